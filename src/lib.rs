@@ -1,0 +1,3 @@
+//! hdi — head-disk interface pipeline.
+pub mod numerics;
+pub mod surface;

@@ -1,0 +1,1 @@
+//! 2-D FFT helpers on ndarray fields (rows then columns, via rustfft). CONTRACT STUB.

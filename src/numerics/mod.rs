@@ -1,0 +1,2 @@
+//! Small numeric kernels shared by stages (FFT helpers, ...).
+pub mod fft2;
