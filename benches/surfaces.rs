@@ -1,1 +1,42 @@
-fn main(){}
+//! criterion benches of the surfaces kernels on a 1024 × 1024 map (not run in CI).
+use criterion::{criterion_group, criterion_main, Criterion};
+use hdi::surface::filter::gaussian_lowpass;
+use hdi::surface::level::{level, LevelOp};
+use hdi::surface::roughness::{roughness, RoughnessOptions};
+use hdi::surface::synth::{gaussian_acf_surface, GaussianSurfaceSpec};
+
+fn surfaces(c: &mut Criterion) {
+    let spec = GaussianSurfaceSpec {
+        n: 1024,
+        size: 4e-6,
+        sigma: 0.5e-9,
+        correlation_length: 40e-9,
+        seed: 7,
+    };
+    let mut map = gaussian_acf_surface(&spec);
+    map.periodic = false;
+    let recipe: Vec<LevelOp> = ["rows:median", "plane", "mean"]
+        .iter()
+        .map(|s| s.parse().unwrap())
+        .collect();
+    let mut g = c.benchmark_group("surfaces_1024");
+    g.sample_size(10);
+    g.bench_function("level_default_recipe", |b| {
+        b.iter(|| {
+            let mut m = map.clone();
+            level(&mut m, &recipe).unwrap();
+            m
+        })
+    });
+    g.bench_function("roughness_9pt", |b| {
+        b.iter(|| roughness(&map, &RoughnessOptions::default()).unwrap())
+    });
+    g.bench_function("gaussian_filter_mirror", |b| {
+        b.iter(|| gaussian_lowpass(&map.z, map.dx, map.dy, 16.0 * map.dx, false))
+    });
+    g.bench_function("synth_gaussian_acf", |b| b.iter(|| gaussian_acf_surface(&spec)));
+    g.finish();
+}
+
+criterion_group!(benches, surfaces);
+criterion_main!(benches);

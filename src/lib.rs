@@ -1,3 +1,14 @@
 //! hdi — head-disk interface pipeline.
+//!
+//! `core` is the small spine every stage uses (config, cache, engine, store, plots);
+//! `surface` (and later physics modules) are pure functions with no I/O besides readers;
+//! `stages` wires physics into the pipeline; `cli` is the thin command-line layer.
+pub mod cli;
+pub mod core;
+pub mod error;
 pub mod numerics;
+pub mod samples;
+pub mod stages;
 pub mod surface;
+
+pub use error::{Error, Result};

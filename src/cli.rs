@@ -1,0 +1,325 @@
+//! The thin command-line layer: parse arguments, call the library, print. `anyhow` only here.
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Parser, Subcommand};
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::core::cache::Store;
+use crate::core::config::PipelineFile;
+use crate::core::engine::{self, Outcome, RunOptions, State};
+use crate::core::units::Length;
+use crate::stages;
+use crate::stages::surfaces::{self, SurfaceConfig};
+
+#[derive(Parser, Debug)]
+#[command(name = "hdi", version, about = "Head-disk interface pipeline: AFM surfaces → contact → slider dynamics → signal analysis, cached by content hash")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Run the pipeline: recompute exactly the stale stage instances.
+    Run {
+        #[arg(long, default_value = "pipeline.toml")]
+        config: PathBuf,
+        /// Run only these instances (and what they consume).
+        #[arg(long, num_args = 1..)]
+        only: Vec<String>,
+        /// Recompute even if cached (the --only instances, or all).
+        #[arg(long)]
+        force: bool,
+        /// List what would run and why; change nothing.
+        #[arg(long)]
+        dry_run: bool,
+        /// Parallel jobs (default: number of cores).
+        #[arg(short = 'j', long)]
+        jobs: Option<usize>,
+    },
+    /// Fresh / stale (and why) per stage instance. Exit 1 if anything is stale.
+    Status {
+        #[arg(long, default_value = "pipeline.toml")]
+        config: PathBuf,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Remove cache entries the current pipeline does not reference, and leftover temp dirs.
+    Gc {
+        #[arg(long, default_value = "pipeline.toml")]
+        config: PathBuf,
+        #[arg(long)]
+        dry_run: bool,
+    },
+    /// One height map → σ, R, η, β, summit count, levelling used.
+    Surface(SurfaceArgs),
+    /// Generate the shipped synthetic sample data (deterministic).
+    Synth {
+        /// What to generate: `afm`.
+        what: String,
+        #[arg(long, default_value = "raw/afm")]
+        out_dir: PathBuf,
+    },
+    /// Print benchmark figures (surfaces stage on a 1024² map; no-op cached rerun).
+    Bench {
+        #[arg(long, default_value = "pipeline.toml")]
+        config: PathBuf,
+        #[arg(long, default_value_t = 1024)]
+        size: usize,
+    },
+}
+
+#[derive(Args, Debug)]
+pub struct SurfaceArgs {
+    pub file: PathBuf,
+    #[arg(long)]
+    pub channel: Option<String>,
+    /// Lateral size along x for files without one (e.g. "1 um").
+    #[arg(long)]
+    pub size_x: Option<Length>,
+    #[arg(long)]
+    pub size_y: Option<Length>,
+    /// Height unit for files without one (m, um, nm, ...).
+    #[arg(long)]
+    pub z_unit: Option<String>,
+    /// Levelling recipe, comma-separated (default rows:median,plane,mean).
+    #[arg(long, value_delimiter = ',')]
+    pub level: Option<Vec<String>>,
+    /// S-filter cutoff (Gaussian low-pass), e.g. "20 nm".
+    #[arg(long)]
+    pub filter_s: Option<Length>,
+    /// L-filter cutoff (Gaussian high-pass), e.g. "5 um".
+    #[arg(long)]
+    pub filter_l: Option<Length>,
+    /// Summit definition: 9 or 5.
+    #[arg(long, default_value_t = 9)]
+    pub summits: u8,
+    #[arg(long, default_value = "inverse_mean_curvature")]
+    pub radius: String,
+    #[arg(long)]
+    pub birmingham: bool,
+    #[arg(long, default_value = "finite_difference")]
+    pub moments: String,
+    #[arg(long)]
+    pub periodic: bool,
+    #[arg(long, default_value_t = 64)]
+    pub histogram_bins: usize,
+    /// Also write the full HDF5 output (and PNGs beside it).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn main() -> Result<()> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Run {
+            config,
+            only,
+            force,
+            dry_run,
+            jobs,
+        } => cmd_run(&config, only, force, dry_run, jobs),
+        Command::Status { config, json } => cmd_status(&config, json),
+        Command::Gc { config, dry_run } => cmd_gc(&config, dry_run),
+        Command::Surface(args) => cmd_surface(args),
+        Command::Synth { what, out_dir } => match what.as_str() {
+            "afm" => crate::samples::write_afm_samples(&out_dir)
+                .map(|_| ())
+                .with_context(|| format!("writing samples to {}", out_dir.display())),
+            other => bail!("unknown synth target `{other}` (available: afm)"),
+        },
+        Command::Bench { config, size } => crate::samples::bench(&config, size),
+    }
+}
+
+fn load(config: &Path) -> Result<(PipelineFile, Vec<Box<dyn crate::core::engine::Stage>>)> {
+    let file = PipelineFile::load(config)?;
+    let stages = stages::build(&file)?;
+    Ok((file, stages))
+}
+
+/// Exit status for "something is stale" in `hdi status`.
+pub struct Stale;
+impl std::fmt::Debug for Stale {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "stale")
+    }
+}
+impl std::fmt::Display for Stale {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "some stage instances are stale")
+    }
+}
+impl std::error::Error for Stale {}
+
+fn cmd_run(config: &Path, only: Vec<String>, force: bool, dry_run: bool, jobs: Option<usize>) -> Result<()> {
+    let started = Instant::now();
+    let (file, stages) = load(config)?;
+    let processed = file.processed_dir();
+    let store = Store::open(&processed).with_context(|| format!("opening {}", processed.display()))?;
+    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1));
+    let opts = RunOptions { only, force, dry_run, jobs };
+    let report = engine::run(stages, &store, &opts)?;
+    if dry_run {
+        for (name, o) in &report.outcomes {
+            match o {
+                Outcome::WouldRun(why) => println!("would run  {name}: {}", why.join("; ")),
+                _ => println!("fresh      {name}"),
+            }
+        }
+        return Ok(());
+    }
+    let ran = report.count(|o| matches!(o, Outcome::Ran { .. }));
+    let cached = report.count(|o| matches!(o, Outcome::Cached));
+    let n_failed = report.count(|o| matches!(o, Outcome::Failed(_)));
+    let mut first_failure = None;
+    for (name, o) in &report.outcomes {
+        match o {
+            Outcome::Ran { seconds } => eprintln!("ran     {name} ({seconds:.2} s)"),
+            Outcome::Failed(e) => {
+                // The first failure becomes the error line; list the others here.
+                if first_failure.is_none() {
+                    first_failure = Some(format!("stage `{name}` failed: {e}"));
+                } else {
+                    eprintln!("FAILED  {name}: {e}");
+                }
+            }
+            Outcome::Skipped(e) => eprintln!("skipped {name}: {e}"),
+            _ => {}
+        }
+    }
+    // Tidy tables from the current entries: rewritten only when something ran or is missing.
+    let tables_dir = processed.join("tables");
+    let current: Vec<(String, String, String)> = {
+        let (file2, stages2) = load(config)?;
+        let _ = file2;
+        let plan = engine::plan(stages2, &store, &Default::default())?;
+        plan.planned
+            .iter()
+            .filter(|p| p.state == State::Fresh)
+            .map(|p| (p.name.clone(), p.kind.clone(), p.key.clone()))
+            .collect()
+    };
+    for (kind, rows) in engine::summary_rows(&store, &current) {
+        let stem = tables_dir.join(format!("{kind}s"));
+        if ran > 0 || !stem.with_extension("parquet").exists() || !stem.with_extension("csv").exists() {
+            crate::core::store::write_table(&rows, &stem)?;
+        }
+    }
+    let failed = report.failed();
+    let total = report.outcomes.len();
+    if ran == 0 && failed == 0 {
+        eprintln!("nothing to do: all {total} stage instances fresh ({:.2} s)", started.elapsed().as_secs_f64());
+    } else {
+        eprintln!(
+            "ran {ran}, cached {cached}, failed {failed} of {total} ({:.2} s); outputs in {}",
+            started.elapsed().as_secs_f64(),
+            processed.display()
+        );
+    }
+    if let Some(first) = first_failure {
+        if n_failed > 1 {
+            bail!("{first} (and {} more failed)", n_failed - 1);
+        }
+        bail!("{first}");
+    }
+    if failed > 0 {
+        bail!("{failed} stage instance(s) did not run");
+    }
+    Ok(())
+}
+
+fn cmd_status(config: &Path, as_json: bool) -> Result<()> {
+    let (file, stages) = load(config)?;
+    let store = Store::open_existing(&file.processed_dir());
+    let plan = engine::plan(stages, &store, &Default::default())?;
+    let mut stale = 0;
+    let mut rows = Vec::new();
+    for p in &plan.planned {
+        let (state, why) = match &p.state {
+            State::Fresh => ("fresh", Vec::new()),
+            State::Stale(why) if why.iter().any(|w| w == "never run") => ("missing", why.clone()),
+            State::Stale(why) => ("stale", why.clone()),
+        };
+        if state != "fresh" {
+            stale += 1;
+        }
+        if !as_json {
+            if why.is_empty() {
+                println!("{state:<8} {}", p.name);
+            } else {
+                println!("{state:<8} {}: {}", p.name, why.join("; "));
+            }
+        }
+        rows.push(json!({"name": p.name, "kind": p.kind, "state": state, "why": why, "key": p.key}));
+    }
+    if as_json {
+        println!("{}", Value::Array(rows));
+    }
+    if stale > 0 {
+        return Err(Stale.into());
+    }
+    Ok(())
+}
+
+fn cmd_gc(config: &Path, dry_run: bool) -> Result<()> {
+    let (file, stages) = load(config)?;
+    let store = Store::open(&file.processed_dir())?;
+    let plan = engine::plan(stages, &store, &Default::default())?;
+    let removed = engine::gc(&plan, &store, dry_run)?;
+    let verb = if dry_run { "would remove" } else { "removed" };
+    for r in &removed {
+        println!("{verb} {}", r.display());
+    }
+    eprintln!("{verb} {} item(s)", removed.len());
+    Ok(())
+}
+
+fn cmd_surface(a: SurfaceArgs) -> Result<()> {
+    let cfg = SurfaceConfig {
+        file: a.file.clone(),
+        channel: a.channel,
+        size_x: a.size_x,
+        size_y: a.size_y,
+        z_unit: a.z_unit,
+        level: a.level.unwrap_or_else(|| vec!["rows:median".into(), "plane".into(), "mean".into()]),
+        filter_s: a.filter_s,
+        filter_l: a.filter_l,
+        summits: a.summits,
+        radius: a.radius,
+        birmingham: a.birmingham,
+        moments: a.moments,
+        periodic: a.periodic,
+        histogram_bins: a.histogram_bins,
+        scale_sweep: a.out.is_some(),
+    };
+    let params = surfaces::validate(&cfg, a.file.clone()).map_err(|(k, m)| anyhow::anyhow!("--{}: {m}", k.replace('_', "-")))?;
+    let analysis = surfaces::analyse(&params)?;
+    if let Some(out) = &a.out {
+        let dir = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        surfaces::write_outputs(&analysis, &params, out, Some(dir), "", &json!([a.file.to_string_lossy()]))?;
+    }
+    let report = surfaces::report_json(&analysis, &params);
+    if a.json {
+        println!("{report}");
+    } else {
+        let r = &analysis.report;
+        println!("{} ({}, channel {}), {} × {} px, dx = {:.3} nm", a.file.display(), analysis.raw.source.format, analysis.raw.channel, analysis.final_map().nx(), analysis.final_map().ny(), analysis.final_map().dx * 1e9);
+        println!("  levelling  {}", report["levelling"]);
+        println!("  filter     {}", report["filter"]);
+        println!("  σ          {:.4} nm   (Sa {:.4} nm, Ssk {:.3}, Sku {:.3})", r.sigma * 1e9, r.sa * 1e9, r.ssk, r.sku);
+        println!("  η          {:.2} µm⁻²  ({} summits, {})", r.eta * 1e-12, r.n_summits, surfaces::scheme_name(r.summit_scheme));
+        println!("  R          {:.4} µm   ({})", r.r * 1e6, surfaces::radius_name(r.r_definition));
+        println!("  β = σRη    {:.5}", r.beta);
+        println!("  Nayak      η {:.2} µm⁻², R {:.4} µm, β {:.5} (α = {:.3})", r.nayak.eta * 1e-12, r.nayak.r * 1e6, r.nayak.beta, r.alpha);
+        for w in &r.warnings {
+            println!("  warning: {w}");
+        }
+    }
+    Ok(())
+}

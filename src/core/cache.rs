@@ -1,0 +1,594 @@
+//! The content-addressed store under `processed/`: fingerprints, manifests, atomic commits,
+//! verification, per-name refs, the input-hash accelerator and the workspace lock.
+//!
+//! Layout:
+//! ```text
+//! processed/
+//!   <name> -> .hdi/store/<kind>/<key>     human-friendly symlink per stage instance
+//!   tables/<kind>.parquet|csv             tidy summary tables
+//!   .hdi/store/<kind>/<key>/              one entry: outputs + manifest.json (written last)
+//!   .hdi/refs/<name>.json                 fingerprint of the last run of that name (for `status`)
+//!   .hdi/tmp/                             work dirs; renamed into the store on success
+//!   .hdi/input-hashes.json                (path, size, mtime, ctime, inode) → blake3 accelerator
+//!   .hdi/lock                             workspace lock (flock), holder's PID inside
+//! ```
+
+use crate::core::hash::{hash_file, hash_json};
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::fs;
+use std::io::{self, Write};
+use std::os::unix::fs::MetadataExt;
+use std::path::{Path, PathBuf};
+
+/// Bumped when the manifest/fingerprint layout changes.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// Everything a stage instance's cache key is made of (pipeline.md, *Cache semantics*).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Fingerprint {
+    pub kind: String,
+    pub model_version: String,
+    /// Canonical parameters: defaults filled in, SI units.
+    pub params: Value,
+    /// Input files by role, with content hashes. Paths are informative only: not in the key.
+    pub inputs: Vec<InputRecord>,
+    /// Keys of the consumed stages, by name.
+    pub upstream: Vec<UpstreamRecord>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct InputRecord {
+    pub role: String,
+    pub path: String,
+    pub blake3: String,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct UpstreamRecord {
+    pub name: String,
+    pub key: String,
+}
+
+impl Fingerprint {
+    /// The cache key: blake3 of the canonical JSON of everything but input paths.
+    pub fn key(&self) -> String {
+        let inputs: Vec<Value> = self
+            .inputs
+            .iter()
+            .map(|i| serde_json::json!({"role": i.role, "blake3": i.blake3}))
+            .collect();
+        let upstream: Vec<Value> = self
+            .upstream
+            .iter()
+            .map(|u| serde_json::json!({"name": u.name, "key": u.key}))
+            .collect();
+        hash_json(&serde_json::json!({
+            "schema": SCHEMA_VERSION,
+            "kind": self.kind,
+            "model_version": self.model_version,
+            "params": self.params,
+            "inputs": inputs,
+            "upstream": upstream,
+        }))
+    }
+
+    /// Human-readable differences from an older fingerprint: why a stage is stale.
+    pub fn explain_changes(&self, old: &Fingerprint) -> Vec<String> {
+        let mut why = Vec::new();
+        if self.kind != old.kind {
+            why.push(format!("kind {} → {}", old.kind, self.kind));
+        }
+        if self.model_version != old.model_version {
+            why.push(format!(
+                "model version {} → {}",
+                old.model_version, self.model_version
+            ));
+        }
+        diff_values("", &old.params, &self.params, &mut why);
+        for new in &self.inputs {
+            match old.inputs.iter().find(|o| o.role == new.role) {
+                None => why.push(format!("new input {} ({})", new.role, new.path)),
+                Some(o) if o.blake3 != new.blake3 => {
+                    why.push(format!("input {} changed ({})", new.role, new.path))
+                }
+                _ => {}
+            }
+        }
+        for o in &old.inputs {
+            if !self.inputs.iter().any(|n| n.role == o.role) {
+                why.push(format!("input {} removed", o.role));
+            }
+        }
+        for new in &self.upstream {
+            match old.upstream.iter().find(|o| o.name == new.name) {
+                None => why.push(format!("now depends on {}", new.name)),
+                Some(o) if o.key != new.key => why.push(format!("upstream {} changed", new.name)),
+                _ => {}
+            }
+        }
+        why
+    }
+}
+
+fn short(v: &Value) -> String {
+    let s = v.to_string();
+    if s.len() > 60 {
+        format!("{}…", &s[..57])
+    } else {
+        s
+    }
+}
+
+fn diff_values(path: &str, old: &Value, new: &Value, out: &mut Vec<String>) {
+    match (old, new) {
+        (Value::Object(a), Value::Object(b)) => {
+            let keys: std::collections::BTreeSet<&String> = a.keys().chain(b.keys()).collect();
+            for k in keys {
+                let p = if path.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{path}.{k}")
+                };
+                match (a.get(k), b.get(k)) {
+                    (Some(x), Some(y)) => diff_values(&p, x, y, out),
+                    (None, Some(y)) => out.push(format!("{p}: (unset) → {}", short(y))),
+                    (Some(x), None) => out.push(format!("{p}: {} → (unset)", short(x))),
+                    (None, None) => {}
+                }
+            }
+        }
+        (a, b) if a != b => out.push(format!("{path}: {} → {}", short(a), short(b))),
+        _ => {}
+    }
+}
+
+/// One store entry's record, written last into the entry directory.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Manifest {
+    pub schema_version: u32,
+    pub key: String,
+    pub name: String,
+    pub fingerprint: Fingerprint,
+    pub outputs: Vec<OutputRecord>,
+    pub hdi_version: String,
+    pub created: String,
+    pub wall_time_s: f64,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct OutputRecord {
+    /// Path relative to the entry directory.
+    pub path: String,
+    pub bytes: u64,
+    pub blake3: String,
+}
+
+/// Result of checking a store entry against its manifest.
+#[derive(Debug)]
+pub enum Verification {
+    Fresh(Box<Manifest>),
+    Missing,
+    Damaged(String),
+}
+
+pub struct Store {
+    processed: PathBuf,
+    meta: PathBuf,
+}
+
+impl Store {
+    /// Open (creating if needed) the store under `processed`.
+    pub fn open(processed: &Path) -> io::Result<Self> {
+        let meta = processed.join(".hdi");
+        for d in ["store", "refs", "tmp"] {
+            fs::create_dir_all(meta.join(d))?;
+        }
+        Ok(Self {
+            processed: processed.to_path_buf(),
+            meta,
+        })
+    }
+
+    /// Open read-only: does not create anything (for `status`).
+    pub fn open_existing(processed: &Path) -> Self {
+        Self {
+            processed: processed.to_path_buf(),
+            meta: processed.join(".hdi"),
+        }
+    }
+
+    pub fn processed(&self) -> &Path {
+        &self.processed
+    }
+
+    pub fn entry_dir(&self, kind: &str, key: &str) -> PathBuf {
+        self.meta.join("store").join(kind).join(key)
+    }
+
+    /// A fresh work directory for one stage run.
+    pub fn new_work_dir(&self, name: &str, key: &str) -> io::Result<PathBuf> {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.subsec_nanos())
+            .unwrap_or(0);
+        let dir = self.meta.join("tmp").join(format!(
+            "{name}-{}-{}-{nanos}",
+            &key[..12.min(key.len())],
+            std::process::id()
+        ));
+        fs::create_dir_all(&dir)?;
+        Ok(dir)
+    }
+
+    /// Check an entry: manifest present and parseable, every output present with its checksum.
+    pub fn verify(&self, kind: &str, key: &str) -> Verification {
+        let dir = self.entry_dir(kind, key);
+        let manifest_path = dir.join("manifest.json");
+        if !dir.exists() {
+            return Verification::Missing;
+        }
+        let manifest: Manifest = match fs::read(&manifest_path)
+            .ok()
+            .and_then(|b| serde_json::from_slice(&b).ok())
+        {
+            Some(m) => m,
+            None => return Verification::Damaged("manifest missing or unreadable".into()),
+        };
+        if manifest.key != key {
+            return Verification::Damaged("manifest belongs to another key".into());
+        }
+        for out in &manifest.outputs {
+            let p = dir.join(&out.path);
+            match hash_file(&p) {
+                Ok(h) if h == out.blake3 => {}
+                Ok(_) => return Verification::Damaged(format!("{} changed since written", out.path)),
+                Err(_) => return Verification::Damaged(format!("{} missing", out.path)),
+            }
+        }
+        Verification::Fresh(Box::new(manifest))
+    }
+
+    /// Checksum the work dir's files, write the manifest last, fsync, and rename the whole
+    /// directory into the store: a crash before the rename leaves only a tmp dir.
+    pub fn commit(
+        &self,
+        work_dir: &Path,
+        name: &str,
+        fingerprint: &Fingerprint,
+        wall_time_s: f64,
+    ) -> io::Result<Manifest> {
+        let key = fingerprint.key();
+        let mut outputs = Vec::new();
+        collect_outputs(work_dir, work_dir, &mut outputs)?;
+        outputs.sort_by(|a, b| a.path.cmp(&b.path));
+        let manifest = Manifest {
+            schema_version: SCHEMA_VERSION,
+            key: key.clone(),
+            name: name.to_string(),
+            fingerprint: fingerprint.clone(),
+            outputs,
+            hdi_version: env!("CARGO_PKG_VERSION").to_string(),
+            created: now_iso8601(),
+            wall_time_s,
+        };
+        let bytes = serde_json::to_vec_pretty(&manifest).map_err(io::Error::other)?;
+        write_synced(&work_dir.join("manifest.json"), &bytes)?;
+        sync_dir(work_dir);
+        let dest = self.entry_dir(&fingerprint.kind, &key);
+        if let Some(parent) = dest.parent() {
+            fs::create_dir_all(parent)?;
+        }
+        if dest.exists() {
+            // A damaged or forced entry: move it aside first so the rename can succeed.
+            let aside = self.new_work_dir(&format!("{name}-old"), &key)?;
+            fs::remove_dir(&aside)?;
+            fs::rename(&dest, &aside)?;
+            let _ = fs::remove_dir_all(&aside);
+        }
+        fs::rename(work_dir, &dest)?;
+        if let Some(parent) = dest.parent() {
+            sync_dir(parent);
+        }
+        Ok(manifest)
+    }
+
+    pub fn read_ref(&self, name: &str) -> Option<Manifest> {
+        let bytes = fs::read(self.meta.join("refs").join(format!("{name}.json"))).ok()?;
+        serde_json::from_slice(&bytes).ok()
+    }
+
+    /// Record that `name` now means this entry, and point `processed/<name>` at it.
+    pub fn write_ref(&self, manifest: &Manifest) -> io::Result<()> {
+        let name = &manifest.name;
+        let bytes = serde_json::to_vec_pretty(manifest).map_err(io::Error::other)?;
+        write_atomic(&self.meta.join("refs").join(format!("{name}.json")), &bytes)?;
+        let target = PathBuf::from(".hdi")
+            .join("store")
+            .join(&manifest.fingerprint.kind)
+            .join(&manifest.key);
+        let link = self.processed.join(name);
+        let current = fs::read_link(&link).ok();
+        if current.as_deref() != Some(target.as_path()) {
+            let tmp = self.processed.join(format!(".{name}.link-{}", std::process::id()));
+            let _ = fs::remove_file(&tmp);
+            std::os::unix::fs::symlink(&target, &tmp)?;
+            if link.exists() && fs::symlink_metadata(&link)?.is_dir() {
+                let _ = fs::remove_file(&tmp);
+                return Err(io::Error::other(format!(
+                    "{} is a real directory, not hdi's link; move it away",
+                    link.display()
+                )));
+            }
+            fs::rename(&tmp, &link)?;
+        }
+        Ok(())
+    }
+
+    /// All names with refs.
+    pub fn ref_names(&self) -> Vec<String> {
+        let mut names: Vec<String> = fs::read_dir(self.meta.join("refs"))
+            .into_iter()
+            .flatten()
+            .flatten()
+            .filter_map(|e| {
+                e.file_name()
+                    .to_str()
+                    .and_then(|n| n.strip_suffix(".json"))
+                    .map(str::to_string)
+            })
+            .collect();
+        names.sort();
+        names
+    }
+
+    pub fn remove_ref(&self, name: &str) -> io::Result<()> {
+        let _ = fs::remove_file(self.meta.join("refs").join(format!("{name}.json")));
+        let link = self.processed.join(name);
+        if fs::symlink_metadata(&link).is_ok_and(|m| m.file_type().is_symlink()) {
+            fs::remove_file(link)?;
+        }
+        Ok(())
+    }
+
+    /// Every (kind, key) entry in the store.
+    pub fn entries(&self) -> Vec<(String, String, PathBuf)> {
+        let mut out = Vec::new();
+        for kind in fs::read_dir(self.meta.join("store")).into_iter().flatten().flatten() {
+            let kname = kind.file_name().to_string_lossy().to_string();
+            for e in fs::read_dir(kind.path()).into_iter().flatten().flatten() {
+                out.push((kname.clone(), e.file_name().to_string_lossy().to_string(), e.path()));
+            }
+        }
+        out.sort();
+        out
+    }
+
+    /// Leftover work dirs (crashed or interrupted runs).
+    pub fn tmp_dirs(&self) -> Vec<PathBuf> {
+        let mut v: Vec<PathBuf> = fs::read_dir(self.meta.join("tmp"))
+            .into_iter()
+            .flatten()
+            .flatten()
+            .map(|e| e.path())
+            .collect();
+        v.sort();
+        v
+    }
+
+    /// Take the workspace lock, waiting (with a message) while another run holds it.
+    pub fn lock(&self) -> io::Result<WorkspaceLock> {
+        let path = self.meta.join("lock");
+        let mut file = fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .read(true)
+            .write(true)
+            .open(&path)?;
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(fs::TryLockError::WouldBlock) => {
+                let holder = fs::read_to_string(&path).unwrap_or_default();
+                eprintln!(
+                    "waiting for another hdi run (pid {}) holding {}",
+                    holder.trim(),
+                    path.display()
+                );
+                file.lock()?;
+            }
+            Err(fs::TryLockError::Error(e)) => return Err(e),
+        }
+        file.set_len(0)?;
+        write!(file, "{}", std::process::id())?;
+        Ok(WorkspaceLock { _file: file })
+    }
+
+    /// Input hash with a stat-keyed accelerator (size, mtime, ctime, inode, device): any field
+    /// differing forces a rehash, so the accelerator can never make a changed file look fresh
+    /// unless all five agree.
+    pub fn hash_input(&self, cache: &mut InputHashCache, path: &Path) -> io::Result<String> {
+        let meta = fs::metadata(path)?;
+        let stat = StatKey {
+            size: meta.len(),
+            mtime_ns: meta.mtime() as i128 * 1_000_000_000 + meta.mtime_nsec() as i128,
+            ctime_ns: meta.ctime() as i128 * 1_000_000_000 + meta.ctime_nsec() as i128,
+            inode: meta.ino(),
+            dev: meta.dev(),
+        };
+        let abs = fs::canonicalize(path)?.to_string_lossy().to_string();
+        if let Some((s, h)) = cache.entries.get(&abs) {
+            if *s == stat {
+                return Ok(h.clone());
+            }
+        }
+        let h = hash_file(path)?;
+        cache.entries.insert(abs, (stat, h.clone()));
+        cache.dirty = true;
+        Ok(h)
+    }
+
+    pub fn load_input_cache(&self) -> InputHashCache {
+        let entries = fs::read(self.meta.join("input-hashes.json"))
+            .ok()
+            .and_then(|b| serde_json::from_slice(&b).ok())
+            .unwrap_or_default();
+        InputHashCache {
+            entries,
+            dirty: false,
+        }
+    }
+
+    pub fn save_input_cache(&self, cache: &InputHashCache) -> io::Result<()> {
+        if !cache.dirty {
+            return Ok(());
+        }
+        let bytes = serde_json::to_vec(&cache.entries).map_err(io::Error::other)?;
+        write_atomic(&self.meta.join("input-hashes.json"), &bytes)
+    }
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+pub struct StatKey {
+    size: u64,
+    mtime_ns: i128,
+    ctime_ns: i128,
+    inode: u64,
+    dev: u64,
+}
+
+#[derive(Debug, Default)]
+pub struct InputHashCache {
+    entries: BTreeMap<String, (StatKey, String)>,
+    dirty: bool,
+}
+
+/// Held for the duration of a run; the OS releases it if the process dies.
+pub struct WorkspaceLock {
+    _file: fs::File,
+}
+
+fn collect_outputs(root: &Path, dir: &Path, out: &mut Vec<OutputRecord>) -> io::Result<()> {
+    for e in fs::read_dir(dir)? {
+        let e = e?;
+        let p = e.path();
+        if e.file_type()?.is_dir() {
+            collect_outputs(root, &p, out)?;
+        } else {
+            let rel = p
+                .strip_prefix(root)
+                .map_err(io::Error::other)?
+                .to_string_lossy()
+                .to_string();
+            if rel == "manifest.json" {
+                continue;
+            }
+            // fsync each output before the rename publishes it.
+            fs::File::open(&p)?.sync_all()?;
+            out.push(OutputRecord {
+                path: rel,
+                bytes: e.metadata()?.len(),
+                blake3: hash_file(&p)?,
+            });
+        }
+    }
+    Ok(())
+}
+
+fn write_synced(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    let mut f = fs::File::create(path)?;
+    f.write_all(bytes)?;
+    f.sync_all()
+}
+
+fn sync_dir(dir: &Path) {
+    if let Ok(d) = fs::File::open(dir) {
+        let _ = d.sync_all();
+    }
+}
+
+/// Write to a sibling temp file, fsync, rename: readers see the old or the new file, never half.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    let parent = path.parent().unwrap_or_else(|| Path::new("."));
+    fs::create_dir_all(parent)?;
+    let file_name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let tmp = parent.join(format!(".{file_name}.tmp-{}", std::process::id()));
+    write_synced(&tmp, bytes)?;
+    fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = fs::remove_file(&tmp);
+    })
+}
+
+/// Current UTC time as ISO 8601 (no external time crate needed for this).
+pub fn now_iso8601() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs() as i64)
+        .unwrap_or(0);
+    let days = secs.div_euclid(86_400);
+    let rem = secs.rem_euclid(86_400);
+    // Civil-from-days (Howard Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    fn fp(cutoff: f64, input_hash: &str) -> Fingerprint {
+        Fingerprint {
+            kind: "surface".into(),
+            model_version: "1".into(),
+            params: json!({"filter_l": cutoff, "level": ["plane"]}),
+            inputs: vec![InputRecord {
+                role: "file".into(),
+                path: "raw/a.gwy".into(),
+                blake3: input_hash.into(),
+            }],
+            upstream: vec![],
+        }
+    }
+
+    #[test]
+    fn key_ignores_input_paths_but_not_contents() {
+        let a = fp(5e-6, "aa");
+        let mut moved = a.clone();
+        moved.inputs[0].path = "elsewhere/a.gwy".into();
+        assert_eq!(a.key(), moved.key());
+        assert_ne!(a.key(), fp(5e-6, "ab").key());
+        assert_ne!(a.key(), fp(2.5e-6, "aa").key());
+    }
+
+    #[test]
+    fn changes_are_explained() {
+        let why = fp(2.5e-6, "bb").explain_changes(&fp(5e-6, "aa"));
+        assert_eq!(why.len(), 2, "{why:?}");
+        assert!(why[0].starts_with("filter_l: 5e-6 → 2.5e-6"), "{why:?}");
+        assert!(why[1].contains("input file changed"), "{why:?}");
+    }
+
+    #[test]
+    fn iso_dates_are_civil() {
+        let s = now_iso8601();
+        assert_eq!(s.len(), 20);
+        assert!(s.starts_with("20"));
+    }
+}

@@ -1,0 +1,9 @@
+//! The small core every stage uses: configuration, cache/store, engine, outputs, plots.
+pub mod cache;
+pub mod config;
+pub mod engine;
+pub mod hash;
+pub mod plot;
+pub mod progress;
+pub mod store;
+pub mod units;

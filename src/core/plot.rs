@@ -1,0 +1,249 @@
+//! PNG plots of what the dissertation plots. plotters with an embedded DejaVu font, so no
+//! system fontconfig/freetype is needed. Plots are side outputs: a failure to draw is reported
+//! as an output error, never a panic.
+
+use crate::error::{Error, Result};
+use ndarray::ArrayView2;
+use plotters::prelude::*;
+use plotters::style::colors::colormaps::ViridisRGB;
+use std::path::Path;
+use std::sync::Once;
+
+static FONT: Once = Once::new();
+
+fn ensure_font() {
+    FONT.call_once(|| {
+        // Registration fails only for a corrupt font, which the dejavu crate does not ship.
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            dejavu::sans::regular(),
+        );
+    });
+}
+
+fn perr(path: &Path, e: impl std::fmt::Display) -> Error {
+    Error::output(path, format!("plot: {e}"))
+}
+
+/// Render into a PNG via a temp file + rename.
+fn render_png(
+    path: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(&DrawingArea<BitMapBackend, plotters::coord::Shift>) -> std::result::Result<(), String>,
+) -> Result<()> {
+    ensure_font();
+    // The bitmap backend picks the image format from the extension: keep ".png" last.
+    let file_name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{file_name}.tmp-{}.png", std::process::id()));
+    {
+        let root = BitMapBackend::new(&tmp, size).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| perr(path, e))?;
+        draw(&root).map_err(|e| perr(path, e))?;
+        root.present().map_err(|e| perr(path, e))?;
+    }
+    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+}
+
+/// Height map as a viridis heat map with a colour bar; axes in µm, colour in nm.
+pub fn heatmap_png(path: &Path, z: ArrayView2<f64>, dx: f64, dy: f64, title: &str) -> Result<()> {
+    let (ny, nx) = z.dim();
+    if nx == 0 || ny == 0 {
+        return Err(perr(path, "empty map"));
+    }
+    let (lo, hi) = z
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    let span = if hi > lo { hi - lo } else { 1.0 };
+    // Decimate to at most 512 cells per axis: enough for a PNG, fast to draw.
+    let step = nx.max(ny).div_ceil(512).max(1);
+    let (w_um, h_um) = (nx as f64 * dx * 1e6, ny as f64 * dy * 1e6);
+    render_png(path, (760, 640), |root| {
+        let (main, bar) = root.split_horizontally(640);
+        let mut chart = ChartBuilder::on(&main)
+            .caption(title, ("sans-serif", 20))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(0.0..w_um, 0.0..h_um)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc("x (µm)")
+            .y_desc("y (µm)")
+            .draw()
+            .map_err(|e| e.to_string())?;
+        let cells = (0..ny).step_by(step).flat_map(|j| {
+            (0..nx).step_by(step).map(move |i| (j, i))
+        });
+        chart
+            .draw_series(cells.map(|(j, i)| {
+                let v = z[[j, i]];
+                let c = if v.is_finite() {
+                    ViridisRGB::get_color_normalized(v, lo, lo + span)
+                } else {
+                    RGBColor(255, 255, 255)
+                };
+                // Row 0 is the top of the image.
+                let x0 = i as f64 * dx * 1e6;
+                let y1 = h_um - j as f64 * dy * 1e6;
+                Rectangle::new(
+                    [(x0, y1), (x0 + step as f64 * dx * 1e6, y1 - step as f64 * dy * 1e6)],
+                    c.filled(),
+                )
+            }))
+            .map_err(|e| e.to_string())?;
+        let lo_nm = lo * 1e9;
+        let hi_nm = (lo + span) * 1e9;
+        let mut cb = ChartBuilder::on(&bar)
+            .margin_top(40)
+            .margin_bottom(50)
+            .margin_right(60)
+            .y_label_area_size(0)
+            .right_y_label_area_size(50)
+            .build_cartesian_2d(0.0..1.0, lo_nm..hi_nm)
+            .map_err(|e| e.to_string())?
+            .set_secondary_coord(0.0..1.0, lo_nm..hi_nm);
+        cb.configure_secondary_axes()
+            .y_desc("height (nm)")
+            .draw()
+            .map_err(|e| e.to_string())?;
+        let n = 100;
+        cb.draw_series((0..n).map(|k| {
+            let a = lo_nm + (hi_nm - lo_nm) * k as f64 / n as f64;
+            let b = lo_nm + (hi_nm - lo_nm) * (k + 1) as f64 / n as f64;
+            Rectangle::new(
+                [(0.0, a), (1.0, b)],
+                ViridisRGB::get_color_normalized(a, lo_nm, hi_nm).filled(),
+            )
+        }))
+        .map_err(|e| e.to_string())?;
+        Ok(())
+    })
+}
+
+/// A histogram (bars of probability density) with an overlaid curve, e.g. the Gaussian of the
+/// same mean and σ. `scale` converts x values for display (e.g. 1e9 for nm).
+#[allow(clippy::too_many_arguments)]
+pub fn histogram_png(
+    path: &Path,
+    edges: &[f64],
+    density: &[f64],
+    overlay: &[f64],
+    scale: f64,
+    title: &str,
+    x_desc: &str,
+    overlay_label: &str,
+) -> Result<()> {
+    if edges.len() != density.len() + 1 || density.is_empty() {
+        return Err(perr(path, "histogram edges and densities do not match"));
+    }
+    let x0 = edges[0] * scale;
+    let x1 = edges[edges.len() - 1] * scale;
+    let ymax = density
+        .iter()
+        .chain(overlay)
+        .map(|v| v / scale)
+        .fold(0.0f64, f64::max)
+        * 1.1;
+    render_png(path, (760, 520), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 20))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(x0..x1, 0.0..ymax.max(1e-30))
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc("probability density")
+            .draw()
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(density.iter().enumerate().map(|(k, d)| {
+                Rectangle::new(
+                    [(edges[k] * scale, 0.0), (edges[k + 1] * scale, d / scale)],
+                    BLUE.mix(0.35).filled(),
+                )
+            }))
+            .map_err(|e| e.to_string())?
+            .label("measured")
+            .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 15, y + 5)], BLUE.mix(0.35).filled()));
+        if overlay.len() == density.len() {
+            chart
+                .draw_series(LineSeries::new(
+                    overlay.iter().enumerate().map(|(k, g)| {
+                        (0.5 * (edges[k] + edges[k + 1]) * scale, g / scale)
+                    }),
+                    RED.stroke_width(2),
+                ))
+                .map_err(|e| e.to_string())?
+                .label(overlay_label)
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], RED.stroke_width(2)));
+        }
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.8))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        Ok(())
+    })
+}
+
+/// Several named (x, y) series on linear axes.
+pub fn lines_png(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    series: &[(&str, Vec<(f64, f64)>)],
+) -> Result<()> {
+    let pts = series.iter().flat_map(|(_, s)| s.iter()).filter(|(x, y)| x.is_finite() && y.is_finite());
+    let (mut xr, mut yr) = ((f64::INFINITY, f64::NEG_INFINITY), (f64::INFINITY, f64::NEG_INFINITY));
+    for (x, y) in pts {
+        xr = (xr.0.min(*x), xr.1.max(*x));
+        yr = (yr.0.min(*y), yr.1.max(*y));
+    }
+    if !xr.0.is_finite() {
+        return Err(perr(path, "no finite points to plot"));
+    }
+    let pad = |r: (f64, f64)| {
+        let d = if r.1 > r.0 { (r.1 - r.0) * 0.05 } else { r.0.abs().max(1.0) * 0.05 };
+        (r.0 - d)..(r.1 + d)
+    };
+    let palette = [BLUE, RED, GREEN, MAGENTA, CYAN, BLACK];
+    render_png(path, (760, 520), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 20))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(pad(xr), pad(yr))
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for (k, (label, s)) in series.iter().enumerate() {
+            let c = palette[k % palette.len()];
+            chart
+                .draw_series(LineSeries::new(s.iter().copied(), c.stroke_width(2)))
+                .map_err(|e| e.to_string())?
+                .label(*label)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], c.stroke_width(2)));
+        }
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.8))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        Ok(())
+    })
+}

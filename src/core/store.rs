@@ -1,0 +1,297 @@
+//! Output writers: HDF5 files following signals-and-surfaces.md §5 (units and long_name on
+//! every numeric dataset, NXdata groups, shuffle+gzip for large data, no plugins), and tidy
+//! tables through polars (Parquet + CSV). polars lives in this module only: its Rust API
+//! churns between minor versions, so an upgrade touches one file.
+
+use crate::error::{Error, Result};
+use hdf5::types::VarLenUnicode;
+use ndarray::ArrayView2;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+fn vlu(s: &str) -> VarLenUnicode {
+    // Only NUL bytes can make this fail; strip them rather than fail an output.
+    s.replace('\0', "").parse().unwrap_or_default()
+}
+
+/// An HDF5 file being written to `<path>.tmp-<pid>`; `finish` renames it into place, so a
+/// crash never leaves a half-written file under the final name.
+pub struct H5Out {
+    file: Option<hdf5::File>,
+    tmp: PathBuf,
+    path: PathBuf,
+}
+
+/// Datasets smaller than this stay contiguous (§5).
+const COMPRESS_MIN_BYTES: usize = 64 * 1024;
+
+impl H5Out {
+    pub fn create(path: &Path) -> Result<Self> {
+        let tmp = path.with_extension(format!("h5.tmp-{}", std::process::id()));
+        let file = hdf5::File::create(&tmp).map_err(|e| Error::output(path, e))?;
+        Ok(Self {
+            file: Some(file),
+            tmp,
+            path: path.to_path_buf(),
+        })
+    }
+
+    fn file(&self) -> Result<&hdf5::File> {
+        self.file.as_ref().ok_or_else(|| self.err("file already closed"))
+    }
+
+    fn err(&self, e: impl std::fmt::Display) -> Error {
+        Error::output(&self.path, e)
+    }
+
+    /// Root attributes every hdi file carries (§5).
+    pub fn root_attributes(
+        &self,
+        stage: &str,
+        cache_key: &str,
+        parameters: &Value,
+        inputs: &Value,
+        default_entry: &str,
+    ) -> Result<()> {
+        let root: &hdf5::Group = self.file()?;
+        self.attr_str(root, "hdi_version", env!("CARGO_PKG_VERSION"))?;
+        self.attr_str(root, "stage", stage)?;
+        self.attr_str(root, "cache_key", cache_key)?;
+        self.attr_str(root, "parameters", &parameters.to_string())?;
+        self.attr_str(root, "inputs", &inputs.to_string())?;
+        self.attr_str(root, "created", &crate::core::cache::now_iso8601())?;
+        self.attr_str(root, "NX_class", "NXroot")?;
+        self.attr_str(root, "default", default_entry)?;
+        Ok(())
+    }
+
+    /// Create a group (and its parents); `nx_class` sets the NeXus class attribute.
+    pub fn group(&self, path: &str, nx_class: Option<&str>) -> Result<hdf5::Group> {
+        let mut g: hdf5::Group = self.file()?.as_group().map_err(|e| self.err(e))?;
+        for part in path.split('/').filter(|p| !p.is_empty()) {
+            g = match g.group(part) {
+                Ok(existing) => existing,
+                Err(_) => g.create_group(part).map_err(|e| self.err(e))?,
+            };
+        }
+        if let Some(c) = nx_class {
+            self.attr_str(&g, "NX_class", c)?;
+        }
+        Ok(g)
+    }
+
+    pub fn attr_str(&self, loc: &hdf5::Location, name: &str, value: &str) -> Result<()> {
+        loc.new_attr::<VarLenUnicode>()
+            .create(name)
+            .and_then(|a| a.write_scalar(&vlu(value)))
+            .map_err(|e| self.err(format!("attribute {name}: {e}")))
+    }
+
+    pub fn attr_str_list(&self, loc: &hdf5::Location, name: &str, values: &[&str]) -> Result<()> {
+        let v: Vec<VarLenUnicode> = values.iter().map(|s| vlu(s)).collect();
+        loc.new_attr_builder()
+            .with_data(v.as_slice())
+            .create(name)
+            .map(|_| ())
+            .map_err(|e| self.err(format!("attribute {name}: {e}")))
+    }
+
+    pub fn attr_f64(&self, loc: &hdf5::Location, name: &str, value: f64) -> Result<()> {
+        loc.new_attr::<f64>()
+            .create(name)
+            .and_then(|a| a.write_scalar(&value))
+            .map_err(|e| self.err(format!("attribute {name}: {e}")))
+    }
+
+    fn describe(&self, ds: &hdf5::Dataset, units: &str, long_name: &str) -> Result<()> {
+        self.attr_str(ds, "units", units)?;
+        self.attr_str(ds, "long_name", long_name)
+    }
+
+    /// 1-D f64 dataset with units; chunked + shuffle + gzip(4) when large.
+    pub fn write_1d(
+        &self,
+        g: &hdf5::Group,
+        name: &str,
+        data: &[f64],
+        units: &str,
+        long_name: &str,
+    ) -> Result<hdf5::Dataset> {
+        let b = g.new_dataset_builder().with_data(data);
+        let ds = if std::mem::size_of_val(data) >= COMPRESS_MIN_BYTES {
+            b.chunk(data.len().min(65_536)).shuffle().deflate(4).create(name)
+        } else {
+            b.create(name)
+        }
+        .map_err(|e| self.err(format!("dataset {name}: {e}")))?;
+        self.describe(&ds, units, long_name)?;
+        Ok(ds)
+    }
+
+    /// 2-D f64 dataset `[ny, nx]` with units; chunks of at most 256 × 256.
+    pub fn write_2d(
+        &self,
+        g: &hdf5::Group,
+        name: &str,
+        data: ArrayView2<f64>,
+        units: &str,
+        long_name: &str,
+    ) -> Result<hdf5::Dataset> {
+        let (ny, nx) = data.dim();
+        let b = g.new_dataset_builder().with_data(data);
+        let ds = if ny * nx * 8 >= COMPRESS_MIN_BYTES {
+            b.chunk((ny.min(256), nx.min(256)))
+                .shuffle()
+                .deflate(4)
+                .create(name)
+        } else {
+            b.create(name)
+        }
+        .map_err(|e| self.err(format!("dataset {name}: {e}")))?;
+        self.describe(&ds, units, long_name)?;
+        Ok(ds)
+    }
+
+    /// 2-D u8 dataset (masks), dimensionless.
+    pub fn write_mask(
+        &self,
+        g: &hdf5::Group,
+        name: &str,
+        data: ArrayView2<u8>,
+        long_name: &str,
+    ) -> Result<()> {
+        let (ny, nx) = data.dim();
+        let b = g.new_dataset_builder().with_data(data);
+        let ds = if ny * nx >= COMPRESS_MIN_BYTES {
+            b.chunk((ny.min(256), nx.min(256))).deflate(4).create(name)
+        } else {
+            b.create(name)
+        }
+        .map_err(|e| self.err(format!("dataset {name}: {e}")))?;
+        self.describe(&ds, "1", long_name)
+    }
+
+    /// Scalar f64 dataset (so `f[path][()]` is a float).
+    pub fn write_scalar(
+        &self,
+        g: &hdf5::Group,
+        name: &str,
+        value: f64,
+        units: &str,
+        long_name: &str,
+    ) -> Result<()> {
+        let ds = g
+            .new_dataset::<f64>()
+            .create(name)
+            .and_then(|d| d.write_scalar(&value).map(|_| d))
+            .map_err(|e| self.err(format!("dataset {name}: {e}")))?;
+        self.describe(&ds, units, long_name)
+    }
+
+    /// Scalar integer count.
+    pub fn write_count(&self, g: &hdf5::Group, name: &str, value: u64, long_name: &str) -> Result<()> {
+        let ds = g
+            .new_dataset::<u64>()
+            .create(name)
+            .and_then(|d| d.write_scalar(&value).map(|_| d))
+            .map_err(|e| self.err(format!("dataset {name}: {e}")))?;
+        self.describe(&ds, "1", long_name)
+    }
+
+    /// Scalar UTF-8 string dataset.
+    pub fn write_string(&self, g: &hdf5::Group, name: &str, value: &str) -> Result<()> {
+        g.new_dataset::<VarLenUnicode>()
+            .create(name)
+            .and_then(|d| d.write_scalar(&vlu(value)))
+            .map_err(|e| self.err(format!("dataset {name}: {e}")))
+    }
+
+    /// Close and move into place.
+    pub fn finish(mut self) -> Result<()> {
+        if let Some(file) = self.file.take() {
+            file.close().map_err(|e| Error::output(&self.path, e))?;
+        }
+        std::fs::rename(&self.tmp, &self.path).map_err(|e| Error::io(&self.path, e))
+    }
+}
+
+impl Drop for H5Out {
+    fn drop(&mut self) {
+        // Reached without `finish` only on error paths: do not leave the temp file behind.
+        drop(self.file.take());
+        if self.tmp.exists() {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// Write rows (JSON objects with the same keys) as `<stem>.parquet` and `<stem>.csv`.
+/// Numbers become f64 columns, strings Utf8, booleans Boolean; a missing value is null.
+pub fn write_table(rows: &[serde_json::Map<String, Value>], stem: &Path) -> Result<()> {
+    use polars::prelude::*;
+    let mut names: Vec<String> = Vec::new();
+    for r in rows {
+        for k in r.keys() {
+            if !names.contains(k) {
+                names.push(k.clone());
+            }
+        }
+    }
+    let mut columns: Vec<Column> = Vec::new();
+    for name in &names {
+        let values: Vec<Option<&Value>> = rows.iter().map(|r| r.get(name)).collect();
+        let col = if values.iter().flatten().all(|v| v.is_number()) {
+            let v: Vec<Option<f64>> = values.iter().map(|v| v.and_then(Value::as_f64)).collect();
+            Column::new(name.as_str().into(), v)
+        } else if values.iter().flatten().all(|v| v.is_boolean()) {
+            let v: Vec<Option<bool>> = values.iter().map(|v| v.and_then(Value::as_bool)).collect();
+            Column::new(name.as_str().into(), v)
+        } else {
+            let v: Vec<Option<String>> = values
+                .iter()
+                .map(|v| {
+                    v.map(|x| match x {
+                        Value::String(s) => s.clone(),
+                        other => other.to_string(),
+                    })
+                })
+                .collect();
+            Column::new(name.as_str().into(), v)
+        };
+        columns.push(col);
+    }
+    let mut df = DataFrame::new(rows.len(), columns).map_err(|e| Error::output(stem, e))?;
+
+    let parquet = stem.with_extension("parquet");
+    write_via_temp(&parquet, |f| {
+        ParquetWriter::new(f)
+            .with_compression(ParquetCompression::Zstd(None))
+            .finish(&mut df)
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    })?;
+    let csv = stem.with_extension("csv");
+    write_via_temp(&csv, |f| {
+        CsvWriter::new(f)
+            .include_header(true)
+            .finish(&mut df)
+            .map_err(|e| e.to_string())
+    })
+}
+
+fn write_via_temp(
+    path: &Path,
+    write: impl FnOnce(&mut std::fs::File) -> std::result::Result<(), String>,
+) -> Result<()> {
+    if let Some(parent) = path.parent() {
+        std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+    }
+    let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
+    let mut f = std::fs::File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
+    let r = write(&mut f).and_then(|_| f.sync_all().map_err(|e| e.to_string()));
+    if let Err(e) = r {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(Error::output(path, e));
+    }
+    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+}

@@ -1,0 +1,171 @@
+//! Physical quantities in configuration and on the command line.
+//!
+//! Inside hdi everything is SI. Users may write a plain number (taken as SI) or a string with a
+//! unit: `"5 um"`, `"0.34nm"`, `"220 um^-2"`. Parsing normalises to SI so that the cache key
+//! does not change when a user rewrites `"5 um"` as `5e-6`.
+
+use serde::{Deserialize, Deserializer};
+
+/// What kind of quantity a value is; decides which unit suffixes are accepted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dimension {
+    Length,
+    /// Areal density, m^-2.
+    PerArea,
+}
+
+impl Dimension {
+    fn si_unit(self) -> &'static str {
+        match self {
+            Dimension::Length => "m",
+            Dimension::PerArea => "m^-2",
+        }
+    }
+}
+
+/// Length unit as a power of ten of metres (all supported units are decimal).
+pub fn length_exponent(unit: &str) -> Option<i32> {
+    Some(match unit.trim() {
+        "m" => 0,
+        "mm" => -3,
+        "um" | "µm" | "μm" | "~m" | "micron" | "microns" => -6,
+        "nm" => -9,
+        "pm" => -12,
+        "A" | "Å" | "angstrom" => -10,
+        _ => return None,
+    })
+}
+
+/// Length unit factor to metres.
+pub fn length_factor(unit: &str) -> Option<f64> {
+    length_exponent(unit).map(|e| 10f64.powi(e))
+}
+
+/// Parse `"<number> <unit>"` (or a bare number, taken as SI) into SI.
+///
+/// The unit is applied by shifting the decimal exponent of the text before one correctly
+/// rounded parse, so `"5 um"` and `5e-6` give the same bits and the same cache key.
+pub fn parse_quantity(text: &str, dim: Dimension) -> Result<f64, String> {
+    let t = text.trim();
+    let split = t
+        .char_indices()
+        .find(|(_, c)| !(c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E')))
+        .map(|(i, _)| i)
+        .unwrap_or(t.len());
+    // "1e-9m" would be cut wrongly only if a unit started with e/E; none does.
+    let (num, unit) = t.split_at(split);
+    let num = num.trim();
+    let not_number = || format!("`{text}` is not a number with a unit (e.g. \"5 um\")");
+    let (mantissa, exp) = match num.find(['e', 'E']) {
+        Some(i) => (&num[..i], num[i + 1..].parse::<i32>().map_err(|_| not_number())?),
+        None => (num, 0),
+    };
+    mantissa.parse::<f64>().map_err(|_| not_number())?;
+    let unit = unit.trim();
+    let shift = if unit.is_empty() {
+        0
+    } else {
+        match dim {
+            Dimension::Length => length_exponent(unit),
+            Dimension::PerArea => unit
+                .strip_suffix("^-2")
+                .or_else(|| unit.strip_suffix("⁻²"))
+                .and_then(length_exponent)
+                .map(|e| -2 * e),
+        }
+        .ok_or_else(|| {
+            format!(
+                "unknown unit `{unit}` in `{text}` (expected a {} unit such as {})",
+                match dim {
+                    Dimension::Length => "length",
+                    Dimension::PerArea => "per-area",
+                },
+                match dim {
+                    Dimension::Length => "m, mm, um, nm, pm, A",
+                    Dimension::PerArea => "m^-2, um^-2",
+                }
+            )
+        })?
+    };
+    let si: f64 = format!("{mantissa}e{}", exp + shift)
+        .parse()
+        .map_err(|_| not_number())?;
+    if !si.is_finite() {
+        return Err(format!("`{text}` is not finite"));
+    }
+    Ok(si)
+}
+
+/// A length in metres, written in config as a number (m) or a string with a unit.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+pub struct Length(pub f64);
+
+/// An areal density in m^-2, written as a number or e.g. `"220 um^-2"`.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+pub struct PerArea(pub f64);
+
+fn deserialize_quantity<'de, D: Deserializer<'de>>(d: D, dim: Dimension) -> Result<f64, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum NumOrText {
+        Num(f64),
+        Text(String),
+    }
+    match NumOrText::deserialize(d).map_err(|_| {
+        serde::de::Error::custom(format!(
+            "expected a number in {} or a string with a unit",
+            dim.si_unit()
+        ))
+    })? {
+        NumOrText::Num(v) if v.is_finite() => Ok(v),
+        NumOrText::Num(v) => Err(serde::de::Error::custom(format!("{v} is not finite"))),
+        NumOrText::Text(s) => parse_quantity(&s, dim).map_err(serde::de::Error::custom),
+    }
+}
+
+impl<'de> Deserialize<'de> for Length {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        deserialize_quantity(d, Dimension::Length).map(Length)
+    }
+}
+
+impl<'de> Deserialize<'de> for PerArea {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        deserialize_quantity(d, Dimension::PerArea).map(PerArea)
+    }
+}
+
+impl std::str::FromStr for Length {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        parse_quantity(s, Dimension::Length).map(Length)
+    }
+}
+
+impl std::str::FromStr for PerArea {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        parse_quantity(s, Dimension::PerArea).map(PerArea)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lengths_normalise_to_metres() {
+        assert_eq!(parse_quantity("5 um", Dimension::Length).unwrap(), 5e-6);
+        assert_eq!(parse_quantity("0.34nm", Dimension::Length).unwrap(), 0.34e-9);
+        assert_eq!(parse_quantity("2e-6", Dimension::Length).unwrap(), 2e-6);
+        assert_eq!(parse_quantity("3 Å", Dimension::Length).unwrap(), 3e-10);
+        assert!(parse_quantity("5 parsecs", Dimension::Length).is_err());
+        assert!(parse_quantity("five um", Dimension::Length).is_err());
+    }
+
+    #[test]
+    fn areal_density_normalises_to_per_square_metre() {
+        assert_eq!(parse_quantity("220 um^-2", Dimension::PerArea).unwrap(), 220e12);
+        assert_eq!(parse_quantity("1.5e-3 mm", Dimension::Length).unwrap(), 1.5e-6);
+    }
+}

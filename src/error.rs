@@ -1,0 +1,40 @@
+//! The library's error type: domain errors from each module, with user-facing messages.
+
+use std::path::PathBuf;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error(transparent)]
+    Config(#[from] crate::core::config::ConfigError),
+    #[error(transparent)]
+    Surface(#[from] crate::surface::SurfaceError),
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// Writing an output (HDF5, table, plot) failed.
+    #[error("writing {}: {message}", path.display())]
+    Output { path: PathBuf, message: String },
+    /// A stage could not run for a reason that is not one of the above.
+    #[error("{0}")]
+    Stage(String),
+}
+
+impl Error {
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+    pub fn output(path: impl Into<PathBuf>, message: impl std::fmt::Display) -> Self {
+        Error::Output {
+            path: path.into(),
+            message: message.to_string(),
+        }
+    }
+}
+
+pub type Result<T> = std::result::Result<T, Error>;

@@ -1,0 +1,200 @@
+//! Interface stage: two measured surfaces (or explicit values) → the equivalent rough surface
+//! against a smooth flat (σ, R, η, β) that the contact models use (signals-and-surfaces.md §2.7).
+
+use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::engine::{Stage, StageContext, StageOutput};
+use crate::core::store::H5Out;
+use crate::core::units::{Length, PerArea};
+use crate::error::{Error, Result};
+use crate::surface::combine::{combine, CombineRule, InterfaceStats, SurfaceStats};
+use serde::Deserialize;
+use serde_json::{json, Value};
+use std::path::PathBuf;
+
+pub const MODEL_VERSION: &str = "interface-1";
+
+fn default_rule() -> String {
+    "sum_surface".into()
+}
+
+/// `[interface.NAME]` as written.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct InterfaceConfig {
+    /// The two `[surface.*]` instances to combine (not needed with rule = "explicit").
+    #[serde(default)]
+    pub surfaces: Vec<String>,
+    /// "sum_surface" (default), "harmonic_r" or "explicit".
+    #[serde(default = "default_rule")]
+    pub rule: String,
+    /// Explicit combined values (rule = "explicit"), e.g. the dissertation's Table 2.2.
+    #[serde(default)]
+    pub sigma: Option<Length>,
+    #[serde(default)]
+    pub r: Option<Length>,
+    #[serde(default)]
+    pub eta: Option<PerArea>,
+}
+
+pub struct InterfaceStage {
+    pub name: String,
+    pub surfaces: Vec<String>,
+    pub rule: CombineRule,
+}
+
+fn rule_name(r: &CombineRule) -> &'static str {
+    match r {
+        CombineRule::SumSurface => "sum_surface",
+        CombineRule::HarmonicR => "harmonic_r",
+        CombineRule::Explicit { .. } => "explicit",
+    }
+}
+
+impl InterfaceStage {
+    pub fn from_config(
+        file: &PipelineFile,
+        name: &str,
+        cfg: &InterfaceConfig,
+    ) -> std::result::Result<Self, ConfigError> {
+        let err = |k: &str, m: String| file.error("interface", name, k, m);
+        let rule = match cfg.rule.as_str() {
+            "sum_surface" => CombineRule::SumSurface,
+            "harmonic_r" => CombineRule::HarmonicR,
+            "explicit" => {
+                let (Some(s), Some(r), Some(e)) = (cfg.sigma, cfg.r, cfg.eta) else {
+                    return Err(err("rule", "rule = \"explicit\" needs sigma, r and eta".into()));
+                };
+                for (k, v) in [("sigma", s.0), ("r", r.0), ("eta", e.0)] {
+                    if v <= 0.0 {
+                        return Err(err(k, format!("{v} is out of range: must be > 0")));
+                    }
+                }
+                CombineRule::Explicit {
+                    sigma: s.0,
+                    r: r.0,
+                    eta: e.0,
+                }
+            }
+            other => {
+                return Err(err(
+                    "rule",
+                    format!("`{other}`: use sum_surface, harmonic_r or explicit"),
+                ))
+            }
+        };
+        if !matches!(rule, CombineRule::Explicit { .. }) {
+            if cfg.surfaces.len() != 2 {
+                return Err(err(
+                    "surfaces",
+                    format!("needs exactly two [surface.*] names, got {}", cfg.surfaces.len()),
+                ));
+            }
+            for s in &cfg.surfaces {
+                if !file.raw.surface.contains_key(s) {
+                    let names: Vec<&str> = file.raw.surface.keys().map(String::as_str).collect();
+                    let hint = crate::core::config::nearest(s, &names)
+                        .map(|n| format!(" (did you mean `{n}`?)"))
+                        .unwrap_or_default();
+                    return Err(err("surfaces", format!("no [surface.{s}] in this file{hint}")));
+                }
+            }
+        }
+        Ok(Self {
+            name: name.to_string(),
+            surfaces: cfg.surfaces.clone(),
+            rule,
+        })
+    }
+}
+
+fn stats_from(result: &Value, name: &str) -> Result<SurfaceStats> {
+    let s = &result["stats"];
+    let get = |k: &str| {
+        s[k].as_f64()
+            .ok_or_else(|| Error::Stage(format!("surface `{name}` result has no `{k}`")))
+    };
+    Ok(SurfaceStats {
+        sigma: get("sigma")?,
+        r: get("r")?,
+        eta: get("eta")?,
+        m2: s["m2"].as_f64(),
+        m4: s["m4"].as_f64(),
+    })
+}
+
+pub fn interface_json(st: &InterfaceStats) -> Value {
+    json!({
+        "rule": rule_name(&st.rule),
+        "sigma_m": st.sigma, "R_m": st.r, "eta_per_m2": st.eta, "beta": st.beta,
+        "m2": st.m2, "m4_per_m2": st.m4, "alpha": st.alpha,
+    })
+}
+
+impl Stage for InterfaceStage {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn kind(&self) -> &'static str {
+        "interface"
+    }
+    fn model_version(&self) -> &'static str {
+        MODEL_VERSION
+    }
+    fn params(&self) -> Value {
+        let explicit = match self.rule {
+            CombineRule::Explicit { sigma, r, eta } => json!({"sigma_m": sigma, "R_m": r, "eta_per_m2": eta}),
+            _ => Value::Null,
+        };
+        json!({"rule": rule_name(&self.rule), "surfaces": self.surfaces, "explicit": explicit})
+    }
+    fn inputs(&self) -> Vec<(String, PathBuf)> {
+        Vec::new()
+    }
+    fn upstream(&self) -> Vec<String> {
+        if matches!(self.rule, CombineRule::Explicit { .. }) {
+            Vec::new()
+        } else {
+            self.surfaces.clone()
+        }
+    }
+    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+        let (a, b) = match self.rule {
+            CombineRule::Explicit { sigma, r, eta } => {
+                let s = SurfaceStats { sigma, r, eta, m2: None, m4: None };
+                (s, s)
+            }
+            _ => {
+                let get = |n: &String| {
+                    ctx.upstream
+                        .get(n)
+                        .ok_or_else(|| Error::Stage(format!("no result from surface `{n}`")))
+                        .and_then(|v| stats_from(v, n))
+                };
+                (get(&self.surfaces[0])?, get(&self.surfaces[1])?)
+            }
+        };
+        let st = combine(&a, &b, self.rule)?;
+        let out = H5Out::create(&ctx.out_dir.join("interface.h5"))?;
+        out.root_attributes("interface", ctx.key, &self.params(), &json!(self.surfaces), "interface")?;
+        let g = out.group("interface", Some("NXentry"))?;
+        out.write_string(&g, "rule", rule_name(&st.rule))?;
+        out.write_scalar(&g, "sigma", st.sigma, "m", "combined RMS roughness")?;
+        out.write_scalar(&g, "R", st.r, "m", "combined mean summit radius")?;
+        out.write_scalar(&g, "eta", st.eta, "m^-2", "combined summit density")?;
+        out.write_scalar(&g, "beta", st.beta, "1", "sigma R eta")?;
+        out.write_scalar(&g, "m2", st.m2, "1", "combined second spectral moment")?;
+        out.write_scalar(&g, "m4", st.m4, "m^-2", "combined fourth spectral moment")?;
+        out.write_scalar(&g, "alpha", st.alpha, "1", "Nayak bandwidth parameter")?;
+        out.finish()?;
+        let row = json!({
+            "rule": rule_name(&st.rule),
+            "surfaces": self.surfaces.join(" + "),
+            "sigma_nm": st.sigma * 1e9, "R_um": st.r * 1e6, "eta_per_um2": st.eta * 1e-12,
+            "beta": st.beta, "alpha": st.alpha,
+        });
+        Ok(StageOutput {
+            result: interface_json(&st),
+            summary_row: row.as_object().cloned(),
+        })
+    }
+}

@@ -1,0 +1,44 @@
+//! Stage implementations, one module per stage kind, and the registry that turns a parsed
+//! `pipeline.toml` into stage instances.
+pub mod interface;
+pub mod surfaces;
+
+use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::engine::Stage;
+
+/// Names reserved for hdi's own entries under `processed/`.
+const RESERVED: &[&str] = &["tables", ".hdi"];
+
+/// Every declared stage instance, validated.
+pub fn build(file: &PipelineFile) -> Result<Vec<Box<dyn Stage>>, ConfigError> {
+    let mut stages: Vec<Box<dyn Stage>> = Vec::new();
+    let mut seen = std::collections::BTreeSet::new();
+    let mut check_name = |section: &str, name: &str| {
+        let valid = !name.is_empty()
+            && name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
+            && !name.starts_with('.');
+        if !valid || RESERVED.contains(&name) {
+            return Err(file.error(
+                section,
+                name,
+                "",
+                format!("`{name}` cannot be a stage name (letters, digits, - _ . ; not tables)"),
+            ));
+        }
+        if !seen.insert(name.to_string()) {
+            return Err(file.error(section, name, "", format!("stage name `{name}` is used twice")));
+        }
+        Ok(())
+    };
+    for (name, cfg) in &file.raw.surface {
+        check_name("surface", name)?;
+        stages.push(Box::new(surfaces::SurfaceStage::from_config(file, name, cfg)?));
+    }
+    for (name, cfg) in &file.raw.interface {
+        check_name("interface", name)?;
+        stages.push(Box::new(interface::InterfaceStage::from_config(file, name, cfg)?));
+    }
+    Ok(stages)
+}

@@ -1,0 +1,571 @@
+//! Surfaces stage: one height map → levelled/filtered field → σ, R, η, β (+ Nayak estimates,
+//! summit list, histograms, scale sweep), as HDF5 + PNG + a summary row. The same function
+//! serves the pipeline and `hdi surface FILE`.
+
+use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::engine::{Stage, StageContext, StageOutput};
+use crate::core::plot;
+use crate::core::store::H5Out;
+use crate::core::units::Length;
+use crate::error::Result;
+use crate::surface::filter::apply_filters;
+use crate::surface::io::{read_height_map, ReadOptions};
+use crate::surface::level::{level, LevelOp};
+use crate::surface::roughness::{
+    roughness, scale_sweep, MomentsMethod, RadiusDefinition, RoughnessOptions, RoughnessReport,
+    SummitScheme, SweepRow,
+};
+use crate::surface::HeightMap;
+use serde::Deserialize;
+use serde_json::{json, Map, Value};
+use std::path::{Path, PathBuf};
+
+/// Bump when the numbers this stage produces change.
+pub const MODEL_VERSION: &str = "surface-1";
+
+fn default_level() -> Vec<String> {
+    vec!["rows:median".into(), "plane".into(), "mean".into()]
+}
+fn default_summits() -> u8 {
+    9
+}
+fn default_bins() -> usize {
+    64
+}
+fn default_true() -> bool {
+    true
+}
+fn default_radius() -> String {
+    "inverse_mean_curvature".into()
+}
+fn default_moments() -> String {
+    "finite_difference".into()
+}
+
+/// `[surface.NAME]` as written in `pipeline.toml`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceConfig {
+    /// Height map file (any supported format, detected from content).
+    pub file: PathBuf,
+    /// Channel name (default: the format's height channel).
+    #[serde(default)]
+    pub channel: Option<String>,
+    /// Lateral size for formats that do not carry it (plain ASCII without header).
+    #[serde(default)]
+    pub size_x: Option<Length>,
+    #[serde(default)]
+    pub size_y: Option<Length>,
+    /// Height unit for formats that do not carry it.
+    #[serde(default)]
+    pub z_unit: Option<String>,
+    /// Levelling recipe, applied in order.
+    #[serde(default = "default_level")]
+    pub level: Vec<String>,
+    /// S-filter (Gaussian low-pass) cutoff wavelength: removes noise shorter than it.
+    #[serde(default)]
+    pub filter_s: Option<Length>,
+    /// L-filter (Gaussian high-pass) cutoff wavelength: removes waviness longer than it.
+    #[serde(default)]
+    pub filter_l: Option<Length>,
+    /// Summit definition: 9 (8 neighbours) or 5 (4 neighbours).
+    #[serde(default = "default_summits")]
+    pub summits: u8,
+    /// Which mean summit radius is reported as R.
+    #[serde(default = "default_radius")]
+    pub radius: String,
+    /// Birmingham-14 summit filtering (5 % of Sz, 1 % merge distance).
+    #[serde(default)]
+    pub birmingham: bool,
+    /// Spectral moments estimator: "finite_difference" or "spectral" (periodic maps only).
+    #[serde(default = "default_moments")]
+    pub moments: String,
+    /// Treat the map as periodic (synthetic surfaces).
+    #[serde(default)]
+    pub periodic: bool,
+    #[serde(default = "default_bins")]
+    pub histogram_bins: usize,
+    /// Also compute the sub-sampling / S-filter scale sweep.
+    #[serde(default = "default_true")]
+    pub scale_sweep: bool,
+}
+
+/// Validated parameters, SI units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurfaceParams {
+    pub file: PathBuf,
+    pub read: ReadOptions,
+    pub level: Vec<LevelOp>,
+    pub filter_s: Option<f64>,
+    pub filter_l: Option<f64>,
+    pub roughness: RoughnessOptions,
+    pub periodic: bool,
+    pub scale_sweep: bool,
+}
+
+/// Validation failures: (key, message).
+pub fn validate(cfg: &SurfaceConfig, file: PathBuf) -> std::result::Result<SurfaceParams, (String, String)> {
+    let bad = |k: &str, m: String| Err((k.to_string(), m));
+    let level = cfg
+        .level
+        .iter()
+        .map(|s| s.parse::<LevelOp>())
+        .collect::<std::result::Result<Vec<_>, _>>();
+    let level = match level {
+        Ok(l) => l,
+        Err(e) => return bad("level", e),
+    };
+    for (k, v) in [("filter_s", cfg.filter_s), ("filter_l", cfg.filter_l)] {
+        if let Some(Length(x)) = v {
+            if x <= 0.0 {
+                return bad(k, format!("{x} m is out of range: a cutoff wavelength must be > 0"));
+            }
+        }
+    }
+    if let (Some(s), Some(l)) = (cfg.filter_s, cfg.filter_l) {
+        if s.0 >= l.0 {
+            return bad("filter_s", format!(
+                "S-filter cutoff {} m must be shorter than the L-filter cutoff {} m",
+                s.0, l.0
+            ));
+        }
+    }
+    for (k, v) in [("size_x", cfg.size_x), ("size_y", cfg.size_y)] {
+        if let Some(Length(x)) = v {
+            if x <= 0.0 {
+                return bad(k, format!("{x} m is out of range: must be > 0"));
+            }
+        }
+    }
+    let summits = match cfg.summits {
+        9 => SummitScheme::NinePoint,
+        5 => SummitScheme::FivePoint,
+        n => return bad("summits", format!("{n} is not a summit definition: use 9 or 5")),
+    };
+    let radius = match cfg.radius.as_str() {
+        "inverse_mean_curvature" => RadiusDefinition::InverseMeanCurvature,
+        "mean_of_inverse" => RadiusDefinition::MeanOfInverse,
+        "median_of_inverse" => RadiusDefinition::MedianOfInverse,
+        other => {
+            return bad("radius", format!(
+                "`{other}`: use inverse_mean_curvature, mean_of_inverse or median_of_inverse"
+            ))
+        }
+    };
+    let moments = match cfg.moments.as_str() {
+        "finite_difference" => MomentsMethod::FiniteDifference,
+        "spectral" if cfg.periodic => MomentsMethod::Spectral,
+        "spectral" => {
+            return bad("moments", "spectral moments need a periodic map (set periodic = true)".into())
+        }
+        other => return bad("moments", format!("`{other}`: use finite_difference or spectral")),
+    };
+    if !(4..=4096).contains(&cfg.histogram_bins) {
+        return bad("histogram_bins", format!("{} is out of range 4..=4096", cfg.histogram_bins));
+    }
+    Ok(SurfaceParams {
+        file,
+        read: ReadOptions {
+            channel: cfg.channel.clone(),
+            size_x: cfg.size_x.map(|l| l.0),
+            size_y: cfg.size_y.map(|l| l.0),
+            z_unit: cfg.z_unit.clone(),
+        },
+        level,
+        filter_s: cfg.filter_s.map(|l| l.0),
+        filter_l: cfg.filter_l.map(|l| l.0),
+        roughness: RoughnessOptions {
+            summits,
+            radius,
+            birmingham: cfg.birmingham,
+            moments,
+            histogram_bins: cfg.histogram_bins,
+        },
+        periodic: cfg.periodic,
+        scale_sweep: cfg.scale_sweep,
+    })
+}
+
+impl SurfaceParams {
+    /// Canonical parameters for the cache key (the file enters by content, not by path).
+    pub fn canonical(&self) -> Value {
+        json!({
+            "channel": self.read.channel,
+            "size_x_m": self.read.size_x,
+            "size_y_m": self.read.size_y,
+            "z_unit": self.read.z_unit,
+            "level": self.level.iter().map(|l| l.to_string()).collect::<Vec<_>>(),
+            "filter_s_m": self.filter_s,
+            "filter_l_m": self.filter_l,
+            "summits": scheme_name(self.roughness.summits),
+            "radius": radius_name(self.roughness.radius),
+            "birmingham": self.roughness.birmingham,
+            "moments": moments_name(self.roughness.moments),
+            "periodic": self.periodic,
+            "histogram_bins": self.roughness.histogram_bins,
+            "scale_sweep": self.scale_sweep,
+        })
+    }
+}
+
+pub fn scheme_name(s: SummitScheme) -> &'static str {
+    match s {
+        SummitScheme::NinePoint => "9-point",
+        SummitScheme::FivePoint => "5-point",
+    }
+}
+pub fn radius_name(r: RadiusDefinition) -> &'static str {
+    match r {
+        RadiusDefinition::InverseMeanCurvature => "inverse_mean_curvature",
+        RadiusDefinition::MeanOfInverse => "mean_of_inverse",
+        RadiusDefinition::MedianOfInverse => "median_of_inverse",
+    }
+}
+pub fn moments_name(m: MomentsMethod) -> &'static str {
+    match m {
+        MomentsMethod::FiniteDifference => "finite_difference",
+        MomentsMethod::Spectral => "spectral",
+    }
+}
+
+/// Everything computed for one surface.
+pub struct SurfaceAnalysis {
+    pub raw: HeightMap,
+    pub levelled: HeightMap,
+    /// After the S/L filters, when any was set.
+    pub filtered: Option<HeightMap>,
+    pub report: RoughnessReport,
+    pub sweep: Vec<SweepRow>,
+}
+
+impl SurfaceAnalysis {
+    pub fn final_map(&self) -> &HeightMap {
+        self.filtered.as_ref().unwrap_or(&self.levelled)
+    }
+}
+
+/// Read, level, filter, and measure one height map.
+pub fn analyse(params: &SurfaceParams) -> Result<SurfaceAnalysis> {
+    let mut raw = read_height_map(&params.file, &params.read)?;
+    if params.periodic {
+        raw.periodic = true;
+    }
+    let mut levelled = raw.clone();
+    level(&mut levelled, &params.level)?;
+    let filtered = if params.filter_s.is_some() || params.filter_l.is_some() {
+        let mut f = levelled.clone();
+        apply_filters(&mut f, params.filter_s, params.filter_l)?;
+        Some(f)
+    } else {
+        None
+    };
+    let target = filtered.as_ref().unwrap_or(&levelled);
+    let report = roughness(target, &params.roughness)?;
+    let sweep = if params.scale_sweep {
+        scale_sweep(target, &params.roughness)?
+    } else {
+        Vec::new()
+    };
+    Ok(SurfaceAnalysis {
+        raw,
+        levelled,
+        filtered,
+        report,
+        sweep,
+    })
+}
+
+fn filter_text(p: &SurfaceParams) -> String {
+    match (p.filter_s, p.filter_l) {
+        (None, None) => "none".into(),
+        (s, l) => {
+            let mut parts = Vec::new();
+            if let Some(s) = s {
+                parts.push(format!("S {} um", s * 1e6));
+            }
+            if let Some(l) = l {
+                parts.push(format!("L {} um", l * 1e6));
+            }
+            parts.join(", ")
+        }
+    }
+}
+
+/// The `--json` object of `hdi surface` (signals-and-surfaces.md §2.8), SI units.
+pub fn report_json(a: &SurfaceAnalysis, p: &SurfaceParams) -> Value {
+    let r = &a.report;
+    let m = a.final_map();
+    json!({
+        "file": p.file.to_string_lossy(),
+        "format": a.raw.source.format,
+        "channel": a.raw.channel,
+        "nx": m.nx(), "ny": m.ny(), "dx_m": m.dx, "dy_m": m.dy,
+        "sigma_m": r.sigma, "Sa_m": r.sa, "Ssk": r.ssk, "Sku": r.sku,
+        "m2": r.m2, "m4_per_m2": r.m4, "alpha": r.alpha,
+        "moments_method": moments_name(r.moments_method),
+        "eta_per_m2": r.eta, "R_m": r.r, "R_definition": radius_name(r.r_definition),
+        "R_mean_of_inverse_m": r.r_mean_of_inverse,
+        "R_median_of_inverse_m": r.r_median_of_inverse,
+        "beta": r.beta, "sigma_s_m": r.sigma_s, "mean_summit_height_m": r.mean_summit_height,
+        "n_summits": r.n_summits, "summit_scheme": scheme_name(r.summit_scheme),
+        "sampling_interval_m": r.sampling_interval,
+        "nayak": {"eta_per_m2": r.nayak.eta, "R_m": r.nayak.r, "beta": r.nayak.beta,
+                  "sigma_s_m": r.nayak.sigma_s},
+        "levelling": p.level.iter().map(|l| l.to_string()).collect::<Vec<_>>(),
+        "filter": filter_text(p),
+        "masked_fraction": m.masked_fraction(),
+        "warnings": r.warnings,
+    })
+}
+
+/// One tidy row (unit suffixes in the column names).
+pub fn summary_row(a: &SurfaceAnalysis, p: &SurfaceParams) -> Map<String, Value> {
+    let r = &a.report;
+    let m = a.final_map();
+    let row = json!({
+        "file": p.file.file_name().map(|f| f.to_string_lossy().to_string()).unwrap_or_default(),
+        "format": a.raw.source.format,
+        "channel": a.raw.channel,
+        "nx": m.nx(), "ny": m.ny(),
+        "dx_nm": m.dx * 1e9, "dy_nm": m.dy * 1e9,
+        "sigma_nm": r.sigma * 1e9, "Sa_nm": r.sa * 1e9, "Ssk": r.ssk, "Sku": r.sku,
+        "R_um": r.r * 1e6, "eta_per_um2": r.eta * 1e-12, "beta": r.beta,
+        "sigma_s_nm": r.sigma_s * 1e9, "n_summits": r.n_summits,
+        "alpha": r.alpha,
+        "nayak_R_um": r.nayak.r * 1e6, "nayak_eta_per_um2": r.nayak.eta * 1e-12,
+        "nayak_beta": r.nayak.beta,
+        "summit_scheme": scheme_name(r.summit_scheme),
+        "R_definition": radius_name(r.r_definition),
+        "levelling": p.level.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(" "),
+        "filter_s_um": p.filter_s.map(|v| v * 1e6),
+        "filter_l_um": p.filter_l.map(|v| v * 1e6),
+        "masked_pct": m.masked_fraction() * 100.0,
+        "warnings": r.warnings.join("; "),
+    });
+    match row {
+        Value::Object(m) => m,
+        _ => Map::new(),
+    }
+}
+
+fn axis(n: usize, d: f64, off: f64) -> Vec<f64> {
+    (0..n).map(|i| off + i as f64 * d).collect()
+}
+
+fn write_map(out: &H5Out, path: &str, m: &HeightMap, long_name: &str) -> Result<()> {
+    let g = out.group(path, Some("NXdata"))?;
+    out.attr_str(&g, "signal", "height")?;
+    out.attr_str_list(&g, "axes", &["y", "x"])?;
+    out.attr_f64(&g, "y_indices", 0.0)?;
+    out.attr_f64(&g, "x_indices", 1.0)?;
+    out.write_2d(&g, "height", m.z.view(), "m", long_name)?;
+    out.write_1d(&g, "x", &axis(m.nx(), m.dx, m.x0), "m", "fast-scan position")?;
+    out.write_1d(&g, "y", &axis(m.ny(), m.dy, m.y0), "m", "slow-scan position (row 0 = top)")?;
+    Ok(())
+}
+
+/// HDF5 (layout of signals-and-surfaces.md §5) and PNGs into `dir`.
+pub fn write_outputs(
+    a: &SurfaceAnalysis,
+    p: &SurfaceParams,
+    h5_path: &Path,
+    plot_dir: Option<&Path>,
+    cache_key: &str,
+    inputs: &Value,
+) -> Result<()> {
+    let out = H5Out::create(h5_path)?;
+    out.root_attributes("surface", cache_key, &p.canonical(), inputs, "surface")?;
+    let entry = out.group("surface", Some("NXentry"))?;
+    out.attr_str(&entry, "default", "levelled")?;
+    write_map(&out, "surface/raw", &a.raw, "height as read")?;
+    write_map(&out, "surface/levelled", &a.levelled, "height after levelling")?;
+    if let Some(f) = &a.filtered {
+        write_map(&out, "surface/filtered", f, "height after levelling and filtering")?;
+        out.attr_str(&entry, "default", "filtered")?;
+    }
+    let fm = a.final_map();
+    if let Some(valid) = &fm.valid {
+        let mask = valid.mapv(|ok| u8::from(!ok));
+        out.write_mask(&entry, "mask", mask.view(), "1 = invalid pixel (NaN, saturated, masked)")?;
+    }
+    let r = &a.report;
+    let g = out.group("surface/summits", None)?;
+    let col = |f: fn(&crate::surface::roughness::Summit) -> f64| -> Vec<f64> {
+        r.summits.iter().map(f).collect()
+    };
+    out.write_1d(&g, "x", &col(|s| s.x), "m", "summit x")?;
+    out.write_1d(&g, "y", &col(|s| s.y), "m", "summit y")?;
+    out.write_1d(&g, "height", &col(|s| s.height), "m", "summit height above the mean plane")?;
+    out.write_1d(&g, "curvature", &col(|s| s.curvature), "1/m", "summit curvature")?;
+    out.write_string(&g, "scheme", scheme_name(r.summit_scheme))?;
+    for (name, h, what) in [
+        ("height_histogram", &r.height_histogram, "height"),
+        ("summit_histogram", &r.summit_histogram, "summit height"),
+    ] {
+        let g = out.group(&format!("surface/{name}"), None)?;
+        out.write_1d(&g, "edges", &h.edges, "m", &format!("{what} bin edges"))?;
+        let counts: Vec<f64> = h.counts.iter().map(|&c| c as f64).collect();
+        out.write_1d(&g, "counts", &counts, "1", &format!("{what} counts"))?;
+        out.write_1d(&g, "density", &h.density, "1/m", &format!("{what} probability density"))?;
+        out.write_1d(&g, "gaussian", &h.gaussian, "1/m", "Gaussian density, same mean and sigma")?;
+    }
+    let g = out.group("surface/parameters", None)?;
+    for (name, v, u, ln) in [
+        ("sigma", r.sigma, "m", "RMS roughness Sq"),
+        ("Sa", r.sa, "m", "arithmetic mean roughness"),
+        ("Ssk", r.ssk, "1", "skewness"),
+        ("Sku", r.sku, "1", "kurtosis (not excess)"),
+        ("m2", r.m2, "1", "second spectral moment (mean square slope / 2)"),
+        ("m4", r.m4, "m^-2", "fourth spectral moment"),
+        ("alpha", r.alpha, "1", "Nayak bandwidth parameter"),
+        ("eta", r.eta, "m^-2", "summit density"),
+        ("R", r.r, "m", "mean summit radius"),
+        ("R_mean_of_inverse", r.r_mean_of_inverse, "m", "mean of 1/curvature"),
+        ("R_median_of_inverse", r.r_median_of_inverse, "m", "median of 1/curvature"),
+        ("beta", r.beta, "1", "sigma R eta"),
+        ("sigma_s", r.sigma_s, "m", "std of summit heights"),
+        ("mean_summit_height", r.mean_summit_height, "m", "mean summit height above mean plane"),
+        ("sampling_interval", r.sampling_interval, "m", "pixel spacing the summits were found at"),
+        ("masked_fraction", fm.masked_fraction(), "1", "fraction of invalid pixels"),
+    ] {
+        out.write_scalar(&g, name, v, u, ln)?;
+    }
+    out.write_count(&g, "n_summits", r.n_summits as u64, "number of summits")?;
+    out.write_string(&g, "R_definition", radius_name(r.r_definition))?;
+    out.write_string(&g, "moments_method", moments_name(r.moments_method))?;
+    let g = out.group("surface/nayak", None)?;
+    out.write_scalar(&g, "eta", r.nayak.eta, "m^-2", "summit density from spectral moments")?;
+    out.write_scalar(&g, "R", r.nayak.r, "m", "mean summit radius from spectral moments")?;
+    out.write_scalar(&g, "beta", r.nayak.beta, "1", "beta from spectral moments")?;
+    out.write_scalar(&g, "sigma_s", r.nayak.sigma_s, "m", "summit height std (Nayak)")?;
+    if !a.sweep.is_empty() {
+        let g = out.group("surface/sweeps", None)?;
+        let kinds: Vec<&str> = a.sweep.iter().map(|s| s.kind.as_str()).collect();
+        out.attr_str_list(&g, "kind", &kinds)?;
+        let c = |f: fn(&SweepRow) -> f64| -> Vec<f64> { a.sweep.iter().map(f).collect() };
+        out.write_1d(&g, "value", &c(|s| s.value), "1", "sub-sampling factor or S-filter cutoff in pixels")?;
+        out.write_1d(&g, "sampling_interval", &c(|s| s.sampling_interval), "m", "pixel spacing")?;
+        out.write_1d(&g, "sigma", &c(|s| s.sigma), "m", "RMS roughness")?;
+        out.write_1d(&g, "eta", &c(|s| s.eta), "m^-2", "summit density")?;
+        out.write_1d(&g, "R", &c(|s| s.r), "m", "mean summit radius")?;
+        out.write_1d(&g, "beta", &c(|s| s.beta), "1", "sigma R eta")?;
+    }
+    let history: Vec<Value> = fm
+        .history
+        .iter()
+        .map(|s| json!({"name": s.name, "params": s.params}))
+        .collect();
+    out.write_string(&entry, "history", &Value::Array(history).to_string())?;
+    out.write_string(&entry, "warnings", &r.warnings.join("\n"))?;
+    out.finish()?;
+
+    if let Some(dir) = plot_dir {
+        let z = &fm.z;
+        plot::heatmap_png(
+            &dir.join("height_map.png"),
+            z.view(),
+            fm.dx,
+            fm.dy,
+            &format!("{} — σ = {:.3} nm", fm.channel, r.sigma * 1e9),
+        )?;
+        let h = &r.height_histogram;
+        plot::histogram_png(
+            &dir.join("height_histogram.png"),
+            &h.edges,
+            &h.density,
+            &h.gaussian,
+            1e9,
+            "Height distribution",
+            "height (nm)",
+            "Gaussian, same σ",
+        )?;
+        let s = &r.summit_histogram;
+        if r.n_summits > 0 && s.density.iter().any(|d| *d > 0.0) {
+            plot::histogram_png(
+                &dir.join("summit_height_histogram.png"),
+                &s.edges,
+                &s.density,
+                &s.gaussian,
+                1e9,
+                &format!("Summit heights ({} summits, {})", r.n_summits, scheme_name(r.summit_scheme)),
+                "summit height (nm)",
+                "Gaussian, same mean and σ_s",
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// A `[surface.NAME]` instance.
+pub struct SurfaceStage {
+    pub name: String,
+    pub params: SurfaceParams,
+}
+
+impl SurfaceStage {
+    pub fn from_config(
+        file: &PipelineFile,
+        name: &str,
+        cfg: &SurfaceConfig,
+    ) -> std::result::Result<Self, ConfigError> {
+        let path = file.resolve(&cfg.file);
+        if !path.is_file() {
+            return Err(file.error(
+                "surface",
+                name,
+                "file",
+                format!("height map {} not found", path.display()),
+            ));
+        }
+        let params = validate(cfg, path).map_err(|(k, m)| file.error("surface", name, &k, m))?;
+        Ok(Self {
+            name: name.to_string(),
+            params,
+        })
+    }
+}
+
+impl Stage for SurfaceStage {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn kind(&self) -> &'static str {
+        "surface"
+    }
+    fn model_version(&self) -> &'static str {
+        MODEL_VERSION
+    }
+    fn params(&self) -> Value {
+        self.params.canonical()
+    }
+    fn inputs(&self) -> Vec<(String, PathBuf)> {
+        vec![("file".into(), self.params.file.clone())]
+    }
+    fn upstream(&self) -> Vec<String> {
+        Vec::new()
+    }
+    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+        ctx.progress.set_message("reading and levelling");
+        let a = analyse(&self.params)?;
+        ctx.progress.set_message("writing HDF5 and plots");
+        let inputs = serde_json::to_value(&ctx.fingerprint.inputs).unwrap_or(Value::Null);
+        write_outputs(
+            &a,
+            &self.params,
+            &ctx.out_dir.join("surface.h5"),
+            Some(ctx.out_dir),
+            ctx.key,
+            &inputs,
+        )?;
+        let r = &a.report;
+        let mut result = report_json(&a, &self.params);
+        if let Value::Object(m) = &mut result {
+            // What the interface stage combines.
+            m.insert("stats".into(), json!({"sigma": r.sigma, "r": r.r, "eta": r.eta, "m2": r.m2, "m4": r.m4}));
+        }
+        Ok(StageOutput {
+            result,
+            summary_row: Some(summary_row(&a, &self.params)),
+        })
+    }
+}

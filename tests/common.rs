@@ -1,0 +1,117 @@
+//! Shared helpers: a project copy in a temp dir and a way to run the real `hdi` binary.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+pub fn hdi() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_hdi"))
+}
+
+pub fn repo_root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// `../shared/data` beside the project (CI puts `shared/` there).
+pub fn shared_data() -> PathBuf {
+    repo_root().join("..").join("shared").join("data")
+}
+
+/// A copy of the shipped pipeline.toml and raw/ in a fresh temp dir.
+pub struct Project {
+    pub dir: tempfile::TempDir,
+}
+
+impl Project {
+    pub fn shipped() -> Self {
+        let dir = tempfile::tempdir().expect("tempdir");
+        copy_dir(&repo_root().join("raw"), &dir.path().join("raw"));
+        std::fs::copy(repo_root().join("pipeline.toml"), dir.path().join("pipeline.toml"))
+            .expect("copy pipeline.toml");
+        Self { dir }
+    }
+    pub fn path(&self) -> &Path {
+        self.dir.path()
+    }
+    pub fn run(&self, args: &[&str]) -> Output {
+        hdi()
+            .current_dir(self.path())
+            .args(args)
+            .output()
+            .expect("run hdi")
+    }
+    pub fn config(&self) -> String {
+        std::fs::read_to_string(self.path().join("pipeline.toml")).unwrap()
+    }
+    pub fn set_config(&self, text: &str) {
+        std::fs::write(self.path().join("pipeline.toml"), text).unwrap();
+    }
+    pub fn processed(&self) -> PathBuf {
+        self.path().join("processed")
+    }
+}
+
+pub fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let p = e.path();
+        if p.is_dir() {
+            copy_dir(&p, &to.join(e.file_name()));
+        } else {
+            std::fs::copy(&p, to.join(e.file_name())).unwrap();
+        }
+    }
+}
+
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).to_string()
+}
+pub fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).to_string()
+}
+
+/// Assert a failed run: non-zero exit, a one-line `error:` message containing `needle`, no panic.
+pub fn assert_clean_failure(o: &Output, needle: &str) {
+    let err = stderr(o);
+    assert!(!o.status.success(), "expected failure, got success; stderr: {err}");
+    assert!(!err.contains("panicked"), "panic on user input: {err}");
+    let error_lines: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(error_lines.len(), 1, "want exactly one error line: {err}");
+    assert!(error_lines[0].contains(needle), "error line lacks `{needle}`: {err}");
+}
+
+/// Every file under `dir` (following no links) with its content hash: to show nothing changed.
+pub fn snapshot(dir: &Path) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    fn walk(root: &Path, d: &Path, out: &mut Vec<(String, String)>) {
+        let Ok(rd) = std::fs::read_dir(d) else { return };
+        for e in rd.flatten() {
+            let p = e.path();
+            let ft = e.file_type().unwrap();
+            let rel = p.strip_prefix(root).unwrap().to_string_lossy().to_string();
+            if ft.is_symlink() {
+                out.push((rel, std::fs::read_link(&p).unwrap().to_string_lossy().to_string()));
+            } else if ft.is_dir() {
+                walk(root, &p, out);
+            } else if !rel.ends_with("lock") && !rel.ends_with("input-hashes.json") {
+                let bytes = std::fs::read(&p).unwrap();
+                out.push((rel, blake3::hash(&bytes).to_hex().to_string()));
+            }
+        }
+    }
+    walk(dir, dir, &mut out);
+    out.sort();
+    out
+}
+
+/// The project's Python (h5py, pyarrow), installed by scripts/setup.sh.
+pub fn python() -> PathBuf {
+    let p = repo_root().join(".venv").join("bin").join("python");
+    assert!(
+        p.exists(),
+        "{} missing: run `bash scripts/setup.sh` first (the README's test command does)",
+        p.display()
+    );
+    p
+}

@@ -1,0 +1,104 @@
+//! `hdi surface FILE --json` on every supported format, and the analytic surfaces.
+
+use crate::common::*;
+use hdi::surface::io::{encode_ascii_matrix, encode_gsf, encode_gwy, encode_nanoscope, encode_xyz};
+use hdi::surface::synth::{egg_crate, gaussian_acf_surface, GaussianSurfaceSpec};
+use serde_json::Value;
+
+fn surface_json(file: &std::path::Path, extra: &[&str]) -> Value {
+    let o = hdi().arg("surface").arg(file).args(extra).arg("--json").output().unwrap();
+    assert!(o.status.success(), "hdi surface failed: {}", stderr(&o));
+    serde_json::from_str(&stdout(&o)).expect("one JSON object on stdout")
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    ((a - b) / b).abs()
+}
+
+#[test]
+fn every_format_gives_sigma_r_eta_beta_in_si() {
+    let spec = GaussianSurfaceSpec { n: 128, size: 0.5e-6, sigma: 0.5e-9, correlation_length: 20e-9, seed: 42 };
+    let map = gaussian_acf_surface(&spec);
+    let dir = tempfile::tempdir().unwrap();
+    let files = [
+        ("gwy", encode_gwy(&map)),
+        ("spm", encode_nanoscope(&map, 4)),
+        ("txt", encode_ascii_matrix(&map)),
+        ("xyz", encode_xyz(&map)),
+        ("gsf", encode_gsf(&map)),
+    ];
+    let mut sigmas = Vec::new();
+    for (ext, bytes) in files {
+        let f = dir.path().join(format!("map.{ext}"));
+        std::fs::write(&f, bytes).unwrap();
+        let j = surface_json(&f, &[]);
+        for key in ["sigma_m", "R_m", "eta_per_m2", "beta", "n_summits", "m2", "m4_per_m2", "alpha"] {
+            assert!(j[key].is_number(), "{ext}: {key} missing in {j}");
+        }
+        assert_eq!(j["nx"], 128, "{ext}");
+        assert!(rel(j["dx_m"].as_f64().unwrap(), 0.5e-6 / 128.0) < 1e-6, "{ext}: dx {}", j["dx_m"]);
+        let sigma = j["sigma_m"].as_f64().unwrap();
+        // Same field in every format: σ agrees (int32 NanoScope and f32 GSF quantise a little).
+        assert!(sigma > 0.3e-9 && sigma < 0.6e-9, "{ext}: sigma {sigma}");
+        sigmas.push((ext, sigma, j["eta_per_m2"].as_f64().unwrap()));
+    }
+    let (_, s0, e0) = sigmas[0];
+    for (ext, s, e) in &sigmas {
+        assert!(rel(*s, s0) < 1e-6, "{ext}: sigma {s} vs gwy {s0}");
+        assert!(rel(*e, e0) < 0.02, "{ext}: eta {e} vs gwy {e0}");
+    }
+}
+
+#[test]
+fn egg_crate_summit_density_and_radius_match_the_analytic_values() {
+    // z = A cos(2πx/λ) cos(2πy/λ): maxima where both cosines are ±1 with the same sign, i.e.
+    // 2 per λ² cell; curvature at a maximum A(2π/λ)² in both directions ⇒ R = 1/(A(2π/λ)²).
+    let (n, dx, a, lambda) = (256, 4e-9, 1e-9, 64.0 * 4e-9);
+    let map = egg_crate(n, dx, a, lambda);
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("egg.gwy");
+    std::fs::write(&f, encode_gwy(&map)).unwrap();
+    let j = surface_json(&f, &["--periodic", "--level", "mean"]);
+    let eta = j["eta_per_m2"].as_f64().unwrap();
+    let r = j["R_m"].as_f64().unwrap();
+    let eta_exact = 2.0 / (lambda * lambda);
+    let r_exact = 1.0 / (a * (2.0 * std::f64::consts::PI / lambda).powi(2));
+    assert!(rel(eta, eta_exact) < 0.02, "eta {eta} vs {eta_exact}");
+    assert!(rel(r, r_exact) < 0.02, "R {r} vs {r_exact}");
+}
+
+#[test]
+fn gaussian_surface_sigma_is_the_sample_rms_after_levelling() {
+    use hdi::surface::level::{level, LevelOp};
+    use hdi::surface::roughness::{roughness, RoughnessOptions};
+    let spec = GaussianSurfaceSpec { n: 200, size: 1e-6, sigma: 0.4e-9, correlation_length: 25e-9, seed: 9 };
+    let mut map = gaussian_acf_surface(&spec);
+    map.periodic = false;
+    let recipe: Vec<LevelOp> = ["rows:median", "plane", "mean"].iter().map(|s| s.parse().unwrap()).collect();
+    level(&mut map, &recipe).unwrap();
+    let n = map.z.len() as f64;
+    let mean = map.z.sum() / n;
+    let rms = (map.z.iter().map(|z| (z - mean).powi(2)).sum::<f64>() / n).sqrt();
+    let rep = roughness(&map, &RoughnessOptions::default()).unwrap();
+    assert!(rel(rep.sigma, rms) < 1e-12, "sigma {} vs sample rms {rms}", rep.sigma);
+    // And through the CLI on a file, with levelling "mean" only, σ is the generator's σ.
+    let raw = gaussian_acf_surface(&spec);
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("g.gwy");
+    std::fs::write(&f, encode_gwy(&raw)).unwrap();
+    let j = surface_json(&f, &["--level", "mean"]);
+    assert!(rel(j["sigma_m"].as_f64().unwrap(), 0.4e-9) < 1e-12, "{}", j["sigma_m"]);
+}
+
+#[test]
+fn out_option_writes_hdf5_and_plots() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("res").join("disk.h5");
+    let f = repo_root().join("raw/afm/disk_dlc_1um.gwy");
+    let o = hdi().arg("surface").arg(&f).arg("--out").arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.is_file());
+    assert!(dir.path().join("res/height_map.png").is_file());
+    let text = stdout(&o);
+    assert!(text.contains("β = σRη"), "{text}");
+}
