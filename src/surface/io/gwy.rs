@@ -296,7 +296,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
             "Gwyddion 1.x file (magic GWYO); re-save it with Gwyddion 2",
         ));
     }
-    let malformed = |e: String| format_error(path, format!("malformed GWY file: {e}"));
+    let malformed = |e: String| format_error(path, format!("truncated or malformed GWY file: {e}"));
     let mut cursor = Cursor {
         buf: bytes,
         pos: 4,
@@ -686,6 +686,24 @@ mod tests {
         map.valid = Some(valid);
         let back = read_bytes("m.gwy", &encode_gwy(&map)).unwrap();
         assert!(back.source.header["mask"].contains("not applied"));
+    }
+
+    /// A file written by the independent MIT `gwyfile` Python package
+    /// (`testdata/make_gwyfile_fixture.py`).
+    #[test]
+    fn reads_file_from_independent_writer() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("src/surface/io/testdata/gwyfile_writer.gwy");
+        let map = read_height_map(&path, &ReadOptions::default()).unwrap();
+        assert_eq!(map.channel, "Topography");
+        assert_eq!(map.source.header["channel_number"], "3");
+        assert_eq!(map.z.dim(), (29, 37));
+        assert!(close(map.dx, 2e-6 / 37.0, 1e-15) && close(map.dy, 1.5e-6 / 29.0, 1e-15));
+        assert_eq!((map.x0, map.y0), (1e-7, -2e-7));
+        for ((j, i), &z) in map.z.indexed_iter() {
+            let want = (0.25 * i as f64 - 0.5 * j as f64 + ((i * j) % 7) as f64) * 1e-9;
+            assert_eq!(z, want, "z[[{j}, {i}]]");
+        }
     }
 
     #[test]

@@ -175,7 +175,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
             .ok_or_else(|| {
                 format_error(
                     path,
-                    format!("no [ZSensor] or [Height] channel; channels: {listing:?}; choose one"),
+                    format!("no [ZSensor] or [Height] channel; channels: {listing}; choose one"),
                 )
             })?,
     };
@@ -186,14 +186,12 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
             .get(key)
             .or_else(|| scan_list.and_then(|s| s.get(key)))
     };
-    let count = |key: &str, default: Option<usize>| -> Result<usize> {
-        match get(key) {
-            None => default.ok_or_else(|| {
-                missing(&format!(
-                    "`\\{key}` for channel {}",
-                    listing_of(&names[chosen])
-                ))
-            }),
+    // Data location keys belong to the image itself: no fall-back for them.
+    let count = |key: &str, default: Option<usize>, image_only: bool| -> Result<usize> {
+        let value = if image_only { image.get(key) } else { get(key) };
+        match value {
+            None => default
+                .ok_or_else(|| missing(&format!("`\\{key}` for channel [{}]", names[chosen][0]))),
             Some(text) => text
                 .split_whitespace()
                 .next()
@@ -203,11 +201,11 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
                 }),
         }
     };
-    let offset = count("data offset", None)?;
-    let data_length = count("data length", None)?;
-    let bpp = count("bytes/pixel", Some(2))?;
-    let nx = count("samps/line", None)?;
-    let ny = count("number of lines", None)?;
+    let offset = count("data offset", None, true)?;
+    let data_length = count("data length", None, true)?;
+    let bpp = count("bytes/pixel", Some(2), false)?;
+    let nx = count("samps/line", None, false)?;
+    let ny = count("number of lines", None, false)?;
     if bpp != 2 && bpp != 4 {
         return Err(format_error(
             path,
@@ -355,10 +353,6 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
         format: "nanoscope",
         header,
     })
-}
-
-fn listing_of(names: &[String]) -> String {
-    format!("[{}]", names.first().map_or("", String::as_str))
 }
 
 /// Soft scale the writer declares (name and value as a real Multimode/Icon file would).
