@@ -4,6 +4,7 @@
 //! frequency domain, so the transmission of every Fourier mode is exact (no kernel truncation).
 //! Periodic fields are transformed as they are; non-periodic fields are mirror-extended to
 //! 2ny × 2nx first (even reflection), which is periodic without wrap-around steps.
+use super::level::check_mask_shape;
 use super::{HeightMap, Result, SurfaceError};
 use crate::numerics::fft2::{angular_wavenumbers, fft2_real, ifft2_real};
 use ndarray::{s, Array2};
@@ -97,6 +98,7 @@ pub fn apply_filters(
     s_cutoff: Option<f64>,
     l_cutoff: Option<f64>,
 ) -> Result<()> {
+    check_mask_shape(map)?;
     if let Some(c) = s_cutoff {
         check_cutoff("filter_s", c, map)?;
     }

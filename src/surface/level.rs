@@ -78,13 +78,34 @@ impl std::fmt::Display for LevelOp {
     }
 }
 
-/// Apply a recipe in order; each op is recorded in `map.history`.
+/// Apply a recipe in order; each op is recorded in `map.history`. On error the map is left
+/// as it was before the call.
 pub fn level(map: &mut HeightMap, recipe: &[LevelOp]) -> Result<()> {
+    check_mask_shape(map)?;
+    let before = (map.z.clone(), map.history.len());
     for &op in recipe {
-        apply_op(map, op)?;
+        if let Err(e) = apply_op(map, op) {
+            map.z = before.0;
+            map.history.truncate(before.1);
+            return Err(e);
+        }
         map.push_step("level", &[("op", op.to_string())]);
     }
     Ok(())
+}
+
+/// A validity mask must have the shape of the heights (indexing it would otherwise fail).
+pub(crate) fn check_mask_shape(map: &HeightMap) -> Result<()> {
+    match &map.valid {
+        Some(v) if v.dim() != map.z.dim() => Err(SurfaceError::InvalidData(format!(
+            "validity mask is {}×{} but the height map is {}×{}",
+            v.ncols(),
+            v.nrows(),
+            map.nx(),
+            map.ny()
+        ))),
+        _ => Ok(()),
+    }
 }
 
 fn apply_op(map: &mut HeightMap, op: LevelOp) -> Result<()> {
