@@ -614,5 +614,22 @@ mod tests {
         let mut map = map_from(Array2::from_elem((4, 4), 1.0));
         map.valid = Some(Array2::from_elem((4, 4), false));
         assert!(level(&mut map, &[LevelOp::Mean]).is_err());
+        // A failing op leaves the map as it was, including earlier ops of the recipe.
+        let z = Array2::from_shape_fn((4, 4), |(j, i)| (i + 3 * j) as f64);
+        let mut valid = Array2::from_elem((4, 4), false);
+        valid[[2, 0]] = true;
+        valid[[2, 3]] = true;
+        let mut map = map_from(z.clone());
+        map.valid = Some(valid);
+        assert!(level(&mut map, &[LevelOp::RowsMean, LevelOp::Plane]).is_err());
+        assert_eq!(map.z, z);
+        assert!(map.history.is_empty());
+        // A mask of the wrong shape is reported, not indexed.
+        let mut map = map_from(z);
+        map.valid = Some(Array2::from_elem((3, 4), true));
+        assert!(matches!(
+            level(&mut map, &[LevelOp::Mean]),
+            Err(SurfaceError::InvalidData(_))
+        ));
     }
 }
