@@ -1,14 +1,318 @@
-//! ISO 16610-61 areal Gaussian filter (signals-and-surfaces.md §2.4). CONTRACT STUB.
-use super::{HeightMap, Result};
-use ndarray::Array2;
+//! ISO 16610-61 areal Gaussian filter (signals-and-surfaces.md §2.4).
+//!
+//! The analytic transfer function `H(λ) = exp(−π(αλc/λ)²)`, `α = √(ln2/π)`, is applied in the
+//! frequency domain, so the transmission of every Fourier mode is exact (no kernel truncation).
+//! Periodic fields are transformed as they are; non-periodic fields are mirror-extended to
+//! 2ny × 2nx first (even reflection), which is periodic without wrap-around steps.
+use super::level::check_mask_shape;
+use super::{HeightMap, Result, SurfaceError};
+use crate::numerics::fft2::{angular_wavenumbers, fft2_real, ifft2_real};
+use ndarray::{s, Array2};
+use std::f64::consts::PI;
+
+/// `α = √(ln2/π)`: makes the transmission exactly 50 % at the cutoff.
+pub fn iso_alpha() -> f64 {
+    (std::f64::consts::LN_2 / PI).sqrt()
+}
+
+/// Low-pass amplitude transmission of a mode of wavelength `wavelength` for cutoff `cutoff`.
+pub fn lowpass_transmission(wavelength: f64, cutoff: f64) -> f64 {
+    let ratio = iso_alpha() * cutoff / wavelength;
+    (-PI * ratio * ratio).exp()
+}
 
 /// Gaussian low-pass with cutoff wavelength `cutoff` (m): transmission 0.5^((λc/λ)²).
-pub fn gaussian_lowpass(_z: &Array2<f64>, _dx: f64, _dy: f64, _cutoff: f64, _periodic: bool) -> Array2<f64> {
-    unimplemented!()
+///
+/// Pure function of the heights: NaNs propagate (use [`apply_filters`] for maps with invalid
+/// pixels) and the cutoff is not validated here (`apply_filters` does).
+pub fn gaussian_lowpass(
+    z: &Array2<f64>,
+    dx: f64,
+    dy: f64,
+    cutoff: f64,
+    periodic: bool,
+) -> Array2<f64> {
+    let (ny, nx) = z.dim();
+    if nx == 0 || ny == 0 {
+        return z.clone();
+    }
+    let work = if periodic {
+        z.to_owned()
+    } else {
+        mirror_extend(z)
+    };
+    let (wy, wx) = work.dim();
+    let mut spectrum = fft2_real(&work);
+    // |k|²/(2π)² = 1/λ², so H = exp(−π α²λc² |k|²/(4π²)).
+    let factor = -PI * (iso_alpha() * cutoff).powi(2) / (4.0 * PI * PI);
+    let kx = angular_wavenumbers(wx, dx);
+    let ky = angular_wavenumbers(wy, dy);
+    let hx: Vec<f64> = kx.iter().map(|k| (factor * k * k).exp()).collect();
+    let hy: Vec<f64> = ky.iter().map(|k| (factor * k * k).exp()).collect();
+    // The Gaussian factorises: H(kx, ky) = H(kx)·H(ky).
+    for ((q, p), c) in spectrum.indexed_iter_mut() {
+        *c *= hy[q] * hx[p];
+    }
+    let filtered = ifft2_real(&spectrum);
+    if periodic {
+        filtered
+    } else {
+        filtered.slice(s![..ny, ..nx]).to_owned()
+    }
+}
+
+/// Even mirror extension `[[z, flip_x z], [flip_y z, flip_xy z]]` (edge samples repeated), which
+/// is continuous across every wrap-around.
+fn mirror_extend(z: &Array2<f64>) -> Array2<f64> {
+    let (ny, nx) = z.dim();
+    Array2::from_shape_fn((2 * ny, 2 * nx), |(j, i)| {
+        let jj = if j < ny { j } else { 2 * ny - 1 - j };
+        let ii = if i < nx { i } else { 2 * nx - 1 - i };
+        z[[jj, ii]]
+    })
+}
+
+/// Validates a cutoff wavelength: finite, positive and at least two pixels (Nyquist).
+fn check_cutoff(name: &str, cutoff: f64, map: &HeightMap) -> Result<()> {
+    let nyquist = 2.0 * map.dx.max(map.dy);
+    if !cutoff.is_finite() || cutoff <= 0.0 || cutoff < nyquist {
+        return Err(SurfaceError::Parameter {
+            name: name.into(),
+            value: format!("{cutoff:e} m"),
+            expected: format!(
+                "a finite cutoff wavelength ≥ 2·max(dx, dy) = {nyquist:e} m (Nyquist)"
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// S-filter (low-pass at `s_cutoff`, removes noise) and L-filter (high-pass at `l_cutoff`,
 /// removes waviness), both optional; recorded in history.
-pub fn apply_filters(_map: &mut HeightMap, _s_cutoff: Option<f64>, _l_cutoff: Option<f64>) -> Result<()> {
-    unimplemented!()
+///
+/// Invalid (or non-finite) pixels are filled with the mean of the valid pixels before
+/// filtering (0 after levelling with `mean`) and keep their original values afterwards, so they
+/// stay excluded from statistics without leaking NaNs into their neighbours.
+pub fn apply_filters(
+    map: &mut HeightMap,
+    s_cutoff: Option<f64>,
+    l_cutoff: Option<f64>,
+) -> Result<()> {
+    check_mask_shape(map)?;
+    if let Some(c) = s_cutoff {
+        check_cutoff("filter_s", c, map)?;
+    }
+    if let Some(c) = l_cutoff {
+        check_cutoff("filter_l", c, map)?;
+    }
+    if let (Some(s), Some(l)) = (s_cutoff, l_cutoff) {
+        if s >= l {
+            return Err(SurfaceError::Parameter {
+                name: "filter_s".into(),
+                value: format!("{s:e} m"),
+                expected: format!("below the L-filter cutoff {l:e} m"),
+            });
+        }
+    }
+    if s_cutoff.is_none() && l_cutoff.is_none() {
+        return Ok(());
+    }
+
+    let original = map.z.clone();
+    let usable = |j: usize, i: usize, v: f64| map.is_valid(j, i) && v.is_finite();
+    let (mut sum, mut count) = (0.0, 0usize);
+    for ((j, i), &v) in original.indexed_iter() {
+        if usable(j, i, v) {
+            sum += v;
+            count += 1;
+        }
+    }
+    if count == 0 {
+        return Err(SurfaceError::InvalidData(
+            "filtering: the map has no valid pixels".into(),
+        ));
+    }
+    let fill = sum / count as f64;
+    let mut z = Array2::from_shape_fn(original.dim(), |(j, i)| {
+        let v = original[[j, i]];
+        if usable(j, i, v) {
+            v
+        } else {
+            fill
+        }
+    });
+    let edges = if map.periodic { "periodic" } else { "mirror" };
+
+    if let Some(cutoff) = s_cutoff {
+        z = gaussian_lowpass(&z, map.dx, map.dy, cutoff, map.periodic);
+    }
+    if let Some(cutoff) = l_cutoff {
+        let waviness = gaussian_lowpass(&z, map.dx, map.dy, cutoff, map.periodic);
+        z -= &waviness;
+    }
+    for ((j, i), v) in z.indexed_iter_mut() {
+        let raw = original[[j, i]];
+        if !(map.is_valid(j, i) && raw.is_finite()) {
+            *v = raw;
+        }
+    }
+    map.z = z;
+
+    if let Some(cutoff) = s_cutoff {
+        map.push_step(
+            "filter_s",
+            &[
+                ("kind", "gaussian ISO 16610-61 low-pass".into()),
+                ("cutoff_m", format!("{cutoff:e}")),
+                ("edges", edges.into()),
+                ("invalid_fill", "valid mean".into()),
+            ],
+        );
+    }
+    if let Some(cutoff) = l_cutoff {
+        map.push_step(
+            "filter_l",
+            &[
+                ("kind", "gaussian ISO 16610-61 high-pass".into()),
+                ("cutoff_m", format!("{cutoff:e}")),
+                ("edges", edges.into()),
+                ("invalid_fill", "valid mean".into()),
+            ],
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::surface::SourceInfo;
+
+    fn sinusoid(ny: usize, nx: usize, wavelength_px: f64, phase: f64) -> Array2<f64> {
+        Array2::from_shape_fn((ny, nx), |(_, i)| {
+            (2.0 * PI * i as f64 / wavelength_px + phase).cos()
+        })
+    }
+
+    #[test]
+    fn transmission_constants_match_iso() {
+        assert!((iso_alpha() - 0.469719).abs() < 1e-6);
+        assert!((lowpass_transmission(2.0, 1.0) - 0.840896).abs() < 1e-6);
+        assert!((lowpass_transmission(4.0, 1.0) - 0.957603).abs() < 1e-6);
+    }
+
+    #[test]
+    fn periodic_sinusoid_transmission_is_exact() {
+        let dx = 1e-9;
+        let z = sinusoid(16, 128, 32.0, 0.3);
+        for (cutoff_px, expected) in [(16.0, 0.840896), (32.0, 0.5), (64.0, 0.0625)] {
+            let low = gaussian_lowpass(&z, dx, dx, cutoff_px * dx, true);
+            let exact = 0.5f64.powf((cutoff_px / 32.0f64).powi(2));
+            assert!((exact - expected).abs() < 1e-6);
+            for (a, b) in low.iter().zip(z.iter()) {
+                assert!(
+                    (a - exact * b).abs() < 1e-12,
+                    "λc = {cutoff_px}: {a} vs {}",
+                    exact * b
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn sinusoid_along_y_and_rectangular_pixels() {
+        let (dx, dy) = (1e-9, 2e-9);
+        let z = Array2::from_shape_fn((64, 8), |(j, _)| (2.0 * PI * j as f64 / 16.0).sin());
+        // λ = 16 px · dy = 32 nm; λc = 32 nm ⇒ 0.5.
+        let low = gaussian_lowpass(&z, dx, dy, 32e-9, true);
+        for (a, b) in low.iter().zip(z.iter()) {
+            assert!((a - 0.5 * b).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn non_periodic_interior_transmission() {
+        let dx = 1e-9;
+        // 300 px is not a multiple of 32 px, so the field is not periodic.
+        let z = sinusoid(40, 300, 32.0, 0.7);
+        for cutoff_px in [16.0, 32.0, 64.0] {
+            let h = lowpass_transmission(32.0, cutoff_px);
+            let low = gaussian_lowpass(&z, dx, dx, cutoff_px * dx, false);
+            for j in 0..40 {
+                for i in 100..200 {
+                    let expected = h * z[[j, i]];
+                    assert!(
+                        (low[[j, i]] - expected).abs() < 1e-3,
+                        "λc = {cutoff_px} at ({j},{i}): {} vs {expected}",
+                        low[[j, i]]
+                    );
+                }
+            }
+        }
+    }
+
+    fn test_map(z: Array2<f64>) -> HeightMap {
+        HeightMap {
+            z,
+            dx: 1e-9,
+            dy: 1e-9,
+            x0: 0.0,
+            y0: 0.0,
+            channel: "test".into(),
+            valid: None,
+            periodic: true,
+            source: SourceInfo::default(),
+            history: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn high_pass_is_the_complement_and_steps_are_recorded() {
+        let z = Array2::from_shape_fn((64, 64), |(j, i)| {
+            (2.0 * PI * i as f64 / 8.0).cos() + 2.0 * (2.0 * PI * j as f64 / 64.0).sin()
+        });
+        let mut map = test_map(z.clone());
+        apply_filters(&mut map, Some(2e-9), Some(32e-9)).unwrap();
+        let hs = lowpass_transmission(8.0, 2.0);
+        let hl_short = lowpass_transmission(8.0, 32.0);
+        let hl_long = lowpass_transmission(64.0, 32.0);
+        for ((j, i), v) in map.z.indexed_iter() {
+            let expected = hs * (1.0 - hl_short) * (2.0 * PI * i as f64 / 8.0).cos()
+                + lowpass_transmission(64.0, 2.0)
+                    * (1.0 - hl_long)
+                    * 2.0
+                    * (2.0 * PI * j as f64 / 64.0).sin();
+            assert!((v - expected).abs() < 1e-12);
+        }
+        let names: Vec<&str> = map.history.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["filter_s", "filter_l"]);
+    }
+
+    #[test]
+    fn bad_cutoffs_are_parameter_errors() {
+        let mut map = test_map(Array2::zeros((8, 8)));
+        for bad in [0.0, -1e-9, f64::NAN, f64::INFINITY, 1.5e-9] {
+            assert!(matches!(
+                apply_filters(&mut map, Some(bad), None),
+                Err(SurfaceError::Parameter { .. })
+            ));
+            assert!(apply_filters(&mut map, None, Some(bad)).is_err());
+        }
+        assert!(apply_filters(&mut map, Some(8e-9), Some(4e-9)).is_err());
+        assert!(map.history.is_empty());
+    }
+
+    #[test]
+    fn invalid_pixels_do_not_leak() {
+        let mut z = Array2::from_shape_fn((32, 32), |(j, i)| ((i * 7 + j * 3) % 5) as f64);
+        z[[5, 5]] = f64::NAN;
+        let mut valid = Array2::from_elem((32, 32), true);
+        valid[[5, 5]] = false;
+        let mut map = test_map(z);
+        map.periodic = false;
+        map.valid = Some(valid);
+        apply_filters(&mut map, Some(4e-9), None).unwrap();
+        assert!(map.z[[5, 5]].is_nan());
+        assert_eq!(map.z.iter().filter(|v| v.is_finite()).count(), 32 * 32 - 1);
+    }
 }
