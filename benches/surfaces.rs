@@ -34,7 +34,9 @@ fn surfaces(c: &mut Criterion) {
     g.bench_function("gaussian_filter_mirror", |b| {
         b.iter(|| gaussian_lowpass(&map.z, map.dx, map.dy, 16.0 * map.dx, false))
     });
-    g.bench_function("synth_gaussian_acf", |b| b.iter(|| gaussian_acf_surface(&spec)));
+    g.bench_function("synth_gaussian_acf", |b| {
+        b.iter(|| gaussian_acf_surface(&spec))
+    });
     g.finish();
 }
 

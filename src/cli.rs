@@ -14,7 +14,11 @@ use crate::stages;
 use crate::stages::surfaces::{self, SurfaceConfig};
 
 #[derive(Parser, Debug)]
-#[command(name = "hdi", version, about = "Head-disk interface pipeline: AFM surfaces → contact → slider dynamics → signal analysis, cached by content hash")]
+#[command(
+    name = "hdi",
+    version,
+    about = "Head-disk interface pipeline: AFM surfaces → contact → slider dynamics → signal analysis, cached by content hash"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -156,13 +160,29 @@ impl std::fmt::Display for Stale {
 }
 impl std::error::Error for Stale {}
 
-fn cmd_run(config: &Path, only: Vec<String>, force: bool, dry_run: bool, jobs: Option<usize>) -> Result<()> {
+fn cmd_run(
+    config: &Path,
+    only: Vec<String>,
+    force: bool,
+    dry_run: bool,
+    jobs: Option<usize>,
+) -> Result<()> {
     let started = Instant::now();
     let (file, stages) = load(config)?;
     let processed = file.processed_dir();
-    let store = Store::open(&processed).with_context(|| format!("opening {}", processed.display()))?;
-    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1));
-    let opts = RunOptions { only, force, dry_run, jobs };
+    let store =
+        Store::open(&processed).with_context(|| format!("opening {}", processed.display()))?;
+    let jobs = jobs.unwrap_or_else(|| {
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+    });
+    let opts = RunOptions {
+        only,
+        force,
+        dry_run,
+        jobs,
+    };
     let report = engine::run(stages, &store, &opts)?;
     if dry_run {
         for (name, o) in &report.outcomes {
@@ -206,14 +226,20 @@ fn cmd_run(config: &Path, only: Vec<String>, force: bool, dry_run: bool, jobs: O
     };
     for (kind, rows) in engine::summary_rows(&store, &current) {
         let stem = tables_dir.join(format!("{kind}s"));
-        if ran > 0 || !stem.with_extension("parquet").exists() || !stem.with_extension("csv").exists() {
+        if ran > 0
+            || !stem.with_extension("parquet").exists()
+            || !stem.with_extension("csv").exists()
+        {
             crate::core::store::write_table(&rows, &stem)?;
         }
     }
     let failed = report.failed();
     let total = report.outcomes.len();
     if ran == 0 && failed == 0 {
-        eprintln!("nothing to do: all {total} stage instances fresh ({:.2} s)", started.elapsed().as_secs_f64());
+        eprintln!(
+            "nothing to do: all {total} stage instances fresh ({:.2} s)",
+            started.elapsed().as_secs_f64()
+        );
     } else {
         eprintln!(
             "ran {ran}, cached {cached}, failed {failed} of {total} ({:.2} s); outputs in {}",
@@ -255,7 +281,9 @@ fn cmd_status(config: &Path, as_json: bool) -> Result<()> {
                 println!("{state:<8} {}: {}", p.name, why.join("; "));
             }
         }
-        rows.push(json!({"name": p.name, "kind": p.kind, "state": state, "why": why, "key": p.key}));
+        rows.push(
+            json!({"name": p.name, "kind": p.kind, "state": state, "why": why, "key": p.key}),
+        );
     }
     if as_json {
         println!("{}", Value::Array(rows));
@@ -286,7 +314,9 @@ fn cmd_surface(a: SurfaceArgs) -> Result<()> {
         size_x: a.size_x,
         size_y: a.size_y,
         z_unit: a.z_unit,
-        level: a.level.unwrap_or_else(|| vec!["rows:median".into(), "plane".into(), "mean".into()]),
+        level: a
+            .level
+            .unwrap_or_else(|| vec!["rows:median".into(), "plane".into(), "mean".into()]),
         filter_s: a.filter_s,
         filter_l: a.filter_l,
         summits: a.summits,
@@ -297,26 +327,66 @@ fn cmd_surface(a: SurfaceArgs) -> Result<()> {
         histogram_bins: a.histogram_bins,
         scale_sweep: a.out.is_some(),
     };
-    let params = surfaces::validate(&cfg, a.file.clone()).map_err(|(k, m)| anyhow::anyhow!("--{}: {m}", k.replace('_', "-")))?;
+    let params = surfaces::validate(&cfg, a.file.clone())
+        .map_err(|(k, m)| anyhow::anyhow!("--{}: {m}", k.replace('_', "-")))?;
     let analysis = surfaces::analyse(&params)?;
     if let Some(out) = &a.out {
-        let dir = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        let dir = out
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        surfaces::write_outputs(&analysis, &params, out, Some(dir), "", &json!([a.file.to_string_lossy()]))?;
+        surfaces::write_outputs(
+            &analysis,
+            &params,
+            out,
+            Some(dir),
+            "",
+            &json!([a.file.to_string_lossy()]),
+        )?;
     }
     let report = surfaces::report_json(&analysis, &params);
     if a.json {
         println!("{report}");
     } else {
         let r = &analysis.report;
-        println!("{} ({}, channel {}), {} × {} px, dx = {:.3} nm", a.file.display(), analysis.raw.source.format, analysis.raw.channel, analysis.final_map().nx(), analysis.final_map().ny(), analysis.final_map().dx * 1e9);
+        println!(
+            "{} ({}, channel {}), {} × {} px, dx = {:.3} nm",
+            a.file.display(),
+            analysis.raw.source.format,
+            analysis.raw.channel,
+            analysis.final_map().nx(),
+            analysis.final_map().ny(),
+            analysis.final_map().dx * 1e9
+        );
         println!("  levelling  {}", report["levelling"]);
         println!("  filter     {}", report["filter"]);
-        println!("  σ          {:.4} nm   (Sa {:.4} nm, Ssk {:.3}, Sku {:.3})", r.sigma * 1e9, r.sa * 1e9, r.ssk, r.sku);
-        println!("  η          {:.2} µm⁻²  ({} summits, {})", r.eta * 1e-12, r.n_summits, surfaces::scheme_name(r.summit_scheme));
-        println!("  R          {:.4} µm   ({})", r.r * 1e6, surfaces::radius_name(r.r_definition));
+        println!(
+            "  σ          {:.4} nm   (Sa {:.4} nm, Ssk {:.3}, Sku {:.3})",
+            r.sigma * 1e9,
+            r.sa * 1e9,
+            r.ssk,
+            r.sku
+        );
+        println!(
+            "  η          {:.2} µm⁻²  ({} summits, {})",
+            r.eta * 1e-12,
+            r.n_summits,
+            surfaces::scheme_name(r.summit_scheme)
+        );
+        println!(
+            "  R          {:.4} µm   ({})",
+            r.r * 1e6,
+            surfaces::radius_name(r.r_definition)
+        );
         println!("  β = σRη    {:.5}", r.beta);
-        println!("  Nayak      η {:.2} µm⁻², R {:.4} µm, β {:.5} (α = {:.3})", r.nayak.eta * 1e-12, r.nayak.r * 1e6, r.nayak.beta, r.alpha);
+        println!(
+            "  Nayak      η {:.2} µm⁻², R {:.4} µm, β {:.5} (α = {:.3})",
+            r.nayak.eta * 1e-12,
+            r.nayak.r * 1e6,
+            r.nayak.beta,
+            r.alpha
+        );
         for w in &r.warnings {
             println!("  warning: {w}");
         }

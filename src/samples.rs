@@ -2,33 +2,12 @@
 //! (`hdi bench`). Deterministic: fixed seeds, so the files are byte-identical on every run.
 
 use crate::surface::io::{encode_gwy, encode_nanoscope};
-use crate::surface::synth::{gaussian_acf_surface, GaussianSurfaceSpec};
+use crate::surface::synth::{gaussian_acf_surface, GaussianSurfaceSpec, Rng};
 use crate::surface::HeightMap;
 use anyhow::{Context, Result};
 use serde_json::json;
 use std::path::Path;
 use std::time::Instant;
-
-/// SplitMix64: tiny, seeded, good enough for measurement-defect noise.
-struct SplitMix(u64);
-impl SplitMix {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    /// Standard normal (Box–Muller).
-    fn normal(&mut self) -> f64 {
-        let u1 = self.uniform().max(f64::MIN_POSITIVE);
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-    }
-}
 
 /// Instrument-like defects on top of a clean field: a tilt, per-line offsets (a random walk,
 /// as AFM line jumps look) and white measurement noise. Levelling is expected to remove the
@@ -42,7 +21,7 @@ pub struct Defects {
 }
 
 pub fn add_defects(map: &mut HeightMap, d: &Defects) {
-    let mut rng = SplitMix(d.seed);
+    let mut rng = Rng::new(d.seed);
     let mut offset = 0.0;
     let (ny, nx) = map.z.dim();
     for j in 0..ny {
@@ -152,12 +131,25 @@ pub fn bench(config: &Path, size: usize) -> Result<()> {
         let t = Instant::now();
         let a = analyse(&params)?;
         let t_analyse = t.elapsed().as_secs_f64();
-        write_outputs(&a, &params, &tmp.join("out.h5"), Some(&tmp), "bench", &json!([]))?;
+        write_outputs(
+            &a,
+            &params,
+            &tmp.join("out.h5"),
+            Some(&tmp),
+            "bench",
+            &json!([]),
+        )?;
         let t_all = t.elapsed().as_secs_f64();
         best = (best.0.min(t_analyse), best.1.min(t_all));
     }
-    println!("surfaces stage, {size}×{size} map (read+level+roughness+scale sweep): {:.3} s", best.0);
-    println!("surfaces stage, {size}×{size} map incl. HDF5 + PNG outputs:            {:.3} s", best.1);
+    println!(
+        "surfaces stage, {size}×{size} map (read+level+roughness+scale sweep): {:.3} s",
+        best.0
+    );
+    println!(
+        "surfaces stage, {size}×{size} map incl. HDF5 + PNG outputs:            {:.3} s",
+        best.1
+    );
     let _ = std::fs::remove_dir_all(&tmp);
 
     if config.is_file() {
@@ -178,7 +170,11 @@ pub fn bench(config: &Path, size: usize) -> Result<()> {
         }
         // The first run may do real work; the rest are the no-op cached reruns.
         let noop = times[1..].iter().cloned().fold(f64::INFINITY, f64::min);
-        println!("no-op cached rerun of {} (best of 4): {:.3} s", config.display(), noop);
+        println!(
+            "no-op cached rerun of {} (best of 4): {:.3} s",
+            config.display(),
+            noop
+        );
     }
     Ok(())
 }

@@ -1,5 +1,5 @@
 //! One integration-test binary (one link step on 2 cores), one module per concern.
+mod bad_input;
 mod common;
 mod pipeline_cache;
-mod bad_input;
 mod surface_cli;

@@ -2,7 +2,9 @@
 
 use crate::common::*;
 
-fn run_then_break(edit: impl Fn(&Project)) -> (Project, std::process::Output, Vec<(String, String)>) {
+fn run_then_break(
+    edit: impl Fn(&Project),
+) -> (Project, std::process::Output, Vec<(String, String)>) {
     let p = Project::shipped();
     let o = p.run(&["run"]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -48,7 +50,10 @@ fn nan_filled_map_is_an_error_naming_the_file() {
             text.push('\n');
         }
         std::fs::write(p.path().join("raw/afm/nan.txt"), text).unwrap();
-        p.set_config(&p.config().replace("raw/afm/slider_tfc_1um.spm", "raw/afm/nan.txt"));
+        p.set_config(
+            &p.config()
+                .replace("raw/afm/slider_tfc_1um.spm", "raw/afm/nan.txt"),
+        );
     });
     assert_clean_failure(&o, "nan.txt");
     assert_eq!(before, snapshot(&p.processed()), "earlier results changed");
@@ -57,9 +62,15 @@ fn nan_filled_map_is_an_error_naming_the_file() {
 #[test]
 fn missing_file_in_config_names_key_file_and_line() {
     let (p, o, before) = run_then_break(|p| {
-        p.set_config(&p.config().replace("raw/afm/disk_dlc_1um.gwy", "raw/afm/nope.gwy"));
+        p.set_config(
+            &p.config()
+                .replace("raw/afm/disk_dlc_1um.gwy", "raw/afm/nope.gwy"),
+        );
     });
-    assert_clean_failure(&o, "pipeline.toml:14: height map");
+    assert_clean_failure(
+        &o,
+        "pipeline.toml:14: surface.disk.file: height map raw/afm/nope.gwy not found",
+    );
     assert!(stderr(&o).contains("nope.gwy"), "{}", stderr(&o));
     assert_eq!(before, snapshot(&p.processed()));
 }
@@ -67,11 +78,17 @@ fn missing_file_in_config_names_key_file_and_line() {
 #[test]
 fn unknown_key_names_file_line_and_nearest_key() {
     let (p, o, before) = run_then_break(|p| {
-        p.set_config(&p.config().replace("rule = \"sum_surface\"", "rule = \"sum_surface\"\nsurfacez = 1"));
+        p.set_config(&p.config().replace(
+            "rule = \"sum_surface\"",
+            "rule = \"sum_surface\"\nsurfacez = 1",
+        ));
     });
     assert_clean_failure(&o, "pipeline.toml:");
     let e = stderr(&o);
-    assert!(e.contains("unknown key `surfacez`") && e.contains("did you mean `surfaces`"), "{e}");
+    assert!(
+        e.contains("unknown key `surfacez`") && e.contains("did you mean `surfaces`"),
+        "{e}"
+    );
     assert_eq!(before, snapshot(&p.processed()));
 }
 
@@ -85,9 +102,15 @@ fn out_of_range_parameter_names_parameter_and_range() {
     let o = p.run(&["run"]);
     assert_clean_failure(&o, "surface.disk.filter_l");
     assert!(stderr(&o).contains("must be > 0"), "{}", stderr(&o));
-    p.set_config(&p.config().replace("filter_l = \"-5 um\"", "filter_l = \"5 parsecs\""));
+    p.set_config(
+        &p.config()
+            .replace("filter_l = \"-5 um\"", "filter_l = \"5 parsecs\""),
+    );
     assert_clean_failure(&p.run(&["run"]), "unknown unit `parsecs`");
-    p.set_config(&p.config().replace("filter_l = \"5 parsecs\"", "summits = 7"));
+    p.set_config(
+        &p.config()
+            .replace("filter_l = \"5 parsecs\"", "summits = 7"),
+    );
     assert_clean_failure(&p.run(&["run"]), "use 9 or 5");
 }
 
@@ -103,7 +126,10 @@ fn ad_hoc_surface_errors_are_one_line() {
     assert_clean_failure(&o, "junk.bin");
     let empty = dir.path().join("empty.txt");
     std::fs::write(&empty, "").unwrap();
-    assert_clean_failure(&hdi().arg("surface").arg(&empty).output().unwrap(), "empty.txt");
+    assert_clean_failure(
+        &hdi().arg("surface").arg(&empty).output().unwrap(),
+        "empty.txt",
+    );
     let no_size = dir.path().join("nosize.txt");
     std::fs::write(&no_size, "1 2 3\n4 5 6\n7 8 9\n1 2 3\n").unwrap();
     let o = hdi().arg("surface").arg(&no_size).output().unwrap();

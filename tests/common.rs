@@ -26,8 +26,11 @@ impl Project {
     pub fn shipped() -> Self {
         let dir = tempfile::tempdir().expect("tempdir");
         copy_dir(&repo_root().join("raw"), &dir.path().join("raw"));
-        std::fs::copy(repo_root().join("pipeline.toml"), dir.path().join("pipeline.toml"))
-            .expect("copy pipeline.toml");
+        std::fs::copy(
+            repo_root().join("pipeline.toml"),
+            dir.path().join("pipeline.toml"),
+        )
+        .expect("copy pipeline.toml");
         Self { dir }
     }
     pub fn path(&self) -> &Path {
@@ -74,11 +77,17 @@ pub fn stdout(o: &Output) -> String {
 /// Assert a failed run: non-zero exit, a one-line `error:` message containing `needle`, no panic.
 pub fn assert_clean_failure(o: &Output, needle: &str) {
     let err = stderr(o);
-    assert!(!o.status.success(), "expected failure, got success; stderr: {err}");
+    assert!(
+        !o.status.success(),
+        "expected failure, got success; stderr: {err}"
+    );
     assert!(!err.contains("panicked"), "panic on user input: {err}");
     let error_lines: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
     assert_eq!(error_lines.len(), 1, "want exactly one error line: {err}");
-    assert!(error_lines[0].contains(needle), "error line lacks `{needle}`: {err}");
+    assert!(
+        error_lines[0].contains(needle),
+        "error line lacks `{needle}`: {err}"
+    );
 }
 
 /// Every file under `dir` (following no links) with its content hash: to show nothing changed.
@@ -91,7 +100,13 @@ pub fn snapshot(dir: &Path) -> Vec<(String, String)> {
             let ft = e.file_type().unwrap();
             let rel = p.strip_prefix(root).unwrap().to_string_lossy().to_string();
             if ft.is_symlink() {
-                out.push((rel, std::fs::read_link(&p).unwrap().to_string_lossy().to_string()));
+                out.push((
+                    rel,
+                    std::fs::read_link(&p)
+                        .unwrap()
+                        .to_string_lossy()
+                        .to_string(),
+                ));
             } else if ft.is_dir() {
                 walk(root, &p, out);
             } else if !rel.ends_with("lock") && !rel.ends_with("input-hashes.json") {

@@ -12,7 +12,11 @@ fn default_pipeline_writes_hdf5_tables_and_plots_readable_by_others() {
     let p = Project::shipped();
     let o = p.run(&["run"]);
     assert_ok(&o);
-    assert!(stderr(&o).contains("ran 4, cached 0, failed 0 of 4"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("ran 4, cached 0, failed 0 of 4"),
+        "{}",
+        stderr(&o)
+    );
     let proc = p.processed();
     for f in [
         "disk/surface.h5",
@@ -61,8 +65,16 @@ print('datasets', n)
         .arg(&proc)
         .output()
         .unwrap();
-    assert!(out.status.success(), "python check failed: {}", stderr(&out));
-    let n: usize = stdout(&out).trim().trim_start_matches("datasets ").parse().unwrap();
+    assert!(
+        out.status.success(),
+        "python check failed: {}",
+        stderr(&out)
+    );
+    let n: usize = stdout(&out)
+        .trim()
+        .trim_start_matches("datasets ")
+        .parse()
+        .unwrap();
     assert!(n > 40, "only {n} datasets checked");
 }
 
@@ -74,8 +86,16 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
 
     let o = p.run(&["run"]);
     assert_ok(&o);
-    assert!(stderr(&o).contains("nothing to do: all 4 stage instances fresh"), "{}", stderr(&o));
-    assert_eq!(before, snapshot(&p.processed()), "a no-op run changed processed/");
+    assert!(
+        stderr(&o).contains("nothing to do: all 4 stage instances fresh"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(
+        before,
+        snapshot(&p.processed()),
+        "a no-op run changed processed/"
+    );
     let st = p.run(&["status"]);
     assert!(st.status.success(), "status: {}", stdout(&st));
 
@@ -89,7 +109,10 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let st = p.run(&["status"]);
     assert_eq!(st.status.code(), Some(1), "status must exit 1 when stale");
     let s = stdout(&st);
-    assert!(s.contains("stale    disk: filter_l_m: null → 2.5e-7"), "{s}");
+    assert!(
+        s.contains("stale    disk: filter_l_m: null → 2.5e-7"),
+        "{s}"
+    );
     assert!(s.contains("stale    hdi: upstream disk changed"), "{s}");
     assert!(s.contains("fresh    slider"), "{s}");
     assert!(s.contains("fresh    table_2_2"), "{s}");
@@ -102,7 +125,10 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     assert_ok(&o);
     let e = stderr(&o);
     assert!(e.contains("ran 2, cached 2"), "{e}");
-    assert!(e.contains("ran     disk") && e.contains("ran     hdi"), "{e}");
+    assert!(
+        e.contains("ran     disk") && e.contains("ran     hdi"),
+        "{e}"
+    );
 
     // Reverting the parameter re-uses the first result: nothing recomputed.
     let reverted = p.config().replace("filter_l = \"250 nm\"\n", "");
@@ -123,7 +149,11 @@ fn damaged_or_deleted_cached_outputs_are_recomputed_not_trusted() {
     bad[mid] ^= 0xff;
     std::fs::write(&h5, &bad).unwrap();
     let st = p.run(&["status"]);
-    assert!(stdout(&st).contains("disk: cached output damaged: surface.h5 changed since written"), "{}", stdout(&st));
+    assert!(
+        stdout(&st).contains("disk: cached output damaged: surface.h5 changed since written"),
+        "{}",
+        stdout(&st)
+    );
     let o = p.run(&["run"]);
     assert_ok(&o);
     assert!(stderr(&o).contains("ran     disk"), "{}", stderr(&o));
@@ -164,7 +194,10 @@ fn gc_removes_what_the_pipeline_no_longer_references() {
     // is gone. Everything the pipeline needs is still fresh.
     let st = p.run(&["status"]);
     assert!(st.status.success(), "{}", stdout(&st));
-    assert!(p.path().join("raw/afm/disk_dlc_1um.gwy").is_file(), "gc must never touch raw/");
+    assert!(
+        p.path().join("raw/afm/disk_dlc_1um.gwy").is_file(),
+        "gc must never touch raw/"
+    );
 }
 
 #[test]

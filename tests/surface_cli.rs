@@ -6,7 +6,13 @@ use hdi::surface::synth::{egg_crate, gaussian_acf_surface, GaussianSurfaceSpec};
 use serde_json::Value;
 
 fn surface_json(file: &std::path::Path, extra: &[&str]) -> Value {
-    let o = hdi().arg("surface").arg(file).args(extra).arg("--json").output().unwrap();
+    let o = hdi()
+        .arg("surface")
+        .arg(file)
+        .args(extra)
+        .arg("--json")
+        .output()
+        .unwrap();
     assert!(o.status.success(), "hdi surface failed: {}", stderr(&o));
     serde_json::from_str(&stdout(&o)).expect("one JSON object on stdout")
 }
@@ -17,7 +23,13 @@ fn rel(a: f64, b: f64) -> f64 {
 
 #[test]
 fn every_format_gives_sigma_r_eta_beta_in_si() {
-    let spec = GaussianSurfaceSpec { n: 128, size: 0.5e-6, sigma: 0.5e-9, correlation_length: 20e-9, seed: 42 };
+    let spec = GaussianSurfaceSpec {
+        n: 128,
+        size: 0.5e-6,
+        sigma: 0.5e-9,
+        correlation_length: 20e-9,
+        seed: 42,
+    };
     let map = gaussian_acf_surface(&spec);
     let dir = tempfile::tempdir().unwrap();
     let files = [
@@ -32,11 +44,24 @@ fn every_format_gives_sigma_r_eta_beta_in_si() {
         let f = dir.path().join(format!("map.{ext}"));
         std::fs::write(&f, bytes).unwrap();
         let j = surface_json(&f, &[]);
-        for key in ["sigma_m", "R_m", "eta_per_m2", "beta", "n_summits", "m2", "m4_per_m2", "alpha"] {
+        for key in [
+            "sigma_m",
+            "R_m",
+            "eta_per_m2",
+            "beta",
+            "n_summits",
+            "m2",
+            "m4_per_m2",
+            "alpha",
+        ] {
             assert!(j[key].is_number(), "{ext}: {key} missing in {j}");
         }
         assert_eq!(j["nx"], 128, "{ext}");
-        assert!(rel(j["dx_m"].as_f64().unwrap(), 0.5e-6 / 128.0) < 1e-6, "{ext}: dx {}", j["dx_m"]);
+        assert!(
+            rel(j["dx_m"].as_f64().unwrap(), 0.5e-6 / 128.0) < 1e-6,
+            "{ext}: dx {}",
+            j["dx_m"]
+        );
         let sigma = j["sigma_m"].as_f64().unwrap();
         // Same field in every format: σ agrees (int32 NanoScope and f32 GSF quantise a little).
         assert!(sigma > 0.3e-9 && sigma < 0.6e-9, "{ext}: sigma {sigma}");
@@ -71,23 +96,40 @@ fn egg_crate_summit_density_and_radius_match_the_analytic_values() {
 fn gaussian_surface_sigma_is_the_sample_rms_after_levelling() {
     use hdi::surface::level::{level, LevelOp};
     use hdi::surface::roughness::{roughness, RoughnessOptions};
-    let spec = GaussianSurfaceSpec { n: 200, size: 1e-6, sigma: 0.4e-9, correlation_length: 25e-9, seed: 9 };
+    let spec = GaussianSurfaceSpec {
+        n: 200,
+        size: 1e-6,
+        sigma: 0.4e-9,
+        correlation_length: 25e-9,
+        seed: 9,
+    };
     let mut map = gaussian_acf_surface(&spec);
     map.periodic = false;
-    let recipe: Vec<LevelOp> = ["rows:median", "plane", "mean"].iter().map(|s| s.parse().unwrap()).collect();
+    let recipe: Vec<LevelOp> = ["rows:median", "plane", "mean"]
+        .iter()
+        .map(|s| s.parse().unwrap())
+        .collect();
     level(&mut map, &recipe).unwrap();
     let n = map.z.len() as f64;
     let mean = map.z.sum() / n;
     let rms = (map.z.iter().map(|z| (z - mean).powi(2)).sum::<f64>() / n).sqrt();
     let rep = roughness(&map, &RoughnessOptions::default()).unwrap();
-    assert!(rel(rep.sigma, rms) < 1e-12, "sigma {} vs sample rms {rms}", rep.sigma);
+    assert!(
+        rel(rep.sigma, rms) < 1e-12,
+        "sigma {} vs sample rms {rms}",
+        rep.sigma
+    );
     // And through the CLI on a file, with levelling "mean" only, σ is the generator's σ.
     let raw = gaussian_acf_surface(&spec);
     let dir = tempfile::tempdir().unwrap();
     let f = dir.path().join("g.gwy");
     std::fs::write(&f, encode_gwy(&raw)).unwrap();
     let j = surface_json(&f, &["--level", "mean"]);
-    assert!(rel(j["sigma_m"].as_f64().unwrap(), 0.4e-9) < 1e-12, "{}", j["sigma_m"]);
+    assert!(
+        rel(j["sigma_m"].as_f64().unwrap(), 0.4e-9) < 1e-12,
+        "{}",
+        j["sigma_m"]
+    );
 }
 
 #[test]
@@ -95,7 +137,13 @@ fn out_option_writes_hdf5_and_plots() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("res").join("disk.h5");
     let f = repo_root().join("raw/afm/disk_dlc_1um.gwy");
-    let o = hdi().arg("surface").arg(&f).arg("--out").arg(&out).output().unwrap();
+    let o = hdi()
+        .arg("surface")
+        .arg(&f)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.is_file());
     assert!(dir.path().join("res/height_map.png").is_file());

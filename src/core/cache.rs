@@ -243,7 +243,9 @@ impl Store {
             let p = dir.join(&out.path);
             match hash_file(&p) {
                 Ok(h) if h == out.blake3 => {}
-                Ok(_) => return Verification::Damaged(format!("{} changed since written", out.path)),
+                Ok(_) => {
+                    return Verification::Damaged(format!("{} changed since written", out.path))
+                }
                 Err(_) => return Verification::Damaged(format!("{} missing", out.path)),
             }
         }
@@ -311,7 +313,9 @@ impl Store {
         let link = self.processed.join(name);
         let current = fs::read_link(&link).ok();
         if current.as_deref() != Some(target.as_path()) {
-            let tmp = self.processed.join(format!(".{name}.link-{}", std::process::id()));
+            let tmp = self
+                .processed
+                .join(format!(".{name}.link-{}", std::process::id()));
             let _ = fs::remove_file(&tmp);
             std::os::unix::fs::symlink(&target, &tmp)?;
             if link.exists() && fs::symlink_metadata(&link)?.is_dir() {
@@ -355,10 +359,18 @@ impl Store {
     /// Every (kind, key) entry in the store.
     pub fn entries(&self) -> Vec<(String, String, PathBuf)> {
         let mut out = Vec::new();
-        for kind in fs::read_dir(self.meta.join("store")).into_iter().flatten().flatten() {
+        for kind in fs::read_dir(self.meta.join("store"))
+            .into_iter()
+            .flatten()
+            .flatten()
+        {
             let kname = kind.file_name().to_string_lossy().to_string();
             for e in fs::read_dir(kind.path()).into_iter().flatten().flatten() {
-                out.push((kname.clone(), e.file_name().to_string_lossy().to_string(), e.path()));
+                out.push((
+                    kname.clone(),
+                    e.file_name().to_string_lossy().to_string(),
+                    e.path(),
+                ));
             }
         }
         out.sort();

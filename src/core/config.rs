@@ -20,7 +20,7 @@ pub enum ConfigError {
         #[source]
         source: std::io::Error,
     },
-    #[error("{}:{line}: {message}", file.display())]
+    #[error("{}:{line}: {}", file.display(), keyed(key, message))]
     Invalid {
         file: PathBuf,
         line: usize,
@@ -121,7 +121,7 @@ impl PipelineFile {
 
     /// Resolve a path written in the file relative to the file's directory.
     pub fn resolve(&self, p: &Path) -> PathBuf {
-        if p.is_absolute() {
+        if p.is_absolute() || self.dir == Path::new(".") {
             p.to_path_buf()
         } else {
             self.dir.join(p)
@@ -146,6 +146,15 @@ impl PipelineFile {
             },
             message,
         }
+    }
+}
+
+/// Prefix the message with the key unless it already names it.
+fn keyed(key: &str, message: &str) -> String {
+    if key.is_empty() || message.contains(&format!("`{key}`")) {
+        message.to_string()
+    } else {
+        format!("{key}: {message}")
     }
 }
 

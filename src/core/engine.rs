@@ -1,9 +1,7 @@
 //! The pipeline engine: stage instances, dependency graph, plan (fresh/stale and why), run
 //! with a thread pool and progress bars, status, gc.
 
-use crate::core::cache::{
-    Fingerprint, InputRecord, Manifest, Store, UpstreamRecord, Verification,
-};
+use crate::core::cache::{Fingerprint, InputRecord, Manifest, Store, UpstreamRecord, Verification};
 use crate::core::progress;
 use crate::error::{Error, Result};
 use serde_json::Value;
@@ -343,30 +341,29 @@ pub fn run(stages: Vec<Box<dyn Stage>>, store: &Store, opts: &RunOptions) -> Res
             }
             break;
         }
-        let wave: Vec<(usize, std::result::Result<(Value, Manifest, f64), String>)> =
-            pool.install(|| {
-                use rayon::prelude::*;
-                ready
-                    .par_iter()
-                    .map(|&i| {
-                        let p = &plan.planned[i];
-                        let stage = &plan.stages[p.index];
-                        let mut upstream = BTreeMap::new();
-                        for u in stage.upstream() {
-                            match results.get(&u) {
-                                Some(Ok(v)) => {
-                                    upstream.insert(u, v.clone());
-                                }
-                                _ => return (i, Err(format!("skipped: upstream `{u}` failed"))),
+        let wave: Vec<(usize, Executed)> = pool.install(|| {
+            use rayon::prelude::*;
+            ready
+                .par_iter()
+                .map(|&i| {
+                    let p = &plan.planned[i];
+                    let stage = &plan.stages[p.index];
+                    let mut upstream = BTreeMap::new();
+                    for u in stage.upstream() {
+                        match results.get(&u) {
+                            Some(Ok(v)) => {
+                                upstream.insert(u, v.clone());
                             }
+                            _ => return (i, Err(format!("skipped: upstream `{u}` failed"))),
                         }
-                        let bar = bars.stage(&p.name);
-                        let r = execute(stage.as_ref(), p, store, upstream, &bar);
-                        bars.finish_stage(bar, &p.name, r.is_ok());
-                        (i, r)
-                    })
-                    .collect()
-            });
+                    }
+                    let bar = bars.stage(&p.name);
+                    let r = execute(stage.as_ref(), p, store, upstream, &bar);
+                    bars.finish_stage(bar, &p.name, r.is_ok());
+                    (i, r)
+                })
+                .collect()
+        });
         for (i, r) in wave {
             let name = plan.planned[i].name.clone();
             match r {
@@ -410,6 +407,9 @@ fn read_result(dir: &Path) -> Result<Value> {
     serde_json::from_slice(&bytes).map_err(|e| Error::Stage(format!("{}: {e}", p.display())))
 }
 
+/// A finished stage: its result, its manifest and the seconds it took; or why it did not run.
+type Executed = std::result::Result<(Value, Manifest, f64), String>;
+
 /// Run one stage into a work dir, then commit it to the store.
 fn execute(
     stage: &dyn Stage,
@@ -417,7 +417,7 @@ fn execute(
     store: &Store,
     upstream: BTreeMap<String, Value>,
     bar: &indicatif::ProgressBar,
-) -> std::result::Result<(Value, Manifest, f64), String> {
+) -> Executed {
     let started = Instant::now();
     let work = store
         .new_work_dir(&p.name, &p.key)
@@ -450,8 +450,13 @@ fn execute(
     };
     // Inputs that changed while the stage ran would make the recorded hashes lie.
     for (role, path) in stage.inputs() {
-        let now = crate::core::hash::hash_file(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-        if p.fingerprint.inputs.iter().any(|i| i.role == role && i.blake3 != now) {
+        let now =
+            crate::core::hash::hash_file(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+        if p.fingerprint
+            .inputs
+            .iter()
+            .any(|i| i.role == role && i.blake3 != now)
+        {
             let _ = std::fs::remove_dir_all(&work);
             return Err(format!(
                 "input {} changed while the stage ran; not recorded, run again",

@@ -74,7 +74,10 @@ mod tests {
         let a = json!({"b": 1.5, "a": {"y": [1, 2], "x": "s"}});
         let b = json!({"a": {"x": "s", "y": [1, 2]}, "b": 1.5});
         assert_eq!(hash_json(&a), hash_json(&b));
-        assert_ne!(hash_json(&a), hash_json(&json!({"b": 1.5000001, "a": {"x": "s", "y": [1, 2]}})));
+        assert_ne!(
+            hash_json(&a),
+            hash_json(&json!({"b": 1.5000001, "a": {"x": "s", "y": [1, 2]}}))
+        );
         assert_eq!(canonical_json(&b), r#"{"a":{"x":"s","y":[1,2]},"b":1.5}"#);
     }
 }

@@ -30,11 +30,16 @@ fn perr(path: &Path, e: impl std::fmt::Display) -> Error {
 fn render_png(
     path: &Path,
     size: (u32, u32),
-    draw: impl FnOnce(&DrawingArea<BitMapBackend, plotters::coord::Shift>) -> std::result::Result<(), String>,
+    draw: impl FnOnce(
+        &DrawingArea<BitMapBackend, plotters::coord::Shift>,
+    ) -> std::result::Result<(), String>,
 ) -> Result<()> {
     ensure_font();
     // The bitmap backend picks the image format from the extension: keep ".png" last.
-    let file_name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+    let file_name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
     let tmp = path.with_file_name(format!(".{file_name}.tmp-{}.png", std::process::id()));
     {
         let root = BitMapBackend::new(&tmp, size).into_drawing_area();
@@ -54,7 +59,9 @@ pub fn heatmap_png(path: &Path, z: ArrayView2<f64>, dx: f64, dy: f64, title: &st
     let (lo, hi) = z
         .iter()
         .filter(|v| v.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
     let span = if hi > lo { hi - lo } else { 1.0 };
     // Decimate to at most 512 cells per axis: enough for a PNG, fast to draw.
     let step = nx.max(ny).div_ceil(512).max(1);
@@ -75,9 +82,9 @@ pub fn heatmap_png(path: &Path, z: ArrayView2<f64>, dx: f64, dy: f64, title: &st
             .y_desc("y (µm)")
             .draw()
             .map_err(|e| e.to_string())?;
-        let cells = (0..ny).step_by(step).flat_map(|j| {
-            (0..nx).step_by(step).map(move |i| (j, i))
-        });
+        let cells = (0..ny)
+            .step_by(step)
+            .flat_map(|j| (0..nx).step_by(step).map(move |i| (j, i)));
         chart
             .draw_series(cells.map(|(j, i)| {
                 let v = z[[j, i]];
@@ -90,7 +97,10 @@ pub fn heatmap_png(path: &Path, z: ArrayView2<f64>, dx: f64, dy: f64, title: &st
                 let x0 = i as f64 * dx * 1e6;
                 let y1 = h_um - j as f64 * dy * 1e6;
                 Rectangle::new(
-                    [(x0, y1), (x0 + step as f64 * dx * 1e6, y1 - step as f64 * dy * 1e6)],
+                    [
+                        (x0, y1),
+                        (x0 + step as f64 * dx * 1e6, y1 - step as f64 * dy * 1e6),
+                    ],
                     c.filled(),
                 )
             }))
@@ -171,13 +181,16 @@ pub fn histogram_png(
             }))
             .map_err(|e| e.to_string())?
             .label("measured")
-            .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 15, y + 5)], BLUE.mix(0.35).filled()));
+            .legend(|(x, y)| {
+                Rectangle::new([(x, y - 5), (x + 15, y + 5)], BLUE.mix(0.35).filled())
+            });
         if overlay.len() == density.len() {
             chart
                 .draw_series(LineSeries::new(
-                    overlay.iter().enumerate().map(|(k, g)| {
-                        (0.5 * (edges[k] + edges[k + 1]) * scale, g / scale)
-                    }),
+                    overlay
+                        .iter()
+                        .enumerate()
+                        .map(|(k, g)| (0.5 * (edges[k] + edges[k + 1]) * scale, g / scale)),
                     RED.stroke_width(2),
                 ))
                 .map_err(|e| e.to_string())?
@@ -202,8 +215,14 @@ pub fn lines_png(
     y_desc: &str,
     series: &[(&str, Vec<(f64, f64)>)],
 ) -> Result<()> {
-    let pts = series.iter().flat_map(|(_, s)| s.iter()).filter(|(x, y)| x.is_finite() && y.is_finite());
-    let (mut xr, mut yr) = ((f64::INFINITY, f64::NEG_INFINITY), (f64::INFINITY, f64::NEG_INFINITY));
+    let pts = series
+        .iter()
+        .flat_map(|(_, s)| s.iter())
+        .filter(|(x, y)| x.is_finite() && y.is_finite());
+    let (mut xr, mut yr) = (
+        (f64::INFINITY, f64::NEG_INFINITY),
+        (f64::INFINITY, f64::NEG_INFINITY),
+    );
     for (x, y) in pts {
         xr = (xr.0.min(*x), xr.1.max(*x));
         yr = (yr.0.min(*y), yr.1.max(*y));
@@ -212,7 +231,11 @@ pub fn lines_png(
         return Err(perr(path, "no finite points to plot"));
     }
     let pad = |r: (f64, f64)| {
-        let d = if r.1 > r.0 { (r.1 - r.0) * 0.05 } else { r.0.abs().max(1.0) * 0.05 };
+        let d = if r.1 > r.0 {
+            (r.1 - r.0) * 0.05
+        } else {
+            r.0.abs().max(1.0) * 0.05
+        };
         (r.0 - d)..(r.1 + d)
     };
     let palette = [BLUE, RED, GREEN, MAGENTA, CYAN, BLACK];
@@ -236,7 +259,9 @@ pub fn lines_png(
                 .draw_series(LineSeries::new(s.iter().copied(), c.stroke_width(2)))
                 .map_err(|e| e.to_string())?
                 .label(*label)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], c.stroke_width(2)));
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 15, y)], c.stroke_width(2))
+                });
         }
         chart
             .configure_series_labels()

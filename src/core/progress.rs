@@ -33,7 +33,9 @@ impl Bars {
 
     /// A spinner for one running stage; stages may set its message.
     pub fn stage(&self, name: &str) -> ProgressBar {
-        let bar = self.multi.insert_before(&self.total, ProgressBar::new_spinner());
+        let bar = self
+            .multi
+            .insert_before(&self.total, ProgressBar::new_spinner());
         bar.set_style(
             ProgressStyle::with_template("{spinner} {prefix:>10} {wide_msg}")
                 .unwrap_or_else(|_| ProgressStyle::default_spinner()),

@@ -37,7 +37,9 @@ impl H5Out {
     }
 
     fn file(&self) -> Result<&hdf5::File> {
-        self.file.as_ref().ok_or_else(|| self.err("file already closed"))
+        self.file
+            .as_ref()
+            .ok_or_else(|| self.err("file already closed"))
     }
 
     fn err(&self, e: impl std::fmt::Display) -> Error {
@@ -119,7 +121,10 @@ impl H5Out {
     ) -> Result<hdf5::Dataset> {
         let b = g.new_dataset_builder().with_data(data);
         let ds = if std::mem::size_of_val(data) >= COMPRESS_MIN_BYTES {
-            b.chunk(data.len().min(65_536)).shuffle().deflate(4).create(name)
+            b.chunk(data.len().min(65_536))
+                .shuffle()
+                .deflate(4)
+                .create(name)
         } else {
             b.create(name)
         }
@@ -138,7 +143,9 @@ impl H5Out {
         long_name: &str,
     ) -> Result<hdf5::Dataset> {
         let (ny, nx) = data.dim();
-        let b = g.new_dataset_builder().with_data(data);
+        // HDF5 writes row-major memory; views from slicing may not be.
+        let data = data.as_standard_layout();
+        let b = g.new_dataset_builder().with_data(data.view());
         let ds = if ny * nx * 8 >= COMPRESS_MIN_BYTES {
             b.chunk((ny.min(256), nx.min(256)))
                 .shuffle()
@@ -161,7 +168,8 @@ impl H5Out {
         long_name: &str,
     ) -> Result<()> {
         let (ny, nx) = data.dim();
-        let b = g.new_dataset_builder().with_data(data);
+        let data = data.as_standard_layout();
+        let b = g.new_dataset_builder().with_data(data.view());
         let ds = if ny * nx >= COMPRESS_MIN_BYTES {
             b.chunk((ny.min(256), nx.min(256))).deflate(4).create(name)
         } else {
@@ -189,7 +197,13 @@ impl H5Out {
     }
 
     /// Scalar integer count.
-    pub fn write_count(&self, g: &hdf5::Group, name: &str, value: u64, long_name: &str) -> Result<()> {
+    pub fn write_count(
+        &self,
+        g: &hdf5::Group,
+        name: &str,
+        value: u64,
+        long_name: &str,
+    ) -> Result<()> {
         let ds = g
             .new_dataset::<u64>()
             .create(name)

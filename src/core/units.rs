@@ -27,18 +27,21 @@ impl Dimension {
 pub fn length_exponent(unit: &str) -> Option<i32> {
     Some(match unit.trim() {
         "m" => 0,
+        "cm" => -2,
         "mm" => -3,
         "um" | "µm" | "μm" | "~m" | "micron" | "microns" => -6,
         "nm" => -9,
         "pm" => -12,
-        "A" | "Å" | "angstrom" => -10,
+        "fm" => -15,
+        "A" | "Å" | "Ang" | "angstrom" | "Angstrom" => -10,
         _ => return None,
     })
 }
 
 /// Length unit factor to metres.
 pub fn length_factor(unit: &str) -> Option<f64> {
-    length_exponent(unit).map(|e| 10f64.powi(e))
+    // 1/10^k is the correctly rounded 10^-k, the same bits as the literal (1e-9 etc.).
+    length_exponent(unit).map(|e| 1.0 / 10f64.powi(-e))
 }
 
 /// Parse `"<number> <unit>"` (or a bare number, taken as SI) into SI.
@@ -57,7 +60,10 @@ pub fn parse_quantity(text: &str, dim: Dimension) -> Result<f64, String> {
     let num = num.trim();
     let not_number = || format!("`{text}` is not a number with a unit (e.g. \"5 um\")");
     let (mantissa, exp) = match num.find(['e', 'E']) {
-        Some(i) => (&num[..i], num[i + 1..].parse::<i32>().map_err(|_| not_number())?),
+        Some(i) => (
+            &num[..i],
+            num[i + 1..].parse::<i32>().map_err(|_| not_number())?,
+        ),
         None => (num, 0),
     };
     mantissa.parse::<f64>().map_err(|_| not_number())?;
@@ -156,7 +162,10 @@ mod tests {
     #[test]
     fn lengths_normalise_to_metres() {
         assert_eq!(parse_quantity("5 um", Dimension::Length).unwrap(), 5e-6);
-        assert_eq!(parse_quantity("0.34nm", Dimension::Length).unwrap(), 0.34e-9);
+        assert_eq!(
+            parse_quantity("0.34nm", Dimension::Length).unwrap(),
+            0.34e-9
+        );
         assert_eq!(parse_quantity("2e-6", Dimension::Length).unwrap(), 2e-6);
         assert_eq!(parse_quantity("3 Å", Dimension::Length).unwrap(), 3e-10);
         assert!(parse_quantity("5 parsecs", Dimension::Length).is_err());
@@ -165,7 +174,13 @@ mod tests {
 
     #[test]
     fn areal_density_normalises_to_per_square_metre() {
-        assert_eq!(parse_quantity("220 um^-2", Dimension::PerArea).unwrap(), 220e12);
-        assert_eq!(parse_quantity("1.5e-3 mm", Dimension::Length).unwrap(), 1.5e-6);
+        assert_eq!(
+            parse_quantity("220 um^-2", Dimension::PerArea).unwrap(),
+            220e12
+        );
+        assert_eq!(
+            parse_quantity("1.5e-3 mm", Dimension::Length).unwrap(),
+            1.5e-6
+        );
     }
 }

@@ -62,7 +62,10 @@ impl InterfaceStage {
             "harmonic_r" => CombineRule::HarmonicR,
             "explicit" => {
                 let (Some(s), Some(r), Some(e)) = (cfg.sigma, cfg.r, cfg.eta) else {
-                    return Err(err("rule", "rule = \"explicit\" needs sigma, r and eta".into()));
+                    return Err(err(
+                        "rule",
+                        "rule = \"explicit\" needs sigma, r and eta".into(),
+                    ));
                 };
                 for (k, v) in [("sigma", s.0), ("r", r.0), ("eta", e.0)] {
                     if v <= 0.0 {
@@ -86,7 +89,10 @@ impl InterfaceStage {
             if cfg.surfaces.len() != 2 {
                 return Err(err(
                     "surfaces",
-                    format!("needs exactly two [surface.*] names, got {}", cfg.surfaces.len()),
+                    format!(
+                        "needs exactly two [surface.*] names, got {}",
+                        cfg.surfaces.len()
+                    ),
                 ));
             }
             for s in &cfg.surfaces {
@@ -95,7 +101,10 @@ impl InterfaceStage {
                     let hint = crate::core::config::nearest(s, &names)
                         .map(|n| format!(" (did you mean `{n}`?)"))
                         .unwrap_or_default();
-                    return Err(err("surfaces", format!("no [surface.{s}] in this file{hint}")));
+                    return Err(err(
+                        "surfaces",
+                        format!("no [surface.{s}] in this file{hint}"),
+                    ));
                 }
             }
         }
@@ -142,7 +151,9 @@ impl Stage for InterfaceStage {
     }
     fn params(&self) -> Value {
         let explicit = match self.rule {
-            CombineRule::Explicit { sigma, r, eta } => json!({"sigma_m": sigma, "R_m": r, "eta_per_m2": eta}),
+            CombineRule::Explicit { sigma, r, eta } => {
+                json!({"sigma_m": sigma, "R_m": r, "eta_per_m2": eta})
+            }
             _ => Value::Null,
         };
         json!({"rule": rule_name(&self.rule), "surfaces": self.surfaces, "explicit": explicit})
@@ -160,7 +171,13 @@ impl Stage for InterfaceStage {
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         let (a, b) = match self.rule {
             CombineRule::Explicit { sigma, r, eta } => {
-                let s = SurfaceStats { sigma, r, eta, m2: None, m4: None };
+                let s = SurfaceStats {
+                    sigma,
+                    r,
+                    eta,
+                    m2: None,
+                    m4: None,
+                };
                 (s, s)
             }
             _ => {
@@ -175,7 +192,13 @@ impl Stage for InterfaceStage {
         };
         let st = combine(&a, &b, self.rule)?;
         let out = H5Out::create(&ctx.out_dir.join("interface.h5"))?;
-        out.root_attributes("interface", ctx.key, &self.params(), &json!(self.surfaces), "interface")?;
+        out.root_attributes(
+            "interface",
+            ctx.key,
+            &self.params(),
+            &json!(self.surfaces),
+            "interface",
+        )?;
         let g = out.group("interface", Some("NXentry"))?;
         out.write_string(&g, "rule", rule_name(&st.rule))?;
         out.write_scalar(&g, "sigma", st.sigma, "m", "combined RMS roughness")?;

@@ -28,17 +28,26 @@ pub fn build(file: &PipelineFile) -> Result<Vec<Box<dyn Stage>>, ConfigError> {
             ));
         }
         if !seen.insert(name.to_string()) {
-            return Err(file.error(section, name, "", format!("stage name `{name}` is used twice")));
+            return Err(file.error(
+                section,
+                name,
+                "",
+                format!("stage name `{name}` is used twice"),
+            ));
         }
         Ok(())
     };
     for (name, cfg) in &file.raw.surface {
         check_name("surface", name)?;
-        stages.push(Box::new(surfaces::SurfaceStage::from_config(file, name, cfg)?));
+        stages.push(Box::new(surfaces::SurfaceStage::from_config(
+            file, name, cfg,
+        )?));
     }
     for (name, cfg) in &file.raw.interface {
         check_name("interface", name)?;
-        stages.push(Box::new(interface::InterfaceStage::from_config(file, name, cfg)?));
+        stages.push(Box::new(interface::InterfaceStage::from_config(
+            file, name, cfg,
+        )?));
     }
     Ok(stages)
 }

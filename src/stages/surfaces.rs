@@ -104,7 +104,10 @@ pub struct SurfaceParams {
 }
 
 /// Validation failures: (key, message).
-pub fn validate(cfg: &SurfaceConfig, file: PathBuf) -> std::result::Result<SurfaceParams, (String, String)> {
+pub fn validate(
+    cfg: &SurfaceConfig,
+    file: PathBuf,
+) -> std::result::Result<SurfaceParams, (String, String)> {
     let bad = |k: &str, m: String| Err((k.to_string(), m));
     let level = cfg
         .level
@@ -118,50 +121,75 @@ pub fn validate(cfg: &SurfaceConfig, file: PathBuf) -> std::result::Result<Surfa
     for (k, v) in [("filter_s", cfg.filter_s), ("filter_l", cfg.filter_l)] {
         if let Some(Length(x)) = v {
             if x <= 0.0 {
-                return bad(k, format!("{x} m is out of range: a cutoff wavelength must be > 0"));
+                return bad(
+                    k,
+                    format!("{x:e} m is out of range: a cutoff wavelength must be > 0"),
+                );
             }
         }
     }
     if let (Some(s), Some(l)) = (cfg.filter_s, cfg.filter_l) {
         if s.0 >= l.0 {
-            return bad("filter_s", format!(
-                "S-filter cutoff {} m must be shorter than the L-filter cutoff {} m",
-                s.0, l.0
-            ));
+            return bad(
+                "filter_s",
+                format!(
+                    "S-filter cutoff {:e} m must be shorter than the L-filter cutoff {:e} m",
+                    s.0, l.0
+                ),
+            );
         }
     }
     for (k, v) in [("size_x", cfg.size_x), ("size_y", cfg.size_y)] {
         if let Some(Length(x)) = v {
             if x <= 0.0 {
-                return bad(k, format!("{x} m is out of range: must be > 0"));
+                return bad(k, format!("{x:e} m is out of range: must be > 0"));
             }
         }
     }
     let summits = match cfg.summits {
         9 => SummitScheme::NinePoint,
         5 => SummitScheme::FivePoint,
-        n => return bad("summits", format!("{n} is not a summit definition: use 9 or 5")),
+        n => {
+            return bad(
+                "summits",
+                format!("{n} is not a summit definition: use 9 or 5"),
+            )
+        }
     };
     let radius = match cfg.radius.as_str() {
         "inverse_mean_curvature" => RadiusDefinition::InverseMeanCurvature,
         "mean_of_inverse" => RadiusDefinition::MeanOfInverse,
         "median_of_inverse" => RadiusDefinition::MedianOfInverse,
         other => {
-            return bad("radius", format!(
-                "`{other}`: use inverse_mean_curvature, mean_of_inverse or median_of_inverse"
-            ))
+            return bad(
+                "radius",
+                format!(
+                    "`{other}`: use inverse_mean_curvature, mean_of_inverse or median_of_inverse"
+                ),
+            )
         }
     };
     let moments = match cfg.moments.as_str() {
         "finite_difference" => MomentsMethod::FiniteDifference,
         "spectral" if cfg.periodic => MomentsMethod::Spectral,
         "spectral" => {
-            return bad("moments", "spectral moments need a periodic map (set periodic = true)".into())
+            return bad(
+                "moments",
+                "spectral moments need a periodic map (set periodic = true)".into(),
+            )
         }
-        other => return bad("moments", format!("`{other}`: use finite_difference or spectral")),
+        other => {
+            return bad(
+                "moments",
+                format!("`{other}`: use finite_difference or spectral"),
+            )
+        }
     };
     if !(4..=4096).contains(&cfg.histogram_bins) {
-        return bad("histogram_bins", format!("{} is out of range 4..=4096", cfg.histogram_bins));
+        return bad(
+            "histogram_bins",
+            format!("{} is out of range 4..=4096", cfg.histogram_bins),
+        );
     }
     Ok(SurfaceParams {
         file,
@@ -359,8 +387,20 @@ fn write_map(out: &H5Out, path: &str, m: &HeightMap, long_name: &str) -> Result<
     out.attr_f64(&g, "y_indices", 0.0)?;
     out.attr_f64(&g, "x_indices", 1.0)?;
     out.write_2d(&g, "height", m.z.view(), "m", long_name)?;
-    out.write_1d(&g, "x", &axis(m.nx(), m.dx, m.x0), "m", "fast-scan position")?;
-    out.write_1d(&g, "y", &axis(m.ny(), m.dy, m.y0), "m", "slow-scan position (row 0 = top)")?;
+    out.write_1d(
+        &g,
+        "x",
+        &axis(m.nx(), m.dx, m.x0),
+        "m",
+        "fast-scan position",
+    )?;
+    out.write_1d(
+        &g,
+        "y",
+        &axis(m.ny(), m.dy, m.y0),
+        "m",
+        "slow-scan position (row 0 = top)",
+    )?;
     Ok(())
 }
 
@@ -376,17 +416,36 @@ pub fn write_outputs(
     let out = H5Out::create(h5_path)?;
     out.root_attributes("surface", cache_key, &p.canonical(), inputs, "surface")?;
     let entry = out.group("surface", Some("NXentry"))?;
-    out.attr_str(&entry, "default", "levelled")?;
+    let default = if a.filtered.is_some() {
+        "filtered"
+    } else {
+        "levelled"
+    };
+    out.attr_str(&entry, "default", default)?;
     write_map(&out, "surface/raw", &a.raw, "height as read")?;
-    write_map(&out, "surface/levelled", &a.levelled, "height after levelling")?;
+    write_map(
+        &out,
+        "surface/levelled",
+        &a.levelled,
+        "height after levelling",
+    )?;
     if let Some(f) = &a.filtered {
-        write_map(&out, "surface/filtered", f, "height after levelling and filtering")?;
-        out.attr_str(&entry, "default", "filtered")?;
+        write_map(
+            &out,
+            "surface/filtered",
+            f,
+            "height after levelling and filtering",
+        )?;
     }
     let fm = a.final_map();
     if let Some(valid) = &fm.valid {
         let mask = valid.mapv(|ok| u8::from(!ok));
-        out.write_mask(&entry, "mask", mask.view(), "1 = invalid pixel (NaN, saturated, masked)")?;
+        out.write_mask(
+            &entry,
+            "mask",
+            mask.view(),
+            "1 = invalid pixel (NaN, saturated, masked)",
+        )?;
     }
     let r = &a.report;
     let g = out.group("surface/summits", None)?;
@@ -395,8 +454,20 @@ pub fn write_outputs(
     };
     out.write_1d(&g, "x", &col(|s| s.x), "m", "summit x")?;
     out.write_1d(&g, "y", &col(|s| s.y), "m", "summit y")?;
-    out.write_1d(&g, "height", &col(|s| s.height), "m", "summit height above the mean plane")?;
-    out.write_1d(&g, "curvature", &col(|s| s.curvature), "1/m", "summit curvature")?;
+    out.write_1d(
+        &g,
+        "height",
+        &col(|s| s.height),
+        "m",
+        "summit height above the mean plane",
+    )?;
+    out.write_1d(
+        &g,
+        "curvature",
+        &col(|s| s.curvature),
+        "1/m",
+        "summit curvature",
+    )?;
     out.write_string(&g, "scheme", scheme_name(r.summit_scheme))?;
     for (name, h, what) in [
         ("height_histogram", &r.height_histogram, "height"),
@@ -406,8 +477,20 @@ pub fn write_outputs(
         out.write_1d(&g, "edges", &h.edges, "m", &format!("{what} bin edges"))?;
         let counts: Vec<f64> = h.counts.iter().map(|&c| c as f64).collect();
         out.write_1d(&g, "counts", &counts, "1", &format!("{what} counts"))?;
-        out.write_1d(&g, "density", &h.density, "1/m", &format!("{what} probability density"))?;
-        out.write_1d(&g, "gaussian", &h.gaussian, "1/m", "Gaussian density, same mean and sigma")?;
+        out.write_1d(
+            &g,
+            "density",
+            &h.density,
+            "1/m",
+            &format!("{what} probability density"),
+        )?;
+        out.write_1d(
+            &g,
+            "gaussian",
+            &h.gaussian,
+            "1/m",
+            "Gaussian density, same mean and sigma",
+        )?;
     }
     let g = out.group("surface/parameters", None)?;
     for (name, v, u, ln) in [
@@ -415,18 +498,48 @@ pub fn write_outputs(
         ("Sa", r.sa, "m", "arithmetic mean roughness"),
         ("Ssk", r.ssk, "1", "skewness"),
         ("Sku", r.sku, "1", "kurtosis (not excess)"),
-        ("m2", r.m2, "1", "second spectral moment (mean square slope / 2)"),
+        (
+            "m2",
+            r.m2,
+            "1",
+            "second spectral moment (mean square slope / 2)",
+        ),
         ("m4", r.m4, "m^-2", "fourth spectral moment"),
         ("alpha", r.alpha, "1", "Nayak bandwidth parameter"),
         ("eta", r.eta, "m^-2", "summit density"),
         ("R", r.r, "m", "mean summit radius"),
-        ("R_mean_of_inverse", r.r_mean_of_inverse, "m", "mean of 1/curvature"),
-        ("R_median_of_inverse", r.r_median_of_inverse, "m", "median of 1/curvature"),
+        (
+            "R_mean_of_inverse",
+            r.r_mean_of_inverse,
+            "m",
+            "mean of 1/curvature",
+        ),
+        (
+            "R_median_of_inverse",
+            r.r_median_of_inverse,
+            "m",
+            "median of 1/curvature",
+        ),
         ("beta", r.beta, "1", "sigma R eta"),
         ("sigma_s", r.sigma_s, "m", "std of summit heights"),
-        ("mean_summit_height", r.mean_summit_height, "m", "mean summit height above mean plane"),
-        ("sampling_interval", r.sampling_interval, "m", "pixel spacing the summits were found at"),
-        ("masked_fraction", fm.masked_fraction(), "1", "fraction of invalid pixels"),
+        (
+            "mean_summit_height",
+            r.mean_summit_height,
+            "m",
+            "mean summit height above mean plane",
+        ),
+        (
+            "sampling_interval",
+            r.sampling_interval,
+            "m",
+            "pixel spacing the summits were found at",
+        ),
+        (
+            "masked_fraction",
+            fm.masked_fraction(),
+            "1",
+            "fraction of invalid pixels",
+        ),
     ] {
         out.write_scalar(&g, name, v, u, ln)?;
     }
@@ -434,17 +547,47 @@ pub fn write_outputs(
     out.write_string(&g, "R_definition", radius_name(r.r_definition))?;
     out.write_string(&g, "moments_method", moments_name(r.moments_method))?;
     let g = out.group("surface/nayak", None)?;
-    out.write_scalar(&g, "eta", r.nayak.eta, "m^-2", "summit density from spectral moments")?;
-    out.write_scalar(&g, "R", r.nayak.r, "m", "mean summit radius from spectral moments")?;
+    out.write_scalar(
+        &g,
+        "eta",
+        r.nayak.eta,
+        "m^-2",
+        "summit density from spectral moments",
+    )?;
+    out.write_scalar(
+        &g,
+        "R",
+        r.nayak.r,
+        "m",
+        "mean summit radius from spectral moments",
+    )?;
     out.write_scalar(&g, "beta", r.nayak.beta, "1", "beta from spectral moments")?;
-    out.write_scalar(&g, "sigma_s", r.nayak.sigma_s, "m", "summit height std (Nayak)")?;
+    out.write_scalar(
+        &g,
+        "sigma_s",
+        r.nayak.sigma_s,
+        "m",
+        "summit height std (Nayak)",
+    )?;
     if !a.sweep.is_empty() {
         let g = out.group("surface/sweeps", None)?;
         let kinds: Vec<&str> = a.sweep.iter().map(|s| s.kind.as_str()).collect();
         out.attr_str_list(&g, "kind", &kinds)?;
         let c = |f: fn(&SweepRow) -> f64| -> Vec<f64> { a.sweep.iter().map(f).collect() };
-        out.write_1d(&g, "value", &c(|s| s.value), "1", "sub-sampling factor or S-filter cutoff in pixels")?;
-        out.write_1d(&g, "sampling_interval", &c(|s| s.sampling_interval), "m", "pixel spacing")?;
+        out.write_1d(
+            &g,
+            "value",
+            &c(|s| s.value),
+            "1",
+            "sub-sampling factor or S-filter cutoff in pixels",
+        )?;
+        out.write_1d(
+            &g,
+            "sampling_interval",
+            &c(|s| s.sampling_interval),
+            "m",
+            "pixel spacing",
+        )?;
         out.write_1d(&g, "sigma", &c(|s| s.sigma), "m", "RMS roughness")?;
         out.write_1d(&g, "eta", &c(|s| s.eta), "m^-2", "summit density")?;
         out.write_1d(&g, "R", &c(|s| s.r), "m", "mean summit radius")?;
@@ -487,7 +630,11 @@ pub fn write_outputs(
                 &s.density,
                 &s.gaussian,
                 1e9,
-                &format!("Summit heights ({} summits, {})", r.n_summits, scheme_name(r.summit_scheme)),
+                &format!(
+                    "Summit heights ({} summits, {})",
+                    r.n_summits,
+                    scheme_name(r.summit_scheme)
+                ),
                 "summit height (nm)",
                 "Gaussian, same mean and σ_s",
             )?;
@@ -561,7 +708,10 @@ impl Stage for SurfaceStage {
         let mut result = report_json(&a, &self.params);
         if let Value::Object(m) = &mut result {
             // What the interface stage combines.
-            m.insert("stats".into(), json!({"sigma": r.sigma, "r": r.r, "eta": r.eta, "m2": r.m2, "m4": r.m4}));
+            m.insert(
+                "stats".into(),
+                json!({"sigma": r.sigma, "r": r.r, "eta": r.eta, "m2": r.m2, "m4": r.m4}),
+            );
         }
         Ok(StageOutput {
             result,

@@ -79,7 +79,10 @@ impl HeightMap {
     pub fn push_step(&mut self, name: &str, params: &[(&str, String)]) {
         self.history.push(Step {
             name: name.to_string(),
-            params: params.iter().map(|(k, v)| (k.to_string(), v.clone())).collect(),
+            params: params
+                .iter()
+                .map(|(k, v)| (k.to_string(), v.clone()))
+                .collect(),
         });
     }
 }

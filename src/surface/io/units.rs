@@ -3,17 +3,7 @@
 /// Metres per unit for the length units AFM software writes; `None` if not a length.
 /// `~m` is NanoScope's spelling of µm; both the micro sign (U+00B5) and Greek mu are accepted.
 pub(crate) fn length_factor(unit: &str) -> Option<f64> {
-    match unit.trim() {
-        "m" => Some(1.0),
-        "cm" => Some(1e-2),
-        "mm" => Some(1e-3),
-        "um" | "µm" | "μm" | "~m" | "micron" | "microns" => Some(1e-6),
-        "nm" => Some(1e-9),
-        "pm" => Some(1e-12),
-        "fm" => Some(1e-15),
-        "Å" | "A" | "Ang" | "angstrom" | "Angstrom" => Some(1e-10),
-        _ => None,
-    }
+    crate::core::units::length_factor(unit)
 }
 
 /// Parses `"<number> <unit>"` (e.g. `12.34 µm`) into metres.
