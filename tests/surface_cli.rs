@@ -150,3 +150,116 @@ fn out_option_writes_hdf5_and_plots() {
     let text = stdout(&o);
     assert!(text.contains("β = σRη"), "{text}");
 }
+
+/// The spec's §2.6 reference table on the canonical surface in ../shared/data, through the
+/// real reader and the CLI (the unit tests in roughness.rs check the full table).
+#[test]
+fn canonical_surface_reproduces_the_reference_table_through_the_cli() {
+    let f = shared_data().join("surfaces/gaussian_acf_256_seed12345.txt");
+    assert!(
+        f.is_file(),
+        "{} missing: CI puts shared/ beside the clone",
+        f.display()
+    );
+    // The table prints rounded numbers: `got` must round to the printed value, i.e. lie
+    // within half a unit of its last printed digit (×10^exp for the unit).
+    let close = |got: f64, printed: &str, exp: i32, what: &str| {
+        let want: f64 = printed.parse().unwrap();
+        let decimals = printed
+            .split('.')
+            .nth(1)
+            .map_or(0, |d| d.split(['e', 'E']).next().unwrap().len());
+        let mantissa_exp = printed
+            .split(['e', 'E'])
+            .nth(1)
+            .map_or(0, |e| e.parse::<i32>().unwrap());
+        let half_unit = 0.5 * 10f64.powi(mantissa_exp - decimals as i32);
+        let got_scaled = got / 10f64.powi(exp);
+        assert!(
+            (got_scaled - want).abs() <= half_unit * (1.0 + 1e-9),
+            "{what}: got {got_scaled}, reference prints {printed}"
+        );
+    };
+    // 9-point summits, finite-difference moments (the defaults), periodic field.
+    let j = surface_json(&f, &["--periodic", "--level", "mean"]);
+    assert_eq!(j["nx"], 256);
+    // σ was rescaled to 0.5 nm exactly; the ASCII file carries 13 significant digits.
+    assert!(
+        rel(j["sigma_m"].as_f64().unwrap(), 5.0e-10) < 1e-11,
+        "sigma {}",
+        j["sigma_m"]
+    );
+    close(j["m2"].as_f64().unwrap(), "1.26478e-3", 0, "m2 FD");
+    close(j["m4_per_m2"].as_f64().unwrap(), "1.82771e13", 0, "m4 FD");
+    close(j["alpha"].as_f64().unwrap(), "2.8564", 0, "alpha FD");
+    close(
+        j["nayak"]["eta_per_m2"].as_f64().unwrap(),
+        "442.62",
+        12,
+        "eta FD",
+    );
+    close(j["nayak"]["R_m"].as_f64().unwrap(), "155.47", -9, "R FD");
+    assert_eq!(
+        j["n_summits"], 451,
+        "9-point summit count (η = 451 µm⁻² on 1 µm²)"
+    );
+    close(j["R_m"].as_f64().unwrap(), "158.12", -9, "R 9-pt 1/mean κ");
+    close(
+        j["R_mean_of_inverse_m"].as_f64().unwrap(),
+        "180.18",
+        -9,
+        "R 9-pt mean 1/κ",
+    );
+    close(j["beta"].as_f64().unwrap(), "0.035657", 0, "beta 9-pt");
+    close(
+        j["sigma_s_m"].as_f64().unwrap(),
+        "0.38142e-9",
+        0,
+        "sigma_s 9-pt",
+    );
+    // 5-point summits.
+    let j = surface_json(&f, &["--periodic", "--level", "mean", "--summits", "5"]);
+    assert_eq!(j["n_summits"], 583);
+    close(j["R_m"].as_f64().unwrap(), "163.86", -9, "R 5-pt");
+    close(j["beta"].as_f64().unwrap(), "0.047765", 0, "beta 5-pt");
+    // Birmingham-14 summits.
+    let j = surface_json(&f, &["--periodic", "--level", "mean", "--birmingham"]);
+    assert_eq!(j["n_summits"], 407);
+    close(j["R_m"].as_f64().unwrap(), "154.05", -9, "R Birmingham");
+    close(
+        j["beta"].as_f64().unwrap(),
+        "0.031350",
+        0,
+        "beta Birmingham",
+    );
+    // Spectral moments.
+    let j = surface_json(
+        &f,
+        &["--periodic", "--level", "mean", "--moments", "spectral"],
+    );
+    close(j["m2"].as_f64().unwrap(), "1.28921e-3", 0, "m2 spectral");
+    close(
+        j["m4_per_m2"].as_f64().unwrap(),
+        "1.94575e13",
+        0,
+        "m4 spectral",
+    );
+    close(
+        j["nayak"]["eta_per_m2"].as_f64().unwrap(),
+        "462.28",
+        12,
+        "eta spectral",
+    );
+    close(
+        j["nayak"]["R_m"].as_f64().unwrap(),
+        "150.68",
+        -9,
+        "R spectral",
+    );
+    close(
+        j["nayak"]["beta"].as_f64().unwrap(),
+        "0.034828",
+        0,
+        "beta spectral",
+    );
+}

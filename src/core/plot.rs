@@ -66,8 +66,8 @@ pub fn heatmap_png(path: &Path, z: ArrayView2<f64>, dx: f64, dy: f64, title: &st
     // Decimate to at most 512 cells per axis: enough for a PNG, fast to draw.
     let step = nx.max(ny).div_ceil(512).max(1);
     let (w_um, h_um) = (nx as f64 * dx * 1e6, ny as f64 * dy * 1e6);
-    render_png(path, (760, 640), |root| {
-        let (main, bar) = root.split_horizontally(640);
+    render_png(path, (790, 640), |root| {
+        let (main, bar) = root.split_horizontally(630);
         let mut chart = ChartBuilder::on(&main)
             .caption(title, ("sans-serif", 20))
             .margin(10)
@@ -110,13 +110,17 @@ pub fn heatmap_png(path: &Path, z: ArrayView2<f64>, dx: f64, dy: f64, title: &st
         let mut cb = ChartBuilder::on(&bar)
             .margin_top(40)
             .margin_bottom(50)
+            .margin_left(10)
             .margin_right(60)
-            .y_label_area_size(0)
-            .right_y_label_area_size(50)
+            .y_label_area_size(60)
             .build_cartesian_2d(0.0..1.0, lo_nm..hi_nm)
-            .map_err(|e| e.to_string())?
-            .set_secondary_coord(0.0..1.0, lo_nm..hi_nm);
-        cb.configure_secondary_axes()
+            .map_err(|e| e.to_string())?;
+        cb.configure_mesh()
+            .disable_mesh()
+            .disable_x_axis()
+            .y_labels(6)
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 14))
             .y_desc("height (nm)")
             .draw()
             .map_err(|e| e.to_string())?;
@@ -169,7 +173,7 @@ pub fn histogram_png(
         chart
             .configure_mesh()
             .x_desc(x_desc)
-            .y_desc("probability density")
+            .y_desc(if scale == 1e9 { "probability density (1/nm)" } else { "probability density" })
             .draw()
             .map_err(|e| e.to_string())?;
         chart

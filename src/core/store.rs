@@ -240,7 +240,8 @@ impl Drop for H5Out {
 }
 
 /// Write rows (JSON objects with the same keys) as `<stem>.parquet` and `<stem>.csv`.
-/// Numbers become f64 columns, strings Utf8, booleans Boolean; a missing value is null.
+/// Integers become Int64 columns, other numbers Float64, strings Utf8, booleans Boolean; a
+/// missing key or JSON null is a null. (An all-null column is Float64.)
 pub fn write_table(rows: &[serde_json::Map<String, Value>], stem: &Path) -> Result<()> {
     use polars::prelude::*;
     let mut names: Vec<String> = Vec::new();
@@ -253,11 +254,19 @@ pub fn write_table(rows: &[serde_json::Map<String, Value>], stem: &Path) -> Resu
     }
     let mut columns: Vec<Column> = Vec::new();
     for name in &names {
-        let values: Vec<Option<&Value>> = rows.iter().map(|r| r.get(name)).collect();
-        let col = if values.iter().flatten().all(|v| v.is_number()) {
+        // JSON null and a missing key are both a missing value.
+        let values: Vec<Option<&Value>> = rows
+            .iter()
+            .map(|r| r.get(name).filter(|v| !v.is_null()))
+            .collect();
+        let present = || values.iter().flatten();
+        let col = if present().next().is_some() && present().all(|v| v.is_i64()) {
+            let v: Vec<Option<i64>> = values.iter().map(|v| v.and_then(Value::as_i64)).collect();
+            Column::new(name.as_str().into(), v)
+        } else if present().all(|v| v.is_number()) {
             let v: Vec<Option<f64>> = values.iter().map(|v| v.and_then(Value::as_f64)).collect();
             Column::new(name.as_str().into(), v)
-        } else if values.iter().flatten().all(|v| v.is_boolean()) {
+        } else if present().all(|v| v.is_boolean()) {
             let v: Vec<Option<bool>> = values.iter().map(|v| v.and_then(Value::as_bool)).collect();
             Column::new(name.as_str().into(), v)
         } else {
