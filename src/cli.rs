@@ -372,13 +372,9 @@ fn cmd_surface(a: SurfaceArgs) -> Result<()> {
             "  η          {:.2} µm⁻²  ({} summits, {})",
             r.eta * 1e-12,
             r.n_summits,
-            surfaces::scheme_name(r.summit_scheme)
+            r.summit_scheme
         );
-        println!(
-            "  R          {:.4} µm   ({})",
-            r.r * 1e6,
-            surfaces::radius_name(r.r_definition)
-        );
+        println!("  R          {:.4} µm   ({})", r.r * 1e6, r.r_definition);
         println!("  β = σRη    {:.5}", r.beta);
         println!(
             "  Nayak      η {:.2} µm⁻², R {:.4} µm, β {:.5} (α = {:.3})",

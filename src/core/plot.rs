@@ -173,7 +173,11 @@ pub fn histogram_png(
         chart
             .configure_mesh()
             .x_desc(x_desc)
-            .y_desc(if scale == 1e9 { "probability density (1/nm)" } else { "probability density" })
+            .y_desc(if scale == 1e9 {
+                "probability density (1/nm)"
+            } else {
+                "probability density"
+            })
             .draw()
             .map_err(|e| e.to_string())?;
         chart

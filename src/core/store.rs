@@ -5,7 +5,6 @@
 
 use crate::error::{Error, Result};
 use hdf5::types::VarLenUnicode;
-use ndarray::ArrayView2;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -110,7 +109,32 @@ impl H5Out {
         self.attr_str(ds, "long_name", long_name)
     }
 
-    /// 1-D f64 dataset with units; chunked + shuffle + gzip(4) when large.
+    /// An n-D dataset with units: contiguous when small, else chunked (1-D: up to 65 536
+    /// elements; n-D: up to 256 per axis) with shuffle + gzip(4), which every HDF5 reads.
+    pub fn write_array<T: hdf5::H5Type + Clone, D: ndarray::Dimension>(
+        &self,
+        g: &hdf5::Group,
+        name: &str,
+        data: ndarray::ArrayView<T, D>,
+        units: &str,
+        long_name: &str,
+    ) -> Result<hdf5::Dataset> {
+        // HDF5 writes row-major memory; views from slicing may not be.
+        let data = data.as_standard_layout();
+        let b = g.new_dataset_builder().with_data(data.view());
+        let ds = if data.len() * std::mem::size_of::<T>() >= COMPRESS_MIN_BYTES {
+            let cap = if data.ndim() == 1 { 65_536 } else { 256 };
+            let chunk: Vec<usize> = data.shape().iter().map(|&n| n.min(cap)).collect();
+            b.chunk(chunk).shuffle().deflate(4).create(name)
+        } else {
+            b.create(name)
+        }
+        .map_err(|e| self.err(format!("dataset {name}: {e}")))?;
+        self.describe(&ds, units, long_name)?;
+        Ok(ds)
+    }
+
+    /// 1-D f64 dataset with units.
     pub fn write_1d(
         &self,
         g: &hdf5::Group,
@@ -119,64 +143,7 @@ impl H5Out {
         units: &str,
         long_name: &str,
     ) -> Result<hdf5::Dataset> {
-        let b = g.new_dataset_builder().with_data(data);
-        let ds = if std::mem::size_of_val(data) >= COMPRESS_MIN_BYTES {
-            b.chunk(data.len().min(65_536))
-                .shuffle()
-                .deflate(4)
-                .create(name)
-        } else {
-            b.create(name)
-        }
-        .map_err(|e| self.err(format!("dataset {name}: {e}")))?;
-        self.describe(&ds, units, long_name)?;
-        Ok(ds)
-    }
-
-    /// 2-D f64 dataset `[ny, nx]` with units; chunks of at most 256 × 256.
-    pub fn write_2d(
-        &self,
-        g: &hdf5::Group,
-        name: &str,
-        data: ArrayView2<f64>,
-        units: &str,
-        long_name: &str,
-    ) -> Result<hdf5::Dataset> {
-        let (ny, nx) = data.dim();
-        // HDF5 writes row-major memory; views from slicing may not be.
-        let data = data.as_standard_layout();
-        let b = g.new_dataset_builder().with_data(data.view());
-        let ds = if ny * nx * 8 >= COMPRESS_MIN_BYTES {
-            b.chunk((ny.min(256), nx.min(256)))
-                .shuffle()
-                .deflate(4)
-                .create(name)
-        } else {
-            b.create(name)
-        }
-        .map_err(|e| self.err(format!("dataset {name}: {e}")))?;
-        self.describe(&ds, units, long_name)?;
-        Ok(ds)
-    }
-
-    /// 2-D u8 dataset (masks), dimensionless.
-    pub fn write_mask(
-        &self,
-        g: &hdf5::Group,
-        name: &str,
-        data: ArrayView2<u8>,
-        long_name: &str,
-    ) -> Result<()> {
-        let (ny, nx) = data.dim();
-        let data = data.as_standard_layout();
-        let b = g.new_dataset_builder().with_data(data.view());
-        let ds = if ny * nx >= COMPRESS_MIN_BYTES {
-            b.chunk((ny.min(256), nx.min(256))).deflate(4).create(name)
-        } else {
-            b.create(name)
-        }
-        .map_err(|e| self.err(format!("dataset {name}: {e}")))?;
-        self.describe(&ds, "1", long_name)
+        self.write_array(g, name, ndarray::ArrayView1::from(data), units, long_name)
     }
 
     /// Scalar f64 dataset (so `f[path][()]` is a float).

@@ -146,45 +146,29 @@ pub fn validate(
             }
         }
     }
-    let summits = match cfg.summits {
-        9 => SummitScheme::NinePoint,
-        5 => SummitScheme::FivePoint,
-        n => {
+    let summits: SummitScheme = match cfg.summits.to_string().parse() {
+        Ok(s) => s,
+        Err(_) => {
             return bad(
                 "summits",
-                format!("{n} is not a summit definition: use 9 or 5"),
+                format!("{} is not a summit definition: use 9 or 5", cfg.summits),
             )
         }
     };
-    let radius = match cfg.radius.as_str() {
-        "inverse_mean_curvature" => RadiusDefinition::InverseMeanCurvature,
-        "mean_of_inverse" => RadiusDefinition::MeanOfInverse,
-        "median_of_inverse" => RadiusDefinition::MedianOfInverse,
-        other => {
-            return bad(
-                "radius",
-                format!(
-                    "`{other}`: use inverse_mean_curvature, mean_of_inverse or median_of_inverse"
-                ),
-            )
-        }
+    let radius: RadiusDefinition = match cfg.radius.parse() {
+        Ok(r) => r,
+        Err(e) => return bad("radius", e),
     };
-    let moments = match cfg.moments.as_str() {
-        "finite_difference" => MomentsMethod::FiniteDifference,
-        "spectral" if cfg.periodic => MomentsMethod::Spectral,
-        "spectral" => {
-            return bad(
-                "moments",
-                "spectral moments need a periodic map (set periodic = true)".into(),
-            )
-        }
-        other => {
-            return bad(
-                "moments",
-                format!("`{other}`: use finite_difference or spectral"),
-            )
-        }
+    let moments: MomentsMethod = match cfg.moments.parse() {
+        Ok(m) => m,
+        Err(e) => return bad("moments", e),
     };
+    if moments == MomentsMethod::Spectral && !cfg.periodic {
+        return bad(
+            "moments",
+            "spectral moments need a periodic map (set periodic = true)".into(),
+        );
+    }
     if !(4..=4096).contains(&cfg.histogram_bins) {
         return bad(
             "histogram_bins",
@@ -225,34 +209,14 @@ impl SurfaceParams {
             "level": self.level.iter().map(|l| l.to_string()).collect::<Vec<_>>(),
             "filter_s_m": self.filter_s,
             "filter_l_m": self.filter_l,
-            "summits": scheme_name(self.roughness.summits),
-            "radius": radius_name(self.roughness.radius),
+            "summits": self.roughness.summits.to_string(),
+            "radius": self.roughness.radius.to_string(),
             "birmingham": self.roughness.birmingham,
-            "moments": moments_name(self.roughness.moments),
+            "moments": self.roughness.moments.to_string(),
             "periodic": self.periodic,
             "histogram_bins": self.roughness.histogram_bins,
             "scale_sweep": self.scale_sweep,
         })
-    }
-}
-
-pub fn scheme_name(s: SummitScheme) -> &'static str {
-    match s {
-        SummitScheme::NinePoint => "9-point",
-        SummitScheme::FivePoint => "5-point",
-    }
-}
-pub fn radius_name(r: RadiusDefinition) -> &'static str {
-    match r {
-        RadiusDefinition::InverseMeanCurvature => "inverse_mean_curvature",
-        RadiusDefinition::MeanOfInverse => "mean_of_inverse",
-        RadiusDefinition::MedianOfInverse => "median_of_inverse",
-    }
-}
-pub fn moments_name(m: MomentsMethod) -> &'static str {
-    match m {
-        MomentsMethod::FiniteDifference => "finite_difference",
-        MomentsMethod::Spectral => "spectral",
     }
 }
 
@@ -330,12 +294,12 @@ pub fn report_json(a: &SurfaceAnalysis, p: &SurfaceParams) -> Value {
         "nx": m.nx(), "ny": m.ny(), "dx_m": m.dx, "dy_m": m.dy,
         "sigma_m": r.sigma, "Sa_m": r.sa, "Ssk": r.ssk, "Sku": r.sku,
         "m2": r.m2, "m4_per_m2": r.m4, "alpha": r.alpha,
-        "moments_method": moments_name(r.moments_method),
-        "eta_per_m2": r.eta, "R_m": r.r, "R_definition": radius_name(r.r_definition),
+        "moments_method": r.moments_method.to_string(),
+        "eta_per_m2": r.eta, "R_m": r.r, "R_definition": r.r_definition.to_string(),
         "R_mean_of_inverse_m": r.r_mean_of_inverse,
         "R_median_of_inverse_m": r.r_median_of_inverse,
         "beta": r.beta, "sigma_s_m": r.sigma_s, "mean_summit_height_m": r.mean_summit_height,
-        "n_summits": r.n_summits, "summit_scheme": scheme_name(r.summit_scheme),
+        "n_summits": r.n_summits, "summit_scheme": r.summit_scheme.to_string(),
         "sampling_interval_m": r.sampling_interval,
         "nayak": {"eta_per_m2": r.nayak.eta, "R_m": r.nayak.r, "beta": r.nayak.beta,
                   "sigma_s_m": r.nayak.sigma_s},
@@ -362,8 +326,8 @@ pub fn summary_row(a: &SurfaceAnalysis, p: &SurfaceParams) -> Map<String, Value>
         "alpha": r.alpha,
         "nayak_R_um": r.nayak.r * 1e6, "nayak_eta_per_um2": r.nayak.eta * 1e-12,
         "nayak_beta": r.nayak.beta,
-        "summit_scheme": scheme_name(r.summit_scheme),
-        "R_definition": radius_name(r.r_definition),
+        "summit_scheme": r.summit_scheme.to_string(),
+        "R_definition": r.r_definition.to_string(),
         "levelling": p.level.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(" "),
         "filter_s_um": p.filter_s.map(|v| v * 1e6),
         "filter_l_um": p.filter_l.map(|v| v * 1e6),
@@ -386,7 +350,7 @@ fn write_map(out: &H5Out, path: &str, m: &HeightMap, long_name: &str) -> Result<
     out.attr_str_list(&g, "axes", &["y", "x"])?;
     out.attr_f64(&g, "y_indices", 0.0)?;
     out.attr_f64(&g, "x_indices", 1.0)?;
-    out.write_2d(&g, "height", m.z.view(), "m", long_name)?;
+    out.write_array(&g, "height", m.z.view(), "m", long_name)?;
     out.write_1d(
         &g,
         "x",
@@ -440,10 +404,11 @@ pub fn write_outputs(
     let fm = a.final_map();
     if let Some(valid) = &fm.valid {
         let mask = valid.mapv(|ok| u8::from(!ok));
-        out.write_mask(
+        out.write_array(
             &entry,
             "mask",
             mask.view(),
+            "1",
             "1 = invalid pixel (NaN, saturated, masked)",
         )?;
     }
@@ -468,7 +433,7 @@ pub fn write_outputs(
         "1/m",
         "summit curvature",
     )?;
-    out.write_string(&g, "scheme", scheme_name(r.summit_scheme))?;
+    out.write_string(&g, "scheme", &r.summit_scheme.to_string())?;
     for (name, h, what) in [
         ("height_histogram", &r.height_histogram, "height"),
         ("summit_histogram", &r.summit_histogram, "summit height"),
@@ -544,8 +509,8 @@ pub fn write_outputs(
         out.write_scalar(&g, name, v, u, ln)?;
     }
     out.write_count(&g, "n_summits", r.n_summits as u64, "number of summits")?;
-    out.write_string(&g, "R_definition", radius_name(r.r_definition))?;
-    out.write_string(&g, "moments_method", moments_name(r.moments_method))?;
+    out.write_string(&g, "R_definition", &r.r_definition.to_string())?;
+    out.write_string(&g, "moments_method", &r.moments_method.to_string())?;
     let g = out.group("surface/nayak", None)?;
     out.write_scalar(
         &g,
@@ -632,8 +597,7 @@ pub fn write_outputs(
                 1e9,
                 &format!(
                     "Summit heights ({} summits, {})",
-                    r.n_summits,
-                    scheme_name(r.summit_scheme)
+                    r.n_summits, r.summit_scheme
                 ),
                 "summit height (nm)",
                 "Gaussian, same mean and σ_s",

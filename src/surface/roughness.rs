@@ -140,9 +140,9 @@ impl std::str::FromStr for SummitScheme {
 impl std::fmt::Display for RadiusDefinition {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
-            RadiusDefinition::InverseMeanCurvature => "1/mean(kappa)",
-            RadiusDefinition::MeanOfInverse => "mean(1/kappa)",
-            RadiusDefinition::MedianOfInverse => "median(1/kappa)",
+            RadiusDefinition::InverseMeanCurvature => "inverse_mean_curvature",
+            RadiusDefinition::MeanOfInverse => "mean_of_inverse",
+            RadiusDefinition::MedianOfInverse => "median_of_inverse",
         })
     }
 }
@@ -157,8 +157,8 @@ impl std::str::FromStr for RadiusDefinition {
             "mean(1/kappa)" | "mean_of_inverse" => Ok(RadiusDefinition::MeanOfInverse),
             "median(1/kappa)" | "median_of_inverse" => Ok(RadiusDefinition::MedianOfInverse),
             other => Err(format!(
-                "unknown radius definition `{other}`; valid: \"1/mean(kappa)\", \
-                 \"mean(1/kappa)\", \"median(1/kappa)\""
+                "unknown radius definition `{other}`; valid: \"inverse_mean_curvature\" \
+                 (1/mean κ), \"mean_of_inverse\", \"median_of_inverse\""
             )),
         }
     }
