@@ -6,8 +6,8 @@
 //! 2ny × 2nx first (even reflection), which is periodic without wrap-around steps.
 use super::level::check_mask_shape;
 use super::{HeightMap, Result, SurfaceError};
-use crate::numerics::fft2::{angular_wavenumbers, fft2_real, ifft2_real};
-use ndarray::{s, Array2};
+use crate::numerics::fft2::angular_wavenumbers;
+use ndarray::Array2;
 use std::f64::consts::PI;
 
 /// `α = √(ln2/π)`: makes the transmission exactly 50 % at the cutoff.
@@ -36,40 +36,75 @@ pub fn gaussian_lowpass(
     if nx == 0 || ny == 0 {
         return z.clone();
     }
-    let work = if periodic {
-        z.to_owned()
-    } else {
-        mirror_extend(z)
-    };
-    let (wy, wx) = work.dim();
-    let mut spectrum = fft2_real(&work);
-    // |k|²/(2π)² = 1/λ², so H = exp(−π α²λc² |k|²/(4π²)).
+    // |k|²/(2π)² = 1/λ², so H = exp(−π α²λc² |k|²/(4π²)). The Gaussian factorises,
+    // H(kx, ky) = H(kx)·H(ky), and so does the even mirror extension: filtering every row,
+    // then every column, equals the 2-D transform of the 2ny × 2nx extended field, at a
+    // quarter of the work.
     let factor = -PI * (iso_alpha() * cutoff).powi(2) / (4.0 * PI * PI);
-    let kx = angular_wavenumbers(wx, dx);
-    let ky = angular_wavenumbers(wy, dy);
-    let hx: Vec<f64> = kx.iter().map(|k| (factor * k * k).exp()).collect();
-    let hy: Vec<f64> = ky.iter().map(|k| (factor * k * k).exp()).collect();
-    // The Gaussian factorises: H(kx, ky) = H(kx)·H(ky).
-    for ((q, p), c) in spectrum.indexed_iter_mut() {
-        *c *= hy[q] * hx[p];
+    let mut rows = z.as_standard_layout().into_owned();
+    if let Some(data) = rows.as_slice_mut() {
+        filter_lines(data, nx, dx, factor, periodic);
     }
-    let filtered = ifft2_real(&spectrum);
-    if periodic {
-        filtered
-    } else {
-        filtered.slice(s![..ny, ..nx]).to_owned()
+    let mut cols = rows.t().as_standard_layout().into_owned();
+    if let Some(data) = cols.as_slice_mut() {
+        filter_lines(data, ny, dy, factor, periodic);
     }
+    cols.t().as_standard_layout().into_owned()
 }
 
-/// Even mirror extension `[[z, flip_x z], [flip_y z, flip_xy z]]` (edge samples repeated), which
-/// is continuous across every wrap-around.
-fn mirror_extend(z: &Array2<f64>) -> Array2<f64> {
-    let (ny, nx) = z.dim();
-    Array2::from_shape_fn((2 * ny, 2 * nx), |(j, i)| {
-        let jj = if j < ny { j } else { 2 * ny - 1 - j };
-        let ii = if i < nx { i } else { 2 * nx - 1 - i };
-        z[[jj, ii]]
-    })
+/// Filter every contiguous line of length `n` in `data` with the transfer function
+/// `exp(factor·k²)`: on the line itself when periodic, else on its even mirror extension
+/// (length 2n, edge samples repeated, continuous across the wrap-around). Two real lines share
+/// one complex FFT (the filter is real and even, so real and imaginary parts stay apart);
+/// line pairs run in parallel.
+fn filter_lines(data: &mut [f64], n: usize, d: f64, factor: f64, periodic: bool) {
+    use rayon::prelude::*;
+    use rustfft::num_complex::Complex64;
+    let m = if periodic { n } else { 2 * n };
+    let gain: Vec<f64> = angular_wavenumbers(m, d)
+        .iter()
+        .map(|k| (factor * k * k).exp() / m as f64)
+        .collect();
+    let mut planner = rustfft::FftPlanner::<f64>::new();
+    let forward = planner.plan_fft_forward(m);
+    let inverse = planner.plan_fft_inverse(m);
+    let scratch_len = forward
+        .get_inplace_scratch_len()
+        .max(inverse.get_inplace_scratch_len());
+    let source = |i: usize| if i < n { i } else { 2 * n - 1 - i };
+    data.par_chunks_mut(2 * n).for_each_init(
+        || {
+            (
+                vec![Complex64::default(); m],
+                vec![Complex64::default(); scratch_len],
+            )
+        },
+        |(buf, scratch), pair| {
+            let (a, mut b) = if pair.len() == 2 * n {
+                let (a, b) = pair.split_at_mut(n);
+                (a, Some(b))
+            } else {
+                (pair, None)
+            };
+            for (i, c) in buf.iter_mut().enumerate() {
+                let j = source(i);
+                *c = Complex64::new(a[j], b.as_ref().map_or(0.0, |b| b[j]));
+            }
+            forward.process_with_scratch(buf, scratch);
+            for (c, g) in buf.iter_mut().zip(&gain) {
+                *c *= g;
+            }
+            inverse.process_with_scratch(buf, scratch);
+            for (i, v) in a.iter_mut().enumerate() {
+                *v = buf[i].re;
+            }
+            if let Some(b) = b.as_mut() {
+                for (i, v) in b.iter_mut().enumerate() {
+                    *v = buf[i].im;
+                }
+            }
+        },
+    );
 }
 
 /// Validates a cutoff wavelength: finite, positive and at least two pixels (Nyquist).

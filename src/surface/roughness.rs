@@ -1008,7 +1008,10 @@ mod tests {
     use crate::surface::SourceInfo;
     use ndarray::Array2;
 
-    const CANONICAL: &str = "/work/shared/data/surfaces/gaussian_acf_256_seed12345.txt";
+    const CANONICAL: &str = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../shared/data/surfaces/gaussian_acf_256_seed12345.txt"
+    );
 
     /// Minimal reader for the canonical ASCII matrix (the real readers live in `surface::io`).
     fn canonical_map() -> HeightMap {
