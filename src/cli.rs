@@ -212,28 +212,19 @@ fn cmd_run(
             _ => {}
         }
     }
-    // Tidy tables from the current entries: rewritten only when something ran or is missing.
+    // Tidy tables from the current entries: rewritten when something ran and nothing failed
+    // (a failed instance keeps its earlier row), or when a table is missing.
     let tables_dir = processed.join("tables");
-    let current: Vec<(String, String, String)> = {
-        let (file2, stages2) = load(config)?;
-        let _ = file2;
-        let plan = engine::plan(stages2, &store, &Default::default())?;
-        plan.planned
-            .iter()
-            .filter(|p| p.state == State::Fresh)
-            .map(|p| (p.name.clone(), p.kind.clone(), p.key.clone()))
-            .collect()
-    };
-    for (kind, rows) in engine::summary_rows(&store, &current) {
+    let failed = report.failed();
+    for (kind, rows) in engine::summary_rows(&store, &report.current) {
         let stem = tables_dir.join(format!("{kind}s"));
-        if ran > 0
+        if (ran > 0 && failed == 0)
             || !stem.with_extension("parquet").exists()
             || !stem.with_extension("csv").exists()
         {
             crate::core::store::write_table(&rows, &stem)?;
         }
     }
-    let failed = report.failed();
     let total = report.outcomes.len();
     if ran == 0 && failed == 0 {
         eprintln!(
@@ -242,7 +233,9 @@ fn cmd_run(
         );
     } else {
         eprintln!(
-            "ran {ran}, cached {cached}, failed {failed} of {total} ({:.2} s); outputs in {}",
+            "ran {ran}, cached {cached}, failed {n_failed}, skipped {} of {total} ({:.2} s); \
+             outputs in {}",
+            failed - n_failed,
             started.elapsed().as_secs_f64(),
             processed.display()
         );

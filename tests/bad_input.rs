@@ -135,3 +135,37 @@ fn ad_hoc_surface_errors_are_one_line() {
     let o = hdi().arg("surface").arg(&no_size).output().unwrap();
     assert_clean_failure(&o, "size_x");
 }
+
+#[test]
+fn a_failure_beside_a_successful_rerun_keeps_the_failed_instances_results() {
+    let (p, o, before) = run_then_break(|p| {
+        // The slider file breaks while the disk gets a new parameter.
+        let f = p.path().join("raw/afm/slider_tfc_1um.spm");
+        std::fs::write(&f, b"\\*File list\r\n\\Version: 0x09200000\r\n").unwrap();
+        p.set_config(&p.config().replace(
+            "file = \"raw/afm/disk_dlc_1um.gwy\"\n",
+            "file = \"raw/afm/disk_dlc_1um.gwy\"\nsummits = 5\n",
+        ));
+    });
+    assert_clean_failure(&o, "slider_tfc_1um.spm");
+    let e = stderr(&o);
+    assert!(
+        e.contains("ran     disk") && e.contains("skipped hdi"),
+        "{e}"
+    );
+    let after = snapshot(&p.processed());
+    let keep = |s: &[(String, String)], prefix: &str| -> Vec<(String, String)> {
+        s.iter()
+            .filter(|(k, _)| k.starts_with(prefix))
+            .cloned()
+            .collect()
+    };
+    // The slider's and the interface's links and the tables are as before.
+    for prefix in ["slider", "hdi", "tables/"] {
+        assert_eq!(
+            keep(&before, prefix),
+            keep(&after, prefix),
+            "{prefix} changed"
+        );
+    }
+}

@@ -13,7 +13,7 @@ fn default_pipeline_writes_hdf5_tables_and_plots_readable_by_others() {
     let o = p.run(&["run"]);
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("ran 4, cached 0, failed 0 of 4"),
+        stderr(&o).contains("ran 4, cached 0, failed 0, skipped 0 of 4"),
         "{}",
         stderr(&o)
     );
@@ -217,7 +217,10 @@ fn only_runs_the_named_instance_and_what_it_needs() {
     let o = p.run(&["run", "--only", "hdi"]);
     assert_ok(&o);
     let e = stderr(&o);
-    assert!(e.contains("ran 3, cached 0, failed 0 of 3"), "{e}");
+    assert!(
+        e.contains("ran 3, cached 0, failed 0, skipped 0 of 3"),
+        "{e}"
+    );
     assert!(!p.processed().join("table_2_2").exists());
     let o = p.run(&["run", "--only", "hdii"]);
     assert_clean_failure(&o, "did you mean `hdi`");

@@ -118,8 +118,8 @@ pub fn topo_order(stages: &[Box<dyn Stage>]) -> Result<Vec<usize>> {
     Ok(order)
 }
 
-/// Compute every stage's fingerprint and check the store. `hash_inputs` reads input files
-/// (through the stat accelerator when `cache` is given).
+/// Compute every stage's fingerprint (hashing input files through the stat accelerator) and
+/// check the store; instances named in `force` are stale even when cached.
 pub fn plan(stages: Vec<Box<dyn Stage>>, store: &Store, force: &BTreeSet<String>) -> Result<Plan> {
     let order = topo_order(&stages)?;
     let mut input_cache = store.load_input_cache();
@@ -187,8 +187,7 @@ pub fn plan(stages: Vec<Box<dyn Stage>>, store: &Store, force: &BTreeSet<String>
             manifest,
         });
     }
-    // Upstream changes propagate through keys already; say so for stale dependents whose own
-    // fingerprint is otherwise unchanged.
+    // The accelerator is an optimisation: failing to save it only costs a rehash next time.
     let _ = store.save_input_cache(&input_cache);
     Ok(Plan { stages, planned })
 }
@@ -214,6 +213,9 @@ pub enum Outcome {
 
 pub struct RunReport {
     pub outcomes: Vec<(String, Outcome)>,
+    /// (name, kind, key) of every instance whose entry is now current (ran, or cached whether
+    /// selected by `--only` or not): what the summary tables are built from.
+    pub current: Vec<(String, String, String)>,
 }
 
 impl RunReport {
@@ -283,7 +285,10 @@ pub fn run(stages: Vec<Box<dyn Stage>>, store: &Store, opts: &RunOptions) -> Res
                 (p.name.clone(), o)
             })
             .collect();
-        return Ok(RunReport { outcomes });
+        return Ok(RunReport {
+            outcomes,
+            current: Vec::new(),
+        });
     }
 
     let pool = rayon::ThreadPoolBuilder::new()
@@ -393,12 +398,18 @@ pub fn run(stages: Vec<Box<dyn Stage>>, store: &Store, opts: &RunOptions) -> Res
             .write_ref(m)
             .map_err(|e| Error::io(store.processed().join(name), e))?;
     }
+    let current = plan
+        .planned
+        .iter()
+        .filter(|p| manifests.contains_key(&p.name) || p.state == State::Fresh)
+        .map(|p| (p.name.clone(), p.kind.clone(), p.key.clone()))
+        .collect();
     let outcomes = plan
         .planned
         .iter()
         .filter_map(|p| outcomes.remove(&p.name).map(|o| (p.name.clone(), o)))
         .collect();
-    Ok(RunReport { outcomes })
+    Ok(RunReport { outcomes, current })
 }
 
 fn read_result(dir: &Path) -> Result<Value> {
