@@ -307,9 +307,7 @@ fn cmd_surface(a: SurfaceArgs) -> Result<()> {
         size_x: a.size_x,
         size_y: a.size_y,
         z_unit: a.z_unit,
-        level: a
-            .level
-            .unwrap_or_else(|| vec!["rows:median".into(), "plane".into(), "mean".into()]),
+        level: a.level.unwrap_or_else(surfaces::default_level),
         filter_s: a.filter_s,
         filter_l: a.filter_l,
         summits: a.summits,

@@ -23,7 +23,8 @@ use std::path::{Path, PathBuf};
 /// Bump when the numbers this stage produces change.
 pub const MODEL_VERSION: &str = "surface-1";
 
-fn default_level() -> Vec<String> {
+/// The default levelling recipe (signals-and-surfaces.md §2.3).
+pub fn default_level() -> Vec<String> {
     vec!["rows:median".into(), "plane".into(), "mean".into()]
 }
 fn default_summits() -> u8 {
