@@ -58,7 +58,7 @@ pub enum Command {
         dry_run: bool,
     },
     /// One height map → σ, R, η, β, summit count, levelling used.
-    Surface(SurfaceArgs),
+    Surface(Box<SurfaceArgs>),
     /// Generate the shipped synthetic sample data (deterministic).
     Synth {
         /// What to generate: `afm`.
@@ -88,6 +88,10 @@ pub struct SurfaceArgs {
     /// Height unit for files without one (m, um, nm, ...).
     #[arg(long)]
     pub z_unit: Option<String>,
+    /// Analyse only a rectangle: x0,y0,width,height with units (y down from the top row),
+    /// e.g. "0um,0um,1um,1um".
+    #[arg(long)]
+    pub crop: Option<surfaces::CropConfig>,
     /// Levelling recipe, comma-separated (default rows:median,plane,mean).
     #[arg(long, value_delimiter = ',')]
     pub level: Option<Vec<String>>,
@@ -129,7 +133,7 @@ pub fn main() -> Result<()> {
         } => cmd_run(&config, only, force, dry_run, jobs),
         Command::Status { config, json } => cmd_status(&config, json),
         Command::Gc { config, dry_run } => cmd_gc(&config, dry_run),
-        Command::Surface(args) => cmd_surface(args),
+        Command::Surface(args) => cmd_surface(*args),
         Command::Synth { what, out_dir } => match what.as_str() {
             "afm" => crate::samples::write_afm_samples(&out_dir)
                 .map(|_| ())
@@ -307,6 +311,7 @@ fn cmd_surface(a: SurfaceArgs) -> Result<()> {
         size_x: a.size_x,
         size_y: a.size_y,
         z_unit: a.z_unit,
+        crop: a.crop,
         level: a.level.unwrap_or_else(surfaces::default_level),
         filter_s: a.filter_s,
         filter_l: a.filter_l,

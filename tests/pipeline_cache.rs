@@ -22,6 +22,7 @@ fn default_pipeline_writes_hdf5_tables_and_plots_readable_by_others() {
         "disk/surface.h5",
         "disk/height_map.png",
         "disk/height_histogram.png",
+        "disk/scale_sweep.png",
         "slider/surface.h5",
         "hdi/interface.h5",
         "table_2_2/interface.h5",

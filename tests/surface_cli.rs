@@ -263,3 +263,30 @@ fn canonical_surface_reproduces_the_reference_table_through_the_cli() {
         "beta spectral",
     );
 }
+
+#[test]
+fn crop_analyses_only_the_rectangle() {
+    let f = repo_root().join("raw/afm/disk_dlc_1um.gwy");
+    let whole = surface_json(&f, &[]);
+    let half = surface_json(&f, &["--crop", "0.5um,0um,0.5um,1um"]);
+    assert_eq!(whole["nx"], 256);
+    assert_eq!(half["nx"], 128);
+    assert_eq!(half["ny"], 256);
+    assert_eq!(
+        half["crop_m"],
+        serde_json::json!([0.5e-6, 0.0, 0.5e-6, 1e-6])
+    );
+    // A different area of the same surface: same statistics within sampling scatter.
+    let (s1, s2) = (
+        whole["sigma_m"].as_f64().unwrap(),
+        half["sigma_m"].as_f64().unwrap(),
+    );
+    assert!(rel(s2, s1) < 0.15, "sigma {s2} vs {s1}");
+    let o = hdi()
+        .arg("surface")
+        .arg(&f)
+        .args(["--crop", "0.9um,0um,0.5um,1um"])
+        .output()
+        .unwrap();
+    assert_clean_failure(&o, "crop x");
+}

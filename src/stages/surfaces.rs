@@ -8,6 +8,7 @@ use crate::core::plot;
 use crate::core::store::H5Out;
 use crate::core::units::Length;
 use crate::error::Result;
+use crate::surface::crop::{crop, CropRect};
 use crate::surface::filter::apply_filters;
 use crate::surface::io::{read_height_map, ReadOptions};
 use crate::surface::level::{level, LevelOp};
@@ -60,6 +61,9 @@ pub struct SurfaceConfig {
     /// Height unit for formats that do not carry it.
     #[serde(default)]
     pub z_unit: Option<String>,
+    /// Analyse only this rectangle of the scan (e.g. a 1 × 1 µm sub-area free of artefacts).
+    #[serde(default)]
+    pub crop: Option<CropConfig>,
     /// Levelling recipe, applied in order.
     #[serde(default = "default_level")]
     pub level: Vec<String>,
@@ -91,11 +95,42 @@ pub struct SurfaceConfig {
     pub scale_sweep: bool,
 }
 
+/// `crop = { x0 = "0 um", y0 = "0 um", width = "1 um", height = "1 um" }`: x along a scan
+/// line, y down from the top row, both from the first pixel.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CropConfig {
+    pub x0: Length,
+    pub y0: Length,
+    pub width: Length,
+    pub height: Length,
+}
+
+impl std::str::FromStr for CropConfig {
+    type Err = String;
+    /// `"x0,y0,width,height"`, each a length with a unit, e.g. `"0um,0um,1um,1um"`.
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let parts: Vec<&str> = s.split(',').collect();
+        let [x0, y0, width, height] = parts.as_slice() else {
+            return Err(format!(
+                "`{s}`: expected x0,y0,width,height (e.g. 0um,0um,1um,1um)"
+            ));
+        };
+        Ok(Self {
+            x0: x0.parse()?,
+            y0: y0.parse()?,
+            width: width.parse()?,
+            height: height.parse()?,
+        })
+    }
+}
+
 /// Validated parameters, SI units.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SurfaceParams {
     pub file: PathBuf,
     pub read: ReadOptions,
+    pub crop: Option<CropRect>,
     pub level: Vec<LevelOp>,
     pub filter_s: Option<f64>,
     pub filter_l: Option<f64>,
@@ -176,8 +211,21 @@ pub fn validate(
             format!("{} is out of range 4..=4096", cfg.histogram_bins),
         );
     }
+    let crop = match cfg.crop {
+        Some(c) if c.x0.0 < 0.0 || c.y0.0 < 0.0 || c.width.0 <= 0.0 || c.height.0 <= 0.0 => {
+            return bad("crop", "x0 and y0 must be ≥ 0, width and height > 0".into())
+        }
+        Some(c) => Some(CropRect {
+            x0: c.x0.0,
+            y0: c.y0.0,
+            width: c.width.0,
+            height: c.height.0,
+        }),
+        None => None,
+    };
     Ok(SurfaceParams {
         file,
+        crop,
         read: ReadOptions {
             channel: cfg.channel.clone(),
             size_x: cfg.size_x.map(|l| l.0),
@@ -207,6 +255,7 @@ impl SurfaceParams {
             "size_x_m": self.read.size_x,
             "size_y_m": self.read.size_y,
             "z_unit": self.read.z_unit,
+            "crop_m": self.crop.map(|c| [c.x0, c.y0, c.width, c.height]),
             "level": self.level.iter().map(|l| l.to_string()).collect::<Vec<_>>(),
             "filter_s_m": self.filter_s,
             "filter_l_m": self.filter_l,
@@ -243,7 +292,11 @@ pub fn analyse(params: &SurfaceParams) -> Result<SurfaceAnalysis> {
     if params.periodic {
         raw.periodic = true;
     }
-    let mut levelled = raw.clone();
+    // `raw` stays the whole scan (so the output shows where the crop lies).
+    let mut levelled = match &params.crop {
+        Some(rect) => crop(&raw, rect)?,
+        None => raw.clone(),
+    };
     level(&mut levelled, &params.level)?;
     let filtered = if params.filter_s.is_some() || params.filter_l.is_some() {
         let mut f = levelled.clone();
@@ -305,6 +358,7 @@ pub fn report_json(a: &SurfaceAnalysis, p: &SurfaceParams) -> Value {
         "nayak": {"eta_per_m2": r.nayak.eta, "R_m": r.nayak.r, "beta": r.nayak.beta,
                   "sigma_s_m": r.nayak.sigma_s},
         "levelling": p.level.iter().map(|l| l.to_string()).collect::<Vec<_>>(),
+        "crop_m": p.crop.map(|c| [c.x0, c.y0, c.width, c.height]),
         "filter": filter_text(p),
         "masked_fraction": m.masked_fraction(),
         "warnings": r.warnings,
@@ -330,6 +384,7 @@ pub fn summary_row(a: &SurfaceAnalysis, p: &SurfaceParams) -> Map<String, Value>
         "summit_scheme": r.summit_scheme.to_string(),
         "R_definition": r.r_definition.to_string(),
         "levelling": p.level.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(" "),
+        "crop_um": p.crop.map(|c| format!("{} {} {} {}", c.x0 * 1e6, c.y0 * 1e6, c.width * 1e6, c.height * 1e6)),
         "filter_s_um": p.filter_s.map(|v| v * 1e6),
         "filter_l_um": p.filter_l.map(|v| v * 1e6),
         "masked_pct": m.masked_fraction() * 100.0,
@@ -605,7 +660,47 @@ pub fn write_outputs(
             )?;
         }
     }
+    if let Some(dir) = plot_dir {
+        write_sweep_plot(&dir.join("scale_sweep.png"), &a.sweep, fm.dx.max(fm.dy))?;
+    }
     Ok(())
+}
+
+/// β against the lateral scale it was measured at: the sampling interval (sub-sampling) or the
+/// S-filter cutoff, with McCool's lower bound for a Gaussian surface (App. C's discussion).
+fn write_sweep_plot(path: &Path, sweep: &[SweepRow], pixel: f64) -> Result<()> {
+    let series = |kind: &str, scale: f64| -> Vec<(f64, f64)> {
+        sweep
+            .iter()
+            .filter(|r| r.kind == kind && r.beta > 0.0)
+            .map(|r| {
+                let x = if kind == "subsample" {
+                    r.sampling_interval
+                } else {
+                    r.value * pixel
+                };
+                (x * scale, r.beta)
+            })
+            .collect()
+    };
+    let sub = series("subsample", 1e9);
+    let filt = series("s_filter", 1e9);
+    if sub.is_empty() && filt.is_empty() {
+        return Ok(());
+    }
+    let xs = sub.iter().chain(&filt).map(|p| p.0);
+    let (lo, hi) = xs.fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
+    plot::lines_png(
+        path,
+        "β = σRη against lateral scale",
+        "sampling interval or S-filter cutoff (nm)",
+        "β",
+        &[
+            ("sub-sampling (x = sampling interval)", sub),
+            ("S-filter (x = cutoff)", filt),
+            ("McCool bound 0.0193", vec![(lo, 0.0193), (hi, 0.0193)]),
+        ],
+    )
 }
 
 /// A `[surface.NAME]` instance.
