@@ -8,7 +8,7 @@ pub enum Error {
     Config(#[from] crate::core::config::ConfigError),
     #[error(transparent)]
     Surface(#[from] crate::surface::SurfaceError),
-    #[error("{}: {source}", path.display())]
+    #[error("{}", path.display())]
     Io {
         path: PathBuf,
         #[source]
@@ -38,3 +38,15 @@ impl Error {
 }
 
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// The error and all its sources on one line, `outer: inner: …` (as anyhow's `{:#}` prints).
+pub fn chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        text.push_str(": ");
+        text.push_str(&s.to_string());
+        source = s.source();
+    }
+    text
+}

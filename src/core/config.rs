@@ -14,7 +14,7 @@ use crate::stages::surfaces::SurfaceConfig;
 /// Errors in a pipeline file. `line` is 1-based; 0 when unknown.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}")]
     Io {
         path: PathBuf,
         #[source]

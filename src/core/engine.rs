@@ -319,8 +319,9 @@ pub fn run(stages: Vec<Box<dyn Stage>>, store: &Store, opts: &RunOptions) -> Res
                         outcomes.insert(p.name.clone(), Outcome::Cached);
                     }
                     Err(e) => {
-                        results.insert(p.name.clone(), Err(e.to_string()));
-                        outcomes.insert(p.name.clone(), Outcome::Failed(e.to_string()));
+                        let e = crate::error::chain(&e);
+                        results.insert(p.name.clone(), Err(e.clone()));
+                        outcomes.insert(p.name.clone(), Outcome::Failed(e));
                     }
                 }
             }
@@ -447,7 +448,7 @@ fn execute(
         Ok(Ok(out)) => out,
         Ok(Err(e)) => {
             let _ = std::fs::remove_dir_all(&work);
-            return Err(e.to_string());
+            return Err(crate::error::chain(&e));
         }
         Err(panic) => {
             let _ = std::fs::remove_dir_all(&work);

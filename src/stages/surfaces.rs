@@ -721,7 +721,11 @@ impl SurfaceStage {
                 "surface",
                 name,
                 "file",
-                format!("height map {} not found", path.display()),
+                if path.exists() {
+                    format!("height map {} is not a file", path.display())
+                } else {
+                    format!("height map {} not found", path.display())
+                },
             ));
         }
         let params = validate(cfg, path).map_err(|(k, m)| file.error("surface", name, &k, m))?;

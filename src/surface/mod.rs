@@ -91,7 +91,7 @@ impl HeightMap {
 /// Errors of the surfaces domain. Each names the file (where there is one) and what was wrong.
 #[derive(Debug, thiserror::Error)]
 pub enum SurfaceError {
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}")]
     Io {
         path: PathBuf,
         #[source]
