@@ -58,8 +58,3 @@ impl Bars {
         self.total.finish_and_clear();
     }
 }
-
-/// A hidden bar for code paths outside a pipeline run (ad-hoc commands, tests).
-pub fn hidden() -> ProgressBar {
-    ProgressBar::hidden()
-}
