@@ -8,6 +8,10 @@ pub enum Error {
     Config(#[from] crate::core::config::ConfigError),
     #[error(transparent)]
     Surface(#[from] crate::surface::SurfaceError),
+    #[error(transparent)]
+    Dmw(#[from] crate::dmw::DmwError),
+    #[error(transparent)]
+    Signal(#[from] crate::signal::SignalError),
     #[error("{}", path.display())]
     Io {
         path: PathBuf,

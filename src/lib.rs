@@ -5,9 +5,11 @@
 //! `stages` wires physics into the pipeline; `cli` is the thin command-line layer.
 pub mod cli;
 pub mod core;
+pub mod dmw;
 pub mod error;
 pub mod numerics;
 pub mod samples;
+pub mod signal;
 pub mod stages;
 pub mod surface;
 
