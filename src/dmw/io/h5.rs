@@ -1,0 +1,468 @@
+//! HDF5 records (layout in the module docs of `io`): read in hyperslabs of [`CHUNK`] samples
+//! converted to f64 as they come, written through `core::store::H5Out` (temp file + rename,
+//! `units`/`long_name` on every dataset, shuffle + deflate for large data).
+
+use super::names::{self, parse_unit, Meta, TimeKind, Unit};
+use super::stream::{Col, Stream, TimeAcc};
+use super::{
+    finish, layout_name, no_panic, read_err, record_err, sample_time, velocity_unit, Raw,
+    ReadOptions, F,
+};
+use crate::core::store::H5Out;
+use crate::dmw::{DmwError, Layout, LdvRecord, VelocityUnit};
+use hdf5::types::{FixedAscii, FixedUnicode, TypeDescriptor, VarLenAscii, VarLenUnicode};
+use ndarray::s;
+use std::path::Path;
+
+/// Samples per hyperslab read: peak memory is the output plus one chunk per channel.
+const CHUNK: usize = 1 << 20;
+/// Above this many samples the explicit `time` dataset is left out (§5).
+const TIME_MAX: usize = 10_000_000;
+
+fn h5err(path: &Path, e: hdf5::Error) -> DmwError {
+    read_err(path, format!("HDF5: {e}"))
+}
+
+/// A string attribute in any of the encodings h5py and other writers use.
+fn attr_string(loc: &hdf5::Location, name: &str) -> Option<String> {
+    let a = loc.attr(name).ok()?;
+    if let Ok(s) = a.read_scalar::<VarLenUnicode>() {
+        return Some(s.as_str().to_string());
+    }
+    if let Ok(s) = a.read_scalar::<VarLenAscii>() {
+        return Some(s.as_str().to_string());
+    }
+    if let Ok(s) = a.read_scalar::<FixedAscii<256>>() {
+        return Some(s.as_str().to_string());
+    }
+    if let Ok(s) = a.read_scalar::<FixedUnicode<256>>() {
+        return Some(s.as_str().to_string());
+    }
+    None
+}
+
+/// A numeric attribute, scalar or a one-element array.
+fn attr_number(loc: &hdf5::Location, name: &str) -> Option<f64> {
+    let a = loc.attr(name).ok()?;
+    if let Ok(x) = a.read_scalar::<f64>() {
+        return Some(x);
+    }
+    match a.read_raw::<f64>() {
+        Ok(v) if v.len() == 1 => Some(v[0]),
+        _ => None,
+    }
+}
+
+/// Attribute as text (numbers in round-trip form), for `Meta::set`.
+fn attr_text(loc: &hdf5::Location, name: &str) -> Option<String> {
+    if !loc.attr_names().ok()?.iter().any(|n| n == name) {
+        return None;
+    }
+    attr_number(loc, name)
+        .map(|x| F(x).to_string())
+        .or_else(|| attr_string(loc, name))
+}
+
+/// `y = scale·stored + offset` (also CF `scale_factor`/`add_offset`).
+fn scale_offset(ds: &hdf5::Dataset) -> (f64, f64) {
+    let get = |a: &str, b: &str| attr_number(ds, a).or_else(|| attr_number(ds, b));
+    (
+        get("scale", "scale_factor").unwrap_or(1.0),
+        get("offset", "add_offset").unwrap_or(0.0),
+    )
+}
+
+fn numeric(path: &Path, ds: &hdf5::Dataset, name: &str) -> Result<(), DmwError> {
+    let td = ds
+        .dtype()
+        .and_then(|t| t.to_descriptor())
+        .map_err(|e| h5err(path, e))?;
+    match td {
+        TypeDescriptor::Integer(_)
+        | TypeDescriptor::Unsigned(_)
+        | TypeDescriptor::Float(_)
+        | TypeDescriptor::Boolean => Ok(()),
+        other => Err(record_err(
+            path,
+            format!("dataset '{name}' holds {other:?}, not numbers"),
+        )),
+    }
+}
+
+/// Reads `ds[a..b]` (1-D) or rows `a..b` (2-D) as f64 with scale and offset applied.
+fn read_part(
+    path: &Path,
+    ds: &hdf5::Dataset,
+    so: (f64, f64),
+    a: usize,
+    b: usize,
+) -> Result<Vec<f64>, DmwError> {
+    let mut v = if ds.ndim() == 1 {
+        ds.read_slice_1d::<f64, _>(s![a..b])
+            .map(|x| x.into_raw_vec_and_offset().0)
+    } else {
+        ds.read_slice_2d::<f64, _>(s![a..b, ..]).map(|x| {
+            x.as_standard_layout()
+                .into_owned()
+                .into_raw_vec_and_offset()
+                .0
+        })
+    }
+    .map_err(|e| h5err(path, e))?;
+    if so != (1.0, 0.0) {
+        for x in &mut v {
+            *x = so.0 * *x + so.1;
+        }
+    }
+    Ok(v)
+}
+
+pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
+    no_panic(path, "the HDF5 reader", || read_inner(path, opts))
+}
+
+fn read_inner(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
+    let file = hdf5::File::open(path).map_err(|e| h5err(path, e))?;
+    let root = file.as_group().map_err(|e| h5err(path, e))?;
+    let (group, gname) = if root.link_exists("ldv") {
+        let g = root.group("ldv").map_err(|_| {
+            record_err(
+                path,
+                "'/ldv' is not a group; expected the layout of the docs",
+            )
+        })?;
+        (g, "/ldv")
+    } else {
+        (root.clone(), "/")
+    };
+    let names: Vec<String> = group
+        .member_names()
+        .map_err(|e| h5err(path, e))?
+        .into_iter()
+        .filter(|n| group.dataset(n).is_ok())
+        .collect();
+    let chosen = names::choose(&names, opts, "dataset")
+        .map_err(|m| record_err(path, format!("{m} (in {gname})")))?;
+    let open = |k: usize| -> Result<hdf5::Dataset, DmwError> {
+        let ds = group.dataset(&names[k]).map_err(|e| h5err(path, e))?;
+        numeric(path, &ds, &names[k])?;
+        Ok(ds)
+    };
+    let vds = open(chosen.velocity)?;
+    let ids = chosen.index.map(open).transpose()?;
+    let tds = chosen.time.map(|(k, _)| open(k)).transpose()?;
+
+    // Metadata: root, then group, then the velocity dataset (the most specific wins).
+    let mut meta = Meta::default();
+    let mut sources: Vec<&hdf5::Location> = vec![];
+    if gname != "/" {
+        sources.push(&root);
+    }
+    sources.push(&group);
+    sources.push(&vds);
+    for loc in sources {
+        for key in [
+            "sampling_rate",
+            "sample_rate",
+            "fs",
+            "t0",
+            "sensitivity",
+            "rpm",
+            "layout",
+        ] {
+            if let Some(v) = attr_text(loc, key) {
+                meta.set(key, &v)
+                    .map_err(|m| record_err(path, format!("attribute {m}")))?;
+            }
+        }
+    }
+    let units = attr_string(&vds, "units");
+    let (name_unit, unknown) = match &units {
+        Some(u) => match parse_unit(u) {
+            Some(unit) => (Some(unit), None),
+            None => (None, Some(u.clone())),
+        },
+        None => (chosen.velocity_unit, chosen.velocity_unknown_unit.clone()),
+    };
+    let unit_source = if units.is_some() {
+        "units attribute"
+    } else {
+        "dataset name"
+    };
+    let unit = velocity_unit(
+        path,
+        opts,
+        name_unit,
+        unknown.as_deref(),
+        meta.velocity_unit,
+        unit_source,
+    )?;
+
+    let shape = vds.shape();
+    let vname = names[chosen.velocity].clone();
+    let averaged = meta.layout.as_deref() == Some("averaged");
+    let (layout, n_rows, row_len) = match shape.as_slice() {
+        [n] => (
+            if averaged {
+                Layout::Averaged
+            } else {
+                Layout::Continuous
+            },
+            *n,
+            1,
+        ),
+        [1, n] if averaged => (Layout::Averaged, 1, *n),
+        [s, n] => (
+            Layout::Segments {
+                n_segments: *s,
+                segment_len: *n,
+            },
+            *s,
+            *n,
+        ),
+        _ => {
+            return Err(record_err(
+                path,
+                format!("dataset '{vname}' has shape {shape:?}; expected [n] or [segments, n]"),
+            ))
+        }
+    };
+    let samples_per_axis = if shape.len() == 1 { n_rows } else { row_len };
+    if let (Some(ids), Some(k)) = (&ids, chosen.index) {
+        if ids.shape() != shape {
+            return Err(record_err(
+                path,
+                format!(
+                    "index dataset '{}' has shape {:?}, velocity {shape:?}",
+                    names[k],
+                    ids.shape()
+                ),
+            ));
+        }
+    }
+    let mut time = chosen.time.map(|(k, kind)| (names[k].clone(), kind));
+    if let (Some(tds), Some((tname, kind))) = (&tds, &mut time) {
+        if tds.shape() != [samples_per_axis] {
+            return Err(record_err(
+                path,
+                format!(
+                    "time dataset '{tname}' has shape {:?}; expected [{samples_per_axis}]",
+                    tds.shape()
+                ),
+            ));
+        }
+        match attr_string(tds, "units").as_deref().map(parse_unit) {
+            Some(Some(Unit::Second(f))) => *kind = TimeKind::Seconds(f),
+            Some(Some(Unit::Count)) => *kind = TimeKind::Samples,
+            _ => {}
+        }
+    }
+
+    let vso = scale_offset(&vds);
+    let iso = ids.as_ref().map(scale_offset).unwrap_or((1.0, 0.0));
+    let tso = tds.as_ref().map(scale_offset).unwrap_or((1.0, 0.0));
+    let total = n_rows * row_len;
+    let segmented = shape.len() == 2;
+    let mut stream = Stream::new(
+        unit.scale,
+        ids.is_some(),
+        tds.is_some() && !segmented,
+        total,
+    );
+    // Rows (1-D: samples; 2-D: segments) per hyperslab.
+    let step = (CHUNK / row_len.max(1)).max(1);
+    let mut a = 0;
+    while a < n_rows && !stream.done() {
+        let b = (a + step).min(n_rows);
+        let v = read_part(path, &vds, vso, a, b)?;
+        let i = ids
+            .as_ref()
+            .map(|d| read_part(path, d, iso, a, b))
+            .transpose()?;
+        let t = match &tds {
+            Some(d) if !segmented => Some(read_part(path, d, tso, a, b)?),
+            _ => None,
+        };
+        stream.push(
+            t.as_deref().map(Col::new),
+            Col::new(&v),
+            i.as_deref().map(Col::new),
+        );
+        a = b;
+    }
+    if let (true, Some(d)) = (segmented, &tds) {
+        // One time axis shared by all segments.
+        let mut acc = TimeAcc::default();
+        let mut a = 0;
+        while a < row_len && acc.fault.is_none() {
+            let b = (a + CHUNK).min(row_len);
+            acc.push_slice(a, &read_part(path, d, tso, a, b)?);
+            a = b;
+        }
+        stream.time = Some(acc);
+    }
+    let mut provenance = vec![("group".to_string(), gname.to_string())];
+    if vso != (1.0, 0.0) {
+        provenance.push((
+            "velocity_scale_offset".to_string(),
+            format!("{} {}", vso.0, vso.1),
+        ));
+    }
+    let raw = Raw {
+        format: "hdf5",
+        stream,
+        velocity_name: vname,
+        index_name: chosen.index.map(|k| names[k].clone()),
+        time,
+        unit,
+        layout,
+        meta,
+        meta_hint: "a 'sampling_rate' attribute",
+        provenance,
+    };
+    let locate = move |row: usize| {
+        if segmented {
+            format!("segment {}, sample {}", row / row_len, row % row_len)
+        } else {
+            format!("sample {row}")
+        }
+    };
+    finish(path, raw, opts, &locate)
+}
+
+/// int16 counts of `y` with step `lsb` around the mid-range; `None` if `lsb` is unusable.
+fn quantise(path: &Path, y: &[f64], lsb: f64, what: &str) -> Result<(Vec<i16>, f64), DmwError> {
+    let err = |m: String| DmwError::Processing(format!("writing {}: {m}", path.display()));
+    if !(lsb.is_finite() && lsb > 0.0) {
+        return Err(err(format!(
+            "{what} LSB = {lsb}: must be a positive number"
+        )));
+    }
+    let (lo, hi) = y
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
+            (l.min(x), h.max(x))
+        });
+    if !(lo.is_finite() && hi.is_finite()) || y.iter().any(|x| !x.is_finite()) {
+        return Err(err(format!("{what} has NaN/inf values")));
+    }
+    let offset = 0.5 * (lo + hi);
+    if (hi - offset) / lsb > 32767.0 {
+        return Err(err(format!(
+            "{what} spans {lo}..{hi}, more than 65535 steps of {lsb}; choose a larger LSB"
+        )));
+    }
+    let counts = y
+        .iter()
+        .map(|&x| ((x - offset) / lsb).round().clamp(-32767.0, 32767.0) as i16)
+        .collect();
+    Ok((counts, offset))
+}
+
+/// Writes the layout of the module docs; `counts` = (velocity LSB, index LSB) for int16.
+pub(super) fn write(
+    rec: &LdvRecord,
+    path: &Path,
+    counts: Option<(f64, f64)>,
+) -> Result<(), DmwError> {
+    let werr = |e: crate::error::Error| DmwError::Processing(crate::error::chain(&e));
+    let herr = |e: hdf5::Error| super::write_err(path, e);
+    let (rows, len) = match rec.layout {
+        Layout::Segments {
+            n_segments,
+            segment_len,
+        } => (n_segments, segment_len),
+        _ => (1, rec.velocity.len()),
+    };
+    let shape: Vec<usize> = match rec.layout {
+        Layout::Segments { .. } => vec![rows, len],
+        _ => vec![len],
+    };
+    let out = H5Out::create(path).map_err(werr)?;
+    let root = out.group("", None).map_err(werr)?;
+    out.attr_str(&root, "NX_class", "NXroot").map_err(werr)?;
+    out.attr_str(&root, "default", "ldv").map_err(werr)?;
+    out.attr_str(&root, "hdi_version", env!("CARGO_PKG_VERSION"))
+        .map_err(werr)?;
+    let g = out.group("ldv", Some("NXdata")).map_err(werr)?;
+    let with_time = counts.is_none() && len <= TIME_MAX;
+    out.attr_str(&g, "signal", "velocity").map_err(werr)?;
+    let axes: Vec<&str> = match (shape.len(), with_time) {
+        (1, true) => vec!["time"],
+        (1, false) => vec!["."],
+        (_, true) => vec![".", "time"],
+        (_, false) => vec![".", "."],
+    };
+    out.attr_str_list(&g, "axes", &axes).map_err(werr)?;
+    if with_time {
+        let dim = shape.len() as i64 - 1;
+        g.new_attr::<i64>()
+            .create("time_indices")
+            .and_then(|a| a.write_scalar(&dim))
+            .map_err(herr)?;
+    }
+    if rec.index.is_some() {
+        out.attr_str_list(&g, "auxiliary_signals", &["index"])
+            .map_err(werr)?;
+    }
+    out.attr_f64(&g, "sampling_rate", rec.sample_rate)
+        .map_err(werr)?;
+    out.attr_f64(&g, "t0", rec.t0).map_err(werr)?;
+    if let Some(s) = rec.sensitivity {
+        out.attr_f64(&g, "sensitivity", s).map_err(werr)?;
+    }
+    if let Some(r) = rec.rpm {
+        out.attr_f64(&g, "rpm", r).map_err(werr)?;
+    }
+    out.attr_str(&g, "layout", layout_name(&rec.layout))
+        .map_err(werr)?;
+
+    let (vunit, vlong) = match rec.velocity_unit {
+        VelocityUnit::Volt => ("V", "LDV decoder output voltage"),
+        VelocityUnit::MetrePerSecond => ("m/s", "LDV surface velocity"),
+    };
+    let channels = [
+        Some((
+            "velocity",
+            rec.velocity.as_slice(),
+            vunit,
+            vlong,
+            counts.map(|c| c.0),
+        )),
+        rec.index.as_deref().map(|idx| {
+            (
+                "index",
+                idx,
+                "V",
+                "once-per-revolution index",
+                counts.map(|c| c.1),
+            )
+        }),
+    ];
+    for (name, data, unit, long, lsb) in channels.into_iter().flatten() {
+        let shape_err = |e: ndarray::ShapeError| super::write_err(path, e);
+        match lsb {
+            None => {
+                let view =
+                    ndarray::ArrayViewD::from_shape(shape.as_slice(), data).map_err(shape_err)?;
+                out.write_array(&g, name, view, unit, long).map_err(werr)?;
+            }
+            Some(lsb) => {
+                let (q, offset) = quantise(path, data, lsb, name)?;
+                let view =
+                    ndarray::ArrayViewD::from_shape(shape.as_slice(), &q).map_err(shape_err)?;
+                let ds = out.write_array(&g, name, view, unit, long).map_err(werr)?;
+                out.attr_f64(&ds, "scale", lsb).map_err(werr)?;
+                out.attr_f64(&ds, "offset", offset).map_err(werr)?;
+            }
+        }
+    }
+    if with_time {
+        let t: Vec<f64> = (0..len).map(|i| sample_time(rec, i)).collect();
+        let ds = out.write_1d(&g, "time", &t, "s", "time").map_err(werr)?;
+        out.attr_f64(&ds, "sampling_rate", rec.sample_rate)
+            .map_err(werr)?;
+        out.attr_f64(&ds, "t0", rec.t0).map_err(werr)?;
+    }
+    out.finish().map_err(werr)
+}

@@ -1,0 +1,730 @@
+//! Reader/writer tests: round trips, detection rules, and every bad input giving an error
+//! (never a panic) whose message names the line/row/sample or key.
+
+use super::*;
+use crate::dmw::{DmwError, Layout, LdvRecord, VelocityUnit};
+use std::path::{Path, PathBuf};
+
+fn record(n: usize, fs: f64, index: bool, unit: VelocityUnit) -> LdvRecord {
+    let velocity = (0..n)
+        .map(|i| {
+            let x = i as f64;
+            0.3 * (0.0137 * x).sin() + 0.01 * (1.7 * x).cos() - 1e-7 * x
+        })
+        .collect();
+    LdvRecord {
+        source: PathBuf::from("synthetic"),
+        format: "synthetic",
+        sample_rate: fs,
+        t0: 0.125,
+        velocity,
+        velocity_unit: unit,
+        index: index.then(|| {
+            (0..n)
+                .map(|i| {
+                    if i % 97 < 5 {
+                        4.9 + 1e-3 * (i % 7) as f64
+                    } else {
+                        0.02
+                    }
+                })
+                .collect()
+        }),
+        layout: Layout::Continuous,
+        sensitivity: Some(0.025),
+        rpm: Some(5425.0),
+        provenance: vec![],
+    }
+}
+
+fn temp(name: &str, bytes: &[u8]) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, bytes).unwrap();
+    (dir, path)
+}
+
+fn prov<'a>(rec: &'a LdvRecord, key: &str) -> &'a str {
+    rec.provenance
+        .iter()
+        .find(|(k, _)| k == key)
+        .map(|(_, v)| v.as_str())
+        .unwrap_or_else(|| panic!("no provenance key {key}: {:?}", rec.provenance))
+}
+
+fn read(path: &Path) -> Result<LdvRecord, DmwError> {
+    read_ldv(path, &ReadOptions::default())
+}
+
+fn read_text(text: &str) -> Result<LdvRecord, DmwError> {
+    let (_d, p) = temp("rec.csv", text.as_bytes());
+    read(&p)
+}
+
+/// The error of reading `text` must be a `Record` error whose message has all `parts`.
+fn record_error(text: &str, opts: &ReadOptions, parts: &[&str]) {
+    let (_d, p) = temp("bad.csv", text.as_bytes());
+    let err = match std::panic::catch_unwind(|| read_ldv(&p, opts)).expect("reader panicked") {
+        Ok(rec) => panic!("{text:?}: no error, {} samples", rec.velocity.len()),
+        Err(e) => e,
+    };
+    let msg = err.to_string();
+    assert!(matches!(err, DmwError::Record { .. }), "{err:?}");
+    assert!(!msg.contains('\n'), "multi-line message: {msg}");
+    assert!(msg.contains("bad.csv"), "{msg}");
+    for part in parts {
+        assert!(msg.contains(part), "missing '{part}' in: {msg}");
+    }
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
+
+fn same_record(got: &LdvRecord, want: &LdvRecord) {
+    assert_eq!(got.velocity, want.velocity);
+    assert_eq!(got.index, want.index);
+    assert_eq!(got.velocity_unit, want.velocity_unit);
+    assert_eq!(got.layout, want.layout);
+    assert_eq!(got.sensitivity, want.sensitivity);
+    assert_eq!(got.rpm, want.rpm);
+    assert!(
+        rel(got.sample_rate, want.sample_rate) < 1e-12,
+        "{}",
+        got.sample_rate
+    );
+    assert!((got.t0 - want.t0).abs() < 1e-15, "{}", got.t0);
+}
+
+#[test]
+fn round_trips() {
+    let dir = tempfile::tempdir().unwrap();
+    for (k, unit) in [VelocityUnit::Volt, VelocityUnit::MetrePerSecond]
+        .into_iter()
+        .enumerate()
+    {
+        let rec = record(5000, 4e6, k == 0, unit);
+        // Extensions that lie: detection is by content.
+        for (format, name, fmt) in [
+            (LdvFormat::Csv, "a.h5", "csv"),
+            (LdvFormat::Parquet, "b.csv", "parquet"),
+            (LdvFormat::Hdf5, "c.parquet", "hdf5"),
+        ] {
+            let path = dir.path().join(name);
+            write_ldv(&rec, &path, format).unwrap();
+            assert_eq!(detect_format(&path).unwrap(), format);
+            let got = read(&path).unwrap();
+            same_record(&got, &rec);
+            assert_eq!(got.format, fmt);
+            assert_eq!(prov(&got, "format"), fmt);
+            assert_eq!(prov(&got, "sample_rate_source"), "time column");
+            let index = match (k, format) {
+                (1, _) => "none",
+                (_, LdvFormat::Hdf5) => "index",
+                _ => "index_V",
+            };
+            assert_eq!(prov(&got, "index"), index);
+        }
+    }
+    // No temporary files left behind.
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(left.len(), 3);
+}
+
+#[test]
+fn hdf5_layouts_and_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut rec = record(6000, 2e6, true, VelocityUnit::Volt);
+    rec.layout = Layout::Segments {
+        n_segments: 3,
+        segment_len: 2000,
+    };
+    let path = dir.path().join("seg.h5");
+    write_ldv(&rec, &path, LdvFormat::Hdf5).unwrap();
+    let got = read(&path).unwrap();
+    same_record(&got, &rec);
+    // Text cannot hold a segment stack.
+    let err = write_ldv(&rec, &dir.path().join("seg.csv"), LdvFormat::Csv).unwrap_err();
+    assert!(err.to_string().contains("needs HDF5"), "{err}");
+
+    rec.layout = Layout::Averaged;
+    write_ldv(&rec, &path, LdvFormat::Hdf5).unwrap();
+    assert_eq!(read(&path).unwrap().layout, Layout::Averaged);
+    let csv = dir.path().join("avg.csv");
+    write_ldv(&rec, &csv, LdvFormat::Csv).unwrap();
+    assert_eq!(read(&csv).unwrap().layout, Layout::Averaged);
+
+    // int16 counts: within half an LSB, no time dataset, rate from the attribute.
+    let rec = record(200_000, 4e6, true, VelocityUnit::Volt);
+    let (vl, il) = (1e-5, 2e-4);
+    let f64_path = dir.path().join("f64.h5");
+    let cnt_path = dir.path().join("counts.h5");
+    write_ldv(&rec, &f64_path, LdvFormat::Hdf5).unwrap();
+    write_ldv_hdf5_counts(&rec, &cnt_path, vl, il).unwrap();
+    let got = read(&cnt_path).unwrap();
+    let worst = |a: &[f64], b: &[f64]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+    };
+    assert!(worst(&got.velocity, &rec.velocity) <= 0.5 * vl * (1.0 + 1e-9));
+    let (gi, ri) = (got.index.as_ref().unwrap(), rec.index.as_ref().unwrap());
+    assert!(worst(gi, ri) <= 0.5 * il * (1.0 + 1e-9));
+    assert_eq!(got.sample_rate, 4e6);
+    assert_eq!(got.t0, rec.t0);
+    assert_eq!(prov(&got, "sample_rate_source"), "file metadata");
+    assert_eq!(prov(&got, "time"), "none");
+    let size = |p: &Path| std::fs::metadata(p).unwrap().len();
+    assert!(
+        size(&cnt_path) * 4 < size(&f64_path),
+        "{} {}",
+        size(&cnt_path),
+        size(&f64_path)
+    );
+    // An LSB too fine for 16 bits.
+    let err = write_ldv_hdf5_counts(&rec, &cnt_path, 1e-8, il).unwrap_err();
+    assert!(err.to_string().contains("larger LSB"), "{err}");
+}
+
+/// Files laid out by other writers: datasets in the root, int32 with CF scale attributes,
+/// fixed-length string units, the rate on the dataset, sample-number time.
+#[test]
+fn hdf5_foreign_layouts() {
+    use hdf5::types::{FixedAscii, VarLenUnicode};
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scope.h5");
+    {
+        let f = hdf5::File::create(&path).unwrap();
+        let counts: Vec<i32> = (0..1000).map(|i| (i % 50) - 25).collect();
+        let ds = f
+            .new_dataset_builder()
+            .with_data(&counts)
+            .create("U")
+            .unwrap();
+        ds.new_attr::<f64>()
+            .create("scale_factor")
+            .unwrap()
+            .write_scalar(&0.5)
+            .unwrap();
+        ds.new_attr::<f64>()
+            .create("add_offset")
+            .unwrap()
+            .write_scalar(&1.0)
+            .unwrap();
+        let unit: FixedAscii<8> = FixedAscii::from_ascii(b"mV").unwrap();
+        ds.new_attr::<FixedAscii<8>>()
+            .create("units")
+            .unwrap()
+            .write_scalar(&unit)
+            .unwrap();
+        ds.new_attr::<f64>()
+            .create("fs")
+            .unwrap()
+            .write_scalar(&1e6)
+            .unwrap();
+        let n: Vec<u32> = (100..1100).collect();
+        f.new_dataset_builder()
+            .with_data(&n)
+            .create("sample")
+            .unwrap();
+        let s: VarLenUnicode = "5425".parse().unwrap();
+        f.new_attr::<VarLenUnicode>()
+            .create("rpm")
+            .unwrap()
+            .write_scalar(&s)
+            .unwrap();
+    }
+    let got = read(&path).unwrap();
+    assert_eq!(got.velocity.len(), 1000);
+    assert_eq!(got.velocity[3], (0.5 * -22.0 + 1.0) * 1e-3);
+    assert_eq!(got.velocity_unit, VelocityUnit::Volt);
+    assert_eq!(got.sample_rate, 1e6);
+    assert_eq!(got.t0, 100.0 / 1e6);
+    assert_eq!(got.rpm, Some(5425.0));
+    assert_eq!(prov(&got, "group"), "/");
+    assert_eq!(prov(&got, "velocity_unit_source"), "units attribute");
+    assert_eq!(prov(&got, "sample_rate_source"), "file metadata");
+    // The option must agree with the file.
+    let opts = ReadOptions {
+        sample_rate: Some(1.1e6),
+        ..Default::default()
+    };
+    let err = read_ldv(&path, &opts).unwrap_err();
+    assert!(
+        err.to_string().contains("1100000") && err.to_string().contains("1000000"),
+        "{err}"
+    );
+
+    // NaN run in an HDF5 velocity dataset; no rate at all.
+    let path = dir.path().join("nan.h5");
+    {
+        let f = hdf5::File::create(&path).unwrap();
+        let g = f.create_group("ldv").unwrap();
+        let mut v = vec![0.25f32; 100];
+        v[40..43].fill(f32::NAN);
+        g.new_dataset_builder()
+            .with_data(&v)
+            .create("velocity")
+            .unwrap();
+    }
+    let err = read(&path).unwrap_err();
+    let msg = err.to_string();
+    assert!(matches!(err, DmwError::Record { .. }));
+    assert!(
+        msg.contains("sample 40") && msg.contains("run of 3"),
+        "{msg}"
+    );
+    let path2 = dir.path().join("norate.h5");
+    {
+        let f = hdf5::File::create(&path2).unwrap();
+        f.new_dataset_builder()
+            .with_data(&[0.1f64, 0.2, 0.3])
+            .create("velocity_m_s")
+            .unwrap();
+    }
+    let err = read(&path2).unwrap_err();
+    assert!(err.to_string().contains("sampling_rate"), "{err}");
+    let opts = ReadOptions {
+        sample_rate: Some(1e5),
+        ..Default::default()
+    };
+    let got = read_ldv(&path2, &opts).unwrap();
+    assert_eq!(got.velocity_unit, VelocityUnit::MetrePerSecond);
+    assert_eq!(prov(&got, "sample_rate_source"), "option");
+}
+
+/// A Parquet file from another writer: f32 velocity, integer sample numbers, a null.
+#[test]
+fn parquet_foreign_columns() {
+    use polars::prelude::*;
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, v: Vec<Option<f32>>| {
+        let n = v.len();
+        let samples: Vec<i64> = (0..n as i64).collect();
+        let mut df = DataFrame::new(
+            n,
+            vec![
+                Column::new("n".into(), samples),
+                Column::new("U (mV)".into(), v),
+            ],
+        )
+        .unwrap();
+        let path = dir.path().join(name);
+        let f = std::fs::File::create(&path).unwrap();
+        ParquetWriter::new(f).finish(&mut df).unwrap();
+        path
+    };
+    let good = write("good.parquet", vec![Some(1.5), Some(-2.0), Some(0.25)]);
+    let opts = ReadOptions {
+        sample_rate: Some(1e6),
+        ..Default::default()
+    };
+    let rec = read_ldv(&good, &opts).unwrap();
+    assert_eq!(rec.velocity, vec![1.5e-3, -2e-3, 0.25e-3]);
+    assert_eq!(rec.velocity_unit, VelocityUnit::Volt);
+    assert_eq!(prov(&rec, "time"), "n (sample number)");
+    let bad = write("bad.parquet", vec![Some(1.0), None, None, Some(2.0)]);
+    let err = read_ldv(&bad, &opts).unwrap_err();
+    let msg = err.to_string();
+    assert!(matches!(err, DmwError::Record { .. }), "{msg}");
+    assert!(
+        msg.contains("row 1") && msg.contains("run of 2") && msg.contains("missing"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn column_detection() {
+    // (text, velocity unit, sample rate, t0, index present)
+    let cases: &[(&str, VelocityUnit, f64, f64, bool)] = &[
+        (
+            "t,U,trigger\n0,1,0\n0.5,2,5\n1,3,0\n",
+            VelocityUnit::Volt,
+            2.0,
+            0.0,
+            true,
+        ),
+        (
+            "# comment\n#fs: 2 kHz\nTime (ms);Velocity (m/s);Tacho\n1;0.1;0\n1.5;0.2;1\n2;0.3;0\n",
+            VelocityUnit::MetrePerSecond,
+            2000.0,
+            1e-3,
+            true,
+        ),
+        (
+            "Time [s]\tVelocity [V]\n0\t1\n0.25\t2\n",
+            VelocityUnit::Volt,
+            4.0,
+            0.0,
+            false,
+        ),
+        (
+            "time_us,voltage_V,once_per_rev_V\n10,1,0\n12,2,0\n14,3,1\n",
+            VelocityUnit::Volt,
+            5e5,
+            1e-5,
+            true,
+        ),
+        (
+            "\u{feff}\"t_s\",\"v_m_s\",\"index\"\r\n0,1,0\r\n1,2,0\r\n",
+            VelocityUnit::MetrePerSecond,
+            1.0,
+            0.0,
+            true,
+        ),
+        (
+            "# sample_rate = 4e6\nvelocity_mps\n1\n2\n3\n",
+            VelocityUnit::MetrePerSecond,
+            4e6,
+            0.0,
+            false,
+        ),
+    ];
+    for (text, unit, fs, t0, has_index) in cases {
+        let rec = read_text(text).unwrap_or_else(|e| panic!("{text:?}: {e}"));
+        assert_eq!(rec.velocity_unit, *unit, "{text:?}");
+        assert!(
+            rel(rec.sample_rate, *fs) < 1e-12,
+            "{text:?}: {}",
+            rec.sample_rate
+        );
+        assert!((rec.t0 - t0).abs() < 1e-15, "{text:?}: {}", rec.t0);
+        assert_eq!(rec.index.is_some(), *has_index, "{text:?}");
+    }
+
+    // Scaled units: mV → V, mm/s → m/s; the option overrides without scaling.
+    let rec = read_text("time_s,velocity (mV)\n0,250\n1,500\n").unwrap();
+    assert_eq!(rec.velocity, vec![0.25, 0.5]);
+    let rec = read_text("time_s,velocity [mm/s]\n0,250\n1,500\n").unwrap();
+    assert_eq!(
+        (rec.velocity_unit, rec.velocity.clone()),
+        (VelocityUnit::MetrePerSecond, vec![0.25, 0.5])
+    );
+    let (_d, p) = temp("o.csv", b"time_s,velocity_V\n0,250\n1,500\n");
+    let opts = ReadOptions {
+        velocity_unit: Some(VelocityUnit::MetrePerSecond),
+        ..Default::default()
+    };
+    let rec = read_ldv(&p, &opts).unwrap();
+    assert_eq!(rec.velocity_unit, VelocityUnit::MetrePerSecond);
+    assert_eq!(prov(&rec, "velocity_unit_source"), "option");
+
+    // Decimal comma with semicolons; metadata with units.
+    let rec =
+        read_text("# sensitivity = 25 mm/s/V\n# rpm: 5425\ntime_s;velocity_V\n0,0;1,5\n0,5;2,5\n")
+            .unwrap();
+    assert_eq!(rec.velocity, vec![1.5, 2.5]);
+    assert_eq!(rec.sensitivity, Some(0.025));
+    assert_eq!(rec.rpm, Some(5425.0));
+
+    // Ambiguous and missing velocity; explicit choice.
+    let text = "time_s,voltage_V,velocity_m_s\n0,1,2\n1,1,2\n";
+    record_error(
+        text,
+        &ReadOptions::default(),
+        &["voltage_V", "velocity_m_s", "velocity_column"],
+    );
+    let (_d, p) = temp("c.csv", text.as_bytes());
+    let opts = ReadOptions {
+        velocity_column: Some("VELOCITY_M_S".into()),
+        ..Default::default()
+    };
+    let rec = read_ldv(&p, &opts).unwrap();
+    assert_eq!(rec.velocity, vec![2.0, 2.0]);
+    assert_eq!(rec.velocity_unit, VelocityUnit::MetrePerSecond);
+    record_error(
+        "time_s,foo,bar\n0,1,2\n1,1,2\n",
+        &ReadOptions::default(),
+        &["no velocity column", "foo", "bar", "velocity_column"],
+    );
+    let opts = ReadOptions {
+        index_column: Some("nope".into()),
+        ..Default::default()
+    };
+    record_error(
+        "time_s,velocity_V\n0,1\n1,1\n",
+        &opts,
+        &["no column 'nope'", "index_column"],
+    );
+    // A velocity unit we do not know asks for the option.
+    record_error(
+        "time_s,velocity (in/s)\n0,1\n1,2\n",
+        &ReadOptions::default(),
+        &["'in/s'", "velocity_unit"],
+    );
+    // An explicitly chosen, unknown-named time column is in seconds.
+    let (_d, p) = temp("z.csv", b"Zeit,U_V\n0,1\n0.5,1\n");
+    let opts = ReadOptions {
+        time_column: Some("zeit".into()),
+        ..Default::default()
+    };
+    assert_eq!(read_ldv(&p, &opts).unwrap().sample_rate, 2.0);
+}
+
+#[test]
+fn sample_rate_sources() {
+    let text = "sample,velocity_V,index_V\n10,1,0\n11,2,0\n12,3,5\n";
+    let (_d, p) = temp("s.csv", text.as_bytes());
+    let err = read(&p).unwrap_err();
+    assert!(
+        err.to_string().contains("sample_rate") && err.to_string().contains("'sample'"),
+        "{err}"
+    );
+    let opts = ReadOptions {
+        sample_rate: Some(4e6),
+        ..Default::default()
+    };
+    let rec = read_ldv(&p, &opts).unwrap();
+    assert_eq!(rec.sample_rate, 4e6);
+    assert_eq!(rec.t0, 10.0 / 4e6);
+    assert_eq!(prov(&rec, "sample_rate_source"), "option");
+    assert_eq!(prov(&rec, "time"), "sample (sample number)");
+
+    // No time column at all.
+    record_error(
+        "velocity_V\n1\n2\n",
+        &ReadOptions::default(),
+        &["no time column", "sample_rate"],
+    );
+    // Time column against option and against metadata.
+    let text = "time_s,velocity_V\n0,1\n0.25,2\n0.5,3\n";
+    let opts = ReadOptions {
+        sample_rate: Some(4.1),
+        ..Default::default()
+    };
+    record_error(text, &opts, &["4.1 Hz", "(4 Hz)", "disagree"]);
+    let close = ReadOptions {
+        sample_rate: Some(4.0 * (1.0 + 1e-7)),
+        ..Default::default()
+    };
+    let (_d, p) = temp("ok.csv", text.as_bytes());
+    assert!(read_ldv(&p, &close).is_ok());
+    record_error(
+        &format!("# sample_rate = 5\n{text}"),
+        &ReadOptions::default(),
+        &["5 Hz", "4 Hz", "disagree"],
+    );
+    // Metadata against option without a time column.
+    record_error(
+        "# sample_rate = 5\nvelocity_V\n1\n2\n",
+        &opts,
+        &["4.1 Hz", "5 Hz"],
+    );
+    let bad = ReadOptions {
+        sample_rate: Some(-1.0),
+        ..Default::default()
+    };
+    let (_d, p) = temp("neg.csv", b"velocity_V\n1\n2\n");
+    assert!(read_ldv(&p, &bad).is_err());
+    record_error(
+        "# sample_rate = fast\nvelocity_V\n1\n2\n",
+        &ReadOptions::default(),
+        &["line 1", "sample_rate"],
+    );
+    record_error(
+        "# rpm = -5\ntime_s,velocity_V\n0,1\n1,2\n",
+        &ReadOptions::default(),
+        &["rpm"],
+    );
+}
+
+#[test]
+fn bad_text_inputs() {
+    let d = ReadOptions::default();
+    record_error("", &d, &["empty file"]);
+    record_error("# only a comment\n\n", &d, &["no header"]);
+    record_error("time_s,velocity_V,index_V\n", &d, &["no data rows"]);
+    record_error("1,2,3\n4,5,6\n", &d, &["line 1", "no header"]);
+    record_error("time_s,velocity_V\n0,1\n", &d, &["only 1 sample"]);
+    record_error("time velocity\n0 1\n1 2\n", &d, &["spaces"]);
+    // Non-numeric cell: line 5 is sample 2.
+    record_error(
+        "# x\ntime_s,velocity_V,index_V\n0,1,0\n1,2,0\n2,abc,0\n3,4,0\n",
+        &d,
+        &["line 5", "sample 2", "'abc'", "velocity_V", "not a number"],
+    );
+    // polars skips leading spaces but not trailing ones.
+    assert_eq!(
+        read_text("time_s,velocity_V\n0, 1\n1, 2\n")
+            .unwrap()
+            .velocity,
+        vec![1.0, 2.0]
+    );
+    record_error(
+        "time_s,velocity_V\n0,1\n1 ,2\n2,3\n",
+        &d,
+        &["line 3", "'1 '", "spaces around"],
+    );
+    // NaN run of 3 in the index channel.
+    record_error(
+        "time_s,velocity_V,index_V\n0,1,0\n1,2,NaN\n2,3,nan\n3,4,inf\n4,5,0\n",
+        &d,
+        &["index_V", "NaN/inf", "line 3", "sample 1", "run of 3"],
+    );
+    // Empty cells up to the end.
+    record_error(
+        "time_s,velocity_V\n0,1\n1,2\n2,\n3,\n",
+        &d,
+        &[
+            "velocity_V",
+            "empty cells",
+            "line 4",
+            "run of 2",
+            "end of the record",
+        ],
+    );
+    // A blank line in the middle.
+    record_error(
+        "time_s,velocity_V\n0,1\n\n1,2\n",
+        &d,
+        &["line 3", "is empty"],
+    );
+    // Non-monotonic and non-uniform time.
+    record_error(
+        "time_s,velocity_V\n0,1\n1,2\n2,3\n2,4\n",
+        &d,
+        &["does not increase", "line 5", "sample 3"],
+    );
+    record_error(
+        "time_s,velocity_V\n0,1\n1,2\n2,3\n3.01,4\n4,5\n",
+        &d,
+        &["not uniformly sampled", "line 5", "sample 3"],
+    );
+    // Truncated last line: missing a used field, missing an unused field.
+    record_error(
+        "time_s,velocity_V,index_V\n0,1,0\n1,2,0\n2,3",
+        &d,
+        &["line 4", "2 of 3 fields"],
+    );
+    record_error(
+        "time_s,velocity_V,extra\n0,1,a\n1,2,b\n2,3",
+        &d,
+        &["last line (line 4)", "2 of 3 fields", "truncated"],
+    );
+    // Trailing blank lines are not a gap.
+    let rec = read_text("time_s,velocity_V\n0,1\n1,2\n\n\n").unwrap();
+    assert_eq!(rec.velocity, vec![1.0, 2.0]);
+    // Binary junk.
+    let (_d, p) = temp("junk.csv", b"\x7fELF\x02\x01\x01\0\0\0");
+    let err = read(&p).unwrap_err();
+    assert!(matches!(err, DmwError::Read { .. }), "{err}");
+    // A missing file.
+    assert!(matches!(
+        read(Path::new("/nonexistent/x.csv")).unwrap_err(),
+        DmwError::Read { .. }
+    ));
+}
+
+#[test]
+fn truncated_and_corrupt_binary_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = record(300_000, 4e6, true, VelocityUnit::Volt);
+    for (format, name) in [(LdvFormat::Parquet, "r.parquet"), (LdvFormat::Hdf5, "r.h5")] {
+        let path = dir.path().join(name);
+        write_ldv(&rec, &path, format).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        // Cut to half; garble the middle; cut to just the magic.
+        let mut garbled = bytes.clone();
+        let mid = garbled.len() / 2;
+        for b in &mut garbled[mid - 2000..mid + 2000] {
+            *b ^= 0x5a;
+        }
+        for (k, variant) in [
+            bytes[..bytes.len() / 2].to_vec(),
+            garbled,
+            bytes[..8].to_vec(),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let bad = dir.path().join(format!("bad{k}-{name}"));
+            std::fs::write(&bad, &variant).unwrap();
+            let outcome = std::panic::catch_unwind(|| read(&bad));
+            let err = match outcome.unwrap_or_else(|_| panic!("{name} variant {k} panicked")) {
+                Err(e) => e,
+                // Parquet pages carry no checksum: garbled plain data can go unnoticed.
+                Ok(_) if k == 1 && format == LdvFormat::Parquet => continue,
+                Ok(_) => panic!("{name} variant {k} read without error"),
+            };
+            let msg = err.to_string();
+            assert!(!msg.contains('\n'), "{msg}");
+            assert!(msg.contains(&format!("bad{k}-{name}")), "{msg}");
+            if k != 1 {
+                assert!(matches!(err, DmwError::Read { .. }), "{name} {k}: {err:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn million_row_csv() {
+    let rec = record(1_000_000, 4e6, true, VelocityUnit::Volt);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("big.csv");
+    write_ldv(&rec, &path, LdvFormat::Csv).unwrap();
+    let got = read(&path).unwrap();
+    same_record(&got, &rec);
+}
+
+// ---- measurements (run by hand, release mode) ----
+//
+// LDV_BENCH_DIR=/var/tmp/ldvbench cargo test --release --lib dmw::io::tests::bench_write \
+//   -- --ignored
+// then, per file, under /usr/bin/time -v:
+// LDV_BENCH_FILE=/var/tmp/ldvbench/r.csv <test binary> dmw::io::tests::bench_read --ignored
+
+#[test]
+#[ignore]
+fn bench_write() {
+    let dir = PathBuf::from(std::env::var("LDV_BENCH_DIR").expect("LDV_BENCH_DIR"));
+    std::fs::create_dir_all(&dir).unwrap();
+    let n: usize = std::env::var("LDV_BENCH_N")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(10_000_000);
+    let rec = record(n, 4e6, true, VelocityUnit::Volt);
+    for (name, f) in [
+        ("r.csv", Some(LdvFormat::Csv)),
+        ("r.parquet", Some(LdvFormat::Parquet)),
+        ("r.h5", Some(LdvFormat::Hdf5)),
+        ("r-counts.h5", None),
+    ] {
+        let t = std::time::Instant::now();
+        let path = dir.join(name);
+        match f {
+            Some(f) => write_ldv(&rec, &path, f).unwrap(),
+            None => write_ldv_hdf5_counts(&rec, &path, 5e-5, 2e-4).unwrap(),
+        }
+        let size = std::fs::metadata(&path).unwrap().len();
+        println!(
+            "write {name}: {:.2} s, {size} bytes",
+            t.elapsed().as_secs_f64()
+        );
+    }
+}
+
+#[test]
+#[ignore]
+fn bench_read() {
+    let path = PathBuf::from(std::env::var("LDV_BENCH_FILE").expect("LDV_BENCH_FILE"));
+    let t = std::time::Instant::now();
+    let rec = read(&path).unwrap();
+    println!(
+        "read {}: {:.3} s, {} samples, fs {} Hz",
+        path.display(),
+        t.elapsed().as_secs_f64(),
+        rec.velocity.len(),
+        rec.sample_rate
+    );
+    // Peak and current memory, split into heap (anonymous) and mapped file pages.
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    for line in status.lines() {
+        if ["VmHWM", "RssAnon", "RssFile"]
+            .iter()
+            .any(|k| line.starts_with(k))
+        {
+            println!("{line}");
+        }
+    }
+}
