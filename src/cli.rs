@@ -9,8 +9,9 @@ use std::time::Instant;
 use crate::core::cache::Store;
 use crate::core::config::PipelineFile;
 use crate::core::engine::{self, Outcome, RunOptions, State};
-use crate::core::units::Length;
+use crate::core::units::{Frequency, Length, Sensitivity, TimeSpan};
 use crate::stages;
+use crate::stages::dmw::{self, DmwConfig};
 use crate::stages::surfaces::{self, SurfaceConfig};
 
 #[derive(Parser, Debug)]
@@ -59,12 +60,27 @@ pub enum Command {
     },
     /// One height map → σ, R, η, β, summit count, levelling used.
     Surface(Box<SurfaceArgs>),
+    /// One LDV record → DMW tracks and their statistics.
+    Dmw(Box<DmwArgs>),
     /// Generate the shipped synthetic sample data (deterministic).
     Synth {
-        /// What to generate: `afm`.
+        /// What to generate: `afm` (height maps) or `ldv` (an LDV record).
         what: String,
-        #[arg(long, default_value = "raw/afm")]
-        out_dir: PathBuf,
+        /// Output directory (default raw/afm or raw/ldv).
+        #[arg(long)]
+        out_dir: Option<PathBuf>,
+        /// ldv: file format, h5 (int16 counts, the shipped sample), csv or parquet.
+        #[arg(long, default_value = "h5")]
+        format: String,
+        /// ldv: number of revolutions.
+        #[arg(long)]
+        revolutions: Option<usize>,
+        /// ldv: random seed.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// ldv: leave out the index channel.
+        #[arg(long)]
+        no_index: bool,
     },
     /// Print benchmark figures (surfaces stage on a 1024² map; no-op cached rerun).
     Bench {
@@ -121,6 +137,75 @@ pub struct SurfaceArgs {
     pub json: bool,
 }
 
+/// `hdi dmw FILE`: every option has the name of its `[dmw.NAME]` key.
+#[derive(Args, Debug)]
+pub struct DmwArgs {
+    pub file: PathBuf,
+    /// Sample rate when the file has no time column, e.g. "4 MHz".
+    #[arg(long)]
+    pub sample_rate: Option<Frequency>,
+    /// Decoder sensitivity, e.g. "25 mm/s/V" (default).
+    #[arg(long)]
+    pub sensitivity: Option<Sensitivity>,
+    /// Spindle speed (rpm): checks the index period, or segments a record without index.
+    #[arg(long)]
+    pub rpm: Option<f64>,
+    #[arg(long)]
+    pub velocity_column: Option<String>,
+    #[arg(long)]
+    pub index_column: Option<String>,
+    #[arg(long)]
+    pub time_column: Option<String>,
+    /// "V" or "m/s".
+    #[arg(long)]
+    pub velocity_unit: Option<String>,
+    #[arg(long)]
+    pub trigger_level: Option<f64>,
+    /// Averaged segment length, e.g. "2.5 ms" (default).
+    #[arg(long)]
+    pub segment: Option<TimeSpan>,
+    #[arg(long)]
+    pub max_revolutions: Option<usize>,
+    /// angular (default), subsample or integer.
+    #[arg(long)]
+    pub averaging: Option<String>,
+    /// zero_phase (default), causal or none.
+    #[arg(long)]
+    pub filter: Option<String>,
+    /// High-pass cutoff, e.g. "10 kHz" (default).
+    #[arg(long)]
+    pub highpass_hz: Option<Frequency>,
+    #[arg(long)]
+    pub highpass_order: Option<usize>,
+    #[arg(long)]
+    pub lowpass_hz: Option<Frequency>,
+    #[arg(long)]
+    pub lowpass_order: Option<usize>,
+    /// auto (3·fs/fc, default), scipy, or a number of samples.
+    #[arg(long)]
+    pub padlen: Option<String>,
+    /// filter_then_integrate (default) or integrate_then_filter.
+    #[arg(long)]
+    pub chain_order: Option<String>,
+    /// line (default), mean or none.
+    #[arg(long)]
+    pub detrend: Option<String>,
+    /// Subtract the averaged velocity's mean before integrating (default true; the
+    /// reference scripts use false).
+    #[arg(long)]
+    pub remove_offset: Option<bool>,
+    /// Output sample rate, e.g. "1 GHz" (band-limited resampling).
+    #[arg(long)]
+    pub resample_hz: Option<Frequency>,
+    #[arg(long)]
+    pub peaks: Option<usize>,
+    /// Also write the HDF5 output (and PNGs beside it).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[arg(long)]
+    pub json: bool,
+}
+
 pub fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
@@ -134,11 +219,31 @@ pub fn main() -> Result<()> {
         Command::Status { config, json } => cmd_status(&config, json),
         Command::Gc { config, dry_run } => cmd_gc(&config, dry_run),
         Command::Surface(args) => cmd_surface(*args),
-        Command::Synth { what, out_dir } => match what.as_str() {
-            "afm" => crate::samples::write_afm_samples(&out_dir)
-                .map(|_| ())
-                .with_context(|| format!("writing samples to {}", out_dir.display())),
-            other => bail!("unknown synth target `{other}` (available: afm)"),
+        Command::Dmw(args) => cmd_dmw(*args),
+        Command::Synth {
+            what,
+            out_dir,
+            format,
+            revolutions,
+            seed,
+            no_index,
+        } => match what.as_str() {
+            "ldv" => {
+                let dir = out_dir.unwrap_or_else(|| PathBuf::from("raw/ldv"));
+                let files =
+                    crate::samples::write_ldv_sample(&dir, &format, revolutions, seed, !no_index)?;
+                for f in files {
+                    println!("{}", f.display());
+                }
+                Ok(())
+            }
+            "afm" => {
+                let dir = out_dir.unwrap_or_else(|| PathBuf::from("raw/afm"));
+                crate::samples::write_afm_samples(&dir)
+                    .map(|_| ())
+                    .with_context(|| format!("writing samples to {}", dir.display()))
+            }
+            other => bail!("unknown synth target `{other}` (available: afm, ldv)"),
         },
         Command::Bench { config, size } => crate::samples::bench(&config, size),
     }
@@ -221,7 +326,7 @@ fn cmd_run(
     let tables_dir = processed.join("tables");
     let failed = report.failed();
     for (kind, rows) in engine::summary_rows(&store, &report.current) {
-        let stem = tables_dir.join(format!("{kind}s"));
+        let stem = tables_dir.join(table_name(&kind));
         if (ran > 0 && failed == 0)
             || !stem.with_extension("parquet").exists()
             || !stem.with_extension("csv").exists()
@@ -254,6 +359,14 @@ fn cmd_run(
         bail!("{failed} stage instance(s) did not run");
     }
     Ok(())
+}
+
+/// Summary table per stage kind: `surfaces`, `interfaces`, `dmw` (a mass noun).
+fn table_name(kind: &str) -> String {
+    match kind {
+        "dmw" => "dmw".into(),
+        k => format!("{k}s"),
+    }
 }
 
 fn cmd_status(config: &Path, as_json: bool) -> Result<()> {
@@ -382,6 +495,129 @@ fn cmd_surface(a: SurfaceArgs) -> Result<()> {
         for w in &r.warnings {
             println!("  warning: {w}");
         }
+    }
+    Ok(())
+}
+
+fn cmd_dmw(a: DmwArgs) -> Result<()> {
+    let mut cfg = DmwConfig::for_file(a.file.clone());
+    cfg.sample_rate = a.sample_rate;
+    if let Some(s) = a.sensitivity {
+        cfg.sensitivity = s;
+    }
+    cfg.rpm = a.rpm;
+    cfg.velocity_column = a.velocity_column;
+    cfg.index_column = a.index_column;
+    cfg.time_column = a.time_column;
+    cfg.velocity_unit = a.velocity_unit;
+    cfg.trigger_level = a.trigger_level;
+    if let Some(s) = a.segment {
+        cfg.segment = s;
+    }
+    cfg.max_revolutions = a.max_revolutions;
+    if let Some(v) = a.averaging {
+        cfg.averaging = v;
+    }
+    if let Some(v) = a.filter {
+        cfg.filter = v;
+    }
+    if let Some(v) = a.highpass_hz {
+        cfg.highpass_hz = v;
+    }
+    if let Some(v) = a.highpass_order {
+        cfg.highpass_order = v;
+    }
+    cfg.lowpass_hz = a.lowpass_hz;
+    if let Some(v) = a.lowpass_order {
+        cfg.lowpass_order = v;
+    }
+    if let Some(v) = a.padlen {
+        cfg.padlen = match v.parse::<i64>() {
+            Ok(n) => dmw::PadlenConfig::Samples(n),
+            Err(_) => dmw::PadlenConfig::Text(v),
+        };
+    }
+    if let Some(v) = a.chain_order {
+        cfg.chain_order = v;
+    }
+    if let Some(v) = a.detrend {
+        cfg.detrend = v;
+    }
+    if let Some(v) = a.remove_offset {
+        cfg.remove_offset = v;
+    }
+    cfg.resample_hz = a.resample_hz;
+    if let Some(v) = a.peaks {
+        cfg.peaks = v;
+    }
+    let params = dmw::validate(&cfg, a.file.clone())
+        .map_err(|(k, m)| anyhow::anyhow!("--{}: {m}", k.replace('_', "-")))?;
+    let (rec, res) = dmw::analyse(&params)?;
+    if let Some(out) = &a.out {
+        let dir = out
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        dmw::write_outputs(
+            &rec,
+            &res,
+            &params,
+            out,
+            Some(dir),
+            "",
+            &json!([a.file.to_string_lossy()]),
+        )?;
+    }
+    let report = dmw::report_json(&rec, &res, &params);
+    if a.json {
+        println!("{report}");
+        return Ok(());
+    }
+    let q = &res.qa;
+    let s = &res.stats;
+    println!(
+        "{} ({}, {}), {} samples at {} MS/s",
+        a.file.display(),
+        rec.format,
+        q.layout,
+        rec.velocity.len(),
+        rec.sample_rate / 1e6
+    );
+    println!(
+        "  revolutions  {} averaged of {} triggers ({}; {} averaging)",
+        q.n_avg, q.n_triggers, q.segmentation, params.chain.averaging
+    );
+    if q.period_mean.is_finite() {
+        println!(
+            "  period       {:.6} ms ({:.1} rpm), relative std {:.2e}",
+            q.period_mean * 1e3,
+            60.0 / q.period_mean,
+            q.period_relstd
+        );
+    }
+    println!(
+        "  noise floor  {:.3} µm/s in the average (residual {:.3} µm/s per revolution)",
+        q.noise_floor * 1e6,
+        q.residual_std * 1e6
+    );
+    println!(
+        "  DMW          std {:.4} nm, peak-to-peak {:.4} nm ({} samples at {} MS/s, {} edge samples excluded each end)",
+        s.std * 1e9,
+        s.peak_to_peak * 1e9,
+        res.tracks.d[0].len(),
+        res.sample_rate / 1e6,
+        q.edge_samples
+    );
+    for p in s.peaks.iter().take(5) {
+        println!(
+            "  line         {:9.3} kHz  {:.4} nm",
+            p.frequency / 1e3,
+            p.amplitude * 1e9
+        );
+    }
+    for w in &q.warnings {
+        println!("  warning: {w}");
     }
     Ok(())
 }

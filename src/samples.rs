@@ -34,6 +34,102 @@ pub fn add_defects(map: &mut HeightMap, d: &Defects) {
     }
 }
 
+/// Revolutions in the shipped LDV sample: enough to show the √N noise reduction and the
+/// speed wander, small enough to keep the file about a megabyte.
+pub const SHIPPED_LDV_REVOLUTIONS: usize = 32;
+/// ADC step of the shipped sample's velocity channel (0.5 mV: a 16-bit digitiser on ±16 V
+/// would be coarser; 12-bit on ±1 V is this).
+pub const SHIPPED_LDV_LSB: f64 = 0.5e-3;
+
+/// The synthetic LDV record of `raw/ldv/` (or a variant for tests) and `samples.json` beside it
+/// with the generator's parameters and the truth a processing chain should recover.
+pub fn write_ldv_sample(
+    dir: &Path,
+    format: &str,
+    revolutions: Option<usize>,
+    seed: Option<u64>,
+    with_index: bool,
+) -> Result<Vec<std::path::PathBuf>> {
+    use crate::dmw::io::{write_ldv, write_ldv_hdf5_counts, LdvFormat};
+    use crate::dmw::synth::{generate, truth_displacement, LdvSynthSpec};
+    use crate::signal::butterworth::{butterworth_sos, FilterKind};
+    let defaults = LdvSynthSpec::default();
+    let spec = LdvSynthSpec {
+        n_revolutions: revolutions.unwrap_or(SHIPPED_LDV_REVOLUTIONS),
+        seed: seed.unwrap_or(defaults.seed),
+        ..defaults
+    };
+    if spec.n_revolutions == 0 {
+        anyhow::bail!("--revolutions must be at least 1");
+    }
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let (mut rec, truth) = generate(&spec);
+    if !with_index {
+        rec.index = None;
+    }
+    let stem = format!("disk_md_{}rpm", spec.rpm);
+    let path = match format {
+        "h5" | "hdf5" => {
+            let p = dir.join(format!("{stem}.h5"));
+            write_ldv_hdf5_counts(&rec, &p, SHIPPED_LDV_LSB, 0.01)?;
+            p
+        }
+        "h5-f64" => {
+            let p = dir.join(format!("{stem}_f64.h5"));
+            write_ldv(&rec, &p, LdvFormat::Hdf5)?;
+            p
+        }
+        "csv" => {
+            let p = dir.join(format!("{stem}.csv"));
+            write_ldv(&rec, &p, LdvFormat::Csv)?;
+            p
+        }
+        "parquet" => {
+            let p = dir.join(format!("{stem}.parquet"));
+            write_ldv(&rec, &p, LdvFormat::Parquet)?;
+            p
+        }
+        other => anyhow::bail!("unknown --format `{other}` (h5, h5-f64, csv, parquet)"),
+    };
+    // What an ideal chain returns: the repeatable lines at mean speed through the default
+    // zero-phase 10 kHz high-pass, over a 2.5 ms segment without its 0.3 ms edges.
+    let n_p = truth.periods.len() as f64;
+    let mean_period = truth.periods.iter().sum::<f64>() / n_p;
+    let relstd = (truth
+        .periods
+        .iter()
+        .map(|p| (p - mean_period).powi(2))
+        .sum::<f64>()
+        / n_p)
+        .sqrt()
+        / mean_period;
+    let hp = butterworth_sos(4, 10e3, spec.sample_rate, FilterKind::HighPass)?;
+    let times: Vec<f64> = (1200..8800).map(|i| i as f64 / spec.sample_rate).collect();
+    let d = truth_displacement(&spec, &truth, mean_period, &times, Some(&hp));
+    let m = d.iter().sum::<f64>() / d.len() as f64;
+    let truth_std = (d.iter().map(|x| (x - m).powi(2)).sum::<f64>() / d.len() as f64).sqrt();
+    let info = json!({
+        "file": path.file_name().map(|n| n.to_string_lossy().to_string()),
+        "generator": "hdi synth ldv (src/dmw/synth.rs); model of signals-and-surfaces.md §3.3",
+        "parameters": spec.to_json(),
+        "index_channel": with_index,
+        "velocity_lsb_V": if format.starts_with("h5") && format != "h5-f64" { json!(SHIPPED_LDV_LSB) } else { json!(null) },
+        "n_samples": rec.velocity.len(),
+        "truth": {
+            "n_trigger_edges": truth.trigger_times.len(),
+            "first_trigger_s": truth.trigger_times.first(),
+            "period_mean_s": mean_period,
+            "period_relstd": relstd,
+            "harmonic_phases_rad": truth.harmonic_phases,
+            "dmw_std_m (zero-phase 10 kHz order-4 HP, mean speed, samples 1200..8800)": truth_std,
+        },
+    });
+    let json_path = dir.join("samples.json");
+    crate::core::cache::write_atomic(&json_path, serde_json::to_string_pretty(&info)?.as_bytes())
+        .with_context(|| format!("writing {}", json_path.display()))?;
+    Ok(vec![path, json_path])
+}
+
 /// The two sample height maps of `raw/afm/` and a JSON file with how they were made.
 pub fn write_afm_samples(dir: &Path) -> Result<Vec<std::path::PathBuf>> {
     std::fs::create_dir_all(dir)?;

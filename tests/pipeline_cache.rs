@@ -13,7 +13,7 @@ fn default_pipeline_writes_hdf5_tables_and_plots_readable_by_others() {
     let o = p.run(&["run"]);
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("ran 4, cached 0, failed 0, skipped 0 of 4"),
+        stderr(&o).contains("ran 5, cached 0, failed 0, skipped 0 of 5"),
         "{}",
         stderr(&o)
     );
@@ -88,7 +88,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let o = p.run(&["run"]);
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("nothing to do: all 4 stage instances fresh"),
+        stderr(&o).contains("nothing to do: all 5 stage instances fresh"),
         "{}",
         stderr(&o)
     );
@@ -125,7 +125,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let o = p.run(&["run"]);
     assert_ok(&o);
     let e = stderr(&o);
-    assert!(e.contains("ran 2, cached 2"), "{e}");
+    assert!(e.contains("ran 2, cached 3"), "{e}");
     assert!(
         e.contains("ran     disk") && e.contains("ran     hdi"),
         "{e}"

@@ -8,6 +8,7 @@ use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use crate::stages::dmw::DmwConfig;
 use crate::stages::interface::InterfaceConfig;
 use crate::stages::surfaces::SurfaceConfig;
 
@@ -66,6 +67,9 @@ pub struct RawConfig {
     /// `[interface.NAME]`: two surfaces (or explicit values) → combined σ, R, η, β.
     #[serde(default)]
     pub interface: BTreeMap<String, InterfaceConfig>,
+    /// `[dmw.NAME]`: one LDV record → the three dynamic-microwaviness tracks.
+    #[serde(default)]
+    pub dmw: BTreeMap<String, DmwConfig>,
 }
 
 /// A loaded pipeline file: its text (for line lookups) and parsed content.

@@ -280,3 +280,149 @@ pub fn lines_png(
         Ok(())
     })
 }
+
+/// Named (x, y) series on log–log axes (spectra), with optional marked points (peaks).
+/// Non-positive values are dropped (they have no place on a log axis).
+pub fn loglog_png(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    series: &[(&str, Vec<(f64, f64)>)],
+    marks: &[(f64, f64)],
+) -> Result<()> {
+    let positive = |p: &&(f64, f64)| p.0 > 0.0 && p.1 > 0.0 && p.0.is_finite() && p.1.is_finite();
+    let (mut xr, mut yr) = ((f64::INFINITY, 0.0f64), (f64::INFINITY, 0.0f64));
+    for (x, y) in series.iter().flat_map(|(_, s)| s.iter()).filter(positive) {
+        xr = (xr.0.min(*x), xr.1.max(*x));
+        yr = (yr.0.min(*y), yr.1.max(*y));
+    }
+    if !xr.0.is_finite() {
+        return Err(perr(path, "no positive points to plot"));
+    }
+    // Keep ten decades below the top at most: FFT leakage floors are not information.
+    yr.0 = yr.0.max(yr.1 * 1e-10);
+    let span = |r: (f64, f64)| {
+        if r.1 > r.0 {
+            (r.0 / 1.3)..(r.1 * 1.3)
+        } else {
+            (r.0 / 2.0)..(r.0 * 2.0)
+        }
+    };
+    let palette = [BLUE, RED, GREEN, MAGENTA, CYAN, BLACK];
+    let y_floor = yr.0;
+    render_png(path, (760, 520), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 20))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(span(xr).log_scale(), span(yr).log_scale())
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for (k, (label, s)) in series.iter().enumerate() {
+            let c = palette[k % palette.len()];
+            let pts: Vec<(f64, f64)> = s
+                .iter()
+                .filter(positive)
+                .map(|&(x, y)| (x, y.max(y_floor)))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(pts, c.stroke_width(1)))
+                .map_err(|e| e.to_string())?
+                .label(*label)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 15, y)], c.stroke_width(2))
+                });
+        }
+        if !marks.is_empty() {
+            chart
+                .draw_series(
+                    marks
+                        .iter()
+                        .filter(positive)
+                        .map(|&(x, y)| Circle::new((x, y), 4, RED.stroke_width(2))),
+                )
+                .map_err(|e| e.to_string())?
+                .label("peaks")
+                .legend(|(x, y)| Circle::new((x + 7, y), 4, RED.stroke_width(2)));
+        }
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.8))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        Ok(())
+    })
+}
+
+/// Series stacked in panels that share the x axis (time histories of several tracks), each
+/// with its own y range; `shade` marks x intervals (e.g. filter edge transients) in grey.
+pub fn stacked_png(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    panels: &[(&str, Vec<(f64, f64)>)],
+    shade: &[(f64, f64)],
+) -> Result<()> {
+    if panels.is_empty() {
+        return Err(perr(path, "no panels to plot"));
+    }
+    let range = |pts: &[(f64, f64)], f: fn(&(f64, f64)) -> f64| {
+        pts.iter()
+            .map(f)
+            .filter(|v| v.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(v), b.max(v))
+            })
+    };
+    let all: Vec<(f64, f64)> = panels.iter().flat_map(|(_, p)| p.iter().copied()).collect();
+    let xr = range(&all, |p| p.0);
+    if !xr.0.is_finite() {
+        return Err(perr(path, "no finite points to plot"));
+    }
+    let palette = [BLUE, RED, GREEN, MAGENTA, CYAN, BLACK];
+    let height = 140 + 170 * panels.len() as u32;
+    render_png(path, (900, height), |root| {
+        let root = root
+            .titled(title, ("sans-serif", 20))
+            .map_err(|e| e.to_string())?;
+        let areas = root.split_evenly((panels.len(), 1));
+        for (k, ((label, pts), area)) in panels.iter().zip(areas.iter()).enumerate() {
+            let mut yr = range(pts, |p| p.1);
+            if !yr.0.is_finite() {
+                yr = (-1.0, 1.0);
+            }
+            let pad = ((yr.1 - yr.0) * 0.05).max(1e-30);
+            let mut chart = ChartBuilder::on(area)
+                .margin(8)
+                .x_label_area_size(if k + 1 == panels.len() { 35 } else { 20 })
+                .y_label_area_size(70)
+                .build_cartesian_2d(xr.0..xr.1, (yr.0 - pad)..(yr.1 + pad))
+                .map_err(|e| e.to_string())?;
+            let mut mesh = chart.configure_mesh();
+            mesh.y_desc(*label);
+            if k + 1 == panels.len() {
+                mesh.x_desc(x_desc);
+            }
+            mesh.draw().map_err(|e| e.to_string())?;
+            chart
+                .draw_series(shade.iter().map(|&(a, b)| {
+                    Rectangle::new([(a, yr.0 - pad), (b, yr.1 + pad)], BLACK.mix(0.08).filled())
+                }))
+                .map_err(|e| e.to_string())?;
+            let c = palette[k % palette.len()];
+            chart
+                .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(1)))
+                .map_err(|e| e.to_string())?;
+        }
+        Ok(())
+    })
+}

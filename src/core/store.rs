@@ -1,7 +1,8 @@
 //! Output writers: HDF5 files following signals-and-surfaces.md §5 (units and long_name on
 //! every numeric dataset, NXdata groups, shuffle+gzip for large data, no plugins), and tidy
-//! tables through polars (Parquet + CSV). polars lives in this module only: its Rust API
-//! churns between minor versions, so an upgrade touches one file.
+//! tables through polars (Parquet + CSV). polars lives here and in the LDV readers
+//! (`dmw::io::{text, parquet}`) only: its Rust API churns between minor versions, so an
+//! upgrade touches those files.
 
 use crate::error::{Error, Result};
 use hdf5::types::VarLenUnicode;

@@ -12,6 +12,12 @@ pub enum Dimension {
     Length,
     /// Areal density, m^-2.
     PerArea,
+    /// Frequency or sample rate, Hz.
+    Frequency,
+    /// Duration, s.
+    Time,
+    /// Velocity-decoder sensitivity, m/s per V.
+    Sensitivity,
 }
 
 impl Dimension {
@@ -19,8 +25,34 @@ impl Dimension {
         match self {
             Dimension::Length => "m",
             Dimension::PerArea => "m^-2",
+            Dimension::Frequency => "Hz",
+            Dimension::Time => "s",
+            Dimension::Sensitivity => "m/s/V",
         }
     }
+}
+
+/// Frequency unit as a power of ten of hertz (sample rates may be written as S/s).
+fn frequency_exponent(unit: &str) -> Option<i32> {
+    Some(match unit {
+        "Hz" | "S/s" | "Sa/s" => 0,
+        "kHz" | "kS/s" => 3,
+        "MHz" | "MS/s" => 6,
+        "GHz" | "GS/s" => 9,
+        _ => return None,
+    })
+}
+
+/// Time unit as a power of ten of seconds.
+fn time_exponent(unit: &str) -> Option<i32> {
+    Some(match unit {
+        "s" => 0,
+        "ms" => -3,
+        "us" | "µs" | "μs" => -6,
+        "ns" => -9,
+        "ps" => -12,
+        _ => return None,
+    })
 }
 
 /// Length unit as a power of ten of metres (all supported units are decimal).
@@ -78,6 +110,13 @@ pub fn parse_quantity(text: &str, dim: Dimension) -> Result<f64, String> {
                 .or_else(|| unit.strip_suffix("⁻²"))
                 .and_then(length_exponent)
                 .map(|e| -2 * e),
+            Dimension::Frequency => frequency_exponent(unit),
+            Dimension::Time => time_exponent(unit),
+            Dimension::Sensitivity => unit
+                .strip_suffix("/s/V")
+                .or_else(|| unit.strip_suffix("s^-1 V^-1"))
+                .map(str::trim)
+                .and_then(length_exponent),
         }
         .ok_or_else(|| {
             format!(
@@ -85,10 +124,16 @@ pub fn parse_quantity(text: &str, dim: Dimension) -> Result<f64, String> {
                 match dim {
                     Dimension::Length => "length",
                     Dimension::PerArea => "per-area",
+                    Dimension::Frequency => "frequency",
+                    Dimension::Time => "time",
+                    Dimension::Sensitivity => "sensitivity",
                 },
                 match dim {
                     Dimension::Length => "m, mm, um, nm, pm, A",
                     Dimension::PerArea => "m^-2, um^-2",
+                    Dimension::Frequency => "Hz, kHz, MHz, MS/s",
+                    Dimension::Time => "s, ms, us, ns",
+                    Dimension::Sensitivity => "m/s/V, mm/s/V, um/s/V",
                 }
             )
         })?
@@ -109,6 +154,37 @@ pub struct Length(pub f64);
 /// An areal density in m^-2, written as a number or e.g. `"220 um^-2"`.
 #[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
 pub struct PerArea(pub f64);
+
+/// A frequency or sample rate in Hz, written as a number or e.g. `"10 kHz"`, `"4 MS/s"`.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+pub struct Frequency(pub f64);
+
+/// A duration in seconds, written as a number or e.g. `"2.5 ms"`.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+pub struct TimeSpan(pub f64);
+
+/// A velocity-decoder sensitivity in m/s per V, written as a number or e.g. `"25 mm/s/V"`.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+pub struct Sensitivity(pub f64);
+
+macro_rules! quantity_impls {
+    ($t:ident, $dim:expr) => {
+        impl<'de> Deserialize<'de> for $t {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                deserialize_quantity(d, $dim).map($t)
+            }
+        }
+        impl std::str::FromStr for $t {
+            type Err = String;
+            fn from_str(s: &str) -> Result<Self, String> {
+                parse_quantity(s, $dim).map($t)
+            }
+        }
+    };
+}
+quantity_impls!(Frequency, Dimension::Frequency);
+quantity_impls!(TimeSpan, Dimension::Time);
+quantity_impls!(Sensitivity, Dimension::Sensitivity);
 
 fn deserialize_quantity<'de, D: Deserializer<'de>>(d: D, dim: Dimension) -> Result<f64, D::Error> {
     #[derive(Deserialize)]
@@ -170,6 +246,26 @@ mod tests {
         assert_eq!(parse_quantity("3 Å", Dimension::Length).unwrap(), 3e-10);
         assert!(parse_quantity("5 parsecs", Dimension::Length).is_err());
         assert!(parse_quantity("five um", Dimension::Length).is_err());
+    }
+
+    #[test]
+    fn signal_quantities_normalise_to_si() {
+        assert_eq!(
+            parse_quantity("10 kHz", Dimension::Frequency).unwrap(),
+            10e3
+        );
+        assert_eq!(parse_quantity("4 MS/s", Dimension::Frequency).unwrap(), 4e6);
+        assert_eq!(parse_quantity("2.5 ms", Dimension::Time).unwrap(), 2.5e-3);
+        assert_eq!(
+            parse_quantity("25 mm/s/V", Dimension::Sensitivity).unwrap(),
+            0.025
+        );
+        assert_eq!(
+            parse_quantity("0.025", Dimension::Sensitivity).unwrap(),
+            0.025
+        );
+        assert!(parse_quantity("10 kg", Dimension::Frequency).is_err());
+        assert!(parse_quantity("25 mm/s", Dimension::Sensitivity).is_err());
     }
 
     #[test]

@@ -4,7 +4,12 @@
 //! Everything in here is pure except `io` (readers/writers); `crate::stages::dmw` wires it
 //! into the pipeline. SI inside: seconds, metres, m/s; the raw decoder output is in volts.
 
+pub mod average;
+pub mod chain;
 pub mod io;
+pub mod synth;
+pub mod tracks;
+pub mod triggers;
 
 use std::path::PathBuf;
 

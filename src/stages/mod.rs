@@ -1,5 +1,6 @@
 //! Stage implementations, one module per stage kind, and the registry that turns a parsed
 //! `pipeline.toml` into stage instances.
+pub mod dmw;
 pub mod interface;
 pub mod surfaces;
 
@@ -48,6 +49,10 @@ pub fn build(file: &PipelineFile) -> Result<Vec<Box<dyn Stage>>, ConfigError> {
         stages.push(Box::new(interface::InterfaceStage::from_config(
             file, name, cfg,
         )?));
+    }
+    for (name, cfg) in &file.raw.dmw {
+        check_name("dmw", name)?;
+        stages.push(Box::new(dmw::DmwStage::from_config(file, name, cfg)?));
     }
     Ok(stages)
 }

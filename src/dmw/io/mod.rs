@@ -79,7 +79,7 @@ use names::{Meta, TimeKind, Unit};
 use stream::{BadRun, Channel, Stream, TimeFault};
 
 /// How to read a record; everything defaults to detection from the file.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct ReadOptions {
     /// Column/dataset holding the velocity channel; default: detected by name.
     pub velocity_column: Option<String>,

@@ -1,0 +1,842 @@
+//! DMW stage: one LDV record → revolution average → high-passed velocity and displacement →
+//! the three tracks, as HDF5 + PNG + a summary row. The same function serves the pipeline and
+//! `hdi dmw FILE`.
+
+use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::engine::{Stage, StageContext, StageOutput};
+use crate::core::plot;
+use crate::core::store::H5Out;
+use crate::core::units::{Frequency, Sensitivity, TimeSpan};
+use crate::dmw::average::AverageMode;
+use crate::dmw::chain::{
+    process, Butterworth, ChainOrder, ChainParams, DmwResult, FilterMode, Padlen,
+};
+use crate::dmw::io::{read_ldv, ReadOptions};
+use crate::dmw::{LdvRecord, VelocityUnit};
+use crate::error::Result;
+use crate::signal::integrate::Detrend;
+use serde::Deserialize;
+use serde_json::{json, Map, Value};
+use std::path::{Path, PathBuf};
+
+/// Bump when the numbers this stage produces change.
+pub const MODEL_VERSION: &str = "dmw-1";
+
+fn default_sensitivity() -> Sensitivity {
+    Sensitivity(0.025)
+}
+fn default_segment() -> TimeSpan {
+    TimeSpan(2.5e-3)
+}
+fn default_averaging() -> String {
+    "angular".into()
+}
+fn default_filter() -> String {
+    "zero_phase".into()
+}
+fn default_highpass() -> Frequency {
+    Frequency(10e3)
+}
+fn default_order() -> usize {
+    4
+}
+fn default_padlen() -> PadlenConfig {
+    PadlenConfig::Text("auto".into())
+}
+fn default_chain_order() -> String {
+    "filter_then_integrate".into()
+}
+fn default_detrend() -> String {
+    "line".into()
+}
+fn default_true() -> bool {
+    true
+}
+fn default_peaks() -> usize {
+    8
+}
+
+/// `padlen = "auto" | "scipy" | <samples>`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum PadlenConfig {
+    Samples(i64),
+    Text(String),
+}
+
+/// `[dmw.NAME]` as written in `pipeline.toml` (every key is also a `hdi dmw` option).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DmwConfig {
+    /// LDV record (CSV, Parquet or HDF5; detected from content).
+    pub file: PathBuf,
+    /// Sample rate, when the file has no time column and does not state it.
+    #[serde(default)]
+    pub sample_rate: Option<Frequency>,
+    /// Velocity-decoder sensitivity (used when the velocity channel is in volts).
+    #[serde(default = "default_sensitivity")]
+    pub sensitivity: Sensitivity,
+    /// Spindle speed, rpm: checks the index channel's period, or segments a record that has
+    /// no index channel.
+    #[serde(default)]
+    pub rpm: Option<f64>,
+    #[serde(default)]
+    pub velocity_column: Option<String>,
+    #[serde(default)]
+    pub index_column: Option<String>,
+    #[serde(default)]
+    pub time_column: Option<String>,
+    /// "V" or "m/s", overriding what the file says.
+    #[serde(default)]
+    pub velocity_unit: Option<String>,
+    /// Trigger threshold in the index channel's unit (default: mid-level of its range).
+    #[serde(default)]
+    pub trigger_level: Option<f64>,
+    /// Length of the averaged segment after each trigger.
+    #[serde(default = "default_segment")]
+    pub segment: TimeSpan,
+    #[serde(default)]
+    pub max_revolutions: Option<usize>,
+    /// "angular" (order tracking), "subsample" or "integer".
+    #[serde(default = "default_averaging")]
+    pub averaging: String,
+    /// "zero_phase" (forward–backward), "causal" (one pass) or "none".
+    #[serde(default = "default_filter")]
+    pub filter: String,
+    #[serde(default = "default_highpass")]
+    pub highpass_hz: Frequency,
+    #[serde(default = "default_order")]
+    pub highpass_order: usize,
+    #[serde(default)]
+    pub lowpass_hz: Option<Frequency>,
+    #[serde(default = "default_order")]
+    pub lowpass_order: usize,
+    #[serde(default = "default_padlen")]
+    pub padlen: PadlenConfig,
+    /// "filter_then_integrate" (recommended) or "integrate_then_filter" (reference order).
+    #[serde(default = "default_chain_order")]
+    pub chain_order: String,
+    /// "line", "mean" or "none" after integration.
+    #[serde(default = "default_detrend")]
+    pub detrend: String,
+    /// Subtract the averaged velocity's mean before integration (a decoder offset is not
+    /// motion); `false` reproduces the reference scripts.
+    #[serde(default = "default_true")]
+    pub remove_offset: bool,
+    /// Output sample rate (band-limited resampling); default: the record's.
+    #[serde(default)]
+    pub resample_hz: Option<Frequency>,
+    /// Number of spectral peaks reported.
+    #[serde(default = "default_peaks")]
+    pub peaks: usize,
+}
+
+impl DmwConfig {
+    /// The defaults for a file (what `hdi dmw FILE` starts from).
+    pub fn for_file(file: PathBuf) -> Self {
+        DmwConfig {
+            file,
+            sample_rate: None,
+            sensitivity: default_sensitivity(),
+            rpm: None,
+            velocity_column: None,
+            index_column: None,
+            time_column: None,
+            velocity_unit: None,
+            trigger_level: None,
+            segment: default_segment(),
+            max_revolutions: None,
+            averaging: default_averaging(),
+            filter: default_filter(),
+            highpass_hz: default_highpass(),
+            highpass_order: default_order(),
+            lowpass_hz: None,
+            lowpass_order: default_order(),
+            padlen: default_padlen(),
+            chain_order: default_chain_order(),
+            detrend: default_detrend(),
+            remove_offset: true,
+            resample_hz: None,
+            peaks: default_peaks(),
+        }
+    }
+}
+
+/// Validated parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DmwParams {
+    pub file: PathBuf,
+    pub read: ReadOptions,
+    pub chain: ChainParams,
+}
+
+fn positive(key: &str, v: f64, what: &str) -> std::result::Result<(), (String, String)> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err((
+            key.into(),
+            format!("{v} is out of range: {what} must be > 0"),
+        ))
+    }
+}
+
+/// Validation failures: (key, message).
+pub fn validate(
+    cfg: &DmwConfig,
+    file: PathBuf,
+) -> std::result::Result<DmwParams, (String, String)> {
+    let bad = |k: &str, m: String| Err((k.to_string(), m));
+    if let Some(f) = cfg.sample_rate {
+        positive("sample_rate", f.0, "a sample rate")?;
+    }
+    positive("sensitivity", cfg.sensitivity.0, "the decoder sensitivity")?;
+    if let Some(r) = cfg.rpm {
+        if !(r.is_finite() && r > 0.0 && r <= 100_000.0) {
+            return bad(
+                "rpm",
+                format!("{r} is out of range: spindle speed must be in (0, 100000] rpm"),
+            );
+        }
+    }
+    positive("segment", cfg.segment.0, "the segment length")?;
+    if cfg.max_revolutions == Some(0) {
+        return bad(
+            "max_revolutions",
+            "0 is out of range: average at least 1 revolution".into(),
+        );
+    }
+    let averaging: AverageMode = match cfg.averaging.parse() {
+        Ok(m) => m,
+        Err(e) => return bad("averaging", e),
+    };
+    let (filter_mode, filtered) = match cfg.filter.as_str() {
+        "none" => (FilterMode::ZeroPhase, false),
+        other => match other.parse::<FilterMode>() {
+            Ok(m) => (m, true),
+            Err(e) => return bad("filter", format!("{e} or \"none\"")),
+        },
+    };
+    positive("highpass_hz", cfg.highpass_hz.0, "the high-pass cutoff")?;
+    for (k, o) in [
+        ("highpass_order", cfg.highpass_order),
+        ("lowpass_order", cfg.lowpass_order),
+    ] {
+        if !(1..=12).contains(&o) {
+            return bad(
+                k,
+                format!("{o} is out of range: Butterworth order must be 1…12"),
+            );
+        }
+    }
+    if let Some(lp) = cfg.lowpass_hz {
+        positive("lowpass_hz", lp.0, "the low-pass cutoff")?;
+        if filtered && lp.0 <= cfg.highpass_hz.0 {
+            return bad(
+                "lowpass_hz",
+                format!(
+                    "{} Hz must be above the high-pass cutoff {} Hz",
+                    lp.0, cfg.highpass_hz.0
+                ),
+            );
+        }
+    }
+    if let Some(fs) = cfg.sample_rate {
+        let nyquist = fs.0 / 2.0;
+        for (k, f) in [
+            ("highpass_hz", Some(cfg.highpass_hz.0)),
+            ("lowpass_hz", cfg.lowpass_hz.map(|f| f.0)),
+        ] {
+            if let Some(f) = f {
+                if filtered && f >= nyquist {
+                    return bad(
+                        k,
+                        format!("{f} Hz is out of range: must be below Nyquist ({nyquist} Hz)"),
+                    );
+                }
+            }
+        }
+    }
+    let padlen = match &cfg.padlen {
+        PadlenConfig::Samples(n) if *n >= 0 => Padlen::Samples(*n as usize),
+        PadlenConfig::Samples(n) => {
+            return bad("padlen", format!("{n} is out of range: must be ≥ 0"))
+        }
+        PadlenConfig::Text(t) if t == "auto" => Padlen::Auto,
+        PadlenConfig::Text(t) if t == "scipy" => Padlen::Scipy,
+        PadlenConfig::Text(t) => {
+            return bad(
+                "padlen",
+                format!("`{t}`: expected \"auto\", \"scipy\" or a number of samples"),
+            )
+        }
+    };
+    let order: ChainOrder = match cfg.chain_order.parse() {
+        Ok(o) => o,
+        Err(e) => return bad("chain_order", e),
+    };
+    let detrend: Detrend = match cfg.detrend.parse() {
+        Ok(d) => d,
+        Err(e) => return bad("detrend", e),
+    };
+    if let Some(r) = cfg.resample_hz {
+        positive("resample_hz", r.0, "the output sample rate")?;
+    }
+    if cfg.peaks > 100 {
+        return bad(
+            "peaks",
+            format!("{} is out of range: at most 100 peaks", cfg.peaks),
+        );
+    }
+    let velocity_unit = match cfg.velocity_unit.as_deref() {
+        None => None,
+        Some("V") => Some(VelocityUnit::Volt),
+        Some("m/s") => Some(VelocityUnit::MetrePerSecond),
+        Some(u) => return bad("velocity_unit", format!("`{u}`: expected \"V\" or \"m/s\"")),
+    };
+    Ok(DmwParams {
+        file,
+        read: ReadOptions {
+            velocity_column: cfg.velocity_column.clone(),
+            index_column: cfg.index_column.clone(),
+            time_column: cfg.time_column.clone(),
+            sample_rate: cfg.sample_rate.map(|f| f.0),
+            velocity_unit,
+        },
+        chain: ChainParams {
+            sensitivity: cfg.sensitivity.0,
+            rpm: cfg.rpm,
+            trigger_level: cfg.trigger_level,
+            segment: cfg.segment.0,
+            max_revolutions: cfg.max_revolutions,
+            averaging,
+            highpass: filtered.then_some(Butterworth {
+                order: cfg.highpass_order,
+                cutoff: cfg.highpass_hz.0,
+            }),
+            lowpass: cfg.lowpass_hz.filter(|_| filtered).map(|f| Butterworth {
+                order: cfg.lowpass_order,
+                cutoff: f.0,
+            }),
+            filter_mode,
+            padlen,
+            order,
+            detrend,
+            remove_offset: cfg.remove_offset,
+            resample_rate: cfg.resample_hz.map(|f| f.0),
+            n_peaks: cfg.peaks,
+        },
+    })
+}
+
+impl DmwParams {
+    /// Canonical parameters for the cache key and the HDF5 root attribute (SI units).
+    pub fn canonical(&self) -> Value {
+        let c = &self.chain;
+        let r = &self.read;
+        let bw =
+            |b: Option<Butterworth>| b.map(|b| json!({"order": b.order, "cutoff_Hz": b.cutoff}));
+        json!({
+            "read": {
+                "velocity_column": r.velocity_column,
+                "index_column": r.index_column,
+                "time_column": r.time_column,
+                "sample_rate_Hz": r.sample_rate,
+                "velocity_unit": r.velocity_unit.map(|u| u.symbol()),
+            },
+            "sensitivity_m_s_per_V": c.sensitivity,
+            "rpm": c.rpm,
+            "trigger_level": c.trigger_level,
+            "segment_s": c.segment,
+            "max_revolutions": c.max_revolutions,
+            "averaging": c.averaging.to_string(),
+            "highpass": bw(c.highpass),
+            "lowpass": bw(c.lowpass),
+            "filter_mode": c.filter_mode.to_string(),
+            "padlen": match c.padlen {
+                Padlen::Auto => json!("auto"),
+                Padlen::Scipy => json!("scipy"),
+                Padlen::Samples(n) => json!(n),
+            },
+            "chain_order": c.order.to_string(),
+            "detrend": c.detrend.to_string(),
+            "remove_offset": c.remove_offset,
+            "resample_Hz": c.resample_rate,
+            "peaks": c.n_peaks,
+        })
+    }
+}
+
+/// Read and process.
+pub fn analyse(p: &DmwParams) -> Result<(LdvRecord, DmwResult)> {
+    let rec = read_ldv(&p.file, &p.read)?;
+    let mut chain = p.chain.clone();
+    if chain.rpm.is_none() {
+        chain.rpm = rec.rpm;
+    }
+    let res = process(&rec, &chain).map_err(|e| match e {
+        crate::dmw::DmwError::Processing(m) => crate::dmw::DmwError::Record {
+            path: p.file.clone(),
+            message: m,
+        },
+        other => other,
+    })?;
+    Ok((rec, res))
+}
+
+/// The QA block and statistics (SI units), as printed by `hdi dmw --json`.
+pub fn report_json(rec: &LdvRecord, r: &DmwResult, p: &DmwParams) -> Value {
+    let q = &r.qa;
+    let s = &r.stats;
+    let finite = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
+    let peaks: Vec<Value> = s
+        .peaks
+        .iter()
+        .map(|pk| json!({"frequency": pk.frequency, "amplitude": pk.amplitude}))
+        .collect();
+    json!({
+        "file": p.file.display().to_string(),
+        "format": rec.format,
+        "layout": q.layout,
+        "segmentation": q.segmentation,
+        "sample_rate": r.sample_rate,
+        "record_sample_rate": rec.sample_rate,
+        "n_samples": r.tracks.d[0].len(),
+        "duration": r.tracks.d[0].len() as f64 / r.sample_rate,
+        "velocity_unit": rec.velocity_unit.symbol(),
+        "sensitivity": p.chain.sensitivity,
+        "n_triggers": q.n_triggers,
+        "n_avg": q.n_avg,
+        "n_dropped": q.n_dropped,
+        "trigger_level": finite(q.trigger_level),
+        "period_mean": finite(q.period_mean),
+        "period_relstd": finite(q.period_relstd),
+        "rpm_measured": finite(60.0 / q.period_mean),
+        "phase_wander_275kHz": q.phase_wander_275khz,
+        "noise_floor": finite(q.noise_floor),
+        "residual_std": finite(q.residual_std),
+        "velocity_offset": q.velocity_offset,
+        "drift": q.drift,
+        "integration_gain_275kHz": q.integration_gain_275khz,
+        "edge_samples": q.edge_samples,
+        "dmw_std": s.std,
+        "dmw_peak_to_peak": s.peak_to_peak,
+        "velocity_std": s.velocity_std,
+        "dominant_frequency": s.peaks.first().map(|p| p.frequency),
+        "peaks": peaks,
+        "tracks": {
+            "D1_std": s.std, "D2_std": s.std, "D3_std": s.std,
+            "note": "D2 and D3 are time-flipped copies of D1: same std and amplitude spectrum",
+        },
+        "chain_order": p.chain.order.to_string(),
+        "averaging": p.chain.averaging.to_string(),
+        "warnings": q.warnings,
+    })
+}
+
+/// One row of the tidy DMW table (unit suffixes in the names).
+pub fn summary_row(rec: &LdvRecord, r: &DmwResult, p: &DmwParams) -> Map<String, Value> {
+    let q = &r.qa;
+    let s = &r.stats;
+    let mut m = Map::new();
+    let mut put = |k: &str, v: Value| {
+        m.insert(k.into(), v);
+    };
+    put("file", json!(p.file.display().to_string()));
+    put("format", json!(rec.format));
+    put("n_avg", json!(q.n_avg as i64));
+    put("period_mean_ms", json!(q.period_mean * 1e3));
+    put("period_relstd", json!(q.period_relstd));
+    put("noise_floor_um_s", json!(q.noise_floor * 1e6));
+    put("dmw_std_nm", json!(s.std * 1e9));
+    put("dmw_peak_to_peak_nm", json!(s.peak_to_peak * 1e9));
+    put("velocity_std_mm_s", json!(s.velocity_std * 1e3));
+    put(
+        "dominant_frequency_kHz",
+        json!(s.peaks.first().map(|p| p.frequency / 1e3)),
+    );
+    put(
+        "dominant_amplitude_nm",
+        json!(s.peaks.first().map(|p| p.amplitude * 1e9)),
+    );
+    put(
+        "highpass_kHz",
+        json!(p.chain.highpass.map(|b| b.cutoff / 1e3)),
+    );
+    put("averaging", json!(p.chain.averaging.to_string()));
+    put("chain_order", json!(p.chain.order.to_string()));
+    put("n_samples", json!(r.tracks.d[0].len() as i64));
+    put("sample_rate_MHz", json!(r.sample_rate / 1e6));
+    m
+}
+
+/// HDF5 (layout of signals-and-surfaces.md §5) and PNGs into `plot_dir`.
+pub fn write_outputs(
+    rec: &LdvRecord,
+    r: &DmwResult,
+    p: &DmwParams,
+    h5_path: &Path,
+    plot_dir: Option<&Path>,
+    cache_key: &str,
+    inputs: &Value,
+) -> Result<()> {
+    let out = H5Out::create(h5_path)?;
+    out.root_attributes("dmw", cache_key, &p.canonical(), inputs, "dmw")?;
+    let entry = out.group("dmw", Some("NXentry"))?;
+    out.attr_str(&entry, "default", "tracks")?;
+    let n = r.tracks.d[0].len();
+    let fs = r.sample_rate;
+    let time: Vec<f64> = (0..n).map(|i| i as f64 / fs).collect();
+
+    let g = out.group("dmw/tracks", Some("NXdata"))?;
+    out.attr_str(&g, "signal", "D1")?;
+    out.attr_str_list(&g, "auxiliary_signals", &["D2", "D3"])?;
+    out.attr_str_list(&g, "axes", &["time"])?;
+    let t = out.write_1d(&g, "time", &time, "s", "time from the segment start")?;
+    out.attr_f64(&t, "sampling_rate", fs)?;
+    out.attr_f64(&t, "t0", 0.0)?;
+    let names = [
+        ("D1", "V1", "original track (TFC bulge, centre line)"),
+        ("D2", "V2", "time-flipped track (features at +y)"),
+        ("D3", "V3", "negated time-flipped track (features at -y)"),
+    ];
+    for (k, (dn, vn, what)) in names.iter().enumerate() {
+        out.write_1d(
+            &g,
+            dn,
+            &r.tracks.d[k],
+            "m",
+            &format!("DMW displacement, {what}"),
+        )?;
+        out.write_1d(
+            &g,
+            vn,
+            &r.tracks.v[k],
+            "m/s",
+            &format!("DMW velocity, {what}"),
+        )?;
+    }
+    let edge: Vec<u8> = r.edge_transient.iter().map(|&b| u8::from(b)).collect();
+    out.write_array(
+        &g,
+        "edge_transient",
+        ndarray::ArrayView1::from(&edge[..]),
+        "1",
+        "1 = inside the filter's start/end transient (excluded from statistics)",
+    )?;
+
+    let g = out.group("dmw/average", Some("NXdata"))?;
+    out.attr_str(&g, "signal", "velocity")?;
+    out.attr_str_list(&g, "axes", &["time"])?;
+    let avg_time: Vec<f64> = (0..r.averaged_raw.len())
+        .map(|i| i as f64 / rec.sample_rate)
+        .collect();
+    out.write_1d(&g, "time", &avg_time, "s", "time from the trigger")?;
+    match r.averaged_raw_unit {
+        VelocityUnit::Volt => out.write_1d(
+            &g,
+            "voltage",
+            &r.averaged_raw,
+            "V",
+            "revolution-averaged decoder output",
+        )?,
+        VelocityUnit::MetrePerSecond => out.write_1d(
+            &g,
+            "velocity_raw",
+            &r.averaged_raw,
+            "m/s",
+            "revolution-averaged velocity as recorded",
+        )?,
+    };
+    out.write_1d(
+        &g,
+        "velocity",
+        &r.averaged_velocity,
+        "m/s",
+        "revolution-averaged velocity, offset removed, unfiltered",
+    )?;
+
+    let g = out.group("dmw/spectrum", Some("NXdata"))?;
+    out.attr_str(&g, "signal", "amplitude")?;
+    out.attr_str_list(&g, "auxiliary_signals", &["velocity_amplitude"])?;
+    out.attr_str_list(&g, "axes", &["frequency"])?;
+    out.write_1d(&g, "frequency", &r.spectrum_frequency, "Hz", "frequency")?;
+    out.write_1d(
+        &g,
+        "amplitude",
+        &r.spectrum_displacement,
+        "m",
+        "one-sided amplitude of D1 (Hann)",
+    )?;
+    out.write_1d(
+        &g,
+        "velocity_amplitude",
+        &r.spectrum_velocity,
+        "m/s",
+        "one-sided amplitude of V1 (Hann)",
+    )?;
+    let g = out.group("dmw/spectrum/peaks", None)?;
+    let pf: Vec<f64> = r.stats.peaks.iter().map(|p| p.frequency).collect();
+    let pa: Vec<f64> = r.stats.peaks.iter().map(|p| p.amplitude).collect();
+    out.write_1d(
+        &g,
+        "frequency",
+        &pf,
+        "Hz",
+        "spectral peak frequency (Hann-interpolated)",
+    )?;
+    out.write_1d(&g, "amplitude", &pa, "m", "spectral peak amplitude")?;
+
+    if !r.trigger_times.is_empty() {
+        let g = out.group("dmw/triggers", None)?;
+        out.write_1d(
+            &g,
+            "time",
+            &r.trigger_times,
+            "s",
+            "once-per-revolution trigger times",
+        )?;
+        out.write_1d(&g, "period", &r.periods, "s", "revolution periods")?;
+    }
+
+    let q = &r.qa;
+    let g = out.group("dmw/qa", None)?;
+    out.write_count(&g, "n_avg", q.n_avg as u64, "revolutions averaged")?;
+    out.write_count(&g, "n_triggers", q.n_triggers as u64, "triggers found")?;
+    for (name, v, u, ln) in [
+        ("period_mean", q.period_mean, "s", "mean revolution period"),
+        (
+            "period_relstd",
+            q.period_relstd,
+            "1",
+            "relative std of the revolution period",
+        ),
+        (
+            "phase_wander",
+            q.phase_wander_275khz,
+            "rad",
+            "phase error of a 275 kHz line at the segment end",
+        ),
+        (
+            "noise_floor",
+            q.noise_floor,
+            "m/s",
+            "non-repeating velocity left in the average",
+        ),
+        (
+            "residual_std",
+            q.residual_std,
+            "m/s",
+            "non-repeating velocity per revolution",
+        ),
+        (
+            "velocity_offset",
+            q.velocity_offset,
+            "m/s",
+            "velocity offset removed before integration",
+        ),
+        (
+            "drift",
+            q.drift,
+            "m/s",
+            "slope of the displacement line removed after integration",
+        ),
+        (
+            "integration_gain_275kHz",
+            q.integration_gain_275khz,
+            "1",
+            "trapezoid gain at 275 kHz relative to ideal",
+        ),
+        (
+            "dmw_std",
+            r.stats.std,
+            "m",
+            "DMW standard deviation (edges excluded)",
+        ),
+        (
+            "dmw_peak_to_peak",
+            r.stats.peak_to_peak,
+            "m",
+            "DMW peak-to-peak (edges excluded)",
+        ),
+    ] {
+        out.write_scalar(&g, name, v, u, ln)?;
+    }
+    out.write_string(&g, "warnings", &q.warnings.join("\n"))?;
+
+    let g = out.group("dmw/process", Some("NXprocess"))?;
+    out.write_string(&g, "program", "hdi")?;
+    out.write_string(&g, "version", env!("CARGO_PKG_VERSION"))?;
+    out.write_string(&g, "parameters", &p.canonical().to_string())?;
+    let prov: Map<String, Value> = rec
+        .provenance
+        .iter()
+        .map(|(k, v)| (k.clone(), json!(v)))
+        .collect();
+    out.write_string(&g, "source", &Value::Object(prov).to_string())?;
+    let sos = |s: &[[f64; 6]]| -> ndarray::Array2<f64> {
+        ndarray::Array2::from_shape_fn((s.len(), 6), |(i, j)| s[i][j])
+    };
+    if !r.highpass_sos.is_empty() {
+        out.write_array(
+            &g,
+            "highpass_sos",
+            sos(&r.highpass_sos).view(),
+            "1",
+            "high-pass second-order sections [b0 b1 b2 a0 a1 a2]",
+        )?;
+    }
+    if !r.lowpass_sos.is_empty() {
+        out.write_array(
+            &g,
+            "lowpass_sos",
+            sos(&r.lowpass_sos).view(),
+            "1",
+            "low-pass second-order sections [b0 b1 b2 a0 a1 a2]",
+        )?;
+    }
+    out.finish()?;
+
+    if let Some(dir) = plot_dir {
+        write_plots(r, dir)?;
+    }
+    Ok(())
+}
+
+fn write_plots(r: &DmwResult, dir: &Path) -> Result<()> {
+    let fs = r.sample_rate;
+    // At most ~4000 points per series: enough for the eye, small PNGs.
+    let stride = (r.tracks.d[0].len() / 4000).max(1);
+    let series = |k: usize| -> Vec<(f64, f64)> {
+        r.tracks.d[k]
+            .iter()
+            .enumerate()
+            .step_by(stride)
+            .map(|(i, d)| (i as f64 / fs * 1e3, d * 1e9))
+            .collect()
+    };
+    let n = r.tracks.d[0].len();
+    let edge = r.qa.edge_samples as f64 / fs * 1e3;
+    let end = n as f64 / fs * 1e3;
+    let shade = if edge > 0.0 {
+        vec![(0.0, edge), (end - edge, end)]
+    } else {
+        Vec::new()
+    };
+    plot::stacked_png(
+        &dir.join("tracks.png"),
+        &format!(
+            "DMW tracks: std {:.3} nm (grey: filter transients, excluded)",
+            r.stats.std * 1e9
+        ),
+        "time (ms)",
+        &[
+            ("D1 original, bulge (nm)", series(0)),
+            ("D2 time-flipped, +y (nm)", series(1)),
+            ("D3 negated flipped, −y (nm)", series(2)),
+        ],
+        &shade,
+    )?;
+    let spec: Vec<(f64, f64)> = r
+        .spectrum_frequency
+        .iter()
+        .zip(&r.spectrum_displacement)
+        .filter(|(f, a)| **f > 0.0 && **a > 0.0)
+        .map(|(f, a)| (f / 1e3, a * 1e9))
+        .collect();
+    if !spec.is_empty() {
+        let peaks: Vec<(f64, f64)> = r
+            .stats
+            .peaks
+            .iter()
+            .map(|p| (p.frequency / 1e3, p.amplitude * 1e9))
+            .collect();
+        plot::loglog_png(
+            &dir.join("spectrum.png"),
+            "DMW amplitude spectrum (D1, Hann)",
+            "frequency (kHz)",
+            "amplitude (nm)",
+            &[("D1", spec)],
+            &peaks,
+        )?;
+    }
+    Ok(())
+}
+
+/// A `[dmw.NAME]` instance.
+pub struct DmwStage {
+    pub name: String,
+    pub params: DmwParams,
+}
+
+impl DmwStage {
+    pub fn from_config(
+        file: &PipelineFile,
+        name: &str,
+        cfg: &DmwConfig,
+    ) -> std::result::Result<Self, ConfigError> {
+        let path = file.resolve(&cfg.file);
+        if !path.is_file() {
+            return Err(file.error(
+                "dmw",
+                name,
+                "file",
+                if path.exists() {
+                    format!("LDV record {} is not a file", path.display())
+                } else {
+                    format!("LDV record {} not found", path.display())
+                },
+            ));
+        }
+        let params = validate(cfg, path).map_err(|(k, m)| file.error("dmw", name, &k, m))?;
+        Ok(Self {
+            name: name.to_string(),
+            params,
+        })
+    }
+}
+
+impl Stage for DmwStage {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn kind(&self) -> &'static str {
+        "dmw"
+    }
+    fn model_version(&self) -> &'static str {
+        MODEL_VERSION
+    }
+    fn params(&self) -> Value {
+        self.params.canonical()
+    }
+    fn inputs(&self) -> Vec<(String, PathBuf)> {
+        vec![("file".into(), self.params.file.clone())]
+    }
+    fn upstream(&self) -> Vec<String> {
+        Vec::new()
+    }
+    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+        ctx.progress.set_message("reading, averaging, filtering");
+        let (rec, res) = analyse(&self.params)?;
+        ctx.progress.set_message("writing HDF5 and plots");
+        let inputs = serde_json::to_value(&ctx.fingerprint.inputs).unwrap_or(Value::Null);
+        write_outputs(
+            &rec,
+            &res,
+            &self.params,
+            &ctx.out_dir.join("dmw.h5"),
+            Some(ctx.out_dir),
+            ctx.key,
+            &inputs,
+        )?;
+        let mut result = report_json(&rec, &res, &self.params);
+        if let Value::Object(m) = &mut result {
+            // Where the simulations find the tracks.
+            m.insert("h5".into(), json!("dmw.h5"));
+        }
+        Ok(StageOutput {
+            result,
+            summary_row: Some(summary_row(&rec, &res, &self.params)),
+        })
+    }
+}
