@@ -1,4 +1,4 @@
-//! criterion benches of the DMW chain on a 10^7-sample record (4 MS/s, 2.5 s, 226
+//! criterion benches of the DMW chain on a 10^7-sample record (4 MS/s, 2.5 s, 227
 //! revolutions): the benchmark size. Not run in CI. `scripts/bench_dmw.py` times
 //! the same steps end to end against numpy/scipy.
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -11,7 +11,7 @@ use hdi::signal::sosfilt::{sosfiltfilt, PadType};
 
 fn dmw(c: &mut Criterion) {
     let spec = LdvSynthSpec {
-        n_revolutions: 226,
+        n_revolutions: 227,
         ..Default::default()
     };
     let (rec, _) = generate(&spec);

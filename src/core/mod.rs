@@ -3,6 +3,7 @@ pub mod cache;
 pub mod config;
 pub mod engine;
 pub mod hash;
+pub mod memory;
 pub mod plot;
 pub mod progress;
 pub mod store;

@@ -89,37 +89,48 @@ pub fn synchronous_average(
     } else {
         f64::NAN
     };
-    let mut planner = FftPlanner::<f64>::new();
+    // Which triggers to use and, for `angular`, each revolution's own period relative to the
+    // mean; the last trigger has no period and is dropped.
+    let mut jobs: Vec<(f64, f64)> = Vec::with_capacity(starts.len());
     for (k, &t) in starts.iter().enumerate() {
-        let pos = t * fs;
-        let seg = match mode {
-            AverageMode::Integer => {
-                let s = pos.round();
-                if s < 0.0 || s as usize + segment_len > x.len() {
-                    None
-                } else {
-                    let s = s as usize;
-                    Some(x[s..s + segment_len].to_vec())
-                }
+        let ratio = match (mode, starts.get(k + 1)) {
+            (AverageMode::Angular, Some(next)) if mean_period.is_finite() => {
+                (next - t) / mean_period
             }
-            AverageMode::Subsample => subsample_segment(x, pos, segment_len, &mut planner),
-            AverageMode::Angular => {
-                // A revolution's own period; the last trigger has none and is dropped.
-                let ratio = match starts.get(k + 1) {
-                    Some(next) if mean_period.is_finite() => (next - t) / mean_period,
-                    _ if starts.len() == 1 => 1.0,
-                    _ => {
-                        n_dropped += 1;
-                        continue;
-                    }
-                };
-                angular_segment(x, pos, segment_len, ratio)
+            (AverageMode::Angular, _) if starts.len() > 1 => {
+                n_dropped += 1;
+                continue;
             }
+            _ => 1.0,
         };
+        jobs.push((t, ratio));
+    }
+    // Segments are independent: align them in parallel (rayon), one FFT planner per thread.
+    use rayon::prelude::*;
+    let aligned: Vec<Option<Vec<f64>>> = jobs
+        .par_iter()
+        .map_init(FftPlanner::<f64>::new, |planner, &(t, ratio)| {
+            let pos = t * fs;
+            match mode {
+                AverageMode::Integer => {
+                    let s = pos.round();
+                    if s < 0.0 || s as usize + segment_len > x.len() {
+                        None
+                    } else {
+                        let s = s as usize;
+                        Some(x[s..s + segment_len].to_vec())
+                    }
+                }
+                AverageMode::Subsample => subsample_segment(x, pos, segment_len, planner),
+                AverageMode::Angular => angular_segment(x, pos, segment_len, ratio),
+            }
+        })
+        .collect();
+    for ((t, _), seg) in jobs.iter().zip(aligned) {
         match seg {
             Some(s) => {
                 segments.push(s);
-                used.push(t);
+                used.push(*t);
             }
             None => n_dropped += 1,
         }

@@ -13,7 +13,7 @@ use polars::prelude::*;
 use std::path::Path;
 
 pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
-    let (schema, kv) = no_panic(path, "the Parquet reader", || {
+    let (schema, kv, n_rows) = no_panic(path, "the Parquet reader", || {
         let file = std::fs::File::open(path).map_err(|e| read_err(path, e))?;
         let mut reader = ParquetReader::new(file);
         let md = reader
@@ -28,7 +28,7 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         let schema = LazyFrame::scan_parquet(scan::pl_path(path)?, args())
             .and_then(|mut lf| lf.collect_schema())
             .map_err(|e| read_err(path, format!("Parquet schema: {e}")))?;
-        Ok((schema, kv))
+        Ok((schema, kv, md.num_rows))
     })?;
     let mut meta = Meta::default();
     for (k, v) in &kv {
@@ -72,7 +72,13 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
     let lf = LazyFrame::scan_parquet(scan::pl_path(path)?, args())
         .map_err(|e| read_err(path, e))?
         .select(select);
-    let stream = Stream::new(unit.scale, chosen.index.is_some(), chosen.time.is_some(), 0);
+    // The footer's row count sizes the channel buffers once (on huge pages, core::memory).
+    let stream = Stream::new(
+        unit.scale,
+        chosen.index.is_some(),
+        chosen.time.is_some(),
+        n_rows,
+    );
     let stream = scan::run(path, lf, stream, "Parquet reader")?;
     let raw = Raw {
         format: "parquet",

@@ -29,6 +29,8 @@ struct Sniff {
     sep: u8,
     decimal_comma: bool,
     meta: Meta,
+    /// Length of the first data line in bytes (with its newline), for a row-count estimate.
+    first_row_bytes: usize,
 }
 
 impl Sniff {
@@ -144,6 +146,7 @@ fn sniff(path: &Path) -> Result<Sniff, DmwError> {
         sep,
         decimal_comma,
         meta,
+        first_row_bytes: first_data.as_ref().map_or(0, |d| d.len() + 1),
     })
 }
 
@@ -197,7 +200,21 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         .finish()
         .map_err(|e| read_err(path, e))?
         .select(select);
-    let stream = Stream::new(unit.scale, chosen.index.is_some(), chosen.time.is_some(), 0);
+    // Room for the rows the file size suggests (with 25 % slack for shorter rows): the big
+    // channel buffers are then allocated once, on huge pages (core::memory).
+    let size = std::fs::metadata(path)
+        .map(|m| m.len() as usize)
+        .unwrap_or(0);
+    let rows_guess = match sn.first_row_bytes {
+        0 => 0,
+        b => size / b + size / b / 4,
+    };
+    let stream = Stream::new(
+        unit.scale,
+        chosen.index.is_some(),
+        chosen.time.is_some(),
+        rows_guess,
+    );
     let mut stream = scan::run(path, lf, stream, "CSV reader")?;
 
     let (trailing_blank, last_fields) = tail(path, sn.sep)?;
