@@ -839,4 +839,80 @@ mod tests {
             assert_eq!(process(&rec, &p).unwrap().qa.n_avg, 4, "{mode}");
         }
     }
+
+    #[test]
+    fn optional_lowpass_scales_lines_by_its_zero_phase_gain() {
+        // Order-4 500 kHz low-pass on the synthetic record: the 275 kHz line keeps |H|² of
+        // its amplitude, the 10.7 kHz line is untouched.
+        let (spec, rec, _) = synthetic(8);
+        let base = ChainParams {
+            rpm: Some(spec.rpm),
+            ..Default::default()
+        };
+        let lp = ChainParams {
+            lowpass: Some(Butterworth {
+                order: 4,
+                cutoff: 500e3,
+            }),
+            ..base.clone()
+        };
+        let (a, b) = (process(&rec, &base).unwrap(), process(&rec, &lp).unwrap());
+        let line = |r: &DmwResult, f: f64| {
+            r.stats
+                .peaks
+                .iter()
+                .find(|p| (p.frequency - f).abs() < 1e3)
+                .map(|p| p.amplitude)
+                .unwrap()
+        };
+        let g = crate::signal::butterworth::sos_response(&b.lowpass_sos, 275e3, 4e6).norm_sqr();
+        // Bilinear transform: the analogue prototype sees tan(πf/fs)/tan(πfc/fs), not f/fc.
+        let warped =
+            (std::f64::consts::PI * 275e3 / 4e6).tan() / (std::f64::consts::PI / 8.0).tan();
+        assert!((g - 1.0 / (1.0 + warped.powi(8))).abs() < 1e-9, "{g}");
+        let ratio = line(&b, 275e3) / line(&a, 275e3);
+        assert!((ratio / g - 1.0).abs() < 0.01, "{ratio} vs {g}");
+        assert!((line(&b, 10.67e3) / line(&a, 10.67e3) - 1.0).abs() < 1e-4);
+        // Above the cutoff almost nothing is left.
+        let hf = |r: &DmwResult| -> f64 {
+            r.spectrum_frequency
+                .iter()
+                .zip(&r.spectrum_displacement)
+                .filter(|(f, _)| **f > 1.2e6)
+                .map(|(_, a)| a * a)
+                .sum::<f64>()
+                .sqrt()
+        };
+        assert!(hf(&b) < 0.01 * hf(&a), "{} vs {}", hf(&b), hf(&a));
+    }
+
+    #[test]
+    fn a_pre_segmented_record_averages_its_rows() {
+        // The scope's segmented memory: the same windows the integer mode cuts.
+        let (spec, rec, _) = synthetic(5);
+        let p = ChainParams {
+            averaging: AverageMode::Integer,
+            rpm: Some(spec.rpm),
+            ..Default::default()
+        };
+        let cont = process(&rec, &p).unwrap();
+        let mut stacked = Vec::new();
+        for &t in &cont.trigger_times[..5] {
+            let s = (t * 4e6).round() as usize;
+            stacked.extend_from_slice(&rec.velocity[s..s + 10_000]);
+        }
+        let seg = LdvRecord {
+            velocity: stacked,
+            index: None,
+            layout: Layout::Segments {
+                n_segments: 5,
+                segment_len: 10_000,
+            },
+            ..rec.clone()
+        };
+        let r = process(&seg, &ChainParams::default()).unwrap();
+        assert_eq!((r.qa.n_avg, r.qa.segmentation), (5, "pre-segmented"));
+        assert_eq!(r.averaged_raw, cont.averaged_raw);
+        assert_eq!(r.tracks.d[0], cont.tracks.d[0]);
+    }
 }
