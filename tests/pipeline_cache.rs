@@ -30,6 +30,11 @@ fn default_pipeline_writes_hdf5_tables_and_plots_readable_by_others() {
         "tables/surfaces.csv",
         "tables/interfaces.parquet",
         "tables/interfaces.csv",
+        "disk_md/dmw.h5",
+        "disk_md/tracks.png",
+        "disk_md/spectrum.png",
+        "tables/dmw.parquet",
+        "tables/dmw.csv",
     ] {
         assert!(proc.join(f).is_file(), "missing {f}");
     }
@@ -46,7 +51,7 @@ def check(name, obj):
         assert isinstance(obj.attrs['units'], str), name
         obj[()]
         n += 1
-for f in ['disk/surface.h5', 'slider/surface.h5', 'hdi/interface.h5']:
+for f in ['disk/surface.h5', 'slider/surface.h5', 'hdi/interface.h5', 'disk_md/dmw.h5']:
     with h5py.File(f'{root}/{f}', 'r') as h:
         assert h.attrs['NX_class'] == 'NXroot'
         assert len(h.attrs['cache_key']) == 64
@@ -56,6 +61,12 @@ with h5py.File(f'{root}/disk/surface.h5', 'r') as h:
     assert 0.2e-9 < s < 0.5e-9, s
     assert h['surface/levelled/height'].shape == (256, 256)
     assert h['surface/levelled/height'].compression == 'gzip'
+with h5py.File(f'{root}/disk_md/dmw.h5', 'r') as h:
+    assert h.attrs['default'] == 'dmw'
+    assert h['dmw/tracks/D1'].compression == 'gzip' or h['dmw/tracks/D1'].size * 8 < 65536
+    assert 0.5e-9 < h['dmw/qa/dmw_std'][()] < 1.0e-9
+t = pq.read_table(f'{root}/tables/dmw.parquet')
+assert 'dmw_std_nm' in t.column_names and t.num_rows == 1
 t = pq.read_table(f'{root}/tables/surfaces.parquet')
 assert t.num_rows == 2, t.num_rows
 assert 'sigma_nm' in t.column_names and 'eta_per_um2' in t.column_names
