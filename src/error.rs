@@ -11,6 +11,8 @@ pub enum Error {
     #[error(transparent)]
     Dmw(#[from] crate::dmw::DmwError),
     #[error(transparent)]
+    Contact(#[from] crate::contact::ContactError),
+    #[error(transparent)]
     Signal(#[from] crate::signal::SignalError),
     #[error("{}", path.display())]
     Io {

@@ -4,6 +4,7 @@
 //! `surface` (and later physics modules) are pure functions with no I/O besides readers;
 //! `stages` wires physics into the pipeline; `cli` is the thin command-line layer.
 pub mod cli;
+pub mod contact;
 pub mod core;
 pub mod dmw;
 pub mod error;
