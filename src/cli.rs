@@ -62,6 +62,15 @@ pub enum Command {
     Surface(Box<SurfaceArgs>),
     /// One LDV record → DMW tracks and their statistics.
     Dmw(Box<DmwArgs>),
+    /// Every reproducible number of the specs: target, hdi's value, tolerance, pass. Exit 1 if
+    /// a reproducible target fails.
+    Validate {
+        #[arg(long)]
+        json: bool,
+        /// Only these areas (e.g. dmw).
+        #[arg(long, num_args = 1..)]
+        only: Vec<String>,
+    },
     /// Generate the shipped synthetic sample data (deterministic).
     Synth {
         /// What to generate: `afm` (height maps) or `ldv` (an LDV record).
@@ -220,6 +229,7 @@ pub fn main() -> Result<()> {
         Command::Gc { config, dry_run } => cmd_gc(&config, dry_run),
         Command::Surface(args) => cmd_surface(*args),
         Command::Dmw(args) => cmd_dmw(*args),
+        Command::Validate { json, only } => cmd_validate(json, &only),
         Command::Synth {
             what,
             out_dir,
@@ -618,6 +628,89 @@ fn cmd_dmw(a: DmwArgs) -> Result<()> {
     }
     for w in &q.warnings {
         println!("  warning: {w}");
+    }
+    Ok(())
+}
+
+/// Six significant digits, scientific for very small or large magnitudes.
+fn fmt_number(x: f64) -> String {
+    let a = x.abs();
+    if x != 0.0 && !(1e-3..1e7).contains(&a) {
+        format!("{x:.5e}")
+    } else {
+        format!("{x:.6}")
+    }
+}
+
+fn cmd_validate(as_json: bool, only: &[String]) -> Result<()> {
+    let mut areas = crate::validate::all_rows();
+    if !only.is_empty() {
+        let known: Vec<&str> = areas.iter().map(|(a, _)| *a).collect();
+        for o in only {
+            if !known.contains(&o.as_str()) {
+                bail!(
+                    "--only: unknown area `{o}` (available: {})",
+                    known.join(", ")
+                );
+            }
+        }
+        areas.retain(|(a, _)| only.iter().any(|o| o == a));
+    }
+    let failed = crate::validate::failures(&areas);
+    let total: usize = areas.iter().map(|(_, r)| r.len()).sum();
+    if as_json {
+        let out: serde_json::Map<String, Value> = areas
+            .iter()
+            .map(|(a, rows)| {
+                (
+                    a.to_string(),
+                    Value::Array(rows.iter().map(|r| r.to_json()).collect()),
+                )
+            })
+            .collect();
+        println!("{}", json!({"areas": out, "rows": total, "failed": failed}));
+    } else {
+        for (area, rows) in &areas {
+            println!("── {area} ──");
+            println!(
+                "{:<6} {:<58} {:>12} {:>12} {:>10}  variant / note",
+                "", "quantity", "target", "hdi", "tolerance"
+            );
+            for r in rows {
+                let status = match (r.pass(), r.reproducible) {
+                    (true, _) => "pass",
+                    (false, true) => "FAIL",
+                    (false, false) => "differs",
+                };
+                let tol = match r.tolerance {
+                    crate::validate::Tolerance::Relative(t) => format!("±{}%", t * 100.0),
+                    crate::validate::Tolerance::Absolute(t) => format!("±{t}"),
+                };
+                let unit = if r.unit == "1" {
+                    String::new()
+                } else {
+                    format!(" {}", r.unit)
+                };
+                println!(
+                    "{:<6} {:<58} {:>12} {:>12} {:>10}  {}{}",
+                    status,
+                    format!("{}{}", r.quantity, unit),
+                    fmt_number(r.target),
+                    fmt_number(r.ours),
+                    tol,
+                    r.variant,
+                    if r.note.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" — {}", r.note)
+                    }
+                );
+            }
+        }
+        eprintln!("{} rows, {} reproducible failed", total, failed);
+    }
+    if failed > 0 {
+        std::process::exit(1);
     }
     Ok(())
 }

@@ -13,5 +13,6 @@ pub mod samples;
 pub mod signal;
 pub mod stages;
 pub mod surface;
+pub mod validate;
 
 pub use error::{Error, Result};

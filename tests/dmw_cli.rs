@@ -244,3 +244,25 @@ fn a_misspelt_dmw_key_names_file_line_and_the_nearest_key() {
     let e = stderr(&o);
     assert!(e.contains("rmp") && e.contains("did you mean `rpm`"), "{e}");
 }
+
+#[test]
+fn validate_reports_every_dmw_row_as_passing() {
+    let o = hdi()
+        .args(["validate", "--only", "dmw", "--json"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(j["failed"], 0);
+    let rows = j["areas"]["dmw"].as_array().unwrap();
+    assert!(rows.len() >= 20);
+    for r in rows {
+        assert_eq!(r["pass"], true, "{r}");
+        assert!(r["variant"].is_string() && r["source"].is_string());
+    }
+    let o = hdi()
+        .args(["validate", "--only", "nonsense"])
+        .output()
+        .unwrap();
+    assert_clean_failure(&o, "unknown area");
+}

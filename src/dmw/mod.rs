@@ -10,6 +10,7 @@ pub mod io;
 pub mod synth;
 pub mod tracks;
 pub mod triggers;
+pub mod validation;
 
 use std::path::PathBuf;
 
