@@ -414,12 +414,16 @@ pub fn process(rec: &LdvRecord, p: &ChainParams) -> Result<DmwResult, DmwError> 
     let n = v.len();
 
     // 3. Filters.
+    let design = |b: Butterworth, kind: FilterKind, key: &str| {
+        butterworth_sos(b.order, b.cutoff, fs, kind)
+            .map_err(|e| DmwError::Processing(format!("`{key}` for this record ({} S/s): {e}", fs)))
+    };
     let hp_sos = match p.highpass {
-        Some(b) => butterworth_sos(b.order, b.cutoff, fs, FilterKind::HighPass)?,
+        Some(b) => design(b, FilterKind::HighPass, "highpass_hz")?,
         None => Vec::new(),
     };
     let lp_sos = match p.lowpass {
-        Some(b) => butterworth_sos(b.order, b.cutoff, fs, FilterKind::LowPass)?,
+        Some(b) => design(b, FilterKind::LowPass, "lowpass_hz")?,
         None => Vec::new(),
     };
     let lowest_cut = p.highpass.map(|b| b.cutoff);
