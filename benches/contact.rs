@@ -1,27 +1,26 @@
-//! criterion benches of the contact force tables: build time and ns per lookup (the dynamics'
-//! inner loop). Not run in CI.
-use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use hdi::contact::table::{ForceTable, Interp, Sample};
-
-/// A GW-like positive tail and its exact derivative (the table's cost does not depend on what
-/// the physics is, only on the channel count and the grid).
-fn tail(x: f64) -> Result<Sample, hdi::contact::ContactError> {
-    let y = (-0.5 * x * x).exp() * (1.0 + 0.3 * x * x);
-    let dy = (-0.5 * x * x).exp() * (0.6 * x - x * (1.0 + 0.3 * x * x));
-    Ok(Sample {
-        value: vec![y; 6],
-        derivative: vec![dy; 6],
-    })
-}
+//! criterion benches of the contact model: one direct ISBL evaluation, building the force
+//! table of an interface, and ns per table lookup (the dynamics' inner loop). Not run in CI.
+use criterion::{criterion_group, criterion_main, Criterion};
+use hdi::contact::isbl::{IsblModel, IsblParams};
+use hdi::stages::contact::{analyse, validate, ContactConfig};
+use std::hint::black_box;
 
 fn contact(c: &mut Criterion) {
-    let channels: Vec<(&str, Interp)> = ["p", "kc", "ar", "q", "fs", "nc"]
-        .iter()
-        .map(|n| (*n, Interp::Log))
-        .collect();
-    let table = ForceTable::build(&channels, -4.0, 14.0, 0.05, tail).unwrap();
+    let cfg = ContactConfig::defaults();
+    let params = validate(&cfg).unwrap();
+    let model = IsblModel::new(IsblParams::improved_2dof()).unwrap();
+    let table = analyse(&params.params, &params).unwrap().table;
+    let mut g = c.benchmark_group("contact");
+    g.sample_size(10);
+    g.bench_function("isbl_direct_evaluation_h_3sigma", |b| {
+        b.iter(|| model.at(black_box(1.5e-9)).unwrap())
+    });
+    g.bench_function("build_curves_and_verified_table_improved_set", |b| {
+        b.iter(|| analyse(&params.params, &params).unwrap())
+    });
+    g.finish();
     let mut g = c.benchmark_group("force_table");
-    g.bench_function("lookup_one_channel", |b| {
+    g.bench_function("lookup_value", |b| {
         let mut x = -3.9;
         b.iter(|| {
             x += 0.000_37;

@@ -67,7 +67,11 @@ impl Row {
 
 /// Every row, area by area.
 pub fn all_rows() -> Vec<(&'static str, Vec<Row>)> {
-    vec![("dmw", crate::dmw::validation::rows())]
+    vec![
+        ("dmw", crate::dmw::validation::rows()),
+        ("contact", crate::contact::validation::isbl_rows()),
+        ("mtl", crate::contact::validation::mtl_rows()),
+    ]
 }
 
 /// Rows whose target is reproducible but which fail.

@@ -13,7 +13,7 @@ fn default_pipeline_writes_hdf5_tables_and_plots_readable_by_others() {
     let o = p.run(&["run"]);
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("ran 5, cached 0, failed 0, skipped 0 of 5"),
+        stderr(&o).contains("ran 7, cached 0, failed 0, skipped 0 of 7"),
         "{}",
         stderr(&o)
     );
@@ -31,6 +31,11 @@ fn default_pipeline_writes_hdf5_tables_and_plots_readable_by_others() {
         "tables/interfaces.parquet",
         "tables/interfaces.csv",
         "disk_md/dmw.h5",
+        "improved/contact.h5",
+        "improved/isbl_forces.png",
+        "improved/isbl_area_stiffness.png",
+        "measured/contact.h5",
+        "tables/contacts.parquet",
         "disk_md/tracks.png",
         "disk_md/spectrum.png",
         "tables/dmw.parquet",
@@ -51,7 +56,7 @@ def check(name, obj):
         assert isinstance(obj.attrs['units'], str), name
         obj[()]
         n += 1
-for f in ['disk/surface.h5', 'slider/surface.h5', 'hdi/interface.h5', 'disk_md/dmw.h5']:
+for f in ['disk/surface.h5', 'slider/surface.h5', 'hdi/interface.h5', 'disk_md/dmw.h5', 'improved/contact.h5']:
     with h5py.File(f'{root}/{f}', 'r') as h:
         assert h.attrs['NX_class'] == 'NXroot'
         assert len(h.attrs['cache_key']) == 64
@@ -99,7 +104,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let o = p.run(&["run"]);
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("nothing to do: all 5 stage instances fresh"),
+        stderr(&o).contains("nothing to do: all 7 stage instances fresh"),
         "{}",
         stderr(&o)
     );
@@ -126,6 +131,8 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
         "{s}"
     );
     assert!(s.contains("stale    hdi: upstream disk changed"), "{s}");
+    assert!(s.contains("stale    measured: upstream hdi changed"), "{s}");
+    assert!(s.contains("fresh    improved"), "{s}");
     assert!(s.contains("fresh    slider"), "{s}");
     assert!(s.contains("fresh    table_2_2"), "{s}");
 
@@ -136,7 +143,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let o = p.run(&["run"]);
     assert_ok(&o);
     let e = stderr(&o);
-    assert!(e.contains("ran 2, cached 3"), "{e}");
+    assert!(e.contains("ran 3, cached 4"), "{e}");
     assert!(
         e.contains("ran     disk") && e.contains("ran     hdi"),
         "{e}"

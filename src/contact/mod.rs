@@ -6,6 +6,7 @@
 pub mod isbl;
 pub mod mtl;
 pub mod table;
+pub mod validation;
 
 /// Errors of the contact models: always a parameter outside its physical range.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

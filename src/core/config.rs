@@ -8,6 +8,7 @@ use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use crate::stages::contact::ContactConfig;
 use crate::stages::dmw::DmwConfig;
 use crate::stages::interface::InterfaceConfig;
 use crate::stages::surfaces::SurfaceConfig;
@@ -70,6 +71,9 @@ pub struct RawConfig {
     /// `[dmw.NAME]`: one LDV record → the three dynamic-microwaviness tracks.
     #[serde(default)]
     pub dmw: BTreeMap<String, DmwConfig>,
+    /// `[contact.NAME]`: an interface → ISBL curves and the force table.
+    #[serde(default)]
+    pub contact: BTreeMap<String, ContactConfig>,
 }
 
 /// A loaded pipeline file: its text (for line lookups) and parsed content.

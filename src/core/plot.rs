@@ -363,6 +363,88 @@ pub fn loglog_png(
     })
 }
 
+/// Named (x, y) series on a linear x and a log y axis (contact curves against h/σ).
+/// Non-positive y values are dropped.
+pub fn semilogy_png(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    series: &[(&str, Vec<(f64, f64)>)],
+    marks: &[(f64, f64)],
+) -> Result<()> {
+    let positive = |p: &&(f64, f64)| p.1 > 0.0 && p.0.is_finite() && p.1.is_finite();
+    let (mut xr, mut yr) = ((f64::INFINITY, f64::NEG_INFINITY), (f64::INFINITY, 0.0f64));
+    for (x, y) in series.iter().flat_map(|(_, s)| s.iter()).filter(positive) {
+        xr = (xr.0.min(*x), xr.1.max(*x));
+        yr = (yr.0.min(*y), yr.1.max(*y));
+    }
+    if !xr.0.is_finite() {
+        return Err(perr(path, "no positive points to plot"));
+    }
+    // Keep twenty decades below the top at most: far tails are not information.
+    yr.0 = yr.0.max(yr.1 * 1e-20);
+    let span = |r: (f64, f64)| {
+        if r.1 > r.0 {
+            (r.0 / 1.3)..(r.1 * 1.3)
+        } else {
+            (r.0 / 2.0)..(r.0 * 2.0)
+        }
+    };
+    let palette = [BLUE, RED, GREEN, MAGENTA, CYAN, BLACK];
+    let y_floor = yr.0;
+    render_png(path, (760, 520), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 20))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(xr.0..xr.1, span(yr).log_scale())
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for (k, (label, s)) in series.iter().enumerate() {
+            let c = palette[k % palette.len()];
+            let pts: Vec<(f64, f64)> = s
+                .iter()
+                .filter(positive)
+                .map(|&(x, y)| (x, y.max(y_floor)))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(pts, c.stroke_width(1)))
+                .map_err(|e| e.to_string())?
+                .label(*label)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 15, y)], c.stroke_width(2))
+                });
+        }
+        if !marks.is_empty() {
+            chart
+                .draw_series(
+                    marks
+                        .iter()
+                        .filter(positive)
+                        .map(|&(x, y)| Circle::new((x, y), 4, RED.stroke_width(2))),
+                )
+                .map_err(|e| e.to_string())?
+                .label("peaks")
+                .legend(|(x, y)| Circle::new((x + 7, y), 4, RED.stroke_width(2)));
+        }
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.8))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        Ok(())
+    })
+}
+
 /// Series stacked in panels that share the x axis (time histories of several tracks), each
 /// with its own y range; `shade` marks x intervals (e.g. filter edge transients) in grey.
 pub fn stacked_png(

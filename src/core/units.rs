@@ -18,6 +18,10 @@ pub enum Dimension {
     Time,
     /// Velocity-decoder sensitivity, m/s per V.
     Sensitivity,
+    /// Pressure, modulus, hardness, Pa.
+    Pressure,
+    /// Surface energy (N/m = J/m²).
+    SurfaceEnergy,
 }
 
 impl Dimension {
@@ -28,8 +32,28 @@ impl Dimension {
             Dimension::Frequency => "Hz",
             Dimension::Time => "s",
             Dimension::Sensitivity => "m/s/V",
+            Dimension::Pressure => "Pa",
+            Dimension::SurfaceEnergy => "N/m",
         }
     }
+}
+
+fn pressure_exponent(unit: &str) -> Option<i32> {
+    Some(match unit {
+        "Pa" => 0,
+        "kPa" => 3,
+        "MPa" => 6,
+        "GPa" => 9,
+        _ => return None,
+    })
+}
+
+fn surface_energy_exponent(unit: &str) -> Option<i32> {
+    Some(match unit {
+        "N/m" | "J/m^2" | "J/m²" => 0,
+        "mN/m" | "mJ/m^2" | "mJ/m²" => -3,
+        _ => return None,
+    })
 }
 
 /// Frequency unit as a power of ten of hertz (sample rates may be written as S/s).
@@ -117,6 +141,8 @@ pub fn parse_quantity(text: &str, dim: Dimension) -> Result<f64, String> {
                 .or_else(|| unit.strip_suffix("s^-1 V^-1"))
                 .map(str::trim)
                 .and_then(length_exponent),
+            Dimension::Pressure => pressure_exponent(unit),
+            Dimension::SurfaceEnergy => surface_energy_exponent(unit),
         }
         .ok_or_else(|| {
             format!(
@@ -127,6 +153,8 @@ pub fn parse_quantity(text: &str, dim: Dimension) -> Result<f64, String> {
                     Dimension::Frequency => "frequency",
                     Dimension::Time => "time",
                     Dimension::Sensitivity => "sensitivity",
+                    Dimension::Pressure => "pressure",
+                    Dimension::SurfaceEnergy => "surface-energy",
                 },
                 match dim {
                     Dimension::Length => "m, mm, um, nm, pm, A",
@@ -134,6 +162,8 @@ pub fn parse_quantity(text: &str, dim: Dimension) -> Result<f64, String> {
                     Dimension::Frequency => "Hz, kHz, MHz, MS/s",
                     Dimension::Time => "s, ms, us, ns",
                     Dimension::Sensitivity => "m/s/V, mm/s/V, um/s/V",
+                    Dimension::Pressure => "Pa, kPa, MPa, GPa",
+                    Dimension::SurfaceEnergy => "N/m, mN/m, J/m^2, mJ/m^2",
                 }
             )
         })?
@@ -185,6 +215,16 @@ macro_rules! quantity_impls {
 quantity_impls!(Frequency, Dimension::Frequency);
 quantity_impls!(TimeSpan, Dimension::Time);
 quantity_impls!(Sensitivity, Dimension::Sensitivity);
+
+/// A pressure, modulus or hardness in Pa, written as a number or e.g. `"13 GPa"`.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+pub struct Pressure(pub f64);
+quantity_impls!(Pressure, Dimension::Pressure);
+
+/// A surface energy in N/m, written as a number or e.g. `"60 mN/m"`.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+pub struct SurfaceEnergy(pub f64);
+quantity_impls!(SurfaceEnergy, Dimension::SurfaceEnergy);
 
 fn deserialize_quantity<'de, D: Deserializer<'de>>(d: D, dim: Dimension) -> Result<f64, D::Error> {
     #[derive(Deserialize)]
@@ -266,6 +306,11 @@ mod tests {
         );
         assert!(parse_quantity("10 kg", Dimension::Frequency).is_err());
         assert!(parse_quantity("25 mm/s", Dimension::Sensitivity).is_err());
+        assert_eq!(parse_quantity("13 GPa", Dimension::Pressure).unwrap(), 13e9);
+        assert_eq!(
+            parse_quantity("60 mN/m", Dimension::SurfaceEnergy).unwrap(),
+            0.06
+        );
     }
 
     #[test]

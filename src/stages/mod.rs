@@ -1,5 +1,6 @@
 //! Stage implementations, one module per stage kind, and the registry that turns a parsed
 //! `pipeline.toml` into stage instances.
+pub mod contact;
 pub mod dmw;
 pub mod interface;
 pub mod surfaces;
@@ -47,6 +48,12 @@ pub fn build(file: &PipelineFile) -> Result<Vec<Box<dyn Stage>>, ConfigError> {
     for (name, cfg) in &file.raw.interface {
         check_name("interface", name)?;
         stages.push(Box::new(interface::InterfaceStage::from_config(
+            file, name, cfg,
+        )?));
+    }
+    for (name, cfg) in &file.raw.contact {
+        check_name("contact", name)?;
+        stages.push(Box::new(contact::ContactStage::from_config(
             file, name, cfg,
         )?));
     }

@@ -1,0 +1,686 @@
+//! `hdi validate` rows of the ISBL contact model (contact-isbl.md §9): computed now with the
+//! same model the contact stage and the dynamics use.
+
+use super::isbl::{IsblModel, IsblParams};
+use crate::validate::{Row, Tolerance};
+
+struct R<'a> {
+    source: &'a str,
+    quantity: &'a str,
+    unit: &'a str,
+    target: f64,
+    ours: f64,
+    tolerance: Tolerance,
+    reproducible: bool,
+    variant: &'a str,
+    note: &'a str,
+}
+
+impl R<'_> {
+    fn row(self) -> Row {
+        Row {
+            source: self.source.into(),
+            quantity: self.quantity.into(),
+            unit: self.unit.into(),
+            target: self.target,
+            ours: self.ours,
+            tolerance: self.tolerance,
+            reproducible: self.reproducible,
+            variant: self.variant.into(),
+            note: self.note.into(),
+        }
+    }
+}
+
+fn failed(quantity: &str, why: String) -> Row {
+    Row {
+        source: "contact-isbl §9".into(),
+        quantity: quantity.into(),
+        unit: "-".into(),
+        target: f64::NAN,
+        ours: f64::NAN,
+        tolerance: Tolerance::Absolute(0.0),
+        reproducible: true,
+        variant: "-".into(),
+        note: why,
+    }
+}
+
+const VARIANT: &str = "ISBL, summit_offset none (d = h), junction-shear friction";
+
+/// The ISBL rows.
+pub fn isbl_rows() -> Vec<Row> {
+    let mut rows = Vec::new();
+    let (initial, improved, mtl) = match (
+        IsblModel::new(IsblParams::initial_2dof()),
+        IsblModel::new(IsblParams::improved_2dof()),
+        IsblModel::new(IsblParams::mtl_table_3_2()),
+    ) {
+        (Ok(a), Ok(b), Ok(c)) => (a, b, c),
+        _ => {
+            return vec![failed(
+                "ISBL parameter sets",
+                "a §10 set did not validate".into(),
+            )]
+        }
+    };
+    let d = initial.derived();
+    rows.push(
+        R {
+            source: "contact-isbl §10 [derived]",
+            quantity: "composite modulus E* (DLC/DLC, ν = 0.25)",
+            unit: "GPa",
+            target: 149.3,
+            ours: d.composite_modulus / 1e9,
+            tolerance: Tolerance::Absolute(0.05),
+            reproducible: true,
+            variant: VARIANT,
+            note: "",
+        }
+        .row(),
+    );
+    rows.push(
+        R {
+            source: "contact-isbl §9 #3 [seed Ch. 2.1]",
+            quantity: "plasticity index ψ, Ch. 2 interface",
+            unit: "1",
+            target: 0.52,
+            ours: d.plasticity_index,
+            tolerance: Tolerance::Absolute(0.005),
+            reproducible: true,
+            variant: VARIANT,
+            note: "fixes ν ∈ [0.25, 0.27]",
+        }
+        .row(),
+    );
+    rows.push(
+        R {
+            source: "contact-isbl §10 [derived]",
+            quantity: "critical interference ω_c",
+            unit: "nm",
+            target: 2.49,
+            ours: d.critical_interference * 1e9,
+            tolerance: Tolerance::Absolute(0.005),
+            reproducible: true,
+            variant: VARIANT,
+            note: "",
+        }
+        .row(),
+    );
+    let at = |m: &IsblModel, h_star: f64| m.at(h_star * m.params().sigma);
+    match (
+        at(&initial, 3.0),
+        at(&initial, 2.5),
+        at(&initial, 6.0),
+        at(&initial, 0.0),
+    ) {
+        (Ok(p3), Ok(p25), Ok(p6), Ok(p0)) => {
+            rows.push(
+                R {
+                    source: "contact-isbl §9 #1a [seed Ch. 2.2, Fig. 2.11]",
+                    quantity: "P(h* = 3) per unit nominal area, initial set",
+                    unit: "Pa",
+                    target: 1.097e5,
+                    ours: p3.contact_pressure,
+                    tolerance: Tolerance::Relative(0.01),
+                    reproducible: true,
+                    variant: VARIANT,
+                    note: "",
+                }
+                .row(),
+            );
+            rows.push(
+                R {
+                    source: "contact-isbl §9 #1a [seed: 7.30 μN]",
+                    quantity: "P(h* = 3) on A_n = 66.6 μm², initial set",
+                    unit: "μN",
+                    target: 7.30,
+                    ours: p3.contact_pressure * 66.6e-12 * 1e6,
+                    tolerance: Tolerance::Relative(0.01),
+                    reproducible: true,
+                    variant: VARIANT,
+                    note: "the figure's A_n is not stated; 62–68 μm² (Ch. 2 areas) give 6.8–7.5 μN",
+                }
+                .row(),
+            );
+            rows.push(
+                R {
+                    source: "contact-isbl §9 #1b [seed Ch. 2.2]",
+                    quantity: "P(3)/P(2.5): \"7.30 μN is about 3 % of P at h* = 2.5\"",
+                    unit: "1",
+                    target: 0.03,
+                    ours: p3.contact_pressure / p25.contact_pressure,
+                    tolerance: Tolerance::Relative(0.1),
+                    reproducible: false,
+                    variant: VARIANT,
+                    note:
+                        "not reproducible: a Gaussian of σ gives 0.18; 3 % is reached at h* = 1.90 \
+                           (likely a misread axis in the seed)",
+                }
+                .row(),
+            );
+            rows.push(
+                R {
+                    source: "contact-isbl §9 #1c [seed: adhesion negligible for h* ≥ 6]",
+                    quantity: "F_s(6)/F_s(0), initial set (σ = 0.87 nm)",
+                    unit: "1",
+                    target: 0.008,
+                    ours: p6.adhesion / p0.adhesion,
+                    tolerance: Tolerance::Absolute(0.001),
+                    reproducible: true,
+                    variant: VARIANT,
+                    note: "",
+                }
+                .row(),
+            );
+        }
+        _ => rows.push(failed("initial set curves", "evaluation failed".into())),
+    }
+    // #2c: adhesion at the 12 nm clearance (h_c = 1.16 nm) on A_n = 55 μm², improved set.
+    match improved.at(1.16e-9) {
+        Ok(p) => rows.push(
+            R {
+                source: "contact-isbl §9 #2c [seed Ch. 2.2.2]",
+                quantity: "adhesion at 12 nm actuation (h = 1.16 nm, A_n = 55 μm²)",
+                unit: "mN",
+                target: 0.98,
+                ours: p.adhesion * 55e-12 * 1e3,
+                tolerance: Tolerance::Relative(0.05),
+                reproducible: true,
+                variant: "ISBL improved set, Δγ = 0.06 N/m (back-solved), ε = 0.3 nm",
+                note: "",
+            }
+            .row(),
+        ),
+        Err(e) => rows.push(failed("adhesion at 12 nm", e.to_string())),
+    }
+    // #2a/#2b/#2d: the dynamic contact force read statically, at the h where P·A_n = F_c.
+    for (label, model, area, force, mu_t, ar_t, mu_repro, note_mu, note_ar) in [
+        (
+            "12 nm, improved set (A_n = 55 μm², F_c = 1.63 mN)",
+            &improved,
+            55e-12,
+            1.63e-3,
+            1.49,
+            0.36,
+            false,
+            "−14 %: the seed's μ lies inside the model's μ(h) range (1.65 at the mean clearance)",
+            "the seed's dynamic F_c (a linearised spring) is not P(h) at the mean separation",
+        ),
+        (
+            "11 nm, initial set (A_n = 62 μm², F_c ≈ 1 mN)",
+            &initial,
+            62e-12,
+            1e-3,
+            1.2,
+            2.7,
+            true,
+            "",
+            "A_r = 2.72 μm² needs h* = 0.21 where P = 8.1 mN: the dynamic-vs-static caveat of #2b",
+        ),
+    ] {
+        match separation_for_load(model, force / area) {
+            Ok(p) => {
+                rows.push(
+                    R {
+                        source: "contact-isbl §9 #2a/#2d [seed Ch. 2]",
+                        quantity: &format!("μ = Q/P at P·A_n = F_c, {label}"),
+                        unit: "1",
+                        target: mu_t,
+                        ours: p.friction_stress / p.contact_pressure,
+                        tolerance: Tolerance::Relative(0.10),
+                        reproducible: mu_repro,
+                        variant: VARIANT,
+                        note: note_mu,
+                    }
+                    .row(),
+                );
+                rows.push(
+                    R {
+                        source: "contact-isbl §9 #2b/#2d [seed Ch. 2]",
+                        quantity: &format!("real area at P·A_n = F_c, {label}"),
+                        unit: "μm²",
+                        target: ar_t,
+                        ours: p.real_area_fraction * area * 1e12,
+                        tolerance: Tolerance::Relative(0.10),
+                        reproducible: false,
+                        variant: VARIANT,
+                        note: note_ar,
+                    }
+                    .row(),
+                );
+            }
+            Err(e) => rows.push(failed(label, e.to_string())),
+        }
+    }
+    // #4: the Ch. 3.1 DLC sphere on DLC (E = 180 GPa, ν = 0.24, H = 18 GPa, R = 102 μm).
+    let sphere = IsblModel::new(IsblParams {
+        summit_radius: 102e-6,
+        slider_modulus: 180e9,
+        disk_modulus: 180e9,
+        slider_poisson: 0.24,
+        disk_poisson: 0.24,
+        yielding_poisson: 0.24,
+        hardness: 18e9,
+        ..IsblParams::initial_2dof()
+    });
+    match sphere {
+        Ok(sphere) => {
+            rows.push(
+                R {
+                    source: "contact-isbl §5 [seed Ch. 3.1]",
+                    quantity: "reduced modulus E*, DLC sphere on DLC",
+                    unit: "GPa",
+                    target: 95.5,
+                    ours: sphere.derived().composite_modulus / 1e9,
+                    tolerance: Tolerance::Absolute(0.05),
+                    reproducible: true,
+                    variant: "E = 180 GPa, ν = 0.24",
+                    note: "",
+                }
+                .row(),
+            );
+            for (omega, p_target, q_target, p_repro) in
+                [(0.1e-9, 1.5, 120.0, false), (1e-9, 40.0, 1120.0, true)]
+            {
+                match sphere.asperity_at(omega) {
+                    Ok(a) => {
+                        rows.push(
+                            R {
+                                source: "contact-isbl §9 #4 [seed Ch. 3.1]",
+                                quantity: &format!("sphere load at ω = {} nm", omega * 1e9),
+                                unit: "μN",
+                                target: p_target,
+                                ours: a.load * 1e6,
+                                tolerance: Tolerance::Relative(0.03),
+                                reproducible: p_repro,
+                                variant: "Hertz (KE elastic)",
+                                note: if p_repro {
+                                    ""
+                                } else {
+                                    "Hertz gives 1.29 μN; the seed's 1.5 μN is 14 % above \
+                                     (likely rounding in the seed)"
+                                },
+                            }
+                            .row(),
+                        );
+                        rows.push(
+                            R {
+                                source: "contact-isbl §9 #4 [seed Ch. 3.1]",
+                                quantity: &format!(
+                                    "sphere static friction at ω = {} nm",
+                                    omega * 1e9
+                                ),
+                                unit: "μN",
+                                target: q_target,
+                                ours: a.friction * 1e6,
+                                tolerance: Tolerance::Relative(0.10),
+                                reproducible: true,
+                                variant: "junction shear τ_s = H/(2.8√3)",
+                                note: "",
+                            }
+                            .row(),
+                        );
+                    }
+                    Err(e) => rows.push(failed("Ch. 3.1 sphere", e.to_string())),
+                }
+            }
+        }
+        Err(e) => rows.push(failed("Ch. 3.1 sphere", e.to_string())),
+    }
+    // The reference curves of §9 (independent implementation), all three sets.
+    for (name, model, table) in [
+        ("initial 2-DOF", &initial, REF_INITIAL),
+        ("improved 2-DOF / 3-DOF", &improved, REF_IMPROVED),
+        ("Table 3.2 (MTL)", &mtl, REF_MTL),
+    ] {
+        let worst = table
+            .iter()
+            .map(|r| match at(model, r[0]) {
+                Ok(p) => {
+                    let ours = [
+                        p.contact_pressure,
+                        p.contact_stiffness,
+                        p.real_area_fraction,
+                        p.friction_stress,
+                        p.adhesion,
+                    ];
+                    ours.iter()
+                        .zip(&r[1..])
+                        .map(|(o, t)| ((o - t) / t).abs())
+                        .fold(0.0, f64::max)
+                }
+                Err(_) => f64::INFINITY,
+            })
+            .fold(0.0, f64::max);
+        rows.push(
+            R {
+                source: "contact-isbl §9 reference table",
+                quantity: &format!(
+                    "{name}: worst relative deviation of P, k_c, A_r, Q, F_s (h* = 0…6)"
+                ),
+                unit: "1",
+                target: 0.0,
+                ours: worst,
+                tolerance: Tolerance::Absolute(1e-6),
+                reproducible: true,
+                variant: VARIANT,
+                note: "printed to 7 digits: the bound is their rounding",
+            }
+            .row(),
+        );
+    }
+    rows
+}
+
+/// The ISBL state where the contact pressure equals `pressure` (P decreases with h: bisection
+/// in h* ∈ [−4, 10]).
+fn separation_for_load(
+    model: &IsblModel,
+    pressure: f64,
+) -> Result<super::isbl::IsblPoint, super::ContactError> {
+    let sigma = model.params().sigma;
+    let (mut lo, mut hi) = (-4.0 * sigma, 10.0 * sigma);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if model.at(mid)?.contact_pressure > pressure {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    model.at(0.5 * (lo + hi))
+}
+
+/// §9 reference rows: h*, P (Pa), k_c (Pa/m), A_r/A_n, Q (Pa), F_s const (Pa).
+/// (The Table 3.2 set uses the variable surface energy: its F_s column is "F_s var".)
+const REF_INITIAL: &[[f64; 6]] = &[
+    [
+        0.0,
+        1.787644e8,
+        2.948524e17,
+        5.808404e-2,
+        1.556975e8,
+        2.268814e7,
+    ],
+    [
+        1.0,
+        3.144019e7,
+        7.462058e16,
+        1.214034e-2,
+        3.254284e7,
+        1.770540e7,
+    ],
+    [
+        2.0,
+        2.762091e6,
+        8.939788e15,
+        1.237364e-3,
+        3.316821e6,
+        1.070633e7,
+    ],
+    [
+        3.0,
+        1.096684e5,
+        4.597661e14,
+        5.569261e-5,
+        1.492871e5,
+        4.118073e6,
+    ],
+    [
+        4.0,
+        1.844296e3,
+        9.603362e12,
+        1.041303e-6,
+        2.791270e3,
+        1.111804e6,
+    ],
+    [
+        6.0,
+        3.408268e-2,
+        2.500619e8,
+        2.278644e-11,
+        6.108031e-2,
+        1.784769e5,
+    ],
+];
+const REF_IMPROVED: &[[f64; 6]] = &[
+    [
+        0.0,
+        7.783863e7,
+        2.232361e17,
+        3.341335e-2,
+        8.956631e7,
+        2.216281e7,
+    ],
+    [
+        1.0,
+        1.369682e7,
+        5.655907e16,
+        6.978076e-3,
+        1.870511e7,
+        2.039026e7,
+    ],
+    [
+        2.0,
+        1.203397e6,
+        6.777096e15,
+        7.111376e-4,
+        1.906243e6,
+        1.857828e7,
+    ],
+    [
+        3.0,
+        4.778119e4,
+        3.485471e14,
+        3.200728e-5,
+        8.579727e4,
+        1.387559e7,
+    ],
+    [
+        4.0,
+        8.035387e2,
+        7.280288e12,
+        5.984501e-7,
+        1.604178e3,
+        7.173564e6,
+    ],
+    [
+        6.0,
+        1.484943e-2,
+        1.895715e8,
+        1.309566e-11,
+        3.510363e-2,
+        1.055160e6,
+    ],
+];
+const REF_MTL: &[[f64; 6]] = &[
+    [
+        0.0,
+        6.225574e7,
+        1.088691e17,
+        6.276580e-2,
+        1.941313e8,
+        2.551295e7,
+    ],
+    [
+        1.0,
+        1.095479e7,
+        2.758308e16,
+        1.310807e-2,
+        4.054257e7,
+        1.547513e7,
+    ],
+    [
+        2.0,
+        9.624836e5,
+        3.305096e15,
+        1.335847e-3,
+        4.131704e6,
+        7.095816e6,
+    ],
+    [
+        3.0,
+        3.821565e4,
+        1.699816e14,
+        6.012454e-5,
+        1.859621e5,
+        2.323256e6,
+    ],
+    [
+        4.0,
+        6.426746e2,
+        3.550496e12,
+        1.124167e-6,
+        3.476991e3,
+        5.870508e5,
+    ],
+    [
+        6.0,
+        1.187666e-2,
+        9.245139e7,
+        2.459972e-11,
+        7.608567e-2,
+        8.712156e4,
+    ],
+];
+
+/// The MTL rows (contact-mtl.md §6), computed with the lubricant model.
+pub fn mtl_rows() -> Vec<Row> {
+    use super::mtl::extrapolation::FwmExperiment;
+    use super::mtl::rough::{NoSolid, RoughMtl};
+    let mut rows = Vec::new();
+    let v = "MTL, FWM extrapolation (Fukuzawa Z03 fibre), Table 3.2 film";
+    let fwm = FwmExperiment::fukuzawa_z03();
+    let fit = fwm.high_shear_fit();
+    let mut push =
+        |q: &str, unit: &str, target: f64, ours: f64, tol: Tolerance, repro: bool, note: &str| {
+            rows.push(
+                R {
+                    source: "contact-mtl §6",
+                    quantity: q,
+                    unit,
+                    target,
+                    ours,
+                    tolerance: tol,
+                    reproducible: repro,
+                    variant: v,
+                    note,
+                }
+                .row(),
+            )
+        };
+    push(
+        "V2 Q0, fibre-wobbling shear force at the critical shear rate",
+        "μN",
+        0.7332,
+        fwm.q0() * 1e6,
+        Tolerance::Relative(0.01),
+        true,
+        "",
+    );
+    push(
+        "V3 P0, normal force at the critical shear rate",
+        "μN",
+        10.768,
+        fwm.p0() * 1e6,
+        Tolerance::Relative(1e-4),
+        true,
+        "",
+    );
+    push(
+        "V4 normal-force exponent m",
+        "1",
+        0.5,
+        fit.normal_exponent,
+        Tolerance::Absolute(1e-12),
+        true,
+        "",
+    );
+    push(
+        "V5 shear-force slope n per decade",
+        "N",
+        1.46389e-7,
+        fit.shear_slope_per_decade,
+        Tolerance::Relative(1e-5),
+        true,
+        "",
+    );
+    push(
+        "V6 critical shear rate",
+        "1/s",
+        2e5,
+        fwm.critical_shear_rate(),
+        Tolerance::Relative(1e-12),
+        true,
+        "",
+    );
+    let k = |f: std::result::Result<f64, super::ContactError>| f.unwrap_or(f64::NAN);
+    push(
+        "V9 normal stiffness at d0 = 1.2 nm, U = 15 m/s",
+        "N/m",
+        1.122e6,
+        k(fit.normal_stiffness(1.2e-9, 15.0)),
+        Tolerance::Relative(1e-3),
+        true,
+        "",
+    );
+    push(
+        "V9 normal stiffness at d0 = 0.3 nm, U = 15 m/s",
+        "N/m",
+        8.973e6,
+        k(fit.normal_stiffness(0.3e-9, 15.0)),
+        Tolerance::Relative(1e-3),
+        true,
+        "",
+    );
+    push(
+        "V10 shear stiffness at d0 = 1.2 nm",
+        "N/m",
+        52.98,
+        k(fit.shear_stiffness(1.2e-9, 15.0)),
+        Tolerance::Relative(1e-3),
+        true,
+        "",
+    );
+    push(
+        "V10 shear stiffness at d0 = 0.3 nm",
+        "N/m",
+        211.9,
+        k(fit.shear_stiffness(0.3e-9, 15.0)),
+        Tolerance::Relative(1e-3),
+        true,
+        "",
+    );
+    let mtl = RoughMtl::reference();
+    push(
+        "V11 h* of the maximum lubricant normal stiffness (3σ + 2κ)",
+        "1",
+        3.73,
+        mtl.transition_end() / mtl.film().sigma,
+        Tolerance::Relative(2e-3),
+        true,
+        "",
+    );
+    push(
+        "V12 maximum lubricant normal stiffness",
+        "N/m",
+        1.2690e7,
+        mtl.max_normal_stiffness(),
+        Tolerance::Relative(1e-4),
+        true,
+        "",
+    );
+    let alone = mtl.with_solid(NoSolid);
+    push(
+        "V13 maximum lubricant normal force",
+        "mN",
+        5.54,
+        alone.lubricant(alone.model().transition_end()).normal * 1e3,
+        Tolerance::Relative(0.05),
+        false,
+        "not reproduced: 3.81 mN at 3σ+2κ, 7.61 mN at 3σ (integral of the stiffness); the seed's \
+         5.54 mN matches neither reading (contact-mtl.md §6)",
+    );
+    rows
+}

@@ -1,0 +1,749 @@
+//! Contact stage: an interface (from the interface stage or a dissertation parameter set) →
+//! the ISBL curves per unit nominal area against the solid separation h and h/σ, and the
+//! verified force table the dynamics interpolate. HDF5 + PNG + a summary row.
+
+use crate::contact::isbl::{FrictionLaw, IsblModel, IsblParams, SummitOffset, SurfaceEnergy};
+use crate::contact::table::{ChannelError, ForceTable, Interp, Sample};
+use crate::contact::ContactError;
+use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::engine::{Stage, StageContext, StageOutput};
+use crate::core::plot;
+use crate::core::store::H5Out;
+use crate::core::units::{parse_quantity, Dimension, Length, PerArea, Pressure};
+use crate::error::{Error, Result};
+use serde::Deserialize;
+use serde_json::{json, Map, Value};
+use std::path::{Path, PathBuf};
+
+/// Bump when the numbers this stage produces change.
+pub const MODEL_VERSION: &str = "contact-1";
+
+fn default_set() -> String {
+    "improved_2dof".into()
+}
+fn default_offset() -> String {
+    "none".into()
+}
+fn default_friction() -> String {
+    "junction_shear".into()
+}
+fn default_h_min() -> f64 {
+    -2.0
+}
+fn default_h_max() -> f64 {
+    10.0
+}
+fn default_step() -> f64 {
+    0.05
+}
+
+/// A number (N/m), a string with a unit (`"60 mN/m"`) or `"variable"`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum SurfaceEnergyConfig {
+    Number(f64),
+    Text(String),
+}
+
+/// `[contact.NAME]` as written in `pipeline.toml` (every key is also a `hdi contact` option).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ContactConfig {
+    /// Take σ, R, η from this `[interface.*]` instance.
+    #[serde(default)]
+    pub interface: Option<String>,
+    /// The dissertation parameter set the other inputs start from: `initial_2dof`,
+    /// `improved_2dof`, `three_dof`, `mtl_table_3_2`.
+    #[serde(default = "default_set")]
+    pub parameter_set: String,
+    #[serde(default)]
+    pub sigma: Option<Length>,
+    #[serde(default)]
+    pub r: Option<Length>,
+    #[serde(default)]
+    pub eta: Option<PerArea>,
+    /// Hardness of the yielding body.
+    #[serde(default)]
+    pub hardness: Option<Pressure>,
+    /// Young's modulus of both bodies.
+    #[serde(default)]
+    pub modulus: Option<Pressure>,
+    /// Poisson ratio of both bodies.
+    #[serde(default)]
+    pub poisson: Option<f64>,
+    /// Lennard-Jones equilibrium spacing ε.
+    #[serde(default)]
+    pub lj_spacing: Option<Length>,
+    /// Total lubricant thickness t.
+    #[serde(default)]
+    pub lubricant_thickness: Option<Length>,
+    /// Constant Δγ or `"variable"` (Δγ(s) = c1·exp(−c2·s) + c3).
+    #[serde(default)]
+    pub surface_energy: Option<SurfaceEnergyConfig>,
+    /// `none` (d = h, σ_s = σ: the dissertation) or `mccool`.
+    #[serde(default = "default_offset")]
+    pub summit_offset: String,
+    /// `junction_shear` (recommended) or `seed_power_elastic`.
+    #[serde(default = "default_friction")]
+    pub friction_law: String,
+    /// Output curves from h* = h_star_min to h_star_max in steps of `step` (also the table's
+    /// grid step).
+    #[serde(default = "default_h_min")]
+    pub h_star_min: f64,
+    #[serde(default = "default_h_max")]
+    pub h_star_max: f64,
+    #[serde(default = "default_step")]
+    pub step: f64,
+}
+
+impl ContactConfig {
+    pub fn defaults() -> Self {
+        toml::from_str("").unwrap_or(ContactConfig {
+            interface: None,
+            parameter_set: default_set(),
+            sigma: None,
+            r: None,
+            eta: None,
+            hardness: None,
+            modulus: None,
+            poisson: None,
+            lj_spacing: None,
+            lubricant_thickness: None,
+            surface_energy: None,
+            summit_offset: default_offset(),
+            friction_law: default_friction(),
+            h_star_min: default_h_min(),
+            h_star_max: default_h_max(),
+            step: default_step(),
+        })
+    }
+}
+
+/// Validated parameters: the model inputs (σ, R, η possibly still to come from upstream).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactParams {
+    pub interface: Option<String>,
+    pub parameter_set: String,
+    pub params: IsblParams,
+    pub h_star_min: f64,
+    pub h_star_max: f64,
+    pub step: f64,
+}
+
+/// A dissertation parameter set by name.
+pub fn parameter_set(name: &str) -> Option<IsblParams> {
+    Some(match name {
+        "initial_2dof" => IsblParams::initial_2dof(),
+        "improved_2dof" => IsblParams::improved_2dof(),
+        "three_dof" => IsblParams::three_dof(),
+        "mtl_table_3_2" => IsblParams::mtl_table_3_2(),
+        _ => return None,
+    })
+}
+
+/// Validation failures: (key, message).
+pub fn validate(cfg: &ContactConfig) -> std::result::Result<ContactParams, (String, String)> {
+    let bad = |k: &str, m: String| Err((k.to_string(), m));
+    let Some(mut p) = parameter_set(&cfg.parameter_set) else {
+        return bad(
+            "parameter_set",
+            format!(
+                "unknown set `{}` (initial_2dof, improved_2dof, three_dof, mtl_table_3_2)",
+                cfg.parameter_set
+            ),
+        );
+    };
+    if cfg.interface.is_some() && (cfg.sigma.is_some() || cfg.r.is_some() || cfg.eta.is_some()) {
+        return bad(
+            "interface",
+            "σ, R, η come from the interface: drop `sigma`/`r`/`eta` or the `interface` key".into(),
+        );
+    }
+    if let Some(Length(v)) = cfg.sigma {
+        p.sigma = v;
+    }
+    if let Some(Length(v)) = cfg.r {
+        p.summit_radius = v;
+    }
+    if let Some(PerArea(v)) = cfg.eta {
+        p.summit_density = v;
+    }
+    if let Some(Pressure(v)) = cfg.hardness {
+        p.hardness = v;
+    }
+    if let Some(Pressure(v)) = cfg.modulus {
+        p.slider_modulus = v;
+        p.disk_modulus = v;
+    }
+    if let Some(v) = cfg.poisson {
+        p.slider_poisson = v;
+        p.disk_poisson = v;
+        p.yielding_poisson = v;
+    }
+    if let Some(Length(v)) = cfg.lj_spacing {
+        p.lj_spacing = v;
+    }
+    if let Some(Length(v)) = cfg.lubricant_thickness {
+        p.lubricant_thickness = v;
+    }
+    match &cfg.surface_energy {
+        None => {}
+        Some(SurfaceEnergyConfig::Number(v)) => {
+            p.surface_energy = SurfaceEnergy::Constant { delta_gamma: *v }
+        }
+        Some(SurfaceEnergyConfig::Text(t)) if t == "variable" => {
+            p.surface_energy = SurfaceEnergy::seed_variable()
+        }
+        Some(SurfaceEnergyConfig::Text(t)) => match parse_quantity(t, Dimension::SurfaceEnergy) {
+            Ok(v) => p.surface_energy = SurfaceEnergy::Constant { delta_gamma: v },
+            Err(e) => return bad("surface_energy", format!("{e}, or \"variable\"")),
+        },
+    }
+    p.summit_offset = match cfg.summit_offset.as_str() {
+        "none" => SummitOffset::None,
+        "mccool" => SummitOffset::McCool,
+        o => return bad("summit_offset", format!("unknown `{o}` (none, mccool)")),
+    };
+    p.friction_law = match cfg.friction_law.as_str() {
+        "junction_shear" => FrictionLaw::JunctionShear,
+        "seed_power_elastic" => FrictionLaw::SeedPowerElastic,
+        o => {
+            return bad(
+                "friction_law",
+                format!("unknown `{o}` (junction_shear, seed_power_elastic)"),
+            )
+        }
+    };
+    if !(cfg.h_star_min.is_finite() && cfg.h_star_max.is_finite())
+        || cfg.h_star_min < -4.0
+        || cfg.h_star_max > 20.0
+        || cfg.h_star_max <= cfg.h_star_min
+    {
+        return bad(
+            "h_star_max",
+            format!(
+                "range [{}, {}] is out of range: need −4 ≤ h_star_min < h_star_max ≤ 20",
+                cfg.h_star_min, cfg.h_star_max
+            ),
+        );
+    }
+    if !(cfg.step.is_finite() && cfg.step >= 0.005 && cfg.step <= 0.5) {
+        return bad(
+            "step",
+            format!("{} is out of range: 0.005 ≤ step ≤ 0.5 (in h/σ)", cfg.step),
+        );
+    }
+    if cfg.interface.is_none() {
+        p.validate().map_err(|e| match e {
+            ContactError::Parameter { name, .. } => (name.to_string(), e.to_string()),
+            other => ("parameter_set".to_string(), other.to_string()),
+        })?;
+    }
+    Ok(ContactParams {
+        interface: cfg.interface.clone(),
+        parameter_set: cfg.parameter_set.clone(),
+        params: p,
+        h_star_min: cfg.h_star_min,
+        h_star_max: cfg.h_star_max,
+        step: cfg.step,
+    })
+}
+
+fn surface_energy_json(s: &SurfaceEnergy) -> Value {
+    match s {
+        SurfaceEnergy::Constant { delta_gamma } => json!({"constant_N_per_m": delta_gamma}),
+        SurfaceEnergy::Variable { c1, c2, c3 } => {
+            json!({"variable": {"c1_N_per_m": c1, "c2_per_m": c2, "c3_N_per_m": c3}})
+        }
+    }
+}
+
+fn params_json(p: &IsblParams) -> Value {
+    json!({
+        "sigma_m": p.sigma, "R_m": p.summit_radius, "eta_per_m2": p.summit_density,
+        "E1_Pa": p.slider_modulus, "nu1": p.slider_poisson,
+        "E2_Pa": p.disk_modulus, "nu2": p.disk_poisson, "nu_yielding": p.yielding_poisson,
+        "H_Pa": p.hardness, "epsilon_m": p.lj_spacing, "t_m": p.lubricant_thickness,
+        "surface_energy": surface_energy_json(&p.surface_energy),
+        "summit_offset": format!("{:?}", p.summit_offset),
+        "friction_law": format!("{:?}", p.friction_law),
+    })
+}
+
+impl ContactParams {
+    pub fn canonical(&self) -> Value {
+        json!({
+            "interface": self.interface,
+            "parameter_set": self.parameter_set,
+            // With an interface, σ/R/η come from upstream (its key is in the fingerprint).
+            "inputs": params_json(&self.params),
+            "h_star_min": self.h_star_min,
+            "h_star_max": self.h_star_max,
+            "step": self.step,
+        })
+    }
+}
+
+/// Table channels and how each is interpolated.
+const CHANNELS: [(&str, Interp); 5] = [
+    ("P", Interp::Log),
+    ("k_c", Interp::Log),
+    ("A_r", Interp::Log),
+    ("Q", Interp::Log),
+    ("F_s", Interp::Log),
+];
+
+/// Table sample at h* = x: values and d/dh* (exact from the model, except dk_c/dh*, which is a
+/// fourth-order central difference of the exact k_c).
+fn table_sample(model: &IsblModel, x: f64) -> std::result::Result<Sample, ContactError> {
+    let sigma = model.params().sigma;
+    let p = model.at(x * sigma)?;
+    let delta = 1e-3;
+    let kc = |dx: f64| model.at((x + dx) * sigma).map(|q| q.contact_stiffness);
+    let dkc = (-kc(2.0 * delta)? + 8.0 * kc(delta)? - 8.0 * kc(-delta)? + kc(-2.0 * delta)?)
+        / (12.0 * delta);
+    Ok(Sample {
+        value: vec![
+            p.contact_pressure,
+            p.contact_stiffness,
+            p.real_area_fraction,
+            p.friction_stress,
+            p.adhesion,
+        ],
+        derivative: vec![
+            -p.contact_stiffness * sigma,
+            dkc,
+            -p.real_area_gradient * sigma,
+            -p.friction_stiffness * sigma,
+            p.adhesion_gradient * sigma,
+        ],
+    })
+}
+
+/// The computed stage: model, curves on the output grid, table and its verified accuracy.
+pub struct ContactAnalysis {
+    pub model: IsblModel,
+    pub h_star: Vec<f64>,
+    pub points: Vec<crate::contact::isbl::IsblPoint>,
+    pub table: ForceTable,
+    pub table_error: Vec<ChannelError>,
+}
+
+/// Build the model, the curves and the table (the table covers the spec's §8 range
+/// h* ∈ [−4, 3 + t/σ + 10] or the output range, whichever is wider).
+pub fn analyse(params: &IsblParams, c: &ContactParams) -> Result<ContactAnalysis> {
+    let model = IsblModel::new(*params)?;
+    let n = ((c.h_star_max - c.h_star_min) / c.step).round() as usize + 1;
+    let h_star: Vec<f64> = (0..n).map(|i| c.h_star_min + i as f64 * c.step).collect();
+    use rayon::prelude::*;
+    let points = h_star
+        .par_iter()
+        .map(|&x| model.at(x * params.sigma))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    let top = (3.0 + params.lubricant_thickness / params.sigma + 10.0).max(c.h_star_max);
+    let lo = c.h_star_min.min(-4.0);
+    let table = ForceTable::build(&CHANNELS, lo, top, c.step, |x| table_sample(&model, x))?;
+    // Accuracy where the curves matter (values above 1e-12 of their maximum).
+    let values_only = |x: f64| -> std::result::Result<Sample, ContactError> {
+        let p = model.at(x * params.sigma)?;
+        Ok(Sample {
+            value: vec![
+                p.contact_pressure,
+                p.contact_stiffness,
+                p.real_area_fraction,
+                p.friction_stress,
+                p.adhesion,
+            ],
+            derivative: vec![0.0; 5],
+        })
+    };
+    let table_error = table.verify(values_only, 1, 1e-12)?;
+    Ok(ContactAnalysis {
+        model,
+        h_star,
+        points,
+        table,
+        table_error,
+    })
+}
+
+pub fn summary_row(a: &ContactAnalysis, c: &ContactParams) -> Map<String, Value> {
+    let p = a.model.params();
+    let d = a.model.derived();
+    let at3 = a.model.at(3.0 * p.sigma).ok();
+    let mut m = Map::new();
+    m.insert("parameter_set".into(), json!(c.parameter_set));
+    m.insert("interface".into(), json!(c.interface));
+    m.insert("sigma_nm".into(), json!(p.sigma * 1e9));
+    m.insert("R_um".into(), json!(p.summit_radius * 1e6));
+    m.insert("eta_per_um2".into(), json!(p.summit_density * 1e-12));
+    m.insert("beta".into(), json!(d.beta));
+    m.insert("E_star_GPa".into(), json!(d.composite_modulus / 1e9));
+    m.insert("omega_c_nm".into(), json!(d.critical_interference * 1e9));
+    m.insert("psi".into(), json!(d.plasticity_index));
+    m.insert(
+        "P_at_3sigma_Pa".into(),
+        json!(at3.map(|q| q.contact_pressure)),
+    );
+    m.insert("F_s_at_3sigma_Pa".into(), json!(at3.map(|q| q.adhesion)));
+    let worst = a.table_error.iter().map(|e| e.max_rel).fold(0.0, f64::max);
+    m.insert("table_max_rel_error".into(), json!(worst));
+    m
+}
+
+pub fn report_json(a: &ContactAnalysis, c: &ContactParams) -> Value {
+    let d = a.model.derived();
+    json!({
+        "parameter_set": c.parameter_set,
+        "interface": c.interface,
+        "inputs": params_json(a.model.params()),
+        "derived": {
+            "E_star": d.composite_modulus, "K": d.k_factor, "omega_c": d.critical_interference,
+            "L_c": d.critical_load, "A_c": d.critical_area, "beta": d.beta,
+            "psi": d.plasticity_index, "psi_KE": d.plasticity_index_ke,
+            "y_s": d.summit_offset, "sigma_s": d.summit_sigma,
+        },
+        "curves": a.h_star.iter().zip(&a.points).map(|(x, p)| json!({
+            "h_star": x, "h": p.separation, "P": p.contact_pressure, "k_c": p.contact_stiffness,
+            "A_r_fraction": p.real_area_fraction, "Q": p.friction_stress, "F_s": p.adhesion,
+            "n_c": p.contacts_per_area,
+        })).collect::<Vec<_>>(),
+        "table": {
+            "h_star_range": a.table.range(), "step": a.table.step(),
+            "max_rel_error": a.table_error.iter().map(|e| (e.name.clone(), json!(e.max_rel))).collect::<Map<_, _>>(),
+        },
+    })
+}
+
+pub fn write_outputs(
+    a: &ContactAnalysis,
+    c: &ContactParams,
+    h5_path: &Path,
+    plot_dir: Option<&Path>,
+    cache_key: &str,
+    inputs: &Value,
+) -> Result<()> {
+    let out = H5Out::create(h5_path)?;
+    out.root_attributes("contact", cache_key, &c.canonical(), inputs, "contact")?;
+    let entry = out.group("contact", Some("NXentry"))?;
+    out.attr_str(&entry, "default", "isbl")?;
+    let g = out.group("contact/isbl", Some("NXdata"))?;
+    out.attr_str(&g, "signal", "P")?;
+    out.attr_str_list(&g, "auxiliary_signals", &["Q", "F_s"])?;
+    out.attr_str_list(&g, "axes", &["h_star"])?;
+    let col = |f: fn(&crate::contact::isbl::IsblPoint) -> f64| -> Vec<f64> {
+        a.points.iter().map(f).collect()
+    };
+    out.write_1d(&g, "h_star", &a.h_star, "1", "separation h/σ")?;
+    out.write_1d(
+        &g,
+        "h",
+        &col(|p| p.separation),
+        "m",
+        "solid separation h (mean plane of surface heights)",
+    )?;
+    for (name, f, unit, ln) in [
+        (
+            "P",
+            (|p| p.contact_pressure) as fn(&crate::contact::isbl::IsblPoint) -> f64,
+            "Pa",
+            "contact force per unit nominal area",
+        ),
+        (
+            "k_c",
+            |p| p.contact_stiffness,
+            "Pa/m",
+            "contact stiffness −dP/dh per unit nominal area",
+        ),
+        (
+            "A_r_fraction",
+            |p| p.real_area_fraction,
+            "1",
+            "real contact area / nominal area",
+        ),
+        (
+            "Q",
+            |p| p.friction_stress,
+            "Pa",
+            "static friction per unit nominal area",
+        ),
+        (
+            "k_fr",
+            |p| p.friction_stiffness,
+            "Pa/m",
+            "−dQ/dh per unit nominal area",
+        ),
+        (
+            "F_s",
+            |p| p.adhesion,
+            "Pa",
+            "adhesion per unit nominal area",
+        ),
+        (
+            "F_nc",
+            |p| p.adhesion_non_contacting,
+            "Pa",
+            "adhesion of non-contacting summits",
+        ),
+        (
+            "F_lc",
+            |p| p.adhesion_lubricant,
+            "Pa",
+            "adhesion of lubricant-contacting summits",
+        ),
+        (
+            "F_sc",
+            |p| p.adhesion_solid,
+            "Pa",
+            "adhesion of solid-contacting summits",
+        ),
+        ("dF_s_dh", |p| p.adhesion_gradient, "Pa/m", "dF_s/dh"),
+        (
+            "n_c",
+            |p| p.contacts_per_area,
+            "m^-2",
+            "contacting summits per unit nominal area",
+        ),
+    ] {
+        out.write_1d(&g, name, &col(f), unit, ln)?;
+    }
+    let d = a.model.derived();
+    let g = out.group("contact/derived", None)?;
+    for (name, v, u, ln) in [
+        ("E_star", d.composite_modulus, "Pa", "composite modulus"),
+        (
+            "K",
+            d.k_factor,
+            "1",
+            "Kogut–Etsion hardness factor 0.454 + 0.41ν",
+        ),
+        (
+            "omega_c",
+            d.critical_interference,
+            "m",
+            "critical interference",
+        ),
+        ("L_c", d.critical_load, "N", "critical load"),
+        ("A_c", d.critical_area, "m^2", "critical area"),
+        ("beta", d.beta, "1", "σRη"),
+        (
+            "psi",
+            d.plasticity_index,
+            "1",
+            "plasticity index (E*/H)√(σ/R)",
+        ),
+        (
+            "psi_KE",
+            d.plasticity_index_ke,
+            "1",
+            "KE plasticity index √(σ/ω_c)",
+        ),
+        (
+            "y_s",
+            d.summit_offset,
+            "m",
+            "summit mean plane above the surface mean plane",
+        ),
+        (
+            "sigma_s",
+            d.summit_sigma,
+            "m",
+            "summit height standard deviation",
+        ),
+    ] {
+        out.write_scalar(&g, name, v, u, ln)?;
+    }
+    let g = out.group("contact/table", None)?;
+    let (lo, hi) = a.table.range();
+    out.write_scalar(&g, "h_star_min", lo, "1", "first node")?;
+    out.write_scalar(&g, "h_star_max", hi, "1", "last node")?;
+    out.write_scalar(&g, "step", a.table.step(), "1", "node spacing in h/σ")?;
+    let names: Vec<&str> = a.table_error.iter().map(|e| e.name.as_str()).collect();
+    out.attr_str_list(&g, "channels", &names)?;
+    let errs: Vec<f64> = a.table_error.iter().map(|e| e.max_rel).collect();
+    out.write_1d(
+        &g,
+        "max_rel_error",
+        &errs,
+        "1",
+        "interpolation error vs direct evaluation (midpoints and quarter points), per channel",
+    )?;
+    out.write_string(&entry, "inputs", &params_json(a.model.params()).to_string())?;
+    out.finish()?;
+
+    if let Some(dir) = plot_dir {
+        let series = |f: fn(&crate::contact::isbl::IsblPoint) -> f64| -> Vec<(f64, f64)> {
+            a.h_star
+                .iter()
+                .zip(&a.points)
+                .map(|(x, p)| (*x, f(p)))
+                .collect()
+        };
+        plot::semilogy_png(
+            &dir.join("isbl_forces.png"),
+            &format!(
+                "ISBL per unit nominal area ({}, σ = {:.2} nm)",
+                c.parameter_set,
+                a.model.params().sigma * 1e9
+            ),
+            "h/σ",
+            "Pa",
+            &[
+                ("contact P", series(|p| p.contact_pressure)),
+                ("static friction Q", series(|p| p.friction_stress)),
+                ("adhesion F_s", series(|p| p.adhesion)),
+            ],
+            &[],
+        )?;
+        plot::semilogy_png(
+            &dir.join("isbl_area_stiffness.png"),
+            "Real area fraction and contact stiffness",
+            "h/σ",
+            "A_r/A_n (1), k_c (Pa/nm)",
+            &[
+                ("A_r/A_n", series(|p| p.real_area_fraction)),
+                ("k_c (Pa/nm)", series(|p| p.contact_stiffness * 1e-9)),
+            ],
+            &[],
+        )?;
+    }
+    Ok(())
+}
+
+/// A `[contact.NAME]` instance.
+pub struct ContactStage {
+    pub name: String,
+    pub params: ContactParams,
+}
+
+impl ContactStage {
+    pub fn from_config(
+        file: &PipelineFile,
+        name: &str,
+        cfg: &ContactConfig,
+    ) -> std::result::Result<Self, ConfigError> {
+        let params = validate(cfg).map_err(|(k, m)| file.error("contact", name, &k, m))?;
+        if let Some(i) = &cfg.interface {
+            if !file.raw.interface.contains_key(i) {
+                return Err(file.error(
+                    "contact",
+                    name,
+                    "interface",
+                    format!("no [interface.{i}] in this file"),
+                ));
+            }
+        }
+        Ok(Self {
+            name: name.to_string(),
+            params,
+        })
+    }
+}
+
+impl Stage for ContactStage {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn kind(&self) -> &'static str {
+        "contact"
+    }
+    fn model_version(&self) -> &'static str {
+        MODEL_VERSION
+    }
+    fn params(&self) -> Value {
+        self.params.canonical()
+    }
+    fn inputs(&self) -> Vec<(String, PathBuf)> {
+        Vec::new()
+    }
+    fn upstream(&self) -> Vec<String> {
+        self.params.interface.iter().cloned().collect()
+    }
+    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+        let mut p = self.params.params;
+        if let Some(i) = &self.params.interface {
+            let r = ctx
+                .upstream
+                .get(i)
+                .ok_or_else(|| Error::Stage(format!("no result from interface `{i}`")))?;
+            let get = |k: &str| {
+                r[k].as_f64()
+                    .ok_or_else(|| Error::Stage(format!("interface `{i}` result has no `{k}`")))
+            };
+            p.sigma = get("sigma_m")?;
+            p.summit_radius = get("R_m")?;
+            p.summit_density = get("eta_per_m2")?;
+        }
+        ctx.progress.set_message("ISBL curves and force table");
+        let a = analyse(&p, &self.params)?;
+        let inputs = serde_json::to_value(&ctx.fingerprint.inputs).unwrap_or(Value::Null);
+        write_outputs(
+            &a,
+            &self.params,
+            &ctx.out_dir.join("contact.h5"),
+            Some(ctx.out_dir),
+            ctx.key,
+            &inputs,
+        )?;
+        let mut result = report_json(&a, &self.params);
+        if let Value::Object(m) = &mut result {
+            m.insert("h5".into(), json!("contact.h5"));
+        }
+        Ok(StageOutput {
+            result,
+            summary_row: Some(summary_row(&a, &self.params)),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn force_table_matches_direct_evaluation_across_the_regime_boundaries() {
+        // Acceptance: ≤ 1e-4 relative everywhere the curves matter, no NaN or jump at 3σ,
+        // 3σ + t and the table's ends (measured: ≤ 1.1e-8, F_s the worst).
+        let cfg = ContactConfig::defaults();
+        let c = validate(&cfg).unwrap();
+        let a = analyse(&c.params, &c).unwrap();
+        for e in &a.table_error {
+            assert!(e.max_rel < 1e-4, "{e:?}");
+        }
+        let sigma = c.params.sigma;
+        let t = c.params.lubricant_thickness / sigma;
+        for x in [3.0, 3.0 + t, 0.0, -3.5, 10.0] {
+            for ch in 0..5 {
+                let below = a.table.eval(ch, x - 1e-7).unwrap();
+                let above = a.table.eval(ch, x + 1e-7).unwrap();
+                assert!(below.is_finite() && above.is_finite());
+                assert!(((below - above) / below).abs() < 1e-5, "{ch} at {x}");
+            }
+        }
+        // P, A_r, Q fall and F_s falls with separation.
+        for ch in [0, 2, 3, 4] {
+            let mut prev = f64::INFINITY;
+            for k in 0..2000 {
+                let y = a.table.eval(ch, -3.9 + k as f64 * 0.0087).unwrap();
+                assert!(y <= prev, "channel {ch} at step {k}");
+                prev = y;
+            }
+        }
+    }
+
+    #[test]
+    fn bad_keys_name_themselves() {
+        let mut cfg = ContactConfig::defaults();
+        cfg.parameter_set = "nope".into();
+        assert_eq!(validate(&cfg).unwrap_err().0, "parameter_set");
+        let mut cfg = ContactConfig::defaults();
+        cfg.hardness = Some(Pressure(-1.0));
+        assert_eq!(validate(&cfg).unwrap_err().0, "hardness");
+        let mut cfg = ContactConfig::defaults();
+        cfg.step = 0.0;
+        assert_eq!(validate(&cfg).unwrap_err().0, "step");
+        let mut cfg = ContactConfig::defaults();
+        cfg.surface_energy = Some(SurfaceEnergyConfig::Text("lots".into()));
+        assert_eq!(validate(&cfg).unwrap_err().0, "surface_energy");
+    }
+}
