@@ -413,7 +413,9 @@ pub fn semilogy_png(
             let pts: Vec<(f64, f64)> = s
                 .iter()
                 .filter(positive)
-                .map(|&(x, y)| (x, y.max(y_floor)))
+                // Below the floor a log axis shows nothing meaningful: leave those points out.
+                .filter(|p| p.1 >= y_floor)
+                .copied()
                 .collect();
             chart
                 .draw_series(LineSeries::new(pts, c.stroke_width(1)))
