@@ -8,6 +8,12 @@ pub mod mtl;
 pub mod table;
 pub mod validation;
 
+/// Effective (reduced) modulus of two elastic bodies, `E* = [(1−ν1²)/E1 + (1−ν2²)/E2]⁻¹`
+/// (seed eq. A.5): the one formula both the ISBL and the MTL models use.
+pub fn reduced_modulus(e1: f64, nu1: f64, e2: f64, nu2: f64) -> f64 {
+    1.0 / ((1.0 - nu1 * nu1) / e1 + (1.0 - nu2 * nu2) / e2)
+}
+
 /// Errors of the contact models: always a parameter outside its physical range.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ContactError {

@@ -10,6 +10,7 @@
 //! solver's error control needs; linear interpolation would make the stiffness jump at nodes.
 
 use super::ContactError;
+use crate::signal::resample::hermite_segment;
 use rayon::prelude::*;
 
 /// How a channel is interpolated between nodes.
@@ -182,20 +183,14 @@ impl ForceTable {
         }
         let i = (u as usize).min(self.n - 2);
         let t = u - i as f64;
-        let (p0, p1) = (ch.value[i], ch.value[i + 1]);
-        let (m0, m1) = (ch.slope_dx[i], ch.slope_dx[i + 1]);
-        // Cubic Hermite on the unit interval.
-        let t2 = t * t;
-        let t3 = t2 * t;
-        let h00 = 2.0 * t3 - 3.0 * t2 + 1.0;
-        let h10 = t3 - 2.0 * t2 + t;
-        let h01 = -2.0 * t3 + 3.0 * t2;
-        let h11 = t3 - t2;
-        let v = h00 * p0 + h10 * m0 + h01 * p1 + h11 * m1;
-        let dv = ((6.0 * t2 - 6.0 * t) * (p0 - p1)
-            + (3.0 * t2 - 4.0 * t + 1.0) * m0
-            + (3.0 * t2 - 2.0 * t) * m1)
-            * self.inv_dx;
+        let (v, dv) = hermite_segment(
+            ch.value[i],
+            ch.value[i + 1],
+            ch.slope_dx[i],
+            ch.slope_dx[i + 1],
+            t,
+        );
+        let dv = dv * self.inv_dx;
         Some(match ch.interp {
             Interp::Linear => (v, dv),
             Interp::Log => {

@@ -219,6 +219,23 @@ pub struct HermiteTrack<'a> {
     dt: f64,
 }
 
+/// Cubic Hermite on one unit interval: values `p0`, `p1` and slopes `m0`, `m1` (per unit of
+/// `s`) at its ends → value and slope (per unit of `s`) at `s ∈ [0, 1]`. Shared by the DMW
+/// track evaluation and the contact force tables.
+#[inline]
+pub fn hermite_segment(p0: f64, p1: f64, m0: f64, m1: f64, s: f64) -> (f64, f64) {
+    let s2 = s * s;
+    let s3 = s2 * s;
+    let value = (2.0 * s3 - 3.0 * s2 + 1.0) * p0
+        + (s3 - 2.0 * s2 + s) * m0
+        + (3.0 * s2 - 2.0 * s3) * p1
+        + (s3 - s2) * m1;
+    let slope = (6.0 * s2 - 6.0 * s) * (p0 - p1)
+        + (3.0 * s2 - 4.0 * s + 1.0) * m0
+        + (3.0 * s2 - 2.0 * s) * m1;
+    (value, slope)
+}
+
 impl<'a> HermiteTrack<'a> {
     /// A track over `d`, `v` sampled at `fs` starting at `t0`.
     ///
@@ -286,18 +303,14 @@ impl<'a> HermiteTrack<'a> {
         // 0 < position < n − 1, so the interval index is in 0..=n−2 (the min guards rounding).
         let i = (position.floor() as usize).min(n - 2);
         let s = position - i as f64;
-        let (d0, d1) = (self.d[i], self.d[i + 1]);
         // Slopes per unit s (one sample spacing).
-        let (m0, m1) = (self.v[i] * self.dt, self.v[i + 1] * self.dt);
-        let s2 = s * s;
-        let s3 = s2 * s;
-        let value = (2.0 * s3 - 3.0 * s2 + 1.0) * d0
-            + (s3 - 2.0 * s2 + s) * m0
-            + (3.0 * s2 - 2.0 * s3) * d1
-            + (s3 - s2) * m1;
-        let slope_per_sample = (6.0 * s2 - 6.0 * s) * (d0 - d1)
-            + (3.0 * s2 - 4.0 * s + 1.0) * m0
-            + (3.0 * s2 - 2.0 * s) * m1;
+        let (value, slope_per_sample) = hermite_segment(
+            self.d[i],
+            self.d[i + 1],
+            self.v[i] * self.dt,
+            self.v[i + 1] * self.dt,
+            s,
+        );
         (value, slope_per_sample * self.fs)
     }
 

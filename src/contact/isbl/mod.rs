@@ -228,8 +228,12 @@ impl IsblParams {
 
     /// `E* = [(1−ν1²)/E1 + (1−ν2²)/E2]⁻¹` (seed eq. A.5).
     pub fn composite_modulus(&self) -> f64 {
-        1.0 / ((1.0 - self.slider_poisson.powi(2)) / self.slider_modulus
-            + (1.0 - self.disk_poisson.powi(2)) / self.disk_modulus)
+        super::reduced_modulus(
+            self.slider_modulus,
+            self.slider_poisson,
+            self.disk_modulus,
+            self.disk_poisson,
+        )
     }
 }
 

@@ -78,7 +78,7 @@ pub fn effective_modulus(e1: f64, nu1: f64, e2: f64, nu2: f64) -> Result<f64, Co
             return Err(ContactError::parameter(name, nu, "must be in [-1, 0.5)"));
         }
     }
-    Ok(1.0 / ((1.0 - nu1 * nu1) / e1 + (1.0 - nu2 * nu2) / e2))
+    Ok(super::reduced_modulus(e1, nu1, e2, nu2))
 }
 
 /// Hertz load of a sphere of radius `radius` pressed by `interference` into a flat,
