@@ -9,8 +9,11 @@ use std::time::Instant;
 use crate::core::cache::Store;
 use crate::core::config::PipelineFile;
 use crate::core::engine::{self, Outcome, RunOptions, State};
-use crate::core::units::{Frequency, Length, Sensitivity, TimeSpan};
+use crate::core::units::{
+    Area, Frequency, Length, PerArea, Pressure, Sensitivity, TimeSpan, Velocity, Viscosity,
+};
 use crate::stages;
+use crate::stages::contact::{self, ContactConfig, SurfaceEnergyConfig};
 use crate::stages::dmw::{self, DmwConfig};
 use crate::stages::surfaces::{self, SurfaceConfig};
 
@@ -62,6 +65,8 @@ pub enum Command {
     Surface(Box<SurfaceArgs>),
     /// One LDV record → DMW tracks and their statistics.
     Dmw(Box<DmwArgs>),
+    /// ISBL contact curves (and the MTL lubricant law with --lubricant) for one interface.
+    Contact(Box<ContactArgs>),
     /// Every reproducible number of the specs: target, hdi's value, tolerance, pass. Exit 1 if
     /// a reproducible target fails.
     Validate {
@@ -215,6 +220,73 @@ pub struct DmwArgs {
     pub json: bool,
 }
 
+/// `hdi contact`: every option has the name of its `[contact.NAME]` key.
+#[derive(Args, Debug)]
+pub struct ContactArgs {
+    /// initial_2dof, improved_2dof (default), three_dof or mtl_table_3_2.
+    #[arg(long)]
+    pub parameter_set: Option<String>,
+    /// Combined RMS roughness, e.g. "0.5 nm".
+    #[arg(long, allow_hyphen_values = true)]
+    pub sigma: Option<Length>,
+    /// Mean summit radius, e.g. "0.43 um".
+    #[arg(long, allow_hyphen_values = true)]
+    pub r: Option<Length>,
+    /// Summit density, e.g. "124 um^-2".
+    #[arg(long, allow_hyphen_values = true)]
+    pub eta: Option<PerArea>,
+    /// Hardness of the yielding body, e.g. "13 GPa".
+    #[arg(long, allow_hyphen_values = true)]
+    pub hardness: Option<Pressure>,
+    /// Young's modulus of both bodies, e.g. "280 GPa".
+    #[arg(long, allow_hyphen_values = true)]
+    pub modulus: Option<Pressure>,
+    #[arg(long, allow_hyphen_values = true)]
+    pub poisson: Option<f64>,
+    /// Lennard-Jones equilibrium spacing ε, e.g. "0.3 nm".
+    #[arg(long, allow_hyphen_values = true)]
+    pub lj_spacing: Option<Length>,
+    /// Total lubricant thickness t, e.g. "1.5 nm".
+    #[arg(long, allow_hyphen_values = true)]
+    pub lubricant_thickness: Option<Length>,
+    /// Constant Δγ ("60 mN/m") or "variable".
+    #[arg(long)]
+    pub surface_energy: Option<String>,
+    /// none (default) or mccool.
+    #[arg(long)]
+    pub summit_offset: Option<String>,
+    /// junction_shear (default) or seed_power_elastic.
+    #[arg(long)]
+    pub friction_law: Option<String>,
+    #[arg(long, allow_hyphen_values = true)]
+    pub h_star_min: Option<f64>,
+    #[arg(long, allow_hyphen_values = true)]
+    pub h_star_max: Option<f64>,
+    /// Grid step in h/σ (also the force table's).
+    #[arg(long)]
+    pub step: Option<f64>,
+    /// Add the MTL law: reference, humidity_temperature, more_bonding, larger_gyration_radius.
+    #[arg(long)]
+    pub lubricant: Option<String>,
+    /// Nominal area for the MTL curves, e.g. "2500 um^2" (default).
+    #[arg(long, allow_hyphen_values = true)]
+    pub nominal_area: Option<Area>,
+    /// Sliding speed of the MTL law, e.g. "30 m/s" (default).
+    #[arg(long, allow_hyphen_values = true)]
+    pub sliding_speed: Option<Velocity>,
+    /// Limiting viscosity μ0, e.g. "0.31 Pa s".
+    #[arg(long, allow_hyphen_values = true)]
+    pub lubricant_viscosity: Option<Viscosity>,
+    /// Minimum liquid gap κ (radius of gyration), e.g. "0.3 nm".
+    #[arg(long, allow_hyphen_values = true)]
+    pub gyration_radius: Option<Length>,
+    /// Also write the HDF5 output (and PNGs beside it).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[arg(long)]
+    pub json: bool,
+}
+
 pub fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
@@ -229,6 +301,7 @@ pub fn main() -> Result<()> {
         Command::Gc { config, dry_run } => cmd_gc(&config, dry_run),
         Command::Surface(args) => cmd_surface(*args),
         Command::Dmw(args) => cmd_dmw(*args),
+        Command::Contact(args) => cmd_contact(*args),
         Command::Validate { json, only } => cmd_validate(json, &only),
         Command::Synth {
             what,
@@ -632,6 +705,134 @@ fn cmd_dmw(a: DmwArgs) -> Result<()> {
     Ok(())
 }
 
+fn cmd_contact(a: ContactArgs) -> Result<()> {
+    let mut cfg = ContactConfig::defaults();
+    if let Some(v) = a.parameter_set {
+        cfg.parameter_set = v;
+    }
+    cfg.sigma = a.sigma;
+    cfg.r = a.r;
+    cfg.eta = a.eta;
+    cfg.hardness = a.hardness;
+    cfg.modulus = a.modulus;
+    cfg.poisson = a.poisson;
+    cfg.lj_spacing = a.lj_spacing;
+    cfg.lubricant_thickness = a.lubricant_thickness;
+    cfg.surface_energy = a.surface_energy.map(SurfaceEnergyConfig::Text);
+    if let Some(v) = a.summit_offset {
+        cfg.summit_offset = v;
+    }
+    if let Some(v) = a.friction_law {
+        cfg.friction_law = v;
+    }
+    if let Some(v) = a.h_star_min {
+        cfg.h_star_min = v;
+    }
+    if let Some(v) = a.h_star_max {
+        cfg.h_star_max = v;
+    }
+    if let Some(v) = a.step {
+        cfg.step = v;
+    }
+    cfg.lubricant = a.lubricant;
+    cfg.nominal_area = a.nominal_area;
+    cfg.sliding_speed = a.sliding_speed;
+    cfg.lubricant_viscosity = a.lubricant_viscosity;
+    cfg.gyration_radius = a.gyration_radius;
+    let params = contact::validate(&cfg)
+        .map_err(|(k, m)| anyhow::anyhow!("--{}: {m}", k.replace('_', "-")))?;
+    let analysis = contact::analyse(&params.params, &params)?;
+    if let Some(out) = &a.out {
+        let dir = out
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        contact::write_outputs(&analysis, &params, out, Some(dir), "", &json!([]))?;
+    }
+    if a.json {
+        println!("{}", contact::report_json(&analysis, &params));
+        return Ok(());
+    }
+    let p = analysis.model.params();
+    let d = analysis.model.derived();
+    println!(
+        "ISBL interface ({}): σ = {:.3} nm, R = {:.3} µm, η = {:.1} µm⁻², β = {:.4}",
+        params.parameter_set,
+        p.sigma * 1e9,
+        p.summit_radius * 1e6,
+        p.summit_density * 1e-12,
+        d.beta
+    );
+    println!(
+        "  E* = {:.1} GPa, ω_c = {:.4} nm, ψ = {:.3}, t = {:.2} nm, ε = {:.2} nm",
+        d.composite_modulus / 1e9,
+        d.critical_interference * 1e9,
+        d.plasticity_index,
+        p.lubricant_thickness * 1e9,
+        p.lj_spacing * 1e9
+    );
+    println!(
+        "  {:>6} {:>12} {:>12} {:>12} {:>12} {:>12}",
+        "h/σ", "P (Pa)", "k_c (Pa/nm)", "A_r/A_n", "Q (Pa)", "F_s (Pa)"
+    );
+    for x in [0.0, 1.0, 2.0, 3.0, 4.0, 6.0] {
+        if x < params.h_star_min || x > params.h_star_max {
+            continue;
+        }
+        let q = analysis.lookup.at(x * p.sigma)?;
+        println!(
+            "  {:>6.2} {:>12.4e} {:>12.4e} {:>12.4e} {:>12.4e} {:>12.4e}",
+            x,
+            q.pressure,
+            q.stiffness * 1e-9,
+            q.real_area_fraction,
+            q.friction,
+            q.adhesion
+        );
+    }
+    let worst = analysis
+        .table_error()
+        .iter()
+        .map(|e| e.max_rel)
+        .fold(0.0, f64::max);
+    let (lo, hi) = analysis.table().range();
+    println!(
+        "  force table: h/σ {lo} … {hi} step {}, max relative error vs direct {worst:.1e}",
+        analysis.table().step()
+    );
+    if let Some(m) = &analysis.mtl {
+        let l = m.landmarks();
+        let g = |k: &str| l[k].as_f64().unwrap_or(f64::NAN);
+        println!(
+            "MTL lubricant ({}): μ0 = {} Pa·s, κ = {} nm, U = {} m/s, A_n = {} µm²",
+            l["lubricant"].as_str().unwrap_or("?"),
+            m.settings.limiting_viscosity,
+            m.settings.kappa * 1e9,
+            m.settings.speed,
+            m.settings.nominal_area * 1e12
+        );
+        println!(
+            "  k_P,max = {:.4e} N/m at h/σ = {:.4}; k_Q,max = {:.2} N/m",
+            g("k_P_max_N_per_m"),
+            g("h_star_max_stiffness"),
+            g("k_Q_max_N_per_m")
+        );
+        println!(
+            "  total stiffness there: normal {:.4e} N/m, lateral {:.4e} N/m",
+            g("k_normal_total_at_peak_N_per_m"),
+            g("k_lateral_total_at_peak_N_per_m")
+        );
+        println!(
+            "  lubricant bearing force: {:.4} mN at 3σ + 2κ, {:.4} mN at 3σ; Q_lub {:.4} µN",
+            g("P_lub_transition_end_mN"),
+            g("P_lub_onset_mN"),
+            g("Q_lub_transition_end_uN")
+        );
+    }
+    Ok(())
+}
+
 /// Six significant digits, scientific for very small or large magnitudes.
 fn fmt_number(x: f64) -> String {
     let a = x.abs();
@@ -682,9 +883,17 @@ fn cmd_validate(as_json: bool, only: &[String]) -> Result<()> {
                     (false, true) => "FAIL",
                     (false, false) => "differs",
                 };
+                // Tolerances span 1e-12 … 50 %: short forms, scientific when tiny.
+                let short = |x: f64| {
+                    if x != 0.0 && x.abs() < 1e-3 {
+                        format!("{x:.0e}")
+                    } else {
+                        format!("{}", (x * 1e4).round() / 1e4)
+                    }
+                };
                 let tol = match r.tolerance {
-                    crate::validate::Tolerance::Relative(t) => format!("±{}%", t * 100.0),
-                    crate::validate::Tolerance::Absolute(t) => format!("±{t}"),
+                    crate::validate::Tolerance::Relative(t) => format!("±{}%", short(t * 100.0)),
+                    crate::validate::Tolerance::Absolute(t) => format!("±{}", short(t)),
                 };
                 let unit = if r.unit == "1" {
                     String::new()

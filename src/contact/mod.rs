@@ -4,6 +4,7 @@
 //! dynamics. Pure functions; no I/O.
 
 pub mod isbl;
+pub mod lookup;
 pub mod mtl;
 pub mod table;
 pub mod validation;

@@ -90,10 +90,52 @@ impl ForceTable {
             ));
         }
         let n = ((x1 - x0) / dx).ceil() as usize + 1;
-        let samples: Vec<Result<Sample, ContactError>> = (0..n)
-            .into_par_iter()
-            .map(|i| f(x0 + i as f64 * dx))
-            .collect();
+        Self::from_nodes(channels, x0, dx, n, |i| f(x0 + i as f64 * dx))
+    }
+
+    /// Tabulate `f` on `intervals` equal steps from exactly `x0` to exactly `x1`, for a piece
+    /// of a curve whose derivative jumps at `x0` or `x1` (a regime boundary): the end nodes
+    /// are evaluated a hair (10⁻⁹ of the step) inside, so they carry the one-sided
+    /// derivatives of this piece.
+    pub fn build_between<F>(
+        channels: &[(&str, Interp)],
+        x0: f64,
+        x1: f64,
+        intervals: usize,
+        f: F,
+    ) -> Result<Self, ContactError>
+    where
+        F: Fn(f64) -> Result<Sample, ContactError> + Sync,
+    {
+        if !(x0.is_finite() && x1.is_finite() && x1 > x0 && (1..=10_000_000).contains(&intervals)) {
+            return Err(ContactError::parameter(
+                "table range",
+                format!("[{x0}, {x1}] in {intervals} steps"),
+                "must be finite with x1 > x0 and 1 to 10^7 steps",
+            ));
+        }
+        let dx = (x1 - x0) / intervals as f64;
+        let inset = 1e-9 * dx;
+        let n = intervals + 1;
+        Self::from_nodes(channels, x0, dx, n, |i| {
+            let x = if i == n - 1 { x1 } else { x0 + i as f64 * dx };
+            f(x.clamp(x0 + inset, x1 - inset))
+        })
+    }
+
+    /// Evaluate node `i` = 0..n with `node(i)` (in parallel) and store the channels.
+    fn from_nodes<F>(
+        channels: &[(&str, Interp)],
+        x0: f64,
+        dx: f64,
+        n: usize,
+        node: F,
+    ) -> Result<Self, ContactError>
+    where
+        F: Fn(usize) -> Result<Sample, ContactError> + Sync,
+    {
+        let samples: Vec<Result<Sample, ContactError>> =
+            (0..n).into_par_iter().map(&node).collect();
         let mut out: Vec<Channel> = channels
             .iter()
             .map(|(name, interp)| Channel {

@@ -22,6 +22,12 @@ pub enum Dimension {
     Pressure,
     /// Surface energy (N/m = J/m²).
     SurfaceEnergy,
+    /// Area, m².
+    Area,
+    /// Speed, m/s.
+    Velocity,
+    /// Dynamic viscosity, Pa·s.
+    Viscosity,
 }
 
 impl Dimension {
@@ -34,6 +40,9 @@ impl Dimension {
             Dimension::Sensitivity => "m/s/V",
             Dimension::Pressure => "Pa",
             Dimension::SurfaceEnergy => "N/m",
+            Dimension::Area => "m^2",
+            Dimension::Velocity => "m/s",
+            Dimension::Viscosity => "Pa s",
         }
     }
 }
@@ -52,6 +61,14 @@ fn surface_energy_exponent(unit: &str) -> Option<i32> {
     Some(match unit {
         "N/m" | "J/m^2" | "J/m²" => 0,
         "mN/m" | "mJ/m^2" | "mJ/m²" => -3,
+        _ => return None,
+    })
+}
+
+fn viscosity_exponent(unit: &str) -> Option<i32> {
+    Some(match unit {
+        "Pa s" | "Pa·s" | "Pa*s" => 0,
+        "mPa s" | "mPa·s" | "mPa*s" | "cP" => -3,
         _ => return None,
     })
 }
@@ -143,6 +160,13 @@ pub fn parse_quantity(text: &str, dim: Dimension) -> Result<f64, String> {
                 .and_then(length_exponent),
             Dimension::Pressure => pressure_exponent(unit),
             Dimension::SurfaceEnergy => surface_energy_exponent(unit),
+            Dimension::Area => unit
+                .strip_suffix("^2")
+                .or_else(|| unit.strip_suffix('²'))
+                .and_then(length_exponent)
+                .map(|e| 2 * e),
+            Dimension::Velocity => unit.strip_suffix("/s").and_then(length_exponent),
+            Dimension::Viscosity => viscosity_exponent(unit),
         }
         .ok_or_else(|| {
             format!(
@@ -155,6 +179,9 @@ pub fn parse_quantity(text: &str, dim: Dimension) -> Result<f64, String> {
                     Dimension::Sensitivity => "sensitivity",
                     Dimension::Pressure => "pressure",
                     Dimension::SurfaceEnergy => "surface-energy",
+                    Dimension::Area => "area",
+                    Dimension::Velocity => "speed",
+                    Dimension::Viscosity => "viscosity",
                 },
                 match dim {
                     Dimension::Length => "m, mm, um, nm, pm, A",
@@ -164,6 +191,9 @@ pub fn parse_quantity(text: &str, dim: Dimension) -> Result<f64, String> {
                     Dimension::Sensitivity => "m/s/V, mm/s/V, um/s/V",
                     Dimension::Pressure => "Pa, kPa, MPa, GPa",
                     Dimension::SurfaceEnergy => "N/m, mN/m, J/m^2, mJ/m^2",
+                    Dimension::Area => "m^2, mm^2, um^2",
+                    Dimension::Velocity => "m/s, mm/s, um/s",
+                    Dimension::Viscosity => "Pa s, mPa s",
                 }
             )
         })?
@@ -225,6 +255,21 @@ quantity_impls!(Pressure, Dimension::Pressure);
 #[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
 pub struct SurfaceEnergy(pub f64);
 quantity_impls!(SurfaceEnergy, Dimension::SurfaceEnergy);
+
+/// An area in m², written as a number or e.g. `"2500 um^2"`.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+pub struct Area(pub f64);
+quantity_impls!(Area, Dimension::Area);
+
+/// A speed in m/s, written as a number or e.g. `"200 um/s"`.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+pub struct Velocity(pub f64);
+quantity_impls!(Velocity, Dimension::Velocity);
+
+/// A dynamic viscosity in Pa·s, written as a number or e.g. `"310 mPa s"`.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+pub struct Viscosity(pub f64);
+quantity_impls!(Viscosity, Dimension::Viscosity);
 
 fn deserialize_quantity<'de, D: Deserializer<'de>>(d: D, dim: Dimension) -> Result<f64, D::Error> {
     #[derive(Deserialize)]
@@ -323,5 +368,32 @@ mod tests {
             parse_quantity("1.5e-3 mm", Dimension::Length).unwrap(),
             1.5e-6
         );
+    }
+
+    #[test]
+    fn area_speed_viscosity_normalise_to_si() {
+        assert_eq!(
+            parse_quantity("2500 um^2", Dimension::Area).unwrap(),
+            2500e-12
+        );
+        assert_eq!(
+            parse_quantity("2500 µm²", Dimension::Area).unwrap(),
+            2500e-12
+        );
+        assert_eq!(
+            parse_quantity("200 um/s", Dimension::Velocity).unwrap(),
+            200e-6
+        );
+        assert_eq!(parse_quantity("30 m/s", Dimension::Velocity).unwrap(), 30.0);
+        assert_eq!(
+            parse_quantity("310 mPa s", Dimension::Viscosity).unwrap(),
+            0.31
+        );
+        assert_eq!(
+            parse_quantity("0.31 Pa·s", Dimension::Viscosity).unwrap(),
+            0.31
+        );
+        assert!(parse_quantity("2500 um", Dimension::Area).is_err());
+        assert!(parse_quantity("3 m", Dimension::Velocity).is_err());
     }
 }

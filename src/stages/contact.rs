@@ -2,21 +2,28 @@
 //! the ISBL curves per unit nominal area against the solid separation h and h/σ, and the
 //! verified force table the dynamics interpolate. HDF5 + PNG + a summary row.
 
-use crate::contact::isbl::{FrictionLaw, IsblModel, IsblParams, SummitOffset, SurfaceEnergy};
-use crate::contact::table::{ChannelError, ForceTable, Interp, Sample};
+use super::contact_mtl::{self, MtlAnalysis, MtlKeys, MtlSettings};
+use crate::contact::isbl::{
+    surface_energy_at, FrictionLaw, IsblModel, IsblParams, SummitOffset, SurfaceEnergy,
+};
+use crate::contact::lookup::IsblLookup;
+use crate::contact::table::{ChannelError, ForceTable};
 use crate::contact::ContactError;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::plot;
 use crate::core::store::H5Out;
-use crate::core::units::{parse_quantity, Dimension, Length, PerArea, Pressure};
+use crate::core::units::{
+    parse_quantity, Area, Dimension, Length, PerArea, Pressure, Velocity, Viscosity,
+};
 use crate::error::{Error, Result};
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Bump when the numbers this stage produces change.
-pub const MODEL_VERSION: &str = "contact-1";
+pub const MODEL_VERSION: &str = "contact-2";
 
 fn default_set() -> String {
     "improved_2dof".into()
@@ -94,6 +101,22 @@ pub struct ContactConfig {
     pub h_star_max: f64,
     #[serde(default = "default_step")]
     pub step: f64,
+    /// Add the molecularly-thin-lubricant law on top of the ISBL solid: `reference`,
+    /// `humidity_temperature`, `more_bonding`, `larger_gyration_radius` (Fig. 3.22 cases).
+    #[serde(default)]
+    pub lubricant: Option<String>,
+    /// Nominal area the solid forces are scaled to for the MTL curves (default 2500 µm²).
+    #[serde(default)]
+    pub nominal_area: Option<Area>,
+    /// Sliding speed U of the MTL law (default 30 m/s).
+    #[serde(default)]
+    pub sliding_speed: Option<Velocity>,
+    /// Limiting viscosity μ0 (default: the lubricant case's).
+    #[serde(default)]
+    pub lubricant_viscosity: Option<Viscosity>,
+    /// Minimum liquid gap κ = radius of gyration (default: the lubricant case's).
+    #[serde(default)]
+    pub gyration_radius: Option<Length>,
 }
 
 impl ContactConfig {
@@ -113,6 +136,8 @@ pub struct ContactParams {
     pub h_star_min: f64,
     pub h_star_max: f64,
     pub step: f64,
+    /// The lubricant model, when `lubricant` is set.
+    pub mtl: Option<MtlSettings>,
 }
 
 /// A dissertation parameter set by name.
@@ -224,6 +249,16 @@ pub fn validate(cfg: &ContactConfig) -> std::result::Result<ContactParams, (Stri
             other => ("parameter_set".to_string(), other.to_string()),
         })?;
     }
+    let mtl = contact_mtl::resolve(
+        &MtlKeys {
+            lubricant: cfg.lubricant.clone(),
+            nominal_area: cfg.nominal_area,
+            sliding_speed: cfg.sliding_speed,
+            lubricant_viscosity: cfg.lubricant_viscosity,
+            gyration_radius: cfg.gyration_radius,
+        },
+        &p,
+    )?;
     Ok(ContactParams {
         interface: cfg.interface.clone(),
         parameter_set: cfg.parameter_set.clone(),
@@ -231,6 +266,7 @@ pub fn validate(cfg: &ContactConfig) -> std::result::Result<ContactParams, (Stri
         h_star_min: cfg.h_star_min,
         h_star_max: cfg.h_star_max,
         step: cfg.step,
+        mtl,
     })
 }
 
@@ -265,53 +301,28 @@ impl ContactParams {
             "h_star_min": self.h_star_min,
             "h_star_max": self.h_star_max,
             "step": self.step,
+            "lubricant": self.mtl.map(|m| m.canonical()),
         })
     }
 }
 
-/// Table channels and how each is interpolated.
-const CHANNELS: [(&str, Interp); 5] = [
-    ("P", Interp::Log),
-    ("k_c", Interp::Log),
-    ("A_r", Interp::Log),
-    ("Q", Interp::Log),
-    ("F_s", Interp::Log),
-];
-
-/// Table sample at h* = x: values and d/dh* (exact from the model, except dk_c/dh*, which is a
-/// fourth-order central difference of the exact k_c).
-fn table_sample(model: &IsblModel, x: f64) -> std::result::Result<Sample, ContactError> {
-    let sigma = model.params().sigma;
-    let p = model.at(x * sigma)?;
-    let delta = 1e-3;
-    let kc = |dx: f64| model.at((x + dx) * sigma).map(|q| q.contact_stiffness);
-    let dkc = (-kc(2.0 * delta)? + 8.0 * kc(delta)? - 8.0 * kc(-delta)? + kc(-2.0 * delta)?)
-        / (12.0 * delta);
-    Ok(Sample {
-        value: vec![
-            p.contact_pressure,
-            p.contact_stiffness,
-            p.real_area_fraction,
-            p.friction_stress,
-            p.adhesion,
-        ],
-        derivative: vec![
-            -p.contact_stiffness * sigma,
-            dkc,
-            -p.real_area_gradient * sigma,
-            -p.friction_stiffness * sigma,
-            p.adhesion_gradient * sigma,
-        ],
-    })
-}
-
-/// The computed stage: model, curves on the output grid, table and its verified accuracy.
+/// The computed stage: model, curves on the output grid, the verified table, and the
+/// lubricant curves when a lubricant is configured.
 pub struct ContactAnalysis {
     pub model: IsblModel,
     pub h_star: Vec<f64>,
     pub points: Vec<crate::contact::isbl::IsblPoint>,
-    pub table: ForceTable,
-    pub table_error: Vec<ChannelError>,
+    pub lookup: Arc<IsblLookup>,
+    pub mtl: Option<MtlAnalysis>,
+}
+
+impl ContactAnalysis {
+    pub fn table(&self) -> &ForceTable {
+        self.lookup.table()
+    }
+    pub fn table_error(&self) -> &[ChannelError] {
+        self.lookup.verified_error()
+    }
 }
 
 /// Build the model, the curves and the table (the table covers the spec's §8 range
@@ -325,30 +336,22 @@ pub fn analyse(params: &IsblParams, c: &ContactParams) -> Result<ContactAnalysis
         .par_iter()
         .map(|&x| model.at(x * params.sigma))
         .collect::<std::result::Result<Vec<_>, _>>()?;
-    let top = (3.0 + params.lubricant_thickness / params.sigma + 10.0).max(c.h_star_max);
-    let lo = c.h_star_min.min(-4.0);
-    let table = ForceTable::build(&CHANNELS, lo, top, c.step, |x| table_sample(&model, x))?;
-    // Accuracy where the curves matter (values above 1e-12 of their maximum).
-    let values_only = |x: f64| -> std::result::Result<Sample, ContactError> {
-        let p = model.at(x * params.sigma)?;
-        Ok(Sample {
-            value: vec![
-                p.contact_pressure,
-                p.contact_stiffness,
-                p.real_area_fraction,
-                p.friction_stress,
-                p.adhesion,
-            ],
-            derivative: vec![0.0; 5],
-        })
+    let lookup = Arc::new(IsblLookup::build(
+        model,
+        c.step,
+        c.h_star_min,
+        c.h_star_max,
+    )?);
+    let mtl = match &c.mtl {
+        Some(settings) => Some(contact_mtl::analyse(settings, &lookup)?),
+        None => None,
     };
-    let table_error = table.verify(values_only, 1, 1e-12)?;
     Ok(ContactAnalysis {
         model,
         h_star,
         points,
-        table,
-        table_error,
+        lookup,
+        mtl,
     })
 }
 
@@ -371,8 +374,18 @@ pub fn summary_row(a: &ContactAnalysis, c: &ContactParams) -> Map<String, Value>
         json!(at3.map(|q| q.contact_pressure)),
     );
     m.insert("F_s_at_3sigma_Pa".into(), json!(at3.map(|q| q.adhesion)));
-    let worst = a.table_error.iter().map(|e| e.max_rel).fold(0.0, f64::max);
+    let worst = a
+        .table_error()
+        .iter()
+        .map(|e| e.max_rel)
+        .fold(0.0, f64::max);
     m.insert("table_max_rel_error".into(), json!(worst));
+    match &a.mtl {
+        Some(mtl) => m.extend(mtl.landmarks()),
+        None => {
+            m.insert("lubricant".into(), Value::Null);
+        }
+    }
     m
 }
 
@@ -394,9 +407,10 @@ pub fn report_json(a: &ContactAnalysis, c: &ContactParams) -> Value {
             "n_c": p.contacts_per_area,
         })).collect::<Vec<_>>(),
         "table": {
-            "h_star_range": a.table.range(), "step": a.table.step(),
-            "max_rel_error": a.table_error.iter().map(|e| (e.name.clone(), json!(e.max_rel))).collect::<Map<_, _>>(),
+            "h_star_range": a.table().range(), "step": a.table().step(),
+            "max_rel_error": a.table_error().iter().map(|e| (e.name.clone(), json!(e.max_rel))).collect::<Map<_, _>>(),
         },
+        "mtl": a.mtl.as_ref().map(|m| m.report()),
     })
 }
 
@@ -539,13 +553,13 @@ pub fn write_outputs(
         out.write_scalar(&g, name, v, u, ln)?;
     }
     let g = out.group("contact/table", None)?;
-    let (lo, hi) = a.table.range();
+    let (lo, hi) = a.table().range();
     out.write_scalar(&g, "h_star_min", lo, "1", "first node")?;
     out.write_scalar(&g, "h_star_max", hi, "1", "last node")?;
-    out.write_scalar(&g, "step", a.table.step(), "1", "node spacing in h/σ")?;
-    let names: Vec<&str> = a.table_error.iter().map(|e| e.name.as_str()).collect();
+    out.write_scalar(&g, "step", a.table().step(), "1", "node spacing in h/σ")?;
+    let names: Vec<&str> = a.table_error().iter().map(|e| e.name.as_str()).collect();
     out.attr_str_list(&g, "channels", &names)?;
-    let errs: Vec<f64> = a.table_error.iter().map(|e| e.max_rel).collect();
+    let errs: Vec<f64> = a.table_error().iter().map(|e| e.max_rel).collect();
     out.write_1d(
         &g,
         "max_rel_error",
@@ -554,6 +568,9 @@ pub fn write_outputs(
         "interpolation error vs direct evaluation (midpoints and quarter points), per channel",
     )?;
     out.write_string(&entry, "inputs", &params_json(a.model.params()).to_string())?;
+    if let Some(mtl) = &a.mtl {
+        mtl.write_hdf5(&out)?;
+    }
     out.finish()?;
 
     if let Some(dir) = plot_dir {
@@ -591,6 +608,30 @@ pub fn write_outputs(
             ],
             &[],
         )?;
+        let params = a.model.params();
+        if matches!(params.surface_energy, SurfaceEnergy::Variable { .. }) {
+            // Fig. 3.18: Δγ against the (dimensionless) lubricant gap, held at its maximum
+            // below ε, and the total adhesion it produces.
+            let energy: Vec<(f64, f64)> = a
+                .h_star
+                .iter()
+                .filter(|x| **x >= 0.0)
+                .map(|x| (*x, surface_energy_at(params, x * params.sigma) * 1e3))
+                .collect();
+            plot::stacked_png(
+                &dir.join("surface_energy.png"),
+                "Variable surface energy and total adhesion — Fig. 3.18 (shaded: gap < ε)",
+                "h/σ",
+                &[
+                    ("Δγ (mN/m) vs gap/σ", energy),
+                    ("adhesion F_s (Pa)", series(|p| p.adhesion)),
+                ],
+                &[(0.0, params.lj_spacing / params.sigma)],
+            )?;
+        }
+        if let Some(mtl) = &a.mtl {
+            mtl.plots(dir)?;
+        }
     }
     Ok(())
 }
@@ -692,15 +733,15 @@ mod tests {
         let cfg = ContactConfig::defaults();
         let c = validate(&cfg).unwrap();
         let a = analyse(&c.params, &c).unwrap();
-        for e in &a.table_error {
+        for e in a.table_error() {
             assert!(e.max_rel < 1e-4, "{e:?}");
         }
         let sigma = c.params.sigma;
         let t = c.params.lubricant_thickness / sigma;
         for x in [3.0, 3.0 + t, 0.0, -3.5, 10.0] {
             for ch in 0..5 {
-                let below = a.table.eval(ch, x - 1e-7).unwrap();
-                let above = a.table.eval(ch, x + 1e-7).unwrap();
+                let below = a.table().eval(ch, x - 1e-7).unwrap();
+                let above = a.table().eval(ch, x + 1e-7).unwrap();
                 assert!(below.is_finite() && above.is_finite());
                 assert!(((below - above) / below).abs() < 1e-5, "{ch} at {x}");
             }
@@ -709,7 +750,7 @@ mod tests {
         for ch in [0, 2, 3, 4] {
             let mut prev = f64::INFINITY;
             for k in 0..2000 {
-                let y = a.table.eval(ch, -3.9 + k as f64 * 0.0087).unwrap();
+                let y = a.table().eval(ch, -3.9 + k as f64 * 0.0087).unwrap();
                 assert!(y <= prev, "channel {ch} at step {k}");
                 prev = y;
             }

@@ -1,6 +1,7 @@
 //! Stage implementations, one module per stage kind, and the registry that turns a parsed
 //! `pipeline.toml` into stage instances.
 pub mod contact;
+pub mod contact_mtl;
 pub mod dmw;
 pub mod interface;
 pub mod surfaces;

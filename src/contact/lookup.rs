@@ -1,0 +1,257 @@
+//! What the dynamics call in their inner loop: the ISBL curves per unit nominal area,
+//! tabulated once per interface and looked up in O(1) with the out-of-range rules of
+//! contact-isbl.md §8 item 6, and the same table as the solid of the MTL law.
+
+use super::isbl::{IsblModel, IsblPoint};
+use super::mtl::rough::{SolidContact, SolidResponse};
+use super::table::{ChannelError, ForceTable, Interp, Sample};
+use super::ContactError;
+use std::sync::Arc;
+
+/// ISBL table channels (per unit nominal area, abscissa h* = h/σ) and how each is
+/// interpolated. `k_fr` and `dF_s/dh` are the slopes of `Q` and `F_s`.
+pub const ISBL_CHANNELS: [(&str, Interp); 5] = [
+    ("P", Interp::Log),
+    ("k_c", Interp::Log),
+    ("A_r", Interp::Log),
+    ("Q", Interp::Log),
+    ("F_s", Interp::Log),
+];
+const P: usize = 0;
+const KC: usize = 1;
+const AR: usize = 2;
+const Q: usize = 3;
+const FS: usize = 4;
+
+/// Where a lookup was answered from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LookupRange {
+    /// Interpolated in the table.
+    Table,
+    /// Above the table: the contact terms are zero and `F_s` follows the far-tail formula.
+    AboveTable,
+    /// Below the table (deeper than h* = −4): evaluated directly. The dissertation never
+    /// simulates this deep an interference, so callers should flag the state.
+    BelowTable,
+}
+
+/// ISBL forces per unit nominal area at one separation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IsblForces {
+    /// Contact pressure `P` [Pa].
+    pub pressure: f64,
+    /// Contact stiffness `k_c = −dP/dh` [Pa/m].
+    pub stiffness: f64,
+    /// Real area over nominal area `A_r/A_n` [1].
+    pub real_area_fraction: f64,
+    /// Static friction per unit area `Q` [Pa].
+    pub friction: f64,
+    /// `k_fr = −dQ/dh` [Pa/m].
+    pub friction_stiffness: f64,
+    /// Adhesion per unit area `F_s` (magnitude, pulling the surfaces together) [Pa].
+    pub adhesion: f64,
+    /// `dF_s/dh` [Pa/m] (negative).
+    pub adhesion_gradient: f64,
+    pub range: LookupRange,
+}
+
+/// Value and exact h*-derivative of every ISBL channel at h* = x; `dk_c/dh*` is a
+/// fourth-order central difference of the exact `k_c` (the model has no second derivative).
+fn isbl_sample(model: &IsblModel, x: f64) -> Result<Sample, ContactError> {
+    let sigma = model.params().sigma;
+    let p = model.at(x * sigma)?;
+    let delta = 1e-3;
+    let kc = |dx: f64| model.at((x + dx) * sigma).map(|q| q.contact_stiffness);
+    let dkc = (-kc(2.0 * delta)? + 8.0 * kc(delta)? - 8.0 * kc(-delta)? + kc(-2.0 * delta)?)
+        / (12.0 * delta);
+    Ok(Sample {
+        value: isbl_values(&p),
+        derivative: vec![
+            -p.contact_stiffness * sigma,
+            dkc,
+            -p.real_area_gradient * sigma,
+            -p.friction_stiffness * sigma,
+            p.adhesion_gradient * sigma,
+        ],
+    })
+}
+
+fn isbl_values(p: &IsblPoint) -> Vec<f64> {
+    vec![
+        p.contact_pressure,
+        p.contact_stiffness,
+        p.real_area_fraction,
+        p.friction_stress,
+        p.adhesion,
+    ]
+}
+
+/// The ISBL model of one interface, tabulated on h* ∈ [−4, 3 + t/σ + 10] (or wider).
+#[derive(Debug, Clone)]
+pub struct IsblLookup {
+    model: IsblModel,
+    table: ForceTable,
+    error: Vec<ChannelError>,
+    inv_sigma: f64,
+    /// Far-tail adhesion `F_s ≈ a·(ε/D)²·(1 + 3σ_s²/D²)`, `D = h − y_s − t + ε`
+    /// (contact-isbl.md §6.4), scaled so it meets the table at its last node.
+    tail_scale: f64,
+}
+
+impl IsblLookup {
+    /// Tabulate `model` with node step `step` (in h*) over the spec's range widened to
+    /// `[h_star_min, h_star_max]`, and verify the table against direct evaluation at the
+    /// midpoints and quarter points (values above 10⁻¹² of each channel's peak).
+    pub fn build(
+        model: IsblModel,
+        step: f64,
+        h_star_min: f64,
+        h_star_max: f64,
+    ) -> Result<Self, ContactError> {
+        let p = *model.params();
+        let top = (3.0 + p.lubricant_thickness / p.sigma + 10.0).max(h_star_max);
+        let lo = h_star_min.min(-4.0);
+        let table = ForceTable::build(&ISBL_CHANNELS, lo, top, step, |x| isbl_sample(&model, x))?;
+        let values_only = |x: f64| -> Result<Sample, ContactError> {
+            Ok(Sample {
+                value: isbl_values(&model.at(x * p.sigma)?),
+                derivative: vec![0.0; ISBL_CHANNELS.len()],
+            })
+        };
+        let error = table.verify(values_only, 1, 1e-12)?;
+        let (_, last) = table.range();
+        let at_last = table.eval(FS, last).unwrap_or(0.0);
+        let shape = Self::tail_shape(&model, last * p.sigma).0;
+        let tail_scale = if shape > 0.0 { at_last / shape } else { 0.0 };
+        Ok(Self {
+            inv_sigma: 1.0 / p.sigma,
+            model,
+            table,
+            error,
+            tail_scale,
+        })
+    }
+
+    /// `(ε/D)²(1 + 3σ_s²/D²)` and its h-derivative.
+    fn tail_shape(model: &IsblModel, h: f64) -> (f64, f64) {
+        let (p, dv) = (model.params(), model.derived());
+        let eps = p.lj_spacing;
+        let d = h - dv.summit_offset - p.lubricant_thickness + eps;
+        if d <= 0.0 {
+            return (0.0, 0.0);
+        }
+        let s2 = dv.summit_sigma * dv.summit_sigma;
+        let r = eps / d;
+        let value = r * r * (1.0 + 3.0 * s2 / (d * d));
+        let slope = -2.0 * r * r / d - 12.0 * r * r * s2 / (d * d * d);
+        (value, slope)
+    }
+
+    /// Forces per unit nominal area at solid separation `h` [m].
+    pub fn at(&self, h: f64) -> Result<IsblForces, ContactError> {
+        if !h.is_finite() {
+            return Err(ContactError::Numerical(format!(
+                "ISBL lookup at a non-finite separation {h}"
+            )));
+        }
+        let x = h * self.inv_sigma;
+        let (lo, hi) = self.table.range();
+        if x > hi {
+            let (shape, slope) = Self::tail_shape(&self.model, h);
+            return Ok(IsblForces {
+                pressure: 0.0,
+                stiffness: 0.0,
+                real_area_fraction: 0.0,
+                friction: 0.0,
+                friction_stiffness: 0.0,
+                adhesion: self.tail_scale * shape,
+                adhesion_gradient: self.tail_scale * slope,
+                range: LookupRange::AboveTable,
+            });
+        }
+        if x < lo {
+            let p = self.model.at(h)?;
+            return Ok(IsblForces {
+                pressure: p.contact_pressure,
+                stiffness: p.contact_stiffness,
+                real_area_fraction: p.real_area_fraction,
+                friction: p.friction_stress,
+                friction_stiffness: p.friction_stiffness,
+                adhesion: p.adhesion,
+                adhesion_gradient: p.adhesion_gradient,
+                range: LookupRange::BelowTable,
+            });
+        }
+        let t = &self.table;
+        // In range by the checks above, so every channel answers.
+        let get = |c| t.eval_with_slope(c, x).unwrap_or((0.0, 0.0));
+        let (pressure, _) = get(P);
+        let (stiffness, _) = get(KC);
+        let (real_area_fraction, _) = get(AR);
+        let (friction, dq) = get(Q);
+        let (adhesion, dfs) = get(FS);
+        Ok(IsblForces {
+            pressure,
+            stiffness,
+            real_area_fraction,
+            friction,
+            friction_stiffness: -dq * self.inv_sigma,
+            adhesion,
+            adhesion_gradient: dfs * self.inv_sigma,
+            range: LookupRange::Table,
+        })
+    }
+
+    pub fn model(&self) -> &IsblModel {
+        &self.model
+    }
+
+    pub fn table(&self) -> &ForceTable {
+        &self.table
+    }
+
+    /// Worst interpolation error per channel against direct evaluation.
+    pub fn verified_error(&self) -> &[ChannelError] {
+        &self.error
+    }
+
+    /// The ISBL model as the MTL law's solid, scaled to a nominal area `A_n` [m²]: forces in N,
+    /// stiffnesses in N/m, evaluated from the table (direct below it).
+    pub fn as_solid(self: &Arc<Self>, nominal_area: f64) -> ScaledIsbl {
+        ScaledIsbl {
+            lookup: Arc::clone(self),
+            nominal_area,
+        }
+    }
+}
+
+/// [`IsblLookup`] times a nominal area, as a [`SolidContact`] for the MTL law.
+///
+/// `MtlInterface<ScaledIsbl>` is the fast path of the combined lubricant + solid model: the
+/// MTL law is closed-form per `h` once its anchors are computed (contact-mtl.md §7), so only
+/// the solid needs a table; no cubic straddles the stiffness jumps at `3σ + 2κ` and `3σ + t`.
+#[derive(Debug, Clone)]
+pub struct ScaledIsbl {
+    lookup: Arc<IsblLookup>,
+    nominal_area: f64,
+}
+
+impl SolidContact for ScaledIsbl {
+    fn response(&self, separation: f64) -> SolidResponse {
+        // Separations come from the MTL law's own grid (finite), so a failure here means a
+        // broken model; zero keeps the MTL arithmetic finite and the table verification
+        // reports the mismatch.
+        let f = self.lookup.at(separation).ok();
+        let a = self.nominal_area;
+        f.map(|f| SolidResponse {
+            normal: f.pressure * a,
+            friction: f.friction * a,
+            normal_stiffness: f.stiffness * a,
+            friction_stiffness: f.friction_stiffness * a,
+        })
+        .unwrap_or_default()
+    }
+}
+
+#[cfg(test)]
+mod tests;
