@@ -670,3 +670,16 @@ fn validation_names_the_offending_parameter() {
     assert!(geo.bulge_poc(f64::NAN, 100e-6, 1.0 * NM).is_err());
     assert!(geo.nominal_contact_area(5.0 * NM, -NM, 100e-6).is_err());
 }
+
+/// Roll AB stiffness (§3.1, §11.3): `k_l = J_φ (2π·100 kHz)² − k_φ = 2.090e-2 N·m/rad` with
+/// `J_φ = m (l_w² + l_t²)/12 = 5.306e-14 kg·m²` and `k_φ = 5e-5 N·m/rad` (0.1 %).
+#[test]
+fn roll_stiffness() {
+    use super::air_bearing::roll_stiffness_from_frequency;
+    let s = initial_2dof().slider;
+    let j_roll = s.mass * (s.width * s.width + s.thickness * s.thickness) / 12.0;
+    assert_rel("J_φ", j_roll, 5.306e-14, 1e-3);
+    let k_l = roll_stiffness_from_frequency(j_roll, 100e3, 5e-5).unwrap();
+    assert_rel("k_l", k_l, 2.090e-2, 1e-3);
+    assert!(roll_stiffness_from_frequency(j_roll, 1.0, 5e-5).is_err());
+}
