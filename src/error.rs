@@ -14,6 +14,8 @@ pub enum Error {
     Contact(#[from] crate::contact::ContactError),
     #[error(transparent)]
     Signal(#[from] crate::signal::SignalError),
+    #[error(transparent)]
+    Dynamics(#[from] crate::dynamics::DynamicsError),
     #[error("{}", path.display())]
     Io {
         path: PathBuf,
