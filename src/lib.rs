@@ -7,6 +7,7 @@ pub mod cli;
 pub mod contact;
 pub mod core;
 pub mod dmw;
+pub mod dynamics;
 pub mod error;
 pub mod numerics;
 pub mod samples;
