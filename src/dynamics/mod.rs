@@ -18,6 +18,7 @@
 
 pub mod air_bearing;
 pub mod geometry;
+pub mod metrics;
 pub mod params;
 
 #[cfg(test)]

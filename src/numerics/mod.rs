@@ -1,2 +1,3 @@
-//! Small numeric kernels shared by stages (FFT helpers, ...).
+//! Small numeric kernels shared by stages (FFT helpers, the ODE integrator, ...).
 pub mod fft2;
+pub mod ode;
