@@ -202,6 +202,22 @@ impl IsblLookup {
         })
     }
 
+    /// The separation `h` [m] at which the contact pressure equals `pressure` [Pa]
+    /// (`P⁻¹`, monotone inversion of the table; dynamics.md §4): `None` for `pressure ≤ 0`
+    /// or NaN; a pressure above the table's largest is clamped to its deepest node.
+    pub fn separation_for_pressure(&self, pressure: f64) -> Option<f64> {
+        if pressure.is_nan() || pressure <= 0.0 {
+            return None;
+        }
+        let (lo, hi) = self.table.range();
+        let x = match self.table.invert_decreasing(P, pressure) {
+            Some(x) => x,
+            None if pressure >= self.table.eval(P, lo)? => lo,
+            None => hi,
+        };
+        Some(x / self.inv_sigma)
+    }
+
     pub fn model(&self) -> &IsblModel {
         &self.model
     }

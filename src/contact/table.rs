@@ -248,6 +248,65 @@ impl ForceTable {
         self.eval_with_slope(c, x).map(|(v, _)| v)
     }
 
+    /// The abscissa where a channel that decreases strictly over the table takes the value
+    /// `y`: binary search over the nodes, then Newton on the cell's cubic, safeguarded by
+    /// bisection. `None` for an unknown channel or a `y` outside the tabulated values (the
+    /// caller clamps). Used for `P⁻¹` (friction from a dynamic contact force, dynamics.md §4).
+    pub fn invert_decreasing(&self, c: usize, y: f64) -> Option<f64> {
+        let ch = self.channels.get(c)?;
+        let target = match ch.interp {
+            Interp::Log if y > 0.0 => y.ln(),
+            Interp::Log => return None,
+            Interp::Linear => y,
+        };
+        let v = &ch.value;
+        if !(target <= v[0] && target >= v[self.n - 1]) {
+            return None;
+        }
+        // Largest i with v[i] ≥ target (v decreasing).
+        let (mut lo, mut hi) = (0usize, self.n - 1);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if v[mid] >= target {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let i = lo;
+        let cell = |s: f64| hermite_segment(v[i], v[i + 1], ch.slope_dx[i], ch.slope_dx[i + 1], s);
+        let (mut a, mut b) = (0.0f64, 1.0f64);
+        let span = v[i] - v[i + 1];
+        let mut s = if span > 0.0 {
+            ((v[i] - target) / span).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        for _ in 0..40 {
+            let (f, df) = cell(s);
+            let r = f - target;
+            if r.abs() <= 1e-14 * target.abs().max(1e-300) {
+                break;
+            }
+            // Keep the bracket: the cell's cubic decreases from v[i] to v[i+1].
+            if r > 0.0 {
+                a = s;
+            } else {
+                b = s;
+            }
+            let newton = if df < 0.0 { s - r / df } else { f64::NAN };
+            s = if newton > a && newton < b {
+                newton
+            } else {
+                0.5 * (a + b)
+            };
+            if b - a < 1e-15 {
+                break;
+            }
+        }
+        Some(self.x0 + (i as f64 + s) * self.dx)
+    }
+
     /// Largest node value of a channel (for relative floors).
     fn peak(&self, c: usize) -> f64 {
         let ch = &self.channels[c];
@@ -402,6 +461,38 @@ mod tests {
             assert!(y < prev, "{k}");
             prev = y;
         }
+    }
+
+    #[test]
+    fn inverse_of_a_decreasing_channel() {
+        let f = |x: f64| -> Result<Sample, ContactError> {
+            let y = (-x).exp() / (1.0 + x * x);
+            let dy = -y - y * 2.0 * x / (1.0 + x * x);
+            Ok(Sample {
+                value: vec![y, -x],
+                derivative: vec![dy, -1.0],
+            })
+        };
+        let t = ForceTable::build(
+            &[("p", Interp::Log), ("q", Interp::Linear)],
+            0.0,
+            10.0,
+            0.05,
+            f,
+        )
+        .unwrap();
+        for k in 0..=400 {
+            let x = k as f64 * 0.025;
+            for c in 0..2 {
+                let y = t.eval(c, x).unwrap();
+                let back = t.invert_decreasing(c, y).unwrap();
+                assert!((back - x).abs() < 1e-10, "{c}: {x} → {y} → {back}");
+            }
+        }
+        assert!(t.invert_decreasing(0, 2.0).is_none());
+        assert!(t.invert_decreasing(0, -1.0).is_none());
+        assert!(t.invert_decreasing(0, f64::NAN).is_none());
+        assert!(t.invert_decreasing(5, 0.5).is_none());
     }
 
     #[test]

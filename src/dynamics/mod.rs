@@ -20,6 +20,7 @@ pub mod air_bearing;
 pub mod geometry;
 pub mod metrics;
 pub mod params;
+pub mod two_dof;
 
 #[cfg(test)]
 mod tests;

@@ -1,0 +1,667 @@
+//! One 2-DOF slider case (dynamics.md §4, §5.1, §6, §10): a parameter set, a constant TFC
+//! actuation, an interface (the contact stage's ISBL table) and a DMW track → time histories of
+//! the bulge spacing, clearance and interfacial forces, sampled uniformly. Pure: no I/O.
+//!
+//! State `y = [z, ϑ, ż, ϑ̇]` (heave of the COM and pitch offset from the nominal state). Per
+//! right-hand-side evaluation: DMW under the LE, TE and POC (one track, transit delay), the AB
+//! forcing of eqs. 2.12–2.13, the closed-form POC at the current pitch, the contact force of
+//! eq. 2.16 with friction and real area from `P⁻¹`, ISBL adhesion, and the generalised forces.
+
+use super::air_bearing::{AirBearing2Dof, DmwAtSprings, HeavePitchState, AB_LOSS_FLYING_HEIGHT};
+use super::geometry::{ContactCriterion, Slider2DofGeometry};
+use super::metrics::{case_metrics, CaseMetrics, CaseParams, CaseSeries, ContactSeries};
+use super::params::{Model2Dof, ModelVariant};
+use super::DynamicsError;
+use crate::contact::lookup::IsblLookup;
+use crate::numerics::ode::{integrate_capped, OdeError, OdeOptions, OdeStats, Sampling};
+use crate::signal::resample::HermiteTrack;
+use nalgebra::{Matrix2, Vector2};
+
+/// Reading of eq. 2.16 (dynamics.md §4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ContactForceForm {
+    /// `F_c = A_n k_c(s)·(s_c − s) − c_c ṡ`: the contact stiffness times the interference
+    /// (faithful to the surviving tokens; default).
+    InterferenceTangent,
+    /// `F_c = A_n P(s) − c_c ṡ`.
+    StaticCurve,
+}
+
+/// Time integration (dynamics.md §10).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Integrator {
+    /// Dormand–Prince 5(4), `rtol`, with the step capped at `contact_max_step` while the POC is
+    /// in contact and shortened on approach so a step never jumps deep into contact.
+    Dopri5 {
+        rtol: f64,
+        contact_max_step: f64,
+        max_step: f64,
+    },
+    /// The same tableau at a fixed step (the dissertation's "small fixed step" reproduction).
+    Rk5Fixed { step: f64 },
+}
+
+impl Integrator {
+    pub fn recommended() -> Self {
+        Integrator::Dopri5 {
+            rtol: 1e-8,
+            contact_max_step: 1e-8,
+            // Inside DP5's stability limit for the 300 kHz mode (|hλ| ≲ 3.3 → 1.7 µs), so a
+            // quiet free flight cannot grow the step into instability.
+            max_step: 1e-6,
+        }
+    }
+}
+
+/// Options of one case.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SimOptions {
+    /// Simulated time [s] (2 ms).
+    pub duration: f64,
+    /// Output sampling step [s] (0.25 µs = the DMW rate).
+    pub output_step: f64,
+    pub contact_force: ContactForceForm,
+    pub integrator: Integrator,
+    /// The DMW under a point is the bulge's delayed by its distance along x over U (§6).
+    pub transit_delay: bool,
+    /// Periodic extension of a DMW record shorter than the run (warned by the caller).
+    pub wrap_dmw: bool,
+    /// Initial `[z, ϑ, ż, ϑ̇]` relative to the nominal state (§5.4: zero).
+    pub initial_state: [f64; 4],
+}
+
+impl Default for SimOptions {
+    fn default() -> Self {
+        SimOptions {
+            duration: 2e-3,
+            output_step: 0.25e-6,
+            contact_force: ContactForceForm::InterferenceTangent,
+            integrator: Integrator::recommended(),
+            transit_delay: true,
+            wrap_dmw: false,
+            initial_state: [0.0; 4],
+        }
+    }
+}
+
+/// A DMW displacement track and its velocity, uniformly sampled from t = 0.
+#[derive(Debug, Clone, Copy)]
+pub struct DmwInput<'a> {
+    pub displacement: &'a [f64],
+    pub velocity: &'a [f64],
+    pub sample_rate: f64,
+}
+
+/// Everything the interface gives at one instant.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct InterfaceState {
+    /// Solid spacing of the bulge POC above the local disk surface `s` [m].
+    pub spacing: f64,
+    /// `ṡ` [m/s].
+    pub spacing_rate: f64,
+    /// Clearance `s − s_c` (`s_c` = 3σ improved, nσ initial) [m]; negative in solid contact.
+    pub clearance: f64,
+    /// Dynamic contact force `F_c ≥ 0` [N].
+    pub contact_force: f64,
+    /// Friction `Q ≥ 0` [N] (acts along −X).
+    pub friction: f64,
+    /// Adhesion `F_s ≥ 0` [N] (pulls the slider down).
+    pub adhesion: f64,
+    /// Real contact area [m²].
+    pub real_area: f64,
+    /// DMW displacement under the POC [m].
+    pub disk_displacement: f64,
+    /// TE spacing above the local disk surface [m].
+    pub trailing_edge_spacing: f64,
+    /// The damper would have pulled (`F_c` clipped to 0).
+    pub clipped: bool,
+    /// World offset COM → POC, x and z [m] (lever arm).
+    pub lever_x: f64,
+    pub lever_z: f64,
+}
+
+/// Sampled time histories of one case (SI).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CaseHistory {
+    /// Sampling step [s]; sample k is at `k·dt`.
+    pub dt: f64,
+    pub heave: Vec<f64>,
+    pub pitch_offset: Vec<f64>,
+    pub heave_rate: Vec<f64>,
+    pub pitch_rate: Vec<f64>,
+    pub spacing: Vec<f64>,
+    pub clearance: Vec<f64>,
+    /// Flying height as the dissertation reports it (`s − T0` improved, `h = s` initial).
+    pub flying_height: Vec<f64>,
+    pub contact_force: Vec<f64>,
+    pub friction: Vec<f64>,
+    pub adhesion: Vec<f64>,
+    pub real_area: Vec<f64>,
+    pub disk_displacement: Vec<f64>,
+    pub trailing_edge_spacing: Vec<f64>,
+    /// Samples where the contact damper would have pulled and `F_c` was clipped to 0.
+    pub clipped_samples: usize,
+    pub stats: OdeStats,
+    /// Nominal contact area of the bulge at this actuation [m²].
+    pub nominal_area: f64,
+}
+
+impl CaseHistory {
+    /// Steady-state metrics (dynamics.md §8).
+    pub fn metrics(&self, params: &CaseParams) -> Result<CaseMetrics, DynamicsError> {
+        let series = CaseSeries {
+            t0_s: 0.0,
+            dt_s: self.dt,
+            fh_m: &self.flying_height,
+            clearance_m: &self.clearance,
+            contact: Some(ContactSeries {
+                contact_force_n: &self.contact_force,
+                friction_n: &self.friction,
+                real_area_m2: &self.real_area,
+                adhesion_n: Some(&self.adhesion),
+            }),
+        };
+        case_metrics(&series, params).map_err(|e| DynamicsError::Numerical(e.to_string()))
+    }
+
+    pub fn len(&self) -> usize {
+        self.spacing.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.spacing.is_empty()
+    }
+}
+
+/// Why a right-hand-side evaluation stopped the integration.
+#[derive(Debug, Clone, PartialEq)]
+enum Stop {
+    Model(DynamicsError),
+}
+
+/// One prepared case: every constant of the right-hand side computed once.
+pub struct TwoDofCase<'a> {
+    model: Model2Dof,
+    actuation: f64,
+    isbl: &'a IsblLookup,
+    dmw: Option<HermiteTrack<'a>>,
+    dmw_duration: f64,
+    options: SimOptions,
+    geometry: Slider2DofGeometry,
+    air_bearing: AirBearing2Dof,
+    inverse_mass: Matrix2<f64>,
+    damping: Matrix2<f64>,
+    stiffness: Matrix2<f64>,
+    nominal_area: f64,
+    sigma: f64,
+    bonded_lubricant: f64,
+    contact_threshold: f64,
+    contact_damping: f64,
+    /// DMW time shift of the LE, TE (and the bulge, 0) and the record offset of t = 0 [s].
+    delay_front: f64,
+    delay_rear: f64,
+    bulge_x: f64,
+    record_offset: f64,
+    criterion: ContactCriterion,
+}
+
+fn parameter(name: &str, value: f64, why: impl Into<String>) -> DynamicsError {
+    DynamicsError::parameter(name, value, why)
+}
+
+impl<'a> TwoDofCase<'a> {
+    /// Prepare a case. The interface's σ and t replace the model's (the contact stage owns
+    /// them); the DMW record must cover the run plus the transit delays unless `wrap_dmw`.
+    pub fn new(
+        model: &Model2Dof,
+        actuation: f64,
+        isbl: &'a IsblLookup,
+        dmw: Option<DmwInput<'a>>,
+        options: SimOptions,
+    ) -> Result<Self, DynamicsError> {
+        let mut model = *model;
+        let ip = isbl.model().params();
+        model.interface.sigma = ip.sigma;
+        model.interface.lubricant_thickness = ip.lubricant_thickness;
+        model.validate()?;
+        if !(actuation.is_finite() && actuation >= 0.0 && actuation <= model.max_actuation) {
+            return Err(parameter(
+                "actuation h_TFC (m)",
+                actuation,
+                format!(
+                    "must lie in [0, {} nm], the model's actuation range",
+                    model.max_actuation * 1e9
+                ),
+            ));
+        }
+        let o = &options;
+        if let Some(v) = o.initial_state.iter().find(|v| !v.is_finite()) {
+            return Err(parameter("initial state", *v, "must be finite"));
+        }
+        if !(o.duration.is_finite() && o.duration > 0.0 && o.duration <= 1.0) {
+            return Err(parameter(
+                "duration (s)",
+                o.duration,
+                "must lie in (0, 1] s",
+            ));
+        }
+        if !(o.output_step.is_finite() && o.output_step > 0.0 && o.output_step <= o.duration) {
+            return Err(parameter(
+                "output step (s)",
+                o.output_step,
+                "must be > 0 and at most the duration",
+            ));
+        }
+        if o.duration / o.output_step > 5e7 {
+            return Err(parameter(
+                "output step (s)",
+                o.output_step,
+                "gives more than 5·10⁷ samples",
+            ));
+        }
+        match o.integrator {
+            Integrator::Dopri5 {
+                rtol,
+                contact_max_step,
+                max_step,
+            } => {
+                if !(rtol > 0.0 && rtol < 1e-2) {
+                    return Err(parameter("rtol", rtol, "must lie in (0, 0.01)"));
+                }
+                if !(contact_max_step > 0.0 && contact_max_step.is_finite()) {
+                    return Err(parameter(
+                        "contact_max_step (s)",
+                        contact_max_step,
+                        "must be finite and > 0",
+                    ));
+                }
+                if max_step.is_nan() || max_step <= 0.0 {
+                    return Err(parameter("max_step (s)", max_step, "must be > 0"));
+                }
+            }
+            Integrator::Rk5Fixed { step } => {
+                if !(step > 0.0 && step.is_finite() && o.duration / step <= 1e9) {
+                    return Err(parameter(
+                        "fixed step (s)",
+                        step,
+                        "must be > 0 and give at most 10⁹ steps",
+                    ));
+                }
+            }
+        }
+        let geometry = model.geometry();
+        let air_bearing = model.air_bearing_model()?;
+        let suspension = model.suspension_coefficients()?;
+        let m =
+            air_bearing.eom_matrices(model.slider.mass, model.slider.pitch_inertia, &suspension);
+        let inverse_mass = m
+            .mass
+            .try_inverse()
+            .ok_or_else(|| DynamicsError::Numerical("singular mass matrix".into()))?;
+        let nominal_area = model.nominal_contact_area(actuation)?.area;
+        let sigma = model.interface.sigma;
+        let criterion = model.interface.criterion;
+        let contact_threshold = criterion.contact_threshold(sigma);
+        // c_c = 2ζ_c √(k_c,ref m), k_c,ref at 0.5σ interference (dynamics.md §3.4).
+        let reference = isbl
+            .at(contact_threshold - 0.5 * sigma)
+            .map_err(|e| DynamicsError::Numerical(e.to_string()))?;
+        let k_ref = reference.stiffness * nominal_area;
+        let contact_damping =
+            2.0 * model.interface.contact_damping_ratio * (k_ref * model.slider.mass).sqrt();
+
+        let speed = model.disk_speed;
+        let bulge_x = geometry.bulge_centre().x;
+        let (delay_front, delay_rear) = if o.transit_delay {
+            (
+                (geometry.leading_edge().x - bulge_x) / speed,
+                (geometry.trailing_edge().x - bulge_x) / speed,
+            )
+        } else {
+            (0.0, 0.0)
+        };
+        // The POC sits within a few µm of the bulge centre: allow 1 % of the slider length.
+        let slack = if o.transit_delay {
+            0.01 * model.slider.length / speed
+        } else {
+            0.0
+        };
+        let record_offset = (-delay_rear).max(0.0) + slack;
+        let needed = record_offset + o.duration + delay_front.max(0.0) + slack;
+        let (dmw, dmw_duration) = match dmw {
+            None => (None, 0.0),
+            Some(d) => {
+                let track = HermiteTrack::new(d.displacement, d.velocity, 0.0, d.sample_rate)
+                    .map_err(|e| DynamicsError::Numerical(format!("DMW track: {e}")))?;
+                let have = track.duration();
+                if have < needed && !o.wrap_dmw {
+                    return Err(parameter(
+                        "DMW record length (s)",
+                        have,
+                        format!(
+                            "is shorter than the run plus the transit delays ({:.4} ms); \
+                             shorten the run or set dmw_wrap = true",
+                            needed * 1e3
+                        ),
+                    ));
+                }
+                (Some(track), have)
+            }
+        };
+        Ok(TwoDofCase {
+            model,
+            actuation,
+            isbl,
+            dmw,
+            dmw_duration,
+            options,
+            geometry,
+            air_bearing,
+            inverse_mass,
+            damping: m.damping,
+            stiffness: m.stiffness,
+            nominal_area,
+            sigma,
+            bonded_lubricant: model.interface.bonded_lubricant(),
+            contact_threshold,
+            contact_damping,
+            delay_front,
+            delay_rear,
+            bulge_x,
+            record_offset,
+            criterion,
+        })
+    }
+
+    pub fn nominal_area(&self) -> f64 {
+        self.nominal_area
+    }
+
+    pub fn contact_damping(&self) -> f64 {
+        self.contact_damping
+    }
+
+    /// DMW displacement and velocity under a point delayed by `delay` [s].
+    #[inline]
+    fn disk(&self, t: f64, delay: f64) -> (f64, f64) {
+        match &self.dmw {
+            None => (0.0, 0.0),
+            Some(track) => {
+                let mut tau = self.record_offset + t + delay;
+                if self.options.wrap_dmw && self.dmw_duration > 0.0 {
+                    tau = tau.rem_euclid(self.dmw_duration);
+                }
+                track.eval(tau)
+            }
+        }
+    }
+
+    fn flying_height(&self, spacing: f64) -> f64 {
+        match self.model.variant {
+            ModelVariant::Improved => spacing - self.bonded_lubricant,
+            ModelVariant::Initial => spacing,
+        }
+    }
+
+    /// The interface at state `y` and time `t`.
+    fn interface(&self, t: f64, y: &[f64; 4]) -> Result<InterfaceState, DynamicsError> {
+        let (z, pitch_offset, z_rate, pitch_rate) = (y[0], y[1], y[2], y[3]);
+        let pitch = self.model.nominal_pitch + pitch_offset;
+        let poc = self.geometry.bulge_poc(z, pitch, self.actuation)?;
+        // The POC sits a fraction of a µm from the bulge centre (the delay reference).
+        let poc_delay = if self.options.transit_delay {
+            (poc.lever_arm.x - self.bulge_x) / self.model.disk_speed
+        } else {
+            0.0
+        };
+        let (zd, vd) = self.disk(t, poc_delay);
+        let spacing = poc.solid_spacing - zd;
+        let spacing_rate = poc.spacing_rate(pitch, z_rate, pitch_rate, 0.0) - vd;
+        let (zd_rear, _) = self.disk(t, self.delay_rear);
+        let te = self.geometry.trailing_edge();
+        let trailing_edge_spacing = self.geometry.spacing_of(&te, z, pitch) - zd_rear;
+        let clearance = self.criterion.clearance(spacing, self.sigma);
+        let area = self.nominal_area;
+        let numerical = |e: crate::contact::ContactError| DynamicsError::Numerical(e.to_string());
+        let at_spacing = self.isbl.at(spacing).map_err(numerical)?;
+        let adhesion = area * at_spacing.adhesion;
+        let (mut contact_force, mut clipped) = (0.0, false);
+        if clearance < 0.0 && area > 0.0 {
+            let elastic = match self.options.contact_force {
+                ContactForceForm::InterferenceTangent => {
+                    area * at_spacing.stiffness * (self.contact_threshold - spacing)
+                }
+                ContactForceForm::StaticCurve => area * at_spacing.pressure,
+            };
+            contact_force = elastic - self.contact_damping * spacing_rate;
+            if contact_force < 0.0 {
+                contact_force = 0.0;
+                clipped = true;
+            }
+        }
+        let (mut friction, mut real_area) = (0.0, 0.0);
+        if contact_force > 0.0 {
+            // Quasi-static equivalence P(h*) = F_c / A_n (dynamics.md §4).
+            if let Some(h_star) = self.isbl.separation_for_pressure(contact_force / area) {
+                let at = self.isbl.at(h_star).map_err(numerical)?;
+                friction = area * at.friction;
+                real_area = area * at.real_area_fraction;
+            }
+        }
+        Ok(InterfaceState {
+            spacing,
+            spacing_rate,
+            clearance,
+            contact_force,
+            friction,
+            adhesion,
+            real_area,
+            disk_displacement: zd,
+            trailing_edge_spacing,
+            clipped,
+            lever_x: poc.lever_arm.x,
+            lever_z: poc.lever_arm.z,
+        })
+    }
+
+    /// `y' = f(t, y)`.
+    fn rhs(&self, t: f64, y: &[f64; 4], dy: &mut [f64; 4]) -> Result<(), Stop> {
+        let state = HeavePitchState {
+            heave: y[0],
+            pitch_offset: y[1],
+            heave_rate: y[2],
+            pitch_rate: y[3],
+        };
+        let (front, front_rate) = self.disk(t, self.delay_front);
+        let (rear, rear_rate) = self.disk(t, self.delay_rear);
+        let dmw = DmwAtSprings {
+            front,
+            front_rate,
+            rear,
+            rear_rate,
+        };
+        let f_a = self.air_bearing.eom_forcing(&state, &dmw, self.actuation);
+        // AB loss is checked on the sampled (accepted) states in `run`: trial stages of a step
+        // the controller will reject may overshoot.
+        let i = match self.interface(t, y) {
+            Ok(i) => i,
+            // A trial stage of a step the controller will reject can leave the geometry's
+            // domain (e.g. a pitch of radians): NaN makes the integrator shrink the step.
+            Err(DynamicsError::Parameter { .. }) => {
+                dy.fill(f64::NAN);
+                return Ok(());
+            }
+            Err(e) => return Err(Stop::Model(e)),
+        };
+        // f_c = [F_c; r_x F_c + r_z Q], f_s = [−F_s; −r_x F_s] (eqs. 2.14–2.15, §1.1).
+        let f_interface = Vector2::new(
+            i.contact_force - i.adhesion,
+            i.lever_x * (i.contact_force - i.adhesion) + i.lever_z * i.friction,
+        );
+        let q = Vector2::new(y[0], y[1]);
+        let q_rate = Vector2::new(y[2], y[3]);
+        let acc =
+            self.inverse_mass * (f_a + f_interface - self.damping * q_rate - self.stiffness * q);
+        dy[0] = y[2];
+        dy[1] = y[3];
+        dy[2] = acc[0];
+        dy[3] = acc[1];
+        Ok(())
+    }
+
+    /// Largest step allowed from state `y`: `contact_max_step` in contact; on approach at most
+    /// half the time the POC needs to reach the contact threshold (never below the contact
+    /// cap), so the error control sees the switch instead of stepping over it.
+    fn step_cap(&self, t: f64, y: &[f64; 4], contact_max_step: f64) -> f64 {
+        match self.interface(t, y) {
+            Err(_) => contact_max_step,
+            Ok(i) if i.clearance <= 0.0 => contact_max_step,
+            Ok(i) if i.spacing_rate < 0.0 => {
+                (0.5 * i.clearance / -i.spacing_rate).max(contact_max_step)
+            }
+            Ok(_) => f64::INFINITY,
+        }
+    }
+
+    /// Integrate from the nominal state (§5.4) and sample the histories.
+    pub fn run(&self) -> Result<CaseHistory, DynamicsError> {
+        let o = &self.options;
+        let n_samples =
+            (o.duration / o.output_step * (1.0 + 4.0 * f64::EPSILON)).floor() as usize + 1;
+        let mut h = CaseHistory {
+            dt: o.output_step,
+            nominal_area: self.nominal_area,
+            ..CaseHistory::default()
+        };
+        for v in [
+            &mut h.heave,
+            &mut h.pitch_offset,
+            &mut h.heave_rate,
+            &mut h.pitch_rate,
+            &mut h.spacing,
+            &mut h.clearance,
+            &mut h.flying_height,
+            &mut h.contact_force,
+            &mut h.friction,
+            &mut h.adhesion,
+            &mut h.real_area,
+            &mut h.disk_displacement,
+            &mut h.trailing_edge_spacing,
+        ] {
+            v.reserve_exact(n_samples);
+        }
+        let mut sample_error: Option<DynamicsError> = None;
+        let mut ab_lost: Option<(f64, f64)> = None;
+        let observer = |t: f64, y: &[f64; 4]| match self.interface(t, y) {
+            Ok(i) => {
+                let te_fh = self.flying_height(i.trailing_edge_spacing);
+                if te_fh > AB_LOSS_FLYING_HEIGHT && ab_lost.is_none() {
+                    ab_lost = Some((t, te_fh));
+                }
+                h.heave.push(y[0]);
+                h.pitch_offset.push(y[1]);
+                h.heave_rate.push(y[2]);
+                h.pitch_rate.push(y[3]);
+                h.spacing.push(i.spacing);
+                h.clearance.push(i.clearance);
+                h.flying_height.push(self.flying_height(i.spacing));
+                h.contact_force.push(i.contact_force);
+                h.friction.push(i.friction);
+                h.adhesion.push(i.adhesion);
+                h.real_area.push(i.real_area);
+                h.disk_displacement.push(i.disk_displacement);
+                h.trailing_edge_spacing.push(i.trailing_edge_spacing);
+                h.clipped_samples += usize::from(i.clipped);
+            }
+            Err(e) => {
+                if sample_error.is_none() {
+                    sample_error = Some(e);
+                }
+            }
+        };
+        // atol: 1e-14 m, 1e-11 rad; rates × 2π × 1 MHz (dynamics.md §10).
+        let w = 2.0 * std::f64::consts::PI * 1e6;
+        let atol = [1e-14, 1e-11, 1e-14 * w, 1e-11 * w];
+        let rhs = |t: f64, y: &[f64; 4], dy: &mut [f64; 4]| self.rhs(t, y, dy);
+        let sampling = Sampling::Uniform { dt: o.output_step };
+        let result = match o.integrator {
+            Integrator::Dopri5 {
+                rtol,
+                contact_max_step,
+                max_step,
+            } => {
+                let mut opts = OdeOptions::adaptive_per_component(rtol, atol);
+                opts.max_step = max_step;
+                opts.max_steps = 50_000_000;
+                integrate_capped(
+                    rhs,
+                    |t, y| self.step_cap(t, y, contact_max_step),
+                    0.0,
+                    o.initial_state,
+                    o.duration,
+                    &opts,
+                    sampling,
+                    observer,
+                )
+            }
+            Integrator::Rk5Fixed { step } => {
+                let mut opts = OdeOptions::fixed(step);
+                opts.max_steps = u64::MAX;
+                crate::numerics::ode::integrate(
+                    rhs,
+                    0.0,
+                    o.initial_state,
+                    o.duration,
+                    &opts,
+                    sampling,
+                    observer,
+                )
+            }
+        };
+        // The first sample beyond the AB limit decides, whatever happened after it.
+        if let Some((t, fh)) = ab_lost {
+            return Err(DynamicsError::Numerical(format!(
+                "air bearing lost at t = {:.4} ms: the TE flying height reached {:.2} nm (> {:.0} \
+                 nm, dynamics.md §3.2); the linear AB model does not hold there",
+                t * 1e3,
+                fh * 1e9,
+                AB_LOSS_FLYING_HEIGHT * 1e9
+            )));
+        }
+        let solution = result.map_err(|e| {
+            DynamicsError::Numerical(match e {
+                OdeError::Rhs {
+                    t,
+                    source: Stop::Model(m),
+                } => format!("at t = {:.6} ms: {m}", t * 1e3),
+                OdeError::StepUnderflow { t, h } => format!(
+                    "integration failed: the step fell to {h:e} s at t = {:.6} ms (no convergence)",
+                    t * 1e3
+                ),
+                OdeError::NonFinite { t, component } => format!(
+                    "integration failed: state component {component} became non-finite at \
+                     t = {:.6} ms",
+                    t * 1e3
+                ),
+                OdeError::MaxStepsExceeded { t, steps } => format!(
+                    "integration failed: more than {steps} steps by t = {:.6} ms",
+                    t * 1e3
+                ),
+                OdeError::InvalidInput(m) => format!("integration failed: {m}"),
+            })
+        })?;
+        if let Some(e) = sample_error {
+            return Err(e);
+        }
+        h.stats = solution.stats;
+        if h.spacing.iter().any(|v| !v.is_finite()) {
+            return Err(DynamicsError::Numerical(
+                "non-finite spacing in the sampled history".into(),
+            ));
+        }
+        Ok(h)
+    }
+}
+
+#[cfg(test)]
+mod tests;
