@@ -67,6 +67,8 @@ pub enum Command {
     Dmw(Box<DmwArgs>),
     /// ISBL contact curves (and the MTL lubricant law with --lubricant) for one interface.
     Contact(Box<ContactArgs>),
+    /// 2-DOF slider cases: one actuation or a sweep, with metrics, tables and plots.
+    Simulate(Box<SimulateArgs>),
     /// Every reproducible number of the specs: target, hdi's value, tolerance, pass. Exit 1 if
     /// a reproducible target fails.
     Validate {
@@ -287,6 +289,70 @@ pub struct ContactArgs {
     pub json: bool,
 }
 
+/// `hdi simulate`: every option has the name of its `[simulate.NAME]` key; the interface is a
+/// dissertation parameter set (`--contact-set`) instead of a `[contact.*]` instance.
+#[derive(Args, Debug)]
+pub struct SimulateArgs {
+    /// improved_2dof (default) or initial_2dof.
+    #[arg(long, default_value = "improved_2dof")]
+    pub model: String,
+    /// ISBL parameter set of the interface (default: the model's).
+    #[arg(long)]
+    pub contact_set: Option<String>,
+    /// A DMW stage output (`dmw.h5`, track 1); none by default.
+    #[arg(long)]
+    pub dmw: Option<PathBuf>,
+    /// One or more actuations, e.g. "8.5 nm" "12 nm"; otherwise the sweep below.
+    #[arg(long, num_args = 1..)]
+    pub actuation: Vec<Length>,
+    #[arg(long)]
+    pub actuation_start: Option<Length>,
+    #[arg(long)]
+    pub actuation_stop: Option<Length>,
+    #[arg(long)]
+    pub actuation_step: Option<Length>,
+    #[arg(long)]
+    pub duration: Option<TimeSpan>,
+    #[arg(long)]
+    pub steady_start: Option<TimeSpan>,
+    #[arg(long)]
+    pub output_step: Option<TimeSpan>,
+    /// interference_tangent (default) or static_curve.
+    #[arg(long)]
+    pub contact_force: Option<String>,
+    /// dopri5 (default) or rk5_fixed.
+    #[arg(long)]
+    pub integrator: Option<String>,
+    #[arg(long)]
+    pub rtol: Option<f64>,
+    #[arg(long)]
+    pub contact_max_step: Option<TimeSpan>,
+    #[arg(long)]
+    pub max_step: Option<TimeSpan>,
+    #[arg(long)]
+    pub fixed_step: Option<TimeSpan>,
+    /// All points see the same DMW (no transit delay).
+    #[arg(long)]
+    pub no_transit_delay: bool,
+    #[arg(long)]
+    pub dmw_wrap: bool,
+    #[arg(long)]
+    pub kr_stiffening_beta: Option<f64>,
+    /// dissertation (default) or optimised.
+    #[arg(long)]
+    pub geometry: Option<String>,
+    #[arg(long)]
+    pub bulge_width: Option<Length>,
+    /// Plot the time histories of these actuations.
+    #[arg(long, num_args = 1..)]
+    pub histories: Vec<Length>,
+    /// Write case HDF5s, the sweep table and plots into this directory.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[arg(long)]
+    pub json: bool,
+}
+
 pub fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
@@ -302,6 +368,7 @@ pub fn main() -> Result<()> {
         Command::Surface(args) => cmd_surface(*args),
         Command::Dmw(args) => cmd_dmw(*args),
         Command::Contact(args) => cmd_contact(*args),
+        Command::Simulate(args) => cmd_simulate(*args),
         Command::Validate { json, only } => cmd_validate(json, &only),
         Command::Synth {
             what,
@@ -829,6 +896,168 @@ fn cmd_contact(a: ContactArgs) -> Result<()> {
             g("P_lub_onset_mN"),
             g("Q_lub_transition_end_uN")
         );
+    }
+    Ok(())
+}
+
+fn cmd_simulate(a: SimulateArgs) -> Result<()> {
+    use crate::stages::simulate::{self as sim, SimulateConfig};
+    let mut cfg: SimulateConfig =
+        toml::from_str("contact = \"adhoc\"").context("default simulate settings")?;
+    cfg.model = a.model.clone();
+    if !a.actuation.is_empty() {
+        cfg.actuations = Some(a.actuation.clone());
+    }
+    macro_rules! set {
+        ($($f:ident),*) => { $( if let Some(v) = a.$f.clone() { cfg.$f = v; } )* };
+    }
+    set!(
+        actuation_start,
+        actuation_stop,
+        actuation_step,
+        duration,
+        steady_start,
+        output_step,
+        contact_force,
+        integrator,
+        rtol,
+        contact_max_step,
+        max_step,
+        fixed_step,
+        geometry
+    );
+    cfg.transit_delay = !a.no_transit_delay;
+    cfg.dmw_wrap = a.dmw_wrap;
+    cfg.kr_stiffening_beta = a.kr_stiffening_beta;
+    cfg.bulge_width = a.bulge_width;
+    cfg.histories = a.histories.clone();
+    let params = sim::validate(&cfg)
+        .map_err(|(k, m)| anyhow::anyhow!("--{}: {m}", k.replace('_', "-")))?;
+    let set_name = a.contact_set.clone().unwrap_or_else(|| a.model.clone());
+    let isbl_params = contact::parameter_set(&set_name).ok_or_else(|| {
+        anyhow::anyhow!(
+            "--contact-set: unknown set `{set_name}` (initial_2dof, improved_2dof, three_dof, \
+             mtl_table_3_2)"
+        )
+    })?;
+    let isbl = crate::contact::lookup::IsblLookup::build(
+        crate::contact::isbl::IsblModel::new(isbl_params)?,
+        0.05,
+        -2.0,
+        10.0,
+    )?;
+    let dmw = match &a.dmw {
+        Some(p) => Some(sim::read_dmw_track(p)?),
+        None => None,
+    };
+    let (root, temporary) = match &a.out {
+        Some(o) => (o.clone(), false),
+        None => (
+            std::env::temp_dir().join(format!("hdi-simulate-{}", std::process::id())),
+            true,
+        ),
+    };
+    std::fs::create_dir_all(root.join("cases"))
+        .with_context(|| format!("creating {}", root.display()))?;
+    let bar = indicatif::ProgressBar::new(params.actuations.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} cases {elapsed} (eta {eta})")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let started = Instant::now();
+    use rayon::prelude::*;
+    let results: Vec<Result<sim::CaseOutcome>> = params
+        .actuations
+        .par_iter()
+        .map(|&h| {
+            let dir = root.join("cases").join(format!("h_{:06.2}nm", h * 1e9));
+            std::fs::create_dir_all(&dir)?;
+            let r = sim::simulate_case(&params, h, &isbl, dmw.as_ref(), &dir)
+                .with_context(|| format!("case h_TFC = {} nm", h * 1e9));
+            bar.inc(1);
+            let result = r?;
+            Ok(sim::CaseOutcome {
+                actuation: h,
+                metrics: result.clone(),
+                entry: crate::core::cases::CaseEntry {
+                    key: String::new(),
+                    dir,
+                    result,
+                    cached: false,
+                },
+            })
+        })
+        .collect();
+    bar.finish_and_clear();
+    let mut cases = Vec::new();
+    for r in results {
+        cases.push(r?);
+    }
+    cases.sort_by(|x, y| x.actuation.total_cmp(&y.actuation));
+    let wall = started.elapsed().as_secs_f64();
+    let sweep = sim::sweep_analysis(&params, &cases)?;
+    let rows = sim::case_rows(&cases, &sweep);
+    if a.out.is_some() {
+        crate::core::store::write_table(&rows, &root.join("sweep"))?;
+        sim::plots(&root, &params, &cases, &sweep, &a.model)?;
+    }
+    if temporary {
+        let _ = std::fs::remove_dir_all(&root);
+    }
+    if a.json {
+        println!(
+            "{}",
+            json!({"cases": rows, "wall_time_s": wall})
+        );
+        return Ok(());
+    }
+    println!(
+        "{} ({}), {} case(s) in {:.2} s",
+        a.model,
+        params.geometry,
+        cases.len(),
+        wall
+    );
+    println!(
+        "  {:>8} {:>10} {:>9} {:>9} {:>8} {:>17} {:>10} {:>6} {:>8}",
+        "h (nm)", "c̄ (nm)", "std (nm)", "FHM/BV %", "solid %", "regime", "F_c (mN)", "μ", "steps"
+    );
+    for r in &rows {
+        let g = |k: &str| r.get(k).and_then(|v| v.as_f64());
+        let s = |k: &str| g(k).map_or("-".to_string(), |x| format!("{x:.3}"));
+        println!(
+            "  {:>8.2} {:>10.4} {:>9.4} {:>9.2} {:>8.2} {:>17} {:>10} {:>6} {:>8}",
+            g("actuation_nm").unwrap_or(f64::NAN),
+            g("clearance_mean_nm").unwrap_or(f64::NAN),
+            g("clearance_std_nm").unwrap_or(f64::NAN),
+            g("vibration_percent").unwrap_or(f64::NAN),
+            g("solid_contact_percent").unwrap_or(f64::NAN),
+            r.get("regime").and_then(|v| v.as_str()).unwrap_or("-"),
+            s("contact_force_mean_mN"),
+            s("friction_coefficient"),
+            g("steps").unwrap_or(f64::NAN)
+        );
+    }
+    if cases.len() > 1 {
+        let nm = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{:.2} nm", x * 1e9));
+        println!("  touchdown {}", nm(sweep.touchdown_actuation_m));
+        if let Some(cp) = &sweep.slopes.critical_point {
+            println!(
+                "  critical point {:.2} nm at clearance {:.3} nm",
+                cp.actuation_m * 1e9,
+                cp.clearance_m * 1e9
+            );
+        }
+        for (k, l) in [
+            ("A", &sweep.slopes.a),
+            ("B", &sweep.slopes.b),
+            ("C", &sweep.slopes.c),
+            ("D", &sweep.slopes.d),
+        ] {
+            if let Some(l) = l {
+                println!("  slope {k} {:.3}", l.slope);
+            }
+        }
     }
     Ok(())
 }

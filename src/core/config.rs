@@ -74,6 +74,9 @@ pub struct RawConfig {
     /// `[contact.NAME]`: an interface → ISBL curves and the force table.
     #[serde(default)]
     pub contact: BTreeMap<String, ContactConfig>,
+    /// `[simulate.NAME]`: 2-DOF slider cases over an actuation sweep.
+    #[serde(default)]
+    pub simulate: BTreeMap<String, crate::stages::simulate::SimulateConfig>,
 }
 
 /// A loaded pipeline file: its text (for line lookups) and parsed content.

@@ -35,6 +35,11 @@ pub struct StageContext<'a> {
     pub out_dir: &'a Path,
     /// Results (`result.json`) of the consumed stages, by name.
     pub upstream: BTreeMap<String, Value>,
+    /// Store entry directory of each consumed stage (its files, e.g. `dmw.h5`), by name.
+    pub upstream_dirs: BTreeMap<String, PathBuf>,
+    /// The content-addressed store, for stages that cache sub-results of their own (one
+    /// simulation case per sweep point).
+    pub store: &'a Store,
     pub progress: &'a indicatif::ProgressBar,
 }
 
@@ -355,16 +360,20 @@ pub fn run(stages: Vec<Box<dyn Stage>>, store: &Store, opts: &RunOptions) -> Res
                     let p = &plan.planned[i];
                     let stage = &plan.stages[p.index];
                     let mut upstream = BTreeMap::new();
+                    let mut upstream_dirs = BTreeMap::new();
                     for u in stage.upstream() {
                         match results.get(&u) {
                             Some(Ok(v)) => {
-                                upstream.insert(u, v.clone());
+                                upstream.insert(u.clone(), v.clone());
                             }
                             _ => return (i, Err(format!("skipped: upstream `{u}` failed"))),
                         }
+                        if let Some(up) = plan.planned.iter().find(|q| q.name == u) {
+                            upstream_dirs.insert(u, store.entry_dir(&up.kind, &up.key));
+                        }
                     }
                     let bar = bars.stage(&p.name);
-                    let r = execute(stage.as_ref(), p, store, upstream, &bar);
+                    let r = execute(stage.as_ref(), p, store, upstream, upstream_dirs, &bar);
                     bars.finish_stage(bar, &p.name, r.is_ok());
                     (i, r)
                 })
@@ -428,6 +437,7 @@ fn execute(
     p: &Planned,
     store: &Store,
     upstream: BTreeMap<String, Value>,
+    upstream_dirs: BTreeMap<String, PathBuf>,
     bar: &indicatif::ProgressBar,
 ) -> Executed {
     let started = Instant::now();
@@ -440,6 +450,8 @@ fn execute(
         fingerprint: &p.fingerprint,
         out_dir: &work,
         upstream,
+        upstream_dirs,
+        store,
         progress: bar,
     };
     // A bug must not take the other stages down with it, nor leave a trusted output.
@@ -525,6 +537,22 @@ pub fn gc(plan: &Plan, store: &Store, dry_run: bool) -> Result<Vec<PathBuf>> {
         keep.insert((p.kind.clone(), p.key.clone()));
         if let Some(m) = store.read_ref(&p.name) {
             keep.insert((m.fingerprint.kind.clone(), m.key.clone()));
+        }
+    }
+    // Case entries (core::cases) live as long as a kept stage entry lists them.
+    let kept: Vec<(String, String)> = keep.iter().cloned().collect();
+    for (kind, key) in kept {
+        let result = store.entry_dir(&kind, &key).join("result.json");
+        let Some(v) = std::fs::read(&result)
+            .ok()
+            .and_then(|b| serde_json::from_slice::<Value>(&b).ok())
+        else {
+            continue;
+        };
+        for k in v["case_keys"].as_array().into_iter().flatten() {
+            if let Some(k) = k.as_str() {
+                keep.insert((crate::core::cases::CASE_KIND.to_string(), k.to_string()));
+            }
         }
     }
     let mut removed = Vec::new();

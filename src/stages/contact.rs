@@ -291,6 +291,46 @@ fn params_json(p: &IsblParams) -> Value {
     })
 }
 
+/// The inverse of the `inputs` block of a contact result: the ISBL parameters a downstream
+/// stage (the simulations) rebuilds the interface from. `None` if a field is missing.
+pub fn isbl_params_from_json(v: &Value) -> Option<IsblParams> {
+    let f = |k: &str| v[k].as_f64();
+    let surface_energy = match &v["surface_energy"] {
+        e if e["constant_N_per_m"].is_number() => SurfaceEnergy::Constant {
+            delta_gamma: e["constant_N_per_m"].as_f64()?,
+        },
+        e => SurfaceEnergy::Variable {
+            c1: e["variable"]["c1_N_per_m"].as_f64()?,
+            c2: e["variable"]["c2_per_m"].as_f64()?,
+            c3: e["variable"]["c3_N_per_m"].as_f64()?,
+        },
+    };
+    Some(IsblParams {
+        sigma: f("sigma_m")?,
+        summit_radius: f("R_m")?,
+        summit_density: f("eta_per_m2")?,
+        slider_modulus: f("E1_Pa")?,
+        slider_poisson: f("nu1")?,
+        disk_modulus: f("E2_Pa")?,
+        disk_poisson: f("nu2")?,
+        yielding_poisson: f("nu_yielding")?,
+        hardness: f("H_Pa")?,
+        lj_spacing: f("epsilon_m")?,
+        lubricant_thickness: f("t_m")?,
+        surface_energy,
+        summit_offset: match v["summit_offset"].as_str()? {
+            "None" => SummitOffset::None,
+            "McCool" => SummitOffset::McCool,
+            _ => return None,
+        },
+        friction_law: match v["friction_law"].as_str()? {
+            "JunctionShear" => FrictionLaw::JunctionShear,
+            "SeedPowerElastic" => FrictionLaw::SeedPowerElastic,
+            _ => return None,
+        },
+    })
+}
+
 impl ContactParams {
     pub fn canonical(&self) -> Value {
         json!({
@@ -754,6 +794,14 @@ mod tests {
                 assert!(y <= prev, "channel {ch} at step {k}");
                 prev = y;
             }
+        }
+    }
+
+    #[test]
+    fn isbl_params_round_trip_through_the_result_json() {
+        for p in [IsblParams::improved_2dof(), IsblParams::mtl_table_3_2()] {
+            let back = isbl_params_from_json(&params_json(&p)).unwrap();
+            assert_eq!(back, p);
         }
     }
 

@@ -4,6 +4,7 @@ pub mod contact;
 pub mod contact_mtl;
 pub mod dmw;
 pub mod interface;
+pub mod simulate;
 pub mod surfaces;
 
 use crate::core::config::{ConfigError, PipelineFile};
@@ -61,6 +62,12 @@ pub fn build(file: &PipelineFile) -> Result<Vec<Box<dyn Stage>>, ConfigError> {
     for (name, cfg) in &file.raw.dmw {
         check_name("dmw", name)?;
         stages.push(Box::new(dmw::DmwStage::from_config(file, name, cfg)?));
+    }
+    for (name, cfg) in &file.raw.simulate {
+        check_name("simulate", name)?;
+        stages.push(Box::new(simulate::SimulateStage::from_config(
+            file, name, cfg,
+        )?));
     }
     Ok(stages)
 }
