@@ -11,7 +11,7 @@ use std::sync::Once;
 
 static FONT: Once = Once::new();
 
-fn ensure_font() {
+pub(crate) fn ensure_font() {
     FONT.call_once(|| {
         // Registration fails only for a corrupt font, which the dejavu crate does not ship.
         let _ = plotters::style::register_font(
@@ -22,12 +22,12 @@ fn ensure_font() {
     });
 }
 
-fn perr(path: &Path, e: impl std::fmt::Display) -> Error {
+pub(crate) fn perr(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::output(path, format!("plot: {e}"))
 }
 
 /// Render into a PNG via a temp file + rename.
-fn render_png(
+pub(crate) fn render_png(
     path: &Path,
     size: (u32, u32),
     draw: impl FnOnce(

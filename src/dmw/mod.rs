@@ -8,6 +8,7 @@ pub mod average;
 pub mod chain;
 pub mod io;
 pub mod synth;
+pub mod synthetic;
 pub mod tracks;
 pub mod triggers;
 pub mod validation;

@@ -1,0 +1,964 @@
+//! PNG plots of slider-dynamics actuation sweeps (dynamics.md §7–§8), the analogues of the
+//! dissertation's figures: clearance against TFC actuation with the contact regimes shaded
+//! (Figs 2.16/2.18), FHM/BV and % solid contact against actuation with marked landmarks
+//! (Figs 2.19/2.22), and stacked time histories at chosen actuations (Figs 2.13–2.14).
+//!
+//! Same conventions as [`crate::core::plot`] (whose font registration and temp-file rendering
+//! this reuses): plots are side outputs, so degenerate input — no series, no finite point,
+//! constant data — still gives a valid (possibly empty, "no data") PNG; only a failure to
+//! draw or write is an error. NaN and infinite points are skipped.
+
+use crate::core::plot::{perr, render_png};
+use crate::error::Result;
+use plotters::coord::types::RangedCoordf64;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use std::ops::Range;
+use std::path::Path;
+
+/// A swept quantity: its mean with a ±1 std band, one point per actuation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepSeries<'a> {
+    pub label: &'a str,
+    /// `(x, mean, std)`, e.g. (h_TFC in nm, steady mean clearance in nm, its std in nm).
+    /// A non-finite std draws no band at that point.
+    pub points: Vec<(f64, f64, f64)>,
+}
+
+/// A shaded interval of the x axis with its label at the top (a contact regime).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RegimeBand<'a> {
+    pub x0: f64,
+    pub x1: f64,
+    pub label: &'a str,
+}
+
+/// One panel of [`time_histories_png`]: several named `(time, value)` series.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Panel<'a> {
+    pub y_desc: &'a str,
+    pub series: Vec<(&'a str, Vec<(f64, f64)>)>,
+}
+
+/// Line colours (Okabe–Ito, distinguishable for colour-blind readers), then black.
+const PALETTE: [RGBColor; 7] = [
+    RGBColor(0, 114, 178),
+    RGBColor(213, 94, 0),
+    RGBColor(0, 158, 115),
+    RGBColor(204, 121, 167),
+    RGBColor(230, 159, 0),
+    RGBColor(86, 180, 233),
+    RGBColor(0, 0, 0),
+];
+
+/// Light fills for regime bands: blue, green, yellow, red, lavender, grey.
+const BAND_FILLS: [RGBColor; 6] = [
+    RGBColor(214, 230, 246),
+    RGBColor(214, 239, 208),
+    RGBColor(253, 240, 196),
+    RGBColor(252, 213, 200),
+    RGBColor(226, 222, 240),
+    RGBColor(228, 228, 228),
+];
+
+/// Columns per panel for min/max decimation of time histories (≥ the plot width in pixels).
+const DECIMATION_COLUMNS: usize = 1000;
+
+type Chart<'a, 'b> =
+    ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// A value that can be placed on a plotters axis (finite and far from overflow).
+fn usable(v: f64) -> bool {
+    v.is_finite() && v.abs() < 1e300
+}
+
+/// Running min/max of usable values.
+#[derive(Debug, Clone, Copy)]
+struct Extent {
+    lo: f64,
+    hi: f64,
+}
+
+impl Extent {
+    fn new() -> Self {
+        Extent {
+            lo: f64::INFINITY,
+            hi: f64::NEG_INFINITY,
+        }
+    }
+
+    fn add(&mut self, v: f64) {
+        if usable(v) {
+            self.lo = self.lo.min(v);
+            self.hi = self.hi.max(v);
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.lo > self.hi
+    }
+
+    /// The range padded by `frac` of its span below and `frac + top_extra` above; a
+    /// constant (or relatively tiny) span is padded by 5 % of its magnitude (±1 around 0);
+    /// an empty extent gives `fallback`.
+    fn range(&self, frac: f64, top_extra: f64, fallback: Range<f64>) -> Range<f64> {
+        if self.is_empty() {
+            return fallback;
+        }
+        let (lo, hi) = (self.lo, self.hi);
+        let span = hi - lo;
+        let scale = lo.abs().max(hi.abs());
+        if span.is_finite() && span > scale * 1e-9 && span > 0.0 {
+            (lo - frac * span)..(hi + (frac + top_extra) * span)
+        } else {
+            let d = if scale > 0.0 { 0.05 * scale } else { 1.0 };
+            (lo - d)..(hi + d + top_extra * 2.0 * d)
+        }
+    }
+}
+
+fn text_style(size: u32, pos: Pos) -> TextStyle<'static> {
+    ("sans-serif", size).into_font().color(&BLACK).pos(pos)
+}
+
+/// Finite `(x, y)` points, in order.
+fn finite_xy(pts: &[(f64, f64)]) -> impl Iterator<Item = (f64, f64)> + '_ {
+    pts.iter().copied().filter(|&(x, y)| usable(x) && usable(y))
+}
+
+/// "no data" in the middle of an empty chart.
+fn draw_no_data<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> std::result::Result<(), String> {
+    let (xr, yr) = (chart.x_range(), chart.y_range());
+    let centre = (0.5 * (xr.start + xr.end), 0.5 * (yr.start + yr.end));
+    chart
+        .draw_series(std::iter::once(Text::new(
+            "no data",
+            centre,
+            text_style(18, Pos::new(HPos::Center, VPos::Center)),
+        )))
+        .map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+/// `label` (size 13) at pixel offset `offset` from the data point `at`, anchored by `pos`,
+/// on a translucent white box so that it stays legible over lines and bands.
+fn boxed_label<'a, 'b: 'a>(
+    chart: &mut Chart<'a, 'b>,
+    at: (f64, f64),
+    label: &str,
+    offset: (i32, i32),
+    pos: Pos,
+) -> std::result::Result<(), String> {
+    if label.is_empty() {
+        return Ok(());
+    }
+    let style = text_style(13, pos);
+    let (w, h) = chart
+        .plotting_area()
+        .estimate_text_size(label, &style)
+        .map_err(|e| e.to_string())?;
+    let (w, h) = (w as i32, h as i32);
+    let left = match pos.h_pos {
+        HPos::Left => offset.0,
+        HPos::Center => offset.0 - w / 2,
+        HPos::Right => offset.0 - w,
+    };
+    let top = match pos.v_pos {
+        VPos::Top => offset.1,
+        VPos::Center => offset.1 - h / 2,
+        VPos::Bottom => offset.1 - h,
+    };
+    chart
+        .draw_series(std::iter::once(
+            EmptyElement::at(at)
+                + Rectangle::new(
+                    [(left - 2, top - 1), (left + w + 2, top + h + 1)],
+                    WHITE.mix(0.8).filled(),
+                )
+                + Text::new(label.to_string(), offset, style),
+        ))
+        .map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+/// Outline of marker `shape` (0 circle, 1 triangle, 2 square) centred 10 px right of the
+/// legend entry's origin, as one polygon type for all shapes.
+fn marker_outline(shape: usize) -> Vec<(i32, i32)> {
+    match shape {
+        0 => (0..12)
+            .map(|i| {
+                let a = i as f64 * std::f64::consts::TAU / 12.0;
+                (
+                    10 + (3.5 * a.cos()).round() as i32,
+                    (3.5 * a.sin()).round() as i32,
+                )
+            })
+            .collect(),
+        1 => vec![(10, -4), (14, 3), (6, 3)],
+        _ => vec![(7, -3), (13, -3), (13, 3), (7, 3)],
+    }
+}
+
+/// Draw a line with markers for series `k` (marker shape cycles: circle, triangle, square),
+/// labelled in the legend when `label` is not empty. Returns whether a legend entry was made.
+fn draw_line_with_markers<'a, 'b: 'a>(
+    chart: &mut Chart<'a, 'b>,
+    k: usize,
+    label: &str,
+    pts: &[(f64, f64)],
+) -> std::result::Result<bool, String> {
+    let c = PALETTE[k % PALETTE.len()];
+    let line = chart
+        .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))
+        .map_err(|e| e.to_string())?;
+    let shape = k % 3;
+    if !label.is_empty() {
+        line.label(label).legend(move |(x, y)| {
+            EmptyElement::at((x, y))
+                + PathElement::new(vec![(0, 0), (20, 0)], c.stroke_width(2))
+                + Polygon::new(marker_outline(shape), c.filled())
+        });
+    }
+    match shape {
+        0 => chart
+            .draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))
+            .map(|_| ()),
+        1 => chart
+            .draw_series(pts.iter().map(|&p| TriangleMarker::new(p, 4, c.filled())))
+            .map(|_| ()),
+        _ => chart
+            .draw_series(
+                pts.iter()
+                    .map(|&p| EmptyElement::at(p) + Rectangle::new([(-3, -3), (3, 3)], c.filled())),
+            )
+            .map(|_| ()),
+    }
+    .map_err(|e| e.to_string())?;
+    Ok(!label.is_empty())
+}
+
+fn draw_legend<'a, 'b: 'a>(
+    chart: &mut Chart<'a, 'b>,
+    position: SeriesLabelPosition,
+) -> std::result::Result<(), String> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .label_font(("sans-serif", 14))
+        .border_style(BLACK)
+        .background_style(WHITE.mix(0.85))
+        .draw()
+        .map_err(|e| e.to_string())
+}
+
+/// Clearance (or any swept mean ± std) against actuation: each series' mean as a line with
+/// markers over a translucent ±1 std band; `bands` shade x intervals in light colours with
+/// their label at the top (flying / mobile lubricant / bonded lubricant / solid contact);
+/// `hlines` are dashed horizontal references with a label at the right end (clearance 0, T0,
+/// 2T0). The y range includes every reference line. Figs 2.16/2.18.
+pub fn clearance_sweep_png(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    series: &[SweepSeries],
+    bands: &[RegimeBand],
+    hlines: &[(f64, &str)],
+) -> Result<()> {
+    // Sanitised, x-sorted points per series; a non-finite std counts as no band.
+    let clean: Vec<Vec<(f64, f64, f64)>> = series
+        .iter()
+        .map(|s| {
+            let mut p: Vec<(f64, f64, f64)> = s
+                .points
+                .iter()
+                .filter(|p| usable(p.0) && usable(p.1))
+                .map(|&(x, m, sd)| (x, m, if usable(sd) { sd.abs() } else { 0.0 }))
+                .collect();
+            p.sort_by(|a, b| a.0.total_cmp(&b.0));
+            p
+        })
+        .collect();
+    let (mut xe, mut ye) = (Extent::new(), Extent::new());
+    for &(x, m, sd) in clean.iter().flatten() {
+        xe.add(x);
+        ye.add(m - sd);
+        ye.add(m + sd);
+    }
+    let has_data = !xe.is_empty();
+    if xe.is_empty() {
+        for b in bands {
+            xe.add(b.x0);
+            xe.add(b.x1);
+        }
+    }
+    for &(y, _) in hlines {
+        ye.add(y);
+    }
+    let xr = xe.range(0.03, 0.0, 0.0..1.0);
+    // Headroom for the band labels.
+    let top = if bands.is_empty() { 0.0 } else { 0.12 };
+    let yr = ye.range(0.05, top, -1.0..1.0);
+    render_png(path, (900, 600), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 20))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(65)
+            .build_cartesian_2d(xr.clone(), yr.clone())
+            .map_err(|e| e.to_string())?;
+        // Bands first, under the mesh lines and the data.
+        let plot_w = chart.plotting_area().dim_in_pixel().0.max(1) as f64;
+        for (k, b) in bands.iter().enumerate() {
+            if !(usable(b.x0) && usable(b.x1)) {
+                continue;
+            }
+            let a = b.x0.min(b.x1).max(xr.start);
+            let c = b.x0.max(b.x1).min(xr.end);
+            if c <= a {
+                continue;
+            }
+            let fill = BAND_FILLS[k % BAND_FILLS.len()];
+            chart
+                .draw_series(std::iter::once(Rectangle::new(
+                    [(a, yr.start), (c, yr.end)],
+                    fill.filled(),
+                )))
+                .map_err(|e| e.to_string())?;
+            // One word per line when the label (≈ 7 px per character) is wider than the band.
+            let width_px = (c - a) / (xr.end - xr.start) * plot_w;
+            let lines: Vec<&str> = if (b.label.chars().count() as f64) * 7.0 > width_px {
+                b.label.split_whitespace().collect()
+            } else {
+                vec![b.label]
+            };
+            chart
+                .draw_series(lines.into_iter().enumerate().map(|(i, line)| {
+                    EmptyElement::at((0.5 * (a + c), yr.end))
+                        + Text::new(
+                            line.to_string(),
+                            (0, 4 + 15 * i as i32),
+                            text_style(13, Pos::new(HPos::Center, VPos::Top)),
+                        )
+                }))
+                .map_err(|e| e.to_string())?;
+        }
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .light_line_style(BLACK.mix(0.05))
+            .bold_line_style(BLACK.mix(0.12))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for &(y, label) in hlines {
+            if !usable(y) {
+                continue;
+            }
+            chart
+                .draw_series(DashedLineSeries::new(
+                    vec![(xr.start, y), (xr.end, y)],
+                    8,
+                    5,
+                    BLACK.mix(0.6).stroke_width(1),
+                ))
+                .map_err(|e| e.to_string())?;
+            boxed_label(
+                &mut chart,
+                (xr.end, y),
+                label,
+                (-5, -3),
+                Pos::new(HPos::Right, VPos::Bottom),
+            )?;
+        }
+        let mut legend = false;
+        for (k, (s, pts)) in series.iter().zip(&clean).enumerate() {
+            if pts.is_empty() {
+                continue;
+            }
+            let c = PALETTE[k % PALETTE.len()];
+            if pts.len() >= 2 && pts.iter().any(|p| p.2 > 0.0) {
+                let poly: Vec<(f64, f64)> = pts
+                    .iter()
+                    .map(|p| (p.0, p.1 + p.2))
+                    .chain(pts.iter().rev().map(|p| (p.0, p.1 - p.2)))
+                    .collect();
+                chart
+                    .draw_series(std::iter::once(Polygon::new(poly, c.mix(0.2).filled())))
+                    .map_err(|e| e.to_string())?;
+            } else {
+                // A lone point: its ±std as an error bar.
+                chart
+                    .draw_series(pts.iter().filter(|p| p.2 > 0.0).map(|p| {
+                        PathElement::new(vec![(p.0, p.1 - p.2), (p.0, p.1 + p.2)], c.mix(0.5))
+                    }))
+                    .map_err(|e| e.to_string())?;
+            }
+            let xy: Vec<(f64, f64)> = pts.iter().map(|p| (p.0, p.1)).collect();
+            legend |= draw_line_with_markers(&mut chart, k, s.label, &xy)?;
+        }
+        if !has_data {
+            draw_no_data(&mut chart)?;
+        }
+        if legend {
+            draw_legend(&mut chart, SeriesLabelPosition::LowerLeft)?;
+        }
+        Ok(())
+    })
+}
+
+/// Metrics against actuation (FHM/BV, % solid contact): lines with markers, and vertical
+/// dashed marker lines labelled at the top (touchdown, critical point). The x range includes
+/// every mark. Figs 2.19/2.22.
+pub fn metric_sweep_png(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    series: &[(&str, Vec<(f64, f64)>)],
+    marks: &[(f64, &str)],
+) -> Result<()> {
+    let clean: Vec<Vec<(f64, f64)>> = series
+        .iter()
+        .map(|(_, s)| {
+            let mut p: Vec<(f64, f64)> = finite_xy(s).collect();
+            p.sort_by(|a, b| a.0.total_cmp(&b.0));
+            p
+        })
+        .collect();
+    let (mut xe, mut ye) = (Extent::new(), Extent::new());
+    for &(x, y) in clean.iter().flatten() {
+        xe.add(x);
+        ye.add(y);
+    }
+    let has_data = !xe.is_empty();
+    for &(x, _) in marks {
+        xe.add(x);
+    }
+    let xr = xe.range(0.03, 0.0, 0.0..1.0);
+    let top = if marks.is_empty() {
+        0.0
+    } else {
+        0.04 * marks.len().min(4) as f64
+    };
+    let yr = ye.range(0.05, top, 0.0..1.0);
+    render_png(path, (900, 600), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 20))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(65)
+            .build_cartesian_2d(xr.clone(), yr.clone())
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .light_line_style(BLACK.mix(0.05))
+            .bold_line_style(BLACK.mix(0.12))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        let mut usable_marks: Vec<(f64, &str)> =
+            marks.iter().copied().filter(|m| usable(m.0)).collect();
+        usable_marks.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for &(x, _) in &usable_marks {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    vec![(x, yr.start), (x, yr.end)],
+                    8,
+                    5,
+                    BLACK.mix(0.6).stroke_width(1),
+                ))
+                .map_err(|e| e.to_string())?;
+        }
+        // Labels after all lines, on a light box, staggered in x order so that close marks do
+        // not print over each other.
+        for (k, &(x, label)) in usable_marks.iter().enumerate() {
+            boxed_label(
+                &mut chart,
+                (x, yr.end),
+                label,
+                (4, 4 + 17 * (k % 4) as i32),
+                Pos::new(HPos::Left, VPos::Top),
+            )?;
+        }
+        let mut legend = false;
+        for (k, ((label, _), pts)) in series.iter().zip(&clean).enumerate() {
+            if !pts.is_empty() {
+                legend |= draw_line_with_markers(&mut chart, k, label, pts)?;
+            }
+        }
+        if !has_data {
+            draw_no_data(&mut chart)?;
+        }
+        if legend {
+            draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+        }
+        Ok(())
+    })
+}
+
+/// M4 decimation for drawing: the points falling in each of `columns` equal x bins keep only
+/// their first, last, minimum and maximum (in their original order), so the drawn envelope
+/// is exactly that of the full series. Non-finite points are dropped; series of at most
+/// `4·columns` points are returned as they are (filtered).
+pub(crate) fn decimate_minmax(
+    pts: &[(f64, f64)],
+    x0: f64,
+    x1: f64,
+    columns: usize,
+) -> Vec<(f64, f64)> {
+    let columns = columns.max(1);
+    if pts.len() <= 4 * columns || !(usable(x0) && usable(x1) && x1 > x0) {
+        return finite_xy(pts).collect();
+    }
+    let scale = columns as f64 / (x1 - x0);
+    let bin = |x: f64| (((x - x0) * scale).floor().max(0.0) as usize).min(columns - 1);
+    let mut out = Vec::with_capacity(4 * columns + 4);
+    // (bin, first, min, max, last) as indices into pts.
+    let mut cur: Option<(usize, usize, usize, usize, usize)> = None;
+    let flush = |c: (usize, usize, usize, usize, usize), out: &mut Vec<(f64, f64)>| {
+        let mut idx = [c.1, c.2, c.3, c.4];
+        idx.sort_unstable();
+        let mut last = usize::MAX;
+        for i in idx {
+            if i != last {
+                out.push(pts[i]);
+                last = i;
+            }
+        }
+    };
+    for (i, &(x, y)) in pts.iter().enumerate() {
+        if !(usable(x) && usable(y)) {
+            continue;
+        }
+        let b = bin(x);
+        match cur.as_mut() {
+            Some(c) if c.0 == b => {
+                if y < pts[c.2].1 {
+                    c.2 = i;
+                }
+                if y > pts[c.3].1 {
+                    c.3 = i;
+                }
+                c.4 = i;
+            }
+            _ => {
+                if let Some(c) = cur {
+                    flush(c, &mut out);
+                }
+                cur = Some((b, i, i, i, i));
+            }
+        }
+    }
+    if let Some(c) = cur {
+        flush(c, &mut out);
+    }
+    out
+}
+
+/// Time histories in stacked panels sharing the time axis, several series per panel with a
+/// legend (clearance, forces, μ, P_m, τ at chosen actuations; Figs 2.13–2.14). The x values
+/// are times in milliseconds (the axis is labelled "time (ms)"). Long series are decimated
+/// per pixel column (min/max), so an 8000-sample history draws as fast as a short one.
+pub fn time_histories_png(path: &Path, title: &str, panels: &[Panel]) -> Result<()> {
+    let mut xe = Extent::new();
+    for (x, _) in panels
+        .iter()
+        .flat_map(|p| p.series.iter())
+        .flat_map(|(_, s)| finite_xy(s))
+    {
+        xe.add(x);
+    }
+    let xr = xe.range(0.0, 0.0, 0.0..1.0);
+    let n_panels = panels.len().max(1);
+    let height = u32::try_from(60 + 210 * n_panels)
+        .map_err(|_| perr(path, "too many panels"))?
+        .min(16_000);
+    render_png(path, (1000, height), |root| {
+        let root = root
+            .titled(title, ("sans-serif", 20))
+            .map_err(|e| e.to_string())?;
+        let areas = root.split_evenly((n_panels, 1));
+        let empty = Panel {
+            y_desc: "",
+            series: Vec::new(),
+        };
+        let panel_list: Vec<&Panel> = if panels.is_empty() {
+            vec![&empty]
+        } else {
+            panels.iter().collect()
+        };
+        for (k, (panel, area)) in panel_list.iter().zip(areas.iter()).enumerate() {
+            let last = k + 1 == n_panels;
+            let drawn: Vec<Vec<(f64, f64)>> = panel
+                .series
+                .iter()
+                .map(|(_, s)| decimate_minmax(s, xr.start, xr.end, DECIMATION_COLUMNS))
+                .collect();
+            let mut ye = Extent::new();
+            for &(_, y) in drawn.iter().flatten() {
+                ye.add(y);
+            }
+            let yr = ye.range(0.05, 0.0, -1.0..1.0);
+            let mut chart = ChartBuilder::on(area)
+                .margin(8)
+                .margin_right(16)
+                .x_label_area_size(if last { 40 } else { 22 })
+                .y_label_area_size(75)
+                .build_cartesian_2d(xr.clone(), yr)
+                .map_err(|e| e.to_string())?;
+            let mut mesh = chart.configure_mesh();
+            mesh.y_desc(panel.y_desc)
+                .light_line_style(BLACK.mix(0.05))
+                .bold_line_style(BLACK.mix(0.12));
+            if last {
+                mesh.x_desc("time (ms)");
+            }
+            mesh.draw().map_err(|e| e.to_string())?;
+            let mut legend = false;
+            for (j, ((label, _), pts)) in panel.series.iter().zip(&drawn).enumerate() {
+                if pts.is_empty() {
+                    continue;
+                }
+                let c = PALETTE[j % PALETTE.len()];
+                let line = chart
+                    .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(1)))
+                    .map_err(|e| e.to_string())?;
+                if !label.is_empty() {
+                    legend = true;
+                    line.label(*label).legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                    });
+                }
+            }
+            if ye.is_empty() {
+                draw_no_data(&mut chart)?;
+            }
+            if legend {
+                draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+            }
+        }
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, b'\n'];
+
+    fn assert_png(path: &Path) {
+        let bytes = std::fs::read(path).expect("plot written");
+        assert!(
+            bytes.len() > 1000,
+            "{}: {} bytes",
+            path.display(),
+            bytes.len()
+        );
+        assert_eq!(bytes[..8], PNG_SIGNATURE, "{}", path.display());
+    }
+
+    fn regimes() -> Vec<RegimeBand<'static>> {
+        vec![
+            RegimeBand {
+                x0: 0.0,
+                x1: 8.6,
+                label: "flying",
+            },
+            RegimeBand {
+                x0: 8.6,
+                x1: 9.9,
+                label: "mobile lubricant",
+            },
+            RegimeBand {
+                x0: 9.9,
+                x1: 11.4,
+                label: "bonded lubricant",
+            },
+            RegimeBand {
+                x0: 11.4,
+                x1: 15.0,
+                label: "solid contact",
+            },
+        ]
+    }
+
+    #[test]
+    fn clearance_sweep_normal_and_degenerate() {
+        let dir = tempfile::tempdir().unwrap();
+        let t0 = 1.2;
+        let clearance: Vec<(f64, f64, f64)> = (0..=75)
+            .map(|i| {
+                let h = 0.2 * i as f64;
+                let c = if h < 8.6 {
+                    11.0 - h
+                } else {
+                    (2.4 - 0.4 * (h - 8.6)).max(-0.6)
+                };
+                (h, c, 0.05 + 0.02 * (h - 7.0).abs().min(3.0))
+            })
+            .collect();
+        let fh: Vec<(f64, f64, f64)> = clearance.iter().map(|&(h, c, s)| (h, c + t0, s)).collect();
+        let series = [
+            SweepSeries {
+                label: "clearance",
+                points: clearance,
+            },
+            SweepSeries {
+                label: "FH",
+                points: fh,
+            },
+        ];
+        let hlines = [(0.0, "c = 0"), (t0, "T0"), (2.0 * t0, "2T0")];
+        let p = dir.path().join("clearance.png");
+        clearance_sweep_png(
+            &p,
+            "clearance vs actuation",
+            "h_TFC (nm)",
+            "clearance (nm)",
+            &series,
+            &regimes(),
+            &hlines,
+        )
+        .unwrap();
+        assert_png(&p);
+
+        let nan = f64::NAN;
+        let degenerate: [(&str, Vec<SweepSeries>); 4] = [
+            ("empty", vec![]),
+            (
+                "empty-series",
+                vec![SweepSeries {
+                    label: "none",
+                    points: vec![],
+                }],
+            ),
+            (
+                "all-nan",
+                vec![SweepSeries {
+                    label: "nan",
+                    points: vec![(nan, nan, nan), (1.0, nan, 0.1), (nan, 2.0, 0.1)],
+                }],
+            ),
+            (
+                "constant",
+                vec![SweepSeries {
+                    label: "const",
+                    points: vec![
+                        (3.0, 1e-9, 0.0),
+                        (3.0, 1e-9, nan),
+                        (3.0, 1e-9, f64::INFINITY),
+                    ],
+                }],
+            ),
+        ];
+        for (name, s) in &degenerate {
+            for (bands, lines) in [(vec![], vec![]), (regimes(), hlines.to_vec())] {
+                let p = dir
+                    .path()
+                    .join(format!("clearance-{name}-{}.png", bands.len()));
+                clearance_sweep_png(&p, name, "x", "y", s, &bands, &lines).unwrap();
+                assert_png(&p);
+            }
+        }
+        // Bands and lines that are themselves degenerate.
+        let p = dir.path().join("clearance-bad-bands.png");
+        let bad = [
+            RegimeBand {
+                x0: nan,
+                x1: 1.0,
+                label: "nan",
+            },
+            RegimeBand {
+                x0: 5.0,
+                x1: 5.0,
+                label: "",
+            },
+            RegimeBand {
+                x0: 1e9,
+                x1: 2e9,
+                label: "outside",
+            },
+        ];
+        clearance_sweep_png(
+            &p,
+            "t",
+            "x",
+            "y",
+            &series,
+            &bad,
+            &[(nan, "nan"), (1e308, "huge")],
+        )
+        .unwrap();
+        assert_png(&p);
+    }
+
+    #[test]
+    fn metric_sweep_normal_and_degenerate() {
+        let dir = tempfile::tempdir().unwrap();
+        let fhm: Vec<(f64, f64)> = (0..=75)
+            .map(|i| {
+                let h = 0.2 * i as f64;
+                (
+                    h,
+                    if h < 9.7 {
+                        4.0 + 0.1 * h
+                    } else {
+                        40.0 * (h - 9.0)
+                    },
+                )
+            })
+            .collect();
+        let solid: Vec<(f64, f64)> = fhm
+            .iter()
+            .map(|&(h, _)| (h, (h - 9.7).max(0.0) * 12.0))
+            .collect();
+        let p = dir.path().join("metric.png");
+        metric_sweep_png(
+            &p,
+            "FHM/BV vs actuation",
+            "h_TFC (nm)",
+            "FHM / BV (%)",
+            &[("FHM/BV", fhm), ("% solid contact", solid)],
+            &[(9.7, "touchdown"), (8.5, "critical point"), (9.8, "close")],
+        )
+        .unwrap();
+        assert_png(&p);
+
+        let nan = f64::NAN;
+        type Named = Vec<(&'static str, Vec<(f64, f64)>)>;
+        let cases: [(&str, Named); 4] = [
+            ("empty", vec![]),
+            ("empty-series", vec![("none", vec![])]),
+            (
+                "all-nan",
+                vec![("nan", vec![(nan, 1.0), (2.0, nan), (nan, nan)])],
+            ),
+            (
+                "constant",
+                vec![("const", vec![(1.0, 0.0), (1.0, 0.0), (1.0, 0.0)])],
+            ),
+        ];
+        for (name, s) in &cases {
+            for marks in [vec![], vec![(nan, "nan"), (4.0, "td")]] {
+                let p = dir
+                    .path()
+                    .join(format!("metric-{name}-{}.png", marks.len()));
+                metric_sweep_png(&p, name, "x", "y", s, &marks).unwrap();
+                assert_png(&p);
+            }
+        }
+    }
+
+    #[test]
+    fn time_histories_normal_and_degenerate() {
+        let dir = tempfile::tempdir().unwrap();
+        // 8000 samples at 0.25 µs: a 2 ms history, times in ms.
+        let t: Vec<f64> = (0..8000).map(|i| i as f64 * 0.25e-3).collect();
+        let wave = |f: f64, a: f64, off: f64| -> Vec<(f64, f64)> {
+            t.iter()
+                .map(|&ti| (ti, off + a * (2.0 * std::f64::consts::PI * f * ti).sin()))
+                .collect()
+        };
+        let panels = vec![
+            Panel {
+                y_desc: "clearance (nm)",
+                series: vec![
+                    ("9.7 nm", wave(110.0, 0.3, 1.0)),
+                    ("12 nm", wave(110.0, 0.2, -0.3)),
+                ],
+            },
+            Panel {
+                y_desc: "force (mN)",
+                series: vec![("F_c", wave(10.7, 1.0, 2.0)), ("Q", wave(10.7, 0.3, 0.6))],
+            },
+            Panel {
+                y_desc: "μ",
+                series: vec![("μ", wave(50.0, 0.05, 0.3))],
+            },
+        ];
+        let p = dir.path().join("histories.png");
+        let start = std::time::Instant::now();
+        time_histories_png(&p, "time histories", &panels).unwrap();
+        assert_png(&p);
+        // Generous: the point is that 8000-point series do not draw point by point.
+        assert!(start.elapsed().as_secs_f64() < 20.0);
+
+        let nan = f64::NAN;
+        let cases: Vec<(&str, Vec<Panel>)> = vec![
+            ("no-panels", vec![]),
+            (
+                "empty-series",
+                vec![
+                    Panel {
+                        y_desc: "a",
+                        series: vec![],
+                    },
+                    Panel {
+                        y_desc: "b",
+                        series: vec![("none", vec![])],
+                    },
+                ],
+            ),
+            (
+                "all-nan",
+                vec![Panel {
+                    y_desc: "nan",
+                    series: vec![("nan", vec![(nan, nan); 10_000])],
+                }],
+            ),
+            (
+                "constant",
+                vec![
+                    Panel {
+                        y_desc: "const",
+                        series: vec![("c", t.iter().map(|&x| (x, 5e-9)).collect())],
+                    },
+                    Panel {
+                        y_desc: "same t",
+                        series: vec![("c", vec![(1.0, 0.0); 5000])],
+                    },
+                ],
+            ),
+        ];
+        for (name, panels) in &cases {
+            let p = dir.path().join(format!("hist-{name}.png"));
+            time_histories_png(&p, name, panels).unwrap();
+            assert_png(&p);
+        }
+    }
+
+    #[test]
+    fn decimation_keeps_envelope_and_order() {
+        let pts: Vec<(f64, f64)> = (0..8000)
+            .map(|i| {
+                let x = i as f64;
+                let spike = if i == 4321 {
+                    50.0
+                } else if i == 777 {
+                    -40.0
+                } else {
+                    0.0
+                };
+                (x, (x * 0.37).sin() + spike)
+            })
+            .collect();
+        let d = decimate_minmax(&pts, 0.0, 7999.0, 500);
+        assert!(d.len() <= 4 * 500, "{}", d.len());
+        assert!(d.len() >= 2 * 500);
+        assert!(d.contains(&pts[4321]) && d.contains(&pts[777]));
+        assert_eq!(d[0], pts[0]);
+        assert_eq!(*d.last().unwrap(), pts[7999]);
+        assert!(d.windows(2).all(|w| w[0].0 < w[1].0));
+        // Short, NaN-laden and degenerate-range inputs pass through filtered.
+        let short = [(0.0, 1.0), (f64::NAN, 2.0), (2.0, 3.0)];
+        assert_eq!(
+            decimate_minmax(&short, 0.0, 2.0, 500),
+            vec![(0.0, 1.0), (2.0, 3.0)]
+        );
+        assert_eq!(decimate_minmax(&pts, 1.0, 1.0, 10).len(), 8000);
+        assert!(decimate_minmax(&[(f64::NAN, 0.0); 100], 0.0, 1.0, 10).is_empty());
+    }
+}
