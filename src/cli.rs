@@ -323,7 +323,7 @@ pub struct SimulateArgs {
     /// dopri5 (default) or rk5_fixed.
     #[arg(long)]
     pub integrator: Option<String>,
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub rtol: Option<f64>,
     #[arg(long)]
     pub contact_max_step: Option<TimeSpan>,
@@ -336,7 +336,7 @@ pub struct SimulateArgs {
     pub no_transit_delay: bool,
     #[arg(long)]
     pub dmw_wrap: bool,
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub kr_stiffening_beta: Option<f64>,
     /// dissertation (default) or optimised.
     #[arg(long)]
@@ -346,6 +346,9 @@ pub struct SimulateArgs {
     /// Plot the time histories of these actuations.
     #[arg(long, num_args = 1..)]
     pub histories: Vec<Length>,
+    /// nominal (default) or static (start from the static equilibrium).
+    #[arg(long)]
+    pub init: Option<String>,
     /// Write case HDF5s, the sweep table and plots into this directory.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -924,15 +927,16 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         contact_max_step,
         max_step,
         fixed_step,
-        geometry
+        geometry,
+        init
     );
     cfg.transit_delay = !a.no_transit_delay;
     cfg.dmw_wrap = a.dmw_wrap;
     cfg.kr_stiffening_beta = a.kr_stiffening_beta;
     cfg.bulge_width = a.bulge_width;
     cfg.histories = a.histories.clone();
-    let params = sim::validate(&cfg)
-        .map_err(|(k, m)| anyhow::anyhow!("--{}: {m}", k.replace('_', "-")))?;
+    let params =
+        sim::validate(&cfg).map_err(|(k, m)| anyhow::anyhow!("--{}: {m}", k.replace('_', "-")))?;
     let set_name = a.contact_set.clone().unwrap_or_else(|| a.model.clone());
     let isbl_params = contact::parameter_set(&set_name).ok_or_else(|| {
         anyhow::anyhow!(
@@ -973,7 +977,7 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
             let dir = root.join("cases").join(format!("h_{:06.2}nm", h * 1e9));
             std::fs::create_dir_all(&dir)?;
             let r = sim::simulate_case(&params, h, &isbl, dmw.as_ref(), &dir)
-                .with_context(|| format!("case h_TFC = {} nm", h * 1e9));
+                .with_context(|| format!("case h_TFC = {:.3} nm", h * 1e9));
             bar.inc(1);
             let result = r?;
             Ok(sim::CaseOutcome {
@@ -1005,10 +1009,7 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         let _ = std::fs::remove_dir_all(&root);
     }
     if a.json {
-        println!(
-            "{}",
-            json!({"cases": rows, "wall_time_s": wall})
-        );
+        println!("{}", json!({"cases": rows, "wall_time_s": wall}));
         return Ok(());
     }
     println!(

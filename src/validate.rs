@@ -71,6 +71,7 @@ pub fn all_rows() -> Vec<(&'static str, Vec<Row>)> {
         ("dmw", crate::dmw::validation::rows()),
         ("contact", crate::contact::validation::isbl_rows()),
         ("mtl", crate::contact::validation::mtl_rows()),
+        ("dynamics", crate::dynamics::validation::rows()),
     ]
 }
 

@@ -3,4 +3,5 @@ mod bad_input;
 mod common;
 mod dmw_cli;
 mod pipeline_cache;
+mod simulate_cli;
 mod surface_cli;

@@ -117,7 +117,6 @@ mod tests {
         let c = run(&store);
         assert!(!c.cached);
         assert_eq!(std::fs::read(c.dir.join("data.txt")).unwrap(), b"42");
-        drop(run);
         assert_eq!(runs, 2);
         // A failing case leaves nothing behind.
         let e = get_or_compute(&store, "test-1", &json!({"x": 1}), |_| {

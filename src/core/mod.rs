@@ -1,5 +1,6 @@
 //! The small core every stage uses: configuration, cache/store, engine, outputs, plots.
 pub mod cache;
+pub mod cases;
 pub mod config;
 pub mod engine;
 pub mod hash;

@@ -21,6 +21,7 @@ pub mod geometry;
 pub mod metrics;
 pub mod params;
 pub mod two_dof;
+pub mod validation;
 
 #[cfg(test)]
 mod tests;

@@ -66,8 +66,13 @@ pub struct SimOptions {
     pub transit_delay: bool,
     /// Periodic extension of a DMW record shorter than the run (warned by the caller).
     pub wrap_dmw: bool,
-    /// Initial `[z, ϑ, ż, ϑ̇]` relative to the nominal state (§5.4: zero).
+    /// Initial `[z, ϑ, ż, ϑ̇]` relative to the nominal state (§5.4: zero), or, with
+    /// `static_init`, relative to the static equilibrium.
     pub initial_state: [f64; 4],
+    /// §5.4 `init = "static"`: start from the static equilibrium at the case's actuation
+    /// (DMW frozen at t = 0, interfacial forces on) instead of the nominal state. Shortens the
+    /// transient and avoids the violent start of a deep initial interference.
+    pub static_init: bool,
 }
 
 impl Default for SimOptions {
@@ -80,6 +85,7 @@ impl Default for SimOptions {
             transit_delay: true,
             wrap_dmw: false,
             initial_state: [0.0; 4],
+            static_init: false,
         }
     }
 }
@@ -509,18 +515,98 @@ impl<'a> TwoDofCase<'a> {
         Ok(())
     }
 
-    /// Largest step allowed from state `y`: `contact_max_step` in contact; on approach at most
-    /// half the time the POC needs to reach the contact threshold (never below the contact
-    /// cap), so the error control sees the switch instead of stepping over it.
+    /// Largest step allowed from state `y`: while the POC moves toward the contact threshold
+    /// (from either side), at most half the time it needs to reach it, but never below
+    /// `contact_max_step` — so a step ends close to every contact switch (onset, release, the
+    /// damper clip that happens next to it) and the error control resolves it, while smooth
+    /// steady contact and free flight run at the steps accuracy needs.
     fn step_cap(&self, t: f64, y: &[f64; 4], contact_max_step: f64) -> f64 {
         match self.interface(t, y) {
             Err(_) => contact_max_step,
-            Ok(i) if i.clearance <= 0.0 => contact_max_step,
-            Ok(i) if i.spacing_rate < 0.0 => {
-                (0.5 * i.clearance / -i.spacing_rate).max(contact_max_step)
+            Ok(i) => {
+                let closing = -i.clearance.signum() * i.spacing_rate;
+                if i.clearance == 0.0 {
+                    contact_max_step
+                } else if closing > 0.0 {
+                    (0.5 * i.clearance.abs() / closing).max(contact_max_step)
+                } else {
+                    f64::INFINITY
+                }
             }
-            Ok(_) => f64::INFINITY,
         }
+    }
+
+    /// Accelerations at rest at `(z, ϑ)` and `t = 0`; `None` outside the model's domain.
+    fn rest_acceleration(&self, z: f64, pitch_offset: f64) -> Option<[f64; 2]> {
+        let mut dy = [0.0; 4];
+        self.rhs(0.0, &[z, pitch_offset, 0.0, 0.0], &mut dy).ok()?;
+        (dy[2].is_finite() && dy[3].is_finite()).then_some([dy[2], dy[3]])
+    }
+
+    /// Static equilibrium `(z, ϑ)` at this actuation with the DMW frozen at t = 0 (§5.4):
+    /// damped Newton on the rest accelerations with a finite-difference Jacobian.
+    pub fn static_equilibrium(&self) -> Result<[f64; 2], DynamicsError> {
+        let fail = |why: &str| {
+            DynamicsError::Numerical(format!(
+                "static equilibrium at h_TFC = {:.3} nm: {why}",
+                self.actuation * 1e9
+            ))
+        };
+        // Accelerations scaled to comparable size: heave in m/s², pitch × the TE arm.
+        let arm = 0.5 * self.model.slider.length;
+        let norm = |a: [f64; 2]| a[0].hypot(a[1] * arm);
+        let mut q = [0.0f64, 0.0f64];
+        let mut a = self
+            .rest_acceleration(q[0], q[1])
+            .ok_or_else(|| fail("the nominal state is outside the model's domain"))?;
+        for _ in 0..100 {
+            let (dz, dp) = (1e-13, 1e-13 / arm);
+            let az = self
+                .rest_acceleration(q[0] + dz, q[1])
+                .ok_or_else(|| fail("Jacobian probe left the domain"))?;
+            let ap = self
+                .rest_acceleration(q[0], q[1] + dp)
+                .ok_or_else(|| fail("Jacobian probe left the domain"))?;
+            let j = Matrix2::new(
+                (az[0] - a[0]) / dz,
+                (ap[0] - a[0]) / dp,
+                (az[1] - a[1]) / dz,
+                (ap[1] - a[1]) / dp,
+            );
+            let Some(step) = j.try_inverse().map(|ji| -(ji * Vector2::new(a[0], a[1]))) else {
+                return Err(fail("singular Jacobian"));
+            };
+            let mut lambda = 1.0;
+            let mut accepted = None;
+            for _ in 0..40 {
+                let trial = [q[0] + lambda * step[0], q[1] + lambda * step[1]];
+                if let Some(at) = self.rest_acceleration(trial[0], trial[1]) {
+                    if norm(at) < norm(a) || norm(at) == 0.0 {
+                        accepted = Some((trial, at));
+                        break;
+                    }
+                }
+                lambda *= 0.5;
+            }
+            let Some((trial, at)) = accepted else {
+                // No decrease along the Newton direction: converged to rounding.
+                break;
+            };
+            let moved = (trial[0] - q[0]).abs().max((trial[1] - q[1]).abs() * arm);
+            q = trial;
+            a = at;
+            if moved < 1e-18 {
+                break;
+            }
+        }
+        // At rest the residual force must be negligible against the preload scale.
+        let residual = norm(a) * self.model.slider.mass;
+        if !(residual < 1e-9 * self.model.suspension.preload) {
+            return Err(fail(&format!(
+                "Newton did not converge (residual force {residual:e} N)"
+            )));
+        }
+        Ok(q)
     }
 
     /// Integrate from the nominal state (§5.4) and sample the histories.
@@ -582,6 +668,12 @@ impl<'a> TwoDofCase<'a> {
         // atol: 1e-14 m, 1e-11 rad; rates × 2π × 1 MHz (dynamics.md §10).
         let w = 2.0 * std::f64::consts::PI * 1e6;
         let atol = [1e-14, 1e-11, 1e-14 * w, 1e-11 * w];
+        let mut start = o.initial_state;
+        if o.static_init {
+            let q = self.static_equilibrium()?;
+            start[0] += q[0];
+            start[1] += q[1];
+        }
         let rhs = |t: f64, y: &[f64; 4], dy: &mut [f64; 4]| self.rhs(t, y, dy);
         let sampling = Sampling::Uniform { dt: o.output_step };
         let result = match o.integrator {
@@ -597,7 +689,7 @@ impl<'a> TwoDofCase<'a> {
                     rhs,
                     |t, y| self.step_cap(t, y, contact_max_step),
                     0.0,
-                    o.initial_state,
+                    start,
                     o.duration,
                     &opts,
                     sampling,
@@ -608,13 +700,7 @@ impl<'a> TwoDofCase<'a> {
                 let mut opts = OdeOptions::fixed(step);
                 opts.max_steps = u64::MAX;
                 crate::numerics::ode::integrate(
-                    rhs,
-                    0.0,
-                    o.initial_state,
-                    o.duration,
-                    &opts,
-                    sampling,
-                    observer,
+                    rhs, 0.0, start, o.duration, &opts, sampling, observer,
                 )
             }
         };

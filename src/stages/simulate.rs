@@ -10,6 +10,7 @@ use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::store::H5Out;
 use crate::core::units::{Length, TimeSpan};
+use crate::dynamics::air_bearing::RearStiffening;
 use crate::dynamics::metrics::{
     sweep_metrics, CaseMetrics, CaseParams, Regime, SlopeParams, SteadyWindow, SweepMetrics,
     SweepPoint,
@@ -18,7 +19,6 @@ use crate::dynamics::params::{improved_2dof, initial_2dof, optimised_bulge, Mode
 use crate::dynamics::two_dof::{
     CaseHistory, ContactForceForm, DmwInput, Integrator, SimOptions, TwoDofCase,
 };
-use crate::dynamics::air_bearing::RearStiffening;
 use crate::error::{Error, Result};
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
@@ -143,6 +143,14 @@ pub struct SimulateConfig {
     /// Actuations whose time histories are plotted (nearest case).
     #[serde(default)]
     pub histories: Vec<Length>,
+    /// `nominal` (§5.4 default: start from the nominal state) or `static` (start from the
+    /// static equilibrium at the case's actuation, recommended for sweeps).
+    #[serde(default = "default_init")]
+    pub init: String,
+}
+
+fn default_init() -> String {
+    "nominal".into()
 }
 
 /// Validated settings.
@@ -197,7 +205,10 @@ pub fn validate(cfg: &SimulateConfig) -> std::result::Result<SimulateParams, (St
     }
     if let Some(beta) = cfg.kr_stiffening_beta {
         if !(beta.is_finite() && (0.0..=10.0).contains(&beta)) {
-            return bad("kr_stiffening_beta", format!("{beta} is out of range: 0 ≤ β ≤ 10"));
+            return bad(
+                "kr_stiffening_beta",
+                format!("{beta} is out of range: 0 ≤ β ≤ 10"),
+            );
         }
         model.air_bearing.stiffening = if beta == 0.0 {
             RearStiffening::Constant
@@ -230,7 +241,10 @@ pub fn validate(cfg: &SimulateConfig) -> std::result::Result<SimulateParams, (St
             }
             let n = ((b - a) / s + 1e-9).floor() as usize;
             if n > 10_000 {
-                return bad("actuation_step", format!("{n} cases is too many (≤ 10 000)"));
+                return bad(
+                    "actuation_step",
+                    format!("{n} cases is too many (≤ 10 000)"),
+                );
             }
             // Rounded to the picometre so 0.2 nm steps give 8.6 nm, not 8.600000000000001.
             (0..=n)
@@ -272,7 +286,13 @@ pub fn validate(cfg: &SimulateConfig) -> std::result::Result<SimulateParams, (St
         },
         o => return bad("integrator", format!("unknown `{o}` (dopri5, rk5_fixed)")),
     };
+    let static_init = match cfg.init.as_str() {
+        "nominal" => false,
+        "static" => true,
+        o => return bad("init", format!("unknown `{o}` (nominal, static)")),
+    };
     let options = SimOptions {
+        static_init,
         duration: cfg.duration.0,
         output_step: cfg.output_step.0,
         contact_force,
@@ -282,7 +302,10 @@ pub fn validate(cfg: &SimulateConfig) -> std::result::Result<SimulateParams, (St
         initial_state: [0.0; 4],
     };
     if !(cfg.duration.0 > 0.0 && cfg.duration.0 <= 0.1) {
-        return bad("duration", format!("{} s is out of range: 0 < T ≤ 100 ms", cfg.duration.0));
+        return bad(
+            "duration",
+            format!("{} s is out of range: 0 < T ≤ 100 ms", cfg.duration.0),
+        );
     }
     if !(cfg.steady_start.0 >= 0.0 && cfg.steady_start.0 < 0.9 * cfg.duration.0) {
         return bad(
@@ -403,12 +426,15 @@ pub fn read_dmw_track(path: &Path) -> Result<DmwTrack> {
         .attr("sampling_rate")
         .and_then(|a| a.read_scalar::<f64>())
         .map_err(|x| e(format!("sampling_rate attribute: {x}")))?;
-    if d.len() != v.len() || d.len() < 2 || !(fs > 0.0) {
+    if d.len() != v.len() || d.len() < 2 || fs.is_nan() || fs <= 0.0 {
         return Err(e("inconsistent track datasets".into()));
     }
     // Keep the samples outside the marked edge transients.
     let first = edge.iter().position(|&b| b == 0).unwrap_or(0);
-    let last = edge.iter().rposition(|&b| b == 0).map_or(d.len(), |i| i + 1);
+    let last = edge
+        .iter()
+        .rposition(|&b| b == 0)
+        .map_or(d.len(), |i| i + 1);
     let (first, last) = if edge.len() == d.len() && last > first + 1 {
         (first, last)
     } else {
@@ -447,7 +473,13 @@ pub fn simulate_case(
     let seconds = started.elapsed().as_secs_f64();
     let m = h.metrics(&p.case_metric_params())?;
     write_case_h5(&dir.join("case.h5"), &h, actuation, &m)?;
-    Ok(case_json(actuation, &h, &m, seconds, case.contact_damping()))
+    Ok(case_json(
+        actuation,
+        &h,
+        &m,
+        seconds,
+        case.contact_damping(),
+    ))
 }
 
 fn stats_json(s: &crate::dynamics::metrics::SeriesStats) -> Value {
@@ -490,7 +522,13 @@ fn write_case_h5(path: &Path, h: &CaseHistory, actuation: f64, m: &CaseMetrics) 
     let entry = out.group("case", Some("NXentry"))?;
     out.attr_str(&entry, "default", "history")?;
     out.write_scalar(&entry, "actuation", actuation, "m", "TFC actuation h_TFC")?;
-    out.write_scalar(&entry, "nominal_area", h.nominal_area, "m^2", "bulge nominal contact area")?;
+    out.write_scalar(
+        &entry,
+        "nominal_area",
+        h.nominal_area,
+        "m^2",
+        "bulge nominal contact area",
+    )?;
     out.write_scalar(
         &entry,
         "clearance_mean",
@@ -516,14 +554,39 @@ fn write_case_h5(path: &Path, h: &CaseHistory, actuation: f64, m: &CaseMetrics) 
         ("pitch_offset", &h.pitch_offset, "rad", "pitch θ − θ0"),
         ("heave_rate", &h.heave_rate, "m/s", "dz/dt"),
         ("pitch_rate", &h.pitch_rate, "rad/s", "dθ/dt"),
-        ("spacing", &h.spacing, "m", "solid spacing s of the bulge POC"),
-        ("clearance", &h.clearance, "m", "clearance (negative: solid contact)"),
-        ("flying_height", &h.flying_height, "m", "flying height of the POC"),
-        ("contact_force", &h.contact_force, "N", "dynamic contact force F_c"),
+        (
+            "spacing",
+            &h.spacing,
+            "m",
+            "solid spacing s of the bulge POC",
+        ),
+        (
+            "clearance",
+            &h.clearance,
+            "m",
+            "clearance (negative: solid contact)",
+        ),
+        (
+            "flying_height",
+            &h.flying_height,
+            "m",
+            "flying height of the POC",
+        ),
+        (
+            "contact_force",
+            &h.contact_force,
+            "N",
+            "dynamic contact force F_c",
+        ),
         ("friction", &h.friction, "N", "friction Q"),
         ("adhesion", &h.adhesion, "N", "adhesion F_s"),
         ("real_area", &h.real_area, "m^2", "real contact area A_r"),
-        ("disk_displacement", &h.disk_displacement, "m", "DMW under the POC"),
+        (
+            "disk_displacement",
+            &h.disk_displacement,
+            "m",
+            "DMW under the POC",
+        ),
         (
             "trailing_edge_spacing",
             &h.trailing_edge_spacing,
@@ -536,8 +599,11 @@ fn write_case_h5(path: &Path, h: &CaseHistory, actuation: f64, m: &CaseMetrics) 
     out.finish()
 }
 
-/// Read a case's histories back (for plots of chosen actuations).
-pub fn read_case_history(path: &Path) -> Result<(Vec<f64>, Vec<(String, Vec<f64>)>)> {
+/// Named series of a case file.
+pub type NamedSeries = Vec<(String, Vec<f64>)>;
+
+/// Read a case's histories back (for plots of chosen actuations): time and named series.
+pub fn read_case_history(path: &Path) -> Result<(Vec<f64>, NamedSeries)> {
     let e = |m: String| Error::Stage(format!("{}: {m}", path.display()));
     let file = hdf5::File::open(path).map_err(|x| e(x.to_string()))?;
     let read = |name: &str| -> Result<Vec<f64>> {
@@ -547,7 +613,13 @@ pub fn read_case_history(path: &Path) -> Result<(Vec<f64>, Vec<(String, Vec<f64>
     };
     let time = read("time")?;
     let mut out = Vec::new();
-    for n in ["clearance", "contact_force", "friction", "adhesion", "real_area"] {
+    for n in [
+        "clearance",
+        "contact_force",
+        "friction",
+        "adhesion",
+        "real_area",
+    ] {
         out.push((n.to_string(), read(n)?));
     }
     Ok((time, out))
@@ -559,14 +631,20 @@ pub fn sweep_analysis(p: &SimulateParams, cases: &[CaseOutcome]) -> Result<Sweep
         .iter()
         .map(|c| SweepPoint {
             actuation_m: c.actuation,
-            mean_clearance_m: c.metrics["clearance_m"]["mean"].as_f64().unwrap_or(f64::NAN),
+            mean_clearance_m: c.metrics["clearance_m"]["mean"]
+                .as_f64()
+                .unwrap_or(f64::NAN),
             any_solid_contact: c.metrics["percent_solid_contact"].as_f64().unwrap_or(0.0) > 0.0,
             vibration_percent: c.metrics["vibration_percent"].as_f64().unwrap_or(f64::NAN),
         })
         .collect();
     let t0 = 0.5 * p.model.interface.lubricant_thickness;
-    sweep_metrics(&points, &SlopeParams::new(t0), p.model.nominal_flying_height)
-        .map_err(|e| Error::Stage(format!("sweep metrics: {e}")))
+    sweep_metrics(
+        &points,
+        &SlopeParams::new(t0),
+        p.model.nominal_flying_height,
+    )
+    .map_err(|e| Error::Stage(format!("sweep metrics: {e}")))
 }
 
 fn regime_name(r: Regime) -> &'static str {
@@ -587,9 +665,19 @@ pub fn case_rows(cases: &[CaseOutcome], sweep: &SweepMetrics) -> Vec<Map<String,
             let m = &c.metrics;
             let f = |v: &Value, scale: f64| v.as_f64().map(|x| x * scale);
             let mut r = Map::new();
-            r.insert("actuation_nm".into(), json!(c.actuation * 1e9));
-            r.insert("clearance_mean_nm".into(), json!(f(&m["clearance_m"]["mean"], 1e9)));
-            r.insert("clearance_std_nm".into(), json!(f(&m["clearance_m"]["std"], 1e9)));
+            // Rounded to the femtometre: 8.8 nm, not 8.799999999999999.
+            r.insert(
+                "actuation_nm".into(),
+                json!((c.actuation * 1e15).round() / 1e6),
+            );
+            r.insert(
+                "clearance_mean_nm".into(),
+                json!(f(&m["clearance_m"]["mean"], 1e9)),
+            );
+            r.insert(
+                "clearance_std_nm".into(),
+                json!(f(&m["clearance_m"]["std"], 1e9)),
+            );
             r.insert("fh_mean_nm".into(), json!(f(&m["fh_m"]["mean"], 1e9)));
             r.insert("hms_mean_nm".into(), json!(f(&m["hms_mean_m"], 1e9)));
             r.insert("vibration_percent".into(), m["vibration_percent"].clone());
@@ -598,7 +686,10 @@ pub fn case_rows(cases: &[CaseOutcome], sweep: &SweepMetrics) -> Vec<Map<String,
                 m["vibration_extrema_percent"].clone(),
             );
             r.insert("vibration_kind".into(), m["vibration_kind"].clone());
-            r.insert("solid_contact_percent".into(), m["percent_solid_contact"].clone());
+            r.insert(
+                "solid_contact_percent".into(),
+                m["percent_solid_contact"].clone(),
+            );
             r.insert(
                 "regime".into(),
                 json!(sweep.regimes.get(i).map(|r| regime_name(*r))),
@@ -607,13 +698,22 @@ pub fn case_rows(cases: &[CaseOutcome], sweep: &SweepMetrics) -> Vec<Map<String,
                 "contact_force_mean_mN".into(),
                 json!(f(&m["contact_force_N"]["mean"], 1e3)),
             );
-            r.insert("friction_mean_mN".into(), json!(f(&m["friction_N"]["mean"], 1e3)));
-            r.insert("adhesion_mean_mN".into(), json!(f(&m["adhesion_N"]["mean"], 1e3)));
+            r.insert(
+                "friction_mean_mN".into(),
+                json!(f(&m["friction_N"]["mean"], 1e3)),
+            );
+            r.insert(
+                "adhesion_mean_mN".into(),
+                json!(f(&m["adhesion_N"]["mean"], 1e3)),
+            );
             r.insert(
                 "real_area_mean_um2".into(),
                 json!(f(&m["real_area_m2"]["mean"], 1e12)),
             );
-            r.insert("friction_coefficient".into(), m["friction_coefficient"].clone());
+            r.insert(
+                "friction_coefficient".into(),
+                m["friction_coefficient"].clone(),
+            );
             r.insert(
                 "mean_pressure_GPa".into(),
                 json!(f(&m["mean_pressure_Pa"], 1e-9)),
@@ -622,7 +722,10 @@ pub fn case_rows(cases: &[CaseOutcome], sweep: &SweepMetrics) -> Vec<Map<String,
                 "shear_traction_GPa".into(),
                 json!(f(&m["shear_traction_Pa"], 1e-9)),
             );
-            r.insert("nominal_area_um2".into(), json!(f(&m["nominal_area_m2"], 1e12)));
+            r.insert(
+                "nominal_area_um2".into(),
+                json!(f(&m["nominal_area_m2"], 1e12)),
+            );
             r.insert("flyability".into(), json!(sweep.flyability.get(i)));
             r.insert("steps".into(), m["steps"].clone());
             r.insert("case_key".into(), json!(c.entry.key));
@@ -691,8 +794,7 @@ pub fn plots(
     title: &str,
 ) -> Result<()> {
     use crate::core::plot_sweep::{
-        clearance_sweep_png, metric_sweep_png, time_histories_png, Panel, RegimeBand,
-        SweepSeries,
+        clearance_sweep_png, metric_sweep_png, time_histories_png, Panel, RegimeBand, SweepSeries,
     };
     let nm_of = |v: &Value| v.as_f64().unwrap_or(f64::NAN) * 1e9;
     let clearance: Vec<(f64, f64, f64)> = cases
@@ -737,7 +839,12 @@ pub fn plots(
     let series = |key: &str| -> Vec<(f64, f64)> {
         cases
             .iter()
-            .map(|c| (c.actuation * 1e9, c.metrics[key].as_f64().unwrap_or(f64::NAN)))
+            .map(|c| {
+                (
+                    c.actuation * 1e9,
+                    c.metrics[key].as_f64().unwrap_or(f64::NAN),
+                )
+            })
             .collect()
     };
     metric_sweep_png(
@@ -746,8 +853,14 @@ pub fn plots(
         "TFC actuation (nm)",
         "FHM / BV (%)",
         &[
-            ("eq. 2.1, 5 largest/smallest samples", series("vibration_percent")),
-            ("5 largest/smallest local extrema", series("vibration_extrema_percent")),
+            (
+                "eq. 2.1, 5 largest/smallest samples",
+                series("vibration_percent"),
+            ),
+            (
+                "5 largest/smallest local extrema",
+                series("vibration_extrema_percent"),
+            ),
         ],
         &marks,
     )?;
@@ -891,7 +1004,7 @@ pub fn run_cases(
             let entry = cases::get_or_compute(store, MODEL_VERSION, &params, |dir| {
                 simulate_case(p, a, isbl, dmw.map(|d| d.0), dir)
             })
-            .map_err(|e| Error::Stage(format!("case h_TFC = {} nm: {e}", a * 1e9)));
+            .map_err(|e| Error::Stage(format!("case h_TFC = {:.3} nm: {e}", a * 1e9)));
             let k = finished.fetch_add(1, Ordering::Relaxed) + 1;
             progress.set_message(format!("{k}/{total} cases"));
             let entry = entry?;
@@ -953,9 +1066,13 @@ impl Stage for SimulateStage {
             .upstream
             .get(&p.contact)
             .ok_or_else(|| Error::Stage(format!("no result from contact `{}`", p.contact)))?;
-        let isbl_params = super::contact::isbl_params_from_json(&contact["inputs"]).ok_or_else(
-            || Error::Stage(format!("contact `{}` result has no usable `inputs`", p.contact)),
-        )?;
+        let isbl_params =
+            super::contact::isbl_params_from_json(&contact["inputs"]).ok_or_else(|| {
+                Error::Stage(format!(
+                    "contact `{}` result has no usable `inputs`",
+                    p.contact
+                ))
+            })?;
         let key_of = |name: &str| {
             ctx.fingerprint
                 .upstream
@@ -976,7 +1093,8 @@ impl Stage for SimulateStage {
             }
             None => None,
         };
-        ctx.progress.set_message(format!("{} cases", p.actuations.len()));
+        ctx.progress
+            .set_message(format!("{} cases", p.actuations.len()));
         let cases = run_cases(
             p,
             ctx.store,

@@ -81,6 +81,15 @@ fn settles_to_the_static_equilibrium_with_adhesion() {
         "still moving: {:e}",
         spread.1 - spread.0
     );
+    // The static solver finds the same rest state directly (§5.4 init = "static").
+    let q = case.static_equilibrium().unwrap();
+    assert!(
+        (q[0] - h.heave[n - 1]).abs() < 1e-15,
+        "{:e} vs {:e}",
+        q[0],
+        h.heave[n - 1]
+    );
+    assert!((q[1] - h.pitch_offset[n - 1]).abs() < 1e-12);
     // Published flying clearance at 8.5 nm: 2.54 nm (class K ±0.05 nm, §12 row 18); the
     // independent reference gets 2.525 nm with F_s(s).
     let c = h.clearance[n - 1];
@@ -185,6 +194,27 @@ fn contact_at_high_actuation_and_air_bearing_loss() {
     let n = h.len();
     assert!(h.clearance[n - 1] < 0.0);
     assert!(h.contact_force[n - 1] > 0.0 && h.friction[n - 1] > 0.0 && h.real_area[n - 1] > 0.0);
+    // 15 nm from the nominal state starts 3.9 nm deep in the disk: the contact throws the
+    // slider off the air bearing. From the static equilibrium it settles into steady contact.
+    let e = TwoDofCase::new(&improved_2dof(), 15e-9, &isbl, None, short(0.2e-3))
+        .unwrap()
+        .run()
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("air bearing lost"), "{e}");
+    let mut options = short(0.2e-3);
+    options.static_init = true;
+    let h = TwoDofCase::new(&improved_2dof(), 15e-9, &isbl, None, options)
+        .unwrap()
+        .run()
+        .unwrap();
+    let spread = h
+        .clearance
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(*v), b.max(*v))
+        });
+    assert!(spread.1 < 0.0 && spread.1 - spread.0 < 1e-12, "{spread:?}");
     // Lifted 5 nm: the TE flies above 15 nm → stopped and reported, not continued.
     let mut options = short(0.2e-3);
     options.initial_state = [5e-9, 0.0, 0.0, 0.0];
