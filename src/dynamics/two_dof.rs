@@ -601,7 +601,7 @@ impl<'a> TwoDofCase<'a> {
         }
         // At rest the residual force must be negligible against the preload scale.
         let residual = norm(a) * self.model.slider.mass;
-        if !(residual < 1e-9 * self.model.suspension.preload) {
+        if residual.is_nan() || residual >= 1e-9 * self.model.suspension.preload {
             return Err(fail(&format!(
                 "Newton did not converge (residual force {residual:e} N)"
             )));
