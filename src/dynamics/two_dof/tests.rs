@@ -261,8 +261,10 @@ fn agrees_with_the_independent_scipy_implementation() {
     let isbl = lookup();
     let params = crate::dynamics::metrics::CaseParams::improved_2dof();
     let run = |h: f64| {
-        let mut o = SimOptions::default();
-        o.static_init = true;
+        let o = SimOptions {
+            static_init: true,
+            ..SimOptions::default()
+        };
         let case = TwoDofCase::new(&improved_2dof(), h, &isbl, None, o).unwrap();
         case.run().unwrap().metrics(&params).unwrap()
     };
