@@ -757,6 +757,11 @@ pub struct SlopeParams {
     pub on_line_tol_m: f64,
     /// Points that seed the A-line before it is extended (≥ 2).
     pub min_a_points: usize,
+    /// The A-line starts at the first flying point at or above this actuation [m] (2 nm):
+    /// below ~1 nm the bulge is flatter than the pitch tilts the ABS, its lowest point sits on
+    /// the TE-side rim, and c̄(h) bends away from the approach line for geometric reasons. If
+    /// fewer than two flying points lie above it, A starts at the lowest actuation.
+    pub a_start_m: f64,
 }
 
 impl SlopeParams {
@@ -765,6 +770,7 @@ impl SlopeParams {
             t0_m,
             on_line_tol_m: 0.05e-9,
             min_a_points: 3,
+            a_start_m: 2e-9,
         }
     }
 }
@@ -824,9 +830,19 @@ pub fn slopes(points: &[SweepPoint], p: &SlopeParams) -> Result<SlopeAnalysis> {
 
     // A.
     let mut a = None;
-    if run >= 2 {
-        let seed = p.min_a_points.max(2).min(run);
-        let mut fit = LineFit::fit(points, (0..seed).collect()).expect("two points");
+    let start = points[..run]
+        .iter()
+        .position(|q| q.actuation_m >= p.a_start_m)
+        .filter(|&i| run - i >= 2)
+        .unwrap_or(0);
+    if run - start >= 2 {
+        let seed = start + p.min_a_points.max(2).min(run - start);
+        let Some(mut fit) = LineFit::fit(points, (start..seed).collect()) else {
+            return Err(MetricsError::NonFinite {
+                what: "approach line",
+                index: start,
+            });
+        };
         for j in seed..run {
             let q = &points[j];
             if (q.mean_clearance_m - fit.at(q.actuation_m)).abs() > p.on_line_tol_m {
@@ -834,7 +850,10 @@ pub fn slopes(points: &[SweepPoint], p: &SlopeParams) -> Result<SlopeAnalysis> {
             }
             let mut idx = fit.indices.clone();
             idx.push(j);
-            fit = LineFit::fit(points, idx).expect("two points");
+            match LineFit::fit(points, idx) {
+                Some(f) => fit = f,
+                None => break,
+            }
         }
         a = Some(fit);
     }
@@ -842,7 +861,7 @@ pub fn slopes(points: &[SweepPoint], p: &SlopeParams) -> Result<SlopeAnalysis> {
     // B.
     let first_contact = (run < points.len()).then_some(run);
     let last_on_a = a.as_ref().and_then(|fa| {
-        (0..run).rev().find(|&i| {
+        (start..run).rev().find(|&i| {
             (points[i].mean_clearance_m - fa.at(points[i].actuation_m)).abs() <= p.on_line_tol_m
         })
     });
@@ -1263,6 +1282,31 @@ mod tests {
         }
         let o = optimum_operating_point(&flat, Some(&cp), m.touchdown_index).unwrap();
         assert_eq!(o, Some(idx(9.9)));
+    }
+
+    #[test]
+    fn approach_line_skips_the_small_actuation_bend() {
+        // A sweep from 0 nm whose first points bend away from the approach line (below ~1 nm
+        // the bulge's rim is the lowest point): A still has slope −1 and the same CP.
+        let mut pts: Vec<SweepPoint> = (0..50)
+            .map(|k| {
+                let h = k as f64 / 10.0;
+                let c = 11.05 - h - 0.3 * (-h / 0.3).exp();
+                SweepPoint {
+                    actuation_m: h * NM,
+                    mean_clearance_m: c * NM,
+                    any_solid_contact: false,
+                    vibration_percent: 8.0,
+                }
+            })
+            .collect();
+        pts.extend(synthetic_sweep());
+        let s = slopes(&pts, &SlopeParams::new(0.75 * NM)).unwrap();
+        let a = s.a.as_ref().unwrap();
+        assert!(close(a.slope, -1.0, 1e-4), "A = {}", a.slope);
+        assert!(pts[a.indices[0]].actuation_m >= 2.0 * NM);
+        let cp = s.critical_point.unwrap();
+        assert!(close(cp.actuation_m, 8.6 * NM, 1e-3), "{}", cp.actuation_m);
     }
 
     #[test]

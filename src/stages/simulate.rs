@@ -1110,13 +1110,15 @@ impl Stage for SimulateStage {
         crate::core::store::write_table(&rows, &ctx.out_dir.join("sweep"))?;
         plots(ctx.out_dir, p, &cases, &sweep, &self.name)?;
         let summary = sweep_json(&cases, &sweep);
+        // Femtometre-rounded nm: 10.2, not 10.200000000000001.
+        let nm = |x: f64| (x * 1e15).round() / 1e6;
         let mut row = Map::new();
         row.insert("model".into(), json!(p.model_name));
         row.insert("geometry".into(), json!(p.geometry));
         row.insert("cases".into(), json!(cases.len()));
         row.insert(
             "touchdown_nm".into(),
-            json!(sweep.touchdown_actuation_m.map(|x| x * 1e9)),
+            json!(sweep.touchdown_actuation_m.map(nm)),
         );
         if let Some(cp) = &sweep.slopes.critical_point {
             row.insert("critical_point_nm".into(), json!(cp.actuation_m * 1e9));
@@ -1132,7 +1134,7 @@ impl Stage for SimulateStage {
         }
         row.insert(
             "optimum_nm".into(),
-            json!(sweep.optimum_index.map(|i| cases[i].actuation * 1e9)),
+            json!(sweep.optimum_index.map(|i| nm(cases[i].actuation))),
         );
         let cached = cases.iter().filter(|c| c.entry.cached).count();
         Ok(StageOutput {
