@@ -25,7 +25,7 @@ use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
 
 /// Bump when the numbers a case produces change.
-pub const MODEL_VERSION: &str = "simulate-1";
+pub const MODEL_VERSION: &str = "simulate-2";
 
 fn default_model() -> String {
     "improved_2dof".into()
