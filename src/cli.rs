@@ -935,8 +935,15 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     cfg.kr_stiffening_beta = a.kr_stiffening_beta;
     cfg.bulge_width = a.bulge_width;
     cfg.histories = a.histories.clone();
-    let params =
-        sim::validate(&cfg).map_err(|(k, m)| anyhow::anyhow!("--{}: {m}", k.replace('_', "-")))?;
+    let params = sim::validate(&cfg).map_err(|(k, m)| {
+        // The list key is `actuations` in pipeline.toml, `--actuation` on the command line.
+        let flag = if k == "actuations" {
+            "actuation".to_string()
+        } else {
+            k.replace('_', "-")
+        };
+        anyhow::anyhow!("--{flag}: {m}")
+    })?;
     let set_name = a.contact_set.clone().unwrap_or_else(|| a.model.clone());
     let isbl_params = contact::parameter_set(&set_name).ok_or_else(|| {
         anyhow::anyhow!(

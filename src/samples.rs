@@ -247,6 +247,7 @@ pub fn bench(config: &Path, size: usize) -> Result<()> {
         best.1
     );
     let _ = std::fs::remove_dir_all(&tmp);
+    bench_slider()?;
 
     if config.is_file() {
         let exe = std::env::current_exe()?;
@@ -272,5 +273,71 @@ pub fn bench(config: &Path, size: usize) -> Result<()> {
             noop
         );
     }
+    Ok(())
+}
+
+/// The 2-DOF slider figures of docs/performance.md: one 2 ms case and the 76-case sweep on all
+/// cores, improved model, spec defaults, the spec's synthetic DMW (σ 1 nm).
+fn bench_slider() -> Result<()> {
+    use crate::contact::isbl::{IsblModel, IsblParams};
+    use crate::contact::lookup::IsblLookup;
+    use crate::dmw::synthetic::synthetic_dmw;
+    use crate::dynamics::params::improved_2dof;
+    use crate::dynamics::two_dof::{DmwInput, SimOptions, TwoDofCase};
+    use rayon::prelude::*;
+    let isbl = IsblLookup::build(
+        IsblModel::new(IsblParams::improved_2dof())?,
+        0.05,
+        -2.0,
+        10.0,
+    )?;
+    let track = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1)?;
+    let dmw = || {
+        Some(DmwInput {
+            displacement: &track.displacement,
+            velocity: &track.velocity,
+            sample_rate: track.fs,
+        })
+    };
+    let model = improved_2dof();
+    let options = SimOptions {
+        static_init: true,
+        ..SimOptions::default()
+    };
+    let run = |h: f64| -> Result<u64> {
+        let case = TwoDofCase::new(&model, h, &isbl, dmw(), options)?;
+        Ok(case.run()?.stats.accepted_steps)
+    };
+    for h in [8.5e-9, 12e-9] {
+        let mut best = f64::INFINITY;
+        let mut steps = 0;
+        for _ in 0..5 {
+            let t = Instant::now();
+            steps = run(h)?;
+            best = best.min(t.elapsed().as_secs_f64());
+        }
+        println!(
+            "2-DOF slider, one 2 ms case at {:.1} nm ({steps} steps, best of 5):   {:.1} ms",
+            h * 1e9,
+            best * 1e3
+        );
+    }
+    let mut best = f64::INFINITY;
+    for _ in 0..3 {
+        let t = Instant::now();
+        let results: Vec<Result<u64>> = (0..76)
+            .into_par_iter()
+            .map(|i| run(i as f64 * 0.2e-9))
+            .collect();
+        for r in results {
+            r?;
+        }
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    println!(
+        "2-DOF slider, 76-case sweep 0–15 nm on {} threads (best of 3):   {:.3} s",
+        rayon::current_num_threads(),
+        best
+    );
     Ok(())
 }

@@ -36,7 +36,7 @@ fn ad_hoc_cases_land_on_the_published_clearance_and_contact() {
 #[test]
 fn bad_simulation_input_is_a_clean_error() {
     let run = |args: &[&str]| hdi().arg("simulate").args(args).output().unwrap();
-    assert_clean_failure(&run(&["--actuation", "20 nm"]), "--actuations");
+    assert_clean_failure(&run(&["--actuation", "20 nm"]), "--actuation:");
     assert_clean_failure(&run(&["--integrator", "euler"]), "--integrator");
     assert_clean_failure(&run(&["--dmw", "no/such/dmw.h5"]), "no/such/dmw.h5");
     assert_clean_failure(&run(&["--rtol", "-1"]), "--rtol");
@@ -82,4 +82,36 @@ fn pipeline_sweep_caches_each_case() {
     let o = p.run(&["run", "--only", "improved_sweep", "--force"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(read(&p)["cases_cached"], 3);
+}
+
+#[test]
+fn bad_simulate_keys_name_the_key_and_line() {
+    let p = Project::shipped();
+    let before = snapshot(&p.processed());
+    for (from, to, needle) in [
+        (
+            "contact = \"improved\"",
+            "contact = \"nope\"",
+            "simulate.improved_sweep.contact",
+        ),
+        (
+            "actuation_stop = \"15 nm\"",
+            "actuation_stop = \"25 nm\"",
+            "simulate.improved_sweep.actuation_stop",
+        ),
+        (
+            "init = \"static\"",
+            "init = \"static\"\nintegrater = \"dopri5\"",
+            "integrater",
+        ),
+    ] {
+        let text = p.config();
+        assert!(text.contains(from), "{from}");
+        p.set_config(&text.replacen(from, to, 1));
+        let o = p.run(&["run"]);
+        assert_clean_failure(&o, needle);
+        assert!(stderr(&o).contains("pipeline.toml"), "{}", stderr(&o));
+        p.set_config(&text);
+    }
+    assert_eq!(snapshot(&p.processed()), before);
 }

@@ -256,8 +256,15 @@ pub fn validate(cfg: &SimulateConfig) -> std::result::Result<SimulateParams, (St
         return bad("actuations", "no actuation to simulate".into());
     }
     if let Some(a) = actuations.iter().find(|a| !(**a >= 0.0 && **a <= max)) {
+        let key = if cfg.actuations.is_some() {
+            "actuations"
+        } else if *a < 0.0 {
+            "actuation_start"
+        } else {
+            "actuation_stop"
+        };
         return bad(
-            "actuations",
+            key,
             format!(
                 "{} nm is outside the model's range 0 … {} nm",
                 a * 1e9,
