@@ -459,10 +459,79 @@ fn initial_model_rows() -> Vec<Row> {
     rows
 }
 
+/// The optimised design of §2.3 (S2o, §12.2 row 26), w_TFC = 50 µm [assumption].
+fn optimised_rows() -> Vec<Row> {
+    let mut rows = Vec::new();
+    let Ok(bulge) = super::params::optimised_bulge(50e-6) else {
+        return rows;
+    };
+    let model = improved_2dof().with_bulge(bulge);
+    let Ok(isbl) = IsblModel::new(IsblParams::improved_2dof())
+        .and_then(|m| IsblLookup::build(m, 0.05, -2.0, 10.0))
+    else {
+        return rows;
+    };
+    let Ok(track) = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1) else {
+        return rows;
+    };
+    let dmw = || {
+        Some(DmwInput {
+            displacement: &track.displacement,
+            velocity: &track.velocity,
+            sample_rate: track.fs,
+        })
+    };
+    let nm = 1e-9;
+    let actuations: Vec<f64> = std::iter::once(8.6)
+        .chain((0..=8).map(|i| 9.0 + 0.2 * i as f64))
+        .collect();
+    let mut cases: Vec<(f64, Option<[f64; 7]>)> = actuations
+        .par_iter()
+        .map(|&h| (h, case_with(&model, &isbl, h * nm, dmw(), true)))
+        .collect();
+    cases.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let variant = "optimised bulge a = 4.86 µm, x = 6.35 µm, w = 50 µm (assumed), static init, \
+                   synthetic DMW";
+    let c86 = cases
+        .iter()
+        .find(|(h, _)| (*h - 8.6).abs() < 1e-9)
+        .and_then(|(_, m)| *m)
+        .map_or(f64::NAN, |m| m[0] / nm);
+    rows.push(row(
+        "dynamics §12.2 #26 (D) [seed §2.3.2]",
+        "optimised design: clearance at 8.6 nm (critical point)",
+        "nm",
+        2.23,
+        c86,
+        Tolerance::Absolute(0.15),
+        false,
+        variant,
+        "class D: w_TFC and the adhesion inputs were dropped (docs/validation.md)",
+    ));
+    let td = cases
+        .iter()
+        .filter(|(h, _)| *h >= 9.0)
+        .find(|(_, m)| m.is_some_and(|m| m[2] > 0.0))
+        .map_or(f64::NAN, |(h, _)| *h);
+    rows.push(row(
+        "dynamics §12.2 #26 (D) [seed §2.3.2]",
+        "optimised design: touchdown (0.2 nm steps)",
+        "nm",
+        9.9,
+        td,
+        Tolerance::Absolute(0.2),
+        false,
+        variant,
+        "class D: w_TFC and the adhesion inputs were dropped (docs/validation.md)",
+    ));
+    rows
+}
+
 /// Every 2-DOF row.
 pub fn rows() -> Vec<Row> {
     let mut rows = geometry_rows();
     rows.extend(dynamics_rows());
     rows.extend(initial_model_rows());
+    rows.extend(optimised_rows());
     rows
 }
