@@ -302,6 +302,18 @@ pub struct SimulateArgs {
     /// A DMW stage output (`dmw.h5`, track 1); none by default.
     #[arg(long)]
     pub dmw: Option<PathBuf>,
+    /// Interface overrides on top of `--contact-set` (the `[contact]` keys): Δγ ("60 mN/m" or
+    /// "variable"), ε, R, η, H.
+    #[arg(long)]
+    pub surface_energy: Option<String>,
+    #[arg(long, allow_hyphen_values = true)]
+    pub lj_spacing: Option<Length>,
+    #[arg(long, allow_hyphen_values = true)]
+    pub r: Option<Length>,
+    #[arg(long, allow_hyphen_values = true)]
+    pub eta: Option<PerArea>,
+    #[arg(long, allow_hyphen_values = true)]
+    pub hardness: Option<Pressure>,
     /// One or more actuations, e.g. "8.5 nm" "12 nm"; otherwise the sweep below.
     #[arg(long, num_args = 1..)]
     pub actuation: Vec<Length>,
@@ -944,13 +956,23 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         };
         anyhow::anyhow!("--{flag}: {m}")
     })?;
-    let set_name = a.contact_set.clone().unwrap_or_else(|| a.model.clone());
-    let isbl_params = contact::parameter_set(&set_name).ok_or_else(|| {
-        anyhow::anyhow!(
-            "--contact-set: unknown set `{set_name}` (initial_2dof, improved_2dof, three_dof, \
-             mtl_table_3_2)"
-        )
-    })?;
+    let mut interface = ContactConfig::defaults();
+    interface.parameter_set = a.contact_set.clone().unwrap_or_else(|| a.model.clone());
+    interface.surface_energy = a.surface_energy.clone().map(SurfaceEnergyConfig::Text);
+    interface.lj_spacing = a.lj_spacing;
+    interface.r = a.r;
+    interface.eta = a.eta;
+    interface.hardness = a.hardness;
+    let isbl_params = contact::validate(&interface)
+        .map_err(|(k, m)| {
+            let flag = if k == "parameter_set" {
+                "contact-set".to_string()
+            } else {
+                k.replace('_', "-")
+            };
+            anyhow::anyhow!("--{flag}: {m}")
+        })?
+        .params;
     let isbl = crate::contact::lookup::IsblLookup::build(
         crate::contact::isbl::IsblModel::new(isbl_params)?,
         0.05,

@@ -34,6 +34,28 @@ fn ad_hoc_cases_land_on_the_published_clearance_and_contact() {
 }
 
 #[test]
+fn interface_overrides_reach_the_cases() {
+    // Δγ → 0 removes the adhesion; the 12 nm contact then sits less deep (0.63 vs 0.80 nm).
+    let run = |extra: &[&str]| {
+        let o = hdi()
+            .args(["simulate", "--init", "static", "--duration", "0.6 ms"])
+            .args(["--steady-start", "0.3 ms", "--actuation", "12 nm", "--json"])
+            .args(extra)
+            .output()
+            .unwrap();
+        json_of(&o)["cases"][0].clone()
+    };
+    let default = run(&[]);
+    let no_adhesion = run(&["--surface-energy", "0.1 mN/m"]);
+    assert!(no_adhesion["adhesion_mean_mN"].as_f64().unwrap() < 0.01);
+    let (c0, c1) = (
+        default["clearance_mean_nm"].as_f64().unwrap(),
+        no_adhesion["clearance_mean_nm"].as_f64().unwrap(),
+    );
+    assert!(c1 > c0 + 0.1, "{c0} {c1}");
+}
+
+#[test]
 fn bad_simulation_input_is_a_clean_error() {
     let run = |args: &[&str]| hdi().arg("simulate").args(args).output().unwrap();
     assert_clean_failure(&run(&["--actuation", "20 nm"]), "--actuation:");
@@ -41,6 +63,8 @@ fn bad_simulation_input_is_a_clean_error() {
     assert_clean_failure(&run(&["--dmw", "no/such/dmw.h5"]), "no/such/dmw.h5");
     assert_clean_failure(&run(&["--rtol", "-1"]), "--rtol");
     assert_clean_failure(&run(&["--model", "5dof"]), "--model");
+    assert_clean_failure(&run(&["--contact-set", "nope"]), "--contact-set");
+    assert_clean_failure(&run(&["--surface-energy", "lots"]), "--surface-energy");
 }
 
 #[test]
