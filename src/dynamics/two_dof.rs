@@ -90,6 +90,68 @@ impl Default for SimOptions {
     }
 }
 
+impl SimOptions {
+    /// Every option within its range (errors name the option), independent of the model.
+    pub fn validate(&self) -> Result<(), DynamicsError> {
+        let o = self;
+        if let Some(v) = o.initial_state.iter().find(|v| !v.is_finite()) {
+            return Err(parameter("initial state", *v, "must be finite"));
+        }
+        if !(o.duration.is_finite() && o.duration > 0.0 && o.duration <= 1.0) {
+            return Err(parameter(
+                "duration (s)",
+                o.duration,
+                "must lie in (0, 1] s",
+            ));
+        }
+        if !(o.output_step.is_finite() && o.output_step > 0.0 && o.output_step <= o.duration) {
+            return Err(parameter(
+                "output step (s)",
+                o.output_step,
+                "must be > 0 and at most the duration",
+            ));
+        }
+        if o.duration / o.output_step > 5e7 {
+            return Err(parameter(
+                "output step (s)",
+                o.output_step,
+                "gives more than 5·10⁷ samples",
+            ));
+        }
+        match o.integrator {
+            Integrator::Dopri5 {
+                rtol,
+                contact_max_step,
+                max_step,
+            } => {
+                if !(rtol > 0.0 && rtol < 1e-2) {
+                    return Err(parameter("rtol", rtol, "must lie in (0, 0.01)"));
+                }
+                if !(contact_max_step > 0.0 && contact_max_step.is_finite()) {
+                    return Err(parameter(
+                        "contact_max_step (s)",
+                        contact_max_step,
+                        "must be finite and > 0",
+                    ));
+                }
+                if max_step.is_nan() || max_step <= 0.0 {
+                    return Err(parameter("max_step (s)", max_step, "must be > 0"));
+                }
+            }
+            Integrator::Rk5Fixed { step } => {
+                if !(step > 0.0 && step.is_finite() && o.duration / step <= 1e9) {
+                    return Err(parameter(
+                        "fixed step (s)",
+                        step,
+                        "must be > 0 and give at most 10⁹ steps",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 /// A DMW displacement track and its velocity, uniformly sampled from t = 0.
 #[derive(Debug, Clone, Copy)]
 pub struct DmwInput<'a> {
@@ -240,61 +302,8 @@ impl<'a> TwoDofCase<'a> {
                 ),
             ));
         }
+        options.validate()?;
         let o = &options;
-        if let Some(v) = o.initial_state.iter().find(|v| !v.is_finite()) {
-            return Err(parameter("initial state", *v, "must be finite"));
-        }
-        if !(o.duration.is_finite() && o.duration > 0.0 && o.duration <= 1.0) {
-            return Err(parameter(
-                "duration (s)",
-                o.duration,
-                "must lie in (0, 1] s",
-            ));
-        }
-        if !(o.output_step.is_finite() && o.output_step > 0.0 && o.output_step <= o.duration) {
-            return Err(parameter(
-                "output step (s)",
-                o.output_step,
-                "must be > 0 and at most the duration",
-            ));
-        }
-        if o.duration / o.output_step > 5e7 {
-            return Err(parameter(
-                "output step (s)",
-                o.output_step,
-                "gives more than 5·10⁷ samples",
-            ));
-        }
-        match o.integrator {
-            Integrator::Dopri5 {
-                rtol,
-                contact_max_step,
-                max_step,
-            } => {
-                if !(rtol > 0.0 && rtol < 1e-2) {
-                    return Err(parameter("rtol", rtol, "must lie in (0, 0.01)"));
-                }
-                if !(contact_max_step > 0.0 && contact_max_step.is_finite()) {
-                    return Err(parameter(
-                        "contact_max_step (s)",
-                        contact_max_step,
-                        "must be finite and > 0",
-                    ));
-                }
-                if max_step.is_nan() || max_step <= 0.0 {
-                    return Err(parameter("max_step (s)", max_step, "must be > 0"));
-                }
-            }
-            Integrator::Rk5Fixed { step } => {
-                if !(step > 0.0 && step.is_finite() && o.duration / step <= 1e9) {
-                    return Err(parameter(
-                        "fixed step (s)",
-                        step,
-                        "must be > 0 and give at most 10⁹ steps",
-                    ));
-                }
-            }
-        }
         let geometry = model.geometry();
         let air_bearing = model.air_bearing_model()?;
         let suspension = model.suspension_coefficients()?;

@@ -321,7 +321,7 @@ pub fn validate(cfg: &SimulateConfig) -> std::result::Result<SimulateParams, (St
         );
     }
     // The case checks the remaining numbers (rtol, steps, output step) with their ranges.
-    if let Err(e) = check_options(&model, &options) {
+    if let Err(e) = options.validate().map_err(|e| e.to_string()) {
         let key = if e.contains("rtol") {
             "rtol"
         } else if e.contains("contact_max_step") {
@@ -347,22 +347,6 @@ pub fn validate(cfg: &SimulateConfig) -> std::result::Result<SimulateParams, (St
         histories: cfg.histories.iter().map(|l| l.0).collect(),
         geometry: cfg.geometry.clone(),
     })
-}
-
-/// The option checks of [`TwoDofCase::new`] without an interface (a tiny stand-in table).
-fn check_options(model: &Model2Dof, options: &SimOptions) -> std::result::Result<(), String> {
-    use std::sync::OnceLock;
-    static PROBE: OnceLock<Option<IsblLookup>> = OnceLock::new();
-    let probe = PROBE.get_or_init(|| {
-        let m = IsblModel::new(crate::contact::isbl::IsblParams::improved_2dof()).ok()?;
-        IsblLookup::build(m, 0.5, -4.0, 10.0).ok()
-    });
-    match probe {
-        Some(l) => TwoDofCase::new(model, 0.0, l, None, *options)
-            .map(|_| ())
-            .map_err(|e| e.to_string()),
-        None => Ok(()),
-    }
 }
 
 impl SimulateParams {
