@@ -179,13 +179,21 @@ pub struct InterfaceState {
     pub real_area: f64,
     /// DMW displacement under the POC [m].
     pub disk_displacement: f64,
-    /// TE spacing above the local disk surface [m].
-    pub trailing_edge_spacing: f64,
     /// The damper would have pulled (`F_c` clipped to 0).
     pub clipped: bool,
     /// World offset COM → POC, x and z [m] (lever arm).
     pub lever_x: f64,
     pub lever_z: f64,
+}
+
+/// Where the bulge POC is and how it moves (what the step cap needs; no forces).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct PocKinematics {
+    spacing: f64,
+    spacing_rate: f64,
+    disk_displacement: f64,
+    lever_x: f64,
+    lever_z: f64,
 }
 
 /// Sampled time histories of one case (SI).
@@ -239,12 +247,6 @@ impl CaseHistory {
     pub fn is_empty(&self) -> bool {
         self.spacing.is_empty()
     }
-}
-
-/// Why a right-hand-side evaluation stopped the integration.
-#[derive(Debug, Clone, PartialEq)]
-enum Stop {
-    Model(DynamicsError),
 }
 
 /// One prepared case: every constant of the right-hand side computed once.
@@ -418,8 +420,9 @@ impl<'a> TwoDofCase<'a> {
         }
     }
 
-    /// The interface at state `y` and time `t`.
-    fn interface(&self, t: f64, y: &[f64; 4]) -> Result<InterfaceState, DynamicsError> {
+    /// Kinematics of the bulge POC at state `y` and time `t`: spacing above the local disk
+    /// surface, its rate, the DMW under it and the lever arm (no forces).
+    fn poc_kinematics(&self, t: f64, y: &[f64; 4]) -> Result<PocKinematics, DynamicsError> {
         let (z, pitch_offset, z_rate, pitch_rate) = (y[0], y[1], y[2], y[3]);
         let pitch = self.model.nominal_pitch + pitch_offset;
         let poc = self.geometry.bulge_poc(z, pitch, self.actuation)?;
@@ -430,11 +433,26 @@ impl<'a> TwoDofCase<'a> {
             0.0
         };
         let (zd, vd) = self.disk(t, poc_delay);
-        let spacing = poc.solid_spacing - zd;
-        let spacing_rate = poc.spacing_rate(pitch, z_rate, pitch_rate, 0.0) - vd;
-        let (zd_rear, _) = self.disk(t, self.delay_rear);
+        Ok(PocKinematics {
+            spacing: poc.solid_spacing - zd,
+            spacing_rate: poc.spacing_rate(pitch, z_rate, pitch_rate, 0.0) - vd,
+            disk_displacement: zd,
+            lever_x: poc.lever_arm.x,
+            lever_z: poc.lever_arm.z,
+        })
+    }
+
+    /// Spacing of the TE above the local disk surface (for the AB-loss check and output).
+    fn trailing_edge_spacing(&self, t: f64, y: &[f64; 4]) -> f64 {
+        let pitch = self.model.nominal_pitch + y[1];
         let te = self.geometry.trailing_edge();
-        let trailing_edge_spacing = self.geometry.spacing_of(&te, z, pitch) - zd_rear;
+        self.geometry.spacing_of(&te, y[0], pitch) - self.disk(t, self.delay_rear).0
+    }
+
+    /// The interface at state `y` and time `t`.
+    fn interface(&self, t: f64, y: &[f64; 4]) -> Result<InterfaceState, DynamicsError> {
+        let k = self.poc_kinematics(t, y)?;
+        let (spacing, spacing_rate) = (k.spacing, k.spacing_rate);
         let clearance = self.criterion.clearance(spacing, self.sigma);
         let area = self.nominal_area;
         let numerical = |e: crate::contact::ContactError| DynamicsError::Numerical(e.to_string());
@@ -471,16 +489,15 @@ impl<'a> TwoDofCase<'a> {
             friction,
             adhesion,
             real_area,
-            disk_displacement: zd,
-            trailing_edge_spacing,
+            disk_displacement: k.disk_displacement,
             clipped,
-            lever_x: poc.lever_arm.x,
-            lever_z: poc.lever_arm.z,
+            lever_x: k.lever_x,
+            lever_z: k.lever_z,
         })
     }
 
     /// `y' = f(t, y)`.
-    fn rhs(&self, t: f64, y: &[f64; 4], dy: &mut [f64; 4]) -> Result<(), Stop> {
+    fn rhs(&self, t: f64, y: &[f64; 4], dy: &mut [f64; 4]) -> Result<(), DynamicsError> {
         let state = HeavePitchState {
             heave: y[0],
             pitch_offset: y[1],
@@ -506,7 +523,7 @@ impl<'a> TwoDofCase<'a> {
                 dy.fill(f64::NAN);
                 return Ok(());
             }
-            Err(e) => return Err(Stop::Model(e)),
+            Err(e) => return Err(e),
         };
         // f_c = [F_c; r_x F_c + r_z Q], f_s = [−F_s; −r_x F_s] (eqs. 2.14–2.15, §1.1).
         let f_interface = Vector2::new(
@@ -530,14 +547,15 @@ impl<'a> TwoDofCase<'a> {
     /// damper clip that happens next to it) and the error control resolves it, while smooth
     /// steady contact and free flight run at the steps accuracy needs.
     fn step_cap(&self, t: f64, y: &[f64; 4], contact_max_step: f64) -> f64 {
-        match self.interface(t, y) {
+        match self.poc_kinematics(t, y) {
             Err(_) => contact_max_step,
-            Ok(i) => {
-                let closing = -i.clearance.signum() * i.spacing_rate;
-                if i.clearance == 0.0 {
+            Ok(k) => {
+                let clearance = self.criterion.clearance(k.spacing, self.sigma);
+                let closing = -clearance.signum() * k.spacing_rate;
+                if clearance == 0.0 {
                     contact_max_step
                 } else if closing > 0.0 {
-                    (0.5 * i.clearance.abs() / closing).max(contact_max_step)
+                    (0.5 * clearance.abs() / closing).max(contact_max_step)
                 } else {
                     f64::INFINITY
                 }
@@ -649,7 +667,8 @@ impl<'a> TwoDofCase<'a> {
         let mut ab_lost: Option<(f64, f64)> = None;
         let observer = |t: f64, y: &[f64; 4]| match self.interface(t, y) {
             Ok(i) => {
-                let te_fh = self.flying_height(i.trailing_edge_spacing);
+                let te_spacing = self.trailing_edge_spacing(t, y);
+                let te_fh = self.flying_height(te_spacing);
                 if te_fh > AB_LOSS_FLYING_HEIGHT && ab_lost.is_none() {
                     ab_lost = Some((t, te_fh));
                 }
@@ -665,7 +684,7 @@ impl<'a> TwoDofCase<'a> {
                 h.adhesion.push(i.adhesion);
                 h.real_area.push(i.real_area);
                 h.disk_displacement.push(i.disk_displacement);
-                h.trailing_edge_spacing.push(i.trailing_edge_spacing);
+                h.trailing_edge_spacing.push(te_spacing);
                 h.clipped_samples += usize::from(i.clipped);
             }
             Err(e) => {
@@ -725,10 +744,7 @@ impl<'a> TwoDofCase<'a> {
         }
         let solution = result.map_err(|e| {
             DynamicsError::Numerical(match e {
-                OdeError::Rhs {
-                    t,
-                    source: Stop::Model(m),
-                } => format!("at t = {:.6} ms: {m}", t * 1e3),
+                OdeError::Rhs { t, source: m } => format!("at t = {:.6} ms: {m}", t * 1e3),
                 OdeError::StepUnderflow { t, h } => format!(
                     "integration failed: the step fell to {h:e} s at t = {:.6} ms (no convergence)",
                     t * 1e3

@@ -9,7 +9,7 @@ use super::params::{improved_2dof, initial_2dof, Model2Dof};
 use super::two_dof::{DmwInput, SimOptions, TwoDofCase};
 use crate::contact::isbl::{IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
-use crate::dmw::synthetic::synthetic_dmw;
+use crate::dmw::synthetic::{synthetic_dmw, Excitation};
 use crate::validate::{Row, Tolerance};
 use rayon::prelude::*;
 
@@ -193,19 +193,14 @@ fn case_with(
 }
 
 /// Kinematic (K) and dropped-input (D) landmarks of the improved model (§12.2 rows 16–24).
-fn dynamics_rows() -> Vec<Row> {
+fn dynamics_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
     let mut rows = Vec::new();
     let model = improved_2dof();
-    let Ok(isbl) = IsblModel::new(IsblParams::improved_2dof())
-        .and_then(|m| IsblLookup::build(m, 0.05, -2.0, 10.0))
-    else {
-        return rows;
-    };
     let nm = 1e-9;
     // Class K without DMW: the static flying line and its slope.
     let flying: Vec<(f64, Option<[f64; 7]>)> = [4.0, 5.0, 6.0, 7.0, 8.5]
         .par_iter()
-        .map(|&h| (h, case(&model, &isbl, h * nm, None)))
+        .map(|&h| (h, case(&model, isbl, h * nm, None)))
         .collect();
     let c85 = flying
         .iter()
@@ -261,20 +256,11 @@ fn dynamics_rows() -> Vec<Row> {
         "",
     ));
     // Class D with the spec's synthetic DMW (σ 1 nm, §6), before calibration.
-    let Ok(track) = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1) else {
-        return rows;
-    };
-    let dmw = || {
-        Some(DmwInput {
-            displacement: &track.displacement,
-            velocity: &track.velocity,
-            sample_rate: track.fs,
-        })
-    };
+    let dmw = || Some(dmw_input(track));
     let actuations: Vec<f64> = (0..=15).map(|i| 9.0 + 0.2 * i as f64).collect();
     let mut scan: Vec<(f64, Option<[f64; 7]>)> = actuations
         .par_iter()
-        .map(|&h| (h, case(&model, &isbl, h * nm, dmw())))
+        .map(|&h| (h, case(&model, isbl, h * nm, dmw())))
         .collect();
     scan.sort_by(|a, b| a.0.total_cmp(&b.0));
     let td = scan
@@ -295,8 +281,8 @@ fn dynamics_rows() -> Vec<Row> {
         dvariant,
         note,
     ));
-    let c12 = case(&model, &isbl, 12.0 * nm, dmw());
-    let fhm85 = case(&model, &isbl, 8.5 * nm, dmw());
+    let c12 = case(&model, isbl, 12.0 * nm, dmw());
+    let fhm85 = case(&model, isbl, 8.5 * nm, dmw());
     rows.push(row(
         "dynamics §12.2 #18 (D) [seed §2.2.2]",
         "FHM at 8.5 nm",
@@ -313,7 +299,7 @@ fn dynamics_rows() -> Vec<Row> {
         "steady clearance at 9.5 nm",
         "nm",
         0.67,
-        case(&model, &isbl, 9.5 * nm, dmw()).map_or(f64::NAN, |m| m[0] / nm),
+        case(&model, isbl, 9.5 * nm, dmw()).map_or(f64::NAN, |m| m[0] / nm),
         Tolerance::Absolute(0.2),
         false,
         dvariant,
@@ -377,24 +363,10 @@ fn dynamics_rows() -> Vec<Row> {
 }
 
 /// Initial 2-DOF model landmarks (§12.2 rows 7–9), static init, synthetic DMW.
-fn initial_model_rows() -> Vec<Row> {
+fn initial_model_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
     let mut rows = Vec::new();
     let model = initial_2dof();
-    let Ok(isbl) = IsblModel::new(IsblParams::initial_2dof())
-        .and_then(|m| IsblLookup::build(m, 0.05, -2.0, 10.0))
-    else {
-        return rows;
-    };
-    let Ok(track) = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1) else {
-        return rows;
-    };
-    let dmw = || {
-        Some(DmwInput {
-            displacement: &track.displacement,
-            velocity: &track.velocity,
-            sample_rate: track.fs,
-        })
-    };
+    let dmw = || Some(dmw_input(track));
     let nm = 1e-9;
     let actuations: Vec<f64> = [4.0, 5.0, 6.0, 7.0]
         .into_iter()
@@ -402,7 +374,7 @@ fn initial_model_rows() -> Vec<Row> {
         .collect();
     let mut cases: Vec<(f64, Option<[f64; 7]>)> = actuations
         .par_iter()
-        .map(|&h| (h, case_with(&model, &isbl, h * nm, dmw(), true)))
+        .map(|&h| (h, case_with(&model, isbl, h * nm, dmw(), true)))
         .collect();
     cases.sort_by(|a, b| a.0.total_cmp(&b.0));
     let at = |h: f64| {
@@ -460,34 +432,20 @@ fn initial_model_rows() -> Vec<Row> {
 }
 
 /// The optimised design of §2.3 (S2o, §12.2 row 26), w_TFC = 50 µm [assumption].
-fn optimised_rows() -> Vec<Row> {
+fn optimised_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
     let mut rows = Vec::new();
     let Ok(bulge) = super::params::optimised_bulge(50e-6) else {
         return rows;
     };
     let model = improved_2dof().with_bulge(bulge);
-    let Ok(isbl) = IsblModel::new(IsblParams::improved_2dof())
-        .and_then(|m| IsblLookup::build(m, 0.05, -2.0, 10.0))
-    else {
-        return rows;
-    };
-    let Ok(track) = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1) else {
-        return rows;
-    };
-    let dmw = || {
-        Some(DmwInput {
-            displacement: &track.displacement,
-            velocity: &track.velocity,
-            sample_rate: track.fs,
-        })
-    };
+    let dmw = || Some(dmw_input(track));
     let nm = 1e-9;
     let actuations: Vec<f64> = std::iter::once(8.6)
         .chain((0..=8).map(|i| 9.0 + 0.2 * i as f64))
         .collect();
     let mut cases: Vec<(f64, Option<[f64; 7]>)> = actuations
         .par_iter()
-        .map(|&h| (h, case_with(&model, &isbl, h * nm, dmw(), true)))
+        .map(|&h| (h, case_with(&model, isbl, h * nm, dmw(), true)))
         .collect();
     cases.sort_by(|a, b| a.0.total_cmp(&b.0));
     let variant = "optimised bulge a = 4.86 µm, x = 6.35 µm, w = 50 µm (assumed), static init, \
@@ -527,11 +485,48 @@ fn optimised_rows() -> Vec<Row> {
     rows
 }
 
-/// Every 2-DOF row.
+/// Track 1 of a synthetic excitation as the simulation's DMW input.
+fn dmw_input(track: &Excitation) -> DmwInput<'_> {
+    DmwInput {
+        displacement: &track.displacement,
+        velocity: &track.velocity,
+        sample_rate: track.fs,
+    }
+}
+
+fn interface(params: IsblParams) -> Result<IsblLookup, String> {
+    IsblModel::new(params)
+        .and_then(|m| IsblLookup::build(m, 0.05, -2.0, 10.0))
+        .map_err(|e| e.to_string())
+}
+
+/// Every 2-DOF row. The interfaces and the spec's synthetic DMW (σ 1 nm, seed 1, §6) are built
+/// once for all landmark rows; if they cannot be built, one failing row says why.
 pub fn rows() -> Vec<Row> {
     let mut rows = geometry_rows();
-    rows.extend(dynamics_rows());
-    rows.extend(initial_model_rows());
-    rows.extend(optimised_rows());
+    let inputs = (|| {
+        let improved = interface(IsblParams::improved_2dof())?;
+        let initial = interface(IsblParams::initial_2dof())?;
+        let track = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1).map_err(|e| e.to_string())?;
+        Ok::<_, String>((improved, initial, track))
+    })();
+    match inputs {
+        Ok((improved, initial, track)) => {
+            rows.extend(dynamics_rows(&improved, &track));
+            rows.extend(initial_model_rows(&initial, &track));
+            rows.extend(optimised_rows(&improved, &track));
+        }
+        Err(e) => rows.push(row(
+            "dynamics §12",
+            "simulation inputs (interfaces, synthetic DMW)",
+            "-",
+            f64::NAN,
+            f64::NAN,
+            Tolerance::Absolute(0.0),
+            true,
+            "-",
+            &format!("could not be built: {e}"),
+        )),
+    }
     rows
 }

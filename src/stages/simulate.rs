@@ -886,21 +886,18 @@ pub fn plots(
         let fc = get("contact_force");
         let q = get("friction");
         let ar = get("real_area");
-        let ratio = |num: &[f64], den: &[f64], scale: f64| -> Vec<(f64, f64)> {
+        // μ, P_m and τ only where F_c > 1 µN, as the metrics define them (dynamics.md §8).
+        let loaded = |num: &[f64], den: &[f64], scale: f64| -> Vec<(f64, f64)> {
             ms.iter()
+                .zip(fc)
                 .zip(num.iter().zip(den))
-                .filter(|(_, (_, d))| **d > 1e-6 * if scale == 1.0 { 1.0 } else { 1e-12 })
-                .map(|(t, (n, d))| (*t, n / d * scale))
+                .filter(|((_, f), _)| **f > 1e-6)
+                .map(|((t, _), (n, d))| (*t, n / d * scale))
                 .collect()
         };
-        let mu: Vec<(f64, f64)> = ms
-            .iter()
-            .zip(q.iter().zip(fc))
-            .filter(|(_, (_, f))| **f > 1e-6)
-            .map(|(t, (q, f))| (*t, q / f))
-            .collect();
-        let pm = ratio(fc, ar, 1e-9);
-        let tau = ratio(q, ar, 1e-9);
+        let mu = loaded(q, fc, 1.0);
+        let pm = loaded(fc, ar, 1e-9);
+        let tau = loaded(q, ar, 1e-9);
         let name = format!("history_{:.2}nm.png", c.actuation * 1e9);
         time_histories_png(
             &dir.join(name),
