@@ -77,6 +77,10 @@ pub enum Command {
         /// Only these areas (e.g. dmw).
         #[arg(long, num_args = 1..)]
         only: Vec<String>,
+        /// Pipeline whose finished `[calibrate.*]` fits are re-evaluated (area `calibration`;
+        /// skipped when the file does not exist).
+        #[arg(long, default_value = "pipeline.toml")]
+        config: PathBuf,
     },
     /// Generate the shipped synthetic sample data (deterministic).
     Synth {
@@ -384,7 +388,7 @@ pub fn main() -> Result<()> {
         Command::Dmw(args) => cmd_dmw(*args),
         Command::Contact(args) => cmd_contact(*args),
         Command::Simulate(args) => cmd_simulate(*args),
-        Command::Validate { json, only } => cmd_validate(json, &only),
+        Command::Validate { json, only, config } => cmd_validate(json, &only, &config),
         Command::Synth {
             what,
             out_dir,
@@ -1102,19 +1106,28 @@ fn fmt_number(x: f64) -> String {
     }
 }
 
-fn cmd_validate(as_json: bool, only: &[String]) -> Result<()> {
-    let mut areas = crate::validate::all_rows();
-    if !only.is_empty() {
-        let known: Vec<&str> = areas.iter().map(|(a, _)| *a).collect();
-        for o in only {
-            if !known.contains(&o.as_str()) {
-                bail!(
-                    "--only: unknown area `{o}` (available: {})",
-                    known.join(", ")
-                );
-            }
+fn cmd_validate(as_json: bool, only: &[String], config: &Path) -> Result<()> {
+    let mut known: Vec<&str> = crate::validate::AREAS.iter().map(|(a, _)| *a).collect();
+    known.push("calibration");
+    for o in only {
+        if !known.contains(&o.as_str()) {
+            bail!(
+                "--only: unknown area `{o}` (available: {})",
+                known.join(", ")
+            );
         }
-        areas.retain(|(a, _)| only.iter().any(|o| o == a));
+    }
+    let wants = |a: &str| only.is_empty() || only.iter().any(|o| o == a);
+    let mut areas: Vec<(&'static str, Vec<crate::validate::Row>)> = crate::validate::AREAS
+        .iter()
+        .filter(|(a, _)| wants(a))
+        .map(|(a, rows)| (*a, rows()))
+        .collect();
+    // The fits of the pipeline in the working directory, when there is one (or when asked).
+    if wants("calibration") && (config.exists() || !only.is_empty()) {
+        let rows = crate::stages::calibrate::validation_rows(config)
+            .with_context(|| format!("calibration rows from {}", config.display()))?;
+        areas.push(("calibration", rows));
     }
     let failed = crate::validate::failures(&areas);
     let total: usize = areas.iter().map(|(_, r)| r.len()).sum();

@@ -1,5 +1,6 @@
 //! One integration-test binary (one link step on 2 cores), one module per concern.
 mod bad_input;
+mod calibrate_cli;
 mod common;
 mod dmw_cli;
 mod pipeline_cache;

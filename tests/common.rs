@@ -31,6 +31,12 @@ impl Project {
         let text =
             std::fs::read_to_string(repo_root().join("pipeline.toml")).expect("read pipeline.toml");
         let text = text.replace("actuation_step = \"0.2 nm\"", "actuation_step = \"5 nm\"");
+        // …and a two-target, one-knob calibration of a few evaluations (the shipped one runs
+        // ~2000 cases).
+        let text = text.replace(
+            "max_evaluations = 120",
+            "max_evaluations = 3\nknobs = [\"dmw_scale\"]\ntargets = [\"clearance_8.5nm\", \"fhm_8.5nm\"]",
+        );
         std::fs::write(dir.path().join("pipeline.toml"), text).expect("write pipeline.toml");
         Self { dir }
     }

@@ -77,6 +77,10 @@ pub struct RawConfig {
     /// `[simulate.NAME]`: 2-DOF slider cases over an actuation sweep.
     #[serde(default)]
     pub simulate: BTreeMap<String, crate::stages::simulate::SimulateConfig>,
+    /// `[calibrate.NAME]`: fit the dropped knobs of a `[simulate]` instance to the published
+    /// class-D landmarks.
+    #[serde(default)]
+    pub calibrate: BTreeMap<String, crate::stages::calibrate::CalibrateConfig>,
 }
 
 /// A loaded pipeline file: its text (for line lookups) and parsed content.

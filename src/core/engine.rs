@@ -422,7 +422,8 @@ pub fn run(stages: Vec<Box<dyn Stage>>, store: &Store, opts: &RunOptions) -> Res
     Ok(RunReport { outcomes, current })
 }
 
-fn read_result(dir: &Path) -> Result<Value> {
+/// A store entry's `result.json`.
+pub fn read_result(dir: &Path) -> Result<Value> {
     let p = dir.join("result.json");
     let bytes = std::fs::read(&p).map_err(|e| Error::io(&p, e))?;
     serde_json::from_slice(&bytes).map_err(|e| Error::Stage(format!("{}: {e}", p.display())))

@@ -510,3 +510,81 @@ pub fn stacked_png(
         Ok(())
     })
 }
+
+/// One row per category (labels on the y axis), one marker per series on a shared x axis, with
+/// a shaded band `[−band, band]` (normalised residuals against their tolerance band).
+pub fn category_dots_png(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    categories: &[String],
+    series: &[(&str, Vec<f64>)],
+    band: f64,
+) -> Result<()> {
+    let n = categories.len();
+    if n == 0 {
+        return Err(perr(path, "no categories to plot"));
+    }
+    let finite = series
+        .iter()
+        .flat_map(|(_, v)| v.iter())
+        .filter(|v| v.is_finite());
+    let (lo, hi) = finite.fold((-band, band), |(a, b), v| (a.min(*v), b.max(*v)));
+    let pad = 0.08 * (hi - lo).max(1e-12);
+    let palette = [BLUE, RED, GREEN, MAGENTA];
+    let height = 120 + 36 * n as u32;
+    render_png(path, (860, height), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 20))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(220)
+            .build_cartesian_2d((lo - pad)..(hi + pad), -0.5f64..(n as f64 - 0.5))
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_labels(n)
+            .y_label_formatter(&|y| {
+                let i = y.round();
+                if (y - i).abs() < 1e-6 && i >= 0.0 && (i as usize) < n {
+                    categories[n - 1 - i as usize].clone()
+                } else {
+                    String::new()
+                }
+            })
+            .disable_y_mesh()
+            .draw()
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(std::iter::once(Rectangle::new(
+                [(-band, -0.5), (band, n as f64 - 0.5)],
+                GREEN.mix(0.12).filled(),
+            )))
+            .map_err(|e| e.to_string())?;
+        for (k, (label, values)) in series.iter().enumerate() {
+            let c = palette[k % palette.len()];
+            // Rows top-down in category order; series offset a little so markers do not hide.
+            let dy = (k as f64 - 0.5 * (series.len() as f64 - 1.0)) * 0.18;
+            chart
+                .draw_series(
+                    values
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, v)| v.is_finite())
+                        .map(|(i, v)| Circle::new((*v, (n - 1 - i) as f64 + dy), 6, c.filled())),
+                )
+                .map_err(|e| e.to_string())?
+                .label(*label)
+                .legend(move |(x, y)| Circle::new((x + 7, y), 5, c.filled()));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerRight)
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.8))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        Ok(())
+    })
+}

@@ -17,6 +17,7 @@
 //! The equations of motion are not here; this module gives them every geometric and AB term.
 
 pub mod air_bearing;
+pub mod calibration;
 pub mod geometry;
 pub mod metrics;
 pub mod params;

@@ -573,6 +573,22 @@ impl<'a> TwoDofCase<'a> {
     /// Static equilibrium `(z, ϑ)` at this actuation with the DMW frozen at t = 0 (§5.4):
     /// damped Newton on the rest accelerations with a finite-difference Jacobian.
     pub fn static_equilibrium(&self) -> Result<[f64; 2], DynamicsError> {
+        // Newton from the nominal state first; where strong adhesion makes the rest forces
+        // fold (a jump to contact), the root lies on the other side of the fold and Newton
+        // from the nominal state stalls on it, so retry from heave offsets on either side.
+        let mut first_error = None;
+        for dz in [0.0, -0.5, 0.5, -1.0, 1.0, -2.0, 2.0, -4.0, 4.0] {
+            match self.static_equilibrium_from([dz * 1e-9, 0.0]) {
+                Ok(q) => return Ok(q),
+                Err(e) => {
+                    first_error.get_or_insert(e);
+                }
+            }
+        }
+        Err(first_error.expect("at least one start"))
+    }
+
+    fn static_equilibrium_from(&self, start: [f64; 2]) -> Result<[f64; 2], DynamicsError> {
         let fail = |why: &str| {
             DynamicsError::Numerical(format!(
                 "static equilibrium at h_TFC = {:.3} nm: {why}",
@@ -582,10 +598,10 @@ impl<'a> TwoDofCase<'a> {
         // Accelerations scaled to comparable size: heave in m/s², pitch × the TE arm.
         let arm = 0.5 * self.model.slider.length;
         let norm = |a: [f64; 2]| a[0].hypot(a[1] * arm);
-        let mut q = [0.0f64, 0.0f64];
+        let mut q = start;
         let mut a = self
             .rest_acceleration(q[0], q[1])
-            .ok_or_else(|| fail("the nominal state is outside the model's domain"))?;
+            .ok_or_else(|| fail("the start state is outside the model's domain"))?;
         for _ in 0..100 {
             let (dz, dp) = (1e-13, 1e-13 / arm);
             let az = self
@@ -634,6 +650,13 @@ impl<'a> TwoDofCase<'a> {
             )));
         }
         Ok(q)
+    }
+
+    /// Clearance of the bulge at rest at `(z, ϑ)` with the DMW frozen at t = 0 (e.g. at the
+    /// static equilibrium).
+    pub fn clearance_at_rest(&self, q: [f64; 2]) -> Result<f64, DynamicsError> {
+        let k = self.poc_kinematics(0.0, &[q[0], q[1], 0.0, 0.0])?;
+        Ok(self.criterion.clearance(k.spacing, self.sigma))
     }
 
     /// Integrate from the nominal state (§5.4) and sample the histories.

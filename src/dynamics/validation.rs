@@ -1,8 +1,9 @@
 //! `hdi validate` rows of the 2-DOF models (dynamics.md §2.7, §3.1, §12): geometry and AB
 //! (class G: must pass), kinematic landmarks (class K), and the landmarks that depend on
 //! dropped inputs (class D), computed live with the same code the simulation stage runs.
-//! Class-D rows are marked not reproducible until the calibration of dynamics.md §12 is done;
-//! they show hdi's number and why (docs/validation.md).
+//! Class-D rows here are the spec defaults (not reproducible: they show hdi's number and why,
+//! docs/validation.md); the same targets after the §12 calibration are the area `calibration`
+//! (`[calibrate.*]` fits of the pipeline, docs/calibration.md).
 
 use super::air_bearing::heave_pitch_modes;
 use super::params::{improved_2dof, initial_2dof, Model2Dof};
@@ -268,7 +269,8 @@ fn dynamics_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
         .find(|(_, m)| m.is_some_and(|m| m[2] > 0.0))
         .map_or(f64::NAN, |(h, _)| *h);
     let note = "class D: depends on dropped inputs (DMW spectrum, AB damping, rear stiffening \
-                β, Δγ, ε, ζ_c); not yet calibrated — see docs/validation.md";
+                β, Δγ, ε, ζ_c); spec defaults here, the fitted knobs in area `calibration` \
+                (docs/calibration.md)";
     let dvariant = "improved 2-DOF, spec defaults, synthetic DMW σ = 1 nm (seed 1)";
     rows.push(row(
         "dynamics §12.2 #16 (D) [seed §2.2.1]",
@@ -426,7 +428,8 @@ fn initial_model_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
         false,
         variant,
         "class D: ISBL adhesion inputs, AB damping and the DMW were dropped; the dissertation \
-         calibrated n to 9.8 nm (S1c) (docs/validation.md)",
+         calibrated n to 9.8 nm (S1c); `[calibrate]` with model initial_2dof fits n \
+         (docs/calibration.md)",
     ));
     rows
 }

@@ -1,3 +1,4 @@
 //! Small numeric kernels shared by stages (FFT helpers, the ODE integrator, ...).
 pub mod fft2;
+pub mod nelder_mead;
 pub mod ode;

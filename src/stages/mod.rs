@@ -1,5 +1,6 @@
 //! Stage implementations, one module per stage kind, and the registry that turns a parsed
 //! `pipeline.toml` into stage instances.
+pub mod calibrate;
 pub mod contact;
 pub mod contact_mtl;
 pub mod dmw;
@@ -66,6 +67,12 @@ pub fn build(file: &PipelineFile) -> Result<Vec<Box<dyn Stage>>, ConfigError> {
     for (name, cfg) in &file.raw.simulate {
         check_name("simulate", name)?;
         stages.push(Box::new(simulate::SimulateStage::from_config(
+            file, name, cfg,
+        )?));
+    }
+    for (name, cfg) in &file.raw.calibrate {
+        check_name("calibrate", name)?;
+        stages.push(Box::new(calibrate::CalibrateStage::from_config(
             file, name, cfg,
         )?));
     }

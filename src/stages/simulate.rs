@@ -147,6 +147,10 @@ pub struct SimulateConfig {
     /// static equilibrium at the case's actuation, recommended for sweeps).
     #[serde(default = "default_init")]
     pub init: String,
+    /// A `[calibrate.*]` instance whose fitted knobs (DMW scale, β, Δγ, ε, ζ_c, …) replace
+    /// the spec defaults of this instance.
+    #[serde(default)]
+    pub calibration: Option<String>,
 }
 
 fn default_init() -> String {
@@ -165,6 +169,9 @@ pub struct SimulateParams {
     pub steady_start: f64,
     pub histories: Vec<f64>,
     pub geometry: String,
+    pub calibration: Option<String>,
+    /// The fitted knob values applied at run time (empty without calibration).
+    pub calibrated_knobs: Vec<(String, f64)>,
 }
 
 /// Validation failures: (key, message).
@@ -346,6 +353,8 @@ pub fn validate(cfg: &SimulateConfig) -> std::result::Result<SimulateParams, (St
         steady_start: cfg.steady_start.0,
         histories: cfg.histories.iter().map(|l| l.0).collect(),
         geometry: cfg.geometry.clone(),
+        calibration: cfg.calibration.clone(),
+        calibrated_knobs: Vec::new(),
     })
 }
 
@@ -362,11 +371,15 @@ impl SimulateParams {
             "options": format!("{:?}", self.options),
             "steady_start_s": self.steady_start,
             "histories_m": self.histories,
+            "calibration": self.calibration,
         })
     }
 
     fn case_params(&self, actuation: f64, contact_key: &str, dmw_key: Option<&str>) -> Value {
+        // `model_parameters` carries the calibrated model; the DMW scale and the calibrated
+        // interface enter through `calibrated_knobs`.
         json!({
+            "calibrated_knobs": self.calibrated_knobs,
             "model_parameters": format!("{:?}", self.model),
             "actuation_m": actuation,
             "options": format!("{:?}", self.options),
@@ -953,6 +966,24 @@ impl SimulateStage {
                 format!("no [contact.{}] in this file", cfg.contact),
             ));
         }
+        if let Some(c) = &params.calibration {
+            let Some(cal) = file.raw.calibrate.get(c) else {
+                return Err(file.error(
+                    "simulate",
+                    name,
+                    "calibration",
+                    format!("no [calibrate.{c}] in this file"),
+                ));
+            };
+            if cal.simulate == name {
+                return Err(file.error(
+                    "simulate",
+                    name,
+                    "calibration",
+                    format!("[calibrate.{c}] calibrates this instance; run the calibrated sweep as a second [simulate] instance"),
+                ));
+            }
+        }
         if let Some(d) = &params.dmw {
             if !file.raw.dmw.contains_key(d) {
                 return Err(file.error(
@@ -1046,21 +1077,36 @@ impl Stage for SimulateStage {
     fn upstream(&self) -> Vec<String> {
         let mut u = vec![self.params.contact.clone()];
         u.extend(self.params.dmw.iter().cloned());
+        u.extend(self.params.calibration.iter().cloned());
         u
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
-        let p = &self.params;
-        let contact = ctx
-            .upstream
-            .get(&p.contact)
-            .ok_or_else(|| Error::Stage(format!("no result from contact `{}`", p.contact)))?;
-        let isbl_params =
-            super::contact::isbl_params_from_json(&contact["inputs"]).ok_or_else(|| {
-                Error::Stage(format!(
-                    "contact `{}` result has no usable `inputs`",
-                    p.contact
-                ))
+        let (mut isbl_params, mut dmw_track) =
+            super::calibrate::base_inputs(&self.params, &ctx.upstream, &ctx.upstream_dirs)?;
+        let mut calibrated = self.params.clone();
+        if let Some(cal) = &self.params.calibration {
+            let result = ctx
+                .upstream
+                .get(cal)
+                .ok_or_else(|| Error::Stage(format!("no result from calibrate `{cal}`")))?;
+            let fitted = super::calibrate::fitted_knobs(result).ok_or_else(|| {
+                Error::Stage(format!("calibrate `{cal}` result has no usable `fitted`"))
             })?;
+            let scale = crate::dynamics::calibration::apply_knobs(
+                &fitted,
+                &mut calibrated.model,
+                &mut isbl_params,
+            )?;
+            if let Some(t) = dmw_track.as_mut() {
+                t.displacement.iter_mut().for_each(|x| *x *= scale);
+                t.velocity.iter_mut().for_each(|x| *x *= scale);
+            }
+            calibrated.calibrated_knobs = fitted
+                .iter()
+                .map(|(k, v)| (k.name().to_string(), *v))
+                .collect();
+        }
+        let p = &calibrated;
         let key_of = |name: &str| {
             ctx.fingerprint
                 .upstream
@@ -1071,15 +1117,9 @@ impl Stage for SimulateStage {
         };
         ctx.progress.set_message("interface table");
         let isbl = IsblLookup::build(IsblModel::new(isbl_params)?, 0.05, -2.0, 10.0)?;
-        let dmw = match &p.dmw {
-            Some(d) => {
-                let dir = ctx
-                    .upstream_dirs
-                    .get(d)
-                    .ok_or_else(|| Error::Stage(format!("no files from dmw `{d}`")))?;
-                Some((read_dmw_track(&dir.join("dmw.h5"))?, key_of(d)))
-            }
-            None => None,
+        let dmw = match (&p.dmw, dmw_track) {
+            (Some(d), Some(t)) => Some((t, key_of(d))),
+            _ => None,
         };
         ctx.progress
             .set_message(format!("{} cases", p.actuations.len()));
@@ -1103,6 +1143,7 @@ impl Stage for SimulateStage {
         let mut row = Map::new();
         row.insert("model".into(), json!(p.model_name));
         row.insert("geometry".into(), json!(p.geometry));
+        row.insert("calibration".into(), json!(p.calibration));
         row.insert("cases".into(), json!(cases.len()));
         row.insert(
             "touchdown_nm".into(),
@@ -1133,6 +1174,8 @@ impl Stage for SimulateStage {
                 })).collect::<Vec<_>>(),
                 "case_keys": cases.iter().map(|c| c.entry.key.clone()).collect::<Vec<_>>(),
                 "cases_cached": cached,
+                "calibration": p.calibration,
+                "calibrated_knobs": p.calibrated_knobs.iter().map(|(k, v)| json!({"knob": k, "value": v})).collect::<Vec<_>>(),
                 "table": "sweep.parquet",
             }),
             summary_row: Some(row),

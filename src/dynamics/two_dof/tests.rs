@@ -284,3 +284,35 @@ fn agrees_with_the_independent_scipy_implementation() {
         m.clearance_m.mean
     );
 }
+
+/// Strong adhesion folds the rest forces near the jump to contact: Newton from the nominal
+/// state stalls on the fold, and the static equilibrium must be found from another start (the
+/// contact side). Every actuation across the jump has one, with zero residual force.
+#[test]
+fn static_equilibrium_is_found_across_the_jump_to_contact() {
+    for delta_gamma in [0.118, 0.15, 0.2] {
+        let isbl = IsblLookup::build(
+            IsblModel::new(IsblParams {
+                surface_energy: crate::contact::isbl::SurfaceEnergy::Constant { delta_gamma },
+                ..IsblParams::improved_2dof()
+            })
+            .unwrap(),
+            0.05,
+            -2.0,
+            10.0,
+        )
+        .unwrap();
+        for h in [9.3, 9.5, 9.7, 9.9] {
+            let case =
+                TwoDofCase::new(&improved_2dof(), h * 1e-9, &isbl, None, short(1e-4)).unwrap();
+            let q = case
+                .static_equilibrium()
+                .unwrap_or_else(|e| panic!("Δγ {delta_gamma}, {h} nm: {e}"));
+            let a = case.rest_acceleration(q[0], q[1]).unwrap();
+            assert!(
+                a[0].abs() * case.model.slider.mass < 1e-9 * case.model.suspension.preload,
+                "Δγ {delta_gamma}, {h} nm: {a:?}"
+            );
+        }
+    }
+}

@@ -1,0 +1,597 @@
+//! Calibration stage (dynamics.md §12): fit the dropped `[assumption]` knobs of a `[simulate]`
+//! instance to the dissertation's class-D landmarks. Cached like every stage: the fit reruns
+//! only when the base model, its contact set, its DMW record or the calibration settings change.
+//! A `[simulate]` instance with `calibration = "NAME"` then runs with the fitted knobs.
+
+use super::simulate::{self, DmwTrack, SimulateParams};
+use crate::contact::isbl::IsblParams;
+use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::engine::{Stage, StageContext, StageOutput};
+use crate::core::units::Length;
+use crate::dynamics::calibration::{
+    calibrate, default_knobs, evaluate, targets_for, CalibrationBase, CalibrationResult,
+    CalibrationSettings, Evaluation, Knob, KnobRange,
+};
+use crate::dynamics::two_dof::DmwInput;
+use crate::error::{Error, Result};
+use serde::Deserialize;
+use serde_json::{json, Map, Value};
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+pub const MODEL_VERSION: &str = "calibrate-1";
+
+fn default_evaluations() -> usize {
+    120
+}
+
+/// `[calibrate.NAME]` as written.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CalibrateConfig {
+    /// The `[simulate.*]` instance whose model, contact set, DMW and case options are
+    /// calibrated (its actuation list is not used).
+    pub simulate: String,
+    /// Knobs to fit (default: the model's set, see `docs/calibration.md`).
+    #[serde(default)]
+    pub knobs: Option<Vec<String>>,
+    /// Target ids to fit (default: the model's class-D catalogue).
+    #[serde(default)]
+    pub targets: Option<Vec<String>>,
+    /// Search range per knob in SI units, e.g. `bounds = { lj_spacing = [0.2e-9, 0.8e-9] }`.
+    #[serde(default)]
+    pub bounds: BTreeMap<String, [f64; 2]>,
+    /// Weight per target id (default 1; 10 for the class-K anchor, 0 for the targets reported
+    /// but not fitted), e.g. `weights = { clearance_12nm = 1.0 }`.
+    #[serde(default)]
+    pub weights: BTreeMap<String, f64>,
+    /// Objective evaluations of the Nelder–Mead search.
+    #[serde(default = "default_evaluations")]
+    pub max_evaluations: usize,
+    /// Width of the touchdown bracket.
+    #[serde(default)]
+    pub touchdown_resolution: Option<Length>,
+}
+
+/// Validated settings.
+pub struct CalibrateStage {
+    pub name: String,
+    pub base_name: String,
+    pub base: SimulateParams,
+    pub settings: CalibrationSettings,
+}
+
+impl CalibrateStage {
+    pub fn from_config(
+        file: &PipelineFile,
+        name: &str,
+        cfg: &CalibrateConfig,
+    ) -> std::result::Result<Self, ConfigError> {
+        let err = |k: &str, m: String| file.error("calibrate", name, k, m);
+        let Some(base_cfg) = file.raw.simulate.get(&cfg.simulate) else {
+            return Err(err(
+                "simulate",
+                format!("no [simulate.{}] in this file", cfg.simulate),
+            ));
+        };
+        if base_cfg.calibration.is_some() {
+            return Err(err(
+                "simulate",
+                format!(
+                    "[simulate.{}] is itself calibrated; a calibration starts from an \
+                     uncalibrated instance",
+                    cfg.simulate
+                ),
+            ));
+        }
+        let base = simulate::validate(base_cfg).map_err(|(k, m)| {
+            err(
+                "simulate",
+                format!("[simulate.{}] is invalid ({k}: {m})", cfg.simulate),
+            )
+        })?;
+        if base.geometry != "dissertation" {
+            return Err(err(
+                "simulate",
+                format!(
+                    "[simulate.{}] uses geometry = \"{}\"; the targets are the dissertation \
+                     geometry's (the optimised design's are included as `optimised_*` targets)",
+                    cfg.simulate, base.geometry
+                ),
+            ));
+        }
+        let variant = base.model.variant;
+        let knobs: Vec<Knob> = match &cfg.knobs {
+            None => default_knobs(variant),
+            Some(names) => names
+                .iter()
+                .map(|n| {
+                    Knob::from_name(n).ok_or_else(|| {
+                        err(
+                            "knobs",
+                            format!(
+                                "unknown knob `{n}` (known: {})",
+                                Knob::ALL.map(|k| k.name()).join(", ")
+                            ),
+                        )
+                    })
+                })
+                .collect::<std::result::Result<_, _>>()?,
+        };
+        let mut ranges = Vec::new();
+        let isbl_probe = IsblParams::improved_2dof();
+        for k in &knobs {
+            if ranges.iter().any(|r: &KnobRange| r.knob == *k) {
+                return Err(err("knobs", format!("knob `{}` listed twice", k.name())));
+            }
+            // The knob must exist in the base model (e.g. no β on the initial model).
+            if !matches!(k, Knob::SurfaceEnergy) {
+                k.base_value(&base.model, &isbl_probe)
+                    .map_err(|e| err("knobs", e.to_string()))?;
+            }
+            if *k == Knob::DmwScale && base.dmw.is_none() {
+                return Err(err(
+                    "knobs",
+                    format!(
+                        "dmw_scale needs a DMW input, but [simulate.{}] has dmw = \"none\"",
+                        cfg.simulate
+                    ),
+                ));
+            }
+            let mut r = KnobRange::new(*k);
+            if let Some([lo, hi]) = cfg.bounds.get(k.name()) {
+                (r.lo, r.hi) = (*lo, *hi);
+            }
+            ranges.push(r);
+        }
+        for b in cfg.bounds.keys() {
+            if !knobs.iter().any(|k| k.name() == b) {
+                return Err(err(
+                    "bounds",
+                    format!("`{b}` is not one of the calibrated knobs"),
+                ));
+            }
+        }
+        let catalogue = targets_for(variant);
+        let mut targets: Vec<_> = match &cfg.targets {
+            None => catalogue,
+            Some(ids) => ids
+                .iter()
+                .map(|id| {
+                    catalogue
+                        .iter()
+                        .find(|t| t.id == id)
+                        .cloned()
+                        .ok_or_else(|| {
+                            err(
+                                "targets",
+                                format!(
+                                    "unknown target `{id}` for {} (known: {})",
+                                    base.model_name,
+                                    catalogue
+                                        .iter()
+                                        .map(|t| t.id)
+                                        .collect::<Vec<_>>()
+                                        .join(", ")
+                                ),
+                            )
+                        })
+                })
+                .collect::<std::result::Result<_, _>>()?,
+        };
+        for (id, w) in &cfg.weights {
+            let Some(t) = targets.iter_mut().find(|t| t.id == id) else {
+                return Err(err(
+                    "weights",
+                    format!("`{id}` is not one of the calibration's targets"),
+                ));
+            };
+            if !(w.is_finite() && *w >= 0.0) {
+                return Err(err("weights", format!("{id} = {w}: must be ≥ 0")));
+            }
+            t.weight = *w;
+        }
+        if !targets.iter().any(|t| t.weight > 0.0) {
+            return Err(err("targets", "no target with a weight > 0 to fit".into()));
+        }
+        if !(1..=10_000).contains(&cfg.max_evaluations) {
+            return Err(err(
+                "max_evaluations",
+                format!("{} is out of range: 1 … 10000", cfg.max_evaluations),
+            ));
+        }
+        let mut settings = CalibrationSettings::new(ranges, targets);
+        settings.search.max_evaluations = cfg.max_evaluations;
+        if let Some(r) = cfg.touchdown_resolution {
+            if !(r.0 > 0.0 && r.0 <= 1e-9) {
+                return Err(err(
+                    "touchdown_resolution",
+                    format!("{} m is out of range: 0 < r ≤ 1 nm", r.0),
+                ));
+            }
+            settings.touchdown_resolution = r.0;
+        }
+        for r in &settings.knobs {
+            r.check().map_err(|e| err("bounds", e.to_string()))?;
+        }
+        Ok(CalibrateStage {
+            name: name.to_string(),
+            base_name: cfg.simulate.clone(),
+            base,
+            settings,
+        })
+    }
+}
+
+/// The base inputs of a calibration (or of a calibrated run): ISBL parameters from the contact
+/// result, the DMW track from the DMW entry.
+pub fn base_inputs(
+    p: &SimulateParams,
+    upstream: &BTreeMap<String, Value>,
+    upstream_dirs: &BTreeMap<String, PathBuf>,
+) -> Result<(IsblParams, Option<DmwTrack>)> {
+    let contact = upstream
+        .get(&p.contact)
+        .ok_or_else(|| Error::Stage(format!("no result from contact `{}`", p.contact)))?;
+    let isbl = super::contact::isbl_params_from_json(&contact["inputs"]).ok_or_else(|| {
+        Error::Stage(format!(
+            "contact `{}` result has no usable `inputs`",
+            p.contact
+        ))
+    })?;
+    let dmw = match &p.dmw {
+        Some(d) => {
+            let dir = upstream_dirs
+                .get(d)
+                .ok_or_else(|| Error::Stage(format!("no files from dmw `{d}`")))?;
+            Some(simulate::read_dmw_track(&dir.join("dmw.h5"))?)
+        }
+        None => None,
+    };
+    Ok((isbl, dmw))
+}
+
+fn base_of<'a>(
+    p: &SimulateParams,
+    isbl: IsblParams,
+    dmw: Option<&'a DmwTrack>,
+) -> CalibrationBase<'a> {
+    CalibrationBase {
+        model: p.model,
+        isbl,
+        dmw: dmw.map(|t| DmwInput {
+            displacement: &t.displacement,
+            velocity: &t.velocity,
+            sample_rate: t.sample_rate,
+        }),
+        options: p.options,
+        case_params: p.case_metric_params(),
+    }
+}
+
+/// Fitted knob values from a calibrate result (`result["fitted"]`).
+pub fn fitted_knobs(result: &Value) -> Option<Vec<(Knob, f64)>> {
+    result["fitted"]
+        .as_array()?
+        .iter()
+        .map(|k| Some((Knob::from_name(k["knob"].as_str()?)?, k["value"].as_f64()?)))
+        .collect()
+}
+
+fn evaluation_json(e: &Evaluation) -> Value {
+    json!({
+        "objective": e.objective,
+        "cases": e.cases,
+        "knobs": e.knobs.iter().map(|(k, v)| json!({"knob": k.name(), "value": v})).collect::<Vec<_>>(),
+        "targets": e.outcomes.iter().map(|o| json!({
+            "id": o.target.id,
+            "value": o.value,
+            "published": o.target.published,
+            "tolerance": o.target.tolerance,
+            "weight": o.target.weight,
+            "normalised_residual": o.normalised_residual,
+            "within_tolerance": o.within_tolerance(),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// Describe the knob values compactly in display units (`dmw_scale 2.1, Δγ 52 mN/m, …`).
+pub fn describe_knobs(values: &[(Knob, f64)]) -> String {
+    values
+        .iter()
+        .map(|(k, v)| match k {
+            Knob::SurfaceEnergy => format!("Δγ {:.3} mN/m", v * 1e3),
+            Knob::LjSpacing => format!("ε {:.3} nm", v * 1e9),
+            Knob::AsperityDensity => format!("η {:.1} µm⁻²", v * 1e-12),
+            Knob::KrStiffeningBeta => format!("β {v:.3}"),
+            Knob::ContactDamping => format!("ζ_c {v:.4}"),
+            Knob::DmwScale => format!("dmw_scale {v:.3}"),
+            Knob::TruncationN => format!("n {v:.3}"),
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn table_rows(r: &CalibrationResult) -> Vec<Map<String, Value>> {
+    r.best
+        .outcomes
+        .iter()
+        .zip(&r.initial.outcomes)
+        .map(|(b, i)| {
+            let t = &b.target;
+            let s = |v: Option<f64>| json!(v.map(|v| v * t.display_scale));
+            let mut m = Map::new();
+            m.insert("target".into(), json!(t.id));
+            m.insert(
+                "spec_row".into(),
+                json!(format!("dynamics.md §12.2 {}", t.source)),
+            );
+            m.insert("unit".into(), json!(t.unit));
+            m.insert("published".into(), json!(t.published * t.display_scale));
+            m.insert("tolerance".into(), json!(t.tolerance * t.display_scale));
+            m.insert("weight".into(), json!(t.weight));
+            m.insert("spec_defaults".into(), s(i.value));
+            m.insert("calibrated".into(), s(b.value));
+            m.insert("residual_defaults".into(), json!(i.normalised_residual));
+            m.insert("residual_calibrated".into(), json!(b.normalised_residual));
+            m.insert("within_tolerance".into(), json!(b.within_tolerance()));
+            m
+        })
+        .collect()
+}
+
+fn knob_rows(stage: &CalibrateStage, r: &CalibrationResult) -> Vec<Map<String, Value>> {
+    stage
+        .settings
+        .knobs
+        .iter()
+        .zip(&r.best.knobs)
+        .map(|(range, (k, v))| {
+            let mut m = Map::new();
+            m.insert("knob".into(), json!(k.name()));
+            m.insert("unit".into(), json!(k.unit()));
+            m.insert("lower_bound".into(), json!(range.lo));
+            m.insert("upper_bound".into(), json!(range.hi));
+            m.insert("fitted".into(), json!(v));
+            m.insert(
+                "at_bound".into(),
+                json!(
+                    (*v - range.lo).abs() <= 1e-6 * (range.hi - range.lo)
+                        || (*v - range.hi).abs() <= 1e-6 * (range.hi - range.lo)
+                ),
+            );
+            m
+        })
+        .collect()
+}
+
+impl Stage for CalibrateStage {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn kind(&self) -> &'static str {
+        "calibrate"
+    }
+    fn model_version(&self) -> &'static str {
+        MODEL_VERSION
+    }
+    fn params(&self) -> Value {
+        json!({
+            "base": self.base_name,
+            "base_parameters": self.base.canonical(),
+            "settings": format!("{:?}", self.settings),
+        })
+    }
+    fn inputs(&self) -> Vec<(String, PathBuf)> {
+        Vec::new()
+    }
+    fn upstream(&self) -> Vec<String> {
+        let mut u = vec![self.base.contact.clone()];
+        u.extend(self.base.dmw.iter().cloned());
+        u
+    }
+    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+        let (isbl, dmw) = base_inputs(&self.base, &ctx.upstream, &ctx.upstream_dirs)?;
+        let base = base_of(&self.base, isbl, dmw.as_ref());
+        // Every knob must have a value in the base (e.g. a constant Δγ for `surface_energy`).
+        for r in &self.settings.knobs {
+            r.knob.base_value(&base.model, &base.isbl)?;
+        }
+        let budget = self.settings.search.max_evaluations;
+        ctx.progress.set_message(format!("0/{budget} evaluations"));
+        let result = calibrate(&base, &self.settings, |n, best| {
+            ctx.progress
+                .set_message(format!("{n}/{budget} evaluations, objective {best:.3}"));
+        })?;
+        let rows = table_rows(&result);
+        crate::core::store::write_table(&rows, &ctx.out_dir.join("calibration"))?;
+        crate::core::store::write_table(&knob_rows(self, &result), &ctx.out_dir.join("knobs"))?;
+        let current: Vec<(f64, f64)> = result
+            .history
+            .iter()
+            .map(|(i, f, _)| (*i as f64 + 1.0, *f))
+            .collect();
+        let best: Vec<(f64, f64)> = result
+            .history
+            .iter()
+            .map(|(i, _, b)| (*i as f64 + 1.0, *b))
+            .collect();
+        crate::core::plot::semilogy_png(
+            &ctx.out_dir.join("convergence.png"),
+            &format!(
+                "Calibration of {} — objective Σ weight·(residual/tolerance)²",
+                self.base_name
+            ),
+            "objective evaluation",
+            "objective",
+            &[("evaluated", current), ("best so far", best)],
+            &[],
+        )?;
+        residuals_png(&ctx.out_dir.join("residuals.png"), &self.base_name, &result)?;
+        let within = result
+            .best
+            .outcomes
+            .iter()
+            .filter(|o| o.within_tolerance())
+            .count();
+        let mut row = Map::new();
+        row.insert("base".into(), json!(self.base_name));
+        row.insert("objective_defaults".into(), json!(result.initial.objective));
+        row.insert("objective_calibrated".into(), json!(result.best.objective));
+        row.insert("targets".into(), json!(result.best.outcomes.len()));
+        row.insert("within_tolerance".into(), json!(within));
+        row.insert("evaluations".into(), json!(result.evaluations));
+        row.insert("cases".into(), json!(result.cases));
+        for (k, v) in &result.best.knobs {
+            row.insert(k.name().into(), json!(v));
+        }
+        Ok(StageOutput {
+            result: json!({
+                "base": self.base_name,
+                "model": self.base.model_name,
+                "fitted": result.best.knobs.iter().map(|(k, v)| json!({
+                    "knob": k.name(), "unit": k.unit(), "value": v,
+                })).collect::<Vec<_>>(),
+                "fitted_description": describe_knobs(&result.best.knobs),
+                "defaults": evaluation_json(&result.initial),
+                "calibrated": evaluation_json(&result.best),
+                "converged": result.converged,
+                "evaluations": result.evaluations,
+                "cases": result.cases,
+                "failures": result.failures.iter().map(|(k, e)| json!({
+                    "knobs": describe_knobs(k), "error": e,
+                })).collect::<Vec<_>>(),
+                "history": result.history.iter().map(|(i, f, b)| json!([i, f, b])).collect::<Vec<_>>(),
+                "table": "calibration.parquet",
+            }),
+            summary_row: Some(row),
+        })
+    }
+}
+
+/// Normalised residual per target, spec defaults against calibrated, with the ±1 band.
+fn residuals_png(path: &std::path::Path, base: &str, r: &CalibrationResult) -> Result<()> {
+    let values = |e: &Evaluation| -> Vec<f64> {
+        e.outcomes
+            .iter()
+            .map(|o| o.normalised_residual.clamp(-10.0, 10.0))
+            .collect()
+    };
+    let categories: Vec<String> = r
+        .best
+        .outcomes
+        .iter()
+        .map(|o| {
+            if o.target.weight == 0.0 {
+                format!("{} (reported)", o.target.id)
+            } else {
+                o.target.id.to_string()
+            }
+        })
+        .collect();
+    crate::core::plot::category_dots_png(
+        path,
+        &format!("Calibration of {base}: residual / tolerance (band ±1)"),
+        "(value − published) / tolerance (clamped to ±10)",
+        &categories,
+        &[
+            ("spec defaults", values(&r.initial)),
+            ("calibrated", values(&r.best)),
+        ],
+        1.0,
+    )
+}
+
+/// Re-evaluate a finished calibration now (for `hdi validate`): the targets at its fitted
+/// knobs, computed with the current code from its upstream inputs.
+pub fn re_evaluate(
+    stage: &CalibrateStage,
+    fitted: &[(Knob, f64)],
+    upstream: &BTreeMap<String, Value>,
+    upstream_dirs: &BTreeMap<String, PathBuf>,
+) -> Result<Evaluation> {
+    let (isbl, dmw) = base_inputs(&stage.base, upstream, upstream_dirs)?;
+    let base = base_of(&stage.base, isbl, dmw.as_ref());
+    Ok(evaluate(&base, &stage.settings, fitted)?)
+}
+
+/// `hdi validate` area `calibration`: for every `[calibrate.*]` of the pipeline whose result is
+/// current, its targets re-evaluated now at the fitted knobs (one row per target, class D, the
+/// fitted values in the variant column). A fit that has not run (or is stale) gives one row
+/// without a number that says so.
+pub fn validation_rows(config: &std::path::Path) -> Result<Vec<crate::validate::Row>> {
+    use crate::core::engine::{plan, read_result, State};
+    use crate::validate::{Row, Tolerance};
+    let file = PipelineFile::load(config)?;
+    let stages = super::build(&file)?;
+    let store = crate::core::cache::Store::open_existing(&file.processed_dir());
+    let plan = plan(stages, &store, &Default::default())?;
+    let mut rows = Vec::new();
+    for (name, cfg) in &file.raw.calibrate {
+        let stage = CalibrateStage::from_config(&file, name, cfg)?;
+        let planned = |n: &str| plan.planned.iter().find(|p| p.name == n);
+        let current = |n: &str| planned(n).is_some_and(|p| p.state == State::Fresh);
+        let upstream = stage.upstream();
+        if !current(name) || !upstream.iter().all(|u| current(u)) {
+            rows.push(Row {
+                source: format!("[calibrate.{name}]"),
+                quantity: format!("calibration of {}", stage.base_name),
+                unit: "1".into(),
+                target: 0.0,
+                ours: f64::NAN,
+                tolerance: Tolerance::Absolute(1.0),
+                reproducible: false,
+                variant: "not run".into(),
+                note: format!("no current result: run `hdi run --only {name}` first"),
+            });
+            continue;
+        }
+        let entry = |n: &str| {
+            let p = planned(n).expect("checked above");
+            store.entry_dir(&p.kind, &p.key)
+        };
+        let result = read_result(&entry(name))?;
+        let fitted = fitted_knobs(&result).ok_or_else(|| {
+            Error::Stage(format!("calibrate `{name}` result has no usable `fitted`"))
+        })?;
+        let mut up = BTreeMap::new();
+        let mut dirs = BTreeMap::new();
+        for u in &upstream {
+            up.insert(u.clone(), read_result(&entry(u))?);
+            dirs.insert(u.clone(), entry(u));
+        }
+        let e = re_evaluate(&stage, &fitted, &up, &dirs)?;
+        let defaults = result["defaults"]["targets"]
+            .as_array()
+            .cloned()
+            .unwrap_or_default();
+        for o in &e.outcomes {
+            let t = &o.target;
+            let before = defaults
+                .iter()
+                .find(|d| d["id"] == t.id)
+                .and_then(|d| d["value"].as_f64())
+                .map_or("–".into(), |v| format!("{:.3}", v * t.display_scale));
+            rows.push(Row {
+                source: format!("dynamics.md §12.2 {} [calibrate.{name}]", t.source),
+                quantity: format!("{} (class D, calibrated)", t.id),
+                unit: t.unit.into(),
+                target: t.published * t.display_scale,
+                ours: o.value.map_or(f64::NAN, |v| v * t.display_scale),
+                tolerance: Tolerance::Absolute(t.tolerance * t.display_scale),
+                reproducible: false,
+                variant: format!("{}: {}", stage.base.model_name, describe_knobs(&fitted)),
+                note: format!(
+                    "spec defaults {before}; residual/tolerance {:+.2}{}",
+                    o.normalised_residual,
+                    if t.weight == 0.0 {
+                        " (reported, not fitted)"
+                    } else {
+                        ""
+                    }
+                ),
+            });
+        }
+    }
+    Ok(rows)
+}
