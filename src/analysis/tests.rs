@@ -2,7 +2,8 @@
 
 use super::classify::{classify, Class, ClassifyOptions};
 use super::cwt::{
-    cwt_morlet, cwt_morlet_complex, ridge, CwtOptions, FrequencyGrid, Normalization, Wavelet,
+    cwt_complex_padded, cwt_morlet, cwt_morlet_complex, reconstruction_integrals, ridge,
+    CwtOptions, FrequencyGrid, Normalization, Wavelet,
 };
 use super::poincare::{phase_space, poincare_section, velocity};
 use super::series::{detrend, spectrum, time_window, welch_psd, Detrend};
@@ -148,6 +149,11 @@ fn cwt_ridge_of_pure_tones_sits_on_the_tone_with_amplitude_a() {
         assert_eq!(s.frequencies_hz.len(), 67);
         let r = ridge(&s);
         let mid = n / 2;
+        eprintln!(
+            "tone {f} Hz: ridge {:.2} Hz, |W|/A {:.5}",
+            r.frequency_hz[mid],
+            r.magnitude[mid] / a
+        );
         assert!(
             (r.frequency_hz[mid] / f - 1.0).abs() < 5e-3,
             "{f}: ridge {}",
@@ -158,6 +164,16 @@ fn cwt_ridge_of_pure_tones_sits_on_the_tone_with_amplitude_a() {
             "{f}: |W|/A {}",
             r.magnitude[mid] / a
         );
+        // The spec's reference values (log-parabolic interpolation), to their printed digits.
+        let reference = [
+            (10.7e3, 10.726e3, 0.5, 0.99996),
+            (110e3, 110.14e3, 5.0, 0.9981),
+            (275e3, 275.61e3, 5.0, 0.9990),
+        ];
+        if let Some(&(_, fr, tol, wr)) = reference.iter().find(|r| r.0 == f) {
+            assert!((r.frequency_hz[mid] - fr).abs() <= tol, "{f}");
+            assert!((r.magnitude[mid] / a - wr).abs() <= 5e-5, "{f}");
+        }
         let mut trusted = 0;
         for i in 0..n {
             if r.trusted[i] && s.coi_hz[i] < f / step {
@@ -611,4 +627,97 @@ fn a_period_two_orbit_shows_two_points_and_noise_is_irregular() {
     let s = poincare_section(&x, None, FS).unwrap();
     let c = classify(&s, &ClassifyOptions::default()).unwrap();
     assert_eq!(c.class, Class::Irregular, "{:?}", c.diagnostics);
+}
+
+#[test]
+fn padding_to_the_spec_length_gives_the_same_coefficients() {
+    // Our pad (N + wavelet support) vs the spec's reference (next power of two ≥ 2N).
+    let n = 5000;
+    let x: Vec<f64> = chirp(n, FS, 15e3, 600e3, 1.0)
+        .iter()
+        .zip(noise(n, 5))
+        .map(|(a, b)| a + 0.2 * b)
+        .collect();
+    let opts = CwtOptions::default();
+    let ours = cwt_morlet_complex(&x, FS, &opts).unwrap();
+    let spec = cwt_complex_padded(&x, FS, &opts, (2 * n).next_power_of_two()).unwrap();
+    let max = spec
+        .coefficients
+        .iter()
+        .map(|c| c.norm())
+        .fold(0.0, f64::max);
+    let err = ours
+        .coefficients
+        .iter()
+        .zip(&spec.coefficients)
+        .map(|(a, b)| (a - b).norm())
+        .fold(0.0, f64::max);
+    assert!(err < 1e-12 * max, "{}", err / max);
+}
+
+/// Noise band-limited to [f_lo, f_hi] by zeroing its spectrum outside the band.
+fn band_limited_noise(n: usize, f_lo: f64, f_hi: f64, seed: u64) -> Vec<f64> {
+    use rustfft::num_complex::Complex64;
+    let mut buf: Vec<Complex64> = noise(n, seed)
+        .iter()
+        .map(|&v| Complex64::new(v, 0.0))
+        .collect();
+    let mut planner = rustfft::FftPlanner::<f64>::new();
+    planner.plan_fft_forward(n).process(&mut buf);
+    for (k, b) in buf.iter_mut().enumerate() {
+        let f = k.min(n - k) as f64 * FS / n as f64;
+        if f < f_lo || f > f_hi {
+            *b = Complex64::default();
+        }
+    }
+    planner.plan_fft_inverse(n).process(&mut buf);
+    buf.iter().map(|c| c.re / n as f64).collect()
+}
+
+#[test]
+fn cwt_energy_and_reconstruction_on_band_limited_noise() {
+    // §4.2: I_E = 0.299696, I_R = 0.430514 for ω0 = 6; noise in fs/512…fs/16 analysed at
+    // 8 voices per octave: variance ratio 0.99 ± 0.01, reconstruction error < 1 % (middle 75 %).
+    let (i_e, i_r) = reconstruction_integrals(&Wavelet::default());
+    assert!((i_e - 0.299696).abs() < 2e-6, "{i_e}");
+    assert!((i_r - 0.430514).abs() < 2e-6, "{i_r}");
+    let n = 1 << 15;
+    let x = band_limited_noise(n, FS / 512.0, FS / 16.0, 17);
+    let opts = CwtOptions {
+        frequencies: FrequencyGrid::VoicesPerOctave {
+            f_min_hz: FS / 8192.0,
+            f_max_hz: FS / 2.0,
+            voices: 8,
+        },
+        ..Default::default()
+    };
+    let w = cwt_morlet_complex(&x, FS, &opts).unwrap();
+    let var = x.iter().map(|v| v * v).sum::<f64>() / n as f64;
+    let ratio = w.variance().unwrap() / var;
+    let y = w.reconstruct().unwrap();
+    let (a, b) = (n / 8, n - n / 8);
+    let err = (x[a..b]
+        .iter()
+        .zip(&y[a..b])
+        .map(|(p, q)| (p - q).powi(2))
+        .sum::<f64>()
+        / x[a..b].iter().map(|p| p * p).sum::<f64>())
+    .sqrt();
+    eprintln!("variance ratio {ratio:.4}, reconstruction rel. RMS error {err:.4}");
+    assert!((ratio - 0.99).abs() <= 0.01, "{ratio}");
+    assert!(err < 0.01, "{err}");
+    // Only for the L1 transform on a log-uniform grid.
+    let l2 = cwt_morlet_complex(
+        &x[..1000],
+        FS,
+        &CwtOptions {
+            normalization: Normalization::Energy,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(matches!(
+        l2.variance(),
+        Err(AnalysisError::Parameter { .. })
+    ));
 }
