@@ -53,6 +53,9 @@ use std::sync::Arc;
 /// Where `G(sω)` is treated as zero: `|sω − ω_c| > CUTOFF·σ` (e^{−36} ≈ 2·10⁻¹⁶).
 const CUTOFF: f64 = 8.5;
 
+/// Largest padded length accepted (2³³ complex samples would be 128 GiB).
+const MAX_LEN: usize = 1 << 33;
+
 /// The mother wavelet.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Wavelet {
@@ -497,8 +500,18 @@ fn prepare(
     let n = signal.len();
     let (_, sigma) = opts.wavelet.gaussian();
     let s_max = scales.iter().cloned().fold(0.0, f64::max);
-    let support = (CUTOFF * s_max * fs / sigma).ceil() as usize;
-    let n_pad = fast_len((n + support).max(min_pad));
+    let support = (CUTOFF * s_max * fs / sigma).ceil();
+    // Absurdly low frequencies (a wavelet of billions of samples) would overflow the FFT size.
+    if support > MAX_LEN as f64 || n + min_pad > MAX_LEN {
+        return Err(AnalysisError::FrequencyRange {
+            low_hz: frequencies[0],
+            high_hz: frequencies[frequencies.len() - 1],
+            reason: format!(
+                "the lowest frequency needs a wavelet of {support:.3e} samples (limit {MAX_LEN})"
+            ),
+        });
+    }
+    let n_pad = fast_len((n + support as usize).max(min_pad));
     let mean = if opts.keep_mean {
         0.0
     } else {
@@ -524,6 +537,24 @@ fn prepare(
 }
 
 impl Prepared {
+    /// n_freq × n_time, refused beyond MAX_LEN values rather than overflowing.
+    fn output_len(&self) -> Result<usize, AnalysisError> {
+        match self.n.checked_mul(self.frequencies.len()) {
+            Some(len) if len <= MAX_LEN => Ok(len),
+            _ => Err(AnalysisError::parameter(
+                "scalogram size",
+                format!(
+                    "{} frequencies × {} samples",
+                    self.frequencies.len(),
+                    self.n
+                ),
+                format!(
+                    "more than {MAX_LEN} values; analyse a shorter window or fewer frequencies"
+                ),
+            )),
+        }
+    }
+
     /// Fills `buf` with `X·Ψ̂(s_j ω)/N_pad` and inverse transforms it in place.
     fn row(&self, j: usize, buf: &mut [Complex64], scratch: &mut [Complex64]) {
         let s = self.scales[j];
@@ -625,7 +656,7 @@ pub fn pywt_time_offset(a: f64, precision: u32) -> f64 {
 /// octave, mean removed.
 pub fn cwt_morlet(signal: &[f64], fs: f64, opts: &CwtOptions) -> Result<Scalogram, AnalysisError> {
     let p = prepare(signal, fs, opts, 0)?;
-    let mut magnitude = vec![0f32; p.n * p.frequencies.len()];
+    let mut magnitude = vec![0f32; p.output_len()?];
     p.run(&mut magnitude, |c| c.norm() as f32);
     Ok(Scalogram {
         coi_hz: p.coi(),
@@ -656,7 +687,7 @@ pub(crate) fn cwt_complex_padded(
     min_pad: usize,
 ) -> Result<ComplexScalogram, AnalysisError> {
     let p = prepare(signal, fs, opts, min_pad)?;
-    let mut coefficients = vec![Complex64::default(); p.n * p.frequencies.len()];
+    let mut coefficients = vec![Complex64::default(); p.output_len()?];
     p.run(&mut coefficients, |c| c);
     Ok(ComplexScalogram {
         coi_hz: p.coi(),

@@ -439,6 +439,8 @@ fn cwt_grids_wavelet_names_and_bad_options() {
     );
     assert!(matches!(e, Err(AnalysisError::Parameter { .. })));
     assert!(cwt_morlet(&x, 0.0, &CwtOptions::default()).is_err());
+    let e = cwt_morlet(&x, FS, &with(FrequencyGrid::Explicit(vec![1e-9, 1e3]))).unwrap_err();
+    assert!(matches!(e, AnalysisError::FrequencyRange { .. }), "{e}");
 }
 
 #[test]
