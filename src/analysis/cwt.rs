@@ -32,12 +32,13 @@
 //!   wavelet, which depends on its `precision`); `Pywt { precision: Some(p) }` applies that shift,
 //!   `None` keeps the transform centred. With PyWavelets at `precision=18` the two agree to
 //!   2·10⁻⁴ (test); at its default 12 its coarse wavelet table alone costs up to ~5 % in |W|.
-//!   Conversion to L1 away from the band edges: `W_pywt ≈ √(s·fs)·P_pywt/2 · sinc · W_L1`.
+//!   Conversion to L1 for a component near the scale's frequency f:
+//!   `W_pywt ≈ √(s·fs)·P_pywt/2 · sinc(πf/fs) · W_L1`.
 //!
 //! Padding: zero padding only has to keep the circular convolution from wrapping, so the FFT
 //! length is the smallest 2^a or 3·2^a ≥ N + 8.5·s_max·fs/σ (where the wavelet envelope has
 //! fallen below e^{−36}); the spec's reference (next power of two ≥ 2N) gives the same values
-//! to ~1e-15 relative. Bins where `G < e^{−36}` are skipped.
+//! to 6·10⁻¹³ of the largest |W| (test). Bins where `G < e^{−36}` are skipped.
 //!
 //! Cone of influence: the e-folding time of the wavelet power, `√2·s/σ` (T&C's `√2 s` for
 //! Morlet), reaching the nearest record edge: `f_coi(t) = ω_c√2/(2πσ·t_edge)`
