@@ -121,6 +121,37 @@ fn welch_psd_integrates_to_the_power() {
 }
 
 #[test]
+fn welch_psd_equals_scipy_welch() {
+    // scipy.signal.welch(x, 4e6, 'hann', nperseg=1000, detrend='constant', scaling='density')
+    // of 0.8 cos(2π·123.4 kHz·t + 0.4) + 0.1 cos(2π·700 kHz·t) + a ramp 0…0.01, 20 000 samples.
+    let n = 20_000;
+    let x: Vec<f64> = (0..n)
+        .map(|i| {
+            let t = i as f64 / FS;
+            0.8 * (2.0 * PI * 123.4e3 * t + 0.4).cos()
+                + 0.1 * (2.0 * PI * 700e3 * t).cos()
+                + 0.01 * i as f64 / n as f64
+        })
+        .collect();
+    let psd = welch_psd(&x, FS, 1000).unwrap();
+    assert_eq!(psd.frequency_hz.len(), 501);
+    let scipy = [
+        (0, 1.1516073276437111e-09),
+        (1, 5.733690832523187e-10),
+        (30, 2.001836954819226e-05),
+        (31, 5.180556950654473e-05),
+        (175, 8.333333433334437e-07),
+    ];
+    for (k, p) in scipy {
+        assert!(
+            (psd.density[k] / p - 1.0).abs() < 1e-9,
+            "bin {k}: {}",
+            psd.density[k] / p
+        );
+    }
+}
+
+#[test]
 fn time_window_and_detrend() {
     // App. B's 0.7–1.3 ms window of a record starting at t0 = 0.
     let r = time_window(8000, FS, 0.0, Some(0.7e-3), Some(1.3e-3)).unwrap();
