@@ -604,20 +604,24 @@ impl Prepared {
     /// Runs all scales in parallel, mapping each coefficient through `f` into `out`.
     fn run<T: Send>(&self, out: &mut [T], f: impl Fn(Complex64) -> T + Sync) {
         let scratch_len = self.ifft.get_inplace_scratch_len();
-        out.par_chunks_mut(self.n).enumerate().for_each_init(
-            || {
-                (
-                    vec![Complex64::default(); self.n_pad],
-                    vec![Complex64::default(); scratch_len],
-                )
-            },
-            |(buf, scratch), (j, row)| {
-                self.row(j, buf, scratch);
-                for (o, c) in row.iter_mut().zip(&buf[..self.n]) {
-                    *o = f(*c);
+        let n_freq = self.frequencies.len();
+        // A few blocks of rows per thread: each block allocates its N_pad-sized buffers once
+        // (not once per rayon split), and several blocks still let work stealing even out a
+        // core that is busy with something else.
+        let blocks = 4 * rayon::current_num_threads().max(1);
+        let rows_per_block = n_freq.div_ceil(blocks).max(1);
+        out.par_chunks_mut(self.n * rows_per_block)
+            .enumerate()
+            .for_each(|(b, block)| {
+                let mut buf = vec![Complex64::default(); self.n_pad];
+                let mut scratch = vec![Complex64::default(); scratch_len];
+                for (i, row) in block.chunks_mut(self.n).enumerate() {
+                    self.row(b * rows_per_block + i, &mut buf, &mut scratch);
+                    for (o, c) in row.iter_mut().zip(&buf[..self.n]) {
+                        *o = f(*c);
+                    }
                 }
-            },
-        );
+            });
     }
 
     fn coi(&self) -> Vec<f64> {
