@@ -12,10 +12,11 @@
 //!    `|x_{n+k} − x_n| ≤ tolerance·A` (1 %) for every maximum and every minimum: the section
 //!    shows k points.
 //! 3. **Quasi-periodic** — the return map `(x_n, x_{n+1})` fills a closed curve: ≥ 90 % of the
-//!    maxima distinct at 10⁻⁴ A; around the centroid the points cover ≥ 90 % of 36 angular
+//!    maxima distinct at 10⁻⁴ A (or at least 200 distinct values, so that long records, whose
+//!    maxima crowd closer than 10⁻⁴ A, still pass); around the centroid the points cover ≥ 90 % of 36 angular
 //!    sectors and leave a hole (`r_min/r_max ≥ 0.05`, a ring, not a blob); and the map is
 //!    locally one-dimensional: for the median point the two nearest neighbours lie on opposite
-//!    sides (cosine of the angle between them ≤ −0.8).
+//!    sides (cosine of the angle between them ≤ −0.8; on ≤ 500 points, evenly subsampled).
 //! 4. **Irregular** — anything else (chaos, noise, or a transient the rules do not fit).
 //!
 //! At least `min_points` (16) maxima are required. The rule is deliberately simple: it does not
@@ -56,6 +57,8 @@ pub struct ClassifyOptions {
     pub max_period: usize,
     pub distinct_tolerance: f64,
     pub min_distinct_fraction: f64,
+    /// This many distinct values suffice whatever the fraction.
+    pub distinct_cap: usize,
     pub sectors: usize,
     pub min_coverage: f64,
     pub min_hole: f64,
@@ -71,6 +74,7 @@ impl Default for ClassifyOptions {
             max_period: 16,
             distinct_tolerance: 1e-4,
             min_distinct_fraction: 0.9,
+            distinct_cap: 200,
             sectors: 36,
             min_coverage: 0.9,
             min_hole: 0.05,
@@ -96,7 +100,8 @@ pub struct Diagnostics {
     /// Smallest k ≤ max_period and its max |x_{n+k} − x_n|/A (the best k if none passes).
     pub best_period: usize,
     pub period_residual: f64,
-    /// Fraction of maxima distinct at distinct_tolerance·A.
+    /// Number and fraction of maxima distinct at distinct_tolerance·A.
+    pub distinct_values: usize,
     pub distinct_fraction: f64,
     /// Occupied fraction of the angular sectors around the return map's centroid.
     pub coverage: f64,
@@ -215,7 +220,17 @@ pub fn classify(
     let mut sorted = m.clone();
     sorted.sort_by(f64::total_cmp);
     let tol = opts.distinct_tolerance * amplitude;
-    let distinct = 1 + sorted.windows(2).filter(|w| w[1] - w[0] > tol).count();
+    // Greedy bins of width tol anchored at their first value (chaining gaps would merge a
+    // dense set into one cluster).
+    let mut distinct = 0;
+    let mut anchor = f64::NEG_INFINITY;
+    for &v in &sorted {
+        if v - anchor > tol {
+            distinct += 1;
+            anchor = v;
+        }
+    }
+    d.distinct_values = distinct;
     d.distinct_fraction = distinct as f64 / m.len() as f64;
     let pts = section.return_map();
     let (cx, cy) = {
@@ -239,7 +254,9 @@ pub fn classify(
     d.coverage = occupied.iter().filter(|&&o| o).count() as f64 / sectors as f64;
     d.hole = if rmax > 0.0 { rmin / rmax } else { 0.0 };
     d.neighbour_cosine = neighbour_cosine(&pts);
-    let class = if d.distinct_fraction >= opts.min_distinct_fraction
+    let enough_distinct =
+        d.distinct_fraction >= opts.min_distinct_fraction || distinct >= opts.distinct_cap;
+    let class = if enough_distinct
         && d.coverage >= opts.min_coverage
         && d.hole >= opts.min_hole
         && d.neighbour_cosine <= opts.max_neighbour_cosine
@@ -268,9 +285,11 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 /// Median over points of the cosine of the angle at a point between its two nearest
-/// neighbours. O(n²) on at most 4 000 points (evenly subsampled beyond).
+/// neighbours. On at most 500 points (evenly subsampled in time): denser sets would put the
+/// neighbours closer than the sub-sample scatter of the parabola-refined extrema of coarsely
+/// sampled records (≈ 15–20 samples per period), which is not the curve's structure.
 fn neighbour_cosine(pts: &[[f64; 2]]) -> f64 {
-    let step = pts.len().div_ceil(4000).max(1);
+    let step = pts.len().div_ceil(500).max(1);
     let p: Vec<[f64; 2]> = pts.iter().step_by(step).copied().collect();
     if p.len() < 3 {
         return f64::NAN;

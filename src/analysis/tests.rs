@@ -608,6 +608,19 @@ fn poincare_of_two_incommensurate_tones_fills_a_closed_curve() {
     assert!(d.coverage >= 0.9);
     assert!(d.hole > 0.05);
     assert_eq!(c.class, Class::QuasiPeriodic);
+    // A long record: ~20 000 maxima crowd closer than 10⁻⁴ A; still quasi-periodic.
+    let f1 = 200e3;
+    let x: Vec<f64> = (0..400_000)
+        .map(|i| {
+            let t = i as f64 / FS;
+            (2.0 * PI * f1 * t).sin() + 0.3 * (2.0 * PI * golden * f1 * t + 0.5).sin()
+        })
+        .collect();
+    let s = poincare_section(&x, None, FS).unwrap();
+    let c = classify(&s, &ClassifyOptions::default()).unwrap();
+    eprintln!("two tones, long: {:?}", c.diagnostics);
+    assert!(c.diagnostics.n_maxima > 19_000);
+    assert_eq!(c.class, Class::QuasiPeriodic);
 }
 
 #[test]
@@ -659,6 +672,7 @@ fn a_period_two_orbit_shows_two_points_and_noise_is_irregular() {
     let x: Vec<f64> = raw.windows(5).map(|w| w.iter().sum::<f64>()).collect();
     let s = poincare_section(&x, None, FS).unwrap();
     let c = classify(&s, &ClassifyOptions::default()).unwrap();
+    eprintln!("noise: {:?}", c.diagnostics);
     assert_eq!(c.class, Class::Irregular, "{:?}", c.diagnostics);
 }
 
