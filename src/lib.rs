@@ -3,6 +3,7 @@
 //! `core` is the small spine every stage uses (config, cache, engine, store, plots);
 //! `surface` (and later physics modules) are pure functions with no I/O besides readers;
 //! `stages` wires physics into the pipeline; `cli` is the thin command-line layer.
+pub mod analysis;
 pub mod cli;
 pub mod contact;
 pub mod core;

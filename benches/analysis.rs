@@ -1,0 +1,50 @@
+//! criterion bench of the analysis numerics (signals-and-surfaces.md §4): the CWT of a
+//! 10⁶-sample series (4 MS/s, 0.25 s) at 100 log-spaced frequencies from 5 kHz to 1 MHz
+//! (analytic Morlet ω0 = 6, L1, magnitude as f32), and the Hann amplitude spectrum of 10⁷
+//! samples. `bench/analysis_numpy.py` times numpy / PyWavelets on the same cases.
+//! Not run in CI.
+use criterion::{criterion_group, criterion_main, Criterion};
+use hdi::analysis::cwt::{cwt_morlet, CwtOptions, FrequencyGrid};
+use hdi::analysis::series::spectrum;
+use hdi::signal::spectrum::Window;
+use std::f64::consts::PI;
+use std::hint::black_box;
+
+const FS: f64 = 4e6;
+
+/// A chirp 10 kHz → 500 kHz plus a 275 kHz line: something for every scale to see.
+fn series(n: usize) -> Vec<f64> {
+    let t_total = n as f64 / FS;
+    (0..n)
+        .map(|i| {
+            let t = i as f64 / FS;
+            (2.0 * PI * (10e3 * t + 0.5 * 490e3 / t_total * t * t)).cos()
+                + 0.3 * (2.0 * PI * 275e3 * t).sin()
+        })
+        .collect()
+}
+
+fn analysis(c: &mut Criterion) {
+    let x6 = series(1_000_000);
+    let opts = CwtOptions {
+        frequencies: FrequencyGrid::Log {
+            f_min_hz: 5e3,
+            f_max_hz: 1e6,
+            count: 100,
+        },
+        ..Default::default()
+    };
+    let x7 = series(10_000_000);
+    let mut g = c.benchmark_group("analysis");
+    g.sample_size(10);
+    g.bench_function("cwt_morlet_1e6_samples_100_freqs", |b| {
+        b.iter(|| cwt_morlet(black_box(&x6), FS, &opts).unwrap())
+    });
+    g.bench_function("amplitude_spectrum_hann_1e7_samples", |b| {
+        b.iter(|| spectrum(black_box(&x7), FS, Window::Hann).unwrap())
+    });
+    g.finish();
+}
+
+criterion_group!(benches, analysis);
+criterion_main!(benches);
