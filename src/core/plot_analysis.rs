@@ -1,0 +1,1350 @@
+//! PNG plots of the analysis stage: the wavelet scalogram with its cone of influence and
+//! ridge, the Poincaré return map, the phase portrait and the amplitude spectrum.
+//!
+//! Same conventions as [`crate::core::plot`] (embedded font, temp-file + rename): the plot
+//! functions take plain slices (no dependency on the analysis types), skip non-finite values
+//! (and non-positive ones on log axes), and report empty or degenerate input as an output
+//! error, never a panic.
+
+use crate::core::plot::{perr, render_png};
+use crate::error::Result;
+use plotters::coord::combinators::BindKeyPoints;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::colors::colormaps::ViridisRGB;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use std::path::Path;
+
+/// At most this many time columns in a scalogram (the plot is ~750 px wide).
+const MAX_SCALOGRAM_COLUMNS: usize = 800;
+/// At most this many frequency rows in a scalogram (the plot is ~450 px high).
+const MAX_SCALOGRAM_ROWS: usize = 400;
+/// At most this many rectangles in a scalogram: bounds the drawing time.
+const MAX_SCALOGRAM_CELLS: usize = 160_000;
+/// At most this many points of a ridge line.
+const MAX_RIDGE_POINTS: usize = 4000;
+/// Above this many points a spectrum is reduced to a min/max envelope on log-spaced bins.
+const SPECTRUM_DECIMATE_ABOVE: usize = 6000;
+const SPECTRUM_BINS: usize = 1500;
+/// Labelled peaks in a spectrum.
+const MAX_PEAK_LABELS: usize = 5;
+/// Phase portraits keep a point only when it moves by 1/PHASE_GRID of the axis span.
+const PHASE_GRID: f64 = 3000.0;
+
+/// A pixel rectangle `(left, top, right, bottom)`.
+type PixelRect = (i32, i32, i32, i32);
+type DrawResult<T> = std::result::Result<T, String>;
+/// The lowest and the highest `(x, y)` point of a bin.
+type MinMaxPoints = ((f64, f64), (f64, f64));
+
+fn text_style(size: u32, pos: Pos) -> TextStyle<'static> {
+    ("sans-serif", size).into_font().color(&BLACK).pos(pos)
+}
+
+/// `text` (possibly several lines) on a translucent white box, anchored at pixel `at` of
+/// `area` by `pos`. Returns the box in `area` pixels.
+fn boxed_text(
+    area: &DrawingArea<BitMapBackend<'_>, Shift>,
+    at: (i32, i32),
+    text: &str,
+    pos: Pos,
+    size: u32,
+) -> DrawResult<PixelRect> {
+    let (w, h, lines) = measure_text(area, text, size)?;
+    let left = match pos.h_pos {
+        HPos::Left => at.0,
+        HPos::Center => at.0 - w / 2,
+        HPos::Right => at.0 - w,
+    };
+    let top = match pos.v_pos {
+        VPos::Top => at.1,
+        VPos::Center => at.1 - h / 2,
+        VPos::Bottom => at.1 - h,
+    };
+    let rect = (left - 4, top - 3, left + w + 4, top + h + 3);
+    area.draw(&Rectangle::new(
+        [(rect.0, rect.1), (rect.2, rect.3)],
+        WHITE.mix(0.85).filled(),
+    ))
+    .map_err(|e| e.to_string())?;
+    let line_h = if lines.is_empty() {
+        0
+    } else {
+        h / lines.len() as i32
+    };
+    for (k, line) in lines.iter().enumerate() {
+        area.draw(&Text::new(
+            line.to_string(),
+            (left, top + k as i32 * line_h),
+            text_style(size, Pos::new(HPos::Left, VPos::Top)),
+        ))
+        .map_err(|e| e.to_string())?;
+    }
+    Ok(rect)
+}
+
+/// Width, height (pixels) and lines of a possibly multi-line text.
+fn measure_text<'t>(
+    area: &DrawingArea<BitMapBackend<'_>, Shift>,
+    text: &'t str,
+    size: u32,
+) -> DrawResult<(i32, i32, Vec<&'t str>)> {
+    let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
+    let style = text_style(size, Pos::new(HPos::Left, VPos::Top));
+    let (mut w, mut h) = (0i32, 0i32);
+    for line in &lines {
+        let (lw, _) = area
+            .estimate_text_size(line, &style)
+            .map_err(|e| e.to_string())?;
+        w = w.max(lw as i32);
+        // A fixed line height: the estimate of a line without descenders is shorter.
+        h += (size as f64 * 1.25).round() as i32;
+    }
+    Ok((w, h, lines))
+}
+
+fn overlaps(a: PixelRect, b: PixelRect) -> bool {
+    a.0 < b.2 && b.0 < a.2 && a.1 < b.3 && b.1 < a.3
+}
+
+/// A log-axis tick label: decades always, also 2 and 5 (and 3 on short axes) when the axis
+/// spans few decades; other ticks are unlabelled minor ticks.
+fn log_tick_label(v: f64, decades: f64) -> String {
+    if !v.is_finite() || v <= 0.0 {
+        return String::new();
+    }
+    let e = (v.log10() + 1e-9).floor();
+    let m = v / 10f64.powf(e);
+    let mr = m.round();
+    if (m - mr).abs() > 1e-6 * m {
+        return String::new();
+    }
+    let allowed: &[f64] = if decades <= 1.3 {
+        &[1.0, 2.0, 3.0, 5.0]
+    } else if decades <= 3.5 {
+        &[1.0, 2.0, 5.0]
+    } else {
+        &[1.0]
+    };
+    if !allowed.contains(&mr) {
+        return String::new();
+    }
+    let (m, e) = (mr as i64, e as i32);
+    if !(-3..=5).contains(&e) {
+        format!("{m}e{e}")
+    } else if e >= 0 {
+        format!("{}", m * 10i64.pow(e as u32))
+    } else {
+        format!("0.{}{m}", "0".repeat((-e - 1) as usize))
+    }
+}
+
+/// Three significant digits, without exponent for the usual kHz values.
+fn fmt_sig3(v: f64) -> String {
+    let a = v.abs();
+    if a >= 1e5 || (a < 1e-3 && a > 0.0) {
+        format!("{v:.2e}")
+    } else if a >= 100.0 {
+        format!("{v:.0}")
+    } else if a >= 10.0 {
+        format!("{v:.1}")
+    } else if a >= 1.0 {
+        format!("{v:.2}")
+    } else {
+        format!("{v:.3}")
+    }
+}
+
+/// Tick positions of a log axis over `lo..hi`: every `m·10^e` (m = 1…9) when the axis spans
+/// at most four decades, only the decades otherwise (labelled by [`log_tick_label`]).
+fn log_key_points(lo: f64, hi: f64) -> Vec<f64> {
+    let decades = (hi / lo).log10();
+    let mantissas: &[f64] = if decades <= 4.0 {
+        &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]
+    } else {
+        &[1.0]
+    };
+    let (e0, e1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+    (e0..=e1)
+        .flat_map(|e| mantissas.iter().map(move |m| m * 10f64.powi(e)))
+        .filter(|v| *v >= lo * (1.0 - 1e-12) && *v <= hi * (1.0 + 1e-12))
+        .collect()
+}
+
+/// A linear-axis tick label with as many decimals as the tick spacing (≈ span/10) needs,
+/// trailing zeros trimmed.
+fn lin_tick_label(v: f64, span: f64) -> String {
+    let step = (span / 10.0).abs();
+    let decimals = if step > 0.0 && step.is_finite() {
+        (-(step.log10().floor()) as i32 + 1).clamp(0, 12) as usize
+    } else {
+        3
+    };
+    let mut s = format!("{v:.decimals$}");
+    if s.contains('.') {
+        s = s.trim_end_matches('0').trim_end_matches('.').to_string();
+    }
+    if s == "-0" {
+        s = "0".to_string();
+    }
+    s
+}
+
+/// `name (unit)`, or `name` alone for an empty unit.
+fn with_unit(name: &str, unit: &str) -> String {
+    if unit.trim().is_empty() {
+        name.to_string()
+    } else {
+        format!("{name} ({unit})")
+    }
+}
+
+/// A linear range covering `lo..=hi` with 5 % padding; a constant value gets ±5 % of its
+/// magnitude (±1 around zero).
+fn padded(lo: f64, hi: f64) -> (f64, f64) {
+    let span = hi - lo;
+    let scale = lo.abs().max(hi.abs());
+    if span > scale * 1e-9 && span > 0.0 {
+        (lo - 0.05 * span, hi + 0.05 * span)
+    } else {
+        let d = if scale > 0.0 { 0.05 * scale } else { 1.0 };
+        (lo - d, hi + d)
+    }
+}
+
+/// Lower/upper cell edges of sorted log-spaced frequencies: geometric midpoints between
+/// neighbours, and the outer edges half a step beyond the ends.
+fn log_edges(f: &[f64]) -> Vec<f64> {
+    let n = f.len();
+    let mut e = Vec::with_capacity(n + 1);
+    if n == 1 {
+        e.push(f[0] / 1.1);
+        e.push(f[0] * 1.1);
+        return e;
+    }
+    e.push(f[0] * (f[0] / f[1]).sqrt());
+    for k in 1..n {
+        e.push(f[k - 1].sqrt() * f[k].sqrt());
+    }
+    e.push(f[n - 1] * (f[n - 1] / f[n - 2]).sqrt());
+    e
+}
+
+/// `n` items split into `parts` contiguous blocks of near-equal size: block `b` is
+/// `start(b)..start(b + 1)`.
+fn block_start(n: usize, parts: usize, b: usize) -> usize {
+    b * n / parts
+}
+
+/// Scalogram `|W|` as a viridis heat map: time in ms (x), frequency in kHz on a log axis
+/// (y), a colour bar in `magnitude_unit`, the cone of influence as a black-edged white line
+/// with the region below it (where edge effects matter) dimmed, and the ridge, if given, as
+/// a red line.
+///
+/// `magnitude` is row-major `[frequency][time]` (as in the analysis `Scalogram`);
+/// `frequencies_hz` must be positive and strictly monotonic (increasing, or decreasing),
+/// `time_s` strictly increasing; `coi_hz` has one value per time sample or is empty (no
+/// cone drawn); `ridge_hz` has one value per time sample (non-finite values break the
+/// line). Time is reduced to at most 800 columns by the maximum over each block, so that
+/// peaks survive.
+#[allow(clippy::too_many_arguments)]
+pub fn scalogram_png(
+    path: &Path,
+    title: &str,
+    time_s: &[f64],
+    frequencies_hz: &[f64],
+    magnitude: &[f32],
+    coi_hz: &[f64],
+    ridge_hz: Option<&[f64]>,
+    magnitude_unit: &str,
+) -> Result<()> {
+    let (nt, nf) = (time_s.len(), frequencies_hz.len());
+    if nt < 2 || nf == 0 {
+        return Err(perr(
+            path,
+            format!("scalogram needs ≥ 2 times and ≥ 1 frequency, got {nt} × {nf}"),
+        ));
+    }
+    if nt.checked_mul(nf) != Some(magnitude.len()) {
+        return Err(perr(
+            path,
+            format!(
+                "scalogram magnitude has {} values, expected {nf} × {nt}",
+                magnitude.len()
+            ),
+        ));
+    }
+    if !coi_hz.is_empty() && coi_hz.len() != nt {
+        return Err(perr(
+            path,
+            format!(
+                "cone of influence has {} values for {nt} times",
+                coi_hz.len()
+            ),
+        ));
+    }
+    if let Some(r) = ridge_hz {
+        if r.len() != nt {
+            return Err(perr(
+                path,
+                format!("ridge has {} values for {nt} times", r.len()),
+            ));
+        }
+    }
+    let time_ok = time_s.iter().all(|t| t.is_finite()) && time_s.windows(2).all(|w| w[1] > w[0]);
+    if !time_ok {
+        return Err(perr(path, "scalogram times must be finite and increasing"));
+    }
+    if frequencies_hz
+        .iter()
+        .any(|f| !f.is_finite() || *f <= 0.0 || *f > 1e300)
+    {
+        return Err(perr(
+            path,
+            "scalogram frequencies must be finite and positive",
+        ));
+    }
+    // Rows in increasing frequency.
+    let order: Vec<usize> = if frequencies_hz.windows(2).all(|w| w[1] > w[0]) {
+        (0..nf).collect()
+    } else if frequencies_hz.windows(2).all(|w| w[1] < w[0]) {
+        (0..nf).rev().collect()
+    } else {
+        return Err(perr(
+            path,
+            "scalogram frequencies must be strictly monotonic",
+        ));
+    };
+    let f_khz: Vec<f64> = order.iter().map(|&j| frequencies_hz[j] * 1e-3).collect();
+    let edges = log_edges(&f_khz);
+
+    // Decimation: groups of rows, blocks of time samples; each cell is the max of its block.
+    let rows = nf.min(MAX_SCALOGRAM_ROWS);
+    let cols = nt
+        .min(MAX_SCALOGRAM_COLUMNS)
+        .min((MAX_SCALOGRAM_CELLS / rows).max(1));
+    let mut cells = vec![f64::NAN; rows * cols];
+    for g in 0..rows {
+        for &j in &order[block_start(nf, rows, g)..block_start(nf, rows, g + 1)] {
+            let row = &magnitude[j * nt..(j + 1) * nt];
+            for b in 0..cols {
+                let cell = &mut cells[g * cols + b];
+                for &v in &row[block_start(nt, cols, b)..block_start(nt, cols, b + 1)] {
+                    let v = f64::from(v);
+                    if v.is_finite() && (cell.is_nan() || v > *cell) {
+                        *cell = v;
+                    }
+                }
+            }
+        }
+    }
+    let (lo, hi) = cells
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    if lo > hi {
+        return Err(perr(path, "scalogram has no finite magnitude"));
+    }
+    let hi = if hi > lo {
+        hi
+    } else if lo != 0.0 {
+        lo + lo.abs()
+    } else {
+        1.0
+    };
+
+    let t_ms = |i: usize| {
+        if i < nt {
+            time_s[i] * 1e3
+        } else {
+            (2.0 * time_s[nt - 1] - time_s[nt - 2]) * 1e3
+        }
+    };
+    let col_x = |b: usize| t_ms(block_start(nt, cols, b));
+    let (x0, x1) = (t_ms(0), t_ms(nt));
+    let (y0, y1) = (edges[0], edges[nf]);
+    let row_y = |g: usize| edges[block_start(nf, rows, g)];
+    if !x1.is_finite() || y0 <= 0.0 || !y1.is_finite() {
+        return Err(perr(path, "scalogram axes out of range"));
+    }
+
+    // Cone of influence per column (the highest value in the block), clamped to the axis.
+    let coi: Vec<f64> = if coi_hz.is_empty() {
+        Vec::new()
+    } else {
+        (0..cols)
+            .map(|b| {
+                let c = coi_hz[block_start(nt, cols, b)..block_start(nt, cols, b + 1)]
+                    .iter()
+                    .filter(|c| !c.is_nan())
+                    .fold(f64::NEG_INFINITY, |a, &c| a.max(c * 1e-3));
+                c.clamp(y0, y1)
+            })
+            .collect()
+    };
+    // Ridge as line segments, broken at non-finite or off-axis values.
+    let ridge_segments: Vec<Vec<(f64, f64)>> = match ridge_hz {
+        None => Vec::new(),
+        Some(r) => {
+            let stride = nt.div_ceil(MAX_RIDGE_POINTS).max(1);
+            let mut segs = vec![Vec::new()];
+            for i in (0..nt).step_by(stride) {
+                let f = r[i] * 1e-3;
+                if f.is_finite() && f >= y0 && f <= y1 {
+                    segs.last_mut().unwrap().push((time_s[i] * 1e3, f));
+                } else if !segs.last().unwrap().is_empty() {
+                    segs.push(Vec::new());
+                }
+            }
+            segs.retain(|s| !s.is_empty());
+            segs
+        }
+    };
+    let decades = (y1 / y0).log10();
+
+    let y_ticks = log_key_points(y0, y1);
+    let bar_span = hi - lo;
+    render_png(path, (940, 580), |root| {
+        let (main, bar) = root.split_horizontally(800);
+        let mut chart = ChartBuilder::on(&main)
+            .caption(title, ("sans-serif", 20))
+            .margin(10)
+            .margin_right(15)
+            .x_label_area_size(45)
+            .y_label_area_size(65)
+            .build_cartesian_2d(x0..x1, (y0..y1).log_scale().with_key_points(y_ticks))
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_label_formatter(&|t| lin_tick_label(*t, x1 - x0))
+            .x_desc("time (ms)")
+            .y_desc("frequency (kHz)")
+            .y_label_formatter(&|v| log_tick_label(*v, decades))
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 15))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        let cell_rects = (0..rows).flat_map(|g| (0..cols).map(move |b| (g, b)));
+        chart
+            .draw_series(cell_rects.filter_map(|(g, b)| {
+                let v = cells[g * cols + b];
+                v.is_finite().then(|| {
+                    Rectangle::new(
+                        [(col_x(b), row_y(g)), (col_x(b + 1), row_y(g + 1))],
+                        ViridisRGB::get_color_normalized(v, lo, hi).filled(),
+                    )
+                })
+            }))
+            .map_err(|e| e.to_string())?;
+        if !coi.is_empty() {
+            // The cone through the block centres, extended to the plot edges.
+            let mut line = Vec::with_capacity(cols + 2);
+            line.push((x0, coi[0]));
+            for (b, &c) in coi.iter().enumerate() {
+                line.push((0.5 * (col_x(b) + col_x(b + 1)), c));
+            }
+            line.push((x1, coi[cols - 1]));
+            let mut region = line.clone();
+            region.push((x1, y0));
+            region.push((x0, y0));
+            chart
+                .draw_series(std::iter::once(Polygon::new(region, WHITE.mix(0.45))))
+                .map_err(|e| e.to_string())?;
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    line.clone(),
+                    BLACK.stroke_width(4),
+                )))
+                .map_err(|e| e.to_string())?;
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    line,
+                    WHITE.stroke_width(2),
+                )))
+                .map_err(|e| e.to_string())?
+                .label("cone of influence")
+                .legend(|(x, y)| {
+                    EmptyElement::at((x, y))
+                        + Rectangle::new([(0, -5), (16, 5)], RGBColor(200, 200, 200).filled())
+                        + PathElement::new(vec![(0, -5), (16, -5)], BLACK.stroke_width(2))
+                });
+        }
+        for (k, seg) in ridge_segments.iter().enumerate() {
+            let drawn = chart
+                .draw_series(std::iter::once(PathElement::new(
+                    seg.clone(),
+                    RED.stroke_width(2),
+                )))
+                .map_err(|e| e.to_string())?;
+            if k == 0 {
+                drawn.label("ridge").legend(|(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 16, y)], RED.stroke_width(2))
+                });
+            }
+        }
+        if !coi.is_empty() || !ridge_segments.is_empty() {
+            chart
+                .configure_series_labels()
+                // Low frequencies at late times: usually inside the cone, the least trusted part.
+                .position(SeriesLabelPosition::LowerRight)
+                .label_font(("sans-serif", 13))
+                .border_style(BLACK)
+                .background_style(WHITE.mix(0.85))
+                .draw()
+                .map_err(|e| e.to_string())?;
+        }
+
+        let mut cb = ChartBuilder::on(&bar)
+            .margin_top(40)
+            .margin_bottom(55)
+            .margin_left(4)
+            .margin_right(45)
+            .y_label_area_size(58)
+            .build_cartesian_2d(0.0..1.0, lo..hi)
+            .map_err(|e| e.to_string())?;
+        cb.configure_mesh()
+            .disable_mesh()
+            .disable_x_axis()
+            .y_labels(8)
+            .y_label_formatter(&|v| lin_tick_label(*v, bar_span))
+            .label_style(("sans-serif", 13))
+            .axis_desc_style(("sans-serif", 14))
+            .y_desc(with_unit("|W|", magnitude_unit))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        let n = 128;
+        cb.draw_series((0..n).map(|k| {
+            let a = lo + (hi - lo) * k as f64 / n as f64;
+            let b = lo + (hi - lo) * (k + 1) as f64 / n as f64;
+            Rectangle::new(
+                [(0.0, a), (1.0, b)],
+                ViridisRGB::get_color_normalized(0.5 * (a + b), lo, hi).filled(),
+            )
+        }))
+        .map_err(|e| e.to_string())?;
+        Ok(())
+    })
+}
+
+/// Poincaré return map: points `(x_n, x_{n+1})` on equal, square axes with the diagonal
+/// `x_{n+1} = x_n` as a thin grey line and `annotation` (e.g. the classification, several
+/// lines allowed) in the upper-left corner. Values are in `unit`.
+pub fn poincare_png(
+    path: &Path,
+    title: &str,
+    return_map: &[(f64, f64)],
+    unit: &str,
+    annotation: &str,
+) -> Result<()> {
+    let pts: Vec<(f64, f64)> = return_map
+        .iter()
+        .copied()
+        .filter(|(a, b)| a.is_finite() && b.is_finite() && a.abs() < 1e300 && b.abs() < 1e300)
+        .collect();
+    if pts.is_empty() {
+        return Err(perr(path, "return map has no finite point"));
+    }
+    let (lo, hi) = pts
+        .iter()
+        .flat_map(|&(a, b)| [a, b])
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(v), h.max(v))
+        });
+    let (lo, hi) = padded(lo, hi);
+    let n = pts.len();
+    let radius = if n > 2000 { 2 } else { 3 };
+    let span = hi - lo;
+    // The annotation goes into the corner with the fewest points nearby.
+    let corner_count = |right: bool, top: bool| {
+        pts.iter()
+            .filter(|&&(a, b)| {
+                let (u, w) = ((a - lo) / span, (b - lo) / span);
+                let in_x = if right { u > 0.6 } else { u < 0.4 };
+                let in_y = if top { w > 0.8 } else { w < 0.2 };
+                in_x && in_y
+            })
+            .count()
+    };
+    let corners = [(false, true), (true, false), (true, true), (false, false)];
+    let (right, top) = corners
+        .iter()
+        .copied()
+        .min_by_key(|&(r, t)| corner_count(r, t))
+        .unwrap_or((false, true));
+    // Square plot area (≈ 560 px): equal axes look equal.
+    render_png(path, (680, 676), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 20))
+            .margin(15)
+            .margin_right(25)
+            .x_label_area_size(50)
+            .y_label_area_size(75)
+            .build_cartesian_2d(lo..hi, lo..hi)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .light_line_style(BLACK.mix(0.04))
+            .bold_line_style(BLACK.mix(0.12))
+            .x_label_formatter(&|v| lin_tick_label(*v, span))
+            .y_label_formatter(&|v| lin_tick_label(*v, span))
+            .x_desc(with_unit("xₙ", unit))
+            .y_desc(with_unit("xₙ₊₁", unit))
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 15))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                vec![(lo, lo), (hi, hi)],
+                RGBColor(150, 150, 150).stroke_width(1),
+            )))
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(
+                pts.iter()
+                    .map(|&p| Circle::new(p, radius, RGBColor(0, 90, 170).mix(0.75).filled())),
+            )
+            .map_err(|e| e.to_string())?;
+        let area = chart.plotting_area().strip_coord_spec();
+        let (w, h) = area.dim_in_pixel();
+        let text = if annotation.trim().is_empty() {
+            format!("{n} points")
+        } else {
+            format!("{annotation}\n{n} points")
+        };
+        let at = (
+            if right { w as i32 - 10 } else { 10 },
+            if top { 8 } else { h as i32 - 8 },
+        );
+        let pos = Pos::new(
+            if right { HPos::Right } else { HPos::Left },
+            if top { VPos::Top } else { VPos::Bottom },
+        );
+        boxed_text(&area, at, &text, pos, 15)?;
+        Ok(())
+    })
+}
+
+/// Phase portrait: the trajectory `(x, v)` as a thin line, x horizontal and v vertical,
+/// with the start (green circle) and end (red square) marked. Non-finite samples break the
+/// line; samples that would not move the line by a visible amount are dropped.
+pub fn phase_portrait_png(
+    path: &Path,
+    title: &str,
+    x: &[f64],
+    v: &[f64],
+    x_unit: &str,
+    v_unit: &str,
+) -> Result<()> {
+    if x.len() != v.len() {
+        return Err(perr(
+            path,
+            format!("phase portrait: {} x values, {} v values", x.len(), v.len()),
+        ));
+    }
+    let ok = |a: f64, b: f64| a.is_finite() && b.is_finite() && a.abs() < 1e300 && b.abs() < 1e300;
+    let mut xr = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut vr = xr;
+    let mut n_ok = 0usize;
+    for (&a, &b) in x.iter().zip(v) {
+        if ok(a, b) {
+            xr = (xr.0.min(a), xr.1.max(a));
+            vr = (vr.0.min(b), vr.1.max(b));
+            n_ok += 1;
+        }
+    }
+    if n_ok < 2 {
+        return Err(perr(
+            path,
+            "phase portrait needs at least two finite points",
+        ));
+    }
+    let (xr, vr) = (padded(xr.0, xr.1), padded(vr.0, vr.1));
+    // Segments broken at non-finite samples, thinned to a fine grid.
+    let (qx, qv) = (PHASE_GRID / (xr.1 - xr.0), PHASE_GRID / (vr.1 - vr.0));
+    let mut segments: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+    let mut last_cell = (i64::MIN, i64::MIN);
+    for (&a, &b) in x.iter().zip(v) {
+        if ok(a, b) {
+            let cell = (
+                ((a - xr.0) * qx).floor() as i64,
+                ((b - vr.0) * qv).floor() as i64,
+            );
+            let seg = segments.last_mut().unwrap();
+            if cell != last_cell || seg.is_empty() {
+                seg.push((a, b));
+                last_cell = cell;
+            }
+        } else if !segments.last().unwrap().is_empty() {
+            segments.push(Vec::new());
+            last_cell = (i64::MIN, i64::MIN);
+        }
+    }
+    segments.retain(|s| !s.is_empty());
+    let start = segments[0][0];
+    // The true last finite sample (thinning may have dropped it).
+    let end = x
+        .iter()
+        .zip(v)
+        .rev()
+        .find(|(&a, &b)| ok(a, b))
+        .map(|(&a, &b)| (a, b))
+        .unwrap_or(start);
+    render_png(path, (760, 600), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 20))
+            .margin(15)
+            .margin_right(25)
+            .x_label_area_size(50)
+            .y_label_area_size(75)
+            .build_cartesian_2d(xr.0..xr.1, vr.0..vr.1)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .light_line_style(BLACK.mix(0.04))
+            .bold_line_style(BLACK.mix(0.12))
+            .x_label_formatter(&|t| lin_tick_label(*t, xr.1 - xr.0))
+            .y_label_formatter(&|t| lin_tick_label(*t, vr.1 - vr.0))
+            .x_desc(with_unit("x", x_unit))
+            .y_desc(with_unit("v", v_unit))
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 15))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        let line = RGBColor(0, 90, 170).mix(0.6).stroke_width(1);
+        for seg in &segments {
+            chart
+                .draw_series(std::iter::once(PathElement::new(seg.clone(), line)))
+                .map_err(|e| e.to_string())?;
+        }
+        chart
+            .draw_series(std::iter::once(Circle::new(
+                start,
+                6,
+                RGBColor(0, 158, 115).filled(),
+            )))
+            .map_err(|e| e.to_string())?
+            .label("start")
+            .legend(|(x, y)| Circle::new((x + 8, y), 5, RGBColor(0, 158, 115).filled()));
+        chart
+            .draw_series(std::iter::once(
+                EmptyElement::at(end)
+                    + Rectangle::new([(-5, -5), (5, 5)], RGBColor(213, 30, 0).filled()),
+            ))
+            .map_err(|e| e.to_string())?
+            .label("end")
+            .legend(|(x, y)| {
+                Rectangle::new(
+                    [(x + 3, y - 5), (x + 13, y + 5)],
+                    RGBColor(213, 30, 0).filled(),
+                )
+            });
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .label_font(("sans-serif", 13))
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.85))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        Ok(())
+    })
+}
+
+/// One-sided amplitude spectrum on log–log axes, frequency in kHz (x) and amplitude in
+/// `unit` (y), restricted to `f_range_hz` if given; `peaks` `(frequency Hz, amplitude)` are
+/// circled and the largest few labelled with their frequency in kHz. Non-positive and
+/// non-finite values are skipped; the amplitude axis shows at most eight decades below the
+/// top.
+pub fn spectrum_png(
+    path: &Path,
+    title: &str,
+    frequency_hz: &[f64],
+    amplitude: &[f64],
+    peaks: &[(f64, f64)],
+    unit: &str,
+    f_range_hz: Option<(f64, f64)>,
+) -> Result<()> {
+    if frequency_hz.len() != amplitude.len() {
+        return Err(perr(
+            path,
+            format!(
+                "spectrum: {} frequencies, {} amplitudes",
+                frequency_hz.len(),
+                amplitude.len()
+            ),
+        ));
+    }
+    let positive = |a: f64| a.is_finite() && a > 0.0 && a < 1e300;
+    let (fa, fb) = match f_range_hz {
+        Some((a, b)) => {
+            if a.is_nan() || b.is_nan() || b <= a.max(0.0) {
+                return Err(perr(
+                    path,
+                    format!("spectrum: bad frequency range {a}..{b} Hz"),
+                ));
+            }
+            (a, b)
+        }
+        None => (0.0, f64::INFINITY),
+    };
+    let in_range = |f: f64| positive(f) && f >= fa && f <= fb;
+    let mut pts: Vec<(f64, f64)> = frequency_hz
+        .iter()
+        .zip(amplitude)
+        .filter(|(&f, &a)| in_range(f) && positive(a))
+        .map(|(&f, &a)| (f * 1e-3, a))
+        .collect();
+    if pts.is_empty() {
+        return Err(perr(path, "spectrum has no positive point in range"));
+    }
+    let mut marks: Vec<(f64, f64)> = peaks
+        .iter()
+        .filter(|&&(f, a)| in_range(f) && positive(a))
+        .map(|&(f, a)| (f * 1e-3, a))
+        .collect();
+    let (mut xr, mut yr) = ((f64::INFINITY, 0.0f64), (f64::INFINITY, 0.0f64));
+    for &(f, a) in pts.iter().chain(&marks) {
+        xr = (xr.0.min(f), xr.1.max(f));
+        yr = (yr.0.min(a), yr.1.max(a));
+    }
+    let x_axis = match f_range_hz {
+        Some(_) => {
+            let a = if fa > 0.0 { fa * 1e-3 } else { xr.0 };
+            let b = if fb.is_finite() { fb * 1e-3 } else { xr.1 };
+            if b > a {
+                (a, b)
+            } else {
+                (a / 1.2, a * 1.2)
+            }
+        }
+        None if xr.1 > xr.0 => (xr.0 / 1.1, xr.1 * 1.1),
+        None => (xr.0 / 2.0, xr.0 * 2.0),
+    };
+    let floor = yr.0.max(yr.1 * 1e-8);
+    // Room above the top for the peak labels.
+    let y_axis = if yr.1 > floor {
+        (floor / 1.5, yr.1 * 4.0)
+    } else {
+        (floor / 3.0, floor * 6.0)
+    };
+    // Long spectra: min and max of each log-spaced bin, in frequency order.
+    if pts.len() > SPECTRUM_DECIMATE_ABOVE && xr.1 > xr.0 {
+        let (l0, l1) = (xr.0.ln(), xr.1.ln());
+        let scale = (SPECTRUM_BINS as f64 - 1e-9) / (l1 - l0);
+        let mut bins: Vec<Option<MinMaxPoints>> = vec![None; SPECTRUM_BINS];
+        for &(f, a) in &pts {
+            let k = (((f.ln() - l0) * scale) as usize).min(SPECTRUM_BINS - 1);
+            let bin = bins[k].get_or_insert(((f, a), (f, a)));
+            if a < bin.0 .1 {
+                bin.0 = (f, a);
+            }
+            if a > bin.1 .1 {
+                bin.1 = (f, a);
+            }
+        }
+        pts = bins
+            .into_iter()
+            .flatten()
+            .flat_map(|(mn, mx)| if mn.0 <= mx.0 { [mn, mx] } else { [mx, mn] })
+            .collect();
+    }
+    for p in &mut pts {
+        p.1 = p.1.max(floor);
+    }
+    // The largest few peaks get labels.
+    marks.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let labelled: Vec<(f64, f64)> = marks.iter().copied().take(MAX_PEAK_LABELS).collect();
+    let x_decades = (x_axis.1 / x_axis.0).log10();
+    let y_decades = (y_axis.1 / y_axis.0).log10();
+    let (x_ticks, y_ticks) = (
+        log_key_points(x_axis.0, x_axis.1),
+        log_key_points(y_axis.0, y_axis.1),
+    );
+    render_png(path, (820, 560), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 20))
+            .margin(15)
+            .margin_right(25)
+            .x_label_area_size(45)
+            .y_label_area_size(75)
+            .build_cartesian_2d(
+                (x_axis.0..x_axis.1).log_scale().with_key_points(x_ticks),
+                (y_axis.0..y_axis.1).log_scale().with_key_points(y_ticks),
+            )
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .bold_line_style(BLACK.mix(0.07))
+            .x_label_formatter(&|v| log_tick_label(*v, x_decades))
+            .y_label_formatter(&|v| log_tick_label(*v, y_decades))
+            .x_desc("frequency (kHz)")
+            .y_desc(with_unit("amplitude", unit))
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 15))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                pts.clone(),
+                RGBColor(0, 90, 170).stroke_width(1),
+            )))
+            .map_err(|e| e.to_string())?;
+        if !marks.is_empty() {
+            chart
+                .draw_series(
+                    marks
+                        .iter()
+                        .map(|&(f, a)| Circle::new((f, a.max(floor)), 5, RED.stroke_width(2))),
+                )
+                .map_err(|e| e.to_string())?;
+        }
+        // Labels above their peaks, left to right, each moved up until it overlaps no other.
+        let area = chart.plotting_area().strip_coord_spec();
+        let base = chart.plotting_area().get_base_pixel();
+        let mut by_x: Vec<(i32, i32, f64)> = labelled
+            .iter()
+            .map(|&(f, a)| {
+                let (px, py) = chart.backend_coord(&(f, a.max(floor)));
+                (px - base.0, py - base.1, f)
+            })
+            .collect();
+        by_x.sort_by_key(|p| p.0);
+        let mut placed: Vec<PixelRect> = Vec::new();
+        for (px, py, f) in by_x {
+            let text = format!("{} kHz", fmt_sig3(f));
+            let (w, h, _) = measure_text(&area, &text, 13)?;
+            let mut top = py - 9 - h;
+            let left = px - w / 2;
+            let clash = |top: i32, placed: &[PixelRect]| {
+                let r = (left - 4, top - 3, left + w + 4, top + h + 3);
+                placed.iter().any(|&p| overlaps(r, p))
+            };
+            while clash(top, &placed) && top > 0 {
+                top -= 2;
+            }
+            let top = top.max(2);
+            let rect = boxed_text(
+                &area,
+                (px, top),
+                &text,
+                Pos::new(HPos::Center, VPos::Top),
+                13,
+            )?;
+            placed.push(rect);
+        }
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, b'\n'];
+
+    fn assert_png(path: &Path) {
+        let bytes = std::fs::read(path).expect("plot written");
+        assert!(
+            bytes.len() > 1000,
+            "{}: {} bytes",
+            path.display(),
+            bytes.len()
+        );
+        assert_eq!(bytes[..8], PNG_SIGNATURE, "{}", path.display());
+    }
+
+    /// A hand-made scalogram of a log chirp 20 → 300 kHz: times, frequencies, |W|, coi, ridge.
+    type Chirp = (Vec<f64>, Vec<f64>, Vec<f32>, Vec<f64>, Vec<f64>);
+
+    fn chirp(nt: usize, nf: usize) -> Chirp {
+        let fs = 1e6;
+        let duration = nt as f64 / fs;
+        let t: Vec<f64> = (0..nt).map(|n| n as f64 / fs).collect();
+        let f: Vec<f64> = (0..nf)
+            .map(|j| 5e3 * 100f64.powf(j as f64 / (nf - 1).max(1) as f64))
+            .collect();
+        let f_inst: Vec<f64> = t.iter().map(|&t| 20e3 * 15f64.powf(t / duration)).collect();
+        let mut m = vec![0f32; nt * nf];
+        for (j, &fj) in f.iter().enumerate() {
+            for (n, &fi) in f_inst.iter().enumerate() {
+                let a = 2.5 * (1.0 + 0.3 * (t[n] * 2e3).sin());
+                m[j * nt + n] = (a * (-((fj.ln() - fi.ln()) / 0.1).powi(2)).exp()) as f32;
+            }
+        }
+        // Morlet (ω₀ = 6): f_coi ≈ 1.35 / distance to the nearer edge.
+        let coi: Vec<f64> = t
+            .iter()
+            .map(|&t| 1.35 / (t.min(duration - t) + 1.0 / fs))
+            .collect();
+        (t, f, m, coi, f_inst)
+    }
+
+    #[test]
+    fn scalogram_of_chirp_writes_png() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("scalogram.png");
+        let (t, f, m, coi, ridge) = chirp(2000, 40);
+        scalogram_png(&p, "chirp", &t, &f, &m, &coi, Some(&ridge), "nm").unwrap();
+        assert_png(&p);
+        // No cone, no ridge, no unit.
+        let p2 = dir.path().join("bare.png");
+        scalogram_png(&p2, "bare", &t, &f, &m, &[], None, "").unwrap();
+        assert_png(&p2);
+    }
+
+    #[test]
+    fn scalogram_accepts_decreasing_frequencies_and_clamps_the_cone() {
+        let dir = tempfile::tempdir().unwrap();
+        let (t, mut f, m, _, _) = chirp(500, 20);
+        // Rows reversed: the same picture with decreasing frequencies.
+        f.reverse();
+        let nt = t.len();
+        let m_rev: Vec<f32> = (0..f.len())
+            .rev()
+            .flat_map(|j| m[j * nt..(j + 1) * nt].to_vec())
+            .collect();
+        // Cone far above the top, far below the bottom, NaN and infinite.
+        let coi: Vec<f64> = (0..nt)
+            .map(|n| match n % 4 {
+                0 => 1e12,
+                1 => 1e-3,
+                2 => f64::NAN,
+                _ => f64::INFINITY,
+            })
+            .collect();
+        let ridge = vec![f64::NAN; nt];
+        let p = dir.path().join("clamped.png");
+        scalogram_png(&p, "clamped", &t, &f, &m_rev, &coi, Some(&ridge), "nm").unwrap();
+        assert_png(&p);
+    }
+
+    #[test]
+    fn scalogram_skips_non_finite_cells_and_handles_one_frequency() {
+        let dir = tempfile::tempdir().unwrap();
+        let (t, f, mut m, coi, _) = chirp(300, 10);
+        for k in (0..m.len()).step_by(7) {
+            m[k] = if k % 2 == 0 { f32::NAN } else { f32::INFINITY };
+        }
+        let p = dir.path().join("holes.png");
+        scalogram_png(&p, "holes", &t, &f, &m, &coi, None, "nm").unwrap();
+        assert_png(&p);
+        // One frequency, constant magnitude.
+        let p1 = dir.path().join("one.png");
+        scalogram_png(
+            &p1,
+            "one",
+            &t,
+            &f[..1],
+            &vec![1.0; t.len()],
+            &coi,
+            None,
+            "nm",
+        )
+        .unwrap();
+        assert_png(&p1);
+    }
+
+    #[test]
+    fn scalogram_8000_by_67_renders() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("large.png");
+        let (t, f, m, coi, ridge) = chirp(8000, 67);
+        scalogram_png(&p, "8000 × 67", &t, &f, &m, &coi, Some(&ridge), "nm").unwrap();
+        assert_png(&p);
+    }
+
+    #[test]
+    fn scalogram_degenerate_inputs_are_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bad.png");
+        let (t, f, m, coi, ridge) = chirp(100, 8);
+        let run = |t: &[f64], f: &[f64], m: &[f32], coi: &[f64], r: Option<&[f64]>| {
+            scalogram_png(&p, "bad", t, f, m, coi, r, "nm")
+        };
+        assert!(run(&[], &[], &[], &[], None).is_err());
+        assert!(run(&t[..1], &f, &m[..8], &[], None).is_err());
+        assert!(run(&t, &[], &[], &[], None).is_err());
+        assert!(run(&t, &f, &m[1..], &coi, None).is_err());
+        assert!(run(&t, &f, &m, &coi[1..], None).is_err());
+        assert!(run(&t, &f, &m, &coi, Some(&ridge[1..])).is_err());
+        let mut bad_t = t.clone();
+        bad_t[5] = bad_t[4];
+        assert!(run(&bad_t, &f, &m, &coi, None).is_err());
+        bad_t[5] = f64::NAN;
+        assert!(run(&bad_t, &f, &m, &coi, None).is_err());
+        let mut bad_f = f.clone();
+        bad_f[0] = 0.0;
+        assert!(run(&t, &bad_f, &m, &coi, None).is_err());
+        bad_f[0] = f64::NAN;
+        assert!(run(&t, &bad_f, &m, &coi, None).is_err());
+        let mut bad_f = f.clone();
+        bad_f.swap(2, 3);
+        assert!(run(&t, &bad_f, &m, &coi, None).is_err());
+        assert!(run(&t, &f, &vec![f32::NAN; m.len()], &coi, None).is_err());
+        assert!(!p.exists());
+    }
+
+    fn quasi_periodic_return_map(n: usize) -> Vec<(f64, f64)> {
+        let rho = (5f64.sqrt() - 1.0) / 2.0;
+        let x: Vec<f64> = (0..=n)
+            .map(|k| 12.0 + 0.8 * (std::f64::consts::TAU * rho * k as f64).cos())
+            .collect();
+        x.windows(2).map(|w| (w[0], w[1])).collect()
+    }
+
+    #[test]
+    fn poincare_writes_png() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("poincare.png");
+        let mut map = quasi_periodic_return_map(300);
+        map.push((f64::NAN, 1.0));
+        map.push((1.0, f64::INFINITY));
+        poincare_png(&p, "return map", &map, "nm", "quasi-periodic").unwrap();
+        assert_png(&p);
+        // One point (a fixed point), no annotation, no unit.
+        let p1 = dir.path().join("fixed.png");
+        poincare_png(&p1, "fixed point", &[(3.0, 3.0)], "", "").unwrap();
+        assert_png(&p1);
+    }
+
+    #[test]
+    fn poincare_degenerate_inputs_are_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bad.png");
+        assert!(poincare_png(&p, "t", &[], "nm", "").is_err());
+        assert!(poincare_png(
+            &p,
+            "t",
+            &[(f64::NAN, 1.0), (1.0, f64::NEG_INFINITY)],
+            "nm",
+            ""
+        )
+        .is_err());
+        assert!(!p.exists());
+    }
+
+    fn quasi_periodic_trajectory(n: usize) -> (Vec<f64>, Vec<f64>) {
+        let fs = 2e6;
+        let (f1, f2) = (50e3, 50e3 * 0.618_034);
+        let w = std::f64::consts::TAU;
+        let t: Vec<f64> = (0..n).map(|k| k as f64 / fs).collect();
+        let x = t
+            .iter()
+            .map(|&t| 2.0 * (w * f1 * t).sin() + 0.6 * (w * f2 * t).sin())
+            .collect();
+        // dx/dt in nm/ms = µm/s.
+        let v = t
+            .iter()
+            .map(|&t| {
+                (2.0 * w * f1 * (w * f1 * t).cos() + 0.6 * w * f2 * (w * f2 * t).cos()) * 1e-3
+            })
+            .collect();
+        (x, v)
+    }
+
+    #[test]
+    fn phase_portrait_writes_png() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("phase.png");
+        let (mut x, v) = quasi_periodic_trajectory(20_000);
+        x[100] = f64::NAN;
+        phase_portrait_png(&p, "phase portrait", &x, &v, "nm", "µm/s").unwrap();
+        assert_png(&p);
+        // Two points on a constant velocity.
+        let p2 = dir.path().join("two.png");
+        phase_portrait_png(&p2, "two", &[0.0, 1.0], &[2.0, 2.0], "", "").unwrap();
+        assert_png(&p2);
+    }
+
+    #[test]
+    fn phase_portrait_degenerate_inputs_are_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bad.png");
+        assert!(phase_portrait_png(&p, "t", &[], &[], "nm", "µm/s").is_err());
+        assert!(phase_portrait_png(&p, "t", &[1.0], &[1.0], "nm", "µm/s").is_err());
+        assert!(phase_portrait_png(&p, "t", &[1.0, 2.0], &[1.0], "nm", "µm/s").is_err());
+        assert!(phase_portrait_png(&p, "t", &[1.0, f64::NAN], &[1.0, 2.0], "nm", "µm/s").is_err());
+        assert!(!p.exists());
+    }
+
+    type Spectrum = (Vec<f64>, Vec<f64>, Vec<(f64, f64)>);
+
+    fn synthetic_spectrum(n: usize, df: f64) -> Spectrum {
+        let lines = [
+            (48e3, 1.0),
+            (96e3, 0.3),
+            (101e3, 0.12),
+            (144e3, 0.08),
+            (230e3, 0.02),
+        ];
+        let f: Vec<f64> = (0..n).map(|k| k as f64 * df).collect();
+        let a = f
+            .iter()
+            .enumerate()
+            .map(|(k, &f)| {
+                let floor = 2e-4 * (1.0 + 0.5 * (k as f64 * 0.37).sin().abs());
+                let peaks: f64 = lines
+                    .iter()
+                    .map(|&(f0, a0)| a0 / (1.0 + ((f - f0) / 600.0).powi(2)))
+                    .sum();
+                floor + peaks
+            })
+            .collect();
+        // Include the unlabelled small ones.
+        (f, a, lines.to_vec())
+    }
+
+    #[test]
+    fn spectrum_writes_png_with_peaks() {
+        let dir = tempfile::tempdir().unwrap();
+        let (f, mut a, peaks) = synthetic_spectrum(4000, 125.0);
+        a[10] = f64::NAN;
+        a[11] = -1.0;
+        let p = dir.path().join("spectrum.png");
+        spectrum_png(&p, "spectrum", &f, &a, &peaks, "nm", None).unwrap();
+        assert_png(&p);
+        let p2 = dir.path().join("range.png");
+        spectrum_png(&p2, "range", &f, &a, &peaks, "nm", Some((20e3, 200e3))).unwrap();
+        assert_png(&p2);
+        // Long spectrum (envelope decimation), no peaks, range starting at 0.
+        let (f, a, _) = synthetic_spectrum(200_000, 2.5);
+        let p3 = dir.path().join("long.png");
+        spectrum_png(&p3, "long", &f, &a, &[], "", Some((0.0, 400e3))).unwrap();
+        assert_png(&p3);
+    }
+
+    #[test]
+    fn spectrum_degenerate_inputs_are_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bad.png");
+        let (f, a, peaks) = synthetic_spectrum(100, 1000.0);
+        assert!(spectrum_png(&p, "t", &[], &[], &[], "nm", None).is_err());
+        assert!(spectrum_png(&p, "t", &f, &a[1..], &peaks, "nm", None).is_err());
+        assert!(spectrum_png(&p, "t", &f, &vec![0.0; f.len()], &peaks, "nm", None).is_err());
+        assert!(spectrum_png(&p, "t", &f, &a, &peaks, "nm", Some((2e6, 3e6))).is_err());
+        assert!(spectrum_png(&p, "t", &f, &a, &peaks, "nm", Some((5e4, 1e4))).is_err());
+        assert!(spectrum_png(&p, "t", &f, &a, &peaks, "nm", Some((f64::NAN, 1e4))).is_err());
+        assert!(!p.exists());
+    }
+
+    #[test]
+    fn log_tick_labels() {
+        assert_eq!(log_tick_label(10.0, 2.0), "10");
+        assert_eq!(log_tick_label(20.0, 2.0), "20");
+        assert_eq!(log_tick_label(30.0, 2.0), "");
+        assert_eq!(log_tick_label(30.0, 1.0), "30");
+        assert_eq!(log_tick_label(0.05, 2.0), "0.05");
+        assert_eq!(log_tick_label(200.0, 5.0), "");
+        assert_eq!(log_tick_label(1e-6, 8.0), "1e-6");
+        assert_eq!(log_tick_label(0.0, 2.0), "");
+    }
+
+    /// Renders the examples to /tmp/plots_examples for a visual check:
+    /// `cargo test --release --lib plot_analysis -- --ignored`.
+    #[test]
+    #[ignore]
+    fn write_examples() {
+        let dir = Path::new("/tmp/plots_examples");
+        std::fs::create_dir_all(dir).unwrap();
+        let (t, f, m, coi, ridge) = chirp(8000, 67);
+        let t0 = std::time::Instant::now();
+        scalogram_png(
+            &dir.join("scalogram.png"),
+            "Scalogram of a 20 → 300 kHz chirp",
+            &t,
+            &f,
+            &m,
+            &coi,
+            Some(&ridge),
+            "nm",
+        )
+        .unwrap();
+        eprintln!("scalogram 8000 × 67: {:?}", t0.elapsed());
+        // A cone 20× wider than Morlet's (as for a short record), to see the dimmed region.
+        let wide: Vec<f64> = coi.iter().map(|c| 20.0 * c).collect();
+        scalogram_png(
+            &dir.join("scalogram_wide_coi.png"),
+            "Scalogram, wide cone of influence",
+            &t,
+            &f,
+            &m,
+            &wide,
+            Some(&ridge),
+            "nm",
+        )
+        .unwrap();
+        // Decreasing frequencies, cone alternating above the top and below the bottom.
+        let (t, mut f, m, _, ridge) = chirp(2000, 30);
+        f.reverse();
+        let m_rev: Vec<f32> = (0..f.len())
+            .rev()
+            .flat_map(|j| m[j * 2000..(j + 1) * 2000].to_vec())
+            .collect();
+        let coi: Vec<f64> = (0..2000)
+            .map(|n| if (n / 250) % 2 == 0 { 1e9 } else { 1.0 })
+            .collect();
+        scalogram_png(
+            &dir.join("scalogram_clamped.png"),
+            "Decreasing frequencies, clamped cone",
+            &t,
+            &f,
+            &m_rev,
+            &coi,
+            Some(&ridge),
+            "",
+        )
+        .unwrap();
+        poincare_png(
+            &dir.join("poincare.png"),
+            "Poincaré return map (maxima)",
+            &quasi_periodic_return_map(400),
+            "nm",
+            "quasi-periodic",
+        )
+        .unwrap();
+        let (x, v) = quasi_periodic_trajectory(4000);
+        phase_portrait_png(
+            &dir.join("phase.png"),
+            "Phase portrait",
+            &x,
+            &v,
+            "nm",
+            "µm/s",
+        )
+        .unwrap();
+        let (f, a, _) = synthetic_spectrum(200_000, 2.5);
+        spectrum_png(
+            &dir.join("spectrum_long.png"),
+            "200 000 bins (min/max envelope), no peaks",
+            &f,
+            &a,
+            &[],
+            "",
+            None,
+        )
+        .unwrap();
+        poincare_png(
+            &dir.join("poincare_fixed.png"),
+            "Fixed point",
+            &[(3.0, 3.0); 20],
+            "nm",
+            "periodic (period 1)",
+        )
+        .unwrap();
+        let (f, a, peaks) = synthetic_spectrum(4000, 125.0);
+        spectrum_png(
+            &dir.join("spectrum.png"),
+            "Amplitude spectrum",
+            &f,
+            &a,
+            &peaks,
+            "nm",
+            Some((5e3, 500e3)),
+        )
+        .unwrap();
+    }
+}
