@@ -69,6 +69,9 @@ pub enum Command {
     Contact(Box<ContactArgs>),
     /// 2-DOF slider cases: one actuation or a sweep, with metrics, tables and plots.
     Simulate(Box<SimulateArgs>),
+    /// Spectrum, wavelet transform, Poincaré section and phase space of one series of an
+    /// HDF5 file (a slider case, a DMW or excitation track, …): dominant frequencies and class.
+    Analyze(Box<AnalyzeArgs>),
     /// Every reproducible number of the specs: target, hdi's value, tolerance, pass. Exit 1 if
     /// a reproducible target fails.
     Validate {
@@ -388,6 +391,7 @@ pub fn main() -> Result<()> {
         Command::Dmw(args) => cmd_dmw(*args),
         Command::Contact(args) => cmd_contact(*args),
         Command::Simulate(args) => cmd_simulate(*args),
+        Command::Analyze(args) => cmd_analyze(*args),
         Command::Validate { json, only, config } => cmd_validate(json, &only, &config),
         Command::Synth {
             what,
@@ -530,10 +534,11 @@ fn cmd_run(
     Ok(())
 }
 
-/// Summary table per stage kind: `surfaces`, `interfaces`, `dmw` (a mass noun).
+/// Summary table per stage kind: `surfaces`, `interfaces`, `dmw` (a mass noun), `analyses`.
 fn table_name(kind: &str) -> String {
     match kind {
         "dmw" => "dmw".into(),
+        "analysis" => "analyses".into(),
         k => format!("{k}s"),
     }
 }
@@ -915,6 +920,124 @@ fn cmd_contact(a: ContactArgs) -> Result<()> {
             g("P_lub_onset_mN"),
             g("Q_lub_transition_end_uN")
         );
+    }
+    Ok(())
+}
+
+/// `hdi analyze`.
+#[derive(Args, Debug)]
+pub struct AnalyzeArgs {
+    /// An HDF5 file (a case `h_XXX.XXnm.h5`, a `dmw.h5`, or any file with a 1-D series and a
+    /// `time` dataset with a `sampling_rate` attribute beside it).
+    pub file: PathBuf,
+    /// Series to analyse (default: `case/history/heave` or `dmw/tracks/D1`).
+    #[arg(long)]
+    pub dataset: Option<String>,
+    /// Its velocity (default: the file's own; `none`: central differences).
+    #[arg(long)]
+    pub velocity: Option<String>,
+    /// Time window, e.g. `--window "0.7 ms" "1.3 ms"`.
+    #[arg(long, num_args = 2)]
+    pub window: Vec<TimeSpan>,
+    #[arg(long, default_value = "5 kHz")]
+    pub f_min: Frequency,
+    #[arg(long, default_value = "1 MHz")]
+    pub f_max: Frequency,
+    /// Log-spaced CWT frequencies.
+    #[arg(long, default_value_t = 100)]
+    pub frequencies: usize,
+    #[arg(long, default_value_t = 5)]
+    pub peaks: usize,
+    #[arg(long)]
+    pub min_peak_frequency: Option<Frequency>,
+    /// Write `analysis.h5` and the PNGs (spectrum, scalogram, Poincaré map, phase portrait)
+    /// into this directory.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn cmd_analyze(a: AnalyzeArgs) -> Result<()> {
+    use crate::stages::analysis::{read_series, summary, write_outputs, AnalysisSettings};
+    let settings = AnalysisSettings {
+        window: match a.window.as_slice() {
+            [t0, t1] => (Some(t0.0), Some(t1.0)),
+            _ => (None, None),
+        },
+        f_min: a.f_min.0,
+        f_max: a.f_max.0,
+        frequencies: a.frequencies,
+        peaks: a.peaks,
+        min_peak_frequency: a.min_peak_frequency.map_or(0.0, |f| f.0),
+    };
+    if let Err((k, m)) = settings.check() {
+        bail!("--{}: {m}", k.replace('_', "-"));
+    }
+    if !a.file.is_file() {
+        bail!("{}: no such file", a.file.display());
+    }
+    let s = read_series(&a.file, a.dataset.as_deref(), a.velocity.as_deref())?;
+    let started = Instant::now();
+    let r = crate::analysis::report::analyze(
+        &s.x,
+        s.v.as_deref(),
+        s.sample_rate,
+        s.t0,
+        &settings.options(),
+    )
+    .with_context(|| format!("{}", a.file.display()))?;
+    let seconds = started.elapsed().as_secs_f64();
+    let sum = summary(&r, &s.unit);
+    if let Some(dir) = &a.out {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let label = a
+            .file
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_default();
+        write_outputs(
+            dir,
+            "",
+            &label,
+            &json!({"file": a.file.display().to_string(), "dataset": a.dataset}),
+            &r,
+            &s,
+        )?;
+    }
+    if a.json {
+        println!("{sum}");
+        return Ok(());
+    }
+    let (du, k) = match s.unit.as_str() {
+        "m" => ("nm", 1e9),
+        "N" => ("mN", 1e3),
+        u => (u, 1.0),
+    };
+    println!(
+        "{}: {} samples at {} MHz from {:.4} ms ({seconds:.2} s)",
+        a.file.display(),
+        r.samples,
+        r.sample_rate_hz / 1e6,
+        r.t0_s * 1e3
+    );
+    println!("  {:>12} {:>14}", "peak (kHz)", format!("amplitude ({du})"));
+    for p in &r.peaks {
+        println!("  {:>12.3} {:>14.5}", p.frequency / 1e3, p.amplitude * k);
+    }
+    if let Some(f) = r.median_trusted_ridge_hz() {
+        println!(
+            "  wavelet ridge (median, inside the cone of influence): {:.3} kHz",
+            f / 1e3
+        );
+    }
+    println!(
+        "  Poincaré section: {} maxima → {}",
+        r.section.maxima.len(),
+        r.class_label()
+    );
+    if let Some(dir) = &a.out {
+        println!("  wrote {}/analysis.h5 and 4 PNGs", dir.display());
     }
     Ok(())
 }

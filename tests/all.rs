@@ -1,4 +1,5 @@
 //! One integration-test binary (one link step on 2 cores), one module per concern.
+mod analysis_cli;
 mod bad_input;
 mod calibrate_cli;
 mod common;

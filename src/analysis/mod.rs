@@ -18,6 +18,7 @@
 pub mod classify;
 pub mod cwt;
 pub mod poincare;
+pub mod report;
 pub mod series;
 
 #[cfg(test)]

@@ -77,6 +77,12 @@ pub struct RawConfig {
     /// `[simulate.NAME]`: 2-DOF slider cases over an actuation sweep.
     #[serde(default)]
     pub simulate: BTreeMap<String, crate::stages::simulate::SimulateConfig>,
+    /// `[excitation.NAME]`: a synthetic disk-motion track (Appendix B) in the DMW layout.
+    #[serde(default)]
+    pub excitation: BTreeMap<String, crate::stages::excitation::ExcitationConfig>,
+    /// `[analysis.NAME]`: spectrum, wavelet transform, Poincaré section of an upstream series.
+    #[serde(default)]
+    pub analysis: BTreeMap<String, crate::stages::analysis::AnalysisConfig>,
     /// `[calibrate.NAME]`: fit the dropped knobs of a `[simulate]` instance to the published
     /// class-D landmarks.
     #[serde(default)]

@@ -1,9 +1,11 @@
 //! Stage implementations, one module per stage kind, and the registry that turns a parsed
 //! `pipeline.toml` into stage instances.
+pub mod analysis;
 pub mod calibrate;
 pub mod contact;
 pub mod contact_mtl;
 pub mod dmw;
+pub mod excitation;
 pub mod interface;
 pub mod simulate;
 pub mod surfaces;
@@ -64,6 +66,12 @@ pub fn build(file: &PipelineFile) -> Result<Vec<Box<dyn Stage>>, ConfigError> {
         check_name("dmw", name)?;
         stages.push(Box::new(dmw::DmwStage::from_config(file, name, cfg)?));
     }
+    for (name, cfg) in &file.raw.excitation {
+        check_name("excitation", name)?;
+        stages.push(Box::new(excitation::ExcitationStage::from_config(
+            file, name, cfg,
+        )?));
+    }
     for (name, cfg) in &file.raw.simulate {
         check_name("simulate", name)?;
         stages.push(Box::new(simulate::SimulateStage::from_config(
@@ -73,6 +81,12 @@ pub fn build(file: &PipelineFile) -> Result<Vec<Box<dyn Stage>>, ConfigError> {
     for (name, cfg) in &file.raw.calibrate {
         check_name("calibrate", name)?;
         stages.push(Box::new(calibrate::CalibrateStage::from_config(
+            file, name, cfg,
+        )?));
+    }
+    for (name, cfg) in &file.raw.analysis {
+        check_name("analysis", name)?;
+        stages.push(Box::new(analysis::AnalysisStage::from_config(
             file, name, cfg,
         )?));
     }

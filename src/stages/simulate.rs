@@ -151,6 +151,10 @@ pub struct SimulateConfig {
     /// the spec defaults of this instance.
     #[serde(default)]
     pub calibration: Option<String>,
+    /// Heave offset of the start state (from the nominal or static state), e.g. `"1 nm"`: a
+    /// kick whose free decay shows the AB modes (Appendix B's zero excitation).
+    #[serde(default)]
+    pub initial_heave: Option<Length>,
 }
 
 fn default_init() -> String {
@@ -305,6 +309,13 @@ pub fn validate(cfg: &SimulateConfig) -> std::result::Result<SimulateParams, (St
         "static" => true,
         o => return bad("init", format!("unknown `{o}` (nominal, static)")),
     };
+    let z0 = cfg.initial_heave.map_or(0.0, |l| l.0);
+    if !(z0.is_finite() && z0.abs() <= 5e-9) {
+        return bad(
+            "initial_heave",
+            format!("{z0} m is out of range: |z0| ≤ 5 nm"),
+        );
+    }
     let options = SimOptions {
         static_init,
         duration: cfg.duration.0,
@@ -313,7 +324,7 @@ pub fn validate(cfg: &SimulateConfig) -> std::result::Result<SimulateParams, (St
         integrator,
         transit_delay: cfg.transit_delay,
         wrap_dmw: cfg.dmw_wrap,
-        initial_state: [0.0; 4],
+        initial_state: [z0, 0.0, 0.0, 0.0],
     };
     if !(cfg.duration.0 > 0.0 && cfg.duration.0 <= 0.1) {
         return bad(
@@ -985,12 +996,12 @@ impl SimulateStage {
             }
         }
         if let Some(d) = &params.dmw {
-            if !file.raw.dmw.contains_key(d) {
+            if !file.raw.dmw.contains_key(d) && !file.raw.excitation.contains_key(d) {
                 return Err(file.error(
                     "simulate",
                     name,
                     "dmw",
-                    format!("no [dmw.{d}] in this file (or \"none\")"),
+                    format!("no [dmw.{d}] or [excitation.{d}] in this file (or \"none\")"),
                 ));
             }
         }

@@ -1,0 +1,725 @@
+//! Analysis stage (signals-and-surfaces.md §4, Appendix B): any time series of an upstream
+//! stage's HDF5 (a slider case's heave, a DMW or excitation track, …) within a time window →
+//! amplitude spectrum and peaks, CWT scalogram with ridge and cone of influence, Poincaré
+//! section with a periodicity class, phase space. `hdi analyze FILE` runs the same on any file.
+
+use crate::analysis::cwt::FrequencyGrid;
+use crate::analysis::report::{analyze, AnalysisReport, AnalyzeOptions};
+use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::engine::{Stage, StageContext, StageOutput};
+use crate::core::store::H5Out;
+use crate::core::units::{Frequency, Length, TimeSpan};
+use crate::error::{Error, Result};
+use serde::Deserialize;
+use serde_json::{json, Map, Value};
+use std::path::{Path, PathBuf};
+
+pub const MODEL_VERSION: &str = "analysis-1";
+
+fn default_f_min() -> Frequency {
+    Frequency(5e3)
+}
+fn default_f_max() -> Frequency {
+    Frequency(1e6)
+}
+fn default_frequencies() -> usize {
+    100
+}
+fn default_peaks() -> usize {
+    5
+}
+
+/// `[analysis.NAME]` as written.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AnalysisConfig {
+    /// The stage instance whose output holds the series.
+    pub source: String,
+    /// File inside the source's outputs (default: `dmw.h5` for DMW/excitation sources, the
+    /// case at `actuation` for simulate sources).
+    #[serde(default)]
+    pub file: Option<String>,
+    /// Simulate sources: the case to analyse (default: the only one).
+    #[serde(default)]
+    pub actuation: Option<Length>,
+    /// Dataset path (default: `case/history/heave` or `dmw/tracks/D1`).
+    #[serde(default)]
+    pub dataset: Option<String>,
+    /// Velocity dataset for the Poincaré section and phase space (default: the model's or the
+    /// LDV's own velocity; `"none"`: central differences).
+    #[serde(default)]
+    pub velocity: Option<String>,
+    /// `[start, end]` on the series' time axis (default: the whole record).
+    #[serde(default)]
+    pub window: Option<[TimeSpan; 2]>,
+    #[serde(default = "default_f_min")]
+    pub f_min: Frequency,
+    #[serde(default = "default_f_max")]
+    pub f_max: Frequency,
+    /// Log-spaced CWT frequencies between f_min and f_max.
+    #[serde(default = "default_frequencies")]
+    pub frequencies: usize,
+    /// Spectral peaks reported.
+    #[serde(default = "default_peaks")]
+    pub peaks: usize,
+    /// Ignore spectral peaks below this frequency (e.g. a sweep's slow settling).
+    #[serde(default)]
+    pub min_peak_frequency: Option<Frequency>,
+}
+
+/// Where the series is and how to analyse it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeriesSpec {
+    pub file: String,
+    pub dataset: String,
+    /// `None`: central differences.
+    pub velocity: Option<String>,
+}
+
+/// The settings that are plain numbers (shared with `hdi analyze`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AnalysisSettings {
+    pub window: (Option<f64>, Option<f64>),
+    pub f_min: f64,
+    pub f_max: f64,
+    pub frequencies: usize,
+    pub peaks: usize,
+    pub min_peak_frequency: f64,
+}
+
+impl AnalysisSettings {
+    pub fn check(&self) -> std::result::Result<(), (String, String)> {
+        let bad = |k: &str, m: String| Err((k.to_string(), m));
+        if !(self.f_min > 0.0 && self.f_max > self.f_min && self.f_max.is_finite()) {
+            return bad(
+                "f_min",
+                format!(
+                    "need 0 < f_min < f_max (got {} … {} Hz)",
+                    self.f_min, self.f_max
+                ),
+            );
+        }
+        if !(2..=2000).contains(&self.frequencies) {
+            return bad(
+                "frequencies",
+                format!("{} is out of range: 2 … 2000", self.frequencies),
+            );
+        }
+        if !(1..=100).contains(&self.peaks) {
+            return bad("peaks", format!("{} is out of range: 1 … 100", self.peaks));
+        }
+        if let (Some(a), Some(b)) = self.window {
+            if !(a.is_finite() && b.is_finite() && b > a && a >= 0.0) {
+                return bad("window", format!("need 0 ≤ start < end (got {a} … {b} s)"));
+            }
+        }
+        Ok(())
+    }
+
+    pub fn options(&self) -> AnalyzeOptions {
+        let mut o = AnalyzeOptions {
+            window: self.window,
+            ..AnalyzeOptions::default()
+        };
+        o.cwt.frequencies = FrequencyGrid::Log {
+            f_min_hz: self.f_min,
+            f_max_hz: self.f_max,
+            count: self.frequencies,
+        };
+        o.peaks.max_peaks = self.peaks;
+        o.peaks.min_frequency = self.min_peak_frequency;
+        o
+    }
+}
+
+/// A series read from an HDF5 file.
+pub struct Series {
+    pub x: Vec<f64>,
+    pub v: Option<Vec<f64>>,
+    pub sample_rate: f64,
+    /// Time of the first sample kept, s.
+    pub t0: f64,
+    pub unit: String,
+    pub velocity_unit: String,
+}
+
+fn h5err(path: &Path, what: &str, e: impl std::fmt::Display) -> Error {
+    Error::Stage(format!("{}: {what}: {e}", path.display()))
+}
+
+fn read_units(ds: &hdf5::Dataset) -> String {
+    ds.attr("units")
+        .and_then(|a| a.read_scalar::<hdf5::types::VarLenUnicode>())
+        .map(|s| s.to_string())
+        .unwrap_or_else(|_| "1".into())
+}
+
+/// 1-D float datasets of a file (for the error that lists what could have been meant).
+fn list_series(file: &hdf5::File) -> Vec<String> {
+    fn walk(g: &hdf5::Group, prefix: &str, out: &mut Vec<String>) {
+        for name in g.member_names().unwrap_or_default() {
+            let path = format!("{prefix}{name}");
+            if let Ok(ds) = g.dataset(&name) {
+                if ds.ndim() == 1 && ds.size() > 16 && ds.dtype().is_ok_and(|t| t.is::<f64>()) {
+                    out.push(path);
+                }
+            } else if let Ok(sub) = g.group(&name) {
+                walk(&sub, &format!("{path}/"), out);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(file, "", &mut out);
+    out
+}
+
+/// The default series of a file: a slider case's heave or a DMW track.
+pub const DEFAULT_SERIES: &[(&str, &str)] = &[
+    ("case/history/heave", "case/history/heave_rate"),
+    ("dmw/tracks/D1", "dmw/tracks/V1"),
+];
+
+/// Read `dataset` (and `velocity`) with the time axis beside it (`time` with a
+/// `sampling_rate` attribute); samples flagged in an `edge_transient` dataset beside it are
+/// dropped from both ends.
+pub fn read_series(path: &Path, dataset: Option<&str>, velocity: Option<&str>) -> Result<Series> {
+    let file = hdf5::File::open(path).map_err(|e| h5err(path, "cannot open as HDF5", e))?;
+    let (dataset, velocity) = match dataset {
+        Some(d) => (d.to_string(), velocity.map(str::to_string)),
+        None => {
+            let Some((d, v)) = DEFAULT_SERIES.iter().find(|(d, _)| file.dataset(d).is_ok()) else {
+                return Err(Error::Stage(format!(
+                    "{}: no default series ({}); pass a dataset, one of: {}",
+                    path.display(),
+                    DEFAULT_SERIES
+                        .iter()
+                        .map(|d| d.0)
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    list_series(&file).join(", ")
+                )));
+            };
+            (
+                d.to_string(),
+                velocity.map_or(Some(v.to_string()), |v| Some(v.to_string())),
+            )
+        }
+    };
+    let velocity = velocity.filter(|v| v != "none");
+    let ds = file.dataset(&dataset).map_err(|_| {
+        Error::Stage(format!(
+            "{}: no dataset `{dataset}` (1-D series in this file: {})",
+            path.display(),
+            list_series(&file).join(", ")
+        ))
+    })?;
+    if ds.ndim() != 1 {
+        return Err(h5err(
+            path,
+            &dataset,
+            format!("is {}-D, not a time series", ds.ndim()),
+        ));
+    }
+    let x: Vec<f64> = ds.read_raw().map_err(|e| h5err(path, &dataset, e))?;
+    let unit = read_units(&ds);
+    let parent = dataset.rsplit_once('/').map_or("", |(p, _)| p);
+    let sibling = |name: &str| {
+        if parent.is_empty() {
+            name.to_string()
+        } else {
+            format!("{parent}/{name}")
+        }
+    };
+    let time = file.dataset(&sibling("time")).map_err(|_| {
+        Error::Stage(format!(
+            "{}: `{dataset}` has no time axis (a `{}` dataset with a sampling_rate attribute)",
+            path.display(),
+            sibling("time")
+        ))
+    })?;
+    let fs = time
+        .attr("sampling_rate")
+        .and_then(|a| a.read_scalar::<f64>())
+        .map_err(|e| h5err(path, "sampling_rate attribute of the time axis", e))?;
+    let t: Vec<f64> = time.read_raw().map_err(|e| h5err(path, "time", e))?;
+    if t.len() != x.len() || fs.is_nan() || fs <= 0.0 {
+        return Err(h5err(
+            path,
+            &dataset,
+            "time axis and series disagree in length or rate",
+        ));
+    }
+    let (v, velocity_unit) = match &velocity {
+        Some(vp) => {
+            let vd = file.dataset(vp).map_err(|_| {
+                Error::Stage(format!("{}: no velocity dataset `{vp}`", path.display()))
+            })?;
+            let v: Vec<f64> = vd.read_raw().map_err(|e| h5err(path, vp, e))?;
+            if v.len() != x.len() {
+                return Err(h5err(
+                    path,
+                    vp,
+                    format!("{} samples, the series has {}", v.len(), x.len()),
+                ));
+            }
+            (Some(v), read_units(&vd))
+        }
+        None => (None, format!("{unit}/s")),
+    };
+    let edge: Vec<u8> = file
+        .dataset(&sibling("edge_transient"))
+        .and_then(|d| d.read_raw::<u8>())
+        .unwrap_or_default();
+    let (a, b) = if edge.len() == x.len() {
+        let a = edge.iter().position(|&e| e == 0).unwrap_or(0);
+        let b = edge
+            .iter()
+            .rposition(|&e| e == 0)
+            .map_or(x.len(), |i| i + 1);
+        if b > a + 1 {
+            (a, b)
+        } else {
+            (0, x.len())
+        }
+    } else {
+        (0, x.len())
+    };
+    Ok(Series {
+        x: x[a..b].to_vec(),
+        v: v.map(|v| v[a..b].to_vec()),
+        sample_rate: fs,
+        t0: t.first().copied().unwrap_or(0.0) + a as f64 / fs,
+        unit,
+        velocity_unit,
+    })
+}
+
+/// Display unit and factor for a stored unit (m → nm, N → mN, m/s → mm/s).
+fn display(unit: &str) -> (&str, f64) {
+    match unit {
+        "m" => ("nm", 1e9),
+        "N" => ("mN", 1e3),
+        "m/s" => ("mm/s", 1e3),
+        u => (u, 1.0),
+    }
+}
+
+/// The summary of a report (JSON for `--json`, `result.json` and the table row).
+/// Six significant digits for the summary table (1.92325, not 1.9232500000000001); the HDF5
+/// keeps full precision.
+fn sig6(x: f64) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    let scale = 10f64.powi(5 - x.abs().log10().floor() as i32);
+    (x * scale).round() / scale
+}
+
+pub fn summary(r: &AnalysisReport, unit: &str) -> Value {
+    let (du, k) = display(unit);
+    json!({
+        "window_s": [r.t0_s, r.t0_s + r.samples as f64 / r.sample_rate_hz],
+        "samples": r.samples,
+        "sample_rate_Hz": r.sample_rate_hz,
+        "unit": unit,
+        "peaks": r.peaks.iter().map(|p| json!({
+            "frequency_Hz": p.frequency,
+            "amplitude": p.amplitude,
+            format!("amplitude_{du}"): p.amplitude * k,
+        })).collect::<Vec<_>>(),
+        "ridge_median_Hz": r.median_trusted_ridge_hz(),
+        "class": r.class_label(),
+        "poincare_maxima": r.section.maxima.len(),
+        "diagnostics": r.classification.as_ref().ok().map(|c| format!("{:?}", c.diagnostics)),
+    })
+}
+
+/// Write `analysis.h5` and the four PNGs into `dir`; `label` titles the plots.
+pub fn write_outputs(
+    dir: &Path,
+    key: &str,
+    label: &str,
+    source: &Value,
+    r: &AnalysisReport,
+    s: &Series,
+) -> Result<()> {
+    let out = H5Out::create(&dir.join("analysis.h5"))?;
+    out.root_attributes("analysis", key, source, &json!({}), "analysis")?;
+    let entry = out.group("analysis", Some("NXentry"))?;
+    out.attr_str(&entry, "default", "spectrum")?;
+    out.attr_str(&entry, "class", &r.class_label())?;
+    let g = out.group("analysis/spectrum", Some("NXdata"))?;
+    out.attr_str(&g, "signal", "amplitude")?;
+    out.attr_str_list(&g, "axes", &["frequency"])?;
+    out.write_1d(&g, "frequency", &r.spectrum.frequency, "Hz", "frequency")?;
+    out.write_1d(
+        &g,
+        "amplitude",
+        &r.spectrum.amplitude,
+        &s.unit,
+        "one-sided amplitude (Hann; a tone of amplitude A reads A)",
+    )?;
+    let pf: Vec<f64> = r.peaks.iter().map(|p| p.frequency).collect();
+    let pa: Vec<f64> = r.peaks.iter().map(|p| p.amplitude).collect();
+    out.write_1d(&g, "peak_frequency", &pf, "Hz", "refined peak frequency")?;
+    out.write_1d(&g, "peak_amplitude", &pa, &s.unit, "refined peak amplitude")?;
+
+    let sc = &r.scalogram;
+    let g = out.group("analysis/scalogram", Some("NXdata"))?;
+    out.attr_str(&g, "signal", "magnitude")?;
+    out.attr_str_list(&g, "axes", &["frequency", "time"])?;
+    out.attr_str(&g, "wavelet", &sc.wavelet.to_string())?;
+    out.attr_str(&g, "normalization", &sc.normalization.to_string())?;
+    let nf = sc.frequencies_hz.len();
+    let mag = ndarray::ArrayView2::from_shape((nf, sc.n_time), &sc.magnitude)
+        .map_err(|e| Error::Stage(format!("scalogram shape: {e}")))?;
+    out.write_array(
+        &g,
+        "magnitude",
+        mag,
+        &s.unit,
+        "|W| (L1: a tone of amplitude A reads A)",
+    )?;
+    out.write_1d(&g, "frequency", &sc.frequencies_hz, "Hz", "frequency")?;
+    let time: Vec<f64> = sc.time_s().iter().map(|t| t + r.t0_s).collect();
+    out.write_1d(&g, "time", &time, "s", "time")?;
+    out.write_1d(
+        &g,
+        "coi_frequency",
+        &sc.coi_hz,
+        "Hz",
+        "cone of influence: lowest trusted frequency",
+    )?;
+    out.write_1d(
+        &g,
+        "ridge_frequency",
+        &r.ridge.frequency_hz,
+        "Hz",
+        "ridge (dominant frequency)",
+    )?;
+
+    let g = out.group("analysis/poincare", Some("NXdata"))?;
+    out.attr_str(&g, "signal", "maxima")?;
+    out.attr_str_list(&g, "axes", &["maxima_time"])?;
+    let shift = |t: &[f64]| t.iter().map(|t| t + r.t0_s).collect::<Vec<_>>();
+    out.write_1d(
+        &g,
+        "maxima_time",
+        &shift(&r.section.maxima_time_s),
+        "s",
+        "time of the maxima",
+    )?;
+    out.write_1d(
+        &g,
+        "maxima",
+        &r.section.maxima,
+        &s.unit,
+        "maxima (v = 0, parabola-refined)",
+    )?;
+    out.write_1d(
+        &g,
+        "minima_time",
+        &shift(&r.section.minima_time_s),
+        "s",
+        "time of the minima",
+    )?;
+    out.write_1d(&g, "minima", &r.section.minima, &s.unit, "minima")?;
+
+    let ps = &r.phase_space;
+    let g = out.group("analysis/phase_space", Some("NXdata"))?;
+    out.attr_str(&g, "signal", "velocity")?;
+    out.attr_str_list(&g, "axes", &["displacement"])?;
+    out.write_1d(&g, "time", &shift(&ps.time_s), "s", "time")?;
+    out.write_1d(&g, "displacement", &ps.x, &s.unit, "series (detrended)")?;
+    out.write_1d(&g, "velocity", &ps.v, &s.velocity_unit, "velocity")?;
+    out.finish()?;
+
+    let (du, k) = display(&s.unit);
+    let (vu, kv) = display(&s.velocity_unit);
+    use crate::core::plot_analysis as pa;
+    let peaks: Vec<(f64, f64)> = r
+        .peaks
+        .iter()
+        .map(|p| (p.frequency, p.amplitude * k))
+        .collect();
+    let amp: Vec<f64> = r.spectrum.amplitude.iter().map(|a| a * k).collect();
+    pa::spectrum_png(
+        &dir.join("spectrum.png"),
+        &format!("Amplitude spectrum — {label}"),
+        &r.spectrum.frequency,
+        &amp,
+        &peaks,
+        du,
+        None,
+    )?;
+    let mag: Vec<f32> = sc
+        .magnitude
+        .iter()
+        .map(|m| (*m as f64 * k) as f32)
+        .collect();
+    pa::scalogram_png(
+        &dir.join("scalogram.png"),
+        &format!("Wavelet scalogram — {label}"),
+        &time,
+        &sc.frequencies_hz,
+        &mag,
+        &sc.coi_hz,
+        Some(&r.ridge.frequency_hz),
+        du,
+    )?;
+    let rm: Vec<(f64, f64)> = r
+        .section
+        .return_map()
+        .iter()
+        .map(|p| (p[0] * k, p[1] * k))
+        .collect();
+    if !rm.is_empty() {
+        pa::poincare_png(
+            &dir.join("poincare.png"),
+            &format!("Poincaré map of the maxima — {label}"),
+            &rm,
+            du,
+            &r.class_label(),
+        )?;
+    }
+    let x: Vec<f64> = ps.x.iter().map(|x| x * k).collect();
+    let v: Vec<f64> = ps.v.iter().map(|v| v * kv).collect();
+    pa::phase_portrait_png(
+        &dir.join("phase_portrait.png"),
+        &format!("Phase portrait — {label}"),
+        &x,
+        &v,
+        du,
+        vu,
+    )?;
+    Ok(())
+}
+
+/// The stage.
+pub struct AnalysisStage {
+    pub name: String,
+    pub source: String,
+    pub series: SeriesSpec,
+    pub settings: AnalysisSettings,
+}
+
+impl AnalysisStage {
+    pub fn from_config(
+        file: &PipelineFile,
+        name: &str,
+        cfg: &AnalysisConfig,
+    ) -> std::result::Result<Self, ConfigError> {
+        let err = |k: &str, m: String| file.error("analysis", name, k, m);
+        let raw = &file.raw;
+        let (default_file, dataset, velocity) = if let Some(sim) = raw.simulate.get(&cfg.source) {
+            let p = super::simulate::validate(sim).map_err(|(k, m)| {
+                err(
+                    "source",
+                    format!("[simulate.{}] is invalid ({k}: {m})", cfg.source),
+                )
+            })?;
+            let a = match (cfg.actuation, p.actuations.as_slice()) {
+                (Some(a), list) => {
+                    if !list.iter().any(|x| (x - a.0).abs() < 1e-13) {
+                        return Err(err(
+                            "actuation",
+                            format!("[simulate.{}] has no case at {} nm", cfg.source, a.0 * 1e9),
+                        ));
+                    }
+                    a.0
+                }
+                (None, [one]) => *one,
+                (None, _) => {
+                    return Err(err(
+                        "actuation",
+                        format!(
+                            "[simulate.{}] has several cases: say which (actuation = \"5 nm\")",
+                            cfg.source
+                        ),
+                    ))
+                }
+            };
+            (
+                Some(format!("cases/h_{:06.2}nm.h5", a * 1e9)),
+                DEFAULT_SERIES[0].0,
+                DEFAULT_SERIES[0].1,
+            )
+        } else if raw.dmw.contains_key(&cfg.source) || raw.excitation.contains_key(&cfg.source) {
+            if cfg.actuation.is_some() {
+                return Err(err("actuation", "only for a [simulate] source".into()));
+            }
+            (
+                Some("dmw.h5".to_string()),
+                DEFAULT_SERIES[1].0,
+                DEFAULT_SERIES[1].1,
+            )
+        } else {
+            let known = raw.surface.contains_key(&cfg.source)
+                || raw.interface.contains_key(&cfg.source)
+                || raw.contact.contains_key(&cfg.source)
+                || raw.calibrate.contains_key(&cfg.source)
+                || raw.analysis.contains_key(&cfg.source);
+            if !known {
+                return Err(err(
+                    "source",
+                    format!("no stage instance `{}` in this file", cfg.source),
+                ));
+            }
+            (None, "", "")
+        };
+        let file_name = match (&cfg.file, default_file) {
+            (Some(f), _) => f.clone(),
+            (None, Some(f)) => f,
+            (None, None) => {
+                return Err(err(
+                    "file",
+                    format!("say which file of `{}` holds the series", cfg.source),
+                ))
+            }
+        };
+        if file_name.starts_with('/') || file_name.split('/').any(|c| c == "..") {
+            return Err(err(
+                "file",
+                format!("`{file_name}` must be a path inside the source's outputs"),
+            ));
+        }
+        let dataset = match (&cfg.dataset, dataset) {
+            (Some(d), _) => d.clone(),
+            (None, "") => return Err(err("dataset", "say which dataset holds the series".into())),
+            (None, d) => d.to_string(),
+        };
+        let velocity = match (&cfg.velocity, cfg.dataset.is_some()) {
+            (Some(v), _) if v == "none" => None,
+            (Some(v), _) => Some(v.clone()),
+            (None, false) if !velocity.is_empty() => Some(velocity.to_string()),
+            (None, _) => None,
+        };
+        let settings = AnalysisSettings {
+            window: cfg
+                .window
+                .map_or((None, None), |[a, b]| (Some(a.0), Some(b.0))),
+            f_min: cfg.f_min.0,
+            f_max: cfg.f_max.0,
+            frequencies: cfg.frequencies,
+            peaks: cfg.peaks,
+            min_peak_frequency: cfg.min_peak_frequency.map_or(0.0, |f| f.0),
+        };
+        settings.check().map_err(|(k, m)| err(&k, m))?;
+        Ok(AnalysisStage {
+            name: name.to_string(),
+            source: cfg.source.clone(),
+            series: SeriesSpec {
+                file: file_name,
+                dataset,
+                velocity,
+            },
+            settings,
+        })
+    }
+}
+
+impl Stage for AnalysisStage {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn kind(&self) -> &'static str {
+        "analysis"
+    }
+    fn model_version(&self) -> &'static str {
+        MODEL_VERSION
+    }
+    fn params(&self) -> Value {
+        json!({
+            "source": self.source,
+            "series": format!("{:?}", self.series),
+            "settings": format!("{:?}", self.settings),
+        })
+    }
+    fn inputs(&self) -> Vec<(String, PathBuf)> {
+        Vec::new()
+    }
+    fn upstream(&self) -> Vec<String> {
+        vec![self.source.clone()]
+    }
+    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+        let dir = ctx
+            .upstream_dirs
+            .get(&self.source)
+            .ok_or_else(|| Error::Stage(format!("no files from `{}`", self.source)))?;
+        let path = dir.join(&self.series.file);
+        if !path.is_file() {
+            return Err(Error::Stage(format!(
+                "`{}` has no output `{}`",
+                self.source, self.series.file
+            )));
+        }
+        ctx.progress.set_message("reading the series");
+        let s = read_series(
+            &path,
+            Some(&self.series.dataset),
+            Some(self.series.velocity.as_deref().unwrap_or("none")),
+        )?;
+        ctx.progress
+            .set_message("spectrum, wavelet transform, Poincaré section");
+        let r = analyze(
+            &s.x,
+            s.v.as_deref(),
+            s.sample_rate,
+            s.t0,
+            &self.settings.options(),
+        )
+        .map_err(|e| {
+            Error::Stage(format!(
+                "{} `{}`: {e}",
+                self.series.file, self.series.dataset
+            ))
+        })?;
+        let label = format!(
+            "{} {}",
+            self.source,
+            self.series.dataset.rsplit('/').next().unwrap_or("")
+        );
+        let source = json!({"source": self.source, "file": self.series.file, "dataset": self.series.dataset, "velocity": self.series.velocity});
+        ctx.progress.set_message("HDF5 and plots");
+        write_outputs(ctx.out_dir, ctx.key, &label, &source, &r, &s)?;
+        let sum = summary(&r, &s.unit);
+        let (du, k) = display(&s.unit);
+        let mut row = Map::new();
+        row.insert("source".into(), json!(self.source));
+        row.insert("dataset".into(), json!(self.series.dataset));
+        row.insert("window_start_ms".into(), json!(sig6(r.t0_s * 1e3)));
+        row.insert(
+            "window_end_ms".into(),
+            json!(sig6((r.t0_s + r.samples as f64 / r.sample_rate_hz) * 1e3)),
+        );
+        for (i, p) in r.peaks.iter().take(3).enumerate() {
+            row.insert(format!("peak{}_kHz", i + 1), json!(sig6(p.frequency / 1e3)));
+            row.insert(format!("peak{}_{du}", i + 1), json!(sig6(p.amplitude * k)));
+        }
+        row.insert(
+            "ridge_median_kHz".into(),
+            json!(r.median_trusted_ridge_hz().map(|f| sig6(f / 1e3))),
+        );
+        row.insert("class".into(), json!(r.class_label()));
+        row.insert("poincare_maxima".into(), json!(r.section.maxima.len()));
+        Ok(StageOutput {
+            result: json!({"series": source, "summary": sum, "file": "analysis.h5"}),
+            summary_row: Some(row),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sig6;
+
+    #[test]
+    fn summary_values_keep_six_significant_digits() {
+        assert_eq!(sig6(1.923_250_000_000_000_1), 1.92325);
+        assert_eq!(sig6(110.491_866_891_587), 110.492);
+        assert_eq!(sig6(1.177_594_661e-4), 1.17759e-4);
+        assert_eq!(sig6(-0.340_004_2), -0.340004);
+        assert_eq!(sig6(0.0), 0.0);
+        assert!(sig6(f64::NAN).is_nan());
+    }
+}

@@ -1,0 +1,384 @@
+//! Excitation stage (Appendix B, dynamics.md §7 S7): a synthetic disk-motion track — pure
+//! sinusoid, zero, band-limited random, quadratic chirp or the spec's synthetic DMW — written in
+//! the DMW stage's track layout (`dmw.h5`, `dmw/tracks/D1…V3`), so any `[simulate]` instance
+//! takes it as its `dmw`. The record runs `margin` beyond `duration` so the leading edge's
+//! transit delay (~62 µs) stays inside it.
+
+use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::engine::{Stage, StageContext, StageOutput};
+use crate::core::store::H5Out;
+use crate::core::units::{Frequency, Length, TimeSpan};
+use crate::dmw::synthetic::{
+    band_limited_random, quadratic_chirp, sinusoid, synthetic_dmw, zero, Excitation, DMW_LINE_HZ,
+};
+use crate::error::{Error, Result};
+use serde::Deserialize;
+use serde_json::{json, Map, Value};
+use std::path::{Path, PathBuf};
+
+pub const MODEL_VERSION: &str = "excitation-1";
+
+fn default_duration() -> TimeSpan {
+    TimeSpan(2e-3)
+}
+fn default_margin() -> TimeSpan {
+    TimeSpan(0.1e-3)
+}
+fn default_rate() -> Frequency {
+    Frequency(4e6)
+}
+fn default_seed() -> u64 {
+    1
+}
+
+/// `[excitation.NAME]` as written.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ExcitationConfig {
+    /// `sinusoid`, `zero`, `band_limited_random`, `quadratic_chirp` or `synthetic_dmw`.
+    pub kind: String,
+    /// Signal length (the chirp's sweep time T); the record is `duration + margin`.
+    #[serde(default = "default_duration")]
+    pub duration: TimeSpan,
+    #[serde(default = "default_margin")]
+    pub margin: TimeSpan,
+    #[serde(default = "default_rate")]
+    pub sample_rate: Frequency,
+    /// Sinusoid frequency (default 10.7 kHz, the DMW line).
+    #[serde(default)]
+    pub frequency: Option<Frequency>,
+    /// RMS of the sinusoid / random band, σ of the synthetic DMW (default 1 nm).
+    #[serde(default)]
+    pub rms: Option<Length>,
+    /// Band of the random excitation, e.g. `["10 kHz", "50 kHz"]`.
+    #[serde(default)]
+    pub band: Option<[Frequency; 2]>,
+    /// Chirp start and end frequencies (default 40 → 500 kHz) and peak amplitude (1 nm).
+    #[serde(default)]
+    pub f0: Option<Frequency>,
+    #[serde(default)]
+    pub f1: Option<Frequency>,
+    #[serde(default)]
+    pub amplitude: Option<Length>,
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+}
+
+/// What to generate, validated.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ExcitationKind {
+    Sinusoid {
+        frequency: f64,
+        rms: f64,
+    },
+    Zero,
+    BandLimitedRandom {
+        f_lo: f64,
+        f_hi: f64,
+        rms: f64,
+        seed: u64,
+    },
+    QuadraticChirp {
+        f0: f64,
+        f1: f64,
+        amplitude: f64,
+    },
+    SyntheticDmw {
+        sigma: f64,
+        seed: u64,
+    },
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExcitationParams {
+    pub kind: ExcitationKind,
+    pub duration: f64,
+    pub margin: f64,
+    pub sample_rate: f64,
+}
+
+impl ExcitationParams {
+    fn label(&self) -> &'static str {
+        match self.kind {
+            ExcitationKind::Sinusoid { .. } => "sinusoid",
+            ExcitationKind::Zero => "zero",
+            ExcitationKind::BandLimitedRandom { .. } => "band_limited_random",
+            ExcitationKind::QuadraticChirp { .. } => "quadratic_chirp",
+            ExcitationKind::SyntheticDmw { .. } => "synthetic_dmw",
+        }
+    }
+}
+
+/// Validation failures: (key, message).
+pub fn validate(cfg: &ExcitationConfig) -> std::result::Result<ExcitationParams, (String, String)> {
+    let bad = |k: &str, m: String| Err((k.to_string(), m));
+    let fs = cfg.sample_rate.0;
+    if !(fs.is_finite() && (1e4..=1e9).contains(&fs)) {
+        return bad(
+            "sample_rate",
+            format!("{fs} Hz is out of range: 10 kHz … 1 GHz"),
+        );
+    }
+    let (t, margin) = (cfg.duration.0, cfg.margin.0);
+    if !(t.is_finite() && t > 0.0 && t <= 1.0) {
+        return bad("duration", format!("{t} s is out of range: 0 < T ≤ 1 s"));
+    }
+    if !(margin.is_finite() && (0.0..=1.0).contains(&margin)) {
+        return bad("margin", format!("{margin} s is out of range: 0 … 1 s"));
+    }
+    let rms = cfg.rms.map_or(1e-9, |l| l.0);
+    let unused = |keys: &[(&str, bool)]| -> std::result::Result<(), (String, String)> {
+        match keys.iter().find(|(_, set)| *set) {
+            Some((k, _)) => Err((
+                k.to_string(),
+                format!("not used by kind = \"{}\"", cfg.kind),
+            )),
+            None => Ok(()),
+        }
+    };
+    let kind = match cfg.kind.as_str() {
+        "sinusoid" => {
+            unused(&[("band", cfg.band.is_some()), ("f0", cfg.f0.is_some()), ("f1", cfg.f1.is_some()), ("amplitude", cfg.amplitude.is_some())])?;
+            ExcitationKind::Sinusoid {
+                frequency: cfg.frequency.map_or(DMW_LINE_HZ, |f| f.0),
+                rms,
+            }
+        }
+        "zero" => {
+            unused(&[("frequency", cfg.frequency.is_some()), ("rms", cfg.rms.is_some()), ("band", cfg.band.is_some()), ("f0", cfg.f0.is_some()), ("f1", cfg.f1.is_some()), ("amplitude", cfg.amplitude.is_some())])?;
+            ExcitationKind::Zero
+        }
+        "band_limited_random" => {
+            unused(&[("frequency", cfg.frequency.is_some()), ("f0", cfg.f0.is_some()), ("f1", cfg.f1.is_some()), ("amplitude", cfg.amplitude.is_some())])?;
+            let Some([lo, hi]) = cfg.band else {
+                return bad("band", "band_limited_random needs band = [\"f_lo\", \"f_hi\"]".into());
+            };
+            ExcitationKind::BandLimitedRandom {
+                f_lo: lo.0,
+                f_hi: hi.0,
+                rms,
+                seed: cfg.seed,
+            }
+        }
+        "quadratic_chirp" => {
+            unused(&[("frequency", cfg.frequency.is_some()), ("rms", cfg.rms.is_some()), ("band", cfg.band.is_some())])?;
+            ExcitationKind::QuadraticChirp {
+                f0: cfg.f0.map_or(40e3, |f| f.0),
+                f1: cfg.f1.map_or(500e3, |f| f.0),
+                amplitude: cfg.amplitude.map_or(1e-9, |l| l.0),
+            }
+        }
+        "synthetic_dmw" => {
+            unused(&[("frequency", cfg.frequency.is_some()), ("band", cfg.band.is_some()), ("f0", cfg.f0.is_some()), ("f1", cfg.f1.is_some()), ("amplitude", cfg.amplitude.is_some())])?;
+            ExcitationKind::SyntheticDmw {
+                sigma: rms,
+                seed: cfg.seed,
+            }
+        }
+        o => {
+            return bad(
+                "kind",
+                format!("unknown kind `{o}` (sinusoid, zero, band_limited_random, quadratic_chirp, synthetic_dmw)"),
+            )
+        }
+    };
+    let p = ExcitationParams {
+        kind,
+        duration: t,
+        margin,
+        sample_rate: fs,
+    };
+    // The generators check frequencies against Nyquist, bands, amplitudes: a short trial run
+    // turns their errors into key errors now rather than at run time.
+    let trial = ExcitationParams {
+        duration: (64.0 / fs).min(t),
+        margin: 0.0,
+        ..p.clone()
+    };
+    if let Err(e) = generate(&trial) {
+        let key = match &p.kind {
+            ExcitationKind::Sinusoid { .. } if e.contains("freq") => "frequency",
+            ExcitationKind::BandLimitedRandom { .. } if e.contains("band") => "band",
+            ExcitationKind::QuadraticChirp { .. } if e.contains("f0") => "f0",
+            ExcitationKind::QuadraticChirp { .. } if e.contains("f1") => "f1",
+            ExcitationKind::QuadraticChirp { .. } => "amplitude",
+            _ => "rms",
+        };
+        return bad(key, e);
+    }
+    Ok(p)
+}
+
+/// Generate the track (`duration + margin` long).
+pub fn generate(p: &ExcitationParams) -> std::result::Result<Excitation, String> {
+    let (fs, record) = (p.sample_rate, p.duration + p.margin);
+    let e = |x: crate::dmw::DmwError| x.to_string();
+    match p.kind {
+        ExcitationKind::Sinusoid { frequency, rms } => {
+            sinusoid(record, fs, frequency, rms).map_err(e)
+        }
+        ExcitationKind::Zero => zero(record, fs).map_err(e),
+        ExcitationKind::BandLimitedRandom {
+            f_lo,
+            f_hi,
+            rms,
+            seed,
+        } => band_limited_random(record, fs, f_lo, f_hi, rms, seed).map_err(e),
+        ExcitationKind::SyntheticDmw { sigma, seed } => {
+            synthetic_dmw(record, fs, sigma, seed).map_err(e)
+        }
+        ExcitationKind::QuadraticChirp { f0, f1, amplitude } => {
+            // The sweep time is `duration`; the margin continues the same phase law.
+            let mut x = quadratic_chirp(p.duration, fs, f0, f1, amplitude).map_err(e)?;
+            let n = (record * fs * (1.0 + 4.0 * f64::EPSILON)).floor() as usize + 1;
+            for i in x.displacement.len()..n {
+                let t = i as f64 / fs;
+                x.displacement.push(x.model.displacement_at(t));
+                x.velocity.push(x.model.velocity_at(t));
+            }
+            Ok(x)
+        }
+    }
+}
+
+pub struct ExcitationStage {
+    pub name: String,
+    pub params: ExcitationParams,
+}
+
+impl ExcitationStage {
+    pub fn from_config(
+        file: &PipelineFile,
+        name: &str,
+        cfg: &ExcitationConfig,
+    ) -> std::result::Result<Self, ConfigError> {
+        let params = validate(cfg).map_err(|(k, m)| file.error("excitation", name, &k, m))?;
+        Ok(Self {
+            name: name.to_string(),
+            params,
+        })
+    }
+}
+
+/// Write the track in the DMW stage's layout: D1 = the track, D2/D3 its flipped and
+/// negated-flipped copies (signals-and-surfaces.md §3.8), velocities alike.
+fn write_tracks(path: &Path, key: &str, p: &ExcitationParams, x: &Excitation) -> Result<()> {
+    let out = H5Out::create(path)?;
+    out.root_attributes(
+        "excitation",
+        key,
+        &json!({"excitation": format!("{p:?}")}),
+        &json!({}),
+        "dmw",
+    )?;
+    let entry = out.group("dmw", Some("NXentry"))?;
+    out.attr_str(&entry, "default", "tracks")?;
+    let g = out.group("dmw/tracks", Some("NXdata"))?;
+    out.attr_str(&g, "signal", "D1")?;
+    out.attr_str_list(&g, "axes", &["time"])?;
+    let n = x.displacement.len();
+    let time: Vec<f64> = (0..n).map(|i| i as f64 / x.fs).collect();
+    let t = out.write_1d(&g, "time", &time, "s", "time")?;
+    out.attr_f64(&t, "sampling_rate", x.fs)?;
+    let flipped = |v: &[f64], sign: f64| v.iter().rev().map(|y| sign * y).collect::<Vec<f64>>();
+    out.write_1d(&g, "D1", &x.displacement, "m", "excitation displacement")?;
+    out.write_1d(&g, "V1", &x.velocity, "m/s", "excitation velocity")?;
+    out.write_1d(
+        &g,
+        "D2",
+        &flipped(&x.displacement, 1.0),
+        "m",
+        "time-flipped displacement",
+    )?;
+    out.write_1d(
+        &g,
+        "V2",
+        &flipped(&x.velocity, -1.0),
+        "m/s",
+        "time-flipped velocity",
+    )?;
+    out.write_1d(
+        &g,
+        "D3",
+        &flipped(&x.displacement, -1.0),
+        "m",
+        "negated flipped displacement",
+    )?;
+    out.write_1d(
+        &g,
+        "V3",
+        &flipped(&x.velocity, 1.0),
+        "m/s",
+        "negated flipped velocity",
+    )?;
+    // No filter here: no edge transient to mask.
+    out.write_array(
+        &g,
+        "edge_transient",
+        ndarray::ArrayView1::from(&vec![0u8; n][..]),
+        "1",
+        "1 where the filter's edge transient affects the track",
+    )?;
+    out.finish()
+}
+
+fn rms(x: &[f64]) -> f64 {
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
+}
+
+impl Stage for ExcitationStage {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn kind(&self) -> &'static str {
+        "excitation"
+    }
+    fn model_version(&self) -> &'static str {
+        MODEL_VERSION
+    }
+    fn params(&self) -> Value {
+        json!({ "excitation": format!("{:?}", self.params) })
+    }
+    fn inputs(&self) -> Vec<(String, PathBuf)> {
+        Vec::new()
+    }
+    fn upstream(&self) -> Vec<String> {
+        Vec::new()
+    }
+    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+        let p = &self.params;
+        let x = generate(p).map_err(Error::Stage)?;
+        write_tracks(&ctx.out_dir.join("dmw.h5"), ctx.key, p, &x)?;
+        let ms: Vec<(f64, f64)> = x
+            .displacement
+            .iter()
+            .enumerate()
+            .step_by((x.displacement.len() / 4000).max(1))
+            .map(|(i, d)| (i as f64 / x.fs * 1e3, d * 1e9))
+            .collect();
+        crate::core::plot::lines_png(
+            &ctx.out_dir.join("track.png"),
+            &format!("Excitation `{}` ({})", self.name, p.label()),
+            "time (ms)",
+            "disk displacement (nm)",
+            &[("D1", ms)],
+        )?;
+        let sigma = rms(&x.displacement);
+        let mut row = Map::new();
+        row.insert("kind".into(), json!(p.label()));
+        row.insert("duration_ms".into(), json!(p.duration * 1e3));
+        row.insert("samples".into(), json!(x.displacement.len()));
+        row.insert("rms_nm".into(), json!(sigma * 1e9));
+        Ok(StageOutput {
+            result: json!({
+                "kind": p.label(),
+                "params": format!("{:?}", p.kind),
+                "sample_rate_Hz": x.fs,
+                "samples": x.displacement.len(),
+                "rms_m": sigma,
+                "file": "dmw.h5",
+            }),
+            summary_row: Some(row),
+        })
+    }
+}
