@@ -14,6 +14,8 @@
 //! * [`params`] — the initial and improved 2-DOF parameter sets (§11.1, §11.2) with provenance,
 //!   the optimised bulge of §2.3 and `validate()`.
 //!
+//! * [`three_dof`] — the 3-DOF slider (chapter 4): feature geometry, spacings, truncated areas.
+//!
 //! The equations of motion are not here; this module gives them every geometric and AB term.
 
 pub mod air_bearing;
@@ -21,6 +23,7 @@ pub mod calibration;
 pub mod geometry;
 pub mod metrics;
 pub mod params;
+pub mod three_dof;
 pub mod two_dof;
 pub mod validation;
 
