@@ -21,6 +21,7 @@ pub mod calibration;
 pub mod geometry;
 pub mod metrics;
 pub mod params;
+pub mod three_dof_ab;
 pub mod two_dof;
 pub mod validation;
 
