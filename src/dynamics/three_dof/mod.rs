@@ -8,6 +8,10 @@
 //!   truncation (§2.4; ellipsoid section, spherical cap, clipped rectangle), the read/write
 //!   elements and the pole-tip spacing (§2.6), and an allocation-free per-evaluation fast path.
 //! * [`face`] — truncated area of a tilted flat face (rectangle ∩ half-plane, shoelace).
+//! * [`inputs`] — actuation profile (S3/S5), impulse shock (S4), the Table 4.4 windows.
+//! * [`interface`] — ISBL / MTL forces on one feature from its spacing, rate and area.
 
 pub mod face;
 pub mod geometry;
+pub mod inputs;
+pub mod interface;
