@@ -134,6 +134,19 @@ fn bracket(grid: &[f64], x: f64) -> (usize, f64) {
     (i, (x - grid[i]) / (grid[i + 1] - grid[i]))
 }
 
+/// `∫ k dp` from grid point `i` to `p` on segment `i`, where `ln k` is linear in `ln p`:
+/// `k = k_i (p/p_i)^b` → `k_i p_i ((p/p_i)^{b+1} − 1)/(b + 1)` (`k_i p_i ln(p/p_i)` at `b = −1`).
+fn segment_integral(ln_grid: &[f64], ln_k: &[f64], i: usize, p: f64) -> f64 {
+    let b = (ln_k[i + 1] - ln_k[i]) / (ln_grid[i + 1] - ln_grid[i]);
+    let (pi, ki) = (ln_grid[i].exp(), ln_k[i].exp());
+    let r = (p.ln() - ln_grid[i]).exp();
+    if (b + 1.0).abs() < 1e-12 {
+        ki * pi * r.ln()
+    } else {
+        ki * pi * (r.powf(b + 1.0) - 1.0) / (b + 1.0)
+    }
+}
+
 /// AB spring stiffnesses per grid point, interpolated log–log (§3.3).
 #[derive(Debug, Clone, PartialEq)]
 pub struct AbStiffnessTable {
@@ -142,6 +155,9 @@ pub struct AbStiffnessTable {
     ln_rear: Vec<f64>,
     /// `k_l` per grid point (N·m/rad).
     roll: Vec<f64>,
+    /// `∫ k_f dPT`, `∫ k_r dPT` from the first grid point to each grid point (N).
+    integral_front: Vec<f64>,
+    integral_rear: Vec<f64>,
 }
 
 /// One row of [`AbStiffnessTable`] in linear units.
@@ -172,6 +188,8 @@ impl AbStiffnessTable {
             ln_front: Vec::with_capacity(n),
             ln_rear: Vec::with_capacity(n),
             roll: Vec::with_capacity(n),
+            integral_front: Vec::new(),
+            integral_rear: Vec::new(),
         };
         for p in &table.points {
             let springs =
@@ -183,7 +201,45 @@ impl AbStiffnessTable {
             out.ln_rear.push(springs.rear.ln());
             out.roll.push(k_l);
         }
+        for ln_k in [&out.ln_front, &out.ln_rear] {
+            let mut acc = vec![0.0];
+            for i in 0..n - 1 {
+                let last = acc[i];
+                let p = out.ln_pole_tip[i + 1].exp();
+                acc.push(last + segment_integral(&out.ln_pole_tip, ln_k, i, p));
+            }
+            if out.integral_front.is_empty() {
+                out.integral_front = acc;
+            } else {
+                out.integral_rear = acc;
+            }
+        }
         Ok(out)
+    }
+
+    /// `(∫k_f, ∫k_r)` over PT from the first grid point to `pole_tip` (N), with `k` as
+    /// [`Self::stiffness_at`] gives it (log–log inside, constant outside): the antiderivative
+    /// behind [`SpringLaw::Integrated`].
+    pub fn stiffness_integral_at(&self, pole_tip: f64) -> (f64, f64) {
+        let g = &self.ln_pole_tip;
+        let n = g.len();
+        let one = |ln_k: &[f64], acc: &[f64]| -> f64 {
+            let (p0, pn) = (g[0].exp(), g[n - 1].exp());
+            if pole_tip.is_nan() || pole_tip <= p0 {
+                let p = if pole_tip.is_nan() { p0 } else { pole_tip };
+                return ln_k[0].exp() * (p - p0);
+            }
+            if pole_tip >= pn {
+                return acc[n - 1] + ln_k[n - 1].exp() * (pole_tip - pn);
+            }
+            let i = g.partition_point(|&x| x <= pole_tip.ln()) - 1;
+            let i = i.min(n - 2);
+            acc[i] + segment_integral(g, ln_k, i, pole_tip)
+        };
+        (
+            one(&self.ln_front, &self.integral_front),
+            one(&self.ln_rear, &self.integral_rear),
+        )
     }
 
     /// `(k_f, k_r)` at pole-tip FH `PT` (m): `ln k` linear in `ln PT`, clamped outside the
@@ -236,6 +292,22 @@ pub enum NominalForce {
     Faithful,
 }
 
+/// How a spring force follows from its PT-dependent stiffness (switch `ab_spring_law`;
+/// docs/dynamics-3dof-air-bearing.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SpringLaw {
+    /// `F = F_0 + ∫_ŝ^FH_nom k(s' + PT − ŝ) ds'` (recommended default, ours): the local
+    /// stiffness `−∂F/∂ŝ` is `k(PT)` itself, so every equilibrium is stable. Equals the linear
+    /// law to first order in the deflection.
+    #[default]
+    Integrated,
+    /// Eqs. 4.11–4.14 as rebuilt: `F = F_0 + k(PT)·(FH_nom − ŝ)`. With `k` tied to PT its
+    /// local stiffness `k − (FH_nom − ŝ)·dk/dPT` turns negative once the TFC has pushed the
+    /// TE up a few nm: the calibrated push-back states (PT 7.79 nm at 12 nm) are unstable and
+    /// a case drifts to another root.
+    Linear,
+}
+
 /// Where `ΔF_AB` is applied (switch `ab_stiffening_point`, §3.3, §11.4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum StiffeningPoint {
@@ -281,6 +353,8 @@ pub struct ThreeDofAbParams {
     pub root_assignment: RootAssignment,
     /// Switch `ab_nominal_force`.
     pub nominal_force: NominalForce,
+    /// Switch `ab_spring_law`.
+    pub spring_law: SpringLaw,
     /// Switch `ab_stiffening_point`.
     pub stiffening_point: StiffeningPoint,
     /// `x_TFC`: TFC (ellipsoid) centre from the TE (m).
@@ -322,6 +396,7 @@ impl Default for ThreeDofAbParams {
             roll_damping_ratio: 0.03,
             root_assignment: RootAssignment::StiffRear,
             nominal_force: NominalForce::Balanced,
+            spring_law: SpringLaw::Integrated,
             stiffening_point: StiffeningPoint::TfcCentre,
             tfc_offset_from_te: 15.0 * UM,
             bulge_semi_width_x: 5.0 * UM,
@@ -741,8 +816,23 @@ impl ThreeDofAirBearing {
             if limits && s_hat >= lim {
                 return (0.0, true);
             }
-            let f =
-                self.nominal_forces[j] + k * (fh - s_hat) + self.weights[j] * delta_f_ab - c * rate;
+            let elastic = match self.params.spring_law {
+                SpringLaw::Linear => k * (fh - s_hat),
+                SpringLaw::Integrated => {
+                    // ∫_ŝ^FH k(s' + δ) ds' with δ = PT − ŝ (the PT this spring would see).
+                    let delta = pole_tip - s_hat;
+                    let at = |p: f64| {
+                        let (f, r) = self.table.stiffness_integral_at(p);
+                        if j == 0 {
+                            f
+                        } else {
+                            r
+                        }
+                    };
+                    at(fh + delta) - at(pole_tip)
+                }
+            };
+            let f = self.nominal_forces[j] + elastic + self.weights[j] * delta_f_ab - c * rate;
             (if limits { f.max(0.0) } else { f }, false)
         };
         let (front, front_lost) = one(0, sp.front, sp.front_rate, kf, self.damping.front);

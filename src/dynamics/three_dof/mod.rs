@@ -9,8 +9,10 @@
 //!   elements and the pole-tip spacing (§2.6), and an allocation-free per-evaluation fast path.
 //! * [`face`] — truncated area of a tilted flat face (rectangle ∩ half-plane, shoelace).
 //! * [`inputs`] — actuation profile (S3/S5), impulse shock (S4), the Table 4.4 windows.
+//! * [`case`] — one case: equations of motion (z, θ, φ), DMW tracks, shock, histories.
 //! * [`interface`] — ISBL / MTL forces on one feature from its spacing, rate and area.
 
+pub mod case;
 pub mod face;
 pub mod geometry;
 pub mod inputs;

@@ -7,6 +7,19 @@ fn default_ab() -> ThreeDofAirBearing {
     ThreeDofAirBearing::new(&ThreeDofAbParams::default()).unwrap()
 }
 
+/// The spec's reference numbers (§3.3) were derived with the linear spring law of eqs.
+/// 4.11–4.14; these tests pin them with that law.
+fn linear_params() -> ThreeDofAbParams {
+    ThreeDofAbParams {
+        spring_law: SpringLaw::Linear,
+        ..ThreeDofAbParams::default()
+    }
+}
+
+fn linear_ab() -> ThreeDofAirBearing {
+    ThreeDofAirBearing::new(&linear_params()).unwrap()
+}
+
 /// `x` rounded to 4 significant digits equals the quoted value.
 fn four_digits(x: f64, quoted: f64) -> bool {
     let e = quoted.abs().log10().floor();
@@ -247,7 +260,7 @@ fn forces_at_the_nominal_state_balance_the_preload() {
 
 #[test]
 fn spring_force_law_limits_and_damper() {
-    let ab = default_ab();
+    let ab = linear_ab();
     let att = Attitude::pitch_only(100e-6);
     let [sf, sr] = ab.nominal_spring_spacings();
     let pt = 7e-9;
@@ -367,7 +380,7 @@ fn delta_fab_calibration_reproduces_spec_reference() {
     // §3.3: TFC-centre application, balanced F_j,0, default tables, ΔFH = 0.5 h:
     // ΔF_AB = 2.40 / 10.0 / 32.4 mN and PT = 11.29 / 7.79 / 4.78 nm at h = 5 / 12 / 18 nm.
     // Tolerance: half a unit of the last quoted digit.
-    let ab = default_ab();
+    let ab = linear_ab();
     let t = DeltaFabTable::calibrate_default(&ab, &PushbackCurve::default()).unwrap();
     let cases = [
         (5.0, 2.40e-3, 0.005e-3, 11.29e-9),
@@ -411,7 +424,7 @@ fn delta_fab_calibration_reproduces_spec_reference() {
 fn flattened_pushback_calibrates_to_25_nm() {
     // Validation variant: ΔFH(18) = 7.5 nm, bulge bottom 12.5 + 7.5 − 18 = 2.0 nm (lubricant
     // contact band 1.5–3 nm without solid contact, §3.3).
-    let ab = default_ab();
+    let ab = linear_ab();
     let t = DeltaFabTable::calibrate_default(&ab, &PushbackCurve::flattened()).unwrap();
     assert_eq!(t.ab_lost_at(), None);
     assert!((t.max_actuation() - 25.0 * NM).abs() < 1e-18);
@@ -439,7 +452,7 @@ fn com_application_lifts_the_leading_edge() {
     // front spring past FH_lim (solved with the cut-off off to see that state).
     let ab = ThreeDofAirBearing::new(&ThreeDofAbParams {
         stiffening_point: StiffeningPoint::Com,
-        ..Default::default()
+        ..linear_params()
     })
     .unwrap();
     let s = ab
@@ -478,7 +491,7 @@ fn faithful_nominal_forces_retrim_before_actuation() {
     let frozen = ThreeDofAirBearing::new(&ThreeDofAbParams {
         nominal_force: NominalForce::Faithful,
         frequencies: frozen,
-        ..Default::default()
+        ..linear_params()
     })
     .unwrap();
     let s = frozen
@@ -493,7 +506,7 @@ fn faithful_nominal_forces_retrim_before_actuation() {
 
     let ab = ThreeDofAirBearing::new(&ThreeDofAbParams {
         nominal_force: NominalForce::Faithful,
-        ..Default::default()
+        ..linear_params()
     })
     .unwrap();
     let s = ab
@@ -511,4 +524,96 @@ fn faithful_nominal_forces_retrim_before_actuation() {
     let t = DeltaFabTable::calibrate(&ab, &PushbackCurve::default(), 5e-9, 0.5e-9).unwrap();
     assert!(at(&t, 0.0).delta_force.abs() < 1e-12);
     assert!((at(&t, 5.0).tfc_rise - at(&t, 0.0).tfc_rise - 2.5e-9).abs() < 1e-16);
+}
+
+#[test]
+fn stiffness_integral_is_the_antiderivative_of_the_interpolated_stiffness() {
+    let ab = default_ab();
+    let t = ab.stiffness_table();
+    // Central differences of ∫k dPT reproduce k(PT) inside, below and above the table.
+    for pt in [
+        1.0e-9, 2.6e-9, 3.7e-9, 7.79e-9, 11.0e-9, 14.2e-9, 19.9e-9, 30e-9,
+    ] {
+        let d = 1e-13;
+        let (a, b) = (
+            t.stiffness_integral_at(pt - d),
+            t.stiffness_integral_at(pt + d),
+        );
+        let (kf, kr) = t.stiffness_at(pt);
+        assert!(
+            ((b.0 - a.0) / (2.0 * d) / kf - 1.0).abs() < 1e-6,
+            "front at {pt:e}"
+        );
+        assert!(
+            ((b.1 - a.1) / (2.0 * d) / kr - 1.0).abs() < 1e-6,
+            "rear at {pt:e}"
+        );
+    }
+    // Against an independent trapezoid quadrature of stiffness_at over 2.5 → 20 nm.
+    let n = 200_000;
+    let (lo, hi) = (2.5e-9, 20e-9);
+    let h = (hi - lo) / n as f64;
+    let mut q = 0.5 * (t.stiffness_at(lo).1 + t.stiffness_at(hi).1);
+    for k in 1..n {
+        q += t.stiffness_at(lo + k as f64 * h).1;
+    }
+    q *= h;
+    let exact = t.stiffness_integral_at(hi).1 - t.stiffness_integral_at(lo).1;
+    assert!((exact / q - 1.0).abs() < 1e-6, "{exact} vs {q}");
+}
+
+#[test]
+fn integrated_law_agrees_to_first_order_and_keeps_the_pushback_states_stable() {
+    let (lin, int) = (linear_ab(), default_ab());
+    let att = Attitude::new(100e-6, 0.0);
+    let [s_f, s_r] = int.nominal_spring_spacings();
+    // A 0.01 nm deflection: the two laws agree to O(deflection²).
+    let sp = SpringSpacings {
+        front: s_f - 1e-11,
+        rear: s_r - 1e-11,
+        ..SpringSpacings::default()
+    };
+    let (a, b) = (
+        lin.forces(&sp, 11e-9, 0.0, &att),
+        int.forces(&sp, 11e-9, 0.0, &att),
+    );
+    assert!((a.rear - b.rear).abs() < 1e-3 * (a.rear - int.nominal_forces()[1]).abs());
+    // The calibrated push-back state at 12 nm: heave stiffness (−∂F/∂z of the spring sum with
+    // PT moving with the slider) positive for the integrated law, negative for the linear one.
+    let heave_stiffness = |ab: &ThreeDofAirBearing| {
+        let table = DeltaFabTable::calibrate_default(ab, &PushbackCurve::default()).unwrap();
+        let dfab = table.delta_force_at(12e-9);
+        let s = ab
+            .solve_static(12e-9, StaticCondition::TfcRise(6e-9), None, false)
+            .unwrap();
+        let att = Attitude::new(s.pitch, 0.0);
+        let force = |dz: f64| {
+            let [pf, pr] = ab.spring_points();
+            let sp = SpringSpacings {
+                front: ab.nominal_spacing(&pf) + ab.spacing_increment(&pf, s.heave + dz, &att),
+                rear: ab.nominal_spacing(&pr) + ab.spacing_increment(&pr, s.heave + dz, &att),
+                ..SpringSpacings::default()
+            };
+            let f = ab.forces(&sp, s.pole_tip + dz, dfab, &att);
+            f.front + f.rear
+        };
+        -(force(1e-11) - force(-1e-11)) / 2e-11
+    };
+    let (k_lin, k_int) = (heave_stiffness(&lin), heave_stiffness(&int));
+    let table = DeltaFabTable::calibrate_default(&int, &PushbackCurve::default()).unwrap();
+    for h in [5e-9, 12e-9, 18e-9] {
+        let s = int
+            .solve_static(h, StaticCondition::TfcRise(0.5 * h), None, false)
+            .unwrap();
+        eprintln!(
+            "integrated law: h {:.0} nm ΔF_AB {:.3} mN PT {:.3} nm (table {:.3} mN)",
+            h * 1e9,
+            s.delta_force * 1e3,
+            s.pole_tip * 1e9,
+            table.delta_force_at(h) * 1e3
+        );
+    }
+    eprintln!("heave stiffness at 12 nm: linear {k_lin:.4e}, integrated {k_int:.4e} N/m");
+    assert!(k_int > 1e5, "integrated law: heave stiffness {k_int:e} N/m");
+    assert!(k_lin < 0.0, "linear law: heave stiffness {k_lin:e} N/m");
 }
