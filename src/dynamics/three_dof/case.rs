@@ -255,7 +255,7 @@ impl<'a> ThreeDofCase<'a> {
                 "must be > 0",
             ));
         }
-        if !(model.initial_roll.abs() <= 1e-3) {
+        if model.initial_roll.is_nan() || model.initial_roll.abs() > 1e-3 {
             return Err(parameter(
                 "initial roll φ0 (rad)",
                 model.initial_roll,

@@ -168,7 +168,7 @@ impl ShockPulse {
                 "must lie in (0, 1 ms]",
             ));
         }
-        if !(impulse.is_finite() && impulse >= 0.0 && impulse <= 1e-3) {
+        if !(0.0..=1e-3).contains(&impulse) {
             return Err(DynamicsError::parameter(
                 "shock impulse (N s)",
                 impulse,

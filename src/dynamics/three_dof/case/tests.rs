@@ -239,8 +239,10 @@ fn bad_inputs_are_clear_errors() {
         Options3Dof::default()
     )
     .is_err());
-    let mut bad = Options3Dof::default();
-    bad.duration = -1.0;
+    let bad = Options3Dof {
+        duration: -1.0,
+        ..Options3Dof::default()
+    };
     assert!(new(
         ActuationProfile::constant(5.0 * NM).unwrap(),
         None,

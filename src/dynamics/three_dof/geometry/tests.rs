@@ -660,9 +660,7 @@ fn bad_parameters_are_errors() {
         .feature_point(Feature::Bulge, &nan, &PoseRates::default())
         .is_err());
     let ok = pose(0.0, 100e-6, 0.0, 10.0 * NM);
-    assert!(g
-        .nominal_contact_area(Feature::Bulge, &ok, -1.0 * NM)
-        .is_err());
+    assert!(g.nominal_contact_area(Feature::Bulge, &ok, -NM).is_err());
     assert!(g
         .feature_point(
             Feature::Bulge,
