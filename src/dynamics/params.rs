@@ -36,6 +36,16 @@ pub struct SliderBody {
 }
 
 impl SliderBody {
+    /// Dimensions, mass and inertia finite and positive.
+    pub fn validate(&self) -> Result<()> {
+        require_positive("slider length l (m)", self.length)?;
+        require_positive("slider width l_w (m)", self.width)?;
+        require_positive("slider thickness l_t (m)", self.thickness)?;
+        require_positive("slider mass m (kg)", self.mass)?;
+        require_positive("slider pitch inertia J_θ (kg·m²)", self.pitch_inertia)?;
+        Ok(())
+    }
+
     /// A homogeneous block of density `ρ` (mass and pitch inertia of eq. 4.1).
     pub fn from_density(length: f64, width: f64, thickness: f64, density: f64) -> Self {
         let mass = density * length * width * thickness;
@@ -236,12 +246,7 @@ impl Model2Dof {
             "m",
         )?;
         require_positive("max actuation (m)", self.max_actuation)?;
-        let s = &self.slider;
-        require_positive("slider length l (m)", s.length)?;
-        require_positive("slider width l_w (m)", s.width)?;
-        require_positive("slider thickness l_t (m)", s.thickness)?;
-        require_positive("slider mass m (kg)", s.mass)?;
-        require_positive("slider pitch inertia J_θ (kg·m²)", s.pitch_inertia)?;
+        self.slider.validate()?;
         let u = &self.suspension;
         require_positive("preload F (N)", u.preload)?;
         require_non_negative("suspension stiffness k (N/m)", u.heave_stiffness)?;

@@ -408,12 +408,8 @@ impl Default for ThreeDofAbParams {
 
 impl ThreeDofAbParams {
     pub fn validate(&self) -> Result<()> {
+        self.slider.validate()?;
         let s = &self.slider;
-        require_positive("slider length l (m)", s.length)?;
-        require_positive("slider width l_w (m)", s.width)?;
-        require_positive("slider thickness l_t (m)", s.thickness)?;
-        require_positive("slider mass m (kg)", s.mass)?;
-        require_positive("pitch inertia J_θ (kg·m²)", s.pitch_inertia)?;
         require_positive("roll inertia J_φ (kg·m²)", self.roll_inertia)?;
         let u = &self.suspension;
         require_positive("preload F (N)", u.preload)?;

@@ -765,25 +765,7 @@ impl<'a> TwoDofCase<'a> {
                 AB_LOSS_FLYING_HEIGHT * 1e9
             )));
         }
-        let solution = result.map_err(|e| {
-            DynamicsError::Numerical(match e {
-                OdeError::Rhs { t, source: m } => format!("at t = {:.6} ms: {m}", t * 1e3),
-                OdeError::StepUnderflow { t, h } => format!(
-                    "integration failed: the step fell to {h:e} s at t = {:.6} ms (no convergence)",
-                    t * 1e3
-                ),
-                OdeError::NonFinite { t, component } => format!(
-                    "integration failed: state component {component} became non-finite at \
-                     t = {:.6} ms",
-                    t * 1e3
-                ),
-                OdeError::MaxStepsExceeded { t, steps } => format!(
-                    "integration failed: more than {steps} steps by t = {:.6} ms",
-                    t * 1e3
-                ),
-                OdeError::InvalidInput(m) => format!("integration failed: {m}"),
-            })
-        })?;
+        let solution = result.map_err(integration_error)?;
         if let Some(e) = sample_error {
             return Err(e);
         }
@@ -795,6 +777,26 @@ impl<'a> TwoDofCase<'a> {
         }
         Ok(h)
     }
+}
+
+/// A failed integration as one clear error (shared by the 2-DOF and 3-DOF cases).
+pub(crate) fn integration_error(e: OdeError<DynamicsError>) -> DynamicsError {
+    DynamicsError::Numerical(match e {
+        OdeError::Rhs { t, source: m } => format!("at t = {:.6} ms: {m}", t * 1e3),
+        OdeError::StepUnderflow { t, h } => format!(
+            "integration failed: the step fell to {h:e} s at t = {:.6} ms (no convergence)",
+            t * 1e3
+        ),
+        OdeError::NonFinite { t, component } => format!(
+            "integration failed: state component {component} became non-finite at t = {:.6} ms",
+            t * 1e3
+        ),
+        OdeError::MaxStepsExceeded { t, steps } => format!(
+            "integration failed: more than {steps} steps by t = {:.6} ms",
+            t * 1e3
+        ),
+        OdeError::InvalidInput(m) => format!("integration failed: {m}"),
+    })
 }
 
 #[cfg(test)]

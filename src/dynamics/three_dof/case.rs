@@ -21,14 +21,14 @@ use super::geometry::{
 };
 use super::inputs::{ActuationProfile, ShockPulse};
 use super::interface::{FeatureForces, FeatureInterface};
-use crate::dynamics::geometry::{generalised_force, Attitude};
+use crate::dynamics::geometry::generalised_force;
 use crate::dynamics::three_dof_ab::{
     DeltaFabTable, PushbackCurve, SpringSpacings, StaticCondition, ThreeDofAbParams,
     ThreeDofAirBearing,
 };
-use crate::dynamics::two_dof::DmwInput;
+use crate::dynamics::two_dof::{integration_error, DmwInput};
 use crate::dynamics::DynamicsError;
-use crate::numerics::ode::{integrate_capped, OdeError, OdeOptions, OdeStats, Sampling};
+use crate::numerics::ode::{integrate_capped, OdeOptions, OdeStats, Sampling};
 use crate::signal::resample::HermiteTrack;
 use nalgebra::{Matrix3, Vector3};
 
@@ -382,13 +382,12 @@ impl<'a> ThreeDofCase<'a> {
         tracks[k].eval(tau)
     }
 
-    fn evaluate(&self, t: f64, y: &[f64; 6]) -> Result<Evaluation, DynamicsError> {
-        let g = &self.model.geometry;
+    /// Pose and rates at `t` (the actuation from the profile).
+    fn pose(&self, t: f64, y: &[f64; 6]) -> (SliderPose, PoseRates) {
         let (h, h_rate) = self.profile.at(t);
-        let pitch = g.nominal_pitch + y[1];
         let pose = SliderPose {
             heave: y[0],
-            pitch,
+            pitch: self.model.geometry.nominal_pitch + y[1],
             roll: y[2],
             actuation: h,
         };
@@ -398,7 +397,14 @@ impl<'a> ThreeDofCase<'a> {
             roll: y[5],
             actuation: h_rate,
         };
-        let att = Attitude::new(pitch, y[2]);
+        (pose, rates)
+    }
+
+    fn evaluate(&self, t: f64, y: &[f64; 6]) -> Result<Evaluation, DynamicsError> {
+        let g = &self.model.geometry;
+        let (pose, rates) = self.pose(t, y);
+        let (h, pitch) = (pose.actuation, pose.pitch);
+        let att = pose.attitude();
         let mut points = FeaturePoints::new();
         g.evaluate_features(&pose, &rates, &mut points)?;
         let sigma = self.interface.sigma();
@@ -590,27 +596,7 @@ impl<'a> ThreeDofCase<'a> {
             Sampling::Uniform { dt: o.output_step },
             observer,
         );
-        let solution = result.map_err(|e| {
-            DynamicsError::Numerical(match e {
-                OdeError::Rhs { t, source } => format!("at t = {:.6} ms: {source}", t * 1e3),
-                OdeError::StepUnderflow { t, h } => format!(
-                    "integration failed: the step fell to {h:e} s at t = {:.6} ms (no convergence)",
-                    t * 1e3
-                ),
-                OdeError::NonFinite { t, component } => format!(
-                    "integration failed: state component {component} became non-finite at t = \
-                     {:.6} ms",
-                    t * 1e3
-                ),
-                OdeError::MaxStepsExceeded { t, steps } => {
-                    format!(
-                        "integration failed: more than {steps} steps by t = {:.6} ms",
-                        t * 1e3
-                    )
-                }
-                OdeError::InvalidInput(m) => format!("integration failed: {m}"),
-            })
-        })?;
+        let solution = result.map_err(integration_error)?;
         if let Some(e) = sample_error {
             return Err(e);
         }
@@ -650,20 +636,7 @@ impl<'a> ThreeDofCase<'a> {
         h.clipped_samples += usize::from(e.clipped);
         // Per-feature spacing and normal force (a second, cheap pass over the features).
         let g = &self.model.geometry;
-        let (act, act_rate) = self.profile.at(t);
-        let pitch = g.nominal_pitch + y[1];
-        let pose = SliderPose {
-            heave: y[0],
-            pitch,
-            roll: y[2],
-            actuation: act,
-        };
-        let rates = PoseRates {
-            heave: y[3],
-            pitch: y[4],
-            roll: y[5],
-            actuation: act_rate,
-        };
+        let (pose, rates) = self.pose(t, y);
         let mut points = FeaturePoints::new();
         g.evaluate_features(&pose, &rates, &mut points)?;
         for (i, f) in self.features.iter().enumerate() {

@@ -801,18 +801,23 @@ impl Slider3DofGeometry {
         roll: f64,
         actuation: f64,
     ) -> Result<f64> {
-        self.check_pose(&SliderPose {
-            heave,
-            pitch,
-            roll,
-            actuation,
-        })?;
-        Ok(self.spacing_of(&self.read_element(actuation)?, heave, pitch, roll))
+        self.element_spacing(self.read_offset, heave, pitch, roll, actuation)
     }
 
     /// Solid spacing of the write element (no DMW).
     pub fn write_element_spacing(
         &self,
+        heave: f64,
+        pitch: f64,
+        roll: f64,
+        actuation: f64,
+    ) -> Result<f64> {
+        self.element_spacing(-self.write_offset, heave, pitch, roll, actuation)
+    }
+
+    fn element_spacing(
+        &self,
+        offset: f64,
         heave: f64,
         pitch: f64,
         roll: f64,
@@ -824,6 +829,6 @@ impl Slider3DofGeometry {
             roll,
             actuation,
         })?;
-        Ok(self.spacing_of(&self.write_element(actuation)?, heave, pitch, roll))
+        Ok(self.spacing_of(&self.element_point(offset, actuation)?, heave, pitch, roll))
     }
 }
