@@ -75,6 +75,7 @@ pub const AREAS: &[(&str, AreaRows)] = &[
     ("contact", crate::contact::validation::isbl_rows),
     ("mtl", crate::contact::validation::mtl_rows),
     ("dynamics", crate::dynamics::validation::rows),
+    ("three_dof", crate::dynamics::three_dof::validation::rows),
 ];
 
 /// Every row of [`AREAS`], area by area.
