@@ -539,6 +539,7 @@ fn table_name(kind: &str) -> String {
     match kind {
         "dmw" => "dmw".into(),
         "analysis" => "analyses".into(),
+        "three_dof" => "three_dof".into(),
         k => format!("{k}s"),
     }
 }

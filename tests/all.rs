@@ -7,3 +7,4 @@ mod dmw_cli;
 mod pipeline_cache;
 mod simulate_cli;
 mod surface_cli;
+mod three_dof_cli;

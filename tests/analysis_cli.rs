@@ -101,6 +101,10 @@ fn analyze_errors_are_clear() {
         g.new_dataset_builder().with_data(&x).create("x").unwrap();
         let ok: Vec<f64> = t.iter().map(|t| (6.28e4 * t).sin()).collect();
         g.new_dataset_builder().with_data(&ok).create("ok").unwrap();
+        // Close strongly before the child opens it: a weakly closed file can stay open (and
+        // locked) in this process while the CLI tries to open it.
+        drop((time, g));
+        f.close().unwrap();
     }
     let run = |args: &[&str]| hdi().arg("analyze").arg(&path).args(args).output().unwrap();
     // No default series: the error lists what the file holds.

@@ -77,6 +77,9 @@ pub struct RawConfig {
     /// `[simulate.NAME]`: 2-DOF slider cases over an actuation sweep.
     #[serde(default)]
     pub simulate: BTreeMap<String, crate::stages::simulate::SimulateConfig>,
+    /// `[three_dof.NAME]`: the 3-DOF slider of Chapter 4 in one scenario.
+    #[serde(default)]
+    pub three_dof: BTreeMap<String, crate::stages::three_dof::ThreeDofConfig>,
     /// `[excitation.NAME]`: a synthetic disk-motion track (Appendix B) in the DMW layout.
     #[serde(default)]
     pub excitation: BTreeMap<String, crate::stages::excitation::ExcitationConfig>,

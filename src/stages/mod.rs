@@ -9,6 +9,7 @@ pub mod excitation;
 pub mod interface;
 pub mod simulate;
 pub mod surfaces;
+pub mod three_dof;
 
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::engine::Stage;
@@ -81,6 +82,12 @@ pub fn build(file: &PipelineFile) -> Result<Vec<Box<dyn Stage>>, ConfigError> {
     for (name, cfg) in &file.raw.calibrate {
         check_name("calibrate", name)?;
         stages.push(Box::new(calibrate::CalibrateStage::from_config(
+            file, name, cfg,
+        )?));
+    }
+    for (name, cfg) in &file.raw.three_dof {
+        check_name("three_dof", name)?;
+        stages.push(Box::new(three_dof::ThreeDofStage::from_config(
             file, name, cfg,
         )?));
     }

@@ -422,6 +422,20 @@ pub struct DmwTrack {
 
 /// Read track 1 of a DMW stage's `dmw.h5`, without the filter's edge transients.
 pub fn read_dmw_track(path: &Path) -> Result<DmwTrack> {
+    read_dmw_track_named(path, 1)
+}
+
+/// Tracks 1–3 (original, flipped, negated flipped) of a `dmw.h5`, edge transients dropped.
+pub fn read_dmw_tracks(path: &Path) -> Result<[DmwTrack; 3]> {
+    Ok([
+        read_dmw_track_named(path, 1)?,
+        read_dmw_track_named(path, 2)?,
+        read_dmw_track_named(path, 3)?,
+    ])
+}
+
+/// Track `k` (1–3) of a `dmw.h5`: `D{k}`, `V{k}`, without the filter's edge transients.
+fn read_dmw_track_named(path: &Path, k: usize) -> Result<DmwTrack> {
     let e = |m: String| Error::Stage(format!("{}: {m}", path.display()));
     let file = hdf5::File::open(path).map_err(|x| e(x.to_string()))?;
     let read = |name: &str| -> Result<Vec<f64>> {
@@ -429,7 +443,7 @@ pub fn read_dmw_track(path: &Path) -> Result<DmwTrack> {
             .and_then(|d| d.read_raw::<f64>())
             .map_err(|x| e(format!("dmw/tracks/{name}: {x}")))
     };
-    let (d, v) = (read("D1")?, read("V1")?);
+    let (d, v) = (read(&format!("D{k}"))?, read(&format!("V{k}"))?);
     let edge: Vec<u8> = file
         .dataset("dmw/tracks/edge_transient")
         .and_then(|d| d.read_raw::<u8>())

@@ -190,10 +190,62 @@ impl History3Dof {
     pub fn is_empty(&self) -> bool {
         self.heave.is_empty()
     }
+    /// BV/FHM (eq. 2.1: 5 largest/smallest samples, FH_nom 11 nm) of the bulge spacing over
+    /// `[start, end)` seconds; `None` for fewer than 10 samples.
+    pub fn bulge_vibration(&self, (start, end): (f64, f64)) -> Option<f64> {
+        let n = self.bulge_spacing.len();
+        let i0 = ((start / self.dt).round().max(0.0) as usize).min(n);
+        let i1 = ((end / self.dt).round().max(0.0) as usize).clamp(i0, n);
+        let w = &self.bulge_spacing[i0..i1];
+        if w.len() < 10 {
+            return None;
+        }
+        crate::dynamics::metrics::modulation(w, 11e-9, 5)
+            .ok()
+            .map(|m| m.percent)
+    }
+
+    /// First sample time at which any feature is below `spacing` (e.g. the lubricant surface).
+    pub fn first_time_below(&self, spacing: f64) -> Option<f64> {
+        (0..self.len())
+            .find(|&k| self.feature_spacing.iter().any(|s| s[k] < spacing))
+            .map(|k| k as f64 * self.dt)
+    }
+
+    /// Table 4.4 vibrations of a variable-actuation case (dynamics.md §8 windows): flying FHM,
+    /// jump-to-contact BV, steady-contact BV. The flying window ends at the first ramp of the
+    /// profile (over a ramp the formula measures the ramp, not vibration).
+    pub fn table_4_4(&self, profile: &ActuationProfile, lubricant_surface: f64) -> Table44 {
+        let entry = self.first_time_below(lubricant_surface);
+        let end = self.len().saturating_sub(1) as f64 * self.dt;
+        let Some(plateau) = profile.plateau().filter(|_| !profile.is_constant()) else {
+            return Table44::default();
+        };
+        let mut w = super::inputs::regime_windows(entry, plateau, end);
+        if let Some(&ramp) = profile.breakpoints().first() {
+            w.flying.1 = w.flying.1.min(ramp);
+        }
+        Table44 {
+            first_lubricant_contact: entry,
+            flying_fhm: self.bulge_vibration(w.flying),
+            jump_to_contact_bv: w.jump_to_contact.and_then(|s| self.bulge_vibration(s)),
+            steady_contact_bv: w.steady_contact.and_then(|s| self.bulge_vibration(s)),
+        }
+    }
+
     /// Index of `feature` in the per-feature series.
     pub fn feature_index(&self, feature: Feature) -> Option<usize> {
         self.features.iter().position(|f| *f == feature)
     }
+}
+
+/// Table 4.4 numbers of one variable-actuation case [%] and the first lubricant contact [s].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Table44 {
+    pub first_lubricant_contact: Option<f64>,
+    pub flying_fhm: Option<f64>,
+    pub jump_to_contact_bv: Option<f64>,
+    pub steady_contact_bv: Option<f64>,
 }
 
 /// Everything of one instant (what the right-hand side and the sampler share).
@@ -447,9 +499,13 @@ impl<'a> ThreeDofCase<'a> {
         }
         // AB springs on the centre line (track 1), PT of the read element (track 1).
         let mut sp = SpringSpacings::default();
+        let mut zd_rear = 0.0;
         for (j, p) in self.spring_points.iter().enumerate() {
             let x = att.world_offset(p).x;
             let (zd, vd) = self.disk(DmwTrack::Centre, x, t);
+            if j == 1 {
+                zd_rear = zd;
+            }
             let s = g.spacing_of(p, y[0], pitch, y[2]) - zd;
             let r = g.spacing_rate_of(p, pitch, y[2], &rates) - vd;
             if j == 0 {
@@ -460,10 +516,19 @@ impl<'a> ThreeDofCase<'a> {
         }
         let read = g.read_element(h)?;
         let (zd_read, _) = self.disk(DmwTrack::Centre, att.world_offset(&read).x, t);
-        let pole_tip = g.pole_tip_spacing(y[0], pitch, y[2], h)? - zd_read;
-        let ab = self
-            .ab
-            .forces(&sp, pole_tip, self.delta_force.delta_force_at(h), &att);
+        let pole_tip_mean_plane = g.pole_tip_spacing(y[0], pitch, y[2], h)?;
+        let pole_tip = pole_tip_mean_plane - zd_read;
+        // The stiffness argument: PT over the disk under the rear spring, the same surface the
+        // spring's own deflection is measured from. With the DMW under the read element 15 µm
+        // away instead, k(PT) turns every short-wavelength DMW component into a spring force
+        // independent of the spring's deflection (docs/three-dof.md).
+        let stiffness_pole_tip = pole_tip_mean_plane - zd_rear;
+        let ab = self.ab.forces(
+            &sp,
+            stiffness_pole_tip,
+            self.delta_force.delta_force_at(h),
+            &att,
+        );
         generalised += ab.generalised;
         // Roll spring against the disk's roll under the two ABS halves (module doc).
         if self.tracks.is_some() && self.options.tracks == TrackAssignment::Three {

@@ -1,0 +1,828 @@
+//! 3-DOF slider stage `[three_dof.NAME]` (dynamics.md §7 S3–S6; issue 7): one scenario —
+//! constant actuation, impulse shock or a variable actuation profile — run for each requested
+//! interface (ISBL, MTL with each lubricant case of Table 4.4), one cached case each, in
+//! parallel. Outputs per case an HDF5 of the time histories and a PNG of them; per instance a
+//! table with one row per case (PT, bulge spacing, BV/FHM overall and per Table 4.4 window,
+//! contact shares, peak forces, the features that touched).
+
+use super::simulate::{read_dmw_tracks, DmwTrack};
+use crate::contact::isbl::{IsblModel, SurfaceEnergy};
+use crate::contact::lookup::IsblLookup;
+use crate::contact::mtl::{FwmExperiment, LubricantCase, RoughFilm, RoughMtl};
+use crate::core::cases;
+use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::engine::{Stage, StageContext, StageOutput};
+use crate::core::store::H5Out;
+use crate::core::units::{Length, TimeSpan};
+use crate::dynamics::three_dof::case::{
+    History3Dof, Init3Dof, Model3Dof, Options3Dof, ThreeDofCase, TrackAssignment,
+};
+use crate::dynamics::three_dof::inputs::{ActuationProfile, ShockPulse};
+use crate::dynamics::three_dof::interface::{FeatureInterface, InterfaceLaw};
+use crate::dynamics::three_dof_ab::{PushbackCurve, SpringLaw};
+use crate::dynamics::two_dof::{ContactForceForm, DmwInput};
+use crate::error::{Error, Result};
+use serde::Deserialize;
+use serde_json::{json, Map, Value};
+use std::path::{Path, PathBuf};
+
+pub const MODEL_VERSION: &str = "three-dof-1";
+
+fn default_none() -> String {
+    "none".into()
+}
+fn default_scenario() -> String {
+    "constant".into()
+}
+fn default_interfaces() -> Vec<String> {
+    vec!["isbl".into()]
+}
+fn default_lubricants() -> Vec<String> {
+    vec!["reference".into()]
+}
+fn default_duration() -> TimeSpan {
+    TimeSpan(2e-3)
+}
+fn default_steady() -> TimeSpan {
+    TimeSpan(0.5e-3)
+}
+fn default_output_step() -> TimeSpan {
+    TimeSpan(0.25e-6)
+}
+fn default_shock_start() -> TimeSpan {
+    TimeSpan(0.6e-3)
+}
+fn default_shock_duration() -> TimeSpan {
+    TimeSpan(5e-6)
+}
+fn default_shock_impulse() -> f64 {
+    0.25e-6
+}
+fn default_true() -> bool {
+    true
+}
+fn default_word(w: &str) -> String {
+    w.to_string()
+}
+fn default_spring_law() -> String {
+    default_word("integrated")
+}
+fn default_init() -> String {
+    default_word("static")
+}
+fn default_tracks() -> String {
+    default_word("three")
+}
+fn default_pushback() -> String {
+    default_word("linear")
+}
+
+/// `[three_dof.NAME]` as written in `pipeline.toml`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ThreeDofConfig {
+    /// The `[contact.*]` instance whose ISBL interface the features use (σ, R, η, H, t).
+    pub contact: String,
+    /// A `[dmw.*]` or `[excitation.*]` instance (tracks D1–D3) or `none`.
+    #[serde(default = "default_none")]
+    pub dmw: String,
+    /// `constant` (S3), `shock` (S4) or `variable` (S5/S6).
+    #[serde(default = "default_scenario")]
+    pub scenario: String,
+    /// Constant / shock actuation (default 12 nm constant, 5 nm shock).
+    #[serde(default)]
+    pub actuation: Option<Length>,
+    /// Variable scenario: `[["0 ms", "5 nm"], ["0.2 ms", "5 nm"], …]` (default the S5 profile).
+    #[serde(default)]
+    pub profile: Option<Vec<(TimeSpan, Length)>>,
+    /// Any of `isbl`, `mtl`: one case each (MTL once per lubricant).
+    #[serde(default = "default_interfaces")]
+    pub interfaces: Vec<String>,
+    /// Table 4.4 cases for the MTL runs: `reference`, `humidity_temperature`, `more_bonding`,
+    /// `larger_gyration_radius`.
+    #[serde(default = "default_lubricants")]
+    pub lubricants: Vec<String>,
+    #[serde(default = "default_duration")]
+    pub duration: TimeSpan,
+    #[serde(default = "default_steady")]
+    pub steady_start: TimeSpan,
+    #[serde(default = "default_output_step")]
+    pub output_step: TimeSpan,
+    #[serde(default = "default_shock_start")]
+    pub shock_start: TimeSpan,
+    #[serde(default = "default_shock_duration")]
+    pub shock_duration: TimeSpan,
+    /// Impulse of the shock [N·s] (0.25 µN·s).
+    #[serde(default = "default_shock_impulse")]
+    pub shock_impulse: f64,
+    /// `integrated` (default, stable) or `linear` (eqs. 4.11–4.14).
+    #[serde(default = "default_spring_law")]
+    pub ab_spring_law: String,
+    /// `linear` (ΔFH = 0.5·h) or `flattened` (above 12 nm, dynamics.md §3.3).
+    #[serde(default = "default_pushback")]
+    pub pushback_curve: String,
+    /// `static` (the push-back already in place) or `nominal`.
+    #[serde(default = "default_init")]
+    pub init: String,
+    /// `three` (D1 centre, D2 +y, D3 −y) or `one` (D1 everywhere).
+    #[serde(default = "default_tracks")]
+    pub tracks: String,
+    #[serde(default = "default_true")]
+    pub transit_delay: bool,
+    #[serde(default)]
+    pub dmw_wrap: bool,
+}
+
+/// One case of an instance: the interface law and its lubricant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CaseInterface {
+    Isbl,
+    Mtl(LubricantCase),
+}
+
+impl CaseInterface {
+    pub fn label(&self) -> String {
+        match self {
+            CaseInterface::Isbl => "isbl".into(),
+            CaseInterface::Mtl(l) => format!("mtl_{}", lubricant_name(*l)),
+        }
+    }
+}
+
+fn lubricant_name(l: LubricantCase) -> &'static str {
+    match l {
+        LubricantCase::Reference => "reference",
+        LubricantCase::HumidityTemperature => "humidity_temperature",
+        LubricantCase::MoreBonding => "more_bonding",
+        LubricantCase::LargerGyrationRadius => "larger_gyration_radius",
+    }
+}
+
+/// Validated parameters (SI).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ThreeDofParams {
+    pub contact: String,
+    pub dmw: Option<String>,
+    pub scenario: String,
+    pub profile: ActuationProfile,
+    pub shock: Option<ShockPulse>,
+    pub cases: Vec<CaseInterface>,
+    pub options: Options3Dof,
+    pub steady_start: f64,
+    pub spring_law: SpringLaw,
+    pub pushback: String,
+}
+
+type Bad = (String, String);
+
+fn bad<T>(key: &str, m: impl Into<String>) -> std::result::Result<T, Bad> {
+    Err((key.to_string(), m.into()))
+}
+
+pub fn validate(cfg: &ThreeDofConfig) -> std::result::Result<ThreeDofParams, Bad> {
+    let dmw = (cfg.dmw != "none").then(|| cfg.dmw.clone());
+    let nm = 1e-9;
+    let (profile, shock) = match cfg.scenario.as_str() {
+        "constant" | "shock" => {
+            if cfg.profile.is_some() {
+                return bad("profile", "only the `variable` scenario takes a profile");
+            }
+            let default = if cfg.scenario == "shock" { 5.0 } else { 12.0 };
+            let h = cfg.actuation.map_or(default * nm, |l| l.0);
+            let p =
+                ActuationProfile::constant(h).map_err(|e| ("actuation".into(), e.to_string()))?;
+            let shock = if cfg.scenario == "shock" {
+                Some(
+                    ShockPulse::from_impulse(
+                        cfg.shock_start.0,
+                        cfg.shock_duration.0,
+                        cfg.shock_impulse,
+                    )
+                    .map_err(|e| ("shock_impulse".to_string(), e.to_string()))?,
+                )
+            } else {
+                None
+            };
+            (p, shock)
+        }
+        "variable" => {
+            if cfg.actuation.is_some() {
+                return bad(
+                    "actuation",
+                    "the `variable` scenario takes a `profile` instead",
+                );
+            }
+            let p = match &cfg.profile {
+                None => ActuationProfile::variable_default(),
+                Some(points) => {
+                    ActuationProfile::table(points.iter().map(|(t, h)| (t.0, h.0)).collect())
+                        .map_err(|e| ("profile".to_string(), e.to_string()))?
+                }
+            };
+            (p, None)
+        }
+        o => {
+            return bad(
+                "scenario",
+                format!("unknown `{o}` (constant, shock, variable)"),
+            )
+        }
+    };
+    let b = Model3Dof::dissertation().geometry.bulge_height;
+    if profile.range().0 < b {
+        let key = if cfg.scenario == "variable" {
+            "profile"
+        } else {
+            "actuation"
+        };
+        return bad(
+            key,
+            format!(
+                "{:.2} nm is below the bulge height b_TFC = {:.0} nm (the 3-DOF actuation is the \
+                 bulge bottom's total protrusion)",
+                profile.range().0 * 1e9,
+                b * 1e9
+            ),
+        );
+    }
+    let mut cases = Vec::new();
+    if cfg.interfaces.is_empty() {
+        return bad("interfaces", "name at least one of isbl, mtl");
+    }
+    for i in &cfg.interfaces {
+        match i.as_str() {
+            "isbl" => cases.push(CaseInterface::Isbl),
+            "mtl" => {
+                if cfg.lubricants.is_empty() {
+                    return bad(
+                        "lubricants",
+                        "the MTL runs need at least one lubricant case",
+                    );
+                }
+                for l in &cfg.lubricants {
+                    let case = LubricantCase::ALL
+                        .into_iter()
+                        .find(|c| lubricant_name(*c) == l)
+                        .ok_or_else(|| {
+                            (
+                                "lubricants".to_string(),
+                                format!(
+                                    "unknown `{l}` (reference, humidity_temperature, more_bonding, \
+                                     larger_gyration_radius)"
+                                ),
+                            )
+                        })?;
+                    cases.push(CaseInterface::Mtl(case));
+                }
+            }
+            o => return bad("interfaces", format!("unknown `{o}` (isbl, mtl)")),
+        }
+    }
+    let mut seen = Vec::new();
+    for c in &cases {
+        if seen.contains(c) {
+            return bad("interfaces", format!("`{}` listed twice", c.label()));
+        }
+        seen.push(*c);
+    }
+    let spring_law = match cfg.ab_spring_law.as_str() {
+        "integrated" => SpringLaw::Integrated,
+        "linear" => SpringLaw::Linear,
+        o => {
+            return bad(
+                "ab_spring_law",
+                format!("unknown `{o}` (integrated, linear)"),
+            )
+        }
+    };
+    if !matches!(cfg.pushback_curve.as_str(), "linear" | "flattened") {
+        return bad(
+            "pushback_curve",
+            format!("unknown `{}` (linear, flattened)", cfg.pushback_curve),
+        );
+    }
+    let init = match cfg.init.as_str() {
+        "static" => Init3Dof::AirBearingStatic,
+        "nominal" => Init3Dof::Nominal,
+        o => return bad("init", format!("unknown `{o}` (static, nominal)")),
+    };
+    let tracks = match cfg.tracks.as_str() {
+        "three" => TrackAssignment::Three,
+        "one" => TrackAssignment::One,
+        o => return bad("tracks", format!("unknown `{o}` (three, one)")),
+    };
+    let options = Options3Dof {
+        duration: cfg.duration.0,
+        output_step: cfg.output_step.0,
+        transit_delay: cfg.transit_delay,
+        wrap_dmw: cfg.dmw_wrap,
+        tracks,
+        init,
+        ..Options3Dof::default()
+    };
+    options
+        .validate()
+        .map_err(|e| ("duration".to_string(), e.to_string()))?;
+    if !(cfg.steady_start.0 >= 0.0 && cfg.steady_start.0 < cfg.duration.0) {
+        return bad("steady_start", "must lie in [0, duration)");
+    }
+    if let Some(s) = &shock {
+        if s.start + s.duration > cfg.duration.0 {
+            return bad("shock_start", "the pulse must end before `duration`");
+        }
+    }
+    Ok(ThreeDofParams {
+        contact: cfg.contact.clone(),
+        dmw,
+        scenario: cfg.scenario.clone(),
+        profile,
+        shock,
+        cases,
+        options,
+        steady_start: cfg.steady_start.0,
+        spring_law,
+        pushback: cfg.pushback_curve.clone(),
+    })
+}
+
+impl ThreeDofParams {
+    /// Canonical parameters (part of the instance key).
+    pub fn canonical(&self) -> Value {
+        let o = &self.options;
+        json!({
+            "contact": self.contact,
+            "dmw": self.dmw,
+            "scenario": self.scenario,
+            "profile_s_m": self.profile.points(),
+            "shock": self.shock.map(|s| json!({"start_s": s.start, "duration_s": s.duration, "peak_N": s.peak})),
+            "cases": self.cases.iter().map(|c| c.label()).collect::<Vec<_>>(),
+            "duration_s": o.duration,
+            "output_step_s": o.output_step,
+            "steady_start_s": self.steady_start,
+            "transit_delay": o.transit_delay,
+            "dmw_wrap": o.wrap_dmw,
+            "tracks": format!("{:?}", o.tracks),
+            "init": format!("{:?}", o.init),
+            "ab_spring_law": format!("{:?}", self.spring_law),
+            "pushback_curve": self.pushback,
+        })
+    }
+
+    fn model(&self) -> Model3Dof {
+        let mut m = Model3Dof::dissertation();
+        m.air_bearing.spring_law = self.spring_law;
+        if self.pushback == "flattened" {
+            m.pushback = PushbackCurve::flattened();
+        }
+        m
+    }
+}
+
+pub struct ThreeDofStage {
+    pub name: String,
+    pub params: ThreeDofParams,
+}
+
+impl ThreeDofStage {
+    pub fn from_config(
+        file: &PipelineFile,
+        name: &str,
+        cfg: &ThreeDofConfig,
+    ) -> std::result::Result<Self, ConfigError> {
+        let params = validate(cfg).map_err(|(k, m)| file.error("three_dof", name, &k, m))?;
+        if !file.raw.contact.contains_key(&cfg.contact) {
+            return Err(file.error(
+                "three_dof",
+                name,
+                "contact",
+                format!("no [contact.{}] in this file", cfg.contact),
+            ));
+        }
+        if let Some(d) = &params.dmw {
+            if !file.raw.dmw.contains_key(d) && !file.raw.excitation.contains_key(d) {
+                return Err(file.error(
+                    "three_dof",
+                    name,
+                    "dmw",
+                    format!("no [dmw.{d}] or [excitation.{d}] in this file (or \"none\")"),
+                ));
+            }
+        }
+        Ok(Self {
+            name: name.to_string(),
+            params,
+        })
+    }
+}
+
+/// The MTL law of a Table 4.4 case on the interface's film (σ, t) at the disk speed.
+fn mtl_law(case: LubricantCase, sigma: f64, thickness: f64, speed: f64) -> Result<RoughMtl> {
+    let film = RoughFilm::new(sigma, case.kappa(), thickness, speed)?;
+    let exp = FwmExperiment::fukuzawa_z03().with_limiting_viscosity(case.limiting_viscosity())?;
+    Ok(RoughMtl::from_experiment(film, &exp)?)
+}
+
+/// Simulate one case into `dir` (`case.h5`); returns its metrics.
+fn run_case(
+    p: &ThreeDofParams,
+    which: CaseInterface,
+    isbl: &IsblLookup,
+    tracks: Option<&[DmwTrack; 3]>,
+    dir: &Path,
+) -> Result<Value> {
+    let model = p.model();
+    let ip = isbl.model().params();
+    let law = match which {
+        CaseInterface::Isbl => InterfaceLaw::Isbl,
+        CaseInterface::Mtl(l) => InterfaceLaw::Mtl(mtl_law(
+            l,
+            ip.sigma,
+            ip.lubricant_thickness,
+            model.disk_speed,
+        )?),
+    };
+    let interface = FeatureInterface::new(
+        isbl,
+        law,
+        ContactForceForm::InterferenceTangent,
+        0.05,
+        model.air_bearing.slider.mass,
+    )?;
+    let inputs = tracks.map(|t| {
+        let one = |k: usize| DmwInput {
+            displacement: &t[k].displacement,
+            velocity: &t[k].velocity,
+            sample_rate: t[k].sample_rate,
+        };
+        [one(0), one(1), one(2)]
+    });
+    let case = ThreeDofCase::new(
+        &model,
+        interface,
+        p.profile.clone(),
+        p.shock,
+        inputs,
+        p.options,
+    )?;
+    let started = std::time::Instant::now();
+    let h = case.run()?;
+    let seconds = started.elapsed().as_secs_f64();
+    let sigma = ip.sigma;
+    let metrics = case_metrics(p, &h, 3.0 * sigma, 3.0 * sigma + ip.lubricant_thickness)?;
+    write_case_h5(&dir.join("case.h5"), &h)?;
+    history_png(&dir.join("history.png"), &h, &which.label())?;
+    let mut m = metrics;
+    m.insert("case".into(), json!(which.label()));
+    m.insert("wall_time_s".into(), json!(seconds));
+    m.insert("steps".into(), json!(h.stats.accepted_steps));
+    Ok(Value::Object(m))
+}
+
+fn window(x: &[f64], dt: f64, (a, b): (f64, f64)) -> &[f64] {
+    let n = x.len();
+    let i0 = ((a / dt).round() as usize).min(n);
+    let i1 = ((b / dt).round() as usize).clamp(i0, n);
+    &x[i0..i1]
+}
+
+fn mean(x: &[f64]) -> f64 {
+    x.iter().sum::<f64>() / x.len().max(1) as f64
+}
+
+fn std(x: &[f64]) -> f64 {
+    let m = mean(x);
+    (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / x.len().max(1) as f64).sqrt()
+}
+
+fn case_metrics(
+    p: &ThreeDofParams,
+    h: &History3Dof,
+    solid: f64,
+    lubricant: f64,
+) -> Result<Map<String, Value>> {
+    let dt = h.dt;
+    let end = (h.len() - 1) as f64 * dt;
+    let steady = (p.steady_start, end + dt);
+    let mut m = Map::new();
+    let nm = |x: f64| x * 1e9;
+    let pt = window(&h.pole_tip, dt, steady);
+    let bulge = window(&h.bulge_spacing, dt, steady);
+    m.insert("pole_tip_mean_nm".into(), json!(nm(mean(pt))));
+    m.insert("pole_tip_std_nm".into(), json!(nm(std(pt))));
+    m.insert("bulge_spacing_mean_nm".into(), json!(nm(mean(bulge))));
+    m.insert("bulge_spacing_std_nm".into(), json!(nm(std(bulge))));
+    m.insert(
+        "bulge_vibration_percent".into(),
+        json!(h.bulge_vibration(steady)),
+    );
+    let roll = window(&h.roll, dt, steady);
+    m.insert("roll_std_urad".into(), json!(std(roll) * 1e6));
+    let n = bulge.len().max(1) as f64;
+    let i0 = ((steady.0 / dt).round() as usize).min(h.len());
+    let any_below = |k: usize, level: f64| h.feature_spacing.iter().any(|s| s[k] < level);
+    let solid_share = (i0..h.len()).filter(|&k| any_below(k, solid)).count() as f64 / n;
+    let lube_share = (i0..h.len()).filter(|&k| any_below(k, lubricant)).count() as f64 / n;
+    m.insert("solid_contact_percent".into(), json!(100.0 * solid_share));
+    m.insert(
+        "lubricant_contact_percent".into(),
+        json!(100.0 * lube_share),
+    );
+    let peak = |x: &[f64]| x.iter().cloned().fold(0.0, f64::max);
+    m.insert(
+        "peak_contact_force_mN".into(),
+        json!(peak(&h.contact_force) * 1e3),
+    );
+    m.insert(
+        "peak_lubricant_force_mN".into(),
+        json!(peak(&h.lubricant_force) * 1e3),
+    );
+    m.insert(
+        "mean_contact_force_mN".into(),
+        json!(mean(window(&h.contact_force, dt, steady)) * 1e3),
+    );
+    m.insert(
+        "mean_friction_mN".into(),
+        json!(mean(window(&h.friction, dt, steady)) * 1e3),
+    );
+    let touched: Vec<String> = h
+        .features
+        .iter()
+        .zip(&h.feature_spacing)
+        .filter(|(_, s)| s.iter().any(|v| *v < solid))
+        .map(|(f, _)| format!("{f:?}"))
+        .collect();
+    m.insert("features_in_solid_contact".into(), json!(touched.join(" ")));
+    m.insert("ab_lost_samples".into(), json!(h.ab_lost_samples));
+    // Table 4.4 windows of a variable profile.
+    if !p.profile.is_constant() {
+        let t = h.table_4_4(&p.profile, lubricant);
+        m.insert(
+            "first_lubricant_contact_ms".into(),
+            json!(t.first_lubricant_contact.map(|t| t * 1e3)),
+        );
+        m.insert("flying_fhm_percent".into(), json!(t.flying_fhm));
+        m.insert(
+            "jump_to_contact_bv_percent".into(),
+            json!(t.jump_to_contact_bv),
+        );
+        m.insert(
+            "steady_contact_bv_percent".into(),
+            json!(t.steady_contact_bv),
+        );
+    }
+    Ok(m)
+}
+
+fn write_case_h5(path: &Path, h: &History3Dof) -> Result<()> {
+    let out = H5Out::create(path)?;
+    let entry = out.group("case", Some("NXentry"))?;
+    out.attr_str(&entry, "default", "history")?;
+    let g = out.group("case/history", Some("NXdata"))?;
+    out.attr_str(&g, "signal", "pole_tip")?;
+    out.attr_str_list(&g, "axes", &["time"])?;
+    let time: Vec<f64> = (0..h.len()).map(|k| k as f64 * h.dt).collect();
+    let t = out.write_1d(&g, "time", &time, "s", "time")?;
+    out.attr_f64(&t, "sampling_rate", 1.0 / h.dt)?;
+    for (name, data, unit, what) in [
+        ("heave", &h.heave, "m", "COM heave from the nominal state"),
+        ("heave_rate", &h.heave_rate, "m/s", "dz/dt"),
+        ("pitch", &h.pitch, "rad", "pitch θ"),
+        ("pitch_rate", &h.pitch_rate, "rad/s", "dθ/dt"),
+        ("roll", &h.roll, "rad", "roll φ"),
+        ("roll_rate", &h.roll_rate, "rad/s", "dφ/dt"),
+        ("actuation", &h.actuation, "m", "TFC actuation h_TFC"),
+        ("pole_tip", &h.pole_tip, "m", "pole-tip flying height PT"),
+        (
+            "bulge_spacing",
+            &h.bulge_spacing,
+            "m",
+            "solid spacing of the bulge",
+        ),
+        (
+            "contact_force",
+            &h.contact_force,
+            "N",
+            "solid contact force, all features",
+        ),
+        (
+            "lubricant_force",
+            &h.lubricant_force,
+            "N",
+            "lubricant force, all features",
+        ),
+        ("adhesion", &h.adhesion, "N", "adhesion, all features"),
+        ("friction", &h.friction, "N", "friction, all features"),
+        (
+            "real_area",
+            &h.real_area,
+            "m^2",
+            "real contact area, all features",
+        ),
+        ("front_force", &h.front_force, "N", "front AB spring force"),
+        ("rear_force", &h.rear_force, "N", "rear AB spring force"),
+        (
+            "shock_force",
+            &h.shock_force,
+            "N",
+            "shock force toward the disk",
+        ),
+    ] {
+        out.write_1d(&g, name, data, unit, what)?;
+    }
+    let fg = out.group("case/features", None)?;
+    for (i, f) in h.features.iter().enumerate() {
+        let name = format!("{f:?}")
+            .replace(['(', ')'], "_")
+            .trim_end_matches('_')
+            .to_string();
+        out.write_1d(
+            &fg,
+            &format!("{name}_spacing"),
+            &h.feature_spacing[i],
+            "m",
+            "solid spacing",
+        )?;
+        out.write_1d(
+            &fg,
+            &format!("{name}_normal"),
+            &h.feature_normal[i],
+            "N",
+            "normal force F_c + P_lub − F_s",
+        )?;
+    }
+    out.finish()
+}
+
+fn history_png(path: &Path, h: &History3Dof, label: &str) -> Result<()> {
+    use crate::core::plot_sweep::{time_histories_png, Panel};
+    let t_ms = |k: usize| k as f64 * h.dt * 1e3;
+    let pair = |x: &[f64], scale: f64| -> Vec<(f64, f64)> {
+        x.iter()
+            .enumerate()
+            .map(|(k, v)| (t_ms(k), v * scale))
+            .collect()
+    };
+    time_histories_png(
+        path,
+        &format!("3-DOF slider, {label} (Figs 4.9–4.11, 4.14–4.16)"),
+        &[
+            Panel {
+                y_desc: "spacing (nm)",
+                series: vec![
+                    ("pole tip PT", pair(&h.pole_tip, 1e9)),
+                    ("bulge", pair(&h.bulge_spacing, 1e9)),
+                    ("actuation", pair(&h.actuation, 1e9)),
+                ],
+            },
+            Panel {
+                y_desc: "force (mN)",
+                series: vec![
+                    ("contact", pair(&h.contact_force, 1e3)),
+                    ("lubricant", pair(&h.lubricant_force, 1e3)),
+                    ("adhesion", pair(&h.adhesion, 1e3)),
+                    ("friction", pair(&h.friction, 1e3)),
+                ],
+            },
+            Panel {
+                y_desc: "roll (µrad)",
+                series: vec![("roll φ", pair(&h.roll, 1e6))],
+            },
+        ],
+    )
+}
+
+impl Stage for ThreeDofStage {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn kind(&self) -> &'static str {
+        "three_dof"
+    }
+    fn model_version(&self) -> &'static str {
+        MODEL_VERSION
+    }
+    fn params(&self) -> Value {
+        self.params.canonical()
+    }
+    fn inputs(&self) -> Vec<(String, PathBuf)> {
+        Vec::new()
+    }
+    fn upstream(&self) -> Vec<String> {
+        let mut u = vec![self.params.contact.clone()];
+        u.extend(self.params.dmw.iter().cloned());
+        u
+    }
+    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+        use rayon::prelude::*;
+        let p = &self.params;
+        let contact = ctx
+            .upstream
+            .get(&p.contact)
+            .ok_or_else(|| Error::Stage(format!("no result from contact `{}`", p.contact)))?;
+        let isbl_params =
+            super::contact::isbl_params_from_json(&contact["inputs"]).ok_or_else(|| {
+                Error::Stage(format!(
+                    "contact `{}` result has no usable `inputs`",
+                    p.contact
+                ))
+            })?;
+        let tracks = match &p.dmw {
+            Some(d) => {
+                let dir = ctx
+                    .upstream_dirs
+                    .get(d)
+                    .ok_or_else(|| Error::Stage(format!("no files from dmw `{d}`")))?;
+                Some(read_dmw_tracks(&dir.join("dmw.h5"))?)
+            }
+            None => None,
+        };
+        let key_of = |name: &str| {
+            ctx.fingerprint
+                .upstream
+                .iter()
+                .find(|u| u.name == name)
+                .map(|u| u.key.clone())
+                .unwrap_or_default()
+        };
+        ctx.progress.set_message("interface tables");
+        // The MTL runs use the variable surface energy of Chapter 3 (contact-isbl §10).
+        let build = |variable: bool| -> Result<IsblLookup> {
+            let mut ip = isbl_params.clone();
+            if variable {
+                ip.surface_energy = SurfaceEnergy::seed_variable();
+            }
+            Ok(IsblLookup::build(IsblModel::new(ip)?, 0.05, -2.0, 10.0)?)
+        };
+        let isbl_solid = build(false)?;
+        let isbl_mtl = if p.cases.iter().any(|c| matches!(c, CaseInterface::Mtl(_))) {
+            Some(build(true)?)
+        } else {
+            None
+        };
+        ctx.progress.set_message(format!("{} cases", p.cases.len()));
+        let base = p.canonical();
+        let contact_key = key_of(&p.contact);
+        let dmw_key = p.dmw.as_deref().map(key_of);
+        let outcomes: Vec<Result<(CaseInterface, cases::CaseEntry)>> = p
+            .cases
+            .par_iter()
+            .map(|&which| {
+                let params = json!({"instance": base, "case": which.label(), "contact_key": contact_key, "dmw_key": dmw_key});
+                let isbl = match which {
+                    CaseInterface::Isbl => &isbl_solid,
+                    CaseInterface::Mtl(_) => isbl_mtl.as_ref().unwrap_or(&isbl_solid),
+                };
+                cases::get_or_compute(ctx.store, MODEL_VERSION, &params, |dir| {
+                    run_case(p, which, isbl, tracks.as_ref(), dir)
+                })
+                .map(|e| (which, e))
+                .map_err(|e| Error::Stage(format!("case {}: {e}", which.label())))
+            })
+            .collect();
+        let mut done = Vec::new();
+        for o in outcomes {
+            done.push(o?);
+        }
+        let dir = ctx.out_dir.join("cases");
+        std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+        let mut rows = Vec::new();
+        for (which, entry) in &done {
+            for (file, ext) in [("case.h5", "h5"), ("history.png", "png")] {
+                let (from, to) = (
+                    entry.dir.join(file),
+                    dir.join(format!("{}.{ext}", which.label())),
+                );
+                if std::fs::hard_link(&from, &to).is_err() {
+                    std::fs::copy(&from, &to).map_err(|e| Error::io(&to, e))?;
+                }
+            }
+            if let Value::Object(m) = &entry.result {
+                rows.push(m.clone());
+            }
+        }
+        crate::core::store::write_table(&rows, &ctx.out_dir.join("cases"))?;
+        let mut row = Map::new();
+        row.insert("scenario".into(), json!(p.scenario));
+        row.insert("cases".into(), json!(done.len()));
+        if let Some(first) = rows.first() {
+            for k in [
+                "pole_tip_mean_nm",
+                "bulge_vibration_percent",
+                "peak_contact_force_mN",
+            ] {
+                row.insert(
+                    format!("{}_{k}", first["case"].as_str().unwrap_or("case")),
+                    first[k].clone(),
+                );
+            }
+        }
+        Ok(StageOutput {
+            result: json!({
+                "cases": rows,
+                "case_keys": done.iter().map(|(_, e)| e.key.clone()).collect::<Vec<_>>(),
+                "table": "cases.parquet",
+            }),
+            summary_row: Some(row),
+        })
+    }
+}
