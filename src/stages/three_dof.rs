@@ -747,7 +747,7 @@ impl Stage for ThreeDofStage {
         ctx.progress.set_message("interface tables");
         // The MTL runs use the variable surface energy of Chapter 3 (contact-isbl §10).
         let build = |variable: bool| -> Result<IsblLookup> {
-            let mut ip = isbl_params.clone();
+            let mut ip = isbl_params;
             if variable {
                 ip.surface_energy = SurfaceEnergy::seed_variable();
             }
