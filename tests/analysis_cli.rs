@@ -82,7 +82,12 @@ fn analyze_errors_are_clear() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("series.h5");
     {
-        let f = hdf5::File::create(&path).unwrap();
+        // No HDF5 file lock: hdf5 opens without O_CLOEXEC, so an `hdi` child that another test
+        // thread forks meanwhile inherits the descriptor, and with it the lock, until it exits.
+        let f = hdf5::File::with_options()
+            .with_fapl(|p| p.file_locking(false))
+            .create(&path)
+            .unwrap();
         let g = f.create_group("g").unwrap();
         let n = 4000;
         let t: Vec<f64> = (0..n).map(|i| i as f64 / 4e6).collect();
@@ -101,8 +106,6 @@ fn analyze_errors_are_clear() {
         g.new_dataset_builder().with_data(&x).create("x").unwrap();
         let ok: Vec<f64> = t.iter().map(|t| (6.28e4 * t).sin()).collect();
         g.new_dataset_builder().with_data(&ok).create("ok").unwrap();
-        // Close strongly before the child opens it: a weakly closed file can stay open (and
-        // locked) in this process while the CLI tries to open it.
         drop((time, g));
         f.close().unwrap();
     }
