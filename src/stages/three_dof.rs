@@ -553,6 +553,32 @@ fn case_metrics(
         .collect();
     m.insert("features_in_solid_contact".into(), json!(touched.join(" ")));
     m.insert("ab_lost_samples".into(), json!(h.ab_lost_samples));
+    // Closest approach of every feature over the whole run (which ones came near the disk).
+    for (f, sp) in h.features.iter().zip(&h.feature_spacing) {
+        let min = sp
+            .iter()
+            .copied()
+            .filter(|v| v.is_finite())
+            .fold(f64::INFINITY, f64::min);
+        m.insert(
+            format!("min_spacing_{}_nm", feature_column(f)),
+            json!(min.is_finite().then(|| nm(min))),
+        );
+    }
+    // Contact severity over the steady window, ratio of means where the solid carries load
+    // (dynamics.md §8: μ = Q/F_c, P_m = F_c/A_r, τ = Q/A_r; F_c > 1 µN).
+    let loaded: Vec<usize> = (i0..h.len())
+        .filter(|&k| h.contact_force[k] > 1e-6)
+        .collect();
+    if !loaded.is_empty() {
+        let sum = |x: &[f64]| loaded.iter().map(|&k| x[k]).sum::<f64>();
+        let (fc, q, ar) = (sum(&h.contact_force), sum(&h.friction), sum(&h.real_area));
+        m.insert("friction_coefficient".into(), json!(q / fc));
+        if ar > 0.0 {
+            m.insert("mean_pressure_GPa".into(), json!(fc / ar * 1e-9));
+            m.insert("shear_traction_GPa".into(), json!(q / ar * 1e-9));
+        }
+    }
     // Table 4.4 windows of a variable profile.
     if !p.profile.is_constant() {
         let t = h.table_4_4(&p.profile, lubricant);
@@ -571,6 +597,18 @@ fn case_metrics(
         );
     }
     Ok(m)
+}
+
+/// `Pad(PlusY)` → `pad_plus_y`: a column-friendly feature name.
+fn feature_column(f: &crate::dynamics::three_dof::geometry::Feature) -> String {
+    let mut out = String::new();
+    for (i, c) in format!("{f:?}").replace(['(', ')'], "").chars().enumerate() {
+        if c.is_uppercase() && i > 0 {
+            out.push('_');
+        }
+        out.push(c.to_ascii_lowercase());
+    }
+    out
 }
 
 fn write_case_h5(path: &Path, h: &History3Dof) -> Result<()> {
@@ -662,6 +700,14 @@ fn history_png(path: &Path, h: &History3Dof, label: &str) -> Result<()> {
             .map(|(k, v)| (t_ms(k), v * scale))
             .collect()
     };
+    // Every feature that comes within 50 nm of the disk (the bulge always).
+    let names: Vec<String> = h.features.iter().map(|f| format!("{f:?}")).collect();
+    let near: Vec<(&str, Vec<(f64, f64)>)> = names
+        .iter()
+        .zip(&h.feature_spacing)
+        .filter(|(n, s)| *n == "Bulge" || s.iter().any(|v| *v < 50e-9))
+        .map(|(n, s)| (n.as_str(), pair(s, 1e9)))
+        .collect();
     time_histories_png(
         path,
         &format!("3-DOF slider, {label} (Figs 4.9–4.11, 4.14–4.16)"),
@@ -682,6 +728,10 @@ fn history_png(path: &Path, h: &History3Dof, label: &str) -> Result<()> {
                     ("adhesion", pair(&h.adhesion, 1e3)),
                     ("friction", pair(&h.friction, 1e3)),
                 ],
+            },
+            Panel {
+                y_desc: "feature spacing (nm)",
+                series: near,
             },
             Panel {
                 y_desc: "roll (µrad)",
