@@ -34,6 +34,32 @@ pub struct Row {
 }
 
 impl Row {
+    /// A reproducible row (the usual case); set `reproducible: false` with struct update for
+    /// the others.
+    #[allow(clippy::too_many_arguments)] // a table row: positional reads like the table
+    pub fn reproducible(
+        source: &str,
+        quantity: &str,
+        unit: &str,
+        target: f64,
+        ours: f64,
+        tolerance: Tolerance,
+        variant: &str,
+        note: &str,
+    ) -> Row {
+        Row {
+            source: source.into(),
+            quantity: quantity.into(),
+            unit: unit.into(),
+            target,
+            ours,
+            tolerance,
+            reproducible: true,
+            variant: variant.into(),
+            note: note.into(),
+        }
+    }
+
     pub fn pass(&self) -> bool {
         if !(self.ours.is_finite() && self.target.is_finite()) {
             return false;

@@ -98,6 +98,24 @@ impl H5Out {
             .map_err(|e| self.err(format!("attribute {name}: {e}")))
     }
 
+    /// An NXdata group of time histories: `signal` as the default plot, a `time` axis of `n`
+    /// samples `dt` apart with its `sampling_rate` attribute (the layout `hdi analyze` reads).
+    pub fn history_group(
+        &self,
+        path: &str,
+        signal: &str,
+        dt: f64,
+        n: usize,
+    ) -> Result<hdf5::Group> {
+        let g = self.group(path, Some("NXdata"))?;
+        self.attr_str(&g, "signal", signal)?;
+        self.attr_str_list(&g, "axes", &["time"])?;
+        let time: Vec<f64> = (0..n).map(|k| k as f64 * dt).collect();
+        let t = self.write_1d(&g, "time", &time, "s", "time")?;
+        self.attr_f64(&t, "sampling_rate", 1.0 / dt)?;
+        Ok(g)
+    }
+
     pub fn attr_f64(&self, loc: &hdf5::Location, name: &str, value: f64) -> Result<()> {
         loc.new_attr::<f64>()
             .create(name)

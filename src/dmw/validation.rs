@@ -9,36 +9,12 @@ use crate::signal::integrate::trapezoid_gain;
 use crate::signal::resample::HermiteTrack;
 use crate::validate::{Row, Tolerance};
 
-#[allow(clippy::too_many_arguments)] // a table row: positional reads like the table
-fn row(
-    source: &str,
-    quantity: &str,
-    unit: &str,
-    target: f64,
-    ours: f64,
-    tolerance: Tolerance,
-    variant: &str,
-    note: &str,
-) -> Row {
-    Row {
-        source: source.into(),
-        quantity: quantity.into(),
-        unit: unit.into(),
-        target,
-        ours,
-        tolerance,
-        reproducible: true,
-        variant: variant.into(),
-        note: note.into(),
-    }
-}
-
 /// The DMW rows.
 pub fn rows() -> Vec<Row> {
     let fs = 4e6;
     let mut rows = Vec::new();
     let rpm = 5425.0;
-    rows.push(row(
+    rows.push(Row::reproducible(
         "signals §1 [derived from seed: 5 425 rpm]",
         "revolution period",
         "ms",
@@ -48,7 +24,7 @@ pub fn rows() -> Vec<Row> {
         "-",
         "",
     ));
-    rows.push(row(
+    rows.push(Row::reproducible(
         "signals §1 [derived]",
         "samples per revolution at 4 MS/s",
         "1",
@@ -67,7 +43,7 @@ pub fn rows() -> Vec<Row> {
                 (10e3, -6.021, 0.0005),
                 (20e3, -0.0338, 0.00005),
             ] {
-                rows.push(row(
+                rows.push(Row::reproducible(
                     "signals §3.6 [ref: scipy butter + sosfreqz]",
                     &format!("zero-phase HP response at {} kHz", f / 1e3),
                     "dB",
@@ -78,7 +54,7 @@ pub fn rows() -> Vec<Row> {
                     "",
                 ));
             }
-            rows.push(row(
+            rows.push(Row::reproducible(
                 "signals §3.6 [derived]",
                 "gain of the 10.7 kHz line, zero-phase order 4",
                 "1",
@@ -88,7 +64,7 @@ pub fn rows() -> Vec<Row> {
                 "zero_phase",
                 "",
             ));
-            rows.push(row(
+            rows.push(Row::reproducible(
                 "signals §3.6 [derived]",
                 "gain of the 10.7 kHz line, single-pass order 4",
                 "1",
@@ -103,7 +79,7 @@ pub fn rows() -> Vec<Row> {
     }
     for (order, target) in [(2usize, 0.753), (1, 0.731)] {
         if let Ok(sos) = butterworth_sos(order, 10e3, fs, FilterKind::HighPass) {
-            rows.push(row(
+            rows.push(Row::reproducible(
                 "signals §3.6 [derived]",
                 &format!("gain of the 10.7 kHz line, single-pass order {order}"),
                 "1",
@@ -116,7 +92,7 @@ pub fn rows() -> Vec<Row> {
         }
     }
     for (f, target) in [(10.7e3, 0.99998), (275e3, 0.98440), (500e3, 0.94806)] {
-        rows.push(row(
+        rows.push(Row::reproducible(
             "signals §3.5 [ref]",
             &format!("trapezoid gain at {} kHz", f / 1e3),
             "1",
@@ -128,7 +104,7 @@ pub fn rows() -> Vec<Row> {
         ));
     }
     for (f, target) in [(10.7e3, 2.1e-10), (275e3, 9.0e-5), (500e3, 9.1e-4)] {
-        rows.push(row(
+        rows.push(Row::reproducible(
             "signals §3.7 [ref]",
             &format!(
                 "cubic Hermite max error, unit tone at {} kHz, h = 0.25 µs",
@@ -224,7 +200,7 @@ fn synthetic_chain_rows() -> Vec<Row> {
             }
             c.hypot(s)
         };
-        rows.push(row(
+        rows.push(Row::reproducible(
             "signals §3.3 [ref]",
             &format!("synthetic chain relative RMS error ({mode})"),
             "1",
@@ -234,7 +210,7 @@ fn synthetic_chain_rows() -> Vec<Row> {
             &format!("{mode} averaging, filter_then_integrate"),
             note,
         ));
-        rows.push(row(
+        rows.push(Row::reproducible(
             "signals §3.3 [ref]",
             &format!("275 kHz line recovered / true ({mode})"),
             "1",
@@ -245,7 +221,7 @@ fn synthetic_chain_rows() -> Vec<Row> {
             note,
         ));
         if mode == AverageMode::Angular {
-            rows.push(row(
+            rows.push(Row::reproducible(
                 "signals §3.3 [ref]",
                 "synthetic DMW std",
                 "nm",

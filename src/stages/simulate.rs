@@ -572,12 +572,7 @@ fn write_case_h5(path: &Path, h: &CaseHistory, actuation: f64, m: &CaseMetrics) 
         "%",
         "FHM/BV (eq. 2.1) over the steady window",
     )?;
-    let g = out.group("case/history", Some("NXdata"))?;
-    out.attr_str(&g, "signal", "clearance")?;
-    out.attr_str_list(&g, "axes", &["time"])?;
-    let time: Vec<f64> = (0..h.len()).map(|k| k as f64 * h.dt).collect();
-    let t = out.write_1d(&g, "time", &time, "s", "time")?;
-    out.attr_f64(&t, "sampling_rate", 1.0 / h.dt)?;
+    let g = out.history_group("case/history", "clearance", h.dt, h.len())?;
     for (name, data, unit, what) in [
         ("heave", &h.heave, "m", "COM heave from the nominal state"),
         ("pitch_offset", &h.pitch_offset, "rad", "pitch θ − θ0"),

@@ -615,12 +615,7 @@ fn write_case_h5(path: &Path, h: &History3Dof) -> Result<()> {
     let out = H5Out::create(path)?;
     let entry = out.group("case", Some("NXentry"))?;
     out.attr_str(&entry, "default", "history")?;
-    let g = out.group("case/history", Some("NXdata"))?;
-    out.attr_str(&g, "signal", "pole_tip")?;
-    out.attr_str_list(&g, "axes", &["time"])?;
-    let time: Vec<f64> = (0..h.len()).map(|k| k as f64 * h.dt).collect();
-    let t = out.write_1d(&g, "time", &time, "s", "time")?;
-    out.attr_f64(&t, "sampling_rate", 1.0 / h.dt)?;
+    let g = out.history_group("case/history", "pole_tip", h.dt, h.len())?;
     for (name, data, unit, what) in [
         ("heave", &h.heave, "m", "COM heave from the nominal state"),
         ("heave_rate", &h.heave_rate, "m/s", "dz/dt"),

@@ -12,30 +12,6 @@ use crate::dynamics::two_dof::ContactForceForm;
 use crate::dynamics::{NM, UM};
 use crate::validate::{Row, Tolerance};
 
-#[allow(clippy::too_many_arguments)]
-fn row(
-    source: &str,
-    quantity: &str,
-    unit: &str,
-    target: f64,
-    ours: f64,
-    tolerance: Tolerance,
-    variant: &str,
-    note: &str,
-) -> Row {
-    Row {
-        source: source.into(),
-        quantity: quantity.into(),
-        unit: unit.into(),
-        target,
-        ours,
-        tolerance,
-        reproducible: true,
-        variant: variant.into(),
-        note: note.into(),
-    }
-}
-
 /// Fig. 4.8 truncation example through the 3-DOF feature API (class G, ours 187.9 µm²).
 fn truncation_row(model: &Model3Dof) -> Row {
     let ours = model
@@ -51,7 +27,7 @@ fn truncation_row(model: &Model3Dof) -> Row {
             1.5 * NM,
         )
         .map_or(f64::NAN, |a| a / (UM * UM));
-    row(
+    Row::reproducible(
         "dynamics §2.7 (Fig. 4.8)",
         "3-DOF bulge nominal area, a = 5 µm, b = 5 nm, h = 20 nm, θ 100 µrad, φ −50 µrad, cut 1.5 nm",
         "μm²",
@@ -81,7 +57,7 @@ fn modal_rows(model: &Model3Dof) -> Vec<Row> {
     .iter()
     .zip(modes)
     .map(|(&(name, target), f)| {
-        row(
+        Row::reproducible(
             "dynamics §3.3",
             &format!("3-DOF AB {name} mode at PT = 11 nm"),
             "kHz",
@@ -130,7 +106,7 @@ fn twelve_nm_rows(model: &Model3Dof) -> Vec<Row> {
     let variant = "3-DOF, ISBL, no DMW, AB static init, balanced F_j,0, ΔF_AB at the TFC, \
                    integrated spring law, linear push-back 0.5·h";
     vec![
-        row(
+        Row::reproducible(
             "dynamics §12 row 30 (K)",
             "3-DOF pole-tip FH at 12 nm constant actuation",
             "nm",
@@ -145,7 +121,7 @@ fn twelve_nm_rows(model: &Model3Dof) -> Vec<Row> {
                 &note
             },
         ),
-        row(
+        Row::reproducible(
             "dynamics §3.3 (push-back ΔFH ≈ 0.5·h_TFC)",
             "3-DOF TE rise above the nominal FH at 12 nm",
             "nm",
@@ -265,7 +241,7 @@ fn table_4_4_rows() -> Vec<Row> {
         Err(e) => {
             return vec![Row {
                 reproducible: false,
-                ..row(
+                ..Row::reproducible(
                     "dynamics §12 row 35",
                     "Table 4.4 cases",
                     "%",
@@ -303,7 +279,7 @@ fn table_4_4_rows() -> Vec<Row> {
         );
         rows.push(Row {
             reproducible: false,
-            ..row(
+            ..Row::reproducible(
                 "dynamics §12 row 35 (Table 4.4)",
                 &format!("{name}: steady-contact BV"),
                 "%",
@@ -316,7 +292,7 @@ fn table_4_4_rows() -> Vec<Row> {
         });
         rows.push(Row {
             reproducible: false,
-            ..row(
+            ..Row::reproducible(
                 "dynamics §12 row 35 (Table 4.4)",
                 &format!("{name}: jump-to-contact BV"),
                 "%",
