@@ -13,7 +13,7 @@ fn default_pipeline_writes_hdf5_tables_and_plots_readable_by_others() {
     let o = p.run(&["run"]);
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("ran 32, cached 0, failed 0, skipped 0 of 32"),
+        stderr(&o).contains("ran 33, cached 0, failed 0, skipped 0 of 33"),
         "{}",
         stderr(&o)
     );
@@ -104,7 +104,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let o = p.run(&["run"]);
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("nothing to do: all 32 stage instances fresh"),
+        stderr(&o).contains("nothing to do: all 33 stage instances fresh"),
         "{}",
         stderr(&o)
     );
@@ -143,7 +143,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let o = p.run(&["run"]);
     assert_ok(&o);
     let e = stderr(&o);
-    assert!(e.contains("ran 3, cached 29"), "{e}");
+    assert!(e.contains("ran 3, cached 30"), "{e}");
     assert!(
         e.contains("ran     disk") && e.contains("ran     hdi"),
         "{e}"

@@ -28,7 +28,13 @@ fn csv_rows(path: &std::path::Path) -> Vec<std::collections::BTreeMap<String, St
 #[test]
 fn shipped_three_dof_scenarios_run_and_cache_per_case() {
     let p = Project::shipped();
-    let o = p.run(&["run", "--only", "constant_12nm", "shock"]);
+    let o = p.run(&[
+        "run",
+        "--only",
+        "constant_12nm",
+        "shock_response",
+        "lubricant_cases",
+    ]);
     assert_ok(&o);
     let out = p.processed();
     for f in [
@@ -37,9 +43,33 @@ fn shipped_three_dof_scenarios_run_and_cache_per_case() {
         "constant_12nm/cases/mtl_reference.png",
         "shock/cases/isbl.h5",
         "tables/three_dof.csv",
+        "shock_response/scalogram.png",
+        "lubricant_cases/cases/mtl_reference_regimes.png",
+        "lubricant_cases/cases/isbl_forces.png",
     ] {
         assert!(out.join(f).is_file(), "missing {f}");
     }
+    // Table 4.4 on the shipped DMW: stiffer lubricant → smaller steady-contact BV
+    // (case 2 < case 0 < case 1), the softer one vibrates most into contact.
+    let lub = csv_rows(&out.join("lubricant_cases/cases.csv"));
+    let bv = |case: &str, key: &str| -> f64 {
+        let row = lub.iter().find(|r| r["case"] == case).expect(case);
+        row[key]
+            .parse()
+            .unwrap_or_else(|_| panic!("{case} {key}: {row:?}"))
+    };
+    let steady = |c: &str| bv(c, "steady_contact_bv_percent");
+    assert!(
+        steady("mtl_more_bonding") < steady("mtl_reference")
+            && steady("mtl_reference") < steady("mtl_humidity_temperature"),
+        "{lub:?}"
+    );
+    let jtc = |c: &str| bv(c, "jump_to_contact_bv_percent");
+    assert!(
+        jtc("mtl_humidity_temperature") > jtc("mtl_reference")
+            && jtc("mtl_humidity_temperature") > jtc("mtl_more_bonding"),
+        "{lub:?}"
+    );
     // 12 nm: the pole tip holds the push-back state (dissertation 7.5 ± 1.0 nm).
     let rows = csv_rows(&out.join("constant_12nm/cases.csv"));
     let pt: f64 = rows[0]["pole_tip_mean_nm"].parse().unwrap();
@@ -48,6 +78,19 @@ fn shipped_three_dof_scenarios_run_and_cache_per_case() {
     let shock = csv_rows(&out.join("shock/cases.csv"));
     let touched = &shock[0]["features_in_solid_contact"];
     assert!(touched.contains("Pad"), "{touched}");
+    // Fig. 4.12: the shock excites the AB modes (≈ 100 kHz) above the DMW's 10.7 kHz.
+    let tables = csv_rows(&out.join("tables/analyses.csv"));
+    let shock_row = tables
+        .iter()
+        .find(|r| r["stage"] == "shock_response")
+        .expect("shock_response row");
+    let khz = |k: &str| -> f64 { shock_row[k].parse().unwrap() };
+    // Pitch/roll modes at 100–110 kHz (spec §3.3); the ridge follows the DMW most of the time.
+    assert!((80.0..130.0).contains(&khz("peak1_kHz")), "{shock_row:?}");
+    assert!(
+        (9.5..12.0).contains(&khz("ridge_median_kHz")),
+        "{shock_row:?}"
+    );
     // A rerun recomputes nothing; another lubricant list reuses the cached ISBL case.
     let again = p.run(&["run", "--only", "constant_12nm"]);
     assert_ok(&again);
@@ -92,6 +135,11 @@ fn bad_three_dof_keys_name_the_key() {
             "[three_dof.shock]                        # S4: 0.25 µN·s over 5 µs at 0.6 ms, 5 nm actuation\ncontact = \"slider3\"",
             "[three_dof.shock]\ncontact = \"slider4\"",
             "three_dof.shock.contact",
+        ),
+        (
+            "source = \"shock\"",
+            "source = \"lubricant_cases\"",
+            "has several cases: say which file, one of cases/isbl.h5",
         ),
     ] {
         let cfg = base.replacen(from, to, 1);

@@ -126,6 +126,12 @@ fn finite_xy(pts: &[(f64, f64)]) -> impl Iterator<Item = (f64, f64)> + '_ {
     pts.iter().copied().filter(|&(x, y)| usable(x) && usable(y))
 }
 
+/// The maximal runs of usable points, split at every non-finite one.
+fn finite_runs(pts: &[(f64, f64)]) -> impl Iterator<Item = &[(f64, f64)]> + '_ {
+    pts.split(|&(x, y)| !(usable(x) && usable(y)))
+        .filter(|run| !run.is_empty())
+}
+
 /// "no data" in the middle of an empty chart.
 fn draw_no_data<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> std::result::Result<(), String> {
     let (xr, yr) = (chart.x_range(), chart.y_range());
@@ -561,7 +567,19 @@ pub(crate) fn decimate_minmax(
 /// legend (clearance, forces, μ, P_m, τ at chosen actuations; Figs 2.13–2.14). The x values
 /// are times in milliseconds (the axis is labelled "time (ms)"). Long series are decimated
 /// per pixel column (min/max), so an 8000-sample history draws as fast as a short one.
+/// A non-finite value breaks a line (μ where nothing is loaded draws as a gap, not a bridge).
 pub fn time_histories_png(path: &Path, title: &str, panels: &[Panel]) -> Result<()> {
+    time_histories_banded_png(path, title, panels, &[])
+}
+
+/// [`time_histories_png`] with shaded time intervals behind every panel, labelled in the
+/// first one (the regimes of a variable-actuation run, Fig. 4.16). Band x values in ms.
+pub fn time_histories_banded_png(
+    path: &Path,
+    title: &str,
+    panels: &[Panel],
+    bands: &[RegimeBand],
+) -> Result<()> {
     let mut xe = Extent::new();
     for (x, _) in panels
         .iter()
@@ -591,23 +609,67 @@ pub fn time_histories_png(path: &Path, title: &str, panels: &[Panel]) -> Result<
         };
         for (k, (panel, area)) in panel_list.iter().zip(areas.iter()).enumerate() {
             let last = k + 1 == n_panels;
-            let drawn: Vec<Vec<(f64, f64)>> = panel
+            // Each series as its finite runs, each run decimated on its own.
+            let drawn: Vec<Vec<Vec<(f64, f64)>>> = panel
                 .series
                 .iter()
-                .map(|(_, s)| decimate_minmax(s, xr.start, xr.end, DECIMATION_COLUMNS))
+                .map(|(_, s)| {
+                    finite_runs(s)
+                        .map(|run| decimate_minmax(run, xr.start, xr.end, DECIMATION_COLUMNS))
+                        .collect()
+                })
                 .collect();
             let mut ye = Extent::new();
-            for &(_, y) in drawn.iter().flatten() {
+            for &(_, y) in drawn.iter().flatten().flatten() {
                 ye.add(y);
             }
-            let yr = ye.range(0.05, 0.0, -1.0..1.0);
+            let top = if k == 0 && !bands.is_empty() {
+                0.15
+            } else {
+                0.0
+            };
+            let yr = ye.range(0.05, top, -1.0..1.0);
             let mut chart = ChartBuilder::on(area)
                 .margin(8)
                 .margin_right(16)
                 .x_label_area_size(if last { 40 } else { 22 })
                 .y_label_area_size(75)
-                .build_cartesian_2d(xr.clone(), yr)
+                .build_cartesian_2d(xr.clone(), yr.clone())
                 .map_err(|e| e.to_string())?;
+            for (b_idx, b) in bands.iter().enumerate() {
+                let a = b.x0.min(b.x1).max(xr.start);
+                let c = b.x0.max(b.x1).min(xr.end);
+                if !(usable(a) && usable(c)) || c <= a {
+                    continue;
+                }
+                let fill = BAND_FILLS[b_idx % BAND_FILLS.len()];
+                chart
+                    .draw_series(std::iter::once(Rectangle::new(
+                        [(a, yr.start), (c, yr.end)],
+                        fill.filled(),
+                    )))
+                    .map_err(|e| e.to_string())?;
+                if k == 0 {
+                    // One word per line when the label (≈ 7 px per character) is too wide.
+                    let plot_w = chart.plotting_area().dim_in_pixel().0.max(1) as f64;
+                    let width_px = (c - a) / (xr.end - xr.start) * plot_w;
+                    let lines: Vec<&str> = if (b.label.chars().count() as f64) * 7.0 > width_px {
+                        b.label.split_whitespace().collect()
+                    } else {
+                        vec![b.label]
+                    };
+                    chart
+                        .draw_series(lines.into_iter().enumerate().map(|(i, line)| {
+                            EmptyElement::at((0.5 * (a + c), yr.end))
+                                + Text::new(
+                                    line.to_string(),
+                                    (0, 3 + 14 * i as i32),
+                                    text_style(12, Pos::new(HPos::Center, VPos::Top)),
+                                )
+                        }))
+                        .map_err(|e| e.to_string())?;
+                }
+            }
             let mut mesh = chart.configure_mesh();
             mesh.y_desc(panel.y_desc)
                 .light_line_style(BLACK.mix(0.05))
@@ -617,15 +679,17 @@ pub fn time_histories_png(path: &Path, title: &str, panels: &[Panel]) -> Result<
             }
             mesh.draw().map_err(|e| e.to_string())?;
             let mut legend = false;
-            for (j, ((label, _), pts)) in panel.series.iter().zip(&drawn).enumerate() {
-                if pts.is_empty() {
-                    continue;
-                }
+            for (j, ((label, _), runs)) in panel.series.iter().zip(&drawn).enumerate() {
                 let c = PALETTE[j % PALETTE.len()];
-                let line = chart
-                    .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(1)))
-                    .map_err(|e| e.to_string())?;
-                if !label.is_empty() {
+                let mut labelled = false;
+                for pts in runs.iter().filter(|r| !r.is_empty()) {
+                    let line = chart
+                        .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(1)))
+                        .map_err(|e| e.to_string())?;
+                    if label.is_empty() || labelled {
+                        continue;
+                    }
+                    labelled = true;
                     legend = true;
                     line.label(*label).legend(move |(x, y)| {
                         PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
@@ -636,7 +700,13 @@ pub fn time_histories_png(path: &Path, title: &str, panels: &[Panel]) -> Result<
                 draw_no_data(&mut chart)?;
             }
             if legend {
-                draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+                // With bands the top is taken by their labels.
+                let corner = if bands.is_empty() {
+                    SeriesLabelPosition::UpperRight
+                } else {
+                    SeriesLabelPosition::LowerRight
+                };
+                draw_legend(&mut chart, corner)?;
             }
         }
         Ok(())
@@ -928,6 +998,65 @@ mod tests {
             time_histories_png(&p, name, panels).unwrap();
             assert_png(&p);
         }
+    }
+
+    #[test]
+    fn runs_split_at_gaps_and_bands_draw() {
+        let nan = f64::NAN;
+        let pts = [
+            (0.0, 1.0),
+            (1.0, nan),
+            (2.0, 2.0),
+            (3.0, 3.0),
+            (nan, 0.0),
+            (5.0, 5.0),
+        ];
+        let runs: Vec<usize> = finite_runs(&pts).map(<[_]>::len).collect();
+        assert_eq!(runs, vec![1, 2, 1]);
+        assert_eq!(finite_runs(&[(nan, nan)]).count(), 0);
+
+        let dir = tempfile::tempdir().unwrap();
+        let t: Vec<f64> = (0..4000).map(|i| i as f64 * 0.5e-3).collect();
+        // μ defined only while loaded: a gappy series must draw (as separate runs).
+        let mu: Vec<(f64, f64)> = t
+            .iter()
+            .map(|&x| (x, if (0.6..1.4).contains(&x) { 1.2 } else { nan }))
+            .collect();
+        let panels = vec![
+            Panel {
+                y_desc: "spacing (nm)",
+                series: vec![("bulge", t.iter().map(|&x| (x, (5.0 * x).sin())).collect())],
+            },
+            Panel {
+                y_desc: "μ",
+                series: vec![("μ", mu)],
+            },
+        ];
+        let bands = [
+            RegimeBand {
+                x0: 0.0,
+                x1: 0.45,
+                label: "flying",
+            },
+            RegimeBand {
+                x0: 0.45,
+                x1: 0.6,
+                label: "jump to contact",
+            },
+            RegimeBand {
+                x0: nan,
+                x1: 1.0,
+                label: "skipped",
+            },
+            RegimeBand {
+                x0: 0.6,
+                x1: 1.4,
+                label: "steady contact",
+            },
+        ];
+        let p = dir.path().join("banded.png");
+        time_histories_banded_png(&p, "banded", &panels, &bands).unwrap();
+        assert_png(&p);
     }
 
     #[test]

@@ -544,6 +544,36 @@ impl AnalysisStage {
                 DEFAULT_SERIES[0].0,
                 DEFAULT_SERIES[0].1,
             )
+        } else if let Some(three) = raw.three_dof.get(&cfg.source) {
+            if cfg.actuation.is_some() {
+                return Err(err("actuation", "only for a [simulate] source".into()));
+            }
+            let p = super::three_dof::validate(three).map_err(|(k, m)| {
+                err(
+                    "source",
+                    format!("[three_dof.{}] is invalid ({k}: {m})", cfg.source),
+                )
+            })?;
+            // One case: its file by default; several: `file` says which.
+            let only = match p.cases.as_slice() {
+                [one] => Some(format!("cases/{}.h5", one.label())),
+                _ if cfg.file.is_some() => None,
+                several => {
+                    let names: Vec<String> = several
+                        .iter()
+                        .map(|c| format!("cases/{}.h5", c.label()))
+                        .collect();
+                    return Err(err(
+                        "file",
+                        format!(
+                            "[three_dof.{}] has several cases: say which file, one of {}",
+                            cfg.source,
+                            names.join(", ")
+                        ),
+                    ));
+                }
+            };
+            (only, DEFAULT_SERIES[0].0, DEFAULT_SERIES[0].1)
         } else if raw.dmw.contains_key(&cfg.source) || raw.excitation.contains_key(&cfg.source) {
             if cfg.actuation.is_some() {
                 return Err(err("actuation", "only for a [simulate] source".into()));

@@ -26,7 +26,7 @@ use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
 
-pub const MODEL_VERSION: &str = "three-dof-1";
+pub const MODEL_VERSION: &str = "three-dof-2";
 
 fn default_none() -> String {
     "none".into()
@@ -471,6 +471,10 @@ fn run_case(
     let metrics = case_metrics(p, &h, 3.0 * sigma, 3.0 * sigma + ip.lubricant_thickness)?;
     write_case_h5(&dir.join("case.h5"), &h)?;
     history_png(&dir.join("history.png"), &h, &which.label())?;
+    if !p.profile.is_constant() {
+        let levels = (3.0 * sigma, 3.0 * sigma + ip.lubricant_thickness);
+        variable_actuation_pngs(dir, &h, &p.profile, levels, &which.label())?;
+    }
     let mut m = metrics;
     m.insert("case".into(), json!(which.label()));
     m.insert("wall_time_s".into(), json!(seconds));
@@ -736,6 +740,111 @@ fn history_png(path: &Path, h: &History3Dof, label: &str) -> Result<()> {
     )
 }
 
+/// The variable-actuation figures: bulge and pole-tip spacing against the solid and lubricant
+/// surfaces with the Table 4.4 regimes shaded (`regimes.png`, Figs 4.14 and 4.16), and the
+/// interface forces with μ (`forces.png`, Fig. 4.15).
+fn variable_actuation_pngs(
+    dir: &Path,
+    h: &History3Dof,
+    profile: &ActuationProfile,
+    (solid, lubricant): (f64, f64),
+    label: &str,
+) -> Result<()> {
+    use crate::core::plot_sweep::{
+        time_histories_banded_png, time_histories_png, Panel, RegimeBand,
+    };
+    let t_ms = |k: usize| k as f64 * h.dt * 1e3;
+    let pair = |x: &[f64], scale: f64| -> Vec<(f64, f64)> {
+        x.iter()
+            .enumerate()
+            .map(|(k, v)| (t_ms(k), v * scale))
+            .collect()
+    };
+    let level = |v: f64| vec![(0.0, v * 1e9), (t_ms(h.len().saturating_sub(1)), v * 1e9)];
+    let mut bands = Vec::new();
+    if let Some(w) = h.regime_windows(profile, lubricant) {
+        let ms = |(a, b): (f64, f64)| (a * 1e3, b * 1e3);
+        let mut push = |win: (f64, f64), label: &'static str| {
+            let (x0, x1) = ms(win);
+            bands.push(RegimeBand { x0, x1, label });
+        };
+        push(w.flying, "flying (FHM)");
+        if let Some(j) = w.jump_to_contact {
+            push(j, "jump to contact (BV)");
+        }
+        if let Some(sc) = w.steady_contact {
+            push(sc, "steady contact (BV)");
+            // Retraction: from the plateau's end to the next kink (or the run's end).
+            let end = (h.len().saturating_sub(1)) as f64 * h.dt;
+            let next = profile
+                .breakpoints()
+                .into_iter()
+                .find(|&b| b > sc.1 + 1e-12)
+                .unwrap_or(end);
+            push((sc.1, next), "snap-off");
+        }
+    }
+    time_histories_banded_png(
+        &dir.join("regimes.png"),
+        &format!("3-DOF slider, variable actuation, {label} (Figs 4.14, 4.16)"),
+        &[
+            Panel {
+                y_desc: "bulge spacing (nm)",
+                series: vec![
+                    ("bulge", pair(&h.bulge_spacing, 1e9)),
+                    ("solid surface 3σ", level(solid)),
+                    ("lubricant surface 3σ + t", level(lubricant)),
+                ],
+            },
+            Panel {
+                y_desc: "clearance (nm)",
+                series: vec![
+                    ("pole tip PT", pair(&h.pole_tip, 1e9)),
+                    ("actuation h_TFC", pair(&h.actuation, 1e9)),
+                ],
+            },
+        ],
+        &bands,
+    )?;
+    // μ only where the interface carries load (> 1 µN): a gap elsewhere, not a zero.
+    let mu: Vec<(f64, f64)> = (0..h.len())
+        .map(|k| {
+            let normal = h.contact_force[k] + h.lubricant_force[k];
+            let v = if normal > 1e-6 {
+                h.friction[k] / normal
+            } else {
+                f64::NAN
+            };
+            (t_ms(k), v)
+        })
+        .collect();
+    time_histories_png(
+        &dir.join("forces.png"),
+        &format!("3-DOF slider, variable actuation, {label}: interface (Fig. 4.15)"),
+        &[
+            Panel {
+                y_desc: "adhesion (mN)",
+                series: vec![("F_s", pair(&h.adhesion, 1e3))],
+            },
+            Panel {
+                y_desc: "contact (mN)",
+                series: vec![
+                    ("solid F_c", pair(&h.contact_force, 1e3)),
+                    ("lubricant P_lub", pair(&h.lubricant_force, 1e3)),
+                ],
+            },
+            Panel {
+                y_desc: "friction (mN)",
+                series: vec![("Q", pair(&h.friction, 1e3))],
+            },
+            Panel {
+                y_desc: "friction coefficient",
+                series: vec![("μ = Q / (F_c + P_lub)", mu)],
+            },
+        ],
+    )
+}
+
 impl Stage for ThreeDofStage {
     fn name(&self) -> &str {
         &self.name
@@ -832,11 +941,19 @@ impl Stage for ThreeDofStage {
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
         let mut rows = Vec::new();
         for (which, entry) in &done {
-            for (file, ext) in [("case.h5", "h5"), ("history.png", "png")] {
+            for (file, suffix) in [
+                ("case.h5", ".h5"),
+                ("history.png", ".png"),
+                ("regimes.png", "_regimes.png"),
+                ("forces.png", "_forces.png"),
+            ] {
                 let (from, to) = (
                     entry.dir.join(file),
-                    dir.join(format!("{}.{ext}", which.label())),
+                    dir.join(format!("{}{suffix}", which.label())),
                 );
+                if !from.exists() {
+                    continue; // the variable-actuation figures exist only for that scenario
+                }
                 if std::fs::hard_link(&from, &to).is_err() {
                     std::fs::copy(&from, &to).map_err(|e| Error::io(&to, e))?;
                 }

@@ -217,20 +217,32 @@ impl History3Dof {
     /// profile (over a ramp the formula measures the ramp, not vibration).
     pub fn table_4_4(&self, profile: &ActuationProfile, lubricant_surface: f64) -> Table44 {
         let entry = self.first_time_below(lubricant_surface);
-        let end = self.len().saturating_sub(1) as f64 * self.dt;
-        let Some(plateau) = profile.plateau().filter(|_| !profile.is_constant()) else {
+        let Some(w) = self.regime_windows(profile, lubricant_surface) else {
             return Table44::default();
         };
-        let mut w = super::inputs::regime_windows(entry, plateau, end);
-        if let Some(&ramp) = profile.breakpoints().first() {
-            w.flying.1 = w.flying.1.min(ramp);
-        }
         Table44 {
             first_lubricant_contact: entry,
             flying_fhm: self.bulge_vibration(w.flying),
             jump_to_contact_bv: w.jump_to_contact.and_then(|s| self.bulge_vibration(s)),
             steady_contact_bv: w.steady_contact.and_then(|s| self.bulge_vibration(s)),
         }
+    }
+
+    /// The Table 4.4 windows of this run (`None` for a constant profile): what
+    /// [`Self::table_4_4`] measures and the regime bands of the variable-actuation plot.
+    pub fn regime_windows(
+        &self,
+        profile: &ActuationProfile,
+        lubricant_surface: f64,
+    ) -> Option<super::inputs::RegimeWindows> {
+        let plateau = profile.plateau().filter(|_| !profile.is_constant())?;
+        let entry = self.first_time_below(lubricant_surface);
+        let end = self.len().saturating_sub(1) as f64 * self.dt;
+        let mut w = super::inputs::regime_windows(entry, plateau, end);
+        if let Some(&ramp) = profile.breakpoints().first() {
+            w.flying.1 = w.flying.1.min(ramp);
+        }
+        Some(w)
     }
 
     /// Index of `feature` in the per-feature series.
