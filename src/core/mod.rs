@@ -7,6 +7,7 @@ pub mod hash;
 pub mod memory;
 pub mod plot;
 pub mod plot_analysis;
+pub mod plot_doe;
 pub mod plot_sweep;
 pub mod progress;
 pub mod store;

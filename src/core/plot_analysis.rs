@@ -140,7 +140,7 @@ fn log_tick_label(v: f64, decades: f64) -> String {
 }
 
 /// Three significant digits, without exponent for the usual kHz values.
-fn fmt_sig3(v: f64) -> String {
+pub(crate) fn fmt_sig3(v: f64) -> String {
     let a = v.abs();
     if a >= 1e5 || (a < 1e-3 && a > 0.0) {
         format!("{v:.2e}")
@@ -173,7 +173,7 @@ fn log_key_points(lo: f64, hi: f64) -> Vec<f64> {
 
 /// A linear-axis tick label with as many decimals as the tick spacing (≈ span/10) needs,
 /// trailing zeros trimmed.
-fn lin_tick_label(v: f64, span: f64) -> String {
+pub(crate) fn lin_tick_label(v: f64, span: f64) -> String {
     let step = (span / 10.0).abs();
     let decimals = if step > 0.0 && step.is_finite() {
         (-(step.log10().floor()) as i32 + 1).clamp(0, 12) as usize

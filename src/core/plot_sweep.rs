@@ -41,7 +41,7 @@ pub struct Panel<'a> {
 }
 
 /// Line colours (Okabe–Ito, distinguishable for colour-blind readers), then black.
-const PALETTE: [RGBColor; 7] = [
+pub(crate) const PALETTE: [RGBColor; 7] = [
     RGBColor(0, 114, 178),
     RGBColor(213, 94, 0),
     RGBColor(0, 158, 115),
@@ -64,44 +64,44 @@ const BAND_FILLS: [RGBColor; 6] = [
 /// Columns per panel for min/max decimation of time histories (≥ the plot width in pixels).
 const DECIMATION_COLUMNS: usize = 1000;
 
-type Chart<'a, 'b> =
+pub(crate) type Chart<'a, 'b> =
     ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
 /// A value that can be placed on a plotters axis (finite and far from overflow).
-fn usable(v: f64) -> bool {
+pub(crate) fn usable(v: f64) -> bool {
     v.is_finite() && v.abs() < 1e300
 }
 
 /// Running min/max of usable values.
 #[derive(Debug, Clone, Copy)]
-struct Extent {
-    lo: f64,
-    hi: f64,
+pub(crate) struct Extent {
+    pub(crate) lo: f64,
+    pub(crate) hi: f64,
 }
 
 impl Extent {
-    fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Extent {
             lo: f64::INFINITY,
             hi: f64::NEG_INFINITY,
         }
     }
 
-    fn add(&mut self, v: f64) {
+    pub(crate) fn add(&mut self, v: f64) {
         if usable(v) {
             self.lo = self.lo.min(v);
             self.hi = self.hi.max(v);
         }
     }
 
-    fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.lo > self.hi
     }
 
     /// The range padded by `frac` of its span below and `frac + top_extra` above; a
     /// constant (or relatively tiny) span is padded by 5 % of its magnitude (±1 around 0);
     /// an empty extent gives `fallback`.
-    fn range(&self, frac: f64, top_extra: f64, fallback: Range<f64>) -> Range<f64> {
+    pub(crate) fn range(&self, frac: f64, top_extra: f64, fallback: Range<f64>) -> Range<f64> {
         if self.is_empty() {
             return fallback;
         }
@@ -127,13 +127,15 @@ fn finite_xy(pts: &[(f64, f64)]) -> impl Iterator<Item = (f64, f64)> + '_ {
 }
 
 /// The maximal runs of usable points, split at every non-finite one.
-fn finite_runs(pts: &[(f64, f64)]) -> impl Iterator<Item = &[(f64, f64)]> + '_ {
+pub(crate) fn finite_runs(pts: &[(f64, f64)]) -> impl Iterator<Item = &[(f64, f64)]> + '_ {
     pts.split(|&(x, y)| !(usable(x) && usable(y)))
         .filter(|run| !run.is_empty())
 }
 
 /// "no data" in the middle of an empty chart.
-fn draw_no_data<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> std::result::Result<(), String> {
+pub(crate) fn draw_no_data<'a, 'b: 'a>(
+    chart: &mut Chart<'a, 'b>,
+) -> std::result::Result<(), String> {
     let (xr, yr) = (chart.x_range(), chart.y_range());
     let centre = (0.5 * (xr.start + xr.end), 0.5 * (yr.start + yr.end));
     chart
@@ -243,7 +245,7 @@ fn draw_line_with_markers<'a, 'b: 'a>(
     Ok(!label.is_empty())
 }
 
-fn draw_legend<'a, 'b: 'a>(
+pub(crate) fn draw_legend<'a, 'b: 'a>(
     chart: &mut Chart<'a, 'b>,
     position: SeriesLabelPosition,
 ) -> std::result::Result<(), String> {

@@ -1,0 +1,1449 @@
+//! PNG plots of the design-of-experiments stage, the analogues of the dissertation's
+//! Figs 2.26–2.30: response-surface contour maps side by side (one panel per level of a third
+//! factor, Figs 2.26–2.28), the residual diagnostics of the fitted surface (Fig. 2.29) and the
+//! simulated-annealing history of the optimisation (Fig. 2.30).
+//!
+//! Same conventions as [`crate::core::plot_sweep`] (whose helpers, palette and font this
+//! reuses through [`crate::core::plot::render_png`]): plots are side outputs, so degenerate
+//! data — NaN cells, a constant or all-NaN surface, empty series — still gives a valid PNG,
+//! with "no data" where nothing can be drawn. Only a broken contract (mismatched shapes or
+//! lengths, an unsorted grid) or a failure to draw or write is an error.
+
+use crate::core::plot::{perr, render_png};
+use crate::core::plot_analysis::{fmt_sig3, lin_tick_label};
+use crate::core::plot_sweep::{
+    decimate_minmax, draw_legend, draw_no_data, finite_runs, usable, Chart, Extent, PALETTE,
+};
+use crate::error::Result;
+use ndarray::{Array2, ArrayView2};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::colors::colormaps::ViridisRGB;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use std::collections::HashMap;
+use std::ops::Range;
+use std::path::Path;
+
+/// An iso-line in data coordinates; a closed one repeats its first point at the end.
+pub type Polyline = Vec<(f64, f64)>;
+
+type DrawResult<T> = std::result::Result<T, String>;
+type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
+
+/// One panel of [`contour_panels_png`]: a surface sampled on a rectangular grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContourPanel<'a> {
+    /// Panel caption, e.g. "a_TFC = 3 µm".
+    pub title: &'a str,
+    /// Axis descriptions, e.g. "w_TFC (µm)".
+    pub x_desc: &'a str,
+    pub y_desc: &'a str,
+    /// Grid x values, strictly increasing, length nx.
+    pub x: Vec<f64>,
+    /// Grid y values, strictly increasing, length ny.
+    pub y: Vec<f64>,
+    /// Values, shape (ny, nx): `z[[j, i]]` belongs to `(x[i], y[j])`. NaN = no value.
+    pub z: Array2<f64>,
+    /// Design points, drawn as small black dots.
+    pub points: Vec<(f64, f64)>,
+    /// An optimum, drawn as a red star.
+    pub marker: Option<(f64, f64)>,
+}
+
+/// About this many contour levels over the whole value range (before the negative range is
+/// doubled).
+const TARGET_LEVELS: f64 = 10.0;
+/// Coarse grids are refined bilinearly to about this many nodes per axis before marching
+/// squares, so that the iso-lines follow the bilinear surface the colour fill shows.
+const REFINE_NODES: usize = 121;
+/// Pixel size of one contour panel, and the width of the colour-bar column.
+const PANEL_SIZE: (u32, u32) = (400, 370);
+const BAR_WIDTH: u32 = 130;
+const MAX_PANEL_COLUMNS: usize = 3;
+/// Long annealing histories (the current J is noisy) are drawn as min/max envelopes.
+const ANNEALING_COLUMNS: usize = 1000;
+/// The optimum marker: red (not in the viridis map, so it stands out on every colour).
+const MARKER_RED: RGBColor = RGBColor(220, 20, 20);
+
+/// One of the four edges of a grid cell: `H(j, i)` joins nodes (j, i)–(j, i+1), `V(j, i)`
+/// joins (j, i)–(j+1, i). Segments that cross the same edge meet at the same point, which is
+/// how they are chained into polylines.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+enum Edge {
+    H(usize, usize),
+    V(usize, usize),
+}
+
+/// Iso-lines `z = level` of a gridded surface by marching squares, chained into polylines
+/// (closed ones end on their first point). `z` has shape `(y.len(), x.len())`, `z[[j, i]]` at
+/// `(x[i], y[j])`; a node counts as inside when `z ≥ level`. Cells with a non-finite corner
+/// are skipped, so lines end at holes. The ambiguous saddle cells (diagonal corners on the
+/// same side) are resolved with the asymptotic decider — the value of the bilinear
+/// interpolant at its saddle point — which gives the topology of the bilinear surface rather
+/// than an arbitrary choice. A shape mismatch, a grid smaller than 2 × 2 or a non-finite
+/// level gives no lines.
+pub fn marching_squares(x: &[f64], y: &[f64], z: ArrayView2<f64>, level: f64) -> Vec<Polyline> {
+    let (ny, nx) = z.dim();
+    if nx < 2 || ny < 2 || x.len() != nx || y.len() != ny || !usable(level) {
+        return Vec::new();
+    }
+    let node = |j: usize, i: usize| z[[j, i]];
+    let point = |e: Edge| -> (f64, f64) {
+        let ((ja, ia), (jb, ib)) = match e {
+            Edge::H(j, i) => ((j, i), (j, i + 1)),
+            Edge::V(j, i) => ((j, i), (j + 1, i)),
+        };
+        let (za, zb) = (node(ja, ia), node(jb, ib));
+        // One end is ≥ level and the other < level, so za ≠ zb.
+        let t = ((level - za) / (zb - za)).clamp(0.0, 1.0);
+        (x[ia] + t * (x[ib] - x[ia]), y[ja] + t * (y[jb] - y[ja]))
+    };
+    let mut segments: Vec<(Edge, Edge)> = Vec::new();
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            // Corners counter-clockwise from bottom-left; edge k joins corners k and k+1.
+            let c = [
+                node(j, i),
+                node(j, i + 1),
+                node(j + 1, i + 1),
+                node(j + 1, i),
+            ];
+            if !c.iter().all(|&v| usable(v)) {
+                continue;
+            }
+            let inside = c.map(|v| v >= level);
+            let edges = [
+                Edge::H(j, i),
+                Edge::V(j, i + 1),
+                Edge::H(j + 1, i),
+                Edge::V(j, i),
+            ];
+            let cut: Vec<Edge> = (0..4)
+                .filter(|&k| inside[k] != inside[(k + 1) % 4])
+                .map(|k| edges[k])
+                .collect();
+            match cut.len() {
+                2 => segments.push((cut[0], cut[1])),
+                4 => {
+                    // Saddle: the corners on the other side from the centre are cut off one
+                    // by one (corner k lies between edges k−1 and k).
+                    let den = c[0] + c[2] - c[1] - c[3];
+                    let saddle = if den != 0.0 {
+                        (c[0] * c[2] - c[1] * c[3]) / den
+                    } else {
+                        0.25 * c.iter().sum::<f64>()
+                    };
+                    let centre_inside = saddle >= level;
+                    for k in 0..4 {
+                        if inside[k] != centre_inside {
+                            segments.push((edges[(k + 3) % 4], edges[k]));
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+    chain_segments(&segments)
+        .into_iter()
+        .map(|chain| chain.into_iter().map(point).collect())
+        .collect()
+}
+
+/// Joins segments that share an edge into maximal chains. Every edge is crossed by at most
+/// two segments (one per adjacent cell), so the chains are unambiguous.
+fn chain_segments(segments: &[(Edge, Edge)]) -> Vec<Vec<Edge>> {
+    let mut at: HashMap<Edge, Vec<usize>> = HashMap::new();
+    for (k, &(a, b)) in segments.iter().enumerate() {
+        at.entry(a).or_default().push(k);
+        at.entry(b).or_default().push(k);
+    }
+    let mut used = vec![false; segments.len()];
+    // Follow unused segments from edge `e`, returning the edges reached in order.
+    let walk = |mut e: Edge, used: &mut Vec<bool>| {
+        let mut out = Vec::new();
+        while let Some(k) = at[&e].iter().copied().find(|&k| !used[k]) {
+            used[k] = true;
+            let (p, q) = segments[k];
+            e = if p == e { q } else { p };
+            out.push(e);
+        }
+        out
+    };
+    let mut chains = Vec::new();
+    for start in 0..segments.len() {
+        if used[start] {
+            continue;
+        }
+        used[start] = true;
+        let (a, b) = segments[start];
+        let forward = walk(b, &mut used);
+        // A closed loop has come back to `a`, which then has no unused segment left.
+        let backward = walk(a, &mut used);
+        let mut chain: Vec<Edge> = backward.into_iter().rev().collect();
+        chain.push(a);
+        chain.push(b);
+        chain.extend(forward);
+        chains.push(chain);
+    }
+    chains
+}
+
+/// A "nice" step (1, 2, 2.5 or 5 × 10ⁿ) that divides `span` into the count closest to
+/// `target`.
+fn nice_step(span: f64, target: f64) -> f64 {
+    let e = (span / target).log10().floor();
+    let mut best = (f64::INFINITY, span / target);
+    for de in [-1.0, 0.0, 1.0] {
+        for m in [1.0, 2.0, 2.5, 5.0] {
+            let step = m * 10f64.powf(e + de);
+            let miss = ((span / step).floor() - target).abs();
+            if miss < best.0 {
+                best = (miss, step);
+            }
+        }
+    }
+    best.1
+}
+
+/// Contour levels strictly inside `(lo, hi)`: multiples of a nice step chosen for about ten
+/// levels over the range, at half that step below zero — the dissertation draws the ξ < 0
+/// region (where the design works) with denser contours. Zero, when inside, is a level.
+/// A constant (or numerically constant) range has no levels.
+pub(crate) fn contour_levels(lo: f64, hi: f64) -> Vec<f64> {
+    let span = hi - lo;
+    let scale = lo.abs().max(hi.abs());
+    if !(usable(lo) && usable(hi) && span.is_finite()) || span <= 0.0 || span <= scale * 1e-9 {
+        return Vec::new();
+    }
+    let half = 0.5 * nice_step(span, TARGET_LEVELS);
+    let (k0, k1) = ((lo / half).floor() as i64, (hi / half).ceil() as i64);
+    (k0..=k1)
+        .map(|k| (k, k as f64 * half))
+        .filter(|&(k, v)| v > lo && v < hi && (v < 0.0 || k % 2 == 0))
+        .map(|(_, v)| v)
+        .collect()
+}
+
+/// The shared colour scale: bands between consecutive levels, each in the viridis colour of
+/// its middle, so that the fill changes colour exactly at the drawn iso-lines (as MATLAB's
+/// contourf).
+struct ColourScale {
+    lo: f64,
+    hi: f64,
+    levels: Vec<f64>,
+    colours: Vec<RGBColor>,
+}
+
+impl ColourScale {
+    fn new(lo: f64, hi: f64) -> Self {
+        let levels = contour_levels(lo, hi);
+        let edges: Vec<f64> = std::iter::once(lo)
+            .chain(levels.iter().copied())
+            .chain(std::iter::once(hi))
+            .collect();
+        let colours = edges
+            .windows(2)
+            .map(|w| {
+                let f = if hi > lo {
+                    (0.5 * (w[0] + w[1]) - lo) / (hi - lo)
+                } else {
+                    0.5
+                };
+                ViridisRGB::get_color_normalized(f, 0.0, 1.0)
+            })
+            .collect();
+        ColourScale {
+            lo,
+            hi,
+            levels,
+            colours,
+        }
+    }
+
+    /// Colour of the band holding `v` (a value equal to a level belongs to the band above,
+    /// as a node equal to the level is inside in [`marching_squares`]).
+    fn colour(&self, v: f64) -> RGBColor {
+        self.colours[self.levels.partition_point(|&l| l <= v)]
+    }
+
+    /// `(from, to, colour)` of every band.
+    fn bands(&self) -> Vec<(f64, f64, RGBColor)> {
+        let edges: Vec<f64> = std::iter::once(self.lo)
+            .chain(self.levels.iter().copied())
+            .chain(std::iter::once(self.hi))
+            .collect();
+        edges
+            .windows(2)
+            .zip(&self.colours)
+            .map(|(w, &c)| (w[0], w[1], c))
+            .collect()
+    }
+}
+
+/// Cell of a sorted grid holding `v`: `(i0, i1, t)` with `v ≈ g[i0] + t·(g[i1] − g[i0])`,
+/// `t` clamped to [0, 1] (values outside the grid take the edge value). A single node is its
+/// own cell.
+fn locate(g: &[f64], v: f64) -> (usize, usize, f64) {
+    let n = g.len();
+    if n < 2 {
+        return (0, 0, 0.0);
+    }
+    let i = g.partition_point(|&a| a <= v).clamp(1, n - 1) - 1;
+    let t = ((v - g[i]) / (g[i + 1] - g[i])).clamp(0.0, 1.0);
+    (i, i + 1, t)
+}
+
+/// Bilinear interpolation in a located cell. Only corners with a positive weight count: a
+/// point on a cell edge needs only that edge's nodes, a point inside a cell with a NaN
+/// corner has no value (so the fill and the iso-lines leave the same holes).
+fn bilinear(
+    z: &ArrayView2<f64>,
+    (i0, i1, t): (usize, usize, f64),
+    (j0, j1, u): (usize, usize, f64),
+) -> f64 {
+    let corners = [
+        ((j0, i0), (1.0 - t) * (1.0 - u)),
+        ((j0, i1), t * (1.0 - u)),
+        ((j1, i0), (1.0 - t) * u),
+        ((j1, i1), t * u),
+    ];
+    let mut acc = 0.0;
+    for (idx, w) in corners {
+        if w > 0.0 {
+            let v = z[idx];
+            if !usable(v) {
+                return f64::NAN;
+            }
+            acc += w * v;
+        }
+    }
+    acc
+}
+
+/// `g` with every interval split evenly so that it has at least about `target` nodes; the
+/// original nodes are kept exactly.
+fn refine(g: &[f64], target: usize) -> Vec<f64> {
+    let n = g.len();
+    if n < 2 || n >= target {
+        return g.to_vec();
+    }
+    let r = (target - 1).div_ceil(n - 1);
+    let mut out = Vec::with_capacity((n - 1) * r + 1);
+    for w in g.windows(2) {
+        out.extend((0..r).map(|s| w[0] + (w[1] - w[0]) * s as f64 / r as f64));
+    }
+    out.push(g[n - 1]);
+    out
+}
+
+/// Axis range of grid values: the grid itself, or padded around a single value.
+fn grid_range(g: &[f64]) -> Range<f64> {
+    match g {
+        [] => 0.0..1.0,
+        [a, .., b] if b > a => *a..*b,
+        _ => {
+            let mut e = Extent::new();
+            g.iter().for_each(|&v| e.add(v));
+            e.range(0.0, 0.0, 0.0..1.0)
+        }
+    }
+}
+
+/// Whether `p` lies in the plotted rectangle (with a little slack for points on its edge).
+fn in_view(p: (f64, f64), xr: &Range<f64>, yr: &Range<f64>) -> bool {
+    let (sx, sy) = (1e-9 * (xr.end - xr.start), 1e-9 * (yr.end - yr.start));
+    usable(p.0)
+        && usable(p.1)
+        && p.0 >= xr.start - sx
+        && p.0 <= xr.end + sx
+        && p.1 >= yr.start - sy
+        && p.1 <= yr.end + sy
+}
+
+/// Outline of a five-pointed star of outer radius `r` pixels, centred on the origin.
+fn star(r: f64) -> Vec<(i32, i32)> {
+    (0..10)
+        .map(|k| {
+            let a = -std::f64::consts::FRAC_PI_2 + k as f64 * std::f64::consts::PI / 5.0;
+            let rr = if k % 2 == 0 { r } else { 0.45 * r };
+            ((rr * a.cos()).round() as i32, (rr * a.sin()).round() as i32)
+        })
+        .collect()
+}
+
+/// A design point: a black dot on a white ring, visible on dark and light colours alike.
+fn draw_design_dot<CT: CoordTranslate>(
+    area: &DrawingArea<BitMapBackend<'_>, CT>,
+    at: CT::From,
+) -> DrawResult<()> {
+    area.draw(
+        &(EmptyElement::at(at)
+            + Circle::new((0, 0), 4, WHITE.filled())
+            + Circle::new((0, 0), 3, BLACK.filled())),
+    )
+    .map_err(|e| e.to_string())
+}
+
+/// The optimum: a red star with a black outline.
+fn draw_optimum_star<CT: CoordTranslate>(
+    area: &DrawingArea<BitMapBackend<'_>, CT>,
+    at: CT::From,
+) -> DrawResult<()> {
+    let outline = star(9.0);
+    let mut closed = outline.clone();
+    closed.push(outline[0]);
+    area.draw(
+        &(EmptyElement::at(at)
+            + Polygon::new(outline, MARKER_RED.filled())
+            + PathElement::new(closed, BLACK.stroke_width(1))),
+    )
+    .map_err(|e| e.to_string())
+}
+
+/// A polyline as plotters elements: one path for thin lines, one path per segment for wide
+/// ones — plotters joins wide paths with unlimited inner miters, which at sharp turns (a
+/// contour through a saddle, a reannealing jump) spike far across the plot.
+fn polyline_elements(pts: &[(f64, f64)], style: ShapeStyle) -> Vec<PathElement<(f64, f64)>> {
+    if style.stroke_width <= 1 || pts.len() < 3 {
+        vec![PathElement::new(pts.to_vec(), style)]
+    } else {
+        pts.windows(2)
+            .map(|w| PathElement::new(w.to_vec(), style))
+            .collect()
+    }
+}
+
+fn draw_polyline(chart: &mut Chart, pts: &[(f64, f64)], style: ShapeStyle) -> DrawResult<()> {
+    chart
+        .draw_series(polyline_elements(pts, style))
+        .map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+/// The chart of one contour panel, captioned, on the grid's extent (mesh drawn later, over
+/// the fill).
+fn contour_chart<'a, 'b: 'a>(
+    area: &'a Area<'b>,
+    panel: &ContourPanel,
+    xr: Range<f64>,
+    yr: Range<f64>,
+) -> DrawResult<Chart<'a, 'b>> {
+    ChartBuilder::on(area)
+        .caption(panel.title, ("sans-serif", 16))
+        .margin(8)
+        .margin_right(16)
+        .x_label_area_size(42)
+        .y_label_area_size(58)
+        .build_cartesian_2d(xr, yr)
+        .map_err(|e| e.to_string())
+}
+
+/// Axes and tick labels without grid lines (they would clutter the colour map).
+fn draw_mesh(chart: &mut Chart, x_desc: &str, y_desc: &str) -> DrawResult<()> {
+    let (xr, yr) = (chart.x_range(), chart.y_range());
+    let (xs, ys) = (xr.end - xr.start, yr.end - yr.start);
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_labels(6)
+        .y_labels(6)
+        .x_label_formatter(&|v| lin_tick_label(*v, xs))
+        .y_label_formatter(&|v| lin_tick_label(*v, ys))
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .label_style(("sans-serif", 13))
+        .axis_desc_style(("sans-serif", 14))
+        .draw()
+        .map_err(|e| e.to_string())
+}
+
+/// One contour panel: the banded fill pixel by pixel (bilinear between grid nodes), the
+/// iso-lines (zero bold), then the design points and the optimum on top.
+fn draw_contour_panel(
+    area: &Area,
+    panel: &ContourPanel,
+    scale: Option<&ColourScale>,
+) -> DrawResult<()> {
+    let (xr, yr) = (grid_range(&panel.x), grid_range(&panel.y));
+    let mut chart = contour_chart(area, panel, xr.clone(), yr.clone())?;
+    let z = panel.z.view();
+    let has_data = z.iter().any(|&v| usable(v));
+    if let (Some(scale), true) = (scale, has_data) {
+        let plot = chart.plotting_area().strip_coord_spec();
+        let (w, h) = plot.dim_in_pixel();
+        let cols: Vec<_> = (0..w)
+            .map(|px| {
+                let v = xr.start + (px as f64 + 0.5) / w as f64 * (xr.end - xr.start);
+                locate(&panel.x, v)
+            })
+            .collect();
+        for py in 0..h {
+            let v = yr.end - (py as f64 + 0.5) / h as f64 * (yr.end - yr.start);
+            let row = locate(&panel.y, v);
+            for (px, &col) in cols.iter().enumerate() {
+                let value = bilinear(&z, col, row);
+                if value.is_finite() {
+                    plot.draw_pixel((px as i32, py as i32), &scale.colour(value))
+                        .map_err(|e| e.to_string())?;
+                }
+            }
+        }
+        // Iso-lines on a bilinearly refined grid: they then bound the fill's bands exactly.
+        let (rx, ry) = (
+            refine(&panel.x, REFINE_NODES),
+            refine(&panel.y, REFINE_NODES),
+        );
+        let (lx, ly): (Vec<_>, Vec<_>) = (
+            rx.iter().map(|&v| locate(&panel.x, v)).collect(),
+            ry.iter().map(|&v| locate(&panel.y, v)).collect(),
+        );
+        let rz = Array2::from_shape_fn((ry.len(), rx.len()), |(j, i)| bilinear(&z, lx[i], ly[j]));
+        // Zero last, so that the bold line lies on top.
+        let mut levels = scale.levels.clone();
+        levels.sort_by_key(|&l| l == 0.0);
+        for level in levels {
+            let style = if level == 0.0 {
+                BLACK.stroke_width(3)
+            } else {
+                BLACK.mix(0.55).stroke_width(1)
+            };
+            for line in marching_squares(&rx, &ry, rz.view(), level) {
+                draw_polyline(&mut chart, &line, style)?;
+            }
+        }
+    }
+    draw_mesh(&mut chart, panel.x_desc, panel.y_desc)?;
+    for &p in panel.points.iter().filter(|&&p| in_view(p, &xr, &yr)) {
+        draw_design_dot(chart.plotting_area(), p)?;
+    }
+    if let Some(m) = panel.marker.filter(|&m| in_view(m, &xr, &yr)) {
+        draw_optimum_star(chart.plotting_area(), m)?;
+    }
+    if !has_data {
+        draw_no_data(&mut chart)?;
+    }
+    Ok(())
+}
+
+/// The colour bar: the bands of the shared scale, thin lines at the levels, a bold one at 0.
+fn draw_colour_bar(area: &Area, z_desc: &str, scale: &ColourScale) -> DrawResult<()> {
+    let mut e = Extent::new();
+    e.add(scale.lo);
+    e.add(scale.hi);
+    let yr = e.range(0.0, 0.0, 0.0..1.0);
+    let span = yr.end - yr.start;
+    let mut cb = ChartBuilder::on(area)
+        .margin_top(45)
+        .margin_bottom(55)
+        .margin_left(4)
+        .margin_right(40)
+        .y_label_area_size(62)
+        .build_cartesian_2d(0.0..1.0, yr.clone())
+        .map_err(|e| e.to_string())?;
+    let bands = scale.bands();
+    // A constant surface is one band over the padded range.
+    let rects: Vec<(f64, f64, RGBColor)> = if scale.hi > scale.lo {
+        bands
+    } else {
+        vec![(yr.start, yr.end, scale.colours[0])]
+    };
+    cb.draw_series(
+        rects
+            .into_iter()
+            .map(|(a, b, c)| Rectangle::new([(0.0, a), (1.0, b)], c.filled())),
+    )
+    .map_err(|e| e.to_string())?;
+    cb.draw_series(scale.levels.iter().map(|&l| {
+        let style = if l == 0.0 {
+            BLACK.stroke_width(3)
+        } else {
+            BLACK.mix(0.55).stroke_width(1)
+        };
+        PathElement::new(vec![(0.0, l), (1.0, l)], style)
+    }))
+    .map_err(|e| e.to_string())?;
+    cb.configure_mesh()
+        .disable_mesh()
+        .disable_x_axis()
+        .y_labels(8)
+        .y_label_formatter(&|v| lin_tick_label(*v, span))
+        .label_style(("sans-serif", 13))
+        .axis_desc_style(("sans-serif", 15))
+        .y_desc(z_desc)
+        .draw()
+        .map_err(|e| e.to_string())
+}
+
+/// Legend for the markers, under the colour bar (the panels stay uncovered).
+fn draw_marker_legend(area: &Area, points: bool, marker: bool) -> DrawResult<()> {
+    let (_, h) = area.dim_in_pixel();
+    let style = ("sans-serif", 13)
+        .into_font()
+        .color(&BLACK)
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    let mut y = h as i32 - 45;
+    if points {
+        draw_design_dot(area, (14, y))?;
+        area.draw(&Text::new("design points", (28, y), style.clone()))
+            .map_err(|e| e.to_string())?;
+        y += 22;
+    }
+    if marker {
+        draw_optimum_star(area, (14, y))?;
+        area.draw(&Text::new("optimum", (28, y), style))
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
+/// Contour maps side by side (up to three per row, more rows as needed), Figs 2.26–2.28:
+/// each panel's surface as a filled colour map on ONE colour scale shared by all panels (so
+/// colours compare across panels), with a colour bar labelled `z_desc` (e.g. "ξ"); iso-lines
+/// at about ten nice levels, twice as dense below zero, and the zero level bold black; the
+/// design points as black dots and the optimum, if any, as a red star. The fill is the
+/// bilinear interpolant of the grid, banded between the levels; cells with a NaN corner stay
+/// white. A panel without finite values says "no data".
+///
+/// Errors: `z` not of shape `(y.len(), x.len())`, or grid values not finite and strictly
+/// increasing.
+pub fn contour_panels_png(
+    path: &Path,
+    title: &str,
+    z_desc: &str,
+    panels: &[ContourPanel],
+) -> Result<()> {
+    for (k, p) in panels.iter().enumerate() {
+        if p.z.dim() != (p.y.len(), p.x.len()) {
+            return Err(perr(
+                path,
+                format!(
+                    "contour panel {k}: z has shape {:?}, the grid is {} × {} (y × x)",
+                    p.z.dim(),
+                    p.y.len(),
+                    p.x.len()
+                ),
+            ));
+        }
+        let sorted = |g: &[f64]| g.iter().all(|&v| usable(v)) && g.windows(2).all(|w| w[1] > w[0]);
+        if !(sorted(&p.x) && sorted(&p.y)) {
+            return Err(perr(
+                path,
+                format!("contour panel {k}: grid values must be finite and increasing"),
+            ));
+        }
+    }
+    let mut e = Extent::new();
+    panels
+        .iter()
+        .flat_map(|p| p.z.iter())
+        .for_each(|&v| e.add(v));
+    let scale = (!e.is_empty()).then(|| ColourScale::new(e.lo, e.hi));
+    let n = panels.len().max(1);
+    let ncol = n.min(MAX_PANEL_COLUMNS);
+    let nrow = n.div_ceil(ncol);
+    let size = (
+        ncol as u32 * PANEL_SIZE.0 + BAR_WIDTH,
+        45 + nrow as u32 * PANEL_SIZE.1,
+    );
+    let points = panels.iter().any(|p| !p.points.is_empty());
+    let marker = panels.iter().any(|p| p.marker.is_some());
+    render_png(path, size, |root| {
+        let root = root
+            .titled(title, ("sans-serif", 20))
+            .map_err(|e| e.to_string())?;
+        let (grid, bar) = root.split_horizontally(ncol as u32 * PANEL_SIZE.0);
+        let areas = grid.split_evenly((nrow, ncol));
+        if panels.is_empty() {
+            let empty = ContourPanel {
+                title: "",
+                x_desc: "",
+                y_desc: "",
+                x: Vec::new(),
+                y: Vec::new(),
+                z: Array2::zeros((0, 0)),
+                points: Vec::new(),
+                marker: None,
+            };
+            draw_contour_panel(&areas[0], &empty, None)?;
+        }
+        for (panel, area) in panels.iter().zip(&areas) {
+            draw_contour_panel(area, panel, scale.as_ref())?;
+        }
+        let legend_h = 22 * (points as u32 + marker as u32) + if points || marker { 20 } else { 0 };
+        let (_, bar_h) = bar.dim_in_pixel();
+        let (bar_top, legend) = bar.split_vertically(bar_h.saturating_sub(legend_h));
+        if let Some(scale) = &scale {
+            draw_colour_bar(&bar_top, z_desc, scale)?;
+        }
+        if points || marker {
+            draw_marker_legend(&legend, points, marker)?;
+        }
+        Ok(())
+    })
+}
+
+/// Scatter of points in PALETTE blue; nothing for an empty slice.
+fn draw_scatter(chart: &mut Chart, pts: &[(f64, f64)]) -> DrawResult<()> {
+    let c = PALETTE[0];
+    chart
+        .draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.mix(0.85).filled())))
+        .map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+/// A chart on linear axes with a light grid and its mesh drawn; no caption when `caption` is
+/// empty (so that it takes no room).
+fn linear_chart<'a, 'b: 'a>(
+    area: &'a Area<'b>,
+    caption: &str,
+    xr: Range<f64>,
+    yr: Range<f64>,
+    x_desc: &str,
+    y_desc: &str,
+) -> DrawResult<Chart<'a, 'b>> {
+    let mut builder = ChartBuilder::on(area);
+    if !caption.is_empty() {
+        builder.caption(caption, ("sans-serif", 16));
+    }
+    let mut chart = builder
+        .margin(10)
+        .margin_right(18)
+        .x_label_area_size(45)
+        .y_label_area_size(62)
+        .build_cartesian_2d(xr.clone(), yr.clone())
+        .map_err(|e| e.to_string())?;
+    let (xs, ys) = (xr.end - xr.start, yr.end - yr.start);
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .x_label_formatter(&|v| lin_tick_label(*v, xs))
+        .y_label_formatter(&|v| lin_tick_label(*v, ys))
+        .light_line_style(BLACK.mix(0.05))
+        .bold_line_style(BLACK.mix(0.12))
+        .label_style(("sans-serif", 13))
+        .axis_desc_style(("sans-serif", 14))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    Ok(chart)
+}
+
+/// Residual diagnostics of a fitted response surface, Fig. 2.29, two panels: residual
+/// against fitted value with a dashed zero line (a pattern means the model misses a term),
+/// and a normal probability plot — theoretical normal quantile (x) against standardized
+/// residual (y) with the reference line y = x on equal axes (departures mean non-normal
+/// residuals, so the fit's confidence statements are doubtful). Non-finite points are
+/// skipped; an empty panel says "no data".
+pub fn residual_panels_png(
+    path: &Path,
+    title: &str,
+    fitted_residual: &[(f64, f64)],
+    normal_quantiles: &[(f64, f64)],
+) -> Result<()> {
+    let clean = |pts: &[(f64, f64)]| -> Vec<(f64, f64)> {
+        pts.iter()
+            .copied()
+            .filter(|&(a, b)| usable(a) && usable(b))
+            .collect()
+    };
+    let (fr, nq) = (clean(fitted_residual), clean(normal_quantiles));
+    // Residuals: symmetric about zero, so that a bias shows.
+    let (mut xe, mut ye) = (Extent::new(), Extent::new());
+    ye.add(0.0);
+    for &(f, r) in &fr {
+        xe.add(f);
+        ye.add(r);
+        ye.add(-r);
+    }
+    let (xr1, yr1) = (
+        xe.range(0.05, 0.0, 0.0..1.0),
+        ye.range(0.08, 0.0, -1.0..1.0),
+    );
+    // Probability plot: one range for both axes, so that y = x is the diagonal.
+    let mut qe = Extent::new();
+    for &(a, b) in &nq {
+        qe.add(a);
+        qe.add(b);
+    }
+    let qr = qe.range(0.05, 0.0, -3.0..3.0);
+    render_png(path, (1100, 520), |root| {
+        let root = root
+            .titled(title, ("sans-serif", 20))
+            .map_err(|e| e.to_string())?;
+        let (left, right) = root.split_horizontally(550);
+        let mut chart = linear_chart(
+            &left,
+            "residuals vs fitted",
+            xr1.clone(),
+            yr1,
+            "fitted value",
+            "residual",
+        )?;
+        chart
+            .draw_series(DashedLineSeries::new(
+                vec![(xr1.start, 0.0), (xr1.end, 0.0)],
+                8,
+                5,
+                BLACK.mix(0.6).stroke_width(1),
+            ))
+            .map_err(|e| e.to_string())?;
+        draw_scatter(&mut chart, &fr)?;
+        if fr.is_empty() {
+            draw_no_data(&mut chart)?;
+        }
+        let mut chart = linear_chart(
+            &right,
+            "normal probability plot",
+            qr.clone(),
+            qr.clone(),
+            "theoretical normal quantile",
+            "standardized residual",
+        )?;
+        let c = PALETTE[1];
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                vec![(qr.start, qr.start), (qr.end, qr.end)],
+                c.stroke_width(2),
+            )))
+            .map_err(|e| e.to_string())?
+            .label("y = x")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+        draw_scatter(&mut chart, &nq)?;
+        if nq.is_empty() {
+            draw_no_data(&mut chart)?;
+        }
+        draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+        Ok(())
+    })
+}
+
+/// The objective panel of [`annealing_png`].
+fn draw_objective(
+    area: &Area,
+    iterations: &[(f64, f64, f64)],
+    xr: Range<f64>,
+    x_desc: &str,
+) -> DrawResult<()> {
+    let current: Vec<(f64, f64)> = iterations.iter().map(|&(i, c, _)| (i, c)).collect();
+    let best: Vec<(f64, f64)> = iterations.iter().map(|&(i, _, b)| (i, b)).collect();
+    let mut ye = Extent::new();
+    for &(i, c, b) in iterations {
+        if usable(i) {
+            ye.add(c);
+            ye.add(b);
+        }
+    }
+    let yr = ye.range(0.05, 0.0, 0.0..1.0);
+    let mut chart = linear_chart(area, "", xr.clone(), yr, x_desc, "objective J")?;
+    let best_value = best
+        .iter()
+        .filter(|&&(i, b)| usable(i) && usable(b))
+        .map(|p| p.1)
+        .fold(f64::INFINITY, f64::min);
+    /// Points, colour, line width, legend label.
+    type Styled<'a> = (&'a [(f64, f64)], RGBColor, u32, String);
+    let series: [Styled; 2] = [
+        (&current, PALETTE[0], 1, "current J".to_string()),
+        (
+            &best,
+            PALETTE[1],
+            2,
+            format!("best J (lowest {})", fmt_sig3(best_value)),
+        ),
+    ];
+    for (pts, c, width, label) in series {
+        let mut labelled = false;
+        for run in finite_runs(pts) {
+            let line = decimate_minmax(run, xr.start, xr.end, ANNEALING_COLUMNS);
+            let drawn = chart
+                .draw_series(polyline_elements(&line, c.stroke_width(width)))
+                .map_err(|e| e.to_string())?;
+            if !labelled {
+                labelled = true;
+                drawn.label(label.as_str()).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                });
+            }
+        }
+    }
+    if ye.is_empty() {
+        draw_no_data(&mut chart)?;
+    } else {
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+    }
+    Ok(())
+}
+
+/// The temperature panel of [`annealing_png`], on a log axis (the cooling schedule is
+/// geometric, and reannealing shows as jumps).
+fn draw_temperature(
+    area: &Area,
+    iterations: &[(f64, f64, f64)],
+    temperature: &[f64],
+    xr: Range<f64>,
+) -> DrawResult<()> {
+    let positive = |(i, t): (f64, f64)| usable(i) && usable(t) && t > 0.0;
+    let pts: Vec<(f64, f64)> = iterations
+        .iter()
+        .zip(temperature)
+        .map(|(&(i, _, _), &t)| (i, t))
+        .collect();
+    let mut te = Extent::new();
+    pts.iter()
+        .filter(|&&p| positive(p))
+        .for_each(|p| te.add(p.1));
+    if te.is_empty() {
+        let mut chart = linear_chart(area, "", xr, 0.0..1.0, "iteration", "temperature")?;
+        return draw_no_data(&mut chart);
+    }
+    let yr = if te.hi > te.lo {
+        (te.lo / 1.3)..(te.hi * 1.3)
+    } else {
+        (te.lo / 2.0)..(te.lo * 2.0)
+    };
+    let mut chart = ChartBuilder::on(area)
+        .margin(10)
+        .margin_right(18)
+        .x_label_area_size(45)
+        .y_label_area_size(62)
+        .build_cartesian_2d(xr.clone(), yr.log_scale())
+        .map_err(|e| e.to_string())?;
+    let xs = xr.end - xr.start;
+    chart
+        .configure_mesh()
+        .x_desc("iteration")
+        .y_desc("temperature")
+        .x_label_formatter(&|v| lin_tick_label(*v, xs))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .light_line_style(BLACK.mix(0.05))
+        .bold_line_style(BLACK.mix(0.12))
+        .label_style(("sans-serif", 13))
+        .axis_desc_style(("sans-serif", 14))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let c = PALETTE[2];
+    for run in pts.split(|&p| !positive(p)).filter(|r| !r.is_empty()) {
+        let line = decimate_minmax(run, xr.start, xr.end, ANNEALING_COLUMNS);
+        chart
+            .draw_series(LineSeries::new(line, c.stroke_width(1)))
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
+/// Simulated-annealing history, Fig. 2.30 (as MATLAB's simulannealbnd plots it): the
+/// current and the best objective J against the iteration, `iterations` holding
+/// `(iteration, current J, best J)`. The legend gives the lowest best J. With `temperature`
+/// (one value per iteration; the cooling schedule, which explains when the current J stops
+/// wandering) a second panel below shows it on a log axis; non-positive temperatures are
+/// skipped there. Non-finite values break the lines; long histories are drawn as min/max
+/// envelopes. Errors: a temperature slice of another length than `iterations`.
+pub fn annealing_png(
+    path: &Path,
+    title: &str,
+    iterations: &[(f64, f64, f64)],
+    temperature: Option<&[f64]>,
+) -> Result<()> {
+    if let Some(t) = temperature {
+        if t.len() != iterations.len() {
+            return Err(perr(
+                path,
+                format!(
+                    "annealing: {} temperatures for {} iterations",
+                    t.len(),
+                    iterations.len()
+                ),
+            ));
+        }
+    }
+    let mut xe = Extent::new();
+    for &(i, c, b) in iterations {
+        if usable(c) || usable(b) || temperature.is_some() {
+            xe.add(i);
+        }
+    }
+    let xr = xe.range(0.02, 0.0, 0.0..1.0);
+    let height = if temperature.is_some() { 760 } else { 540 };
+    render_png(path, (900, height), |root| {
+        let root = root
+            .titled(title, ("sans-serif", 20))
+            .map_err(|e| e.to_string())?;
+        match temperature {
+            None => draw_objective(&root, iterations, xr.clone(), "iteration"),
+            Some(t) => {
+                let (_, h) = root.dim_in_pixel();
+                let (top, bottom) = root.split_vertically((h as f64 * 0.6) as u32);
+                draw_objective(&top, iterations, xr.clone(), "iteration")?;
+                draw_temperature(&bottom, iterations, t, xr.clone())
+            }
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, b'\n'];
+
+    fn assert_png(path: &Path) {
+        let bytes = std::fs::read(path).expect("plot written");
+        assert!(
+            bytes.len() > 1000,
+            "{}: {} bytes",
+            path.display(),
+            bytes.len()
+        );
+        assert_eq!(bytes[..8], PNG_SIGNATURE, "{}", path.display());
+    }
+
+    fn grid(lo: f64, hi: f64, n: usize) -> Vec<f64> {
+        (0..n)
+            .map(|k| lo + (hi - lo) * k as f64 / (n - 1) as f64)
+            .collect()
+    }
+
+    fn surface(x: &[f64], y: &[f64], f: impl Fn(f64, f64) -> f64) -> Array2<f64> {
+        Array2::from_shape_fn((y.len(), x.len()), |(j, i)| f(x[i], y[j]))
+    }
+
+    fn is_closed(l: &Polyline) -> bool {
+        l.len() > 3 && l.first() == l.last()
+    }
+
+    #[test]
+    fn cone_gives_closed_circles() {
+        let g = grid(-2.0, 2.0, 41);
+        let h = 0.1;
+        let z = surface(&g, &g, |x, y| x * x + y * y);
+        for level in [0.25, 1.0, 3.0] {
+            let lines = marching_squares(&g, &g, z.view(), level);
+            assert_eq!(lines.len(), 1, "level {level}");
+            let l = &lines[0];
+            assert!(is_closed(l), "level {level}: not closed");
+            // Linear interpolation of r² along an edge is off by at most h²/4 in z.
+            let r = level.sqrt();
+            for &(x, y) in l {
+                let d = ((x * x + y * y).sqrt() - r).abs();
+                assert!(
+                    d < h * h / (4.0 * r) + 1e-12,
+                    "level {level}: |r − √level| = {d}"
+                );
+            }
+            // The whole circle is there: its polygon area is close to πr².
+            let area: f64 = 0.5
+                * l.windows(2)
+                    .map(|w| w[0].0 * w[1].1 - w[1].0 * w[0].1)
+                    .sum::<f64>()
+                    .abs();
+            let exact = std::f64::consts::PI * level;
+            assert!(
+                (area - exact).abs() < 0.02 * exact,
+                "level {level}: {area} vs {exact}"
+            );
+        }
+        // A circle that leaves the grid: four open arcs, ending on the boundary.
+        let lines = marching_squares(&g, &g, z.view(), 5.0);
+        assert_eq!(lines.len(), 4);
+        for l in &lines {
+            assert!(!is_closed(l));
+            for &(x, y) in [l[0], l[l.len() - 1]].iter() {
+                assert!((x.abs() - 2.0).abs() < 1e-12 || (y.abs() - 2.0).abs() < 1e-12);
+            }
+        }
+        // Outside the range: nothing.
+        assert!(marching_squares(&g, &g, z.view(), 9.0).is_empty());
+        assert!(marching_squares(&g, &g, z.view(), -1.0).is_empty());
+    }
+
+    #[test]
+    fn saddle_cell_follows_the_bilinear_surface() {
+        // z = xy on one cell: diagonal corners equal, the saddle value at the centre is 0.
+        let g = [-1.0, 1.0];
+        let z = surface(&g, &g, |x, y| x * y);
+        let ends = |l: &Polyline| {
+            let mut e = [l[0], l[l.len() - 1]];
+            e.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            e
+        };
+        let close =
+            |a: (f64, f64), b: (f64, f64)| (a.0 - b.0).abs() < 1e-12 && (a.1 - b.1).abs() < 1e-12;
+        // Level 0.2: the hyperbola branches in quadrants III and I (the corners at z = 1 are
+        // cut off); level −0.2: quadrants II and IV.
+        let expected = [
+            (
+                0.2,
+                [[(-1.0, -0.2), (-0.2, -1.0)], [(0.2, 1.0), (1.0, 0.2)]],
+            ),
+            (
+                -0.2,
+                [[(-1.0, 0.2), (-0.2, 1.0)], [(0.2, -1.0), (1.0, -0.2)]],
+            ),
+        ];
+        for (level, want) in expected {
+            let mut got: Vec<_> = marching_squares(&g, &g, z.view(), level)
+                .iter()
+                .map(ends)
+                .collect();
+            got.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            assert_eq!(got.len(), 2, "level {level}");
+            for (e, w) in got.iter().zip(&want) {
+                assert!(
+                    close(e[0], w[0]) && close(e[1], w[1]),
+                    "level {level}: {got:?}"
+                );
+            }
+        }
+
+        // z = x² − y² on a grid with the saddle inside: hyperbola points, no branch crossing.
+        let g = grid(-1.0, 1.0, 20);
+        let z = surface(&g, &g, |x, y| x * x - y * y);
+        for level in [0.3, -0.3] {
+            let lines = marching_squares(&g, &g, z.view(), level);
+            assert_eq!(lines.len(), 2, "level {level}");
+            for l in &lines {
+                assert!(!is_closed(l));
+                let side = if level > 0.0 {
+                    l[0].0.signum()
+                } else {
+                    l[0].1.signum()
+                };
+                for &(x, y) in l {
+                    assert!((x * x - y * y - level).abs() < 0.02, "({x}, {y})");
+                    let s = if level > 0.0 { x.signum() } else { y.signum() };
+                    assert_eq!(s, side, "a branch crosses the saddle");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn marching_squares_skips_holes_and_bad_input() {
+        let g = grid(-2.0, 2.0, 41);
+        let mut z = surface(&g, &g, |x, y| x * x + y * y);
+        // A NaN node on the unit circle's path breaks the loop into one open line.
+        z[[20, 30]] = f64::NAN;
+        let lines = marching_squares(&g, &g, z.view(), 1.0);
+        assert_eq!(lines.len(), 1);
+        assert!(!is_closed(&lines[0]));
+        assert!(lines[0]
+            .iter()
+            .all(|&(x, y)| (x - 1.0).abs() > 0.05 || y.abs() > 0.05));
+        // Shape mismatch, too small a grid, non-finite level: no lines, no panic.
+        assert!(marching_squares(&g[..40], &g, z.view(), 1.0).is_empty());
+        let one = Array2::from_elem((1, 3), 1.0);
+        assert!(marching_squares(&[0.0, 1.0, 2.0], &[0.0], one.view(), 1.0).is_empty());
+        assert!(marching_squares(&g, &g, z.view(), f64::NAN).is_empty());
+    }
+
+    #[test]
+    fn levels_are_nice_and_denser_below_zero() {
+        let l = contour_levels(-1.0, 1.0);
+        let neg = l.iter().filter(|&&v| v < 0.0).count();
+        let pos = l.iter().filter(|&&v| v > 0.0).count();
+        assert!(l.contains(&0.0));
+        assert!(neg >= 2 * pos - 1 && pos >= 3, "{l:?}");
+        assert!(l.windows(2).all(|w| w[1] > w[0]));
+        let l = contour_levels(3.0, 17.0);
+        assert!((7..=13).contains(&l.len()), "{l:?}");
+        assert!(l.iter().all(|&v| v > 3.0 && v < 17.0));
+        assert!(contour_levels(2.0, 2.0).is_empty());
+        assert!(contour_levels(0.0, 0.0).is_empty());
+        assert!(contour_levels(f64::NAN, 1.0).is_empty());
+        // All negative: the whole range at the dense spacing.
+        let l = contour_levels(-2.0, -1.0);
+        assert!(l.len() >= 15, "{l:?}");
+    }
+
+    #[test]
+    fn refine_and_bilinear_keep_nodes_and_holes() {
+        let g = [0.0, 1.0, 3.0];
+        assert_eq!(refine(&g, 5), vec![0.0, 0.5, 1.0, 2.0, 3.0]);
+        assert_eq!(refine(&g, 7).len(), 7);
+        assert_eq!(refine(&g, 3), g.to_vec());
+        let mut z = Array2::from_shape_fn((2, 3), |(j, i)| (i + 10 * j) as f64);
+        z[[1, 2]] = f64::NAN;
+        let v = z.view();
+        let at = |x: f64, y: f64| bilinear(&v, locate(&g, x), locate(&[0.0, 1.0], y));
+        assert_eq!(at(0.5, 0.5), 5.5);
+        assert_eq!(at(1.0, 1.0), 11.0);
+        // On the shared edge x = 1 the NaN corner has no weight; inside its cell it has.
+        assert_eq!(at(1.0, 0.5), 6.0);
+        assert!(at(2.0, 0.5).is_nan());
+        assert_eq!(at(2.0, 0.0), 1.5);
+    }
+
+    fn saddle_panels(n: usize) -> Vec<ContourPanel<'static>> {
+        let x = grid(-1.0, 1.0, n);
+        let y = grid(-1.0, 1.0, n);
+        let titles = ["a_TFC = 2 µm", "a_TFC = 3 µm", "a_TFC = 4 µm"];
+        titles
+            .iter()
+            .enumerate()
+            .map(|(k, &title)| {
+                let shift = 0.3 * (k as f64 - 1.0);
+                ContourPanel {
+                    title,
+                    x_desc: "w_TFC (µm)",
+                    y_desc: "h_TFC (nm)",
+                    x: x.clone(),
+                    y: y.clone(),
+                    z: surface(&x, &y, |a, b| a * a - b * b + shift),
+                    points: [-1.0, 0.0, 1.0]
+                        .iter()
+                        .flat_map(|&a| [-1.0, 0.0, 1.0].map(|b| (a, b)))
+                        .collect(),
+                    marker: (k == 1).then_some((0.0, 0.8)),
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn contour_panels_normal_and_degenerate() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("saddle.png");
+        contour_panels_png(&p, "ξ over the design space", "ξ", &saddle_panels(41)).unwrap();
+        assert_png(&p);
+
+        let nan = f64::NAN;
+        let base = |z: Array2<f64>| ContourPanel {
+            title: "t",
+            x_desc: "x",
+            y_desc: "y",
+            x: grid(0.0, 1.0, z.ncols().max(1)),
+            y: grid(0.0, 1.0, z.nrows().max(1)),
+            z,
+            points: vec![(0.5, 0.5), (nan, 0.0), (7.0, 7.0)],
+            marker: Some((1.0, 1.0)),
+        };
+        let mut holed = surface(&grid(0.0, 1.0, 9), &grid(0.0, 1.0, 9), |a, b| a - b);
+        holed.slice_mut(ndarray::s![2..5, 3..7]).fill(nan);
+        let mut single = base(Array2::from_elem((1, 1), 2.0));
+        single.x = vec![0.5];
+        single.y = vec![3.0];
+        let cases: Vec<(&str, Vec<ContourPanel>)> = vec![
+            ("no-panels", vec![]),
+            (
+                "tiny",
+                vec![base(
+                    Array2::from_shape_vec((2, 2), vec![-1.0, 0.5, 0.2, 1.0]).unwrap(),
+                )],
+            ),
+            ("holed", vec![base(holed.clone())]),
+            ("constant", vec![base(Array2::from_elem((5, 4), 3.0))]),
+            (
+                "all-nan",
+                vec![
+                    base(Array2::from_elem((5, 4), nan)),
+                    base(Array2::from_elem((2, 2), nan)),
+                ],
+            ),
+            (
+                "some-nan-panels",
+                vec![base(Array2::from_elem((5, 4), nan)), base(holed), single],
+            ),
+        ];
+        for (name, panels) in &cases {
+            let p = dir.path().join(format!("contour-{name}.png"));
+            contour_panels_png(&p, name, "ξ", panels).unwrap();
+            assert_png(&p);
+        }
+        // Seven panels: three rows.
+        let mut many = saddle_panels(5);
+        many.extend(saddle_panels(3));
+        many.push(saddle_panels(2).remove(0));
+        let p = dir.path().join("contour-many.png");
+        contour_panels_png(&p, "many", "ξ", &many).unwrap();
+        assert_png(&p);
+    }
+
+    #[test]
+    fn contour_panels_reject_broken_grids() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bad.png");
+        let mut panels = saddle_panels(5);
+        panels[1].x.pop();
+        assert!(contour_panels_png(&p, "t", "ξ", &panels).is_err());
+        let mut panels = saddle_panels(5);
+        panels[0].y.reverse();
+        assert!(contour_panels_png(&p, "t", "ξ", &panels).is_err());
+        assert!(!p.exists());
+    }
+
+    #[test]
+    fn residual_panels_normal_and_degenerate() {
+        let dir = tempfile::tempdir().unwrap();
+        let fr: Vec<(f64, f64)> = (0..30)
+            .map(|k| {
+                let f = -1.0 + 0.07 * k as f64;
+                (f, 0.05 * (1.7 * k as f64).sin())
+            })
+            .collect();
+        let nq: Vec<(f64, f64)> = (0..30)
+            .map(|k| {
+                let q = -2.0 + 4.0 * (k as f64 + 0.5) / 30.0;
+                (q, q * 1.1 + 0.1 * (3.0 * q).sin())
+            })
+            .collect();
+        let p = dir.path().join("residuals.png");
+        residual_panels_png(&p, "residuals of the ξ model", &fr, &nq).unwrap();
+        assert_png(&p);
+        let nan = f64::NAN;
+        type Xy = Vec<(f64, f64)>;
+        let cases: [(&str, Xy, Xy); 3] = [
+            ("empty", vec![], vec![]),
+            ("nan", vec![(nan, 1.0), (1.0, nan)], vec![(nan, nan)]),
+            ("constant", vec![(2.0, 0.0); 4], vec![(0.0, 0.0); 4]),
+        ];
+        for (name, a, b) in &cases {
+            let p = dir.path().join(format!("residuals-{name}.png"));
+            residual_panels_png(&p, name, a, b).unwrap();
+            assert_png(&p);
+        }
+    }
+
+    fn annealing_history(n: usize) -> (Vec<(f64, f64, f64)>, Vec<f64>) {
+        let mut best = f64::INFINITY;
+        let mut its = Vec::with_capacity(n);
+        let mut temps = Vec::with_capacity(n);
+        for k in 0..n {
+            let t = 100.0 * 0.95f64.powi((k % 300) as i32);
+            let cur =
+                -1.0 + 0.02 * t * (0.37 * k as f64).sin().abs() + (k as f64 * 0.91).cos() * 0.01;
+            best = best.min(cur);
+            its.push((k as f64 + 1.0, cur, best));
+            temps.push(t);
+        }
+        (its, temps)
+    }
+
+    #[test]
+    fn annealing_normal_and_degenerate() {
+        let dir = tempfile::tempdir().unwrap();
+        let (its, temps) = annealing_history(1200);
+        let p = dir.path().join("annealing.png");
+        annealing_png(&p, "simulated annealing", &its, None).unwrap();
+        assert_png(&p);
+        let p = dir.path().join("annealing-t.png");
+        annealing_png(&p, "simulated annealing", &its, Some(&temps)).unwrap();
+        assert_png(&p);
+        // Long history: decimated, still fast.
+        let (its, temps) = annealing_history(50_000);
+        let p = dir.path().join("annealing-long.png");
+        let start = std::time::Instant::now();
+        annealing_png(&p, "long", &its, Some(&temps)).unwrap();
+        assert_png(&p);
+        assert!(start.elapsed().as_secs_f64() < 20.0);
+
+        let nan = f64::NAN;
+        type History = Vec<(f64, f64, f64)>;
+        let cases: [(&str, History, Vec<f64>); 4] = [
+            ("empty", vec![], vec![]),
+            (
+                "nan",
+                vec![(nan, 1.0, 1.0), (1.0, nan, nan)],
+                vec![nan, -1.0],
+            ),
+            ("one", vec![(1.0, 2.0, 2.0)], vec![0.0]),
+            (
+                "gappy",
+                vec![
+                    (1.0, 2.0, 2.0),
+                    (2.0, nan, 2.0),
+                    (3.0, 1.0, 1.0),
+                    (4.0, 3.0, 1.0),
+                ],
+                vec![1.0, 0.5, nan, 0.25],
+            ),
+        ];
+        for (name, its, t) in &cases {
+            for temperature in [None, Some(t.as_slice())] {
+                let p = dir
+                    .path()
+                    .join(format!("annealing-{name}-{}.png", temperature.is_some()));
+                annealing_png(&p, name, its, temperature).unwrap();
+                assert_png(&p);
+            }
+        }
+        let p = dir.path().join("annealing-bad.png");
+        assert!(annealing_png(&p, "t", &[(1.0, 1.0, 1.0)], Some(&[1.0, 2.0])).is_err());
+    }
+
+    /// Renders the examples to /tmp/plots_doe_examples for a visual check:
+    /// `cargo test --lib plot_doe -- --ignored`.
+    #[test]
+    #[ignore]
+    fn write_examples() {
+        let dir = Path::new("/tmp/plots_doe_examples");
+        std::fs::create_dir_all(dir).unwrap();
+        contour_panels_png(
+            &dir.join("contour_saddle.png"),
+            "Saddle z = x² − y² (+ shift per panel)",
+            "ξ",
+            &saddle_panels(41),
+        )
+        .unwrap();
+        contour_panels_png(
+            &dir.join("contour_saddle_coarse.png"),
+            "Saddle on a 5 × 5 grid",
+            "ξ",
+            &saddle_panels(5),
+        )
+        .unwrap();
+        let mut holed = saddle_panels(41);
+        for p in &mut holed {
+            p.z.slice_mut(ndarray::s![25..35, 5..15]).fill(f64::NAN);
+        }
+        contour_panels_png(
+            &dir.join("contour_holed.png"),
+            "With a NaN hole",
+            "ξ",
+            &holed,
+        )
+        .unwrap();
+        // Degenerate panels: all NaN, a 2 × 2 grid, a constant, a single node.
+        let nan = f64::NAN;
+        let mut odd = saddle_panels(2);
+        odd[0].z.fill(nan);
+        odd[2].z.fill(0.25);
+        let mut single = saddle_panels(2).remove(1);
+        single.x = vec![0.5];
+        single.y = vec![3.0];
+        single.z = Array2::from_elem((1, 1), -0.5);
+        odd.push(single);
+        contour_panels_png(&dir.join("contour_degenerate.png"), "Degenerate", "ξ", &odd).unwrap();
+        let fr: Vec<(f64, f64)> = (0..30)
+            .map(|k| (-1.0 + 0.07 * k as f64, 0.05 * (1.7 * k as f64).sin()))
+            .collect();
+        let nq: Vec<(f64, f64)> = (0..30)
+            .map(|k| {
+                let q = -2.0 + 4.0 * (k as f64 + 0.5) / 30.0;
+                (q, q * 1.1 + 0.1 * (3.0 * q).sin())
+            })
+            .collect();
+        residual_panels_png(
+            &dir.join("residuals.png"),
+            "Residuals of the ξ model",
+            &fr,
+            &nq,
+        )
+        .unwrap();
+        let (its, temps) = annealing_history(1500);
+        annealing_png(
+            &dir.join("annealing.png"),
+            "Simulated annealing",
+            &its,
+            Some(&temps),
+        )
+        .unwrap();
+        annealing_png(
+            &dir.join("annealing_no_t.png"),
+            "Simulated annealing",
+            &its,
+            None,
+        )
+        .unwrap();
+    }
+}
