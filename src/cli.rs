@@ -540,6 +540,7 @@ fn table_name(kind: &str) -> String {
         "dmw" => "dmw".into(),
         "analysis" => "analyses".into(),
         "three_dof" => "three_dof".into(),
+        "doe" => "doe".into(),
         k => format!("{k}s"),
     }
 }
@@ -1233,6 +1234,7 @@ fn fmt_number(x: f64) -> String {
 fn cmd_validate(as_json: bool, only: &[String], config: &Path) -> Result<()> {
     let mut known: Vec<&str> = crate::validate::AREAS.iter().map(|(a, _)| *a).collect();
     known.push("calibration");
+    known.push("optimisation");
     for o in only {
         if !known.contains(&o.as_str()) {
             bail!(
@@ -1252,6 +1254,11 @@ fn cmd_validate(as_json: bool, only: &[String], config: &Path) -> Result<()> {
         let rows = crate::stages::calibrate::validation_rows(config)
             .with_context(|| format!("calibration rows from {}", config.display()))?;
         areas.push(("calibration", rows));
+    }
+    if wants("optimisation") && (config.exists() || !only.is_empty()) {
+        let rows = crate::stages::doe::validation_rows(config)
+            .with_context(|| format!("optimisation rows from {}", config.display()))?;
+        areas.push(("optimisation", rows));
     }
     let failed = crate::validate::failures(&areas);
     let total: usize = areas.iter().map(|(_, r)| r.len()).sum();

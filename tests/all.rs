@@ -4,6 +4,7 @@ mod bad_input;
 mod calibrate_cli;
 mod common;
 mod dmw_cli;
+mod doe_cli;
 mod pipeline_cache;
 mod simulate_cli;
 mod surface_cli;

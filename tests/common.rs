@@ -37,6 +37,11 @@ impl Project {
             "max_evaluations = 120",
             "max_evaluations = 3\nknobs = [\"dmw_scale\"]\ntargets = [\"clearance_8.5nm\", \"fhm_8.5nm\"]",
         );
+        // …and a DOE with a short annealing and coarse Table 2.8 sweeps (the design's 108
+        // cases stay: they are what the stage is about).
+        let text = text
+            .replace("sa_max_evaluations = 400", "sa_max_evaluations = 12")
+            .replace("compare_step = \"0.2 nm\"", "compare_step = \"3 nm\"");
         std::fs::write(dir.path().join("pipeline.toml"), text).expect("write pipeline.toml");
         Self { dir }
     }
@@ -136,4 +141,28 @@ pub fn python() -> PathBuf {
         p.display()
     );
     p
+}
+
+pub fn assert_ok(o: &std::process::Output) {
+    assert!(o.status.success(), "hdi failed: {}{}", stdout(o), stderr(o));
+}
+
+/// Rows of a CSV written by hdi (no quoted commas in its tables).
+pub fn csv_rows(path: &std::path::Path) -> Vec<std::collections::BTreeMap<String, String>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let head: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    lines
+        .map(|l| {
+            head.iter()
+                .cloned()
+                .zip(l.split(',').map(str::to_string))
+                .collect()
+        })
+        .collect()
 }

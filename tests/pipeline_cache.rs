@@ -3,17 +3,13 @@
 
 use crate::common::*;
 
-fn assert_ok(o: &std::process::Output) {
-    assert!(o.status.success(), "hdi failed: {}{}", stdout(o), stderr(o));
-}
-
 #[test]
 fn default_pipeline_writes_hdf5_tables_and_plots_readable_by_others() {
     let p = Project::shipped();
     let o = p.run(&["run"]);
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("ran 33, cached 0, failed 0, skipped 0 of 33"),
+        stderr(&o).contains("ran 34, cached 0, failed 0, skipped 0 of 34"),
         "{}",
         stderr(&o)
     );
@@ -104,7 +100,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let o = p.run(&["run"]);
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("nothing to do: all 33 stage instances fresh"),
+        stderr(&o).contains("nothing to do: all 34 stage instances fresh"),
         "{}",
         stderr(&o)
     );
@@ -143,7 +139,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let o = p.run(&["run"]);
     assert_ok(&o);
     let e = stderr(&o);
-    assert!(e.contains("ran 3, cached 30"), "{e}");
+    assert!(e.contains("ran 3, cached 31"), "{e}");
     assert!(
         e.contains("ran     disk") && e.contains("ran     hdi"),
         "{e}"

@@ -2,29 +2,6 @@
 //! their files, and bad keys name the key.
 use crate::common::*;
 
-fn assert_ok(o: &std::process::Output) {
-    assert!(o.status.success(), "{}", stderr(o));
-}
-
-fn csv_rows(path: &std::path::Path) -> Vec<std::collections::BTreeMap<String, String>> {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let head: Vec<String> = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    lines
-        .map(|l| {
-            head.iter()
-                .cloned()
-                .zip(l.split(',').map(str::to_string))
-                .collect()
-        })
-        .collect()
-}
-
 #[test]
 fn shipped_three_dof_scenarios_run_and_cache_per_case() {
     let p = Project::shipped();

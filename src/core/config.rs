@@ -90,6 +90,9 @@ pub struct RawConfig {
     /// class-D landmarks.
     #[serde(default)]
     pub calibrate: BTreeMap<String, crate::stages::calibrate::CalibrateConfig>,
+    /// `[doe.NAME]`: the §2.3 design of experiments, response surfaces and optimisation.
+    #[serde(default)]
+    pub doe: BTreeMap<String, crate::stages::doe::DoeConfig>,
 }
 
 /// A loaded pipeline file: its text (for line lookups) and parsed content.

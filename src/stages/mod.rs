@@ -5,6 +5,7 @@ pub mod calibrate;
 pub mod contact;
 pub mod contact_mtl;
 pub mod dmw;
+pub mod doe;
 pub mod excitation;
 pub mod interface;
 pub mod simulate;
@@ -84,6 +85,10 @@ pub fn build(file: &PipelineFile) -> Result<Vec<Box<dyn Stage>>, ConfigError> {
         stages.push(Box::new(calibrate::CalibrateStage::from_config(
             file, name, cfg,
         )?));
+    }
+    for (name, cfg) in &file.raw.doe {
+        check_name("doe", name)?;
+        stages.push(Box::new(doe::DoeStage::from_config(file, name, cfg)?));
     }
     for (name, cfg) in &file.raw.three_dof {
         check_name("three_dof", name)?;

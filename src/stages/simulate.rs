@@ -386,7 +386,7 @@ impl SimulateParams {
         })
     }
 
-    fn case_params(&self, actuation: f64, contact_key: &str, dmw_key: Option<&str>) -> Value {
+    pub fn case_params(&self, actuation: f64, contact_key: &str, dmw_key: Option<&str>) -> Value {
         // `model_parameters` carries the calibrated model; the DMW scale and the calibrated
         // interface enter through `calibrated_knobs`.
         json!({

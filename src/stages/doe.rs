@@ -1,0 +1,1282 @@
+//! Design-of-experiments stage (dynamics.md §9, dissertation §2.3): a 3³ full factorial in the
+//! bulge geometry (`a_TFC`, `w_TFC`, `x_TFC`) crossed with actuation levels, every point a cached
+//! improved-2-DOF case (the `[simulate]` stage's own case cache, so a killed run loses no
+//! finished case); polynomial response surfaces of the flyability parameter ξ with ANOVA and
+//! residual diagnostics per level; Table 2.7's predictive equations; simulated annealing on ξ
+//! with a sensitivity check; and Table 2.8, the 2-DOF sweep on the initial and optimised designs.
+
+use super::simulate::{self, CaseOutcome, DmwTrack, SimulateParams};
+use crate::contact::isbl::IsblModel;
+use crate::contact::lookup::IsblLookup;
+use crate::core::cases::{self, CaseEntry};
+use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::engine::{Stage, StageContext, StageOutput};
+use crate::core::units::Length;
+use crate::dynamics::geometry::BulgeDesign;
+use crate::dynamics::metrics::{flyability, Regime};
+use crate::error::{Error, Result};
+use crate::numerics::annealing::{sensitivity_points, Annealer, AnnealingOptions, StopReason};
+use crate::numerics::regression::{
+    coded, decoded, full_factorial, FitOptions, Polynomial, PolynomialBasis, ResponseSurface,
+};
+use serde::Deserialize;
+use serde_json::{json, Map, Value};
+use std::path::{Path, PathBuf};
+
+/// Bump when the numbers the stage derives from its cases change (the cases themselves carry
+/// the simulate stage's model version).
+pub const MODEL_VERSION: &str = "doe-1";
+
+const UM: f64 = 1e-6;
+/// Highest actuation a DOE case may use [m] (see `validate`).
+const DOE_MAX_ACTUATION: f64 = 20e-9;
+const NM: f64 = 1e-9;
+/// Factor names, in the coded order `x1 = a_TFC`, `x2 = w_TFC`, `x3 = x_TFC` (so `b_1122`
+/// multiplies `a² w²`, as the dissertation numbers them).
+pub const FACTORS: [&str; 3] = ["a_tfc", "w_tfc", "x_tfc"];
+
+fn um3(a: f64, b: f64, c: f64) -> [Length; 3] {
+    [Length(a * UM), Length(b * UM), Length(c * UM)]
+}
+fn default_a() -> [Length; 3] {
+    um3(1.0, 3.0, 5.0)
+}
+fn default_w() -> [Length; 3] {
+    um3(10.0, 50.0, 90.0)
+}
+fn default_x() -> [Length; 3] {
+    um3(5.0, 8.0, 11.0)
+}
+fn default_actuations() -> Vec<Length> {
+    [5.0, 9.0, 12.0, 15.0].map(|h| Length(h * NM)).to_vec()
+}
+fn default_true() -> bool {
+    true
+}
+fn default_sa_actuation() -> Length {
+    Length(9.7 * NM)
+}
+fn default_sa_start() -> [Length; 3] {
+    um3(3.0, 10.0, 5.0)
+}
+fn default_objective() -> String {
+    "simulation".into()
+}
+fn default_seed() -> u64 {
+    1
+}
+fn default_sa_evaluations() -> usize {
+    400
+}
+fn default_temperature() -> f64 {
+    100.0
+}
+fn default_reanneal() -> usize {
+    100
+}
+fn default_sensitivity_step() -> Length {
+    Length(50.0 * NM)
+}
+fn default_sensitivity_steps() -> u16 {
+    3
+}
+fn default_compare_step() -> Length {
+    Length(0.2 * NM)
+}
+
+/// `[doe.NAME]` as written.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DoeConfig {
+    /// The `[simulate.*]` instance whose model, contact set, DMW and case options every design
+    /// point uses (its actuation list and geometry are replaced).
+    pub simulate: String,
+    /// Levels −1, 0, +1 of each factor.
+    #[serde(default = "default_a")]
+    pub a_tfc: [Length; 3],
+    #[serde(default = "default_w")]
+    pub w_tfc: [Length; 3],
+    #[serde(default = "default_x")]
+    pub x_tfc: [Length; 3],
+    /// Actuation levels crossed with the design (5, 9, 12, 15 nm: §2.3's 16 nm top level lies
+    /// beyond the 2-DOF model's 0–15 nm, where designs with x_TFC = 5 µm lose the air bearing).
+    #[serde(default = "default_actuations")]
+    pub actuations: Vec<Length>,
+    /// Per actuation level, the factor held at −1/0/+1 in Table 2.7's predictive equations
+    /// (default: `a_tfc` at the flying and the contacting level, `x_tfc` at 9 and 12 nm, as
+    /// the dissertation chose).
+    #[serde(default)]
+    pub fixed_factors: Option<Vec<String>>,
+    /// Run the simulated annealing, the sensitivity check and the Table 2.8 comparison.
+    #[serde(default = "default_true")]
+    pub optimise: bool,
+    #[serde(default = "default_sa_actuation")]
+    pub sa_actuation: Length,
+    #[serde(default = "default_sa_start")]
+    pub sa_start: [Length; 3],
+    /// `simulation` (every evaluation a cached 2-DOF case) or `surrogate` (the response
+    /// surfaces, linear in h_TFC between the levels around `sa_actuation`).
+    #[serde(default = "default_objective")]
+    pub sa_objective: String,
+    #[serde(default = "default_seed")]
+    pub sa_seed: u64,
+    #[serde(default = "default_sa_evaluations")]
+    pub sa_max_evaluations: usize,
+    #[serde(default = "default_temperature")]
+    pub sa_initial_temperature: f64,
+    #[serde(default = "default_reanneal")]
+    pub sa_reanneal_interval: usize,
+    /// Iterations without improvement before stopping (default 500 × 3).
+    #[serde(default)]
+    pub sa_stall_iterations: Option<usize>,
+    #[serde(default = "default_sensitivity_step")]
+    pub sensitivity_step: Length,
+    #[serde(default = "default_sensitivity_steps")]
+    pub sensitivity_steps: u16,
+    /// Table 2.8: sweep both designs over 0–15 nm.
+    #[serde(default = "default_true")]
+    pub compare: bool,
+    #[serde(default = "default_compare_step")]
+    pub compare_step: Length,
+}
+
+/// Where the annealing's ξ comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SaObjective {
+    Simulation,
+    Surrogate,
+}
+
+/// Validated settings (SI).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DoeParams {
+    pub base_name: String,
+    pub base: SimulateParams,
+    /// `levels[f]` = the −1/0/+1 values of factor f [m].
+    pub levels: [[f64; 3]; 3],
+    pub actuations: Vec<f64>,
+    /// Factor index held fixed in Table 2.7, per actuation level.
+    pub fixed: Vec<usize>,
+    pub optimise: bool,
+    pub sa_actuation: f64,
+    pub sa_start: [f64; 3],
+    pub sa_objective: SaObjective,
+    pub sa: AnnealingOptions,
+    pub sensitivity_step: f64,
+    pub sensitivity_steps: u16,
+    pub compare: bool,
+    pub compare_actuations: Vec<f64>,
+}
+
+impl DoeParams {
+    fn canonical(&self) -> Value {
+        json!({
+            "base": self.base.canonical(),
+            "levels_m": self.levels,
+            "actuations_m": self.actuations,
+            "fixed": self.fixed,
+            "optimise": self.optimise,
+            "sa_actuation_m": self.sa_actuation,
+            "sa_start_m": self.sa_start,
+            "sa_objective": format!("{:?}", self.sa_objective),
+            "sa": format!("{:?}", self.sa),
+            "sensitivity_step_m": self.sensitivity_step,
+            "sensitivity_steps": self.sensitivity_steps,
+            "compare": self.compare,
+            "compare_actuations_m": self.compare_actuations,
+        })
+    }
+
+    /// Physical design `[a, w, x]` of a coded point.
+    fn decode(&self, c: &[f64]) -> [f64; 3] {
+        // The design levels exactly (not to an ulp), so a level shared by two factors compares
+        // equal (a_TFC = x_TFC = 5 µm is allowed).
+        std::array::from_fn(|f| match c[f] {
+            -1.0 => self.levels[f][0],
+            0.0 => self.levels[f][1],
+            1.0 => self.levels[f][2],
+            v => decoded(v, self.levels[f][0], self.levels[f][2]),
+        })
+    }
+
+    fn encode(&self, x: &[f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|f| coded(x[f], self.levels[f][0], self.levels[f][2]))
+    }
+}
+
+type Bad = (String, String);
+
+fn bad<T>(key: &str, m: impl Into<String>) -> std::result::Result<T, Bad> {
+    Err((key.to_string(), m.into()))
+}
+
+/// Check `[doe]` keys against the base instance; failures name the key.
+pub fn validate(
+    cfg: &DoeConfig,
+    base: SimulateParams,
+    base_name: &str,
+) -> std::result::Result<DoeParams, Bad> {
+    let levels = [cfg.a_tfc, cfg.w_tfc, cfg.x_tfc].map(|l| l.map(|v| v.0));
+    for (f, l) in levels.iter().enumerate() {
+        if !(l.iter().all(|v| v.is_finite() && *v > 0.0) && l[0] < l[1] && l[1] < l[2]) {
+            return bad(FACTORS[f], "three positive, increasing levels (−1, 0, +1)");
+        }
+        // The DOE codes the middle level as 0: it must be the midpoint.
+        let mid = 0.5 * (l[0] + l[2]);
+        if (l[1] - mid).abs() > 1e-9 * mid {
+            return bad(
+                FACTORS[f],
+                format!(
+                    "the middle level must be the midpoint ({:.4} um) for coded levels −1, 0, +1",
+                    mid / UM
+                ),
+            );
+        }
+    }
+    if levels[0][2] > levels[2][0] {
+        return bad(
+            "a_tfc",
+            "the largest a_tfc exceeds the smallest x_tfc: that bulge would overhang the trailing edge",
+        );
+    }
+    // The 2-DOF range is 0–15 nm [seed §2.1.1], but §2.3's fully contacting level is 16 nm:
+    // DOE cases may run up to 20 nm, extrapolating the rear-stiffening law (docs/doe.md).
+    let max_h = base.model.max_actuation.max(DOE_MAX_ACTUATION);
+    let in_range = |h: f64| h.is_finite() && (0.0..=max_h).contains(&h);
+    if cfg.actuations.is_empty() || !cfg.actuations.iter().all(|h| in_range(h.0)) {
+        return bad(
+            "actuations",
+            format!("one or more actuations within 0–{:.1} nm", max_h / NM),
+        );
+    }
+    let actuations: Vec<f64> = cfg.actuations.iter().map(|h| h.0).collect();
+    if actuations.windows(2).any(|w| w[1] <= w[0]) {
+        return bad("actuations", "increasing, without repeats");
+    }
+    let fixed = match &cfg.fixed_factors {
+        Some(list) => {
+            if list.len() != actuations.len() {
+                return bad(
+                    "fixed_factors",
+                    format!("one factor per actuation level ({})", actuations.len()),
+                );
+            }
+            list.iter()
+                .map(|n| {
+                    FACTORS.iter().position(|f| f == n).ok_or_else(|| {
+                        (
+                            "fixed_factors".to_string(),
+                            format!("unknown factor `{n}` ({})", FACTORS.join(", ")),
+                        )
+                    })
+                })
+                .collect::<std::result::Result<Vec<_>, _>>()?
+        }
+        // §2.3.2: a_TFC fixed at the flying (5) and contacting (16 nm) levels, x_TFC in between.
+        None => actuations
+            .iter()
+            .map(|h| {
+                if (7.0 * NM..14.0 * NM).contains(h) {
+                    2
+                } else {
+                    0
+                }
+            })
+            .collect(),
+    };
+    let sa_objective = match cfg.sa_objective.as_str() {
+        "simulation" => SaObjective::Simulation,
+        "surrogate" => SaObjective::Surrogate,
+        o => {
+            return bad(
+                "sa_objective",
+                format!("unknown `{o}` (simulation, surrogate)"),
+            )
+        }
+    };
+    let sa_actuation = cfg.sa_actuation.0;
+    if !in_range(sa_actuation) {
+        return bad("sa_actuation", format!("within 0–{:.1} nm", max_h / NM));
+    }
+    if sa_objective == SaObjective::Surrogate
+        && !(actuations[0] <= sa_actuation && sa_actuation <= actuations[actuations.len() - 1])
+    {
+        return bad(
+            "sa_actuation",
+            "the surrogate interpolates between the DOE's actuation levels: stay within them",
+        );
+    }
+    let sa_start = cfg.sa_start.map(|v| v.0);
+    for f in 0..3 {
+        if !(levels[f][0] <= sa_start[f] && sa_start[f] <= levels[f][2]) {
+            return bad(
+                "sa_start",
+                format!("{} must lie within the design box", FACTORS[f]),
+            );
+        }
+    }
+    if cfg.sa_max_evaluations == 0 || cfg.sa_max_evaluations > 1_000_000 {
+        return bad("sa_max_evaluations", "1 to 1 000 000");
+    }
+    if !(cfg.sa_initial_temperature.is_finite() && cfg.sa_initial_temperature > 0.0) {
+        return bad("sa_initial_temperature", "positive");
+    }
+    if cfg.sa_reanneal_interval == 0 {
+        return bad("sa_reanneal_interval", "at least 1");
+    }
+    let sensitivity_step = cfg.sensitivity_step.0;
+    if !(sensitivity_step.is_finite() && sensitivity_step > 0.0) {
+        return bad("sensitivity_step", "positive");
+    }
+    if cfg.sensitivity_steps > 20 {
+        return bad("sensitivity_steps", "at most 20");
+    }
+    let step = cfg.compare_step.0;
+    if !(0.01 * NM..=5.0 * NM).contains(&step) {
+        return bad("compare_step", "0.01–5 nm");
+    }
+    // The `[simulate]` grid formula (picometre-rounded), so the initial design's sweep is the
+    // base instance's own cached cases when the steps agree.
+    let sweep_max = base.model.max_actuation;
+    let n = (sweep_max / step + 1e-9).floor() as usize;
+    let compare_actuations = (0..=n)
+        .map(|k| ((k as f64 * step) * 1e12).round() / 1e12)
+        .collect();
+    Ok(DoeParams {
+        base_name: base_name.to_string(),
+        base,
+        levels,
+        actuations,
+        fixed,
+        optimise: cfg.optimise,
+        sa_actuation,
+        sa_start,
+        sa_objective,
+        sa: AnnealingOptions {
+            initial_temperature: cfg.sa_initial_temperature,
+            reanneal_interval: cfg.sa_reanneal_interval,
+            stall_iterations: cfg.sa_stall_iterations,
+            max_evaluations: Some(cfg.sa_max_evaluations),
+            seed: cfg.sa_seed,
+            ..AnnealingOptions::default()
+        },
+        sensitivity_step,
+        sensitivity_steps: cfg.sensitivity_steps,
+        compare: cfg.compare,
+        compare_actuations,
+    })
+}
+
+/// Runs one 2-DOF case of a given bulge through the simulate stage's case cache.
+struct CaseRunner<'a> {
+    base: &'a SimulateParams,
+    isbl: &'a IsblLookup,
+    store: &'a crate::core::cache::Store,
+    contact_key: String,
+    dmw: Option<(&'a DmwTrack, String)>,
+}
+
+/// One finished case of a design: its metrics and ξ.
+#[derive(Debug, Clone)]
+struct DesignCase {
+    design: [f64; 3],
+    actuation: f64,
+    entry: CaseEntry,
+    xi: f64,
+}
+
+impl CaseRunner<'_> {
+    fn params_for(&self, design: &[f64; 3]) -> Result<SimulateParams> {
+        // An annealing point on the a = x edge may miss it by rounding only.
+        let a = if design[0] > design[2] && design[0] - design[2] < 1e-9 * design[2] {
+            design[2]
+        } else {
+            design[0]
+        };
+        let bulge = BulgeDesign {
+            semi_width_x: a,
+            full_width_y: design[1],
+            offset_from_te: design[2],
+        };
+        bulge.validate()?;
+        let mut p = self.base.clone();
+        p.model = p.model.with_bulge(bulge);
+        Ok(p)
+    }
+
+    fn run(&self, design: [f64; 3], actuation: f64) -> Result<DesignCase> {
+        let mut p = self.params_for(&design)?;
+        // Only beyond the model's range is the range widened, so every case inside it keeps
+        // the `[simulate]` stage's cache key (Table 2.8's initial design reuses its sweep).
+        if actuation > p.model.max_actuation {
+            p.model.max_actuation = actuation;
+        }
+        let dmw_key = self.dmw.as_ref().map(|d| d.1.as_str());
+        let params = p.case_params(actuation, &self.contact_key, dmw_key);
+        let entry = cases::get_or_compute(self.store, simulate::MODEL_VERSION, &params, |dir| {
+            simulate::simulate_case(
+                &p,
+                actuation,
+                self.isbl,
+                self.dmw.as_ref().map(|d| d.0),
+                dir,
+            )
+        })
+        .map_err(|e| {
+            Error::Stage(format!(
+                "case a = {:.3} um, w = {:.3} um, x = {:.3} um, h_TFC = {:.3} nm: {e}",
+                design[0] / UM,
+                design[1] / UM,
+                design[2] / UM,
+                actuation / NM
+            ))
+        })?;
+        let xi = xi_of(&entry.result, p.model.nominal_flying_height);
+        Ok(DesignCase {
+            design,
+            actuation,
+            entry,
+            xi,
+        })
+    }
+}
+
+/// ξ of a case result (§9): steady mean clearance over FH_nom times FHM/BV in units of 100 %.
+fn xi_of(metrics: &Value, fh_nom: f64) -> f64 {
+    let c = metrics["clearance_m"]["mean"].as_f64().unwrap_or(f64::NAN);
+    let v = metrics["vibration_percent"].as_f64().unwrap_or(f64::NAN);
+    flyability(c, fh_nom, v)
+}
+
+/// The annealing objective of §9: ξ when positive, else `1 + |ξ|` (never preferred).
+fn annealing_objective(xi: f64) -> f64 {
+    if xi > 0.0 {
+        xi
+    } else {
+        1.0 + xi.abs()
+    }
+}
+
+/// The response surfaces of one actuation level: the spec's degree-4 model and the degree-5
+/// model kept for the residual comparison.
+struct LevelFit {
+    actuation: f64,
+    fixed: usize,
+    quartic: ResponseSurface,
+    quintic: Option<ResponseSurface>,
+}
+
+fn fit_level(actuation: f64, fixed: usize, points: &[Vec<f64>], xi: &[f64]) -> Result<LevelFit> {
+    let opts = FitOptions::default();
+    let fit = |degree: u32| {
+        ResponseSurface::fit(&PolynomialBasis::bounded(3, 2, degree), points, xi, &opts)
+    };
+    let quartic = fit(4)
+        .map_err(|e| Error::Stage(format!("response surface at {:.1} nm: {e}", actuation / NM)))?;
+    Ok(LevelFit {
+        actuation,
+        fixed,
+        quartic,
+        // A 3³ design leaves one residual df to the 26-term model; keep it if it fits.
+        quintic: fit(5).ok(),
+    })
+}
+
+/// The surrogate ξ at any actuation: the level fits, linear in h between neighbours.
+fn surrogate_xi(fits: &[LevelFit], h: f64, coded_point: &[f64]) -> f64 {
+    let k = fits
+        .windows(2)
+        .position(|w| w[0].actuation <= h && h <= w[1].actuation);
+    match k {
+        Some(k) => {
+            let (lo, hi) = (&fits[k], &fits[k + 1]);
+            let t = (h - lo.actuation) / (hi.actuation - lo.actuation);
+            (1.0 - t) * lo.quartic.predict(coded_point) + t * hi.quartic.predict(coded_point)
+        }
+        None => fits
+            .iter()
+            .min_by(|a, b| (a.actuation - h).abs().total_cmp(&(b.actuation - h).abs()))
+            .map_or(f64::NAN, |f| f.quartic.predict(coded_point)),
+    }
+}
+
+fn round6(v: f64) -> Value {
+    if !v.is_finite() {
+        return Value::Null;
+    }
+    let s = format!("{v:.6e}");
+    json!(s.parse::<f64>().unwrap_or(v))
+}
+
+/// Table 2.7 coefficient names of a two-factor reduced polynomial, in output order.
+const PREDICTIVE_TERMS: [&str; 9] = [
+    "b0", "b1", "b2", "b11", "b22", "b12", "b112", "b122", "b1122",
+];
+
+fn predictive_rows(p: &DoeParams, fits: &[LevelFit]) -> Result<Vec<Map<String, Value>>> {
+    let mut rows = Vec::new();
+    for lf in fits {
+        let poly: Polynomial = lf.quartic.polynomial();
+        for level in [-1.0, 0.0, 1.0] {
+            let reduced = poly
+                .fix_factor(lf.fixed, level)
+                .map_err(|e| Error::Stage(format!("predictive equation: {e}")))?;
+            let free: Vec<&str> = (0..3)
+                .filter(|f| *f != lf.fixed)
+                .map(|f| FACTORS[f])
+                .collect();
+            let mut row = Map::new();
+            row.insert("actuation_nm".into(), round6(lf.actuation / NM));
+            row.insert("fixed_factor".into(), json!(FACTORS[lf.fixed]));
+            row.insert("fixed_coded".into(), json!(level));
+            row.insert(
+                "fixed_value_um".into(),
+                round6(decoded(level, p.levels[lf.fixed][0], p.levels[lf.fixed][2]) / UM),
+            );
+            row.insert("x1".into(), json!(free[0]));
+            row.insert("x2".into(), json!(free[1]));
+            for name in PREDICTIVE_TERMS {
+                row.insert(
+                    name.into(),
+                    round6(reduced.coefficient(name).unwrap_or(0.0)),
+                );
+            }
+            row.insert(
+                "residual_error".into(),
+                round6(lf.quartic.residual_ss_at(lf.fixed, level, 1e-9)),
+            );
+            rows.push(row);
+        }
+    }
+    Ok(rows)
+}
+
+fn coefficient_rows(fits: &[LevelFit]) -> Vec<Map<String, Value>> {
+    let mut rows = Vec::new();
+    for lf in fits {
+        for (model, s) in [
+            ("degree 4", Some(&lf.quartic)),
+            ("degree 5", lf.quintic.as_ref()),
+        ] {
+            let Some(s) = s else { continue };
+            for (j, name) in s.basis.names().iter().enumerate() {
+                let mut row = Map::new();
+                row.insert("actuation_nm".into(), round6(lf.actuation / NM));
+                row.insert("model".into(), json!(model));
+                row.insert("term".into(), json!(name));
+                row.insert("coefficient".into(), round6(s.fit.coefficients[j]));
+                row.insert("std_error".into(), round6(s.fit.standard_errors[j]));
+                row.insert("t".into(), round6(s.fit.t_values[j]));
+                row.insert("p".into(), round6(s.fit.p_values[j]));
+                rows.push(row);
+            }
+        }
+    }
+    rows
+}
+
+fn anova_rows(fits: &[LevelFit]) -> Vec<Map<String, Value>> {
+    let mut rows = Vec::new();
+    for lf in fits {
+        let t = lf.quartic.anova();
+        let all = t.terms.iter().chain([&t.model, &t.residual, &t.total]);
+        for r in all {
+            let mut row = Map::new();
+            row.insert("actuation_nm".into(), round6(lf.actuation / NM));
+            row.insert("source".into(), json!(r.source));
+            row.insert("df".into(), json!(r.df));
+            row.insert("sum_sq".into(), round6(r.sum_sq));
+            row.insert("mean_sq".into(), round6(r.mean_sq));
+            row.insert("F".into(), r.f.map_or(Value::Null, round6));
+            row.insert("p".into(), r.p.map_or(Value::Null, round6));
+            rows.push(row);
+        }
+    }
+    rows
+}
+
+fn fit_summary(lf: &LevelFit) -> Value {
+    let one = |s: &ResponseSurface| {
+        json!({
+            "terms": s.basis.len(),
+            "residual_df": s.fit.residual_df,
+            "rss": s.fit.rss,
+            "r_squared": s.fit.r_squared,
+            "adj_r_squared": s.fit.adj_r_squared,
+            "sigma": s.fit.sigma,
+        })
+    };
+    json!({
+        "actuation_m": lf.actuation,
+        "fixed_factor": FACTORS[lf.fixed],
+        "degree_4": one(&lf.quartic),
+        "degree_5": lf.quintic.as_ref().map(one),
+    })
+}
+
+/// Contour panels of one level: ξ over the two free factors at the fixed one's three levels.
+fn contour_png(path: &Path, p: &DoeParams, lf: &LevelFit, points: &[[f64; 3]]) -> Result<()> {
+    use crate::core::plot_doe::{contour_panels_png, ContourPanel};
+    const N: usize = 41;
+    let free: Vec<usize> = (0..3).filter(|f| *f != lf.fixed).collect();
+    let (fx, fy) = (free[0], free[1]);
+    let grid = |f: usize| -> Vec<f64> {
+        (0..N)
+            .map(|i| {
+                decoded(
+                    -1.0 + 2.0 * i as f64 / (N - 1) as f64,
+                    p.levels[f][0],
+                    p.levels[f][2],
+                ) / UM
+            })
+            .collect()
+    };
+    let poly = lf.quartic.polynomial();
+    let desc = |f: usize| format!("{} (µm)", FACTORS[f].replace("_tfc", "_TFC"));
+    let (xd, yd) = (desc(fx), desc(fy));
+    let titles: Vec<String> = [-1.0, 0.0, 1.0]
+        .iter()
+        .map(|&level| {
+            format!(
+                "{} = {:.3} µm",
+                FACTORS[lf.fixed].replace("_tfc", "_TFC"),
+                decoded(level, p.levels[lf.fixed][0], p.levels[lf.fixed][2]) / UM
+            )
+        })
+        .collect();
+    let panels: Vec<ContourPanel> = [-1.0, 0.0, 1.0]
+        .iter()
+        .zip(&titles)
+        .map(|(&level, title)| {
+            let z = ndarray::Array2::from_shape_fn((N, N), |(iy, ix)| {
+                let mut c = [0.0; 3];
+                c[lf.fixed] = level;
+                c[fx] = -1.0 + 2.0 * ix as f64 / (N - 1) as f64;
+                c[fy] = -1.0 + 2.0 * iy as f64 / (N - 1) as f64;
+                poly.eval(&c)
+            });
+            let fixed_value = decoded(level, p.levels[lf.fixed][0], p.levels[lf.fixed][2]);
+            ContourPanel {
+                title,
+                x_desc: &xd,
+                y_desc: &yd,
+                x: grid(fx),
+                y: grid(fy),
+                z,
+                points: points
+                    .iter()
+                    .filter(|d| (d[lf.fixed] - fixed_value).abs() < 1e-12)
+                    .map(|d| (d[fx] / UM, d[fy] / UM))
+                    .collect(),
+                marker: None,
+            }
+        })
+        .collect();
+    contour_panels_png(
+        path,
+        &format!(
+            "Flyability ξ (degree-4 response surface), h_TFC = {:.1} nm (Figs 2.26–2.29)",
+            lf.actuation / NM
+        ),
+        "ξ",
+        &panels,
+    )
+}
+
+/// One condition of Table 2.8 for a design.
+fn comparison_rows(
+    label: &str,
+    design: &[f64; 3],
+    sp: &SimulateParams,
+    cases: &[CaseOutcome],
+) -> Result<Vec<Map<String, Value>>> {
+    let sweep = simulate::sweep_analysis(sp, cases)?;
+    let nearest = |h: f64| {
+        cases
+            .iter()
+            .enumerate()
+            .min_by(|a, b| {
+                (a.1.actuation - h)
+                    .abs()
+                    .total_cmp(&(b.1.actuation - h).abs())
+            })
+            .map(|(i, _)| i)
+    };
+    let critical = sweep
+        .slopes
+        .critical_point
+        .as_ref()
+        .and_then(|c| nearest(c.actuation_m));
+    let steady = sweep
+        .touchdown_index
+        .and_then(|td| (td..cases.len()).find(|&i| sweep.regimes[i] == Regime::SolidContact));
+    let mut rows = Vec::new();
+    for (condition, idx) in [
+        ("critical actuation", critical),
+        ("optimum actuation", sweep.optimum_index),
+        ("touchdown", sweep.touchdown_index),
+        ("steady contact", steady),
+    ] {
+        let mut row = Map::new();
+        row.insert("design".into(), json!(label));
+        row.insert("a_um".into(), round6(design[0] / UM));
+        row.insert("w_um".into(), round6(design[1] / UM));
+        row.insert("x_um".into(), round6(design[2] / UM));
+        row.insert("condition".into(), json!(condition));
+        let m = idx.map(|i| (&cases[i].metrics, cases[i].actuation));
+        let get = |k: &str| m.and_then(|(m, _)| m[k].as_f64());
+        row.insert(
+            "h_tfc_nm".into(),
+            m.map_or(Value::Null, |(_, h)| round6(h / NM)),
+        );
+        row.insert(
+            "clearance_nm".into(),
+            m.and_then(|(m, _)| m["clearance_m"]["mean"].as_f64())
+                .map_or(Value::Null, |v| round6(v / NM)),
+        );
+        row.insert(
+            "hms_nm".into(),
+            get("hms_mean_m").map_or(Value::Null, |v| round6(v / NM)),
+        );
+        row.insert(
+            "fhm_or_bv_percent".into(),
+            get("vibration_percent").map_or(Value::Null, round6),
+        );
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+/// Validated stage instance.
+pub struct DoeStage {
+    pub name: String,
+    pub params: DoeParams,
+}
+
+impl DoeStage {
+    pub fn from_config(
+        file: &PipelineFile,
+        name: &str,
+        cfg: &DoeConfig,
+    ) -> std::result::Result<Self, ConfigError> {
+        let err = |k: &str, m: String| file.error("doe", name, k, m);
+        let Some(base_cfg) = file.raw.simulate.get(&cfg.simulate) else {
+            return Err(err(
+                "simulate",
+                format!("no [simulate.{}] in this file", cfg.simulate),
+            ));
+        };
+        if base_cfg.calibration.is_some() {
+            return Err(err(
+                "simulate",
+                format!(
+                    "[simulate.{}] is calibrated; a DOE starts from an uncalibrated instance",
+                    cfg.simulate
+                ),
+            ));
+        }
+        let base = simulate::validate(base_cfg).map_err(|(k, m)| {
+            err(
+                "simulate",
+                format!("[simulate.{}] is invalid ({k}: {m})", cfg.simulate),
+            )
+        })?;
+        let params = validate(cfg, base, &cfg.simulate).map_err(|(k, m)| err(&k, m))?;
+        Ok(DoeStage {
+            name: name.to_string(),
+            params,
+        })
+    }
+}
+
+impl Stage for DoeStage {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn kind(&self) -> &'static str {
+        "doe"
+    }
+    fn model_version(&self) -> &'static str {
+        MODEL_VERSION
+    }
+    fn params(&self) -> Value {
+        self.params.canonical()
+    }
+    fn inputs(&self) -> Vec<(String, PathBuf)> {
+        Vec::new()
+    }
+    fn upstream(&self) -> Vec<String> {
+        let mut u = vec![self.params.base.contact.clone()];
+        u.extend(self.params.base.dmw.iter().cloned());
+        u
+    }
+    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+        use rayon::prelude::*;
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let p = &self.params;
+        let (isbl_params, dmw_track) =
+            super::calibrate::base_inputs(&p.base, &ctx.upstream, &ctx.upstream_dirs)?;
+        let key_of = |name: &str| {
+            ctx.fingerprint
+                .upstream
+                .iter()
+                .find(|u| u.name == name)
+                .map(|u| u.key.clone())
+                .unwrap_or_default()
+        };
+        ctx.progress.set_message("interface table");
+        let isbl = IsblLookup::build(IsblModel::new(isbl_params)?, 0.05, -2.0, 10.0)?;
+        let runner = CaseRunner {
+            base: &p.base,
+            isbl: &isbl,
+            store: ctx.store,
+            contact_key: key_of(&p.base.contact),
+            dmw: match (&p.base.dmw, dmw_track.as_ref()) {
+                (Some(d), Some(t)) => Some((t, key_of(d))),
+                _ => None,
+            },
+        };
+
+        // 1. The design: 27 coded points × the actuation levels, in parallel.
+        let coded_points = full_factorial(&[3, 3, 3]);
+        let designs: Vec<[f64; 3]> = coded_points.iter().map(|c| p.decode(c)).collect();
+        let jobs: Vec<(usize, usize)> = (0..p.actuations.len())
+            .flat_map(|k| (0..designs.len()).map(move |d| (k, d)))
+            .collect();
+        let total = jobs.len();
+        let finished = AtomicUsize::new(0);
+        ctx.progress.set_message(format!("0/{total} DOE cases"));
+        let outcomes: Vec<Result<DesignCase>> = jobs
+            .par_iter()
+            .map(|&(k, d)| {
+                let r = runner.run(designs[d], p.actuations[k]);
+                let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
+                ctx.progress.set_message(format!("{n}/{total} DOE cases"));
+                r
+            })
+            .collect();
+        let mut doe_cases = Vec::with_capacity(total);
+        for o in outcomes {
+            doe_cases.push(o?);
+        }
+        let mut design_rows = Vec::new();
+        for (i, c) in doe_cases.iter().enumerate() {
+            let coded_point = &coded_points[i % designs.len()];
+            let mut row = Map::new();
+            row.insert("run".into(), json!(i + 1));
+            for f in 0..3 {
+                row.insert(format!("{}_coded", FACTORS[f]), json!(coded_point[f]));
+            }
+            row.insert("a_um".into(), round6(c.design[0] / UM));
+            row.insert("w_um".into(), round6(c.design[1] / UM));
+            row.insert("x_um".into(), round6(c.design[2] / UM));
+            row.insert("actuation_nm".into(), round6(c.actuation / NM));
+            let m = &c.entry.result;
+            row.insert(
+                "clearance_nm".into(),
+                m["clearance_m"]["mean"]
+                    .as_f64()
+                    .map_or(Value::Null, |v| round6(v / NM)),
+            );
+            row.insert(
+                "fhm_or_bv_percent".into(),
+                m["vibration_percent"].as_f64().map_or(Value::Null, round6),
+            );
+            row.insert("regime".into(), m["regime"].clone());
+            row.insert("xi".into(), round6(c.xi));
+            row.insert("case_key".into(), json!(c.entry.key));
+            design_rows.push(row);
+        }
+        crate::core::store::write_table(&design_rows, &ctx.out_dir.join("design"))?;
+
+        // 2. Response surfaces per level.
+        ctx.progress.set_message("response surfaces");
+        let mut fits = Vec::new();
+        for (k, &h) in p.actuations.iter().enumerate() {
+            let xi: Vec<f64> = doe_cases[k * designs.len()..(k + 1) * designs.len()]
+                .iter()
+                .map(|c| c.xi)
+                .collect();
+            if let Some(i) = xi.iter().position(|v| !v.is_finite()) {
+                return Err(Error::Stage(format!(
+                    "ξ is not finite for design {:?} µm at {:.1} nm (a case without a steady \
+                     clearance or vibration)",
+                    designs[i].map(|v| v / UM),
+                    h / NM
+                )));
+            }
+            fits.push(fit_level(h, p.fixed[k], &coded_points, &xi)?);
+        }
+        crate::core::store::write_table(
+            &coefficient_rows(&fits),
+            &ctx.out_dir.join("coefficients"),
+        )?;
+        crate::core::store::write_table(&anova_rows(&fits), &ctx.out_dir.join("anova"))?;
+        crate::core::store::write_table(
+            &predictive_rows(p, &fits)?,
+            &ctx.out_dir.join("predictive_equations"),
+        )?;
+        ctx.progress.set_message("contour and residual plots");
+        for lf in &fits {
+            let tag = format!("{:.1}nm", lf.actuation / NM).replace('.', "p");
+            contour_png(
+                &ctx.out_dir.join(format!("contours_{tag}.png")),
+                p,
+                lf,
+                &designs,
+            )?;
+            let diag = lf.quartic.fit.residual_diagnostics();
+            crate::core::plot_doe::residual_panels_png(
+                &ctx.out_dir.join(format!("residuals_{tag}.png")),
+                &format!(
+                    "Residuals of the degree-4 ξ surface, h_TFC = {:.1} nm",
+                    lf.actuation / NM
+                ),
+                &diag.fitted_residual,
+                &diag.normal_probability,
+            )?;
+        }
+
+        let mut result = json!({
+            "cases": total,
+            "cases_cached": doe_cases.iter().filter(|c| c.entry.cached).count(),
+            "fits": fits.iter().map(fit_summary).collect::<Vec<_>>(),
+            "tables": ["design", "coefficients", "anova", "predictive_equations"],
+        });
+        let mut row = Map::new();
+        row.insert("simulate".into(), json!(p.base_name));
+        row.insert("cases".into(), json!(total));
+
+        // 3. Simulated annealing on ξ at sa_actuation, in coded units.
+        if p.optimise {
+            ctx.progress.set_message("simulated annealing");
+            let lower = [-1.0; 3];
+            let upper = [1.0; 3];
+            let start = p.encode(&p.sa_start);
+            let evaluate = |c: &[f64]| -> Result<(f64, Option<String>)> {
+                match p.sa_objective {
+                    SaObjective::Simulation => {
+                        let r = runner.run(p.decode(c), p.sa_actuation)?;
+                        Ok((r.xi, Some(r.entry.key)))
+                    }
+                    SaObjective::Surrogate => Ok((surrogate_xi(&fits, p.sa_actuation, c), None)),
+                }
+            };
+            let mut annealer = Annealer::new(&lower, &upper, &start, &p.sa)
+                .map_err(|e| Error::Stage(format!("annealing: {e}")))?;
+            let mut xis = Vec::new();
+            while let Some(c) = annealer.ask() {
+                let (xi, _) = evaluate(&c)?;
+                xis.push(xi);
+                annealer.tell(annealing_objective(xi));
+                ctx.progress.set_message(format!(
+                    "simulated annealing: {} evaluations, best J {:.4e}",
+                    annealer.evaluations(),
+                    annealer.best().1
+                ));
+            }
+            let stop = annealer.stop_reason();
+            let res = annealer.into_result();
+            let best = p.decode(&res.x);
+            let mut sa_rows = Vec::new();
+            for (r, xi) in res.history.iter().zip(&xis) {
+                let d = p.decode(&r.candidate);
+                let mut m = Map::new();
+                m.insert("iteration".into(), json!(r.iteration));
+                m.insert("temperature".into(), round6(r.temperature));
+                m.insert("a_um".into(), round6(d[0] / UM));
+                m.insert("w_um".into(), round6(d[1] / UM));
+                m.insert("x_um".into(), round6(d[2] / UM));
+                m.insert("xi".into(), round6(*xi));
+                m.insert("candidate_j".into(), round6(r.candidate_j));
+                m.insert("accepted".into(), json!(r.accepted));
+                m.insert("current_j".into(), round6(r.current_j));
+                m.insert("best_j".into(), round6(r.best_j));
+                sa_rows.push(m);
+            }
+            crate::core::store::write_table(&sa_rows, &ctx.out_dir.join("annealing"))?;
+            let curve: Vec<(f64, f64, f64)> = res
+                .history
+                .iter()
+                .map(|r| (r.iteration as f64, r.current_j, r.best_j))
+                .collect();
+            let temps: Vec<f64> = res.history.iter().map(|r| r.temperature).collect();
+            crate::core::plot_doe::annealing_png(
+                &ctx.out_dir.join("annealing.png"),
+                &format!(
+                    "Simulated annealing of ξ at h_TFC = {:.1} nm (Fig. 2.30)",
+                    p.sa_actuation / NM
+                ),
+                &curve,
+                Some(&temps),
+            )?;
+            let best_xi = match p.sa_objective {
+                SaObjective::Simulation => runner.run(best, p.sa_actuation)?.xi,
+                SaObjective::Surrogate => surrogate_xi(&fits, p.sa_actuation, &res.x),
+            };
+
+            // 4. Sensitivity: ± steps of `sensitivity_step` per factor around the optimum.
+            ctx.progress.set_message("sensitivity check");
+            let step: Vec<f64> = (0..3)
+                .map(|f| p.sensitivity_step / (0.5 * (p.levels[f][2] - p.levels[f][0])))
+                .collect();
+            let pts = sensitivity_points(&res.x, &step, p.sensitivity_steps, &lower, &upper)
+                .map_err(|e| Error::Stage(format!("sensitivity: {e}")))?;
+            let values: Vec<Result<f64>> = pts.par_iter().map(|s| Ok(evaluate(&s.x)?.0)).collect();
+            let mut sens_rows = Vec::new();
+            let mut spread = [0.0f64; 3];
+            for (s, v) in pts.iter().zip(values) {
+                let xi = v?;
+                let d = p.decode(&s.x);
+                if s.offset.abs() == 1 {
+                    spread[s.coordinate] = spread[s.coordinate].max((xi - best_xi).abs());
+                }
+                let mut m = Map::new();
+                m.insert("factor".into(), json!(FACTORS[s.coordinate]));
+                m.insert("offset_steps".into(), json!(s.offset));
+                m.insert(
+                    "offset_nm".into(),
+                    round6(f64::from(s.offset) * p.sensitivity_step / NM),
+                );
+                m.insert("a_um".into(), round6(d[0] / UM));
+                m.insert("w_um".into(), round6(d[1] / UM));
+                m.insert("x_um".into(), round6(d[2] / UM));
+                m.insert("xi".into(), round6(xi));
+                sens_rows.push(m);
+            }
+            crate::core::store::write_table(&sens_rows, &ctx.out_dir.join("sensitivity"))?;
+            let most = (0..3)
+                .max_by(|a, b| spread[*a].total_cmp(&spread[*b]))
+                .map(|f| FACTORS[f]);
+
+            let optimum = json!({
+                "a_m": best[0], "w_m": best[1], "x_m": best[2],
+                "xi": best_xi,
+                "objective": format!("{:?}", p.sa_objective).to_lowercase(),
+                "evaluations": res.evaluations,
+                "reanneals": res.reanneals,
+                "stop": match stop.unwrap_or(res.stop) {
+                    StopReason::Stalled => "converged (stalled)",
+                    StopReason::MaxEvaluations => "evaluation budget",
+                },
+                "sensitivity_one_step": {"a_tfc": spread[0], "w_tfc": spread[1], "x_tfc": spread[2]},
+                "most_sensitive": most,
+            });
+            row.insert("optimum_a_um".into(), round6(best[0] / UM));
+            row.insert("optimum_w_um".into(), round6(best[1] / UM));
+            row.insert("optimum_x_um".into(), round6(best[2] / UM));
+            row.insert("optimum_xi".into(), round6(best_xi));
+            row.insert("sa_evaluations".into(), json!(res.evaluations));
+            row.insert("most_sensitive".into(), json!(most));
+            result["optimum"] = optimum;
+
+            // 5. Table 2.8: the 2-DOF sweep on the initial and the optimised design.
+            if p.compare {
+                let initial = {
+                    let b = p.base.model.bulge;
+                    [b.semi_width_x, b.full_width_y, b.offset_from_te]
+                };
+                let n = p.compare_actuations.len();
+                let total = 2 * n;
+                let done = AtomicUsize::new(0);
+                let runs: Vec<Result<DesignCase>> = (0..total)
+                    .into_par_iter()
+                    .map(|i| {
+                        let design = if i < n { initial } else { best };
+                        let r = runner.run(design, p.compare_actuations[i % n]);
+                        let k = done.fetch_add(1, Ordering::Relaxed) + 1;
+                        ctx.progress
+                            .set_message(format!("Table 2.8 sweeps: {k}/{total} cases"));
+                        r
+                    })
+                    .collect();
+                let mut all = Vec::with_capacity(total);
+                for r in runs {
+                    all.push(r?);
+                }
+                let mut cmp_rows = Vec::new();
+                let mut series = Vec::new();
+                for (label, chunk) in [("initial", &all[..n]), ("optimised", &all[n..])] {
+                    let design = chunk[0].design;
+                    let sp = runner.params_for(&design)?;
+                    let outcomes: Vec<CaseOutcome> = chunk
+                        .iter()
+                        .map(|c| CaseOutcome {
+                            actuation: c.actuation,
+                            metrics: c.entry.result.clone(),
+                            entry: c.entry.clone(),
+                        })
+                        .collect();
+                    cmp_rows.extend(comparison_rows(label, &design, &sp, &outcomes)?);
+                    series.push((
+                        label,
+                        outcomes
+                            .iter()
+                            .map(|c| {
+                                (
+                                    c.actuation / NM,
+                                    c.metrics["clearance_m"]["mean"]
+                                        .as_f64()
+                                        .unwrap_or(f64::NAN)
+                                        / NM,
+                                    c.metrics["clearance_m"]["std"].as_f64().unwrap_or(f64::NAN)
+                                        / NM,
+                                )
+                            })
+                            .collect::<Vec<_>>(),
+                    ));
+                }
+                crate::core::store::write_table(&cmp_rows, &ctx.out_dir.join("comparison"))?;
+                let t0 = 0.5 * p.base.model.interface.lubricant_thickness / NM;
+                let sweep_series: Vec<crate::core::plot_sweep::SweepSeries> = series
+                    .iter()
+                    .map(|(label, pts)| crate::core::plot_sweep::SweepSeries {
+                        label,
+                        points: pts.clone(),
+                    })
+                    .collect();
+                crate::core::plot_sweep::clearance_sweep_png(
+                    &ctx.out_dir.join("comparison.png"),
+                    "Initial vs optimised design: steady clearance (Table 2.8)",
+                    "TFC actuation (nm)",
+                    "clearance (nm)",
+                    &sweep_series,
+                    &[],
+                    &[(0.0, "solid contact"), (t0, "T0"), (2.0 * t0, "2T0")],
+                )?;
+                result["comparison"] = json!(cmp_rows);
+            }
+        }
+        result["tables"] = json!([
+            "design",
+            "coefficients",
+            "anova",
+            "predictive_equations",
+            "annealing",
+            "sensitivity",
+            "comparison"
+        ]);
+        Ok(StageOutput {
+            result,
+            summary_row: Some(row),
+        })
+    }
+}
+
+/// `hdi validate` rows (area `optimisation`): each current `[doe]` optimum beside the
+/// dissertation's (a = 4.86 µm, x = 6.35 µm; w and ξ_min were dropped).
+pub fn validation_rows(config: &Path) -> Result<Vec<crate::validate::Row>> {
+    use crate::core::engine::{plan, read_result, State};
+    use crate::validate::{Row, Tolerance};
+    let file = PipelineFile::load(config)?;
+    let stages = super::build(&file)?;
+    let store = crate::core::cache::Store::open_existing(&file.processed_dir());
+    let plan = plan(stages, &store, &Default::default())?;
+    let mut rows = Vec::new();
+    for (name, cfg) in &file.raw.doe {
+        if !cfg.optimise {
+            continue;
+        }
+        let planned = plan.planned.iter().find(|p| &p.name == name);
+        let Some(entry) = planned.filter(|p| p.state == State::Fresh) else {
+            rows.push(Row {
+                source: format!("[doe.{name}]"),
+                quantity: "optimised a_TFC".into(),
+                unit: "um".into(),
+                target: 4.86,
+                ours: f64::NAN,
+                tolerance: Tolerance::Absolute(0.5),
+                reproducible: false,
+                variant: "not run".into(),
+                note: format!("no current result: run `hdi run --only {name}` first"),
+            });
+            continue;
+        };
+        let result = read_result(&store.entry_dir(&entry.kind, &entry.key))?;
+        let o = &result["optimum"];
+        let variant = format!(
+            "ξ = (c̄/FH_nom)(V/100) [assumed, §9]; SA on the {} objective, {} evaluations ({}), seed {}",
+            o["objective"].as_str().unwrap_or("?").to_lowercase(),
+            o["evaluations"],
+            o["stop"].as_str().unwrap_or("?"),
+            cfg.sa_seed
+        );
+        let w = o["w_m"].as_f64().unwrap_or(f64::NAN) / UM;
+        let note = format!(
+            "class D: ξ's formula, the DOE levels and the DMW were dropped from the text and the \
+             model runs at the spec's default inputs (touchdown 10.4 nm, not 9.7); our w_TFC = \
+             {w:.2} µm (dropped); most sensitive: {}",
+            o["most_sensitive"].as_str().unwrap_or("?")
+        );
+        for (q, key, target) in [("a_TFC", "a_m", 4.86), ("x_TFC", "x_m", 6.35)] {
+            rows.push(Row {
+                source: format!("dynamics.md §9 / seed §2.3.2 [doe.{name}]"),
+                quantity: format!("optimised {q}"),
+                unit: "um".into(),
+                target,
+                ours: o[key].as_f64().unwrap_or(f64::NAN) / UM,
+                tolerance: Tolerance::Absolute(0.5),
+                reproducible: false,
+                variant: variant.clone(),
+                note: note.clone(),
+            });
+        }
+    }
+    Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn objective_never_prefers_contact() {
+        assert_eq!(annealing_objective(0.02), 0.02);
+        // Negative ξ (solid contact) is worse than any positive ξ below 1.
+        assert_eq!(annealing_objective(-0.3), 1.3);
+        assert!(annealing_objective(-1e-9) > annealing_objective(0.9));
+    }
+
+    #[test]
+    fn surrogate_interpolates_linearly_between_levels() {
+        let points = full_factorial(&[3, 3, 3]);
+        let basis = PolynomialBasis::bounded(3, 2, 4);
+        // ξ = 1 + x1 at 9 nm and 3 + x1 at 12 nm: exact on the quartic basis.
+        let fit_of = |h: f64, c: f64| {
+            let xi: Vec<f64> = points.iter().map(|p| c + p[0]).collect();
+            LevelFit {
+                actuation: h,
+                fixed: 0,
+                quartic: ResponseSurface::fit(&basis, &points, &xi, &FitOptions::default())
+                    .unwrap(),
+                quintic: None,
+            }
+        };
+        let fits = [fit_of(9e-9, 1.0), fit_of(12e-9, 3.0)];
+        let at = |h: f64| surrogate_xi(&fits, h, &[0.5, 0.0, 0.0]);
+        assert!((at(9e-9) - 1.5).abs() < 1e-10);
+        assert!((at(12e-9) - 3.5).abs() < 1e-10);
+        // 9.75 nm is a quarter of the way: 1.5 + 0.25 · 2.
+        assert!((at(9.75e-9) - 2.0).abs() < 1e-10);
+        // Outside: the nearest level.
+        assert!((at(20e-9) - 3.5).abs() < 1e-10);
+    }
+
+    #[test]
+    fn coded_levels_decode_to_the_levels_exactly() {
+        let cfg: DoeConfig = toml::from_str("simulate = \"s\"").unwrap();
+        let base = simulate::validate(&toml::from_str("contact = \"c\"").unwrap()).unwrap();
+        let p = validate(&cfg, base, "s").unwrap();
+        // a_TFC's top level and x_TFC's bottom level are both 5 µm: equal, not an ulp apart.
+        let d = p.decode(&[1.0, 0.0, -1.0]);
+        assert_eq!(d[0], d[2]);
+        assert_eq!(d, [5.0 * UM, 50.0 * UM, 5.0 * UM]);
+        let back = p.encode(&d);
+        assert!(back
+            .iter()
+            .zip([1.0, 0.0, -1.0])
+            .all(|(a, b)| (a - b).abs() < 1e-12));
+        // §2.3.2's rule: a_TFC held at 5 and 15 nm, x_TFC at 9 and 12 nm.
+        assert_eq!(p.fixed, vec![0, 2, 2, 0]);
+    }
+}
