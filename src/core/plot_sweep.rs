@@ -132,6 +132,54 @@ pub(crate) fn finite_runs(pts: &[(f64, f64)]) -> impl Iterator<Item = &[(f64, f6
         .filter(|run| !run.is_empty())
 }
 
+/// Shade the bands (x intervals clipped to the chart) over the full y range, under what is
+/// drawn next, labelled at the top when `label_size` is given (one word per line when the
+/// label, ≈ 7 px per character, is wider than its band).
+fn draw_bands<'a, 'b: 'a>(
+    chart: &mut Chart<'a, 'b>,
+    bands: &[RegimeBand],
+    label_size: Option<u32>,
+) -> std::result::Result<(), String> {
+    let (xr, yr) = (chart.x_range(), chart.y_range());
+    let plot_w = chart.plotting_area().dim_in_pixel().0.max(1) as f64;
+    for (k, b) in bands.iter().enumerate() {
+        if !(usable(b.x0) && usable(b.x1)) {
+            continue;
+        }
+        let a = b.x0.min(b.x1).max(xr.start);
+        let c = b.x0.max(b.x1).min(xr.end);
+        if c <= a {
+            continue;
+        }
+        let fill = BAND_FILLS[k % BAND_FILLS.len()];
+        chart
+            .draw_series(std::iter::once(Rectangle::new(
+                [(a, yr.start), (c, yr.end)],
+                fill.filled(),
+            )))
+            .map_err(|e| e.to_string())?;
+        let Some(size) = label_size else { continue };
+        let width_px = (c - a) / (xr.end - xr.start) * plot_w;
+        let lines: Vec<&str> = if (b.label.chars().count() as f64) * 7.0 > width_px {
+            b.label.split_whitespace().collect()
+        } else {
+            vec![b.label]
+        };
+        let step = size as i32 + 2;
+        chart
+            .draw_series(lines.into_iter().enumerate().map(|(i, line)| {
+                EmptyElement::at((0.5 * (a + c), yr.end))
+                    + Text::new(
+                        line.to_string(),
+                        (0, 4 + step * i as i32),
+                        text_style(size, Pos::new(HPos::Center, VPos::Top)),
+                    )
+            }))
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
 /// "no data" in the middle of an empty chart.
 pub(crate) fn draw_no_data<'a, 'b: 'a>(
     chart: &mut Chart<'a, 'b>,
@@ -316,41 +364,7 @@ pub fn clearance_sweep_png(
             .build_cartesian_2d(xr.clone(), yr.clone())
             .map_err(|e| e.to_string())?;
         // Bands first, under the mesh lines and the data.
-        let plot_w = chart.plotting_area().dim_in_pixel().0.max(1) as f64;
-        for (k, b) in bands.iter().enumerate() {
-            if !(usable(b.x0) && usable(b.x1)) {
-                continue;
-            }
-            let a = b.x0.min(b.x1).max(xr.start);
-            let c = b.x0.max(b.x1).min(xr.end);
-            if c <= a {
-                continue;
-            }
-            let fill = BAND_FILLS[k % BAND_FILLS.len()];
-            chart
-                .draw_series(std::iter::once(Rectangle::new(
-                    [(a, yr.start), (c, yr.end)],
-                    fill.filled(),
-                )))
-                .map_err(|e| e.to_string())?;
-            // One word per line when the label (≈ 7 px per character) is wider than the band.
-            let width_px = (c - a) / (xr.end - xr.start) * plot_w;
-            let lines: Vec<&str> = if (b.label.chars().count() as f64) * 7.0 > width_px {
-                b.label.split_whitespace().collect()
-            } else {
-                vec![b.label]
-            };
-            chart
-                .draw_series(lines.into_iter().enumerate().map(|(i, line)| {
-                    EmptyElement::at((0.5 * (a + c), yr.end))
-                        + Text::new(
-                            line.to_string(),
-                            (0, 4 + 15 * i as i32),
-                            text_style(13, Pos::new(HPos::Center, VPos::Top)),
-                        )
-                }))
-                .map_err(|e| e.to_string())?;
-        }
+        draw_bands(&mut chart, bands, Some(13))?;
         chart
             .configure_mesh()
             .x_desc(x_desc)
@@ -638,40 +652,7 @@ pub fn time_histories_banded_png(
                 .y_label_area_size(75)
                 .build_cartesian_2d(xr.clone(), yr.clone())
                 .map_err(|e| e.to_string())?;
-            for (b_idx, b) in bands.iter().enumerate() {
-                let a = b.x0.min(b.x1).max(xr.start);
-                let c = b.x0.max(b.x1).min(xr.end);
-                if !(usable(a) && usable(c)) || c <= a {
-                    continue;
-                }
-                let fill = BAND_FILLS[b_idx % BAND_FILLS.len()];
-                chart
-                    .draw_series(std::iter::once(Rectangle::new(
-                        [(a, yr.start), (c, yr.end)],
-                        fill.filled(),
-                    )))
-                    .map_err(|e| e.to_string())?;
-                if k == 0 {
-                    // One word per line when the label (≈ 7 px per character) is too wide.
-                    let plot_w = chart.plotting_area().dim_in_pixel().0.max(1) as f64;
-                    let width_px = (c - a) / (xr.end - xr.start) * plot_w;
-                    let lines: Vec<&str> = if (b.label.chars().count() as f64) * 7.0 > width_px {
-                        b.label.split_whitespace().collect()
-                    } else {
-                        vec![b.label]
-                    };
-                    chart
-                        .draw_series(lines.into_iter().enumerate().map(|(i, line)| {
-                            EmptyElement::at((0.5 * (a + c), yr.end))
-                                + Text::new(
-                                    line.to_string(),
-                                    (0, 3 + 14 * i as i32),
-                                    text_style(12, Pos::new(HPos::Center, VPos::Top)),
-                                )
-                        }))
-                        .map_err(|e| e.to_string())?;
-                }
-            }
+            draw_bands(&mut chart, bands, (k == 0).then_some(12))?;
             let mut mesh = chart.configure_mesh();
             mesh.y_desc(panel.y_desc)
                 .light_line_style(BLACK.mix(0.05))

@@ -68,28 +68,7 @@ impl CalibrateStage {
         cfg: &CalibrateConfig,
     ) -> std::result::Result<Self, ConfigError> {
         let err = |k: &str, m: String| file.error("calibrate", name, k, m);
-        let Some(base_cfg) = file.raw.simulate.get(&cfg.simulate) else {
-            return Err(err(
-                "simulate",
-                format!("no [simulate.{}] in this file", cfg.simulate),
-            ));
-        };
-        if base_cfg.calibration.is_some() {
-            return Err(err(
-                "simulate",
-                format!(
-                    "[simulate.{}] is itself calibrated; a calibration starts from an \
-                     uncalibrated instance",
-                    cfg.simulate
-                ),
-            ));
-        }
-        let base = simulate::validate(base_cfg).map_err(|(k, m)| {
-            err(
-                "simulate",
-                format!("[simulate.{}] is invalid ({k}: {m})", cfg.simulate),
-            )
-        })?;
+        let base = simulate::uncalibrated_base(file, "calibrate", name, &cfg.simulate)?;
         if base.geometry != "dissertation" {
             return Err(err(
                 "simulate",

@@ -760,27 +760,7 @@ impl DoeStage {
         cfg: &DoeConfig,
     ) -> std::result::Result<Self, ConfigError> {
         let err = |k: &str, m: String| file.error("doe", name, k, m);
-        let Some(base_cfg) = file.raw.simulate.get(&cfg.simulate) else {
-            return Err(err(
-                "simulate",
-                format!("no [simulate.{}] in this file", cfg.simulate),
-            ));
-        };
-        if base_cfg.calibration.is_some() {
-            return Err(err(
-                "simulate",
-                format!(
-                    "[simulate.{}] is calibrated; a DOE starts from an uncalibrated instance",
-                    cfg.simulate
-                ),
-            ));
-        }
-        let base = simulate::validate(base_cfg).map_err(|(k, m)| {
-            err(
-                "simulate",
-                format!("[simulate.{}] is invalid ({k}: {m})", cfg.simulate),
-            )
-        })?;
+        let base = simulate::uncalibrated_base(file, "doe", name, &cfg.simulate)?;
         let params = validate(cfg, base, &cfg.simulate).map_err(|(k, m)| err(&k, m))?;
         Ok(DoeStage {
             name: name.to_string(),

@@ -178,6 +178,27 @@ pub struct SimulateParams {
     pub calibrated_knobs: Vec<(String, f64)>,
 }
 
+/// The uncalibrated `[simulate.<base>]` another stage builds on (`[calibrate]`, `[doe]`),
+/// validated; failures are reported against that stage's `simulate` key.
+pub fn uncalibrated_base(
+    file: &PipelineFile,
+    section: &str,
+    name: &str,
+    base: &str,
+) -> std::result::Result<SimulateParams, ConfigError> {
+    let err = |m: String| file.error(section, name, "simulate", m);
+    let Some(cfg) = file.raw.simulate.get(base) else {
+        return Err(err(format!("no [simulate.{base}] in this file")));
+    };
+    if cfg.calibration.is_some() {
+        return Err(err(format!(
+            "[simulate.{base}] is itself calibrated; [{section}] starts from an uncalibrated \
+             instance"
+        )));
+    }
+    validate(cfg).map_err(|(k, m)| err(format!("[simulate.{base}] is invalid ({k}: {m})")))
+}
+
 /// Validation failures: (key, message).
 pub fn validate(cfg: &SimulateConfig) -> std::result::Result<SimulateParams, (String, String)> {
     let bad = |k: &str, m: String| Err((k.to_string(), m));

@@ -690,15 +690,17 @@ fn write_case_h5(path: &Path, h: &History3Dof) -> Result<()> {
     out.finish()
 }
 
+/// `(time in ms, value · scale)` of a series sampled every `dt` seconds (the plots' x axis).
+fn ms_series(dt: f64, x: &[f64], scale: f64) -> Vec<(f64, f64)> {
+    x.iter()
+        .enumerate()
+        .map(|(k, v)| (k as f64 * dt * 1e3, v * scale))
+        .collect()
+}
+
 fn history_png(path: &Path, h: &History3Dof, label: &str) -> Result<()> {
     use crate::core::plot_sweep::{time_histories_png, Panel};
-    let t_ms = |k: usize| k as f64 * h.dt * 1e3;
-    let pair = |x: &[f64], scale: f64| -> Vec<(f64, f64)> {
-        x.iter()
-            .enumerate()
-            .map(|(k, v)| (t_ms(k), v * scale))
-            .collect()
-    };
+    let pair = |x: &[f64], scale: f64| ms_series(h.dt, x, scale);
     // Every feature that comes within 50 nm of the disk (the bulge always).
     let names: Vec<String> = h.features.iter().map(|f| format!("{f:?}")).collect();
     let near: Vec<(&str, Vec<(f64, f64)>)> = names
@@ -754,12 +756,7 @@ fn variable_actuation_pngs(
         time_histories_banded_png, time_histories_png, Panel, RegimeBand,
     };
     let t_ms = |k: usize| k as f64 * h.dt * 1e3;
-    let pair = |x: &[f64], scale: f64| -> Vec<(f64, f64)> {
-        x.iter()
-            .enumerate()
-            .map(|(k, v)| (t_ms(k), v * scale))
-            .collect()
-    };
+    let pair = |x: &[f64], scale: f64| ms_series(h.dt, x, scale);
     let level = |v: f64| vec![(0.0, v * 1e9), (t_ms(h.len().saturating_sub(1)), v * 1e9)];
     let mut bands = Vec::new();
     if let Some(w) = h.regime_windows(profile, lubricant) {
