@@ -588,3 +588,17 @@ pub fn category_dots_png(
         Ok(())
     })
 }
+
+/// Test helper: `path` holds a real PNG (signature, more than a header's worth of bytes).
+#[cfg(test)]
+pub(crate) fn assert_png(path: &Path) {
+    const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, b'\n'];
+    let bytes = std::fs::read(path).expect("plot written");
+    assert!(
+        bytes.len() > 1000,
+        "{}: {} bytes",
+        path.display(),
+        bytes.len()
+    );
+    assert_eq!(bytes[..8], PNG_SIGNATURE, "{}", path.display());
+}

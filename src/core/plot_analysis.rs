@@ -944,18 +944,7 @@ pub fn spectrum_png(
 mod tests {
     use super::*;
 
-    const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, b'\n'];
-
-    fn assert_png(path: &Path) {
-        let bytes = std::fs::read(path).expect("plot written");
-        assert!(
-            bytes.len() > 1000,
-            "{}: {} bytes",
-            path.display(),
-            bytes.len()
-        );
-        assert_eq!(bytes[..8], PNG_SIGNATURE, "{}", path.display());
-    }
+    use crate::core::plot::assert_png;
 
     /// A hand-made scalogram of a log chirp 20 → 300 kHz: times, frequencies, |W|, coi, ridge.
     type Chirp = (Vec<f64>, Vec<f64>, Vec<f32>, Vec<f64>, Vec<f64>);

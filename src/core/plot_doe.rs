@@ -985,18 +985,7 @@ pub fn annealing_png(
 mod tests {
     use super::*;
 
-    const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, b'\n'];
-
-    fn assert_png(path: &Path) {
-        let bytes = std::fs::read(path).expect("plot written");
-        assert!(
-            bytes.len() > 1000,
-            "{}: {} bytes",
-            path.display(),
-            bytes.len()
-        );
-        assert_eq!(bytes[..8], PNG_SIGNATURE, "{}", path.display());
-    }
+    use crate::core::plot::assert_png;
 
     fn grid(lo: f64, hi: f64, n: usize) -> Vec<f64> {
         (0..n)

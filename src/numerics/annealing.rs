@@ -22,6 +22,7 @@
 //! steps are much longer than the box and many candidates clip to the same corners);
 //! [`anneal`] drives it with a closure.
 
+use crate::numerics::rng::Rng;
 use std::convert::Infallible;
 
 /// Errors of the annealer. `E` is the objective's own error type.
@@ -117,57 +118,12 @@ pub struct AnnealingResult {
     pub history: Vec<AnnealingRecord>,
 }
 
-/// xoshiro256** (Blackman & Vigna), seeded through SplitMix64 as its authors recommend.
-#[derive(Debug, Clone)]
-struct Xoshiro256 {
-    s: [u64; 4],
+/// Random unit directions from the project's seeded generator.
+trait Directions {
+    fn direction(&mut self, dim: usize) -> Vec<f64>;
 }
 
-impl Xoshiro256 {
-    fn seeded(seed: u64) -> Self {
-        let mut x = seed;
-        let mut splitmix = || {
-            x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = x;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        };
-        Xoshiro256 {
-            s: [splitmix(), splitmix(), splitmix(), splitmix()],
-        }
-    }
-
-    fn next_u64(&mut self) -> u64 {
-        let result = self.s[1].wrapping_mul(5).rotate_left(7).wrapping_mul(9);
-        let t = self.s[1] << 17;
-        self.s[2] ^= self.s[0];
-        self.s[3] ^= self.s[1];
-        self.s[1] ^= self.s[2];
-        self.s[0] ^= self.s[3];
-        self.s[2] ^= t;
-        self.s[3] = self.s[3].rotate_left(45);
-        result
-    }
-
-    /// Uniform on [0, 1) with 53 random bits.
-    fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// A pair of independent standard normals (Marsaglia's polar method).
-    fn normal_pair(&mut self) -> (f64, f64) {
-        loop {
-            let u = 2.0 * self.uniform() - 1.0;
-            let v = 2.0 * self.uniform() - 1.0;
-            let s = u * u + v * v;
-            if s > 0.0 && s < 1.0 {
-                let f = (-2.0 * s.ln() / s).sqrt();
-                return (u * f, v * f);
-            }
-        }
-    }
-
+impl Directions for Rng {
     /// Uniformly random unit vector (normalised Gaussian vector).
     fn direction(&mut self, dim: usize) -> Vec<f64> {
         loop {
@@ -202,7 +158,7 @@ pub struct Annealer {
     opts: AnnealingOptions,
     stall_limit: usize,
     max_evaluations: usize,
-    rng: Xoshiro256,
+    rng: Rng,
     /// Annealing parameter (real-valued after a reannealing).
     k: f64,
     current: Vec<f64>,
@@ -292,7 +248,7 @@ impl Annealer {
             opts: *opts,
             stall_limit,
             max_evaluations,
-            rng: Xoshiro256::seeded(opts.seed),
+            rng: Rng::new(opts.seed),
             k: 0.0,
             current: coded,
             current_j: f64::INFINITY,

@@ -4,4 +4,5 @@ pub mod fft2;
 pub mod nelder_mead;
 pub mod ode;
 pub mod regression;
+pub mod rng;
 pub mod special;
