@@ -606,12 +606,32 @@ fn fit_summary(lf: &LevelFit) -> Value {
             "sigma": s.fit.sigma,
         })
     };
+    let (f, p, selected) = model_selection(lf);
     json!({
         "actuation_m": lf.actuation,
         "fixed_factor": FACTORS[lf.fixed],
         "degree_4": one(&lf.quartic),
         "degree_5": lf.quintic.as_ref().map(one),
+        "degree_5_vs_4": {"F": f, "p": p},
+        "selected_degree": selected,
     })
+}
+
+/// Does the degree-5 model explain significantly more than the degree-4 one? The
+/// extra-sum-of-squares F test of the nested models (3 added terms against the larger model's
+/// residual), at 5 %: the dissertation kept degree 4 where the added terms were not needed.
+fn model_selection(lf: &LevelFit) -> (Option<f64>, Option<f64>, u32) {
+    let Some(q) = &lf.quintic else {
+        return (None, None, 4);
+    };
+    let (r4, r5) = (&lf.quartic.fit, &q.fit);
+    let added = r5.parameters.saturating_sub(r4.parameters);
+    if added == 0 || r5.residual_df == 0 || r5.rss <= 0.0 {
+        return (None, None, 4);
+    }
+    let f = ((r4.rss - r5.rss) / added as f64) / (r5.rss / r5.residual_df as f64);
+    let p = crate::numerics::special::f_sf(f, added as f64, r5.residual_df as f64);
+    (Some(f), Some(p), if p < 0.05 { 5 } else { 4 })
 }
 
 /// Contour panels of one level: ξ over the two free factors at the fixed one's three levels.
@@ -887,6 +907,10 @@ impl Stage for DoeStage {
             }
             fits.push(fit_level(h, p.fixed[k], &coded_points, &xi)?);
         }
+        let degrees: Vec<String> = fits
+            .iter()
+            .map(|f| model_selection(f).2.to_string())
+            .collect();
         crate::core::store::write_table(
             &coefficient_rows(&fits),
             &ctx.out_dir.join("coefficients"),
@@ -926,6 +950,7 @@ impl Stage for DoeStage {
         let mut row = Map::new();
         row.insert("simulate".into(), json!(p.base_name));
         row.insert("cases".into(), json!(total));
+        row.insert("selected_degrees".into(), json!(degrees.join(" ")));
 
         // 3. Simulated annealing on ξ at sa_actuation, in coded units.
         if p.optimise {
@@ -1240,6 +1265,39 @@ mod tests {
         assert!((at(9.75e-9) - 2.0).abs() < 1e-10);
         // Outside: the nearest level.
         assert!((at(20e-9) - 3.5).abs() < 1e-10);
+    }
+
+    #[test]
+    fn degree_five_is_selected_only_when_its_terms_are_needed() {
+        let points = full_factorial(&[3, 3, 3]);
+        let mut rng = crate::numerics::rng::Rng::new(5);
+        let noise: Vec<f64> = points.iter().map(|_| 1e-3 * rng.normal()).collect();
+        let level = |y: Vec<f64>| {
+            let opts = FitOptions::default();
+            let fit =
+                |d| ResponseSurface::fit(&PolynomialBasis::bounded(3, 2, d), &points, &y, &opts);
+            LevelFit {
+                actuation: 9e-9,
+                fixed: 2,
+                quartic: fit(4).unwrap(),
+                quintic: fit(5).ok(),
+            }
+        };
+        // A quartic surface plus noise: the added terms explain noise only.
+        let quartic: Vec<f64> = points
+            .iter()
+            .zip(&noise)
+            .map(|(x, e)| 1.0 + x[0] - 0.5 * x[1] * x[1] * x[2] * x[2] + e)
+            .collect();
+        assert_eq!(model_selection(&level(quartic)).2, 4);
+        // A strong degree-5 term (x1² x2² x3) the quartic cannot represent.
+        let quintic: Vec<f64> = points
+            .iter()
+            .zip(&noise)
+            .map(|(x, e)| 1.0 + x[0] * x[0] * x[1] * x[1] * x[2] + e)
+            .collect();
+        let (f, p, d) = model_selection(&level(quintic));
+        assert_eq!(d, 5, "F {f:?}, p {p:?}");
     }
 
     #[test]
