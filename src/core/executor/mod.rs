@@ -170,7 +170,8 @@ pub struct ManifestEntry {
     pub status: CaseStatus,
 }
 
-/// One `sbatch` submission made for this manifest.
+/// One `sbatch` submission made for a manifest; kept in a small file of its own beside the
+/// manifest ([`submissions_path`]) so recording a job id does not rewrite megabytes of cases.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct SubmissionRecord {
     pub job_id: u64,
@@ -191,8 +192,6 @@ pub struct CaseManifest {
     /// `t*cases_per_task .. (t+1)*cases_per_task` (clipped to the case count).
     pub cases_per_task: usize,
     pub cases: Vec<ManifestEntry>,
-    #[serde(default)]
-    pub submissions: Vec<SubmissionRecord>,
 }
 
 /// What a worker writes for one case: `outcomes/<case index>.json` beside the manifest.
@@ -258,7 +257,6 @@ impl CaseManifest {
             created: crate::core::cache::now_iso8601(),
             cases_per_task,
             cases,
-            submissions: Vec::new(),
         })
     }
 
@@ -399,6 +397,65 @@ pub fn manifest_path(processed: &Path, id: &str) -> PathBuf {
     slurm_dir(processed)
         .join("manifests")
         .join(format!("{id}.json"))
+}
+
+/// The submission records of a manifest: `<manifest stem>.jobs.json` beside it.
+pub fn submissions_path(manifest_path: &Path) -> PathBuf {
+    let stem = manifest_path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    manifest_path.with_file_name(format!("{stem}.jobs.json"))
+}
+
+/// The arrays submitted for a manifest so far (none if the file does not exist).
+pub fn read_submissions(manifest_path: &Path) -> ExecResult<Vec<SubmissionRecord>> {
+    let path = submissions_path(manifest_path);
+    match std::fs::read(&path) {
+        Ok(bytes) => serde_json::from_slice(&bytes).map_err(|e| ExecutorError::Manifest {
+            path,
+            message: e.to_string(),
+        }),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Vec::new()),
+        Err(e) => Err(ExecutorError::io(path, e)),
+    }
+}
+
+fn write_submissions(manifest_path: &Path, records: &[SubmissionRecord]) -> ExecResult<()> {
+    let path = submissions_path(manifest_path);
+    let bytes = serde_json::to_vec_pretty(records).map_err(|e| ExecutorError::Manifest {
+        path: path.clone(),
+        message: e.to_string(),
+    })?;
+    write_atomic(&path, &bytes).map_err(|e| ExecutorError::io(path, e))
+}
+
+/// All case manifests, oldest first (their names start with the creation time): what
+/// `hdi status` lists failed cases from.
+pub fn list_manifests(processed: &Path) -> ExecResult<Vec<PathBuf>> {
+    let dir = slurm_dir(processed).join("manifests");
+    let listing = match std::fs::read_dir(&dir) {
+        Ok(l) => l,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(ExecutorError::io(&dir, e)),
+    };
+    let mut paths = Vec::new();
+    for item in listing {
+        let path = item.map_err(|e| ExecutorError::io(&dir, e))?.path();
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_default();
+        let is_manifest = path.is_file()
+            && name.ends_with(".json")
+            && !name.ends_with(".jobs.json")
+            && !name.starts_with('.');
+        if is_manifest {
+            paths.push(path);
+        }
+    }
+    paths.sort();
+    Ok(paths)
 }
 
 /// The outcome files of a manifest: `<manifest stem>.outcomes/` beside it.

@@ -6,8 +6,12 @@
 //! engineering.md §5); `sacct` only adds *why* a task failed when it is available. Whether a
 //! case succeeded is decided by the store and the workers' outcome files, never by Slurm.
 
-use super::plan::ArraySubmission;
-use super::{slurm_dir, ExecResult, ExecutorError};
+use super::plan::{plan_arrays, ArraySubmission};
+use super::{
+    read_submissions, slurm_dir, write_submissions, CaseManifest, ExecResult, ExecutorError,
+    SubmissionRecord,
+};
+use crate::core::cache::{now_iso8601, write_atomic};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
@@ -350,6 +354,54 @@ pub fn failed_tasks(job_id: u64, tasks: usize, acct: &[AccountingLine]) -> Vec<F
     failed.sort_by_key(|f| f.task_id);
     failed.dedup_by_key(|f| f.task_id);
     failed
+}
+
+/// The script file of the array starting at global task `offset` of a manifest.
+pub fn script_path(manifest_path: &Path, offset: usize) -> PathBuf {
+    let stem = manifest_path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    manifest_path.with_file_name(format!("{stem}.task{offset}.sh"))
+}
+
+/// Submit the arrays of a manifest (planned with its `cases_per_task` and `max_array`): one
+/// script per array beside the manifest, `sbatch`, and the job id appended to the manifest's
+/// submission records after every submission, so a refusal half-way (a per-user job limit)
+/// still leaves a record of what is queued. Arrays already recorded (same offset and size)
+/// are not submitted again. Returns the records of this call's submissions.
+pub fn submit_manifest(
+    client: &SlurmClient,
+    opts: &ScriptOptions,
+    manifest_path: &Path,
+    manifest: &CaseManifest,
+    max_array: usize,
+) -> ExecResult<Vec<SubmissionRecord>> {
+    let arrays = plan_arrays(manifest.cases.len(), manifest.cases_per_task, max_array)?;
+    let mut records = read_submissions(manifest_path)?;
+    let mut submitted = Vec::new();
+    for array in &arrays {
+        let already = records
+            .iter()
+            .any(|s| s.offset == array.offset && s.tasks == array.tasks);
+        if already {
+            continue;
+        }
+        let script = sbatch_script(opts, manifest_path, array)?;
+        let path = script_path(manifest_path, array.offset);
+        write_atomic(&path, script.as_bytes()).map_err(|e| ExecutorError::io(&path, e))?;
+        let job_id = client.submit(&path)?;
+        let record = SubmissionRecord {
+            job_id,
+            offset: array.offset,
+            tasks: array.tasks,
+            submitted: now_iso8601(),
+        };
+        records.push(record.clone());
+        write_submissions(manifest_path, &records)?;
+        submitted.push(record);
+    }
+    Ok(submitted)
 }
 
 /// Runs `sbatch`, `squeue` and `sacct`: from PATH, or from one directory (tests, or a site

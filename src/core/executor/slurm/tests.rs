@@ -315,3 +315,110 @@ fn log_path_matches_the_output_pattern() {
     let p = log_path(Path::new("/p/processed"), 4242, 7);
     assert_eq!(p, PathBuf::from("/p/processed/.hdi/slurm/4242_7.log"));
 }
+
+fn study(n: usize, cases_per_task: usize) -> CaseManifest {
+    let specs = (0..n)
+        .map(|i| {
+            super::super::CaseSpec::new(
+                "simulate",
+                "test-1",
+                serde_json::json!({"actuation_m": i as f64 * 1e-12}),
+                serde_json::json!({}),
+            )
+        })
+        .collect();
+    CaseManifest::new(specs, cases_per_task).unwrap()
+}
+
+/// sbatch numbering its jobs 100, 101, ...; failing on call `fail_at` (0-based) if given.
+fn numbering_sbatch(fake: &FakeSlurm, fail_at: Option<usize>) {
+    let fail = fail_at.map_or(String::new(), |k| {
+        format!("[ \"$n\" -eq {k} ] && {{ echo 'sbatch: error: QOSMaxSubmitJobPerUserLimit' >&2; exit 1; }}\n")
+    });
+    fake.tool(
+        "sbatch",
+        &format!(
+            "n=$(cat \"$D/sbatch.count\" 2>/dev/null || echo 0)\n{fail}\
+             echo $((n + 1)) > \"$D/sbatch.count\"\necho $((100 + n))"
+        ),
+    );
+}
+
+#[test]
+fn ten_thousand_cases_submit_as_arrays_within_the_limit() {
+    let fake = FakeSlurm::new();
+    numbering_sbatch(&fake, None);
+    let processed = fake.dir.path().join("processed");
+    let m = study(10_000, 1);
+    let path = super::super::manifest_path(&processed, &m.id());
+    m.write(&path).unwrap();
+    let opts = ScriptOptions {
+        processed: processed.clone(),
+        ..options()
+    };
+    let t0 = std::time::Instant::now();
+    let subs = submit_manifest(&fake.client(), &opts, &path, &m, 1000).unwrap();
+    eprintln!(
+        "10,000 cases → {} arrays submitted in {:?}",
+        subs.len(),
+        t0.elapsed()
+    );
+    assert_eq!(subs.len(), 10);
+    for (k, s) in subs.iter().enumerate() {
+        assert_eq!(
+            (s.job_id, s.offset, s.tasks),
+            (100 + k as u64, 1000 * k, 1000)
+        );
+        let script = std::fs::read_to_string(script_path(&path, s.offset)).unwrap();
+        assert!(script.contains("#SBATCH --array=0-999%50\n"), "{script}");
+        assert!(
+            script.ends_with(&format!("--offset {}\n", s.offset)),
+            "{script}"
+        );
+    }
+    assert_eq!(read_submissions(&path).unwrap(), subs);
+    // Nothing left to submit for this manifest.
+    assert!(submit_manifest(&fake.client(), &opts, &path, &m, 1000)
+        .unwrap()
+        .is_empty());
+    assert_eq!(fake.args("sbatch").len(), 10);
+
+    // 25 cases per task: one array of 400 tasks.
+    let m = study(10_000, 25);
+    let path = super::super::manifest_path(&processed, "per25");
+    m.write(&path).unwrap();
+    let subs = submit_manifest(&fake.client(), &opts, &path, &m, 1000).unwrap();
+    assert_eq!(subs.len(), 1);
+    assert_eq!(subs[0].tasks, 400);
+}
+
+#[test]
+fn a_refused_submission_keeps_the_record_of_what_was_queued() {
+    let fake = FakeSlurm::new();
+    numbering_sbatch(&fake, Some(2));
+    let processed = fake.dir.path().join("processed");
+    let m = study(50, 2); // 25 tasks → arrays of 10, 10, 5
+    let path = super::super::manifest_path(&processed, &m.id());
+    m.write(&path).unwrap();
+    let opts = ScriptOptions {
+        processed,
+        ..options()
+    };
+    let e = submit_manifest(&fake.client(), &opts, &path, &m, 10).unwrap_err();
+    assert!(e.to_string().contains("QOSMaxSubmitJobPerUserLimit"), "{e}");
+    let offsets: Vec<usize> = read_submissions(&path)
+        .unwrap()
+        .iter()
+        .map(|s| s.offset)
+        .collect();
+    assert_eq!(offsets, vec![0, 10]);
+    // Retried (sbatch accepts again): only the third array goes in.
+    numbering_sbatch(&fake, None);
+    let subs = submit_manifest(&fake.client(), &opts, &path, &m, 10).unwrap();
+    assert_eq!(subs.len(), 1);
+    assert_eq!((subs[0].offset, subs[0].tasks), (20, 5));
+    assert_eq!(
+        super::super::list_manifests(&opts.processed).unwrap(),
+        vec![path]
+    );
+}
