@@ -379,6 +379,9 @@ pub fn submit_manifest(
 ) -> ExecResult<Vec<SubmissionRecord>> {
     let arrays = plan_arrays(manifest.cases.len(), manifest.cases_per_task, max_array)?;
     let mut records = read_submissions(manifest_path)?;
+    // Slurm does not create the `--output` directory: a missing one fails every task unlogged.
+    let logs = slurm_dir(&opts.processed);
+    std::fs::create_dir_all(&logs).map_err(|e| ExecutorError::io(&logs, e))?;
     let mut submitted = Vec::new();
     for array in &arrays {
         let already = records

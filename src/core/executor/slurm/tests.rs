@@ -398,7 +398,8 @@ fn a_refused_submission_keeps_the_record_of_what_was_queued() {
     numbering_sbatch(&fake, Some(2));
     let processed = fake.dir.path().join("processed");
     let m = study(50, 2); // 25 tasks → arrays of 10, 10, 5
-    let path = super::super::manifest_path(&processed, &m.id());
+                          // A manifest kept elsewhere: the log directory is still created.
+    let path = fake.dir.path().join("elsewhere").join("m.json");
     m.write(&path).unwrap();
     let opts = ScriptOptions {
         processed,
@@ -417,8 +418,15 @@ fn a_refused_submission_keeps_the_record_of_what_was_queued() {
     let subs = submit_manifest(&fake.client(), &opts, &path, &m, 10).unwrap();
     assert_eq!(subs.len(), 1);
     assert_eq!((subs[0].offset, subs[0].tasks), (20, 5));
+    assert!(slurm_dir(&opts.processed).is_dir());
+    let mut m2 = study(3, 1);
+    m2.created = "2099-01-01T00:00:00Z".into();
+    let path2 = super::super::manifest_path(&opts.processed, &m2.id());
+    m2.write(&path2).unwrap();
+    submit_manifest(&fake.client(), &opts, &path2, &m2, 10).unwrap();
+    // Scripts and job records beside a manifest are not manifests.
     assert_eq!(
         super::super::list_manifests(&opts.processed).unwrap(),
-        vec![path]
+        vec![path2]
     );
 }
