@@ -355,6 +355,41 @@ impl CaseManifest {
         Ok(changed)
     }
 
+    /// Cases of tasks that Slurm reports as failed but that never wrote an outcome (killed
+    /// by TIMEOUT, OOM, NODE_FAIL before reporting): still `Pending`, they become `Failed`
+    /// with the Slurm state, so `hdi status` can point at the log. Call after
+    /// [`Self::merge_outcomes`]. Returns how many changed.
+    pub fn mark_unreported(
+        &mut self,
+        processed: &Path,
+        submission: &SubmissionRecord,
+        failed: &[slurm::FailedTask],
+    ) -> usize {
+        let mut changed = 0;
+        for f in failed {
+            let global = submission.offset + f.task_id as usize;
+            if f.task_id as usize >= submission.tasks || global >= self.task_count() {
+                continue;
+            }
+            for index in task_cases(self.cases.len(), self.cases_per_task, global) {
+                let entry = &mut self.cases[index];
+                if entry.status == CaseStatus::Pending {
+                    entry.status = CaseStatus::Failed {
+                        error: format!(
+                            "task ended {} (exit {}) without reporting this case",
+                            f.state, f.exit_code
+                        ),
+                        job_id: Some(submission.job_id),
+                        task_id: Some(f.task_id),
+                        log: Some(slurm::log_path(processed, submission.job_id, f.task_id)),
+                    };
+                    changed += 1;
+                }
+            }
+        }
+        changed
+    }
+
     /// Entries that failed, with their index.
     pub fn failed(&self) -> impl Iterator<Item = (usize, &ManifestEntry)> {
         self.cases

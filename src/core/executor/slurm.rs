@@ -165,6 +165,26 @@ impl JobState {
     }
 }
 
+impl std::fmt::Display for JobState {
+    /// Slurm's own name, as `sacct` prints it.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let name = match self {
+            JobState::Pending => "PENDING",
+            JobState::Running => "RUNNING",
+            JobState::Completing => "COMPLETING",
+            JobState::Completed => "COMPLETED",
+            JobState::Failed => "FAILED",
+            JobState::Cancelled => "CANCELLED",
+            JobState::Timeout => "TIMEOUT",
+            JobState::OutOfMemory => "OUT_OF_MEMORY",
+            JobState::NodeFail => "NODE_FAIL",
+            JobState::Preempted => "PREEMPTED",
+            JobState::Other(s) => s,
+        };
+        f.write_str(name)
+    }
+}
+
 /// Which tasks of an array a line speaks for: `123` (the whole job), `123_4`, `123_[5-9]`,
 /// `123_[1,3,5-7%2]`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -490,6 +510,35 @@ impl SlurmClient {
             }
         }
         Ok(status)
+    }
+
+    /// One poll of every submitted array of a manifest, summed into one status for the
+    /// progress bar (job id of the first array; `failed` left empty because task ids are
+    /// per array: see each array's own status, returned alongside).
+    pub fn status_all(
+        &self,
+        submissions: &[SubmissionRecord],
+    ) -> ExecResult<(ArrayStatus, Vec<ArrayStatus>)> {
+        let each = submissions
+            .iter()
+            .map(|s| self.status(s.job_id, s.tasks))
+            .collect::<ExecResult<Vec<_>>>()?;
+        let mut total = ArrayStatus {
+            job_id: submissions.first().map_or(0, |s| s.job_id),
+            tasks: 0,
+            pending: 0,
+            running: 0,
+            finished: 0,
+            failed: Vec::new(),
+            accounting: !each.is_empty() && each.iter().all(|s| s.accounting),
+        };
+        for s in &each {
+            total.tasks += s.tasks;
+            total.pending += s.pending;
+            total.running += s.running;
+            total.finished += s.finished;
+        }
+        Ok((total, each))
     }
 
     /// Poll every `interval` until the array has left the queue; `on_poll` sees each poll

@@ -430,3 +430,64 @@ fn a_refused_submission_keeps_the_record_of_what_was_queued() {
         vec![path2]
     );
 }
+
+#[test]
+fn polls_all_arrays_and_marks_tasks_killed_before_reporting() {
+    let fake = FakeSlurm::new();
+    // Array 100 (tasks 0-1) has finished; array 101 (tasks 0-2) still has one running task.
+    fake.tool("squeue", "case \"$3\" in 101) echo '101_2 RUNNING' ;; esac");
+    fake.tool(
+        "sacct",
+        "case \"$4\" in 100) printf '100_0|COMPLETED|0:0\\n100_1|TIMEOUT|0:0\\n' ;; esac",
+    );
+    let subs = [
+        SubmissionRecord {
+            job_id: 100,
+            offset: 0,
+            tasks: 2,
+            submitted: String::new(),
+        },
+        SubmissionRecord {
+            job_id: 101,
+            offset: 2,
+            tasks: 3,
+            submitted: String::new(),
+        },
+    ];
+    let (total, each) = fake.client().status_all(&subs).unwrap();
+    assert_eq!((total.tasks, total.running, total.finished), (5, 1, 4));
+    assert!(!total.is_finished() && !total.accounting);
+    assert!(each[0].accounting && !each[1].accounting);
+    assert_eq!(each[0].failed.len(), 1);
+
+    // Manifest of 10 cases at 2 per task: array 100 task 1 = global task 1 = cases 2..4.
+    let processed = fake.dir.path().join("processed");
+    let mut m = study(10, 2);
+    m.cases[3].status = super::super::CaseStatus::Done; // it did report this one
+    assert_eq!(m.mark_unreported(&processed, &subs[0], &each[0].failed), 1);
+    let failed: Vec<_> = m.failed().collect();
+    assert_eq!(failed.len(), 1);
+    assert_eq!(failed[0].0, 2);
+    let super::super::CaseStatus::Failed {
+        error,
+        job_id,
+        task_id,
+        log,
+    } = &failed[0].1.status
+    else {
+        unreachable!()
+    };
+    assert_eq!(
+        error,
+        "task ended TIMEOUT (exit 0:0) without reporting this case"
+    );
+    assert_eq!((*job_id, *task_id), (Some(100), Some(1)));
+    assert_eq!(log.as_deref(), Some(log_path(&processed, 100, 1).as_path()));
+    // A task id outside the array is ignored.
+    let bogus = [FailedTask {
+        task_id: 7,
+        state: JobState::Failed,
+        exit_code: "1:0".into(),
+    }];
+    assert_eq!(m.mark_unreported(&processed, &subs[0], &bogus), 0);
+}
