@@ -3,6 +3,7 @@ pub mod cache;
 pub mod cases;
 pub mod config;
 pub mod engine;
+pub mod executor;
 pub mod hash;
 pub mod memory;
 pub mod plot;

@@ -1,0 +1,662 @@
+//! Where independent cases run: the groundwork for `hdi run --executor slurm` (issue 9,
+//! docs/slurm.md). Nothing here is wired into the engine or the stages yet.
+//!
+//! The unit of work is a [`CaseSpec`]: a case's cache key and canonical parameters (what
+//! `core::cases` hashes) plus a *recipe* (what a worker process needs to recompute it). The
+//! submitting process writes the stale cases to a [`CaseManifest`]; each Slurm array task runs
+//! a contiguous range of them through [`exec_task`], which computes through
+//! `cases::get_or_compute` (the same code path and atomic store rules as a local run, hence
+//! the same bytes) and reports each case in its own outcome file. Workers never rewrite the
+//! shared manifest: concurrent tasks on different nodes would lose each other's updates, so
+//! the submitter folds the outcome files back in ([`CaseManifest::merge_outcomes`]).
+
+pub mod plan;
+pub mod slurm;
+
+use crate::core::cache::{write_atomic, Store, Verification};
+use crate::core::cases::{self, CASE_KIND};
+use crate::core::hash::hash_json;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use std::collections::{BTreeMap, BTreeSet};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+pub use plan::{plan_arrays, task_cases, ArraySubmission};
+
+/// Bumped when the case-manifest layout changes, so an old manifest is refused, not misread.
+pub const MANIFEST_SCHEMA_VERSION: u32 = 1;
+
+/// Case kinds whose workers are still to be registered (docs/slurm.md, *What is left*).
+pub const UNREGISTERED_CASE_KINDS: &[&str] = &["simulate", "three_dof", "doe", "calibrate"];
+
+#[derive(Debug, thiserror::Error)]
+pub enum ExecutorError {
+    #[error("unknown executor `{0}` (expected `local` or `slurm`)")]
+    UnknownExecutor(String),
+    #[error("invalid array plan: {0}")]
+    InvalidPlan(String),
+    #[error(
+        "`{tool}` not found (searched {searched}); is Slurm installed and on PATH on this node?"
+    )]
+    ToolMissing { tool: String, searched: String },
+    #[error("`{tool}` could not be started")]
+    ToolSpawn {
+        tool: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("`{command}` failed ({status}): {stderr}")]
+    ToolFailed {
+        command: String,
+        status: String,
+        stderr: String,
+    },
+    #[error("cannot parse {what} output line {line:?}")]
+    Parse { what: &'static str, line: String },
+    #[error("{}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("case manifest {}: {message}", path.display())]
+    Manifest { path: PathBuf, message: String },
+    #[error(
+        "unsafe value for #SBATCH {directive}: {value:?} (no whitespace or control characters)"
+    )]
+    UnsafeDirective { directive: String, value: String },
+    #[error("task {task} is outside the manifest ({tasks} tasks of {cases_per_task} cases)")]
+    TaskOutOfRange {
+        task: usize,
+        tasks: usize,
+        cases_per_task: usize,
+    },
+    #[error(
+        "case kind `{kind}` has no worker registered (registered: {registered}); \
+         not yet wired: {unwired} (docs/slurm.md)"
+    )]
+    UnknownCaseKind {
+        kind: String,
+        registered: String,
+        unwired: String,
+    },
+}
+
+impl ExecutorError {
+    fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        ExecutorError::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}
+
+pub type ExecResult<T> = std::result::Result<T, ExecutorError>;
+
+/// Which executor runs a stage's independent cases.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ExecutorKind {
+    /// The rayon pool of this process (the behaviour before issue 9).
+    #[default]
+    Local,
+    /// One `sbatch --array` job per ≤ `max_array` tasks.
+    Slurm,
+}
+
+impl std::str::FromStr for ExecutorKind {
+    type Err = ExecutorError;
+    fn from_str(s: &str) -> ExecResult<Self> {
+        match s {
+            "local" => Ok(ExecutorKind::Local),
+            "slurm" => Ok(ExecutorKind::Slurm),
+            other => Err(ExecutorError::UnknownExecutor(other.to_string())),
+        }
+    }
+}
+
+/// One independent case as a worker process sees it.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct CaseSpec {
+    /// Case kind: which registered worker recomputes it (`simulate`, `three_dof`, ...).
+    pub kind: String,
+    /// Cache key (`cases::case_fingerprint(model_version, params).key()`); the worker checks
+    /// it, so a binary that hashes differently fails loudly instead of filling the cache
+    /// under keys the submitter never looks up.
+    pub key: String,
+    pub model_version: String,
+    /// Canonical parameters exactly as hashed into the key.
+    pub params: Value,
+    /// What the worker needs besides `params` (e.g. the stage's validated parameters and the
+    /// upstream entry keys to load the ISBL table or DMW track from): key parameters can be
+    /// lossy (`model_parameters` is a Debug string), so they cannot double as the recipe.
+    pub recipe: Value,
+}
+
+impl CaseSpec {
+    /// A spec whose key is computed here, the same way `cases::get_or_compute` does.
+    pub fn new(kind: &str, model_version: &str, params: Value, recipe: Value) -> Self {
+        let key = cases::case_fingerprint(model_version, &params).key();
+        Self {
+            kind: kind.to_string(),
+            key,
+            model_version: model_version.to_string(),
+            params,
+            recipe,
+        }
+    }
+}
+
+/// Where a manifest case stands.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "state", rename_all = "snake_case")]
+pub enum CaseStatus {
+    Pending,
+    Done,
+    Failed {
+        error: String,
+        /// Slurm array job id and task id (absent when run outside Slurm).
+        job_id: Option<u64>,
+        task_id: Option<u32>,
+        /// The task's log file, for `hdi status`.
+        log: Option<PathBuf>,
+    },
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct ManifestEntry {
+    #[serde(flatten)]
+    pub spec: CaseSpec,
+    pub status: CaseStatus,
+}
+
+/// One `sbatch` submission made for a manifest; kept in a small file of its own beside the
+/// manifest ([`submissions_path`]) so recording a job id does not rewrite megabytes of cases.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct SubmissionRecord {
+    pub job_id: u64,
+    /// Global index of the array's task 0 (`--offset`).
+    pub offset: usize,
+    pub tasks: usize,
+    pub submitted: String,
+}
+
+/// The stale cases of one `hdi run --executor slurm`, as JSON under
+/// `processed/.hdi/slurm/manifests/`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct CaseManifest {
+    pub schema_version: u32,
+    pub hdi_version: String,
+    pub created: String,
+    /// Fixed when the manifest is written: global task `t` runs cases
+    /// `t*cases_per_task .. (t+1)*cases_per_task` (clipped to the case count).
+    pub cases_per_task: usize,
+    pub cases: Vec<ManifestEntry>,
+}
+
+/// What a worker writes for one case: `outcomes/<case index>.json` beside the manifest.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct CaseOutcome {
+    pub index: usize,
+    pub key: String,
+    pub status: CaseStatus,
+}
+
+/// The Slurm identity of a running worker (from `SLURM_ARRAY_JOB_ID`/`SLURM_ARRAY_TASK_ID`),
+/// passed in rather than read here so the worker stays testable.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TaskIdentity {
+    pub job_id: Option<u64>,
+    pub task_id: Option<u32>,
+    pub log: Option<PathBuf>,
+}
+
+impl TaskIdentity {
+    /// From the environment of a Slurm array task; log path as [`slurm::log_path`] names it.
+    pub fn from_env(processed: &Path) -> Self {
+        let num = |v: &str| {
+            std::env::var(v)
+                .ok()
+                .and_then(|s| s.trim().parse::<u64>().ok())
+        };
+        let job_id = num("SLURM_ARRAY_JOB_ID");
+        let task_id = num("SLURM_ARRAY_TASK_ID").and_then(|t| u32::try_from(t).ok());
+        let log = match (job_id, task_id) {
+            (Some(j), Some(t)) => Some(slurm::log_path(processed, j, t)),
+            _ => None,
+        };
+        Self {
+            job_id,
+            task_id,
+            log,
+        }
+    }
+}
+
+impl CaseManifest {
+    /// A manifest of `specs`, all pending; duplicate keys are dropped (two tasks must never
+    /// race to commit the same store entry).
+    pub fn new(specs: Vec<CaseSpec>, cases_per_task: usize) -> ExecResult<Self> {
+        if cases_per_task == 0 {
+            return Err(ExecutorError::InvalidPlan(
+                "cases per task must be at least 1".into(),
+            ));
+        }
+        let mut seen = BTreeSet::new();
+        let cases = specs
+            .into_iter()
+            .filter(|s| seen.insert(s.key.clone()))
+            .map(|spec| ManifestEntry {
+                spec,
+                status: CaseStatus::Pending,
+            })
+            .collect();
+        Ok(Self {
+            schema_version: MANIFEST_SCHEMA_VERSION,
+            hdi_version: env!("CARGO_PKG_VERSION").to_string(),
+            created: crate::core::cache::now_iso8601(),
+            cases_per_task,
+            cases,
+        })
+    }
+
+    /// Number of array tasks covering all cases.
+    pub fn task_count(&self) -> usize {
+        self.cases.len().div_ceil(self.cases_per_task)
+    }
+
+    /// The cases global task `task` runs.
+    pub fn task_range(&self, task: usize) -> ExecResult<Range<usize>> {
+        let tasks = self.task_count();
+        if task >= tasks {
+            return Err(ExecutorError::TaskOutOfRange {
+                task,
+                tasks,
+                cases_per_task: self.cases_per_task,
+            });
+        }
+        Ok(task_cases(self.cases.len(), self.cases_per_task, task))
+    }
+
+    /// A name unique to this set of cases and creation time, for [`manifest_path`].
+    pub fn id(&self) -> String {
+        let keys: Vec<&str> = self.cases.iter().map(|c| c.spec.key.as_str()).collect();
+        let digest = hash_json(&serde_json::json!({"created": self.created, "keys": keys}));
+        let stamp: String = self
+            .created
+            .chars()
+            .filter(|c| c.is_ascii_alphanumeric())
+            .collect();
+        format!("{stamp}-{}", &digest[..12])
+    }
+
+    /// Write atomically (temp file, fsync, rename): a reader sees the old or the new manifest.
+    pub fn write(&self, path: &Path) -> ExecResult<()> {
+        let bytes = serde_json::to_vec(self).map_err(|e| ExecutorError::Manifest {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        write_atomic(path, &bytes).map_err(|e| ExecutorError::io(path, e))
+    }
+
+    pub fn read(path: &Path) -> ExecResult<Self> {
+        let bytes = std::fs::read(path).map_err(|e| ExecutorError::io(path, e))?;
+        let manifest: Self =
+            serde_json::from_slice(&bytes).map_err(|e| ExecutorError::Manifest {
+                path: path.to_path_buf(),
+                message: e.to_string(),
+            })?;
+        if manifest.schema_version != MANIFEST_SCHEMA_VERSION {
+            return Err(ExecutorError::Manifest {
+                path: path.to_path_buf(),
+                message: format!(
+                    "schema version {} (this hdi reads {MANIFEST_SCHEMA_VERSION})",
+                    manifest.schema_version
+                ),
+            });
+        }
+        if manifest.cases_per_task == 0 {
+            return Err(ExecutorError::Manifest {
+                path: path.to_path_buf(),
+                message: "cases_per_task is 0".into(),
+            });
+        }
+        Ok(manifest)
+    }
+
+    /// Fold the workers' outcome files into the entries' statuses. Returns how many changed.
+    /// Outcomes whose key does not match the entry at that index are ignored (stale files).
+    pub fn merge_outcomes(&mut self, manifest_path: &Path) -> ExecResult<usize> {
+        let dir = outcome_dir(manifest_path);
+        let listing = match std::fs::read_dir(&dir) {
+            Ok(l) => l,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(0),
+            Err(e) => return Err(ExecutorError::io(&dir, e)),
+        };
+        let mut changed = 0;
+        for item in listing {
+            let path = item.map_err(|e| ExecutorError::io(&dir, e))?.path();
+            if path.extension().and_then(|e| e.to_str()) != Some("json") {
+                continue; // half-written temp files start with a dot and end in .tmp-PID
+            }
+            let bytes = std::fs::read(&path).map_err(|e| ExecutorError::io(&path, e))?;
+            let outcome: CaseOutcome =
+                serde_json::from_slice(&bytes).map_err(|e| ExecutorError::Manifest {
+                    path: path.clone(),
+                    message: e.to_string(),
+                })?;
+            if let Some(entry) = self.cases.get_mut(outcome.index) {
+                if entry.spec.key == outcome.key && entry.status != outcome.status {
+                    entry.status = outcome.status;
+                    changed += 1;
+                }
+            }
+        }
+        Ok(changed)
+    }
+
+    /// Cases of tasks that Slurm reports as failed but that never wrote an outcome (killed
+    /// by TIMEOUT, OOM, NODE_FAIL before reporting): still `Pending`, they become `Failed`
+    /// with the Slurm state, so `hdi status` can point at the log. Call after
+    /// [`Self::merge_outcomes`]. Returns how many changed.
+    pub fn mark_unreported(
+        &mut self,
+        processed: &Path,
+        submission: &SubmissionRecord,
+        failed: &[slurm::FailedTask],
+    ) -> usize {
+        let mut changed = 0;
+        for f in failed {
+            let global = submission.offset + f.task_id as usize;
+            if f.task_id as usize >= submission.tasks || global >= self.task_count() {
+                continue;
+            }
+            for index in task_cases(self.cases.len(), self.cases_per_task, global) {
+                let entry = &mut self.cases[index];
+                if entry.status == CaseStatus::Pending {
+                    entry.status = CaseStatus::Failed {
+                        error: format!(
+                            "task ended {} (exit {}) without reporting this case",
+                            f.state, f.exit_code
+                        ),
+                        job_id: Some(submission.job_id),
+                        task_id: Some(f.task_id),
+                        log: Some(slurm::log_path(processed, submission.job_id, f.task_id)),
+                    };
+                    changed += 1;
+                }
+            }
+        }
+        changed
+    }
+
+    /// Entries that failed, with their index.
+    pub fn failed(&self) -> impl Iterator<Item = (usize, &ManifestEntry)> {
+        self.cases
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| matches!(e.status, CaseStatus::Failed { .. }))
+    }
+
+    /// Counts of (pending, done, failed).
+    pub fn counts(&self) -> (usize, usize, usize) {
+        let mut c = (0, 0, 0);
+        for e in &self.cases {
+            match e.status {
+                CaseStatus::Pending => c.0 += 1,
+                CaseStatus::Done => c.1 += 1,
+                CaseStatus::Failed { .. } => c.2 += 1,
+            }
+        }
+        c
+    }
+
+    /// Cases without a verified store entry: what a resubmission must run (failed ones and
+    /// those a killed task never reached). The store, not the status, is the truth here.
+    pub fn still_missing(&self, store: &Store) -> Vec<CaseSpec> {
+        self.cases
+            .iter()
+            .filter(|e| !matches!(store.verify(CASE_KIND, &e.spec.key), Verification::Fresh(_)))
+            .map(|e| e.spec.clone())
+            .collect()
+    }
+}
+
+/// `processed/.hdi/slurm/`: manifests, their outcome files, sbatch scripts and task logs.
+pub fn slurm_dir(processed: &Path) -> PathBuf {
+    processed.join(".hdi").join("slurm")
+}
+
+/// Where a manifest with this id lives.
+pub fn manifest_path(processed: &Path, id: &str) -> PathBuf {
+    slurm_dir(processed)
+        .join("manifests")
+        .join(format!("{id}.json"))
+}
+
+/// The submission records of a manifest: `<manifest stem>.jobs.json` beside it.
+pub fn submissions_path(manifest_path: &Path) -> PathBuf {
+    let stem = manifest_path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    manifest_path.with_file_name(format!("{stem}.jobs.json"))
+}
+
+/// The arrays submitted for a manifest so far (none if the file does not exist).
+pub fn read_submissions(manifest_path: &Path) -> ExecResult<Vec<SubmissionRecord>> {
+    let path = submissions_path(manifest_path);
+    match std::fs::read(&path) {
+        Ok(bytes) => serde_json::from_slice(&bytes).map_err(|e| ExecutorError::Manifest {
+            path,
+            message: e.to_string(),
+        }),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Vec::new()),
+        Err(e) => Err(ExecutorError::io(path, e)),
+    }
+}
+
+fn write_submissions(manifest_path: &Path, records: &[SubmissionRecord]) -> ExecResult<()> {
+    let path = submissions_path(manifest_path);
+    let bytes = serde_json::to_vec_pretty(records).map_err(|e| ExecutorError::Manifest {
+        path: path.clone(),
+        message: e.to_string(),
+    })?;
+    write_atomic(&path, &bytes).map_err(|e| ExecutorError::io(path, e))
+}
+
+/// All case manifests, oldest first (their names start with the creation time): what
+/// `hdi status` lists failed cases from.
+pub fn list_manifests(processed: &Path) -> ExecResult<Vec<PathBuf>> {
+    let dir = slurm_dir(processed).join("manifests");
+    let listing = match std::fs::read_dir(&dir) {
+        Ok(l) => l,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(ExecutorError::io(&dir, e)),
+    };
+    let mut paths = Vec::new();
+    for item in listing {
+        let path = item.map_err(|e| ExecutorError::io(&dir, e))?.path();
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_default();
+        let is_manifest = path.is_file()
+            && name.ends_with(".json")
+            && !name.ends_with(".jobs.json")
+            && !name.starts_with('.');
+        if is_manifest {
+            paths.push(path);
+        }
+    }
+    paths.sort();
+    Ok(paths)
+}
+
+/// The outcome files of a manifest: `<manifest stem>.outcomes/` beside it.
+pub fn outcome_dir(manifest_path: &Path) -> PathBuf {
+    let stem = manifest_path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    manifest_path.with_file_name(format!("{stem}.outcomes"))
+}
+
+/// Recomputes one kind of case in a worker process from its recipe, writing its files into
+/// `dir` and returning its result (as the stage's own closure does under `get_or_compute`).
+pub trait CaseComputer: Send + Sync {
+    fn compute(&self, recipe: &Value, store: &Store, dir: &Path) -> crate::error::Result<Value>;
+}
+
+impl<F> CaseComputer for F
+where
+    F: Fn(&Value, &Store, &Path) -> crate::error::Result<Value> + Send + Sync,
+{
+    fn compute(&self, recipe: &Value, store: &Store, dir: &Path) -> crate::error::Result<Value> {
+        self(recipe, store, dir)
+    }
+}
+
+/// Case kind → worker. `hdi exec-cases` dispatches on [`CaseSpec::kind`] through this.
+#[derive(Default)]
+pub struct CaseRegistry {
+    computers: BTreeMap<String, Box<dyn CaseComputer>>,
+}
+
+impl CaseRegistry {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The stages' workers. Empty for now: see [`UNREGISTERED_CASE_KINDS`].
+    pub fn builtin() -> Self {
+        Self::new()
+    }
+
+    pub fn register(&mut self, kind: &str, computer: impl CaseComputer + 'static) {
+        self.computers.insert(kind.to_string(), Box::new(computer));
+    }
+
+    pub fn kinds(&self) -> Vec<&str> {
+        self.computers.keys().map(String::as_str).collect()
+    }
+
+    /// Compute one case of `kind`; a kind without a worker is an error naming what is missing.
+    pub fn compute_case(
+        &self,
+        kind: &str,
+        recipe: &Value,
+        store: &Store,
+        dir: &Path,
+    ) -> crate::error::Result<Value> {
+        match self.computers.get(kind) {
+            Some(c) => c.compute(recipe, store, dir),
+            None => Err(crate::error::Error::Stage(self.unknown(kind).to_string())),
+        }
+    }
+
+    fn unknown(&self, kind: &str) -> ExecutorError {
+        let registered = self.kinds();
+        let unwired: Vec<&str> = UNREGISTERED_CASE_KINDS
+            .iter()
+            .copied()
+            .filter(|k| !self.computers.contains_key(*k))
+            .collect();
+        let list = |v: &[&str]| {
+            if v.is_empty() {
+                "none".to_string()
+            } else {
+                v.join(", ")
+            }
+        };
+        ExecutorError::UnknownCaseKind {
+            kind: kind.to_string(),
+            registered: list(&registered),
+            unwired: list(&unwired),
+        }
+    }
+}
+
+/// What one worker task did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TaskReport {
+    pub computed: usize,
+    pub cached: usize,
+    pub failed: usize,
+}
+
+/// The body of `hdi exec-cases MANIFEST --task T --offset X`: run global task `task` (the
+/// array task id plus the array's offset) — each case through `cases::get_or_compute`, in
+/// parallel on this process's rayon pool — and write one outcome file per case. A failing
+/// case is recorded, not fatal, so its siblings still finish; the caller exits non-zero when
+/// `failed > 0` so `sacct` shows the task FAILED.
+pub fn exec_task(
+    store: &Store,
+    manifest_path: &Path,
+    task: usize,
+    registry: &CaseRegistry,
+    identity: &TaskIdentity,
+) -> ExecResult<TaskReport> {
+    use rayon::prelude::*;
+    let manifest = CaseManifest::read(manifest_path)?;
+    let range = manifest.task_range(task)?;
+    let out_dir = outcome_dir(manifest_path);
+    std::fs::create_dir_all(&out_dir).map_err(|e| ExecutorError::io(&out_dir, e))?;
+    let results: Vec<ExecResult<Option<bool>>> = range
+        .into_par_iter()
+        .map(|index| {
+            let spec = &manifest.cases[index].spec;
+            let computed = cases::get_or_compute(store, &spec.model_version, &spec.params, |d| {
+                registry.compute_case(&spec.kind, &spec.recipe, store, d)
+            });
+            let (status, cached) = match computed {
+                Ok(entry) if entry.key == spec.key => (CaseStatus::Done, Some(entry.cached)),
+                Ok(entry) => (
+                    failed_status(
+                        format!(
+                            "key mismatch: manifest says {}, this hdi computes {} \
+                             (different hdi version on the nodes?)",
+                            spec.key, entry.key
+                        ),
+                        identity,
+                    ),
+                    None,
+                ),
+                Err(e) => (failed_status(crate::error::chain(&e), identity), None),
+            };
+            let outcome = CaseOutcome {
+                index,
+                key: spec.key.clone(),
+                status,
+            };
+            let path = out_dir.join(format!("{index}.json"));
+            let bytes = serde_json::to_vec(&outcome).map_err(|e| ExecutorError::Manifest {
+                path: path.clone(),
+                message: e.to_string(),
+            })?;
+            write_atomic(&path, &bytes).map_err(|e| ExecutorError::io(&path, e))?;
+            Ok(cached)
+        })
+        .collect();
+    let mut report = TaskReport::default();
+    for r in results {
+        match r? {
+            Some(true) => report.cached += 1,
+            Some(false) => report.computed += 1,
+            None => report.failed += 1,
+        }
+    }
+    Ok(report)
+}
+
+fn failed_status(error: String, identity: &TaskIdentity) -> CaseStatus {
+    CaseStatus::Failed {
+        error,
+        job_id: identity.job_id,
+        task_id: identity.task_id,
+        log: identity.log.clone(),
+    }
+}
+
+#[cfg(test)]
+mod tests;
