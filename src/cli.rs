@@ -9,6 +9,7 @@ use std::time::Instant;
 use crate::core::cache::Store;
 use crate::core::config::PipelineFile;
 use crate::core::engine::{self, Outcome, RunOptions, State};
+use crate::core::executor::ExecutorKind;
 use crate::core::units::{
     Area, Frequency, Length, PerArea, Pressure, Sensitivity, TimeSpan, Velocity, Viscosity,
 };
@@ -26,6 +27,28 @@ use crate::stages::surfaces::{self, SurfaceConfig};
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
+}
+
+/// Where the independent cases run (docs/slurm.md).
+#[derive(Args, Debug, Clone)]
+pub struct SlurmArgs {
+    /// `local` (the thread pool) or `slurm` (one `sbatch --array` job for the stale cases of
+    /// the `[simulate]` instances; the rest of the pipeline then runs locally).
+    #[arg(long, default_value = "local")]
+    executor: String,
+    /// Slurm partition.
+    #[arg(long)]
+    partition: Option<String>,
+    /// Cases per array task (amortises start-up).
+    #[arg(long, default_value_t = 4)]
+    cases_per_task: usize,
+    /// Tasks per array at most (the site's MaxArraySize); more cases make more arrays.
+    #[arg(long, default_value_t = 1000)]
+    max_array: usize,
+    /// Submit and return; a later `hdi run --executor slurm` collects and resubmits only
+    /// what is still missing.
+    #[arg(long)]
+    no_wait: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -46,6 +69,19 @@ pub enum Command {
         /// Parallel jobs (default: number of cores).
         #[arg(short = 'j', long)]
         jobs: Option<usize>,
+        #[command(flatten)]
+        slurm: SlurmArgs,
+    },
+    /// Compute one Slurm array task's cases of a case manifest into the cache (what the
+    /// `hdi run --executor slurm` job script runs on the nodes).
+    ExecCases {
+        manifest: PathBuf,
+        /// `$SLURM_ARRAY_TASK_ID`.
+        #[arg(long)]
+        task: usize,
+        /// The array's first global task (several arrays cover one manifest).
+        #[arg(long, default_value_t = 0)]
+        offset: usize,
     },
     /// Fresh / stale (and why) per stage instance. Exit 1 if anything is stale.
     Status {
@@ -384,7 +420,21 @@ pub fn main() -> Result<()> {
             force,
             dry_run,
             jobs,
-        } => cmd_run(&config, only, force, dry_run, jobs),
+            slurm,
+        } => {
+            if slurm.executor.parse::<ExecutorKind>()? == ExecutorKind::Slurm && !dry_run {
+                let submitted = run_cases_on_slurm(&config, &slurm, jobs)?;
+                if !submitted {
+                    return Ok(());
+                }
+            }
+            cmd_run(&config, only, force, dry_run, jobs)
+        }
+        Command::ExecCases {
+            manifest,
+            task,
+            offset,
+        } => cmd_exec_cases(&manifest, task + offset),
         Command::Status { config, json } => cmd_status(&config, json),
         Command::Gc { config, dry_run } => cmd_gc(&config, dry_run),
         Command::Surface(args) => cmd_surface(*args),
@@ -545,6 +595,167 @@ fn table_name(kind: &str) -> String {
     }
 }
 
+/// `--executor slurm`: bring the `[simulate]` instances' upstream up to date, list their stale
+/// cases into a manifest, submit it as array jobs and wait for them. Returns `false` for
+/// `--no-wait` (submitted; nothing more to do now), `true` when the local run should follow
+/// (every case is then cached).
+fn run_cases_on_slurm(config: &Path, args: &SlurmArgs, jobs: Option<usize>) -> Result<bool> {
+    use crate::core::executor::slurm::{submit_manifest, ScriptOptions, SlurmClient};
+    use crate::core::executor::{manifest_path, CaseManifest};
+    use crate::stages::distributed;
+    let (file, _) = load(config)?;
+    let processed = file.processed_dir();
+    let store =
+        Store::open(&processed).with_context(|| format!("opening {}", processed.display()))?;
+    let upstream = distributed::simulate_upstream(&file, &store)?;
+    if !upstream.is_empty() {
+        let report = engine::run(
+            crate::stages::build(&file)?,
+            &store,
+            &RunOptions {
+                only: upstream,
+                force: false,
+                dry_run: false,
+                jobs: jobs
+                    .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+            },
+        )?;
+        if report.failed() > 0 {
+            bail!("the upstream of the [simulate] instances failed: run `hdi run` to see why");
+        }
+    }
+    let config_abs =
+        std::fs::canonicalize(config).with_context(|| format!("resolving {}", config.display()))?;
+    let specs = distributed::stale_cases(&file, &config_abs, &store)?;
+    if specs.is_empty() {
+        eprintln!("slurm: no stale [simulate] case to submit");
+        return Ok(true);
+    }
+    let manifest = CaseManifest::new(specs, args.cases_per_task)?;
+    let path = manifest_path(&processed, &manifest.id());
+    manifest.write(&path)?;
+    let client = SlurmClient::from_path();
+    let workdir = config_abs
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."));
+    let opts = ScriptOptions {
+        hdi: std::env::current_exe().context("locating the hdi binary")?,
+        workdir,
+        processed: std::fs::canonicalize(&processed)?,
+        job_name: "hdi-cases".into(),
+        partition: args.partition.clone(),
+        max_running: None,
+        extra_directives: Vec::new(),
+    };
+    let records = submit_manifest(&client, &opts, &path, &manifest, args.max_array)?;
+    let ids: Vec<String> = records.iter().map(|r| r.job_id.to_string()).collect();
+    eprintln!(
+        "slurm: {} cases in {} tasks submitted as job(s) {} (manifest {})",
+        manifest.cases.len(),
+        manifest.task_count(),
+        ids.join(", "),
+        path.display()
+    );
+    if args.no_wait {
+        eprintln!("slurm: --no-wait: `hdi run --executor slurm` later collects the results");
+        return Ok(false);
+    }
+    let poll = std::env::var("HDI_SLURM_POLL_MS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(5_000u64);
+    let bar = indicatif::ProgressBar::new(manifest.task_count() as u64);
+    let statuses = loop {
+        let (total, each) = client.status_all(&records)?;
+        bar.set_position(total.finished as u64);
+        bar.set_message(format!(
+            "{} running, {} pending",
+            total.running, total.pending
+        ));
+        if total.is_finished() {
+            break each;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(poll));
+    };
+    bar.finish_and_clear();
+    let mut done = CaseManifest::read(&path)?;
+    done.merge_outcomes(&path)?;
+    for (record, status) in records.iter().zip(&statuses) {
+        done.mark_unreported(&processed, record, &status.failed);
+    }
+    done.write(&path)?;
+    let failed = report_failed_cases(&done);
+    if failed > 0 {
+        bail!(
+            "{failed} case(s) failed on Slurm (listed above; `hdi status` lists them too); \
+             `hdi run --executor slurm` resubmits only what is missing"
+        );
+    }
+    Ok(true)
+}
+
+/// Print the failed cases of a manifest (key, error, job/task, log); returns how many.
+fn report_failed_cases(m: &crate::core::executor::CaseManifest) -> usize {
+    use crate::core::executor::CaseStatus;
+    let mut n = 0;
+    for (i, e) in m.failed() {
+        if let CaseStatus::Failed {
+            error,
+            job_id,
+            task_id,
+            log,
+        } = &e.status
+        {
+            n += 1;
+            let at = match (job_id, task_id) {
+                (Some(j), Some(t)) => format!(" (job {j}, task {t})"),
+                _ => String::new(),
+            };
+            let log = log
+                .as_ref()
+                .map_or(String::new(), |l| format!(", log {}", l.display()));
+            eprintln!(
+                "FAILED  case {i} {} {}{at}{log}: {error}",
+                e.spec.kind, e.spec.key
+            );
+        }
+    }
+    n
+}
+
+fn cmd_exec_cases(manifest: &Path, task: usize) -> Result<()> {
+    use crate::core::executor::{exec_task, TaskIdentity};
+    // Manifests live in `processed/.hdi/slurm/manifests/`: the store is four levels up.
+    let processed = manifest
+        .ancestors()
+        .nth(4)
+        .filter(|p| p.join(".hdi").is_dir())
+        .with_context(|| {
+            format!(
+                "{}: not a manifest under processed/.hdi/slurm/manifests/",
+                manifest.display()
+            )
+        })?
+        .to_path_buf();
+    let store = Store::open(&processed)?;
+    let report = exec_task(
+        &store,
+        manifest,
+        task,
+        &crate::stages::distributed::registry(),
+        &TaskIdentity::from_env(&processed),
+    )?;
+    eprintln!(
+        "task {task}: {} computed, {} cached, {} failed",
+        report.computed, report.cached, report.failed
+    );
+    if report.failed > 0 {
+        bail!("{} case(s) of task {task} failed", report.failed);
+    }
+    Ok(())
+}
+
 fn cmd_status(config: &Path, as_json: bool) -> Result<()> {
     let (file, stages) = load(config)?;
     let store = Store::open_existing(&file.processed_dir());
@@ -573,6 +784,22 @@ fn cmd_status(config: &Path, as_json: bool) -> Result<()> {
     }
     if as_json {
         println!("{}", Value::Array(rows));
+    } else {
+        // Cases that failed on Slurm and are still missing from the cache.
+        use crate::core::executor::{list_manifests, CaseManifest};
+        for path in list_manifests(&file.processed_dir()).unwrap_or_default() {
+            let Ok(mut m) = CaseManifest::read(&path) else {
+                continue;
+            };
+            let _ = m.merge_outcomes(&path);
+            let missing: std::collections::BTreeSet<String> =
+                m.still_missing(&store).into_iter().map(|s| s.key).collect();
+            m.cases.retain(|e| missing.contains(&e.spec.key));
+            if m.failed().next().is_some() {
+                println!("failed cases in {}:", path.display());
+                report_failed_cases(&m);
+            }
+        }
     }
     if stale > 0 {
         return Err(Stale.into());

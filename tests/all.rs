@@ -7,5 +7,6 @@ mod dmw_cli;
 mod doe_cli;
 mod pipeline_cache;
 mod simulate_cli;
+mod slurm_cli;
 mod surface_cli;
 mod three_dof_cli;

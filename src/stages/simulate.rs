@@ -992,6 +992,38 @@ pub struct SimulateStage {
     pub params: SimulateParams,
 }
 
+/// What every case of one sweep shares: the (calibrated) parameters, the interface table, the
+/// DMW track with its instance key, and the contact instance's key (both enter the case keys).
+pub struct PreparedSweep {
+    pub params: SimulateParams,
+    pub isbl: IsblLookup,
+    pub dmw: Option<(DmwTrack, String)>,
+    pub contact_key: String,
+}
+
+impl PreparedSweep {
+    /// The canonical parameters (cache key input) of the case at `actuation`.
+    pub fn case_params(&self, actuation: f64) -> Value {
+        self.params.case_params(
+            actuation,
+            &self.contact_key,
+            self.dmw.as_ref().map(|d| d.1.as_str()),
+        )
+    }
+
+    /// Simulate the case at `actuation` into `dir` (what the case cache calls, locally or on
+    /// a Slurm worker).
+    pub fn compute_case(&self, actuation: f64, dir: &Path) -> Result<Value> {
+        simulate_case(
+            &self.params,
+            actuation,
+            &self.isbl,
+            self.dmw.as_ref().map(|d| &d.0),
+            dir,
+        )
+    }
+}
+
 impl SimulateStage {
     pub fn from_config(
         file: &PipelineFile,
@@ -1099,6 +1131,53 @@ fn link_cases(out: &Path, cases: &[CaseOutcome]) -> Result<Vec<String>> {
     Ok(names)
 }
 
+impl SimulateStage {
+    /// Resolve the upstream results (contact inputs, DMW track, calibration knobs) into the
+    /// shared inputs of the cases; `key_of` gives an upstream instance's cache key.
+    pub fn prepare(
+        &self,
+        upstream: &std::collections::BTreeMap<String, Value>,
+        upstream_dirs: &std::collections::BTreeMap<String, PathBuf>,
+        key_of: impl Fn(&str) -> String,
+    ) -> Result<PreparedSweep> {
+        let (mut isbl_params, mut dmw_track) =
+            super::calibrate::base_inputs(&self.params, upstream, upstream_dirs)?;
+        let mut calibrated = self.params.clone();
+        if let Some(cal) = &self.params.calibration {
+            let result = upstream
+                .get(cal)
+                .ok_or_else(|| Error::Stage(format!("no result from calibrate `{cal}`")))?;
+            let fitted = super::calibrate::fitted_knobs(result).ok_or_else(|| {
+                Error::Stage(format!("calibrate `{cal}` result has no usable `fitted`"))
+            })?;
+            let scale = crate::dynamics::calibration::apply_knobs(
+                &fitted,
+                &mut calibrated.model,
+                &mut isbl_params,
+            )?;
+            if let Some(t) = dmw_track.as_mut() {
+                t.displacement.iter_mut().for_each(|x| *x *= scale);
+                t.velocity.iter_mut().for_each(|x| *x *= scale);
+            }
+            calibrated.calibrated_knobs = fitted
+                .iter()
+                .map(|(k, v)| (k.name().to_string(), *v))
+                .collect();
+        }
+        let isbl = IsblLookup::build(IsblModel::new(isbl_params)?, 0.05, -2.0, 10.0)?;
+        let dmw = match (&calibrated.dmw, dmw_track) {
+            (Some(d), Some(t)) => Some((t, key_of(d))),
+            _ => None,
+        };
+        Ok(PreparedSweep {
+            contact_key: key_of(&calibrated.contact),
+            params: calibrated,
+            isbl,
+            dmw,
+        })
+    }
+}
+
 impl Stage for SimulateStage {
     fn name(&self) -> &str {
         &self.name
@@ -1122,32 +1201,6 @@ impl Stage for SimulateStage {
         u
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
-        let (mut isbl_params, mut dmw_track) =
-            super::calibrate::base_inputs(&self.params, &ctx.upstream, &ctx.upstream_dirs)?;
-        let mut calibrated = self.params.clone();
-        if let Some(cal) = &self.params.calibration {
-            let result = ctx
-                .upstream
-                .get(cal)
-                .ok_or_else(|| Error::Stage(format!("no result from calibrate `{cal}`")))?;
-            let fitted = super::calibrate::fitted_knobs(result).ok_or_else(|| {
-                Error::Stage(format!("calibrate `{cal}` result has no usable `fitted`"))
-            })?;
-            let scale = crate::dynamics::calibration::apply_knobs(
-                &fitted,
-                &mut calibrated.model,
-                &mut isbl_params,
-            )?;
-            if let Some(t) = dmw_track.as_mut() {
-                t.displacement.iter_mut().for_each(|x| *x *= scale);
-                t.velocity.iter_mut().for_each(|x| *x *= scale);
-            }
-            calibrated.calibrated_knobs = fitted
-                .iter()
-                .map(|(k, v)| (k.name().to_string(), *v))
-                .collect();
-        }
-        let p = &calibrated;
         let key_of = |name: &str| {
             ctx.fingerprint
                 .upstream
@@ -1157,19 +1210,18 @@ impl Stage for SimulateStage {
                 .unwrap_or_default()
         };
         ctx.progress.set_message("interface table");
-        let isbl = IsblLookup::build(IsblModel::new(isbl_params)?, 0.05, -2.0, 10.0)?;
-        let dmw = match (&p.dmw, dmw_track) {
-            (Some(d), Some(t)) => Some((t, key_of(d))),
-            _ => None,
-        };
+        let prepared = self.prepare(&ctx.upstream, &ctx.upstream_dirs, key_of)?;
+        let p = &prepared.params;
+        let isbl = &prepared.isbl;
+        let dmw = prepared.dmw.as_ref();
         ctx.progress
             .set_message(format!("{} cases", p.actuations.len()));
         let cases = run_cases(
             p,
             ctx.store,
-            &isbl,
-            &key_of(&p.contact),
-            dmw.as_ref().map(|(t, k)| (t, k.as_str())),
+            isbl,
+            &prepared.contact_key,
+            dmw.map(|(t, k)| (t, k.as_str())),
             ctx.progress,
         )?;
         ctx.progress.set_message("sweep metrics, tables, plots");
