@@ -607,7 +607,7 @@ fn run_cases_on_slurm(config: &Path, args: &SlurmArgs, jobs: Option<usize>) -> R
     let processed = file.processed_dir();
     let store =
         Store::open(&processed).with_context(|| format!("opening {}", processed.display()))?;
-    let upstream = distributed::simulate_upstream(&file, &store)?;
+    let upstream = distributed::case_upstream(&file, &store)?;
     if !upstream.is_empty() {
         let report = engine::run(
             crate::stages::build(&file)?,
@@ -621,14 +621,16 @@ fn run_cases_on_slurm(config: &Path, args: &SlurmArgs, jobs: Option<usize>) -> R
             },
         )?;
         if report.failed() > 0 {
-            bail!("the upstream of the [simulate] instances failed: run `hdi run` to see why");
+            bail!(
+                "the upstream of the [simulate]/[doe] instances failed: run `hdi run` to see why"
+            );
         }
     }
     let config_abs =
         std::fs::canonicalize(config).with_context(|| format!("resolving {}", config.display()))?;
     let specs = distributed::stale_cases(&file, &config_abs, &store)?;
     if specs.is_empty() {
-        eprintln!("slurm: no stale [simulate] case to submit");
+        eprintln!("slurm: no stale [simulate] or [doe] case to submit");
         return Ok(true);
     }
     let manifest = CaseManifest::new(specs, args.cases_per_task)?;

@@ -7,17 +7,23 @@ use std::path::Path;
 
 /// The shipped sections a slurm sweep needs: the DMW, the contact set and one sweep.
 fn sweep_only_config(full: &str) -> String {
+    sections(
+        full,
+        &[
+            "[dmw.disk_md]",
+            "[contact.improved]",
+            "[simulate.improved_sweep]",
+        ],
+    )
+}
+
+/// The shipped sections whose headers start with one of `keep_headers`.
+fn sections(full: &str, keep_headers: &[&str]) -> String {
     let mut out = String::new();
     let mut keep = false;
     for line in full.lines() {
         if line.starts_with('[') {
-            keep = [
-                "[dmw.disk_md]",
-                "[contact.improved]",
-                "[simulate.improved_sweep]",
-            ]
-            .iter()
-            .any(|s| line.starts_with(s));
+            keep = keep_headers.iter().any(|s| line.starts_with(s));
         }
         if keep {
             out.push_str(line);
@@ -131,6 +137,138 @@ fn slurm_sweep_equals_local_and_resubmits_only_failures() {
     let o = run_with(&remote, &bin, &["run", "--executor", "slurm"]);
     assert_ok(&o);
     let e = stderr(&o);
-    assert!(e.contains("no stale [simulate] case to submit"), "{e}");
+    assert!(
+        e.contains("no stale [simulate] or [doe] case to submit"),
+        "{e}"
+    );
     assert!(e.contains("nothing to do"), "{e}");
+}
+
+/// Opt-in (`HDI_SLURM_TESTS=1`, a Slurm from `scripts/slurm-local-up.sh`): the 76-case sweep
+/// through a real single-node Slurm equals the local run, a rerun submits nothing, and a task
+/// cancelled with `scancel` is the only work a rerun submits again.
+#[test]
+fn real_slurm_sweep_matches_local_and_scancel_loses_only_that_task() {
+    if std::env::var("HDI_SLURM_TESTS").as_deref() != Ok("1") {
+        eprintln!(
+            "skipped: set HDI_SLURM_TESTS=1 with a running Slurm (scripts/slurm-local-up.sh)"
+        );
+        return;
+    }
+    let config = sweep_only_config(&Project::shipped().config())
+        .replace("actuation_step = \"5 nm\"", "actuation_step = \"0.2 nm\"");
+    let local = Project::shipped();
+    local.set_config(&config);
+    assert_ok(&local.run(&["run"]));
+    let local_table = std::fs::read(local.processed().join("improved_sweep/sweep.csv")).unwrap();
+
+    let remote = Project::shipped();
+    remote.set_config(&config);
+    let no_bin = remote.path().join("no-fakes");
+    // Submit without waiting, cancel task 1 at once (38 cases), let task 0 finish.
+    let o = run_with(
+        &remote,
+        &no_bin,
+        &[
+            "run",
+            "--executor",
+            "slurm",
+            "--cases-per-task",
+            "38",
+            "--no-wait",
+        ],
+    );
+    assert_ok(&o);
+    let e = stderr(&o);
+    assert!(e.contains("76 cases in 2 tasks submitted"), "{e}");
+    let job: String = e
+        .split("as job(s) ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .expect("job id")
+        .to_string();
+    let cancel = std::process::Command::new("scancel")
+        .arg(format!("{job}_1"))
+        .status()
+        .expect("scancel");
+    assert!(cancel.success());
+    let started = std::time::Instant::now();
+    loop {
+        let q = std::process::Command::new("squeue")
+            .args(["-h", "-j", &job])
+            .output()
+            .expect("squeue");
+        if String::from_utf8_lossy(&q.stdout).trim().is_empty() {
+            break;
+        }
+        assert!(
+            started.elapsed().as_secs() < 600,
+            "job {job} never finished"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(200));
+    }
+    // The rerun submits only what the cancelled task did not store (at most its 38 cases).
+    let o = run_with(&remote, &no_bin, &["run", "--executor", "slurm"]);
+    assert_ok(&o);
+    let e = stderr(&o);
+    let resubmitted: usize = e
+        .split("slurm: ")
+        .nth(1)
+        .and_then(|r| r.split(" cases in").next())
+        .and_then(|n| n.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no resubmission line: {e}"));
+    assert!((1..=38).contains(&resubmitted), "{e}");
+    let remote_table = std::fs::read(remote.processed().join("improved_sweep/sweep.csv")).unwrap();
+    assert_eq!(
+        local_table, remote_table,
+        "slurm and local sweep tables differ"
+    );
+    let o = run_with(&remote, &no_bin, &["run", "--executor", "slurm"]);
+    assert_ok(&o);
+    assert!(
+        stderr(&o).contains("no stale [simulate] or [doe] case to submit"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn doe_design_cases_run_on_slurm_and_match_the_local_design() {
+    let full = Project::shipped().config();
+    let config = sections(
+        &full,
+        &[
+            "[dmw.disk_md]",
+            "[contact.improved]",
+            "[simulate.improved_sweep]",
+            "[doe.bulge_design]",
+        ],
+    );
+    let local = Project::shipped();
+    local.set_config(&config);
+    assert_ok(&local.run(&["run", "--only", "bulge_design"]));
+    let local_design = std::fs::read(local.processed().join("bulge_design/design.csv")).unwrap();
+
+    let remote = Project::shipped();
+    remote.set_config(&config);
+    let bin = remote.path().join("bin");
+    fake_slurm(&bin, None);
+    let o = run_with(
+        &remote,
+        &bin,
+        &["run", "--executor", "slurm", "--cases-per-task", "27"],
+    );
+    assert_ok(&o);
+    assert!(stderr(&o).contains("cases in"), "{}", stderr(&o));
+    // Every design case came from the Slurm tasks: the local DOE run found all 108 cached.
+    let result: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(remote.processed().join("bulge_design/result.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(result["cases_cached"], 108, "{result}");
+    let remote_design = std::fs::read(remote.processed().join("bulge_design/design.csv")).unwrap();
+    assert_eq!(
+        local_design, remote_design,
+        "slurm and local DOE designs differ"
+    );
 }

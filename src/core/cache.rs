@@ -289,7 +289,16 @@ impl Store {
             fs::rename(&dest, &aside)?;
             let _ = fs::remove_dir_all(&aside);
         }
-        fs::rename(work_dir, &dest)?;
+        if let Err(e) = fs::rename(work_dir, &dest) {
+            // Another process committed the same key between the check above and this rename
+            // (two Slurm tasks, or a task and a local run): same key, same inputs, so a
+            // verified entry there is as good as ours.
+            if let Verification::Fresh(theirs) = self.verify(&fingerprint.kind, &key) {
+                let _ = fs::remove_dir_all(work_dir);
+                return Ok(*theirs);
+            }
+            return Err(e);
+        }
         if let Some(parent) = dest.parent() {
             sync_dir(parent);
         }

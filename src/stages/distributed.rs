@@ -2,6 +2,7 @@
 //! `docs/slurm.md`): which cases of the pipeline are stale, and the worker that computes one
 //! on a Slurm node through the same case cache (so the bytes are a local run's).
 
+use super::doe::{design_params, DoeStage};
 use super::simulate::{PreparedSweep, SimulateStage, MODEL_VERSION};
 use crate::core::cache::{Store, Verification};
 use crate::core::cases::{case_fingerprint, CASE_KIND};
@@ -16,16 +17,44 @@ use std::sync::{Arc, Mutex};
 
 /// Case kind of a 2-DOF sweep point.
 pub const SIMULATE_CASE: &str = "simulate";
+/// Case kind of a DOE design point (a 2-DOF case of the base sweep with another bulge).
+pub const DOE_CASE: &str = "doe";
 
-/// The prepared sweep of `[simulate.<instance>]` from the store's current upstream entries
-/// (they must be fresh: the submitting run computes them first).
-fn prepared(file: &PipelineFile, store: &Store, instance: &str) -> Result<PreparedSweep> {
-    let cfg = file
-        .raw
-        .simulate
-        .get(instance)
-        .ok_or_else(|| Error::Stage(format!("no [simulate.{instance}] in the pipeline")))?;
-    let stage = SimulateStage::from_config(file, instance, cfg)?;
+/// The stage whose cases are prepared: a `[simulate]` instance, or the base sweep of a
+/// `[doe]` instance (uncalibrated by construction).
+fn sweep_stage(file: &PipelineFile, kind: &str, instance: &str) -> Result<SimulateStage> {
+    match kind {
+        SIMULATE_CASE => {
+            let cfg =
+                file.raw.simulate.get(instance).ok_or_else(|| {
+                    Error::Stage(format!("no [simulate.{instance}] in the pipeline"))
+                })?;
+            Ok(SimulateStage::from_config(file, instance, cfg)?)
+        }
+        _ => {
+            let cfg = file
+                .raw
+                .doe
+                .get(instance)
+                .ok_or_else(|| Error::Stage(format!("no [doe.{instance}] in the pipeline")))?;
+            let doe = DoeStage::from_config(file, instance, cfg)?;
+            Ok(SimulateStage {
+                name: doe.params.base_name.clone(),
+                params: doe.params.base,
+            })
+        }
+    }
+}
+
+/// The prepared sweep of a `[simulate]` or `[doe]` instance from the store's current upstream
+/// entries (they must be fresh: the submitting run computes them first).
+fn prepared(
+    file: &PipelineFile,
+    store: &Store,
+    kind: &str,
+    instance: &str,
+) -> Result<PreparedSweep> {
+    let stage = sweep_stage(file, kind, instance)?;
     let planned = plan(super::build(file)?, store, &Default::default())?;
     let (mut results, mut dirs, mut keys) = (BTreeMap::new(), BTreeMap::new(), BTreeMap::new());
     for u in stage.upstream() {
@@ -49,77 +78,104 @@ fn prepared(file: &PipelineFile, store: &Store, instance: &str) -> Result<Prepar
     })
 }
 
-/// The upstream instances of every stale `[simulate]` instance: what must be current before
-/// its cases can be listed.
-pub fn simulate_upstream(file: &PipelineFile, store: &Store) -> Result<Vec<String>> {
+/// The stale `[simulate]` and `[doe]` instances, as (case kind, name).
+fn stale_instances(file: &PipelineFile, store: &Store) -> Result<Vec<(&'static str, String)>> {
     let planned = plan(super::build(file)?, store, &Default::default())?;
-    let mut names = Vec::new();
-    for (name, cfg) in &file.raw.simulate {
-        let stale = planned
+    let stale = |name: &str| {
+        planned
             .planned
             .iter()
-            .any(|p| &p.name == name && p.state != State::Fresh);
-        if stale {
-            for u in SimulateStage::from_config(file, name, cfg)?.upstream() {
-                if !names.contains(&u) {
-                    names.push(u);
-                }
+            .any(|p| p.name == name && p.state != State::Fresh)
+    };
+    let sims = file.raw.simulate.keys().map(|n| (SIMULATE_CASE, n.clone()));
+    let does = file.raw.doe.keys().map(|n| (DOE_CASE, n.clone()));
+    Ok(sims.chain(does).filter(|(_, n)| stale(n)).collect())
+}
+
+/// The upstream instances of every stale `[simulate]` and `[doe]` instance: what must be
+/// current before their cases can be listed.
+pub fn case_upstream(file: &PipelineFile, store: &Store) -> Result<Vec<String>> {
+    let mut names = Vec::new();
+    for (kind, name) in stale_instances(file, store)? {
+        for u in sweep_stage(file, kind, &name)?.upstream() {
+            if !names.contains(&u) {
+                names.push(u);
             }
         }
     }
     Ok(names)
 }
 
-/// Every case of the stale `[simulate]` instances without a verified store entry, with the
-/// recipe a worker needs (`config` must be the absolute path of the pipeline file).
+/// Every case of the stale `[simulate]` instances and the design cases of the stale `[doe]`
+/// instances without a verified store entry, with the recipe a worker needs (`config` must be
+/// the absolute path of the pipeline file). A DOE's annealing is sequential: it runs locally.
 pub fn stale_cases(file: &PipelineFile, config: &Path, store: &Store) -> Result<Vec<CaseSpec>> {
-    let planned = plan(super::build(file)?, store, &Default::default())?;
     let mut specs = Vec::new();
-    for name in file.raw.simulate.keys() {
-        let fresh = planned
-            .planned
-            .iter()
-            .any(|p| &p.name == name && p.state == State::Fresh);
-        if fresh {
-            continue;
-        }
-        let sweep = prepared(file, store, name)?;
-        for &a in &sweep.params.actuations {
-            let params = sweep.case_params(a);
+    let missing = |key: &str| !matches!(store.verify(CASE_KIND, key), Verification::Fresh(_));
+    for (kind, name) in stale_instances(file, store)? {
+        let sweep = prepared(file, store, kind, &name)?;
+        let dmw_key = sweep.dmw.as_ref().map(|d| d.1.as_str());
+        let points: Vec<(Option<[f64; 3]>, f64)> = if kind == SIMULATE_CASE {
+            sweep.params.actuations.iter().map(|&a| (None, a)).collect()
+        } else {
+            let cfg = &file.raw.doe[&name];
+            DoeStage::from_config(file, &name, cfg)?
+                .design_cases()
+                .into_iter()
+                .map(|(d, a)| (Some(d), a))
+                .collect()
+        };
+        for (design, a) in points {
+            let params = match design {
+                None => sweep.case_params(a),
+                Some(d) => {
+                    design_params(&sweep.params, &d, a)?.case_params(a, &sweep.contact_key, dmw_key)
+                }
+            };
             let key = case_fingerprint(MODEL_VERSION, &params).key();
-            if matches!(store.verify(CASE_KIND, &key), Verification::Fresh(_)) {
+            if !missing(&key) {
                 continue;
             }
             let recipe = json!({
                 "config": config.display().to_string(),
                 "instance": name,
                 "actuation_m": a,
+                "design_m": design,
             });
-            specs.push(CaseSpec::new(SIMULATE_CASE, MODEL_VERSION, params, recipe));
+            specs.push(CaseSpec::new(kind, MODEL_VERSION, params, recipe));
         }
     }
     Ok(specs)
 }
 
-/// Computes `simulate` cases; prepares each sweep once per process (a task runs a range of
-/// cases of usually one sweep, in parallel).
-#[derive(Default)]
-struct SimulateWorker {
+/// Computes `simulate` and DOE cases; prepares each sweep once per process (a task runs a
+/// range of cases of usually one sweep, in parallel).
+struct SweepWorker {
+    kind: &'static str,
     sweeps: Mutex<HashMap<(String, String), Arc<PreparedSweep>>>,
 }
 
-impl CaseComputer for SimulateWorker {
+impl SweepWorker {
+    fn new(kind: &'static str) -> Self {
+        SweepWorker {
+            kind,
+            sweeps: Mutex::new(HashMap::new()),
+        }
+    }
+}
+
+impl CaseComputer for SweepWorker {
     fn compute(&self, recipe: &Value, store: &Store, dir: &Path) -> Result<Value> {
         let field = |k: &str| {
             recipe[k]
                 .as_str()
                 .map(str::to_string)
-                .ok_or_else(|| Error::Stage(format!("simulate recipe without `{k}`")))
+                .ok_or_else(|| Error::Stage(format!("{} recipe without `{k}`", self.kind)))
         };
         let (config, instance) = (field("config")?, field("instance")?);
         let actuation = recipe["actuation_m"]
             .as_f64()
-            .ok_or_else(|| Error::Stage("simulate recipe without `actuation_m`".into()))?;
+            .ok_or_else(|| Error::Stage(format!("{} recipe without `actuation_m`", self.kind)))?;
         let sweep = {
             let mut sweeps = self
                 .sweeps
@@ -130,19 +186,36 @@ impl CaseComputer for SimulateWorker {
                 Some(s) => Arc::clone(s),
                 None => {
                     let file = PipelineFile::load(Path::new(&config))?;
-                    let s = Arc::new(prepared(&file, store, &instance)?);
+                    let s = Arc::new(prepared(&file, store, self.kind, &instance)?);
                     sweeps.insert(k, Arc::clone(&s));
                     s
                 }
             }
         };
-        sweep.compute_case(actuation, dir)
+        match serde_json::from_value::<Option<[f64; 3]>>(recipe["design_m"].clone()) {
+            Ok(None) => sweep.compute_case(actuation, dir),
+            Ok(Some(design)) => {
+                let p = design_params(&sweep.params, &design, actuation)?;
+                super::simulate::simulate_case(
+                    &p,
+                    actuation,
+                    &sweep.isbl,
+                    sweep.dmw.as_ref().map(|d| &d.0),
+                    dir,
+                )
+            }
+            Err(e) => Err(Error::Stage(format!(
+                "{} recipe: bad `design_m`: {e}",
+                self.kind
+            ))),
+        }
     }
 }
 
 /// The workers `hdi exec-cases` dispatches to.
 pub fn registry() -> CaseRegistry {
     let mut r = CaseRegistry::new();
-    r.register(SIMULATE_CASE, SimulateWorker::default());
+    r.register(SIMULATE_CASE, SweepWorker::new(SIMULATE_CASE));
+    r.register(DOE_CASE, SweepWorker::new(DOE_CASE));
     r
 }

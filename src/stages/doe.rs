@@ -385,32 +385,57 @@ struct DesignCase {
     xi: f64,
 }
 
+/// The base instance's parameters with the bulge `[a, w, x]`, for a case at `actuation` (the
+/// local runner and the Slurm worker build the same key from this).
+pub fn design_params(
+    base: &SimulateParams,
+    design: &[f64; 3],
+    actuation: f64,
+) -> Result<SimulateParams> {
+    // An annealing point on the a = x edge may miss it by rounding only.
+    let a = if design[0] > design[2] && design[0] - design[2] < 1e-9 * design[2] {
+        design[2]
+    } else {
+        design[0]
+    };
+    let bulge = BulgeDesign {
+        semi_width_x: a,
+        full_width_y: design[1],
+        offset_from_te: design[2],
+    };
+    bulge.validate()?;
+    let mut p = base.clone();
+    p.model = p.model.with_bulge(bulge);
+    // Only beyond the model's range is the range widened, so every case inside it keeps the
+    // `[simulate]` stage's cache key (Table 2.8's initial design reuses its sweep).
+    if actuation > p.model.max_actuation {
+        p.model.max_actuation = actuation;
+    }
+    Ok(p)
+}
+
+impl DoeStage {
+    /// The design points `[a, w, x]` [m] crossed with the actuation levels, in run order.
+    pub fn design_cases(&self) -> Vec<([f64; 3], f64)> {
+        let p = &self.params;
+        let designs: Vec<[f64; 3]> = full_factorial(&[3, 3, 3])
+            .iter()
+            .map(|c| p.decode(c))
+            .collect();
+        p.actuations
+            .iter()
+            .flat_map(|&h| designs.iter().map(move |d| (*d, h)))
+            .collect()
+    }
+}
+
 impl CaseRunner<'_> {
     fn params_for(&self, design: &[f64; 3]) -> Result<SimulateParams> {
-        // An annealing point on the a = x edge may miss it by rounding only.
-        let a = if design[0] > design[2] && design[0] - design[2] < 1e-9 * design[2] {
-            design[2]
-        } else {
-            design[0]
-        };
-        let bulge = BulgeDesign {
-            semi_width_x: a,
-            full_width_y: design[1],
-            offset_from_te: design[2],
-        };
-        bulge.validate()?;
-        let mut p = self.base.clone();
-        p.model = p.model.with_bulge(bulge);
-        Ok(p)
+        design_params(self.base, design, 0.0)
     }
 
     fn run(&self, design: [f64; 3], actuation: f64) -> Result<DesignCase> {
-        let mut p = self.params_for(&design)?;
-        // Only beyond the model's range is the range widened, so every case inside it keeps
-        // the `[simulate]` stage's cache key (Table 2.8's initial design reuses its sweep).
-        if actuation > p.model.max_actuation {
-            p.model.max_actuation = actuation;
-        }
+        let p = design_params(self.base, &design, actuation)?;
         let dmw_key = self.dmw.as_ref().map(|d| d.1.as_str());
         let params = p.case_params(actuation, &self.contact_key, dmw_key);
         let entry = cases::get_or_compute(self.store, simulate::MODEL_VERSION, &params, |dir| {
