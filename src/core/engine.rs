@@ -556,6 +556,18 @@ pub fn gc(plan: &Plan, store: &Store, dry_run: bool) -> Result<Vec<PathBuf>> {
             }
         }
     }
+    // …and as long as a Slurm case manifest lists them: cases finished by a `--no-wait`
+    // array before their stage ran are listed nowhere else yet.
+    for path in crate::core::executor::list_manifests(store.processed()).unwrap_or_default() {
+        if let Ok(m) = crate::core::executor::CaseManifest::read(&path) {
+            for e in &m.cases {
+                keep.insert((
+                    crate::core::cases::CASE_KIND.to_string(),
+                    e.spec.key.clone(),
+                ));
+            }
+        }
+    }
     let mut removed = Vec::new();
     for (kind, key, path) in store.entries() {
         if !keep.contains(&(kind, key)) {

@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 
 /// Bump when the numbers the stage derives from its cases change (the cases themselves carry
 /// the simulate stage's model version).
-pub const MODEL_VERSION: &str = "doe-1";
+pub const MODEL_VERSION: &str = "doe-2";
 
 const UM: f64 = 1e-6;
 /// Highest actuation a DOE case may use [m] (see `validate`).
@@ -966,6 +966,8 @@ impl Stage for DoeStage {
             )?;
         }
 
+        // Every case this instance used, so `hdi gc` keeps them with it.
+        let mut case_keys: Vec<String> = doe_cases.iter().map(|c| c.entry.key.clone()).collect();
         let mut result = json!({
             "cases": total,
             "cases_cached": doe_cases.iter().filter(|c| c.entry.cached).count(),
@@ -996,7 +998,8 @@ impl Stage for DoeStage {
                 .map_err(|e| Error::Stage(format!("annealing: {e}")))?;
             let mut xis = Vec::new();
             while let Some(c) = annealer.ask() {
-                let (xi, _) = evaluate(&c)?;
+                let (xi, key) = evaluate(&c)?;
+                case_keys.extend(key);
                 xis.push(xi);
                 annealer.tell(annealing_objective(xi));
                 ctx.progress.set_message(format!(
@@ -1052,11 +1055,13 @@ impl Stage for DoeStage {
                 .collect();
             let pts = sensitivity_points(&res.x, &step, p.sensitivity_steps, &lower, &upper)
                 .map_err(|e| Error::Stage(format!("sensitivity: {e}")))?;
-            let values: Vec<Result<f64>> = pts.par_iter().map(|s| Ok(evaluate(&s.x)?.0)).collect();
+            let values: Vec<Result<(f64, Option<String>)>> =
+                pts.par_iter().map(|s| evaluate(&s.x)).collect();
             let mut sens_rows = Vec::new();
             let mut spread = [0.0f64; 3];
             for (s, v) in pts.iter().zip(values) {
-                let xi = v?;
+                let (xi, key) = v?;
+                case_keys.extend(key);
                 let d = p.decode(&s.x);
                 if s.offset.abs() == 1 {
                     spread[s.coordinate] = spread[s.coordinate].max((xi - best_xi).abs());
@@ -1124,6 +1129,7 @@ impl Stage for DoeStage {
                 for r in runs {
                     all.push(r?);
                 }
+                case_keys.extend(all.iter().map(|c| c.entry.key.clone()));
                 let mut cmp_rows = Vec::new();
                 let mut series = Vec::new();
                 for (label, chunk) in [("initial", &all[..n]), ("optimised", &all[n..])] {
@@ -1177,6 +1183,9 @@ impl Stage for DoeStage {
                 result["comparison"] = json!(cmp_rows);
             }
         }
+        case_keys.sort();
+        case_keys.dedup();
+        result["case_keys"] = json!(case_keys);
         result["tables"] = json!([
             "design",
             "coefficients",
