@@ -116,6 +116,14 @@ fn slurm_sweep_equals_local_and_resubmits_only_failures() {
     assert!(e.contains("task ended FAILED"), "{e}");
     let st = run_with(&remote, &bin, &["status"]);
     assert!(stdout(&st).contains("failed cases in"), "{}", stdout(&st));
+    // While a submitted manifest still misses cases, gc leaves tmp/ (tasks' work dirs) alone.
+    let work = remote.processed().join(".hdi/tmp/case-running-task");
+    std::fs::create_dir_all(&work).unwrap();
+    assert_ok(&run_with(&remote, &bin, &["gc"]));
+    assert!(
+        work.is_dir(),
+        "gc removed a work dir while Slurm cases were missing"
+    );
 
     // The rerun submits only the missing case, then finishes the pipeline locally.
     fake_slurm(&bin, None);
@@ -131,6 +139,12 @@ fn slurm_sweep_equals_local_and_resubmits_only_failures() {
     assert_eq!(
         local_table, remote_table,
         "slurm and local sweep tables differ"
+    );
+    // Every case is in: gc cleans tmp/ again and keeps the cases.
+    assert_ok(&run_with(&remote, &bin, &["gc"]));
+    assert!(
+        !work.exists(),
+        "gc kept a stale work dir after the cases were in"
     );
 
     // Nothing left to submit.

@@ -577,7 +577,22 @@ pub fn gc(plan: &Plan, store: &Store, dry_run: bool) -> Result<Vec<PathBuf>> {
             removed.push(path);
         }
     }
+    // Work dirs of Slurm tasks that may be running now live in tmp/ too: while a submitted
+    // case manifest still has cases missing from the store, leave tmp/ alone.
+    let slurm_pending = crate::core::executor::list_manifests(store.processed())
+        .unwrap_or_default()
+        .iter()
+        .any(|path| {
+            let submitted =
+                crate::core::executor::read_submissions(path).is_ok_and(|s| !s.is_empty());
+            submitted
+                && crate::core::executor::CaseManifest::read(path)
+                    .is_ok_and(|m| !m.still_missing(store).is_empty())
+        });
     for t in store.tmp_dirs() {
+        if slurm_pending {
+            break;
+        }
         if !dry_run {
             let _ = std::fs::remove_dir_all(&t);
         }
