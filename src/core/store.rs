@@ -225,6 +225,16 @@ impl Drop for H5Out {
     }
 }
 
+/// `x` rounded to `digits` significant digits, for summary tables (1.92325, not
+/// 1.9232500000000001); zero and non-finite values pass through. HDF5 keeps full precision.
+pub fn round_significant(x: f64, digits: i32) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    let scale = 10f64.powi(digits - 1 - x.abs().log10().floor() as i32);
+    (x * scale).round() / scale
+}
+
 /// Write rows (JSON objects with the same keys) as `<stem>.parquet` and `<stem>.csv`.
 /// Integers become Int64 columns, other numbers Float64, strings Utf8, booleans Boolean; a
 /// missing key or JSON null is a null. (An all-null column is Float64.)

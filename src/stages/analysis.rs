@@ -304,17 +304,12 @@ fn display(unit: &str) -> (&str, f64) {
     }
 }
 
-/// The summary of a report (JSON for `--json`, `result.json` and the table row).
-/// Six significant digits for the summary table (1.92325, not 1.9232500000000001); the HDF5
-/// keeps full precision.
+/// Six significant digits for the summary table; the HDF5 keeps full precision.
 fn sig6(x: f64) -> f64 {
-    if x == 0.0 || !x.is_finite() {
-        return x;
-    }
-    let scale = 10f64.powi(5 - x.abs().log10().floor() as i32);
-    (x * scale).round() / scale
+    crate::core::store::round_significant(x, 6)
 }
 
+/// The summary of a report (JSON for `--json`, `result.json` and the table row).
 pub fn summary(r: &AnalysisReport, unit: &str) -> Value {
     let (du, k) = display(unit);
     json!({

@@ -7,7 +7,7 @@ use super::simulate::{PreparedSweep, SimulateStage, MODEL_VERSION};
 use crate::core::cache::{Store, Verification};
 use crate::core::cases::{case_fingerprint, CASE_KIND};
 use crate::core::config::PipelineFile;
-use crate::core::engine::{plan, read_result, Stage, State};
+use crate::core::engine::{plan, read_result, Plan, Stage, State};
 use crate::core::executor::{CaseComputer, CaseRegistry, CaseSpec};
 use crate::error::{Error, Result};
 use serde_json::{json, Value};
@@ -51,11 +51,11 @@ fn sweep_stage(file: &PipelineFile, kind: &str, instance: &str) -> Result<Simula
 fn prepared(
     file: &PipelineFile,
     store: &Store,
+    planned: &Plan,
     kind: &str,
     instance: &str,
 ) -> Result<PreparedSweep> {
     let stage = sweep_stage(file, kind, instance)?;
-    let planned = plan(super::build(file)?, store, &Default::default())?;
     let (mut results, mut dirs, mut keys) = (BTreeMap::new(), BTreeMap::new(), BTreeMap::new());
     for u in stage.upstream() {
         let p = planned
@@ -79,8 +79,7 @@ fn prepared(
 }
 
 /// The stale `[simulate]` and `[doe]` instances, as (case kind, name).
-fn stale_instances(file: &PipelineFile, store: &Store) -> Result<Vec<(&'static str, String)>> {
-    let planned = plan(super::build(file)?, store, &Default::default())?;
+fn stale_instances(file: &PipelineFile, planned: &Plan) -> Vec<(&'static str, String)> {
     let stale = |name: &str| {
         planned
             .planned
@@ -89,14 +88,19 @@ fn stale_instances(file: &PipelineFile, store: &Store) -> Result<Vec<(&'static s
     };
     let sims = file.raw.simulate.keys().map(|n| (SIMULATE_CASE, n.clone()));
     let does = file.raw.doe.keys().map(|n| (DOE_CASE, n.clone()));
-    Ok(sims.chain(does).filter(|(_, n)| stale(n)).collect())
+    sims.chain(does).filter(|(_, n)| stale(n)).collect()
+}
+
+/// The pipeline planned against the store (fingerprints hash every input file: done once).
+fn plan_of(file: &PipelineFile, store: &Store) -> Result<Plan> {
+    plan(super::build(file)?, store, &Default::default())
 }
 
 /// The upstream instances of every stale `[simulate]` and `[doe]` instance: what must be
 /// current before their cases can be listed.
 pub fn case_upstream(file: &PipelineFile, store: &Store) -> Result<Vec<String>> {
     let mut names = Vec::new();
-    for (kind, name) in stale_instances(file, store)? {
+    for (kind, name) in stale_instances(file, &plan_of(file, store)?) {
         for u in sweep_stage(file, kind, &name)?.upstream() {
             if !names.contains(&u) {
                 names.push(u);
@@ -112,8 +116,9 @@ pub fn case_upstream(file: &PipelineFile, store: &Store) -> Result<Vec<String>> 
 pub fn stale_cases(file: &PipelineFile, config: &Path, store: &Store) -> Result<Vec<CaseSpec>> {
     let mut specs = Vec::new();
     let missing = |key: &str| !matches!(store.verify(CASE_KIND, key), Verification::Fresh(_));
-    for (kind, name) in stale_instances(file, store)? {
-        let sweep = prepared(file, store, kind, &name)?;
+    let planned = plan_of(file, store)?;
+    for (kind, name) in stale_instances(file, &planned) {
+        let sweep = prepared(file, store, &planned, kind, &name)?;
         let dmw_key = sweep.dmw.as_ref().map(|d| d.1.as_str());
         let points: Vec<(Option<[f64; 3]>, f64)> = if kind == SIMULATE_CASE {
             sweep.params.actuations.iter().map(|&a| (None, a)).collect()
@@ -186,7 +191,8 @@ impl CaseComputer for SweepWorker {
                 Some(s) => Arc::clone(s),
                 None => {
                     let file = PipelineFile::load(Path::new(&config))?;
-                    let s = Arc::new(prepared(&file, store, self.kind, &instance)?);
+                    let planned = plan_of(&file, store)?;
+                    let s = Arc::new(prepared(&file, store, &planned, self.kind, &instance)?);
                     sweeps.insert(k, Arc::clone(&s));
                     s
                 }

@@ -187,6 +187,14 @@ impl DoeParams {
         })
     }
 
+    /// The 27 designs `[a, w, x]` [m] of the 3³ factorial, in `full_factorial` order.
+    fn design_points(&self) -> Vec<[f64; 3]> {
+        full_factorial(&[3, 3, 3])
+            .iter()
+            .map(|c| self.decode(c))
+            .collect()
+    }
+
     /// Physical design `[a, w, x]` of a coded point.
     fn decode(&self, c: &[f64]) -> [f64; 3] {
         // The design levels exactly (not to an ulp), so a level shared by two factors compares
@@ -418,10 +426,7 @@ impl DoeStage {
     /// The design points `[a, w, x]` [m] crossed with the actuation levels, in run order.
     pub fn design_cases(&self) -> Vec<([f64; 3], f64)> {
         let p = &self.params;
-        let designs: Vec<[f64; 3]> = full_factorial(&[3, 3, 3])
-            .iter()
-            .map(|c| p.decode(c))
-            .collect();
+        let designs = p.design_points();
         p.actuations
             .iter()
             .flat_map(|&h| designs.iter().map(move |d| (*d, h)))
@@ -525,12 +530,13 @@ fn surrogate_xi(fits: &[LevelFit], h: f64, coded_point: &[f64]) -> f64 {
     }
 }
 
-fn round6(v: f64) -> Value {
-    if !v.is_finite() {
-        return Value::Null;
+/// A table value: seven significant digits, null when not finite.
+fn table_value(v: f64) -> Value {
+    if v.is_finite() {
+        json!(crate::core::store::round_significant(v, 7))
+    } else {
+        Value::Null
     }
-    let s = format!("{v:.6e}");
-    json!(s.parse::<f64>().unwrap_or(v))
 }
 
 /// Table 2.7 coefficient names of a two-factor reduced polynomial, in output order.
@@ -551,24 +557,24 @@ fn predictive_rows(p: &DoeParams, fits: &[LevelFit]) -> Result<Vec<Map<String, V
                 .map(|f| FACTORS[f])
                 .collect();
             let mut row = Map::new();
-            row.insert("actuation_nm".into(), round6(lf.actuation / NM));
+            row.insert("actuation_nm".into(), table_value(lf.actuation / NM));
             row.insert("fixed_factor".into(), json!(FACTORS[lf.fixed]));
             row.insert("fixed_coded".into(), json!(level));
             row.insert(
                 "fixed_value_um".into(),
-                round6(decoded(level, p.levels[lf.fixed][0], p.levels[lf.fixed][2]) / UM),
+                table_value(decoded(level, p.levels[lf.fixed][0], p.levels[lf.fixed][2]) / UM),
             );
             row.insert("x1".into(), json!(free[0]));
             row.insert("x2".into(), json!(free[1]));
             for name in PREDICTIVE_TERMS {
                 row.insert(
                     name.into(),
-                    round6(reduced.coefficient(name).unwrap_or(0.0)),
+                    table_value(reduced.coefficient(name).unwrap_or(0.0)),
                 );
             }
             row.insert(
                 "residual_error".into(),
-                round6(lf.quartic.residual_ss_at(lf.fixed, level, 1e-9)),
+                table_value(lf.quartic.residual_ss_at(lf.fixed, level, 1e-9)),
             );
             rows.push(row);
         }
@@ -586,13 +592,13 @@ fn coefficient_rows(fits: &[LevelFit]) -> Vec<Map<String, Value>> {
             let Some(s) = s else { continue };
             for (j, name) in s.basis.names().iter().enumerate() {
                 let mut row = Map::new();
-                row.insert("actuation_nm".into(), round6(lf.actuation / NM));
+                row.insert("actuation_nm".into(), table_value(lf.actuation / NM));
                 row.insert("model".into(), json!(model));
                 row.insert("term".into(), json!(name));
-                row.insert("coefficient".into(), round6(s.fit.coefficients[j]));
-                row.insert("std_error".into(), round6(s.fit.standard_errors[j]));
-                row.insert("t".into(), round6(s.fit.t_values[j]));
-                row.insert("p".into(), round6(s.fit.p_values[j]));
+                row.insert("coefficient".into(), table_value(s.fit.coefficients[j]));
+                row.insert("std_error".into(), table_value(s.fit.standard_errors[j]));
+                row.insert("t".into(), table_value(s.fit.t_values[j]));
+                row.insert("p".into(), table_value(s.fit.p_values[j]));
                 rows.push(row);
             }
         }
@@ -607,13 +613,13 @@ fn anova_rows(fits: &[LevelFit]) -> Vec<Map<String, Value>> {
         let all = t.terms.iter().chain([&t.model, &t.residual, &t.total]);
         for r in all {
             let mut row = Map::new();
-            row.insert("actuation_nm".into(), round6(lf.actuation / NM));
+            row.insert("actuation_nm".into(), table_value(lf.actuation / NM));
             row.insert("source".into(), json!(r.source));
             row.insert("df".into(), json!(r.df));
-            row.insert("sum_sq".into(), round6(r.sum_sq));
-            row.insert("mean_sq".into(), round6(r.mean_sq));
-            row.insert("F".into(), r.f.map_or(Value::Null, round6));
-            row.insert("p".into(), r.p.map_or(Value::Null, round6));
+            row.insert("sum_sq".into(), table_value(r.sum_sq));
+            row.insert("mean_sq".into(), table_value(r.mean_sq));
+            row.insert("F".into(), r.f.map_or(Value::Null, table_value));
+            row.insert("p".into(), r.p.map_or(Value::Null, table_value));
             rows.push(row);
         }
     }
@@ -764,28 +770,28 @@ fn comparison_rows(
     ] {
         let mut row = Map::new();
         row.insert("design".into(), json!(label));
-        row.insert("a_um".into(), round6(design[0] / UM));
-        row.insert("w_um".into(), round6(design[1] / UM));
-        row.insert("x_um".into(), round6(design[2] / UM));
+        row.insert("a_um".into(), table_value(design[0] / UM));
+        row.insert("w_um".into(), table_value(design[1] / UM));
+        row.insert("x_um".into(), table_value(design[2] / UM));
         row.insert("condition".into(), json!(condition));
         let m = idx.map(|i| (&cases[i].metrics, cases[i].actuation));
         let get = |k: &str| m.and_then(|(m, _)| m[k].as_f64());
         row.insert(
             "h_tfc_nm".into(),
-            m.map_or(Value::Null, |(_, h)| round6(h / NM)),
+            m.map_or(Value::Null, |(_, h)| table_value(h / NM)),
         );
         row.insert(
             "clearance_nm".into(),
             m.and_then(|(m, _)| m["clearance_m"]["mean"].as_f64())
-                .map_or(Value::Null, |v| round6(v / NM)),
+                .map_or(Value::Null, |v| table_value(v / NM)),
         );
         row.insert(
             "hms_nm".into(),
-            get("hms_mean_m").map_or(Value::Null, |v| round6(v / NM)),
+            get("hms_mean_m").map_or(Value::Null, |v| table_value(v / NM)),
         );
         row.insert(
             "fhm_or_bv_percent".into(),
-            get("vibration_percent").map_or(Value::Null, round6),
+            get("vibration_percent").map_or(Value::Null, table_value),
         );
         rows.push(row);
     }
@@ -863,18 +869,17 @@ impl Stage for DoeStage {
         };
 
         // 1. The design: 27 coded points × the actuation levels, in parallel.
+        // The same list the Slurm executor submits (`design_cases`), level by level.
         let coded_points = full_factorial(&[3, 3, 3]);
-        let designs: Vec<[f64; 3]> = coded_points.iter().map(|c| p.decode(c)).collect();
-        let jobs: Vec<(usize, usize)> = (0..p.actuations.len())
-            .flat_map(|k| (0..designs.len()).map(move |d| (k, d)))
-            .collect();
+        let designs = p.design_points();
+        let jobs = self.design_cases();
         let total = jobs.len();
         let finished = AtomicUsize::new(0);
         ctx.progress.set_message(format!("0/{total} DOE cases"));
         let outcomes: Vec<Result<DesignCase>> = jobs
             .par_iter()
-            .map(|&(k, d)| {
-                let r = runner.run(designs[d], p.actuations[k]);
+            .map(|&(design, actuation)| {
+                let r = runner.run(design, actuation);
                 let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
                 ctx.progress.set_message(format!("{n}/{total} DOE cases"));
                 r
@@ -892,23 +897,25 @@ impl Stage for DoeStage {
             for f in 0..3 {
                 row.insert(format!("{}_coded", FACTORS[f]), json!(coded_point[f]));
             }
-            row.insert("a_um".into(), round6(c.design[0] / UM));
-            row.insert("w_um".into(), round6(c.design[1] / UM));
-            row.insert("x_um".into(), round6(c.design[2] / UM));
-            row.insert("actuation_nm".into(), round6(c.actuation / NM));
+            row.insert("a_um".into(), table_value(c.design[0] / UM));
+            row.insert("w_um".into(), table_value(c.design[1] / UM));
+            row.insert("x_um".into(), table_value(c.design[2] / UM));
+            row.insert("actuation_nm".into(), table_value(c.actuation / NM));
             let m = &c.entry.result;
             row.insert(
                 "clearance_nm".into(),
                 m["clearance_m"]["mean"]
                     .as_f64()
-                    .map_or(Value::Null, |v| round6(v / NM)),
+                    .map_or(Value::Null, |v| table_value(v / NM)),
             );
             row.insert(
                 "fhm_or_bv_percent".into(),
-                m["vibration_percent"].as_f64().map_or(Value::Null, round6),
+                m["vibration_percent"]
+                    .as_f64()
+                    .map_or(Value::Null, table_value),
             );
             row.insert("regime".into(), m["regime"].clone());
-            row.insert("xi".into(), round6(c.xi));
+            row.insert("xi".into(), table_value(c.xi));
             row.insert("case_key".into(), json!(c.entry.key));
             design_rows.push(row);
         }
@@ -1016,15 +1023,15 @@ impl Stage for DoeStage {
                 let d = p.decode(&r.candidate);
                 let mut m = Map::new();
                 m.insert("iteration".into(), json!(r.iteration));
-                m.insert("temperature".into(), round6(r.temperature));
-                m.insert("a_um".into(), round6(d[0] / UM));
-                m.insert("w_um".into(), round6(d[1] / UM));
-                m.insert("x_um".into(), round6(d[2] / UM));
-                m.insert("xi".into(), round6(*xi));
-                m.insert("candidate_j".into(), round6(r.candidate_j));
+                m.insert("temperature".into(), table_value(r.temperature));
+                m.insert("a_um".into(), table_value(d[0] / UM));
+                m.insert("w_um".into(), table_value(d[1] / UM));
+                m.insert("x_um".into(), table_value(d[2] / UM));
+                m.insert("xi".into(), table_value(*xi));
+                m.insert("candidate_j".into(), table_value(r.candidate_j));
                 m.insert("accepted".into(), json!(r.accepted));
-                m.insert("current_j".into(), round6(r.current_j));
-                m.insert("best_j".into(), round6(r.best_j));
+                m.insert("current_j".into(), table_value(r.current_j));
+                m.insert("best_j".into(), table_value(r.best_j));
                 sa_rows.push(m);
             }
             crate::core::store::write_table(&sa_rows, &ctx.out_dir.join("annealing"))?;
@@ -1071,12 +1078,12 @@ impl Stage for DoeStage {
                 m.insert("offset_steps".into(), json!(s.offset));
                 m.insert(
                     "offset_nm".into(),
-                    round6(f64::from(s.offset) * p.sensitivity_step / NM),
+                    table_value(f64::from(s.offset) * p.sensitivity_step / NM),
                 );
-                m.insert("a_um".into(), round6(d[0] / UM));
-                m.insert("w_um".into(), round6(d[1] / UM));
-                m.insert("x_um".into(), round6(d[2] / UM));
-                m.insert("xi".into(), round6(xi));
+                m.insert("a_um".into(), table_value(d[0] / UM));
+                m.insert("w_um".into(), table_value(d[1] / UM));
+                m.insert("x_um".into(), table_value(d[2] / UM));
+                m.insert("xi".into(), table_value(xi));
                 sens_rows.push(m);
             }
             crate::core::store::write_table(&sens_rows, &ctx.out_dir.join("sensitivity"))?;
@@ -1097,10 +1104,10 @@ impl Stage for DoeStage {
                 "sensitivity_one_step": {"a_tfc": spread[0], "w_tfc": spread[1], "x_tfc": spread[2]},
                 "most_sensitive": most,
             });
-            row.insert("optimum_a_um".into(), round6(best[0] / UM));
-            row.insert("optimum_w_um".into(), round6(best[1] / UM));
-            row.insert("optimum_x_um".into(), round6(best[2] / UM));
-            row.insert("optimum_xi".into(), round6(best_xi));
+            row.insert("optimum_a_um".into(), table_value(best[0] / UM));
+            row.insert("optimum_w_um".into(), table_value(best[1] / UM));
+            row.insert("optimum_x_um".into(), table_value(best[2] / UM));
+            row.insert("optimum_xi".into(), table_value(best_xi));
             row.insert("sa_evaluations".into(), json!(res.evaluations));
             row.insert("most_sensitive".into(), json!(most));
             result["optimum"] = optimum;
