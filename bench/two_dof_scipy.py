@@ -3,7 +3,7 @@
 
 Written from /work/shared/spec/dynamics.md (§1.1, §1.2, §2.1–2.4, §3.1, §3.2, §3.4, §4, §5.1,
 §5.3, §5.4, §6, §7 S2, §8, §10, §11.1–11.2, §12) and the ISBL per-unit-area table
-/work/shared/data/isbl/improved_2dof.csv, without looking at the project's Rust sources.
+tests/data/isbl/improved_2dof.csv, without looking at the project's Rust sources.
 It serves (1) as a cross-check of the Rust implementation and (2) as the scipy `solve_ivp`
 side of a speed comparison.
 
@@ -32,7 +32,7 @@ from scipy.optimize import fsolve
 
 NM = 1e-9
 HERE = os.path.dirname(os.path.abspath(__file__))
-DEFAULT_ISBL = "/work/shared/data/isbl/improved_2dof.csv"
+DEFAULT_ISBL = os.path.join(HERE, "..", "tests", "data", "isbl", "improved_2dof.csv")
 
 
 # ----------------------------------------------------------------------------------------

@@ -8,5 +8,6 @@ mod doe_cli;
 mod pipeline_cache;
 mod simulate_cli;
 mod slurm_cli;
+mod standalone;
 mod surface_cli;
 mod three_dof_cli;

@@ -12,9 +12,10 @@ pub fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// `../shared/data` beside the project (CI puts `shared/` there).
-pub fn shared_data() -> PathBuf {
-    repo_root().join("..").join("shared").join("data")
+/// The reference data the tests read (`tests/data`, provenance in its README.md); tests never
+/// read outside the repository.
+pub fn test_data() -> PathBuf {
+    repo_root().join("tests").join("data")
 }
 
 /// A copy of the shipped pipeline.toml and raw/ in a fresh temp dir.

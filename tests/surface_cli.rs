@@ -151,14 +151,14 @@ fn out_option_writes_hdf5_and_plots() {
     assert!(text.contains("β = σRη"), "{text}");
 }
 
-/// The spec's §2.6 reference table on the canonical surface in ../shared/data, through the
+/// The spec's §2.6 reference table on the canonical surface in tests/data, through the
 /// real reader and the CLI (the unit tests in roughness.rs check the full table).
 #[test]
 fn canonical_surface_reproduces_the_reference_table_through_the_cli() {
-    let f = shared_data().join("surfaces/gaussian_acf_256_seed12345.txt");
+    let f = test_data().join("surfaces/gaussian_acf_256_seed12345.txt");
     assert!(
         f.is_file(),
-        "{} missing: CI puts shared/ beside the clone",
+        "{} missing (tests/data ships with the repository)",
         f.display()
     );
     // The table prints rounded numbers: `got` must round to the printed value, i.e. lie

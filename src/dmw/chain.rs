@@ -576,11 +576,8 @@ mod tests {
     use crate::dmw::synth::{generate, truth_displacement, LdvSynthSpec};
     use std::path::PathBuf;
 
-    fn shared(name: &str) -> Vec<f64> {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../shared/data/signals/dmw_chain/"
-        );
+    fn reference(name: &str) -> Vec<f64> {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/signals/dmw_chain/");
         std::fs::read_to_string(format!("{path}{name}"))
             .unwrap()
             .lines()
@@ -615,7 +612,7 @@ mod tests {
     fn reference_chain_is_reproduced_exactly_in_its_own_order() {
         // The reference integrates the averaged velocity (offset kept), then filters D and V
         // with scipy's default padding: same order and padding → the same numbers.
-        let rec = averaged(shared("avg_u.csv"));
+        let rec = averaged(reference("avg_u.csv"));
         let p = ChainParams {
             order: ChainOrder::IntegrateThenFilter,
             padlen: Padlen::Scipy,
@@ -624,7 +621,7 @@ mod tests {
             ..Default::default()
         };
         let r = process(&rec, &p).unwrap();
-        let (d_ref, v_ref) = (shared("d_hp.csv"), shared("v_hp.csv"));
+        let (d_ref, v_ref) = (reference("d_hp.csv"), reference("v_hp.csv"));
         let max_rel = |a: &[f64], b: &[f64]| {
             let top = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
             a.iter()
@@ -649,10 +646,10 @@ mod tests {
         // Filtering before integrating, with 3·fs/fc padding and the offset removed: the
         // filters commute, so the middle agrees (measured 2.0e-4 relative RMS) and both are
         // as close to the truth as the reference (0.0182 relative RMS).
-        let rec = averaged(shared("avg_u.csv"));
+        let rec = averaged(reference("avg_u.csv"));
         let r = process(&rec, &ChainParams::default()).unwrap();
-        let d_ref = shared("d_hp.csv");
-        let truth = shared("d_true_hp.csv");
+        let d_ref = reference("d_hp.csv");
+        let truth = reference("d_true_hp.csv");
         let mid = 1200..8800;
         let e = rel_rms(&r.tracks.d[0][mid.clone()], &d_ref[mid.clone()]);
         assert!(e < 1e-3, "{e}");
@@ -809,7 +806,7 @@ mod tests {
 
     #[test]
     fn resampling_keeps_the_tracks_band_limited_copies() {
-        let rec = averaged(shared("avg_u.csv"));
+        let rec = averaged(reference("avg_u.csv"));
         let base = process(&rec, &ChainParams::default()).unwrap();
         let p = ChainParams {
             resample_rate: Some(8e6),

@@ -402,7 +402,7 @@ mod tests {
             .fold(0.0, f64::max)
     }
 
-    // spec §3.6 and shared/data/signals/sosfiltfilt_testvector/sos.csv;
+    // spec §3.6 and tests/data/signals/sosfiltfilt_testvector/sos.csv;
     // scipy 1.17.1: signal.butter(4, 10e3, 'highpass', fs=4e6, output='sos')
     const HP4_10K: [Sos; 2] = [
         [
@@ -424,12 +424,12 @@ mod tests {
     }
 
     #[test]
-    fn highpass_order4_matches_shared_sos_csv() {
+    fn highpass_order4_matches_reference_sos_csv() {
         let path = concat!(
             env!("CARGO_MANIFEST_DIR"),
-            "/../shared/data/signals/sosfiltfilt_testvector/sos.csv"
+            "/tests/data/signals/sosfiltfilt_testvector/sos.csv"
         );
-        let text = std::fs::read_to_string(path).expect("shared sos.csv");
+        let text = std::fs::read_to_string(path).expect("reference sos.csv");
         let want: Vec<Sos> = text
             .lines()
             .filter(|l| !l.trim().is_empty())

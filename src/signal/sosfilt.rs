@@ -340,7 +340,7 @@ mod tests {
     const FS: f64 = 4e6;
     const VECTOR_DIR: &str = concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../shared/data/signals/sosfiltfilt_testvector/"
+        "/tests/data/signals/sosfiltfilt_testvector/"
     );
 
     fn hp4() -> Vec<Sos> {
@@ -429,7 +429,7 @@ mod tests {
     }
 
     #[test]
-    fn shared_test_vector_matches_scipy_to_1e_12() {
+    fn reference_test_vector_matches_scipy_to_1e_12() {
         let x = read_column("x.csv");
         let want = read_column("y.csv");
         assert_eq!(x.len(), 4096);
@@ -450,7 +450,7 @@ mod tests {
     }
 
     #[test]
-    fn shared_test_vector_quoted_values_of_spec() {
+    fn reference_test_vector_quoted_values_of_spec() {
         let x = read_column("x.csv");
         let y = sosfiltfilt(&hp4(), &x, PadType::Odd, None).unwrap();
         // spec §3.6 (scipy sosfiltfilt with defaults)

@@ -1010,7 +1010,7 @@ mod tests {
 
     const CANONICAL: &str = concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../shared/data/surfaces/gaussian_acf_256_seed12345.txt"
+        "/tests/data/surfaces/gaussian_acf_256_seed12345.txt"
     );
 
     /// Minimal reader for the canonical ASCII matrix (the real readers live in `surface::io`).

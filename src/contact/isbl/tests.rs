@@ -1,10 +1,10 @@
 //! Tests of the ISBL curves against the reference CSVs (independent numpy/scipy
-//! implementation, /work/shared/data/isbl), closed forms and the spec's §9 numbers.
+//! implementation, tests/data/isbl), closed forms and the spec's §9 numbers.
 
 use super::asperity::KeRegime;
 use super::*;
 
-const DATA_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/isbl/");
+const DATA_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/isbl/");
 const COLUMNS: [&str; 7] = [
     "P_Pa",
     "kc_Pa_per_m",

@@ -172,7 +172,7 @@ mod tests {
     fn canonical_surface_reads_with_its_size() {
         let path = std::path::Path::new(concat!(
             env!("CARGO_MANIFEST_DIR"),
-            "/../shared/data/surfaces/gaussian_acf_256_seed12345.txt"
+            "/tests/data/surfaces/gaussian_acf_256_seed12345.txt"
         ));
         let map = read_height_map(path, &ReadOptions::default()).unwrap();
         assert_eq!(map.z.dim(), (256, 256));
