@@ -25,6 +25,17 @@ pub enum Error {
     /// Writing an output (HDF5, table, plot) failed.
     #[error("writing {}: {message}", path.display())]
     Output { path: PathBuf, message: String },
+    /// `hdi synth` could not write the sample data.
+    #[error(transparent)]
+    Samples(#[from] crate::samples::SampleError),
+    /// One slider case of a sweep failed.
+    #[error("case h_TFC = {:.3} nm", .actuation * 1e9)]
+    Case {
+        /// The case's actuation (m).
+        actuation: f64,
+        #[source]
+        source: Box<Error>,
+    },
     /// A stage could not run for a reason that is not one of the above.
     #[error("{0}")]
     Stage(String),
@@ -47,7 +58,7 @@ impl Error {
 
 pub type Result<T> = std::result::Result<T, Error>;
 
-/// The error and all its sources on one line, `outer: inner: …` (as anyhow's `{:#}` prints).
+/// The error and all its sources on one line, `outer: inner: …` (as the binary prints errors).
 pub fn chain(e: &dyn std::error::Error) -> String {
     let mut text = e.to_string();
     let mut source = e.source();

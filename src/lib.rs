@@ -1,10 +1,10 @@
 //! hdi — head-disk interface pipeline.
 //!
-//! `core` is the small spine every stage uses (config, cache, engine, store, plots);
-//! `surface` (and later physics modules) are pure functions with no I/O besides readers;
-//! `stages` wires physics into the pipeline; `cli` is the thin command-line layer.
+//! `core` is the small spine every stage uses (config, cache, engine, store, plots, the
+//! progress observers); `surface` (and later physics modules) are pure functions with no I/O
+//! besides readers; `stages` wires physics into the pipeline. The command line is the binary
+//! target (`src/main.rs`, `src/cli/`, feature `cli`), outside this library.
 pub mod analysis;
-pub mod cli;
 pub mod contact;
 pub mod core;
 pub mod dmw;

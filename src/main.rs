@@ -1,9 +1,13 @@
+//! `hdi`: the command line over the library (src/cli/).
+
+mod cli;
+
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    match hdi::cli::main() {
+    match cli::main() {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) if e.is::<hdi::cli::Stale>() => ExitCode::from(1),
+        Err(e) if e.is::<cli::Stale>() => ExitCode::from(1),
         Err(e) => {
             // One line: the whole context chain.
             eprintln!("error: {e:#}");

@@ -1,13 +1,37 @@
-//! The shipped synthetic sample data (`hdi synth afm`) and the benchmark harness
-//! (`hdi bench`). Deterministic: fixed seeds, so the files are byte-identical on every run.
+//! The shipped synthetic sample data (`hdi synth afm`, `hdi synth ldv`). Deterministic:
+//! fixed seeds, so the files are byte-identical on every run.
 
+use crate::error::Result;
 use crate::surface::io::{encode_gwy, encode_nanoscope};
 use crate::surface::synth::{gaussian_acf_surface, GaussianSurfaceSpec, Rng};
 use crate::surface::HeightMap;
-use anyhow::{Context, Result};
 use serde_json::json;
-use std::path::Path;
-use std::time::Instant;
+use std::path::{Path, PathBuf};
+
+/// Why sample data could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum SampleError {
+    #[error("--revolutions must be at least 1")]
+    NoRevolutions,
+    #[error("unknown --format `{0}` (h5, h5-f64, csv, parquet)")]
+    UnknownFormat(String),
+    #[error("creating {}", path.display())]
+    Create {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("writing {}", path.display())]
+    Write {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+}
 
 /// Instrument-like defects on top of a clean field: a tilt, per-line offsets (a random walk,
 /// as AFM line jumps look) and white measurement noise. Levelling is expected to remove the
@@ -49,7 +73,7 @@ pub fn write_ldv_sample(
     revolutions: Option<usize>,
     seed: Option<u64>,
     with_index: bool,
-) -> Result<Vec<std::path::PathBuf>> {
+) -> Result<Vec<PathBuf>> {
     use crate::dmw::io::{write_ldv, write_ldv_hdf5_counts, LdvFormat};
     use crate::dmw::synth::{generate, truth_displacement, LdvSynthSpec};
     use crate::signal::butterworth::{butterworth_sos, FilterKind};
@@ -60,9 +84,12 @@ pub fn write_ldv_sample(
         ..defaults
     };
     if spec.n_revolutions == 0 {
-        anyhow::bail!("--revolutions must be at least 1");
+        return Err(SampleError::NoRevolutions.into());
     }
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    std::fs::create_dir_all(dir).map_err(|source| SampleError::Create {
+        path: dir.to_path_buf(),
+        source,
+    })?;
     let (mut rec, truth) = generate(&spec);
     if !with_index {
         rec.index = None;
@@ -89,7 +116,7 @@ pub fn write_ldv_sample(
             write_ldv(&rec, &p, LdvFormat::Parquet)?;
             p
         }
-        other => anyhow::bail!("unknown --format `{other}` (h5, h5-f64, csv, parquet)"),
+        other => return Err(SampleError::UnknownFormat(other.to_string()).into()),
     };
     // What an ideal chain returns: the repeatable lines at mean speed through the default
     // zero-phase 10 kHz high-pass, over a 2.5 ms segment without its 0.3 ms edges.
@@ -125,14 +152,19 @@ pub fn write_ldv_sample(
         },
     });
     let json_path = dir.join("samples.json");
-    crate::core::cache::write_atomic(&json_path, serde_json::to_string_pretty(&info)?.as_bytes())
-        .with_context(|| format!("writing {}", json_path.display()))?;
+    let text = serde_json::to_string_pretty(&info).map_err(SampleError::Json)?;
+    crate::core::cache::write_atomic(&json_path, text.as_bytes()).map_err(|source| {
+        SampleError::Write {
+            path: json_path.clone(),
+            source,
+        }
+    })?;
     Ok(vec![path, json_path])
 }
 
 /// The two sample height maps of `raw/afm/` and a JSON file with how they were made.
-pub fn write_afm_samples(dir: &Path) -> Result<Vec<std::path::PathBuf>> {
-    std::fs::create_dir_all(dir)?;
+pub fn write_afm_samples(dir: &Path) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).map_err(SampleError::Io)?;
     // Disk-like: σ 0.34 nm; ℓ chosen so Nayak's R ≈ 0.43 µm (Table 2.2): for a Gaussian ACF
     // R = 0.375·√π·ℓ²/(√12·σ) ⇒ ℓ = 27.6 nm, and then η = 1/(π√3 ℓ²) ≈ 241 µm⁻².
     let disk_spec = GaussianSurfaceSpec {
@@ -176,8 +208,9 @@ pub fn write_afm_samples(dir: &Path) -> Result<Vec<std::path::PathBuf>> {
 
     let disk_path = dir.join("disk_dlc_1um.gwy");
     let slider_path = dir.join("slider_tfc_1um.spm");
-    crate::core::cache::write_atomic(&disk_path, &encode_gwy(&disk))?;
-    crate::core::cache::write_atomic(&slider_path, &encode_nanoscope(&slider, 2))?;
+    crate::core::cache::write_atomic(&disk_path, &encode_gwy(&disk)).map_err(SampleError::Io)?;
+    crate::core::cache::write_atomic(&slider_path, &encode_nanoscope(&slider, 2))
+        .map_err(SampleError::Io)?;
 
     let describe = |spec: &GaussianSurfaceSpec, d: &Defects, file: &str, format: &str| {
         json!({
@@ -201,143 +234,7 @@ pub fn write_afm_samples(dir: &Path) -> Result<Vec<std::path::PathBuf>> {
         ]
     });
     let meta_path = dir.join("samples.json");
-    crate::core::cache::write_atomic(&meta_path, serde_json::to_string_pretty(&meta)?.as_bytes())?;
+    let text = serde_json::to_string_pretty(&meta).map_err(SampleError::Json)?;
+    crate::core::cache::write_atomic(&meta_path, text.as_bytes()).map_err(SampleError::Io)?;
     Ok(vec![disk_path, slider_path, meta_path])
-}
-
-/// `hdi bench`: figures for docs/performance.md.
-pub fn bench(config: &Path, size: usize) -> Result<()> {
-    use crate::stages::surfaces::{analyse, validate, write_outputs, SurfaceConfig};
-    let tmp = std::env::temp_dir().join(format!("hdi-bench-{}", std::process::id()));
-    std::fs::create_dir_all(&tmp)?;
-    let spec = GaussianSurfaceSpec {
-        n: size,
-        size: 4e-6,
-        sigma: 0.5e-9,
-        correlation_length: 40e-9,
-        seed: 7,
-    };
-    let map = gaussian_acf_surface(&spec);
-    let file = tmp.join("bench.gwy");
-    std::fs::write(&file, encode_gwy(&map))?;
-    let cfg: SurfaceConfig = toml::from_str(&format!("file = {:?}", file.to_string_lossy()))?;
-    let params = validate(&cfg, file.clone()).map_err(|(k, m)| anyhow::anyhow!("{k}: {m}"))?;
-    let mut best = (f64::INFINITY, f64::INFINITY);
-    for _ in 0..3 {
-        let t = Instant::now();
-        let a = analyse(&params)?;
-        let t_analyse = t.elapsed().as_secs_f64();
-        write_outputs(
-            &a,
-            &params,
-            &tmp.join("out.h5"),
-            Some(&tmp),
-            "bench",
-            &json!([]),
-        )?;
-        let t_all = t.elapsed().as_secs_f64();
-        best = (best.0.min(t_analyse), best.1.min(t_all));
-    }
-    println!(
-        "surfaces stage, {size}×{size} map (read+level+roughness+scale sweep): {:.3} s",
-        best.0
-    );
-    println!(
-        "surfaces stage, {size}×{size} map incl. HDF5 + PNG outputs:            {:.3} s",
-        best.1
-    );
-    let _ = std::fs::remove_dir_all(&tmp);
-    bench_slider()?;
-
-    if config.is_file() {
-        let exe = std::env::current_exe()?;
-        let mut times = Vec::new();
-        for _ in 0..5 {
-            let t = Instant::now();
-            let st = std::process::Command::new(&exe)
-                .args(["run", "--config"])
-                .arg(config)
-                .stderr(std::process::Stdio::null())
-                .status()
-                .context("running hdi run")?;
-            if !st.success() {
-                anyhow::bail!("hdi run failed; run it once without bench to see why");
-            }
-            times.push(t.elapsed().as_secs_f64());
-        }
-        // The first run may do real work; the rest are the no-op cached reruns.
-        let noop = times[1..].iter().cloned().fold(f64::INFINITY, f64::min);
-        println!(
-            "no-op cached rerun of {} (best of 4): {:.3} s",
-            config.display(),
-            noop
-        );
-    }
-    Ok(())
-}
-
-/// The 2-DOF slider figures of docs/performance.md: one 2 ms case and the 76-case sweep on all
-/// cores, improved model, spec defaults, the spec's synthetic DMW (σ 1 nm).
-fn bench_slider() -> Result<()> {
-    use crate::contact::isbl::{IsblModel, IsblParams};
-    use crate::contact::lookup::IsblLookup;
-    use crate::dmw::synthetic::synthetic_dmw;
-    use crate::dynamics::params::improved_2dof;
-    use crate::dynamics::two_dof::{DmwInput, SimOptions, TwoDofCase};
-    use rayon::prelude::*;
-    let isbl = IsblLookup::build(
-        IsblModel::new(IsblParams::improved_2dof())?,
-        0.05,
-        -2.0,
-        10.0,
-    )?;
-    let track = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1)?;
-    let dmw = || {
-        Some(DmwInput {
-            displacement: &track.displacement,
-            velocity: &track.velocity,
-            sample_rate: track.fs,
-        })
-    };
-    let model = improved_2dof();
-    let options = SimOptions {
-        static_init: true,
-        ..SimOptions::default()
-    };
-    let run = |h: f64| -> Result<u64> {
-        let case = TwoDofCase::new(&model, h, &isbl, dmw(), options)?;
-        Ok(case.run()?.stats.accepted_steps)
-    };
-    for h in [8.5e-9, 12e-9] {
-        let mut best = f64::INFINITY;
-        let mut steps = 0;
-        for _ in 0..5 {
-            let t = Instant::now();
-            steps = run(h)?;
-            best = best.min(t.elapsed().as_secs_f64());
-        }
-        println!(
-            "2-DOF slider, one 2 ms case at {:.1} nm ({steps} steps, best of 5):   {:.1} ms",
-            h * 1e9,
-            best * 1e3
-        );
-    }
-    let mut best = f64::INFINITY;
-    for _ in 0..3 {
-        let t = Instant::now();
-        let results: Vec<Result<u64>> = (0..76)
-            .into_par_iter()
-            .map(|i| run(i as f64 * 0.2e-9))
-            .collect();
-        for r in results {
-            r?;
-        }
-        best = best.min(t.elapsed().as_secs_f64());
-    }
-    println!(
-        "2-DOF slider, 76-case sweep 0–15 nm on {} threads (best of 3):   {:.3} s",
-        rayon::current_num_threads(),
-        best
-    );
-    Ok(())
 }

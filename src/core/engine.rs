@@ -1,8 +1,8 @@
 //! The pipeline engine: stage instances, dependency graph, plan (fresh/stale and why), run
-//! with a thread pool and progress bars, status, gc.
+//! with a thread pool (reporting to a `RunObserver`), status, gc.
 
 use crate::core::cache::{Fingerprint, InputRecord, Manifest, Store, UpstreamRecord, Verification};
-use crate::core::progress;
+use crate::core::progress::{Progress, RunObserver};
 use crate::error::{Error, Result};
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
@@ -40,7 +40,8 @@ pub struct StageContext<'a> {
     /// The content-addressed store, for stages that cache sub-results of their own (one
     /// simulation case per sweep point).
     pub store: &'a Store,
-    pub progress: &'a indicatif::ProgressBar,
+    /// Where the stage reports what it is doing (`ctx.progress.set_message(…)`).
+    pub progress: &'a dyn Progress,
 }
 
 /// What a stage returns besides its files.
@@ -257,8 +258,14 @@ fn selection(plan: &Plan, only: &[String]) -> Result<BTreeSet<String>> {
     Ok(sel)
 }
 
-/// Run the pipeline: stale instances in dependency order, independent ones in parallel.
-pub fn run(stages: Vec<Box<dyn Stage>>, store: &Store, opts: &RunOptions) -> Result<RunReport> {
+/// Run the pipeline: stale instances in dependency order, independent ones in parallel;
+/// `observer` hears which instances start and end.
+pub fn run(
+    stages: Vec<Box<dyn Stage>>,
+    store: &Store,
+    opts: &RunOptions,
+    observer: &dyn RunObserver,
+) -> Result<RunReport> {
     let _lock = if opts.dry_run {
         None
     } else {
@@ -307,7 +314,7 @@ pub fn run(stages: Vec<Box<dyn Stage>>, store: &Store, opts: &RunOptions) -> Res
                 && matches!(plan.planned[i].state, State::Stale(_))
         })
         .collect();
-    let bars = progress::Bars::new(to_run.len() as u64, "stages");
+    observer.run_started(to_run.len());
 
     // results by name: Ok(result.json) or Err(reason)
     let mut results: BTreeMap<String, std::result::Result<Value, String>> = BTreeMap::new();
@@ -372,9 +379,16 @@ pub fn run(stages: Vec<Box<dyn Stage>>, store: &Store, opts: &RunOptions) -> Res
                             upstream_dirs.insert(u, store.entry_dir(&up.kind, &up.key));
                         }
                     }
-                    let bar = bars.stage(&p.name);
-                    let r = execute(stage.as_ref(), p, store, upstream, upstream_dirs, &bar);
-                    bars.finish_stage(bar, &p.name, r.is_ok());
+                    let progress = observer.stage_started(&p.name);
+                    let r = execute(
+                        stage.as_ref(),
+                        p,
+                        store,
+                        upstream,
+                        upstream_dirs,
+                        progress.as_ref(),
+                    );
+                    observer.stage_finished(&p.name, r.is_ok());
                     (i, r)
                 })
                 .collect()
@@ -400,7 +414,7 @@ pub fn run(stages: Vec<Box<dyn Stage>>, store: &Store, opts: &RunOptions) -> Res
         }
         remaining = blocked;
     }
-    bars.finish();
+    observer.run_finished();
 
     // Point the human-friendly names at the current entries.
     for (name, m) in &manifests {
@@ -439,7 +453,7 @@ fn execute(
     store: &Store,
     upstream: BTreeMap<String, Value>,
     upstream_dirs: BTreeMap<String, PathBuf>,
-    bar: &indicatif::ProgressBar,
+    progress: &dyn Progress,
 ) -> Executed {
     let started = Instant::now();
     let work = store
@@ -453,7 +467,7 @@ fn execute(
         upstream,
         upstream_dirs,
         store,
-        progress: bar,
+        progress,
     };
     // A bug must not take the other stages down with it, nor leave a trusted output.
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| stage.run(&ctx)));

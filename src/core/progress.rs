@@ -1,60 +1,45 @@
-//! All indicatif set-up in one place. Bars draw to stderr only when it is a terminal, so
-//! logs and CI output stay clean.
+//! Progress reaches the caller through these observers; the library never draws or prints
+//! progress itself (the command line draws bars with them, tests and benches pass
+//! [`NoProgress`]).
 
-use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
-use std::io::IsTerminal;
-use std::time::Duration;
-
-pub struct Bars {
-    multi: MultiProgress,
-    total: ProgressBar,
+/// Progress of one piece of work: a running stage, a sweep of cases.
+pub trait Progress: Send + Sync {
+    /// The status line: what the work is doing now. Call sites use `set_message` on
+    /// `dyn Progress`, which takes literals and `format!`s alike.
+    fn message(&self, msg: String);
+    /// How many units the work has (the cases of a sweep), once known.
+    fn set_length(&self, _len: u64) {}
+    /// `delta` more units done.
+    fn inc(&self, _delta: u64) {}
 }
 
-fn draw_target() -> ProgressDrawTarget {
-    if std::io::stderr().is_terminal() {
-        ProgressDrawTarget::stderr()
-    } else {
-        ProgressDrawTarget::hidden()
+impl dyn Progress + '_ {
+    /// [`Progress::message`] for anything string-like.
+    pub fn set_message(&self, msg: impl Into<String>) {
+        self.message(msg.into());
     }
 }
 
-impl Bars {
-    pub fn new(len: u64, what: &str) -> Self {
-        let multi = MultiProgress::with_draw_target(draw_target());
-        let total = multi.add(ProgressBar::new(len));
-        total.set_style(
-            ProgressStyle::with_template("{prefix:>10} [{bar:30}] {pos}/{len} {elapsed_precise}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar())
-                .progress_chars("=> "),
-        );
-        total.set_prefix(what.to_string());
-        Self { multi, total }
+/// What `engine::run` reports while it runs a pipeline.
+pub trait RunObserver: Sync {
+    /// Planning is done: `stages` stale instances will run (not called for a dry run).
+    fn run_started(&self, _stages: usize) {}
+    /// An instance starts; its stage reports through the returned [`Progress`].
+    fn stage_started(&self, _name: &str) -> Box<dyn Progress> {
+        Box::new(NoProgress)
     }
-
-    /// A spinner for one running stage; stages may set its message.
-    pub fn stage(&self, name: &str) -> ProgressBar {
-        let bar = self
-            .multi
-            .insert_before(&self.total, ProgressBar::new_spinner());
-        bar.set_style(
-            ProgressStyle::with_template("{spinner} {prefix:>10} {wide_msg}")
-                .unwrap_or_else(|_| ProgressStyle::default_spinner()),
-        );
-        bar.set_prefix(name.to_string());
-        bar.enable_steady_tick(Duration::from_millis(120));
-        bar
-    }
-
-    pub fn finish_stage(&self, bar: ProgressBar, name: &str, ok: bool) {
-        bar.finish_and_clear();
-        self.multi.remove(&bar);
-        if !ok {
-            let _ = self.multi.println(format!("failed: {name}"));
-        }
-        self.total.inc(1);
-    }
-
-    pub fn finish(&self) {
-        self.total.finish_and_clear();
-    }
+    /// The instance `stage_started` named has ended: committed to the store (`ok`) or failed.
+    fn stage_finished(&self, _name: &str, _ok: bool) {}
+    /// Every wave has run.
+    fn run_finished(&self) {}
 }
+
+/// Ignores everything.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoProgress;
+
+impl Progress for NoProgress {
+    fn message(&self, _msg: String) {}
+}
+
+impl RunObserver for NoProgress {}

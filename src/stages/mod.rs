@@ -105,3 +105,38 @@ pub fn build(file: &PipelineFile) -> Result<Vec<Box<dyn Stage>>, ConfigError> {
     }
     Ok(stages)
 }
+
+/// The tidy summary table of a stage kind (`processed/tables/<name>.{parquet,csv}`):
+/// `surfaces`, `interfaces`, `dmw` (a mass noun), `analyses`.
+pub fn summary_table_name(kind: &str) -> String {
+    match kind {
+        "dmw" => "dmw".into(),
+        "analysis" => "analyses".into(),
+        "three_dof" => "three_dof".into(),
+        "doe" => "doe".into(),
+        k => format!("{k}s"),
+    }
+}
+
+/// After `hdi run`: the summary tables from the current entries, one per kind. A table is
+/// rewritten when something ran and nothing failed (a failed instance keeps its earlier row),
+/// or when it is missing.
+pub fn write_summary_tables(
+    store: &crate::core::cache::Store,
+    report: &crate::core::engine::RunReport,
+) -> crate::error::Result<()> {
+    use crate::core::engine::Outcome;
+    let tables_dir = store.processed().join("tables");
+    let ran = report.count(|o| matches!(o, Outcome::Ran { .. }));
+    let failed = report.failed();
+    for (kind, rows) in crate::core::engine::summary_rows(store, &report.current) {
+        let stem = tables_dir.join(summary_table_name(&kind));
+        if (ran > 0 && failed == 0)
+            || !stem.with_extension("parquet").exists()
+            || !stem.with_extension("csv").exists()
+        {
+            crate::core::store::write_table(&rows, &stem)?;
+        }
+    }
+    Ok(())
+}

@@ -1,13 +1,14 @@
 //! Simulation stage: 2-DOF slider cases (dynamics.md §5.1, §7 S1/S2/S2o) over an actuation
-//! sweep, each case cached by content hash (`core::cases`), run in parallel with a progress
-//! bar; per-case HDF5 time histories, the sweep table, the flyability metrics of §8 and the
-//! dissertation's plots (Figs 2.13–2.14, 2.16–2.19, 2.22).
+//! sweep, each case cached by content hash (`core::cases`), run in parallel reporting to a
+//! progress observer; per-case HDF5 time histories, the sweep table, the flyability metrics
+//! of §8 and the dissertation's plots (Figs 2.13–2.14, 2.16–2.19, 2.22).
 
 use crate::contact::isbl::IsblModel;
 use crate::contact::lookup::IsblLookup;
 use crate::core::cases::{self, CaseEntry};
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::engine::{Stage, StageContext, StageOutput};
+use crate::core::progress::Progress;
 use crate::core::store::H5Out;
 use crate::core::units::{Length, TimeSpan};
 use crate::dynamics::air_bearing::RearStiffening;
@@ -1074,31 +1075,47 @@ impl SimulateStage {
     }
 }
 
-/// Run every case (cached, parallel, with progress) and return them sorted by actuation.
+/// Where a sweep's cases are computed.
+pub enum CaseSink<'a> {
+    /// One content-addressed store entry per case (`core::cases`), so a rerun or an extended
+    /// sweep recomputes only what is missing: the pipeline's sweeps. The cache keys of the
+    /// consumed contact and DMW entries are part of each case's key.
+    Store {
+        store: &'a crate::core::cache::Store,
+        contact_key: &'a str,
+        dmw_key: Option<&'a str>,
+    },
+    /// A directory `h_XXX.XXnm/` per case under this one, recomputed every time: `hdi simulate`.
+    Directory(&'a Path),
+}
+
+/// Run every case of the sweep in parallel into `sink`, reporting to `progress` (its length
+/// is the number of cases, one `inc` and a "k/n cases" message per finished case), and return
+/// them sorted by actuation. The first failed case (in actuation order) is the error.
 pub fn run_cases(
     p: &SimulateParams,
-    store: &crate::core::cache::Store,
+    sink: &CaseSink,
     isbl: &IsblLookup,
-    contact_key: &str,
-    dmw: Option<(&DmwTrack, &str)>,
-    progress: &indicatif::ProgressBar,
+    dmw: Option<&DmwTrack>,
+    progress: &dyn Progress,
 ) -> Result<Vec<CaseOutcome>> {
     use rayon::prelude::*;
     use std::sync::atomic::{AtomicUsize, Ordering};
     let total = p.actuations.len();
     let finished = AtomicUsize::new(0);
+    progress.set_length(total as u64);
     progress.set_message(format!("0/{total} cases"));
     let outcomes: Vec<Result<CaseOutcome>> = p
         .actuations
         .par_iter()
         .map(|&a| {
-            let params = p.case_params(a, contact_key, dmw.map(|d| d.1));
-            let entry = cases::get_or_compute(store, MODEL_VERSION, &params, |dir| {
-                simulate_case(p, a, isbl, dmw.map(|d| d.0), dir)
-            })
-            .map_err(|e| Error::Stage(format!("case h_TFC = {:.3} nm: {e}", a * 1e9)));
+            let entry = run_case(p, sink, a, isbl, dmw).map_err(|e| Error::Case {
+                actuation: a,
+                source: Box::new(e),
+            });
             let k = finished.fetch_add(1, Ordering::Relaxed) + 1;
             progress.set_message(format!("{k}/{total} cases"));
+            progress.inc(1);
             let entry = entry?;
             Ok(CaseOutcome {
                 actuation: a,
@@ -1113,6 +1130,39 @@ pub fn run_cases(
     }
     done.sort_by(|a, b| a.actuation.total_cmp(&b.actuation));
     Ok(done)
+}
+
+/// One case of [`run_cases`].
+fn run_case(
+    p: &SimulateParams,
+    sink: &CaseSink,
+    actuation: f64,
+    isbl: &IsblLookup,
+    dmw: Option<&DmwTrack>,
+) -> Result<CaseEntry> {
+    match sink {
+        CaseSink::Store {
+            store,
+            contact_key,
+            dmw_key,
+        } => {
+            let params = p.case_params(actuation, contact_key, *dmw_key);
+            cases::get_or_compute(store, MODEL_VERSION, &params, |dir| {
+                simulate_case(p, actuation, isbl, dmw, dir)
+            })
+        }
+        CaseSink::Directory(root) => {
+            let dir = root.join(format!("h_{:06.2}nm", actuation * 1e9));
+            std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+            let result = simulate_case(p, actuation, isbl, dmw, &dir)?;
+            Ok(CaseEntry {
+                key: String::new(),
+                dir,
+                result,
+                cached: false,
+            })
+        }
+    }
 }
 
 /// Hard-link (or copy) each case's HDF5 into `out/cases/`.
@@ -1216,14 +1266,12 @@ impl Stage for SimulateStage {
         let dmw = prepared.dmw.as_ref();
         ctx.progress
             .set_message(format!("{} cases", p.actuations.len()));
-        let cases = run_cases(
-            p,
-            ctx.store,
-            isbl,
-            &prepared.contact_key,
-            dmw.map(|(t, k)| (t, k.as_str())),
-            ctx.progress,
-        )?;
+        let sink = CaseSink::Store {
+            store: ctx.store,
+            contact_key: &prepared.contact_key,
+            dmw_key: dmw.map(|(_, k)| k.as_str()),
+        };
+        let cases = run_cases(p, &sink, isbl, dmw.map(|(t, _)| t), ctx.progress)?;
         ctx.progress.set_message("sweep metrics, tables, plots");
         let sweep = sweep_analysis(p, &cases)?;
         let files = link_cases(ctx.out_dir, &cases)?;

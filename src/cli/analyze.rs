@@ -1,0 +1,91 @@
+//! `hdi analyze FILE`: spectrum, wavelet ridge and Poincaré class of one series.
+
+use anyhow::{bail, Context, Result};
+use serde_json::json;
+use std::time::Instant;
+
+use super::args::AnalyzeArgs;
+
+pub(super) fn cmd_analyze(a: AnalyzeArgs) -> Result<()> {
+    use hdi::stages::analysis::{read_series, summary, write_outputs, AnalysisSettings};
+    let settings = AnalysisSettings {
+        window: match a.window.as_slice() {
+            [t0, t1] => (Some(t0.0), Some(t1.0)),
+            _ => (None, None),
+        },
+        f_min: a.f_min.0,
+        f_max: a.f_max.0,
+        frequencies: a.frequencies,
+        peaks: a.peaks,
+        min_peak_frequency: a.min_peak_frequency.map_or(0.0, |f| f.0),
+    };
+    if let Err((k, m)) = settings.check() {
+        bail!("--{}: {m}", k.replace('_', "-"));
+    }
+    if !a.file.is_file() {
+        bail!("{}: no such file", a.file.display());
+    }
+    let s = read_series(&a.file, a.dataset.as_deref(), a.velocity.as_deref())?;
+    let started = Instant::now();
+    let r = hdi::analysis::report::analyze(
+        &s.x,
+        s.v.as_deref(),
+        s.sample_rate,
+        s.t0,
+        &settings.options(),
+    )
+    .with_context(|| format!("{}", a.file.display()))?;
+    let seconds = started.elapsed().as_secs_f64();
+    let sum = summary(&r, &s.unit);
+    if let Some(dir) = &a.out {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let label = a
+            .file
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_default();
+        write_outputs(
+            dir,
+            "",
+            &label,
+            &json!({"file": a.file.display().to_string(), "dataset": a.dataset}),
+            &r,
+            &s,
+        )?;
+    }
+    if a.json {
+        println!("{sum}");
+        return Ok(());
+    }
+    let (du, k) = match s.unit.as_str() {
+        "m" => ("nm", 1e9),
+        "N" => ("mN", 1e3),
+        u => (u, 1.0),
+    };
+    println!(
+        "{}: {} samples at {} MHz from {:.4} ms ({seconds:.2} s)",
+        a.file.display(),
+        r.samples,
+        r.sample_rate_hz / 1e6,
+        r.t0_s * 1e3
+    );
+    println!("  {:>12} {:>14}", "peak (kHz)", format!("amplitude ({du})"));
+    for p in &r.peaks {
+        println!("  {:>12.3} {:>14.5}", p.frequency / 1e3, p.amplitude * k);
+    }
+    if let Some(f) = r.median_trusted_ridge_hz() {
+        println!(
+            "  wavelet ridge (median, inside the cone of influence): {:.3} kHz",
+            f / 1e3
+        );
+    }
+    println!(
+        "  Poincaré section: {} maxima → {}",
+        r.section.maxima.len(),
+        r.class_label()
+    );
+    if let Some(dir) = &a.out {
+        println!("  wrote {}/analysis.h5 and 4 PNGs", dir.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,83 @@
+//! The thin command-line layer: parse arguments, call the library, print. clap, indicatif and
+//! anyhow live only here (feature `cli`).
+
+mod analyze;
+mod args;
+mod bench;
+mod contact;
+mod dmw;
+mod progress;
+mod run;
+mod simulate;
+mod slurm;
+mod surface;
+mod synth;
+mod validate;
+
+use anyhow::{Context, Result};
+use clap::Parser;
+use std::path::Path;
+
+use args::{Cli, Command};
+use hdi::core::executor::ExecutorKind;
+
+pub use run::Stale;
+
+pub fn main() -> Result<()> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Run {
+            config,
+            only,
+            force,
+            dry_run,
+            jobs,
+            slurm,
+        } => {
+            if slurm.executor.parse::<ExecutorKind>()? == ExecutorKind::Slurm && !dry_run {
+                let submitted = slurm::run_cases_on_slurm(&config, &slurm, jobs)?;
+                if !submitted {
+                    return Ok(());
+                }
+            }
+            run::cmd_run(&config, only, force, dry_run, jobs)
+        }
+        Command::ExecCases {
+            manifest,
+            task,
+            offset,
+        } => run::cmd_exec_cases(&manifest, task + offset),
+        Command::Status { config, json } => run::cmd_status(&config, json),
+        Command::Gc { config, dry_run } => run::cmd_gc(&config, dry_run),
+        Command::Surface(args) => surface::cmd_surface(*args),
+        Command::Dmw(args) => dmw::cmd_dmw(*args),
+        Command::Contact(args) => contact::cmd_contact(*args),
+        Command::Simulate(args) => simulate::cmd_simulate(*args),
+        Command::Analyze(args) => analyze::cmd_analyze(*args),
+        Command::Validate { json, only, config } => validate::cmd_validate(json, &only, &config),
+        Command::Synth {
+            what,
+            out_dir,
+            format,
+            revolutions,
+            seed,
+            no_index,
+        } => synth::cmd_synth(&what, out_dir, &format, revolutions, seed, no_index),
+        Command::Bench { config, size } => bench::cmd_bench(&config, size),
+    }
+}
+
+/// The directory an `--out FILE` goes into (created; `.` for a bare file name).
+fn out_parent(out: &Path) -> Result<&Path> {
+    let dir = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    Ok(dir)
+}
+
+/// `--{key}` for a config key (`h_star_min` → `--h-star-min`).
+fn flag(key: &str) -> String {
+    format!("--{}", key.replace('_', "-"))
+}

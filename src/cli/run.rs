@@ -1,0 +1,213 @@
+//! `hdi run`, `status`, `gc` and `exec-cases`: the pipeline commands.
+
+use anyhow::{bail, Context, Result};
+use serde_json::{json, Value};
+use std::path::Path;
+use std::time::Instant;
+
+use super::progress::StageBars;
+use hdi::core::cache::Store;
+use hdi::core::config::PipelineFile;
+use hdi::core::engine::{self, Outcome, RunOptions, State};
+use hdi::stages;
+
+pub(super) fn load(config: &Path) -> Result<(PipelineFile, Vec<Box<dyn engine::Stage>>)> {
+    let file = PipelineFile::load(config)?;
+    let stages = stages::build(&file)?;
+    Ok((file, stages))
+}
+
+/// `--jobs`, or one per core.
+pub(super) fn jobs_or_cores(jobs: Option<usize>) -> usize {
+    jobs.unwrap_or_else(|| {
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+    })
+}
+
+/// Exit status for "something is stale" in `hdi status`.
+pub struct Stale;
+impl std::fmt::Debug for Stale {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "stale")
+    }
+}
+impl std::fmt::Display for Stale {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "some stage instances are stale")
+    }
+}
+impl std::error::Error for Stale {}
+
+pub(super) fn cmd_run(
+    config: &Path,
+    only: Vec<String>,
+    force: bool,
+    dry_run: bool,
+    jobs: Option<usize>,
+) -> Result<()> {
+    let started = Instant::now();
+    let (file, stages) = load(config)?;
+    let processed = file.processed_dir();
+    let store =
+        Store::open(&processed).with_context(|| format!("opening {}", processed.display()))?;
+    let opts = RunOptions {
+        only,
+        force,
+        dry_run,
+        jobs: jobs_or_cores(jobs),
+    };
+    let report = engine::run(stages, &store, &opts, &StageBars::new("stages"))?;
+    if dry_run {
+        for (name, o) in &report.outcomes {
+            match o {
+                Outcome::WouldRun(why) => println!("would run  {name}: {}", why.join("; ")),
+                _ => println!("fresh      {name}"),
+            }
+        }
+        return Ok(());
+    }
+    let ran = report.count(|o| matches!(o, Outcome::Ran { .. }));
+    let cached = report.count(|o| matches!(o, Outcome::Cached));
+    let n_failed = report.count(|o| matches!(o, Outcome::Failed(_)));
+    let mut first_failure = None;
+    for (name, o) in &report.outcomes {
+        match o {
+            Outcome::Ran { seconds } => eprintln!("ran     {name} ({seconds:.2} s)"),
+            Outcome::Failed(e) => {
+                // The first failure becomes the error line; list the others here.
+                if first_failure.is_none() {
+                    first_failure = Some(format!("stage `{name}` failed: {e}"));
+                } else {
+                    eprintln!("FAILED  {name}: {e}");
+                }
+            }
+            Outcome::Skipped(e) => eprintln!("skipped {name}: {e}"),
+            _ => {}
+        }
+    }
+    stages::write_summary_tables(&store, &report)?;
+    let failed = report.failed();
+    let total = report.outcomes.len();
+    if ran == 0 && failed == 0 {
+        eprintln!(
+            "nothing to do: all {total} stage instances fresh ({:.2} s)",
+            started.elapsed().as_secs_f64()
+        );
+    } else {
+        eprintln!(
+            "ran {ran}, cached {cached}, failed {n_failed}, skipped {} of {total} ({:.2} s); \
+             outputs in {}",
+            failed - n_failed,
+            started.elapsed().as_secs_f64(),
+            processed.display()
+        );
+    }
+    if let Some(first) = first_failure {
+        if n_failed > 1 {
+            bail!("{first} (and {} more failed)", n_failed - 1);
+        }
+        bail!("{first}");
+    }
+    if failed > 0 {
+        bail!("{failed} stage instance(s) did not run");
+    }
+    Ok(())
+}
+
+pub(super) fn cmd_exec_cases(manifest: &Path, task: usize) -> Result<()> {
+    use hdi::core::executor::{exec_task, TaskIdentity};
+    // Manifests live in `processed/.hdi/slurm/manifests/`: the store is four levels up.
+    let processed = manifest
+        .ancestors()
+        .nth(4)
+        .filter(|p| p.join(".hdi").is_dir())
+        .with_context(|| {
+            format!(
+                "{}: not a manifest under processed/.hdi/slurm/manifests/",
+                manifest.display()
+            )
+        })?
+        .to_path_buf();
+    let store = Store::open(&processed)?;
+    let report = exec_task(
+        &store,
+        manifest,
+        task,
+        &hdi::stages::distributed::registry(),
+        &TaskIdentity::from_env(&processed),
+    )?;
+    eprintln!(
+        "task {task}: {} computed, {} cached, {} failed",
+        report.computed, report.cached, report.failed
+    );
+    if report.failed > 0 {
+        bail!("{} case(s) of task {task} failed", report.failed);
+    }
+    Ok(())
+}
+
+pub(super) fn cmd_status(config: &Path, as_json: bool) -> Result<()> {
+    let (file, stages) = load(config)?;
+    let store = Store::open_existing(&file.processed_dir());
+    let plan = engine::plan(stages, &store, &Default::default())?;
+    let mut stale = 0;
+    let mut rows = Vec::new();
+    for p in &plan.planned {
+        let (state, why) = match &p.state {
+            State::Fresh => ("fresh", Vec::new()),
+            State::Stale(why) if why.iter().any(|w| w == "never run") => ("missing", why.clone()),
+            State::Stale(why) => ("stale", why.clone()),
+        };
+        if state != "fresh" {
+            stale += 1;
+        }
+        if !as_json {
+            if why.is_empty() {
+                println!("{state:<8} {}", p.name);
+            } else {
+                println!("{state:<8} {}: {}", p.name, why.join("; "));
+            }
+        }
+        rows.push(
+            json!({"name": p.name, "kind": p.kind, "state": state, "why": why, "key": p.key}),
+        );
+    }
+    if as_json {
+        println!("{}", Value::Array(rows));
+    } else {
+        // Cases that failed on Slurm and are still missing from the cache.
+        use hdi::core::executor::{list_manifests, CaseManifest};
+        for path in list_manifests(&file.processed_dir()).unwrap_or_default() {
+            let Ok(mut m) = CaseManifest::read(&path) else {
+                continue;
+            };
+            let _ = m.merge_outcomes(&path);
+            let missing: std::collections::BTreeSet<String> =
+                m.still_missing(&store).into_iter().map(|s| s.key).collect();
+            m.cases.retain(|e| missing.contains(&e.spec.key));
+            if m.failed().next().is_some() {
+                println!("failed cases in {}:", path.display());
+                super::slurm::report_failed_cases(&m);
+            }
+        }
+    }
+    if stale > 0 {
+        return Err(Stale.into());
+    }
+    Ok(())
+}
+
+pub(super) fn cmd_gc(config: &Path, dry_run: bool) -> Result<()> {
+    let (file, stages) = load(config)?;
+    let store = Store::open(&file.processed_dir())?;
+    let plan = engine::plan(stages, &store, &Default::default())?;
+    let removed = engine::gc(&plan, &store, dry_run)?;
+    let verb = if dry_run { "would remove" } else { "removed" };
+    for r in &removed {
+        println!("{verb} {}", r.display());
+    }
+    eprintln!("{verb} {} item(s)", removed.len());
+    Ok(())
+}

@@ -1,0 +1,162 @@
+//! `hdi simulate`: ad-hoc 2-DOF slider cases through the library's sweep runner.
+
+use anyhow::{Context, Result};
+use serde_json::json;
+use std::time::Instant;
+
+use super::args::SimulateArgs;
+use super::progress::CaseBar;
+use hdi::stages::contact::{self, ContactConfig, SurfaceEnergyConfig};
+
+pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
+    use hdi::stages::simulate::{self as sim, SimulateConfig};
+    let mut cfg: SimulateConfig =
+        toml::from_str("contact = \"adhoc\"").context("default simulate settings")?;
+    cfg.model = a.model.clone();
+    if !a.actuation.is_empty() {
+        cfg.actuations = Some(a.actuation.clone());
+    }
+    macro_rules! set {
+        ($($f:ident),*) => { $( if let Some(v) = a.$f.clone() { cfg.$f = v; } )* };
+    }
+    set!(
+        actuation_start,
+        actuation_stop,
+        actuation_step,
+        duration,
+        steady_start,
+        output_step,
+        contact_force,
+        integrator,
+        rtol,
+        contact_max_step,
+        max_step,
+        fixed_step,
+        geometry,
+        init
+    );
+    cfg.transit_delay = !a.no_transit_delay;
+    cfg.dmw_wrap = a.dmw_wrap;
+    cfg.kr_stiffening_beta = a.kr_stiffening_beta;
+    cfg.bulge_width = a.bulge_width;
+    cfg.histories = a.histories.clone();
+    let params = sim::validate(&cfg).map_err(|(k, m)| {
+        // The list key is `actuations` in pipeline.toml, `--actuation` on the command line.
+        let flag = if k == "actuations" {
+            "actuation".to_string()
+        } else {
+            k.replace('_', "-")
+        };
+        anyhow::anyhow!("--{flag}: {m}")
+    })?;
+    let mut interface = ContactConfig::defaults();
+    interface.parameter_set = a.contact_set.clone().unwrap_or_else(|| a.model.clone());
+    interface.surface_energy = a.surface_energy.clone().map(SurfaceEnergyConfig::Text);
+    interface.lj_spacing = a.lj_spacing;
+    interface.r = a.r;
+    interface.eta = a.eta;
+    interface.hardness = a.hardness;
+    let isbl_params = contact::validate(&interface)
+        .map_err(|(k, m)| {
+            let flag = if k == "parameter_set" {
+                "contact-set".to_string()
+            } else {
+                k.replace('_', "-")
+            };
+            anyhow::anyhow!("--{flag}: {m}")
+        })?
+        .params;
+    let isbl = hdi::contact::lookup::IsblLookup::build(
+        hdi::contact::isbl::IsblModel::new(isbl_params)?,
+        0.05,
+        -2.0,
+        10.0,
+    )?;
+    let dmw = match &a.dmw {
+        Some(p) => Some(sim::read_dmw_track(p)?),
+        None => None,
+    };
+    let (root, temporary) = match &a.out {
+        Some(o) => (o.clone(), false),
+        None => (
+            std::env::temp_dir().join(format!("hdi-simulate-{}", std::process::id())),
+            true,
+        ),
+    };
+    std::fs::create_dir_all(root.join("cases"))
+        .with_context(|| format!("creating {}", root.display()))?;
+    let bar = CaseBar::new(params.actuations.len());
+    let started = Instant::now();
+    let cases = sim::run_cases(
+        &params,
+        &sim::CaseSink::Directory(&root.join("cases")),
+        &isbl,
+        dmw.as_ref(),
+        &bar,
+    );
+    bar.finish();
+    let cases = cases?;
+    let wall = started.elapsed().as_secs_f64();
+    let sweep = sim::sweep_analysis(&params, &cases)?;
+    let rows = sim::case_rows(&cases, &sweep);
+    if a.out.is_some() {
+        hdi::core::store::write_table(&rows, &root.join("sweep"))?;
+        sim::plots(&root, &params, &cases, &sweep, &a.model)?;
+    }
+    if temporary {
+        let _ = std::fs::remove_dir_all(&root);
+    }
+    if a.json {
+        println!("{}", json!({"cases": rows, "wall_time_s": wall}));
+        return Ok(());
+    }
+    println!(
+        "{} ({}), {} case(s) in {:.2} s",
+        a.model,
+        params.geometry,
+        cases.len(),
+        wall
+    );
+    println!(
+        "  {:>8} {:>10} {:>9} {:>9} {:>8} {:>17} {:>10} {:>6} {:>8}",
+        "h (nm)", "c̄ (nm)", "std (nm)", "FHM/BV %", "solid %", "regime", "F_c (mN)", "μ", "steps"
+    );
+    for r in &rows {
+        let g = |k: &str| r.get(k).and_then(|v| v.as_f64());
+        let s = |k: &str| g(k).map_or("-".to_string(), |x| format!("{x:.3}"));
+        println!(
+            "  {:>8.2} {:>10.4} {:>9.4} {:>9.2} {:>8.2} {:>17} {:>10} {:>6} {:>8}",
+            g("actuation_nm").unwrap_or(f64::NAN),
+            g("clearance_mean_nm").unwrap_or(f64::NAN),
+            g("clearance_std_nm").unwrap_or(f64::NAN),
+            g("vibration_percent").unwrap_or(f64::NAN),
+            g("solid_contact_percent").unwrap_or(f64::NAN),
+            r.get("regime").and_then(|v| v.as_str()).unwrap_or("-"),
+            s("contact_force_mean_mN"),
+            s("friction_coefficient"),
+            g("steps").unwrap_or(f64::NAN)
+        );
+    }
+    if cases.len() > 1 {
+        let nm = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{:.2} nm", x * 1e9));
+        println!("  touchdown {}", nm(sweep.touchdown_actuation_m));
+        if let Some(cp) = &sweep.slopes.critical_point {
+            println!(
+                "  critical point {:.2} nm at clearance {:.3} nm",
+                cp.actuation_m * 1e9,
+                cp.clearance_m * 1e9
+            );
+        }
+        for (k, l) in [
+            ("A", &sweep.slopes.a),
+            ("B", &sweep.slopes.b),
+            ("C", &sweep.slopes.c),
+            ("D", &sweep.slopes.d),
+        ] {
+            if let Some(l) = l {
+                println!("  slope {k} {:.3}", l.slope);
+            }
+        }
+    }
+    Ok(())
+}
