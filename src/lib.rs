@@ -1,8 +1,9 @@
 //! hdi — head-disk interface pipeline.
 //!
-//! `core` is the small spine every stage uses (config, cache, engine, store, plots);
-//! `surface` (and later physics modules) are pure functions with no I/O besides readers;
-//! `stages` wires physics into the pipeline; `cli` is the thin command-line layer.
+//! `core` is the small spine every stage uses (config, cache, engine, store); `figures` draws
+//! every plot with one plotting kit; `surface` (and later physics modules) are pure functions
+//! with no I/O besides readers; `stages` wires physics into the pipeline; `cli` is the thin
+//! command-line layer.
 pub mod analysis;
 pub mod cli;
 pub mod contact;
@@ -10,6 +11,7 @@ pub mod core;
 pub mod dmw;
 pub mod dynamics;
 pub mod error;
+pub mod figures;
 pub mod numerics;
 pub mod samples;
 pub mod signal;
