@@ -16,6 +16,9 @@ pub enum Error {
     Signal(#[from] crate::signal::SignalError),
     #[error(transparent)]
     Dynamics(#[from] crate::dynamics::DynamicsError),
+    /// Drawing or writing a figure failed (same text as an output or I/O error).
+    #[error(transparent)]
+    Figure(#[from] crate::figures::FigureError),
     #[error("{}", path.display())]
     Io {
         path: PathBuf,
@@ -68,4 +71,26 @@ pub fn chain(e: &dyn std::error::Error) -> String {
         source = s.source();
     }
     text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::figures::FigureError;
+
+    #[test]
+    fn figure_errors_read_as_output_and_io_errors() {
+        let draw = FigureError::Draw {
+            path: PathBuf::from("out/a.png"),
+            message: "plot: empty map".into(),
+        };
+        let as_output = Error::output("out/a.png", "plot: empty map");
+        assert_eq!(Error::from(draw).to_string(), as_output.to_string());
+        let io = || std::io::Error::new(std::io::ErrorKind::NotFound, "gone");
+        let fig = Error::from(FigureError::Io {
+            path: PathBuf::from("out/a.png"),
+            source: io(),
+        });
+        assert_eq!(chain(&fig), chain(&Error::io("out/a.png", io())));
+    }
 }

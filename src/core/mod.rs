@@ -1,4 +1,4 @@
-//! The small core every stage uses: configuration, cache/store, engine, outputs, plots.
+//! The small core every stage uses: configuration, cache/store, engine, outputs.
 pub mod cache;
 pub mod cases;
 pub mod config;
@@ -6,10 +6,6 @@ pub mod engine;
 pub mod executor;
 pub mod hash;
 pub mod memory;
-pub mod plot;
-pub mod plot_analysis;
-pub mod plot_doe;
-pub mod plot_sweep;
 pub mod progress;
 pub mod store;
 pub mod units;

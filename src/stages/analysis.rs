@@ -431,14 +431,14 @@ pub fn write_outputs(
 
     let (du, k) = display(&s.unit);
     let (vu, kv) = display(&s.velocity_unit);
-    use crate::core::plot_analysis as pa;
+    use crate::figures;
     let peaks: Vec<(f64, f64)> = r
         .peaks
         .iter()
         .map(|p| (p.frequency, p.amplitude * k))
         .collect();
     let amp: Vec<f64> = r.spectrum.amplitude.iter().map(|a| a * k).collect();
-    pa::spectrum_png(
+    figures::spectrum_png(
         &dir.join("spectrum.png"),
         &format!("Amplitude spectrum — {label}"),
         &r.spectrum.frequency,
@@ -452,7 +452,7 @@ pub fn write_outputs(
         .iter()
         .map(|m| (*m as f64 * k) as f32)
         .collect();
-    pa::scalogram_png(
+    figures::scalogram_png(
         &dir.join("scalogram.png"),
         &format!("Wavelet scalogram — {label}"),
         &time,
@@ -469,7 +469,7 @@ pub fn write_outputs(
         .map(|p| (p[0] * k, p[1] * k))
         .collect();
     if !rm.is_empty() {
-        pa::poincare_png(
+        figures::poincare_png(
             &dir.join("poincare.png"),
             &format!("Poincaré map of the maxima — {label}"),
             &rm,
@@ -479,7 +479,7 @@ pub fn write_outputs(
     }
     let x: Vec<f64> = ps.x.iter().map(|x| x * k).collect();
     let v: Vec<f64> = ps.v.iter().map(|v| v * kv).collect();
-    pa::phase_portrait_png(
+    figures::phase_portrait_png(
         &dir.join("phase_portrait.png"),
         &format!("Phase portrait — {label}"),
         &x,

@@ -395,7 +395,7 @@ impl Stage for CalibrateStage {
             .iter()
             .map(|(i, _, b)| (*i as f64 + 1.0, *b))
             .collect();
-        crate::core::plot::semilogy_png(
+        crate::figures::semilogy_png(
             &ctx.out_dir.join("convergence.png"),
             &format!(
                 "Calibration of {} — objective Σ weight·(residual/tolerance)²",
@@ -468,7 +468,7 @@ fn residuals_png(path: &std::path::Path, base: &str, r: &CalibrationResult) -> R
             }
         })
         .collect();
-    crate::core::plot::category_dots_png(
+    crate::figures::category_dots_png(
         path,
         &format!("Calibration of {base}: residual / tolerance (band ±1)"),
         "(value − published) / tolerance (clamped to ±10)",
@@ -478,7 +478,8 @@ fn residuals_png(path: &std::path::Path, base: &str, r: &CalibrationResult) -> R
             ("calibrated", values(&r.best)),
         ],
         1.0,
-    )
+    )?;
+    Ok(())
 }
 
 /// Re-evaluate a finished calibration now (for `hdi validate`): the targets at its fitted

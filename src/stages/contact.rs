@@ -11,12 +11,12 @@ use crate::contact::table::{ChannelError, ForceTable};
 use crate::contact::ContactError;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::engine::{Stage, StageContext, StageOutput};
-use crate::core::plot;
 use crate::core::store::H5Out;
 use crate::core::units::{
     parse_quantity, Area, Dimension, Length, PerArea, Pressure, Velocity, Viscosity,
 };
 use crate::error::{Error, Result};
+use crate::figures;
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
@@ -621,7 +621,7 @@ pub fn write_outputs(
                 .map(|(x, p)| (*x, f(p)))
                 .collect()
         };
-        plot::semilogy_png(
+        figures::semilogy_png(
             &dir.join("isbl_forces.png"),
             &format!(
                 "ISBL per unit nominal area ({}, σ = {:.2} nm)",
@@ -637,7 +637,7 @@ pub fn write_outputs(
             ],
             &[],
         )?;
-        plot::semilogy_png(
+        figures::semilogy_png(
             &dir.join("isbl_area_stiffness.png"),
             "Real area fraction and contact stiffness",
             "h/σ",
@@ -658,7 +658,7 @@ pub fn write_outputs(
                 .filter(|x| **x >= 0.0)
                 .map(|x| (*x, surface_energy_at(params, x * params.sigma) * 1e3))
                 .collect();
-            plot::stacked_png(
+            figures::stacked_png(
                 &dir.join("surface_energy.png"),
                 "Variable surface energy and total adhesion — Fig. 3.18 (shaded: gap < ε)",
                 "h/σ",

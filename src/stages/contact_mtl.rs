@@ -9,10 +9,10 @@ use crate::contact::mtl::rough::{
 };
 use crate::contact::mtl::FwmExperiment;
 use crate::contact::ContactError;
-use crate::core::plot;
 use crate::core::store::H5Out;
 use crate::core::units::{Area, Length, Velocity, Viscosity};
 use crate::error::Result;
+use crate::figures;
 use serde_json::{json, Map, Value};
 use std::path::Path;
 use std::sync::Arc;
@@ -389,7 +389,7 @@ impl MtlAnalysis {
                 .collect::<Vec<_>>()
         };
         let hs = |h: f64| h / sigma;
-        plot::semilogy_png(
+        figures::semilogy_png(
             &dir.join("mtl_stiffness.png"),
             &format!(
                 "Normal and lateral stiffness ({}, A_n = {:.0} µm²) — Fig. 3.19",
@@ -420,7 +420,7 @@ impl MtlAnalysis {
             ],
             &[],
         )?;
-        plot::semilogy_png(
+        figures::semilogy_png(
             &dir.join("mtl_stiffness_penetration.png"),
             "Total stiffness vs penetration (lubricant contact at −t < ω < 0) — Fig. 3.20",
             "penetration ω (nm)",
@@ -437,7 +437,7 @@ impl MtlAnalysis {
             .zip(&self.adhesion)
             .map(|(&h, f)| (pen_nm(h), f * 1e3))
             .collect();
-        plot::stacked_png(
+        figures::stacked_png(
             &dir.join("mtl_forces.png"),
             "Total contact, friction and adhesion forces — Fig. 3.21 (shaded: lubricant contact)",
             "penetration ω (nm)",
@@ -472,7 +472,7 @@ impl MtlAnalysis {
             .collect();
         let refs: Vec<(&str, Vec<(f64, f64)>)> =
             cases.iter().map(|(n, s)| (n.as_str(), s.clone())).collect();
-        plot::lines_png(
+        figures::lines_png(
             &dir.join("mtl_lubricant_cases.png"),
             "Total contact force for four lubricant conditions — Fig. 3.22",
             "penetration ω (nm)",

@@ -4,7 +4,6 @@
 
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::engine::{Stage, StageContext, StageOutput};
-use crate::core::plot;
 use crate::core::store::H5Out;
 use crate::core::units::{Frequency, Sensitivity, TimeSpan};
 use crate::dmw::average::AverageMode;
@@ -14,6 +13,7 @@ use crate::dmw::chain::{
 use crate::dmw::io::{read_ldv, ReadOptions};
 use crate::dmw::{LdvRecord, VelocityUnit};
 use crate::error::Result;
+use crate::figures;
 use crate::signal::integrate::Detrend;
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
@@ -723,7 +723,7 @@ fn write_plots(r: &DmwResult, dir: &Path) -> Result<()> {
     } else {
         Vec::new()
     };
-    plot::stacked_png(
+    figures::stacked_png(
         &dir.join("tracks.png"),
         &format!(
             "DMW tracks: std {:.3} nm (grey: filter transients, excluded)",
@@ -751,7 +751,7 @@ fn write_plots(r: &DmwResult, dir: &Path) -> Result<()> {
             .iter()
             .map(|p| (p.frequency / 1e3, p.amplitude * 1e9))
             .collect();
-        plot::loglog_png(
+        figures::loglog_png(
             &dir.join("spectrum.png"),
             "DMW amplitude spectrum (D1, Hann)",
             "frequency (kHz)",

@@ -667,7 +667,7 @@ fn model_selection(lf: &LevelFit) -> (Option<f64>, Option<f64>, u32) {
 
 /// Contour panels of one level: ξ over the two free factors at the fixed one's three levels.
 fn contour_png(path: &Path, p: &DoeParams, lf: &LevelFit, points: &[[f64; 3]]) -> Result<()> {
-    use crate::core::plot_doe::{contour_panels_png, ContourPanel};
+    use crate::figures::{contour_panels_png, ContourPanel};
     const N: usize = 41;
     let free: Vec<usize> = (0..3).filter(|f| *f != lf.fixed).collect();
     let (fx, fy) = (free[0], free[1]);
@@ -731,7 +731,8 @@ fn contour_png(path: &Path, p: &DoeParams, lf: &LevelFit, points: &[[f64; 3]]) -
         ),
         "ξ",
         &panels,
-    )
+    )?;
+    Ok(())
 }
 
 /// One condition of Table 2.8 for a design.
@@ -962,7 +963,7 @@ impl Stage for DoeStage {
                 &designs,
             )?;
             let diag = lf.quartic.fit.residual_diagnostics();
-            crate::core::plot_doe::residual_panels_png(
+            crate::figures::residual_panels_png(
                 &ctx.out_dir.join(format!("residuals_{tag}.png")),
                 &format!(
                     "Residuals of the degree-4 ξ surface, h_TFC = {:.1} nm",
@@ -1041,7 +1042,7 @@ impl Stage for DoeStage {
                 .map(|r| (r.iteration as f64, r.current_j, r.best_j))
                 .collect();
             let temps: Vec<f64> = res.history.iter().map(|r| r.temperature).collect();
-            crate::core::plot_doe::annealing_png(
+            crate::figures::annealing_png(
                 &ctx.out_dir.join("annealing.png"),
                 &format!(
                     "Simulated annealing of ξ at h_TFC = {:.1} nm (Fig. 2.30)",
@@ -1171,14 +1172,14 @@ impl Stage for DoeStage {
                 }
                 crate::core::store::write_table(&cmp_rows, &ctx.out_dir.join("comparison"))?;
                 let t0 = 0.5 * p.base.model.interface.lubricant_thickness / NM;
-                let sweep_series: Vec<crate::core::plot_sweep::SweepSeries> = series
+                let sweep_series: Vec<crate::figures::SweepSeries> = series
                     .iter()
-                    .map(|(label, pts)| crate::core::plot_sweep::SweepSeries {
+                    .map(|(label, pts)| crate::figures::SweepSeries {
                         label,
                         points: pts.clone(),
                     })
                     .collect();
-                crate::core::plot_sweep::clearance_sweep_png(
+                crate::figures::clearance_sweep_png(
                     &ctx.out_dir.join("comparison.png"),
                     "Initial vs optimised design: steady clearance (Table 2.8)",
                     "TFC actuation (nm)",

@@ -356,7 +356,7 @@ impl Stage for ExcitationStage {
             .step_by((x.displacement.len() / 4000).max(1))
             .map(|(i, d)| (i as f64 / x.fs * 1e3, d * 1e9))
             .collect();
-        crate::core::plot::lines_png(
+        crate::figures::lines_png(
             &ctx.out_dir.join("track.png"),
             &format!("Excitation `{}` ({})", self.name, p.label()),
             "time (ms)",

@@ -839,7 +839,7 @@ pub fn plots(
     s: &SweepMetrics,
     title: &str,
 ) -> Result<()> {
-    use crate::core::plot_sweep::{
+    use crate::figures::{
         clearance_sweep_png, metric_sweep_png, time_histories_png, Panel, RegimeBand, SweepSeries,
     };
     let nm_of = |v: &Value| v.as_f64().unwrap_or(f64::NAN) * 1e9;

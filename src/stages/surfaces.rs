@@ -4,10 +4,10 @@
 
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::engine::{Stage, StageContext, StageOutput};
-use crate::core::plot;
 use crate::core::store::H5Out;
 use crate::core::units::Length;
 use crate::error::Result;
+use crate::figures;
 use crate::surface::crop::{crop, CropRect};
 use crate::surface::filter::apply_filters;
 use crate::surface::io::{read_height_map, ReadOptions};
@@ -625,7 +625,7 @@ pub fn write_outputs(
 
     if let Some(dir) = plot_dir {
         let z = &fm.z;
-        plot::heatmap_png(
+        figures::heatmap_png(
             &dir.join("height_map.png"),
             z.view(),
             fm.dx,
@@ -633,7 +633,7 @@ pub fn write_outputs(
             &format!("{} — σ = {:.3} nm", fm.channel, r.sigma * 1e9),
         )?;
         let h = &r.height_histogram;
-        plot::histogram_png(
+        figures::histogram_png(
             &dir.join("height_histogram.png"),
             &h.edges,
             &h.density,
@@ -645,7 +645,7 @@ pub fn write_outputs(
         )?;
         let s = &r.summit_histogram;
         if r.n_summits > 0 && s.density.iter().any(|d| *d > 0.0) {
-            plot::histogram_png(
+            figures::histogram_png(
                 &dir.join("summit_height_histogram.png"),
                 &s.edges,
                 &s.density,
@@ -690,7 +690,7 @@ fn write_sweep_plot(path: &Path, sweep: &[SweepRow], pixel: f64) -> Result<()> {
     }
     let xs = sub.iter().chain(&filt).map(|p| p.0);
     let (lo, hi) = xs.fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
-    plot::lines_png(
+    figures::lines_png(
         path,
         "β = σRη against lateral scale",
         "sampling interval or S-filter cutoff (nm)",
@@ -700,7 +700,8 @@ fn write_sweep_plot(path: &Path, sweep: &[SweepRow], pixel: f64) -> Result<()> {
             ("S-filter (x = cutoff)", filt),
             ("McCool bound 0.0193", vec![(lo, 0.0193), (hi, 0.0193)]),
         ],
-    )
+    )?;
+    Ok(())
 }
 
 /// A `[surface.NAME]` instance.

@@ -699,7 +699,7 @@ fn ms_series(dt: f64, x: &[f64], scale: f64) -> Vec<(f64, f64)> {
 }
 
 fn history_png(path: &Path, h: &History3Dof, label: &str) -> Result<()> {
-    use crate::core::plot_sweep::{time_histories_png, Panel};
+    use crate::figures::{time_histories_png, Panel};
     let pair = |x: &[f64], scale: f64| ms_series(h.dt, x, scale);
     // Every feature that comes within 50 nm of the disk (the bulge always).
     let names: Vec<String> = h.features.iter().map(|f| format!("{f:?}")).collect();
@@ -739,7 +739,8 @@ fn history_png(path: &Path, h: &History3Dof, label: &str) -> Result<()> {
                 series: vec![("roll φ", pair(&h.roll, 1e6))],
             },
         ],
-    )
+    )?;
+    Ok(())
 }
 
 /// The variable-actuation figures: bulge and pole-tip spacing against the solid and lubricant
@@ -752,9 +753,7 @@ fn variable_actuation_pngs(
     (solid, lubricant): (f64, f64),
     label: &str,
 ) -> Result<()> {
-    use crate::core::plot_sweep::{
-        time_histories_banded_png, time_histories_png, Panel, RegimeBand,
-    };
+    use crate::figures::{time_histories_banded_png, time_histories_png, Panel, RegimeBand};
     let t_ms = |k: usize| k as f64 * h.dt * 1e3;
     let pair = |x: &[f64], scale: f64| ms_series(h.dt, x, scale);
     let level = |v: f64| vec![(0.0, v * 1e9), (t_ms(h.len().saturating_sub(1)), v * 1e9)];
@@ -839,7 +838,8 @@ fn variable_actuation_pngs(
                 series: vec![("μ = Q / (F_c + P_lub)", mu)],
             },
         ],
-    )
+    )?;
+    Ok(())
 }
 
 impl Stage for ThreeDofStage {

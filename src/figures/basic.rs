@@ -1,54 +1,16 @@
-//! PNG plots of what the dissertation plots. plotters with an embedded DejaVu font, so no
-//! system fontconfig/freetype is needed. Plots are side outputs: a failure to draw is reported
-//! as an output error, never a panic.
+//! The basic figures of the surface, DMW, contact, excitation and calibration stages: heat
+//! map, histogram, named lines on linear, log–log and semi-log axes, stacked panels and
+//! category dots. Degenerate input (no finite point, mismatched lengths) is an error, never a
+//! panic.
 
-use crate::error::{Error, Result};
+use super::kit::{
+    draw_legend, finite_min_max, font, line_key, log_padded, padded_abs, perr, render_png,
+    sci_tick_label, title_font, Legend, Result, BASIC_PALETTE,
+};
 use ndarray::ArrayView2;
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;
 use std::path::Path;
-use std::sync::Once;
-
-static FONT: Once = Once::new();
-
-pub(crate) fn ensure_font() {
-    FONT.call_once(|| {
-        // Registration fails only for a corrupt font, which the dejavu crate does not ship.
-        let _ = plotters::style::register_font(
-            "sans-serif",
-            FontStyle::Normal,
-            dejavu::sans::regular(),
-        );
-    });
-}
-
-pub(crate) fn perr(path: &Path, e: impl std::fmt::Display) -> Error {
-    Error::output(path, format!("plot: {e}"))
-}
-
-/// Render into a PNG via a temp file + rename.
-pub(crate) fn render_png(
-    path: &Path,
-    size: (u32, u32),
-    draw: impl FnOnce(
-        &DrawingArea<BitMapBackend, plotters::coord::Shift>,
-    ) -> std::result::Result<(), String>,
-) -> Result<()> {
-    ensure_font();
-    // The bitmap backend picks the image format from the extension: keep ".png" last.
-    let file_name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_string())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{file_name}.tmp-{}.png", std::process::id()));
-    {
-        let root = BitMapBackend::new(&tmp, size).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| perr(path, e))?;
-        draw(&root).map_err(|e| perr(path, e))?;
-        root.present().map_err(|e| perr(path, e))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
-}
 
 /// Height map as a viridis heat map with a colour bar; axes in µm, colour in nm.
 pub fn heatmap_png(path: &Path, z: ArrayView2<f64>, dx: f64, dy: f64, title: &str) -> Result<()> {
@@ -56,12 +18,7 @@ pub fn heatmap_png(path: &Path, z: ArrayView2<f64>, dx: f64, dy: f64, title: &st
     if nx == 0 || ny == 0 {
         return Err(perr(path, "empty map"));
     }
-    let (lo, hi) = z
-        .iter()
-        .filter(|v| v.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
+    let (lo, hi) = finite_min_max(z.iter().copied());
     let span = if hi > lo { hi - lo } else { 1.0 };
     // Decimate to at most 512 cells per axis: enough for a PNG, fast to draw.
     let step = nx.max(ny).div_ceil(512).max(1);
@@ -69,7 +26,7 @@ pub fn heatmap_png(path: &Path, z: ArrayView2<f64>, dx: f64, dy: f64, title: &st
     render_png(path, (790, 640), |root| {
         let (main, bar) = root.split_horizontally(630);
         let mut chart = ChartBuilder::on(&main)
-            .caption(title, ("sans-serif", 20))
+            .caption(title, title_font())
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(50)
@@ -119,8 +76,8 @@ pub fn heatmap_png(path: &Path, z: ArrayView2<f64>, dx: f64, dy: f64, title: &st
             .disable_mesh()
             .disable_x_axis()
             .y_labels(6)
-            .label_style(("sans-serif", 14))
-            .axis_desc_style(("sans-serif", 14))
+            .label_style(font(14))
+            .axis_desc_style(font(14))
             .y_desc("height (nm)")
             .draw()
             .map_err(|e| e.to_string())?;
@@ -164,7 +121,7 @@ pub fn histogram_png(
         * 1.1;
     render_png(path, (760, 520), |root| {
         let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 20))
+            .caption(title, title_font())
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(60)
@@ -203,14 +160,9 @@ pub fn histogram_png(
                 ))
                 .map_err(|e| e.to_string())?
                 .label(overlay_label)
-                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], RED.stroke_width(2)));
+                .legend(line_key(15, RED.stroke_width(2)));
         }
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.8))
-            .draw()
-            .map_err(|e| e.to_string())?;
+        draw_legend(&mut chart, Legend::BASIC)?;
         Ok(())
     })
 }
@@ -238,22 +190,13 @@ pub fn lines_png(
     if !xr.0.is_finite() {
         return Err(perr(path, "no finite points to plot"));
     }
-    let pad = |r: (f64, f64)| {
-        let d = if r.1 > r.0 {
-            (r.1 - r.0) * 0.05
-        } else {
-            r.0.abs().max(1.0) * 0.05
-        };
-        (r.0 - d)..(r.1 + d)
-    };
-    let palette = [BLUE, RED, GREEN, MAGENTA, CYAN, BLACK];
     render_png(path, (760, 520), |root| {
         let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 20))
+            .caption(title, title_font())
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(60)
-            .build_cartesian_2d(pad(xr), pad(yr))
+            .build_cartesian_2d(padded_abs(xr), padded_abs(yr))
             .map_err(|e| e.to_string())?;
         chart
             .configure_mesh()
@@ -262,21 +205,14 @@ pub fn lines_png(
             .draw()
             .map_err(|e| e.to_string())?;
         for (k, (label, s)) in series.iter().enumerate() {
-            let c = palette[k % palette.len()];
+            let c = BASIC_PALETTE[k % BASIC_PALETTE.len()];
             chart
                 .draw_series(LineSeries::new(s.iter().copied(), c.stroke_width(2)))
                 .map_err(|e| e.to_string())?
                 .label(*label)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 15, y)], c.stroke_width(2))
-                });
+                .legend(line_key(15, c.stroke_width(2)));
         }
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.8))
-            .draw()
-            .map_err(|e| e.to_string())?;
+        draw_legend(&mut chart, Legend::BASIC)?;
         Ok(())
     })
 }
@@ -302,32 +238,27 @@ pub fn loglog_png(
     }
     // Keep ten decades below the top at most: FFT leakage floors are not information.
     yr.0 = yr.0.max(yr.1 * 1e-10);
-    let span = |r: (f64, f64)| {
-        if r.1 > r.0 {
-            (r.0 / 1.3)..(r.1 * 1.3)
-        } else {
-            (r.0 / 2.0)..(r.0 * 2.0)
-        }
-    };
-    let palette = [BLUE, RED, GREEN, MAGENTA, CYAN, BLACK];
     let y_floor = yr.0;
     render_png(path, (760, 520), |root| {
         let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 20))
+            .caption(title, title_font())
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(70)
-            .build_cartesian_2d(span(xr).log_scale(), span(yr).log_scale())
+            .build_cartesian_2d(
+                log_padded(xr.0, xr.1, 1.3).log_scale(),
+                log_padded(yr.0, yr.1, 1.3).log_scale(),
+            )
             .map_err(|e| e.to_string())?;
         chart
             .configure_mesh()
             .x_desc(x_desc)
             .y_desc(y_desc)
-            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .y_label_formatter(&sci_tick_label)
             .draw()
             .map_err(|e| e.to_string())?;
         for (k, (label, s)) in series.iter().enumerate() {
-            let c = palette[k % palette.len()];
+            let c = BASIC_PALETTE[k % BASIC_PALETTE.len()];
             let pts: Vec<(f64, f64)> = s
                 .iter()
                 .filter(positive)
@@ -337,9 +268,7 @@ pub fn loglog_png(
                 .draw_series(LineSeries::new(pts, c.stroke_width(1)))
                 .map_err(|e| e.to_string())?
                 .label(*label)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 15, y)], c.stroke_width(2))
-                });
+                .legend(line_key(15, c.stroke_width(2)));
         }
         if !marks.is_empty() {
             chart
@@ -353,12 +282,7 @@ pub fn loglog_png(
                 .label("peaks")
                 .legend(|(x, y)| Circle::new((x + 7, y), 4, RED.stroke_width(2)));
         }
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.8))
-            .draw()
-            .map_err(|e| e.to_string())?;
+        draw_legend(&mut chart, Legend::BASIC)?;
         Ok(())
     })
 }
@@ -384,32 +308,24 @@ pub fn semilogy_png(
     }
     // Keep twenty decades below the top at most: far tails are not information.
     yr.0 = yr.0.max(yr.1 * 1e-20);
-    let span = |r: (f64, f64)| {
-        if r.1 > r.0 {
-            (r.0 / 1.3)..(r.1 * 1.3)
-        } else {
-            (r.0 / 2.0)..(r.0 * 2.0)
-        }
-    };
-    let palette = [BLUE, RED, GREEN, MAGENTA, CYAN, BLACK];
     let y_floor = yr.0;
     render_png(path, (760, 520), |root| {
         let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 20))
+            .caption(title, title_font())
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(70)
-            .build_cartesian_2d(xr.0..xr.1, span(yr).log_scale())
+            .build_cartesian_2d(xr.0..xr.1, log_padded(yr.0, yr.1, 1.3).log_scale())
             .map_err(|e| e.to_string())?;
         chart
             .configure_mesh()
             .x_desc(x_desc)
             .y_desc(y_desc)
-            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .y_label_formatter(&sci_tick_label)
             .draw()
             .map_err(|e| e.to_string())?;
         for (k, (label, s)) in series.iter().enumerate() {
-            let c = palette[k % palette.len()];
+            let c = BASIC_PALETTE[k % BASIC_PALETTE.len()];
             let pts: Vec<(f64, f64)> = s
                 .iter()
                 .filter(positive)
@@ -421,9 +337,7 @@ pub fn semilogy_png(
                 .draw_series(LineSeries::new(pts, c.stroke_width(1)))
                 .map_err(|e| e.to_string())?
                 .label(*label)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 15, y)], c.stroke_width(2))
-                });
+                .legend(line_key(15, c.stroke_width(2)));
         }
         if !marks.is_empty() {
             chart
@@ -437,12 +351,7 @@ pub fn semilogy_png(
                 .label("peaks")
                 .legend(|(x, y)| Circle::new((x + 7, y), 4, RED.stroke_width(2)));
         }
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.8))
-            .draw()
-            .map_err(|e| e.to_string())?;
+        draw_legend(&mut chart, Legend::BASIC)?;
         Ok(())
     })
 }
@@ -459,28 +368,19 @@ pub fn stacked_png(
     if panels.is_empty() {
         return Err(perr(path, "no panels to plot"));
     }
-    let range = |pts: &[(f64, f64)], f: fn(&(f64, f64)) -> f64| {
-        pts.iter()
-            .map(f)
-            .filter(|v| v.is_finite())
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                (a.min(v), b.max(v))
-            })
-    };
     let all: Vec<(f64, f64)> = panels.iter().flat_map(|(_, p)| p.iter().copied()).collect();
-    let xr = range(&all, |p| p.0);
+    let xr = finite_min_max(all.iter().map(|p| p.0));
     if !xr.0.is_finite() {
         return Err(perr(path, "no finite points to plot"));
     }
-    let palette = [BLUE, RED, GREEN, MAGENTA, CYAN, BLACK];
     let height = 140 + 170 * panels.len() as u32;
     render_png(path, (900, height), |root| {
         let root = root
-            .titled(title, ("sans-serif", 20))
+            .titled(title, title_font())
             .map_err(|e| e.to_string())?;
         let areas = root.split_evenly((panels.len(), 1));
         for (k, ((label, pts), area)) in panels.iter().zip(areas.iter()).enumerate() {
-            let mut yr = range(pts, |p| p.1);
+            let mut yr = finite_min_max(pts.iter().map(|p| p.1));
             if !yr.0.is_finite() {
                 yr = (-1.0, 1.0);
             }
@@ -502,7 +402,7 @@ pub fn stacked_png(
                     Rectangle::new([(a, yr.0 - pad), (b, yr.1 + pad)], BLACK.mix(0.08).filled())
                 }))
                 .map_err(|e| e.to_string())?;
-            let c = palette[k % palette.len()];
+            let c = BASIC_PALETTE[k % BASIC_PALETTE.len()];
             chart
                 .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(1)))
                 .map_err(|e| e.to_string())?;
@@ -531,11 +431,12 @@ pub fn category_dots_png(
         .filter(|v| v.is_finite());
     let (lo, hi) = finite.fold((-band, band), |(a, b), v| (a.min(*v), b.max(*v)));
     let pad = 0.08 * (hi - lo).max(1e-12);
-    let palette = [BLUE, RED, GREEN, MAGENTA];
+    // The first four colours of the basic palette, cycled.
+    let palette = &BASIC_PALETTE[..4];
     let height = 120 + 36 * n as u32;
     render_png(path, (860, height), |root| {
         let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 20))
+            .caption(title, title_font())
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(220)
@@ -578,27 +479,11 @@ pub fn category_dots_png(
                 .label(*label)
                 .legend(move |(x, y)| Circle::new((x + 7, y), 5, c.filled()));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.8))
-            .draw()
-            .map_err(|e| e.to_string())?;
+        let legend = Legend {
+            position: Some(SeriesLabelPosition::LowerRight),
+            ..Legend::BASIC
+        };
+        draw_legend(&mut chart, legend)?;
         Ok(())
     })
-}
-
-/// Test helper: `path` holds a real PNG (signature, more than a header's worth of bytes).
-#[cfg(test)]
-pub(crate) fn assert_png(path: &Path) {
-    const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, b'\n'];
-    let bytes = std::fs::read(path).expect("plot written");
-    assert!(
-        bytes.len() > 1000,
-        "{}: {} bytes",
-        path.display(),
-        bytes.len()
-    );
-    assert_eq!(bytes[..8], PNG_SIGNATURE, "{}", path.display());
 }

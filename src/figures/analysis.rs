@@ -1,15 +1,16 @@
 //! PNG plots of the analysis stage: the wavelet scalogram with its cone of influence and
 //! ridge, the Poincaré return map, the phase portrait and the amplitude spectrum.
 //!
-//! Same conventions as [`crate::core::plot`] (embedded font, temp-file + rename): the plot
-//! functions take plain slices (no dependency on the analysis types), skip non-finite values
-//! (and non-positive ones on log axes), and report empty or degenerate input as an output
-//! error, never a panic.
+//! Drawn with the plotting kit: the plot functions take plain slices (no dependency on
+//! the analysis types), skip non-finite values (and non-positive ones on log axes), and report
+//! empty or degenerate input as an error, never a panic.
 
-use crate::core::plot::{perr, render_png};
-use crate::error::Result;
+use super::kit::{
+    boxed_text, decimate_log_minmax, draw_legend, finite_min_max, fmt_sig3, font, lin_tick_label,
+    line_key, log_key_points, log_padded, log_tick_label, measure_text, overlaps, padded, perr,
+    render_png, title_font, usable, with_unit, Legend, PixelRect, Result, TRACE_BLUE,
+};
 use plotters::coord::combinators::BindKeyPoints;
-use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -30,187 +31,6 @@ const SPECTRUM_BINS: usize = 1500;
 const MAX_PEAK_LABELS: usize = 5;
 /// Phase portraits keep a point only when it moves by 1/PHASE_GRID of the axis span.
 const PHASE_GRID: f64 = 3000.0;
-
-/// A pixel rectangle `(left, top, right, bottom)`.
-type PixelRect = (i32, i32, i32, i32);
-type DrawResult<T> = std::result::Result<T, String>;
-/// The lowest and the highest `(x, y)` point of a bin.
-type MinMaxPoints = ((f64, f64), (f64, f64));
-
-fn text_style(size: u32, pos: Pos) -> TextStyle<'static> {
-    ("sans-serif", size).into_font().color(&BLACK).pos(pos)
-}
-
-/// `text` (possibly several lines) on a translucent white box, anchored at pixel `at` of
-/// `area` by `pos`. Returns the box in `area` pixels.
-fn boxed_text(
-    area: &DrawingArea<BitMapBackend<'_>, Shift>,
-    at: (i32, i32),
-    text: &str,
-    pos: Pos,
-    size: u32,
-) -> DrawResult<PixelRect> {
-    let (w, h, lines) = measure_text(area, text, size)?;
-    let left = match pos.h_pos {
-        HPos::Left => at.0,
-        HPos::Center => at.0 - w / 2,
-        HPos::Right => at.0 - w,
-    };
-    let top = match pos.v_pos {
-        VPos::Top => at.1,
-        VPos::Center => at.1 - h / 2,
-        VPos::Bottom => at.1 - h,
-    };
-    let rect = (left - 4, top - 3, left + w + 4, top + h + 3);
-    area.draw(&Rectangle::new(
-        [(rect.0, rect.1), (rect.2, rect.3)],
-        WHITE.mix(0.85).filled(),
-    ))
-    .map_err(|e| e.to_string())?;
-    let line_h = if lines.is_empty() {
-        0
-    } else {
-        h / lines.len() as i32
-    };
-    for (k, line) in lines.iter().enumerate() {
-        area.draw(&Text::new(
-            line.to_string(),
-            (left, top + k as i32 * line_h),
-            text_style(size, Pos::new(HPos::Left, VPos::Top)),
-        ))
-        .map_err(|e| e.to_string())?;
-    }
-    Ok(rect)
-}
-
-/// Width, height (pixels) and lines of a possibly multi-line text.
-fn measure_text<'t>(
-    area: &DrawingArea<BitMapBackend<'_>, Shift>,
-    text: &'t str,
-    size: u32,
-) -> DrawResult<(i32, i32, Vec<&'t str>)> {
-    let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
-    let style = text_style(size, Pos::new(HPos::Left, VPos::Top));
-    let (mut w, mut h) = (0i32, 0i32);
-    for line in &lines {
-        let (lw, _) = area
-            .estimate_text_size(line, &style)
-            .map_err(|e| e.to_string())?;
-        w = w.max(lw as i32);
-        // A fixed line height: the estimate of a line without descenders is shorter.
-        h += (size as f64 * 1.25).round() as i32;
-    }
-    Ok((w, h, lines))
-}
-
-fn overlaps(a: PixelRect, b: PixelRect) -> bool {
-    a.0 < b.2 && b.0 < a.2 && a.1 < b.3 && b.1 < a.3
-}
-
-/// A log-axis tick label: decades always, also 2 and 5 (and 3 on short axes) when the axis
-/// spans few decades; other ticks are unlabelled minor ticks.
-fn log_tick_label(v: f64, decades: f64) -> String {
-    if !v.is_finite() || v <= 0.0 {
-        return String::new();
-    }
-    let e = (v.log10() + 1e-9).floor();
-    let m = v / 10f64.powf(e);
-    let mr = m.round();
-    if (m - mr).abs() > 1e-6 * m {
-        return String::new();
-    }
-    let allowed: &[f64] = if decades <= 1.3 {
-        &[1.0, 2.0, 3.0, 5.0]
-    } else if decades <= 3.5 {
-        &[1.0, 2.0, 5.0]
-    } else {
-        &[1.0]
-    };
-    if !allowed.contains(&mr) {
-        return String::new();
-    }
-    let (m, e) = (mr as i64, e as i32);
-    if !(-3..=5).contains(&e) {
-        format!("{m}e{e}")
-    } else if e >= 0 {
-        format!("{}", m * 10i64.pow(e as u32))
-    } else {
-        format!("0.{}{m}", "0".repeat((-e - 1) as usize))
-    }
-}
-
-/// Three significant digits, without exponent for the usual kHz values.
-pub(crate) fn fmt_sig3(v: f64) -> String {
-    let a = v.abs();
-    if a >= 1e5 || (a < 1e-3 && a > 0.0) {
-        format!("{v:.2e}")
-    } else if a >= 100.0 {
-        format!("{v:.0}")
-    } else if a >= 10.0 {
-        format!("{v:.1}")
-    } else if a >= 1.0 {
-        format!("{v:.2}")
-    } else {
-        format!("{v:.3}")
-    }
-}
-
-/// Tick positions of a log axis over `lo..hi`: every `m·10^e` (m = 1…9) when the axis spans
-/// at most four decades, only the decades otherwise (labelled by [`log_tick_label`]).
-fn log_key_points(lo: f64, hi: f64) -> Vec<f64> {
-    let decades = (hi / lo).log10();
-    let mantissas: &[f64] = if decades <= 4.0 {
-        &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]
-    } else {
-        &[1.0]
-    };
-    let (e0, e1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
-    (e0..=e1)
-        .flat_map(|e| mantissas.iter().map(move |m| m * 10f64.powi(e)))
-        .filter(|v| *v >= lo * (1.0 - 1e-12) && *v <= hi * (1.0 + 1e-12))
-        .collect()
-}
-
-/// A linear-axis tick label with as many decimals as the tick spacing (≈ span/10) needs,
-/// trailing zeros trimmed.
-pub(crate) fn lin_tick_label(v: f64, span: f64) -> String {
-    let step = (span / 10.0).abs();
-    let decimals = if step > 0.0 && step.is_finite() {
-        (-(step.log10().floor()) as i32 + 1).clamp(0, 12) as usize
-    } else {
-        3
-    };
-    let mut s = format!("{v:.decimals$}");
-    if s.contains('.') {
-        s = s.trim_end_matches('0').trim_end_matches('.').to_string();
-    }
-    if s == "-0" {
-        s = "0".to_string();
-    }
-    s
-}
-
-/// `name (unit)`, or `name` alone for an empty unit.
-fn with_unit(name: &str, unit: &str) -> String {
-    if unit.trim().is_empty() {
-        name.to_string()
-    } else {
-        format!("{name} ({unit})")
-    }
-}
-
-/// A linear range covering `lo..=hi` with 5 % padding; a constant value gets ±5 % of its
-/// magnitude (±1 around zero).
-fn padded(lo: f64, hi: f64) -> (f64, f64) {
-    let span = hi - lo;
-    let scale = lo.abs().max(hi.abs());
-    if span > scale * 1e-9 && span > 0.0 {
-        (lo - 0.05 * span, hi + 0.05 * span)
-    } else {
-        let d = if scale > 0.0 { 0.05 * scale } else { 1.0 };
-        (lo - d, hi + d)
-    }
-}
 
 /// Lower/upper cell edges of sorted log-spaced frequencies: geometric midpoints between
 /// neighbours, and the outer edges half a step beyond the ends.
@@ -338,12 +158,7 @@ pub fn scalogram_png(
             }
         }
     }
-    let (lo, hi) = cells
-        .iter()
-        .filter(|v| v.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
+    let (lo, hi) = finite_min_max(cells.iter().copied());
     if lo > hi {
         return Err(perr(path, "scalogram has no finite magnitude"));
     }
@@ -409,7 +224,7 @@ pub fn scalogram_png(
     render_png(path, (940, 580), |root| {
         let (main, bar) = root.split_horizontally(800);
         let mut chart = ChartBuilder::on(&main)
-            .caption(title, ("sans-serif", 20))
+            .caption(title, title_font())
             .margin(10)
             .margin_right(15)
             .x_label_area_size(45)
@@ -423,8 +238,8 @@ pub fn scalogram_png(
             .x_desc("time (ms)")
             .y_desc("frequency (kHz)")
             .y_label_formatter(&|v| log_tick_label(*v, decades))
-            .label_style(("sans-serif", 14))
-            .axis_desc_style(("sans-serif", 15))
+            .label_style(font(14))
+            .axis_desc_style(font(15))
             .draw()
             .map_err(|e| e.to_string())?;
         let cell_rects = (0..rows).flat_map(|g| (0..cols).map(move |b| (g, b)));
@@ -480,21 +295,14 @@ pub fn scalogram_png(
                 )))
                 .map_err(|e| e.to_string())?;
             if k == 0 {
-                drawn.label("ridge").legend(|(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 16, y)], RED.stroke_width(2))
-                });
+                drawn
+                    .label("ridge")
+                    .legend(line_key(16, RED.stroke_width(2)));
             }
         }
         if !coi.is_empty() || !ridge_segments.is_empty() {
-            chart
-                .configure_series_labels()
-                // Low frequencies at late times: usually inside the cone, the least trusted part.
-                .position(SeriesLabelPosition::LowerRight)
-                .label_font(("sans-serif", 13))
-                .border_style(BLACK)
-                .background_style(WHITE.mix(0.85))
-                .draw()
-                .map_err(|e| e.to_string())?;
+            // Low frequencies at late times: usually inside the cone, the least trusted part.
+            draw_legend(&mut chart, Legend::at(SeriesLabelPosition::LowerRight, 13))?;
         }
 
         let mut cb = ChartBuilder::on(&bar)
@@ -510,8 +318,8 @@ pub fn scalogram_png(
             .disable_x_axis()
             .y_labels(8)
             .y_label_formatter(&|v| lin_tick_label(*v, bar_span))
-            .label_style(("sans-serif", 13))
-            .axis_desc_style(("sans-serif", 14))
+            .label_style(font(13))
+            .axis_desc_style(font(14))
             .y_desc(with_unit("|W|", magnitude_unit))
             .draw()
             .map_err(|e| e.to_string())?;
@@ -542,17 +350,12 @@ pub fn poincare_png(
     let pts: Vec<(f64, f64)> = return_map
         .iter()
         .copied()
-        .filter(|(a, b)| a.is_finite() && b.is_finite() && a.abs() < 1e300 && b.abs() < 1e300)
+        .filter(|&(a, b)| usable(a) && usable(b))
         .collect();
     if pts.is_empty() {
         return Err(perr(path, "return map has no finite point"));
     }
-    let (lo, hi) = pts
-        .iter()
-        .flat_map(|&(a, b)| [a, b])
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-            (l.min(v), h.max(v))
-        });
+    let (lo, hi) = finite_min_max(pts.iter().flat_map(|&(a, b)| [a, b]));
     let (lo, hi) = padded(lo, hi);
     let n = pts.len();
     let radius = if n > 2000 { 2 } else { 3 };
@@ -577,7 +380,7 @@ pub fn poincare_png(
     // Square plot area (≈ 560 px): equal axes look equal.
     render_png(path, (680, 676), |root| {
         let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 20))
+            .caption(title, title_font())
             .margin(15)
             .margin_right(25)
             .x_label_area_size(50)
@@ -592,8 +395,8 @@ pub fn poincare_png(
             .y_label_formatter(&|v| lin_tick_label(*v, span))
             .x_desc(with_unit("xₙ", unit))
             .y_desc(with_unit("xₙ₊₁", unit))
-            .label_style(("sans-serif", 14))
-            .axis_desc_style(("sans-serif", 15))
+            .label_style(font(14))
+            .axis_desc_style(font(15))
             .draw()
             .map_err(|e| e.to_string())?;
         chart
@@ -605,7 +408,7 @@ pub fn poincare_png(
         chart
             .draw_series(
                 pts.iter()
-                    .map(|&p| Circle::new(p, radius, RGBColor(0, 90, 170).mix(0.75).filled())),
+                    .map(|&p| Circle::new(p, radius, TRACE_BLUE.mix(0.75).filled())),
             )
             .map_err(|e| e.to_string())?;
         let area = chart.plotting_area().strip_coord_spec();
@@ -645,7 +448,7 @@ pub fn phase_portrait_png(
             format!("phase portrait: {} x values, {} v values", x.len(), v.len()),
         ));
     }
-    let ok = |a: f64, b: f64| a.is_finite() && b.is_finite() && a.abs() < 1e300 && b.abs() < 1e300;
+    let ok = |a: f64, b: f64| usable(a) && usable(b);
     let mut xr = (f64::INFINITY, f64::NEG_INFINITY);
     let mut vr = xr;
     let mut n_ok = 0usize;
@@ -695,7 +498,7 @@ pub fn phase_portrait_png(
         .unwrap_or(start);
     render_png(path, (760, 600), |root| {
         let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 20))
+            .caption(title, title_font())
             .margin(15)
             .margin_right(25)
             .x_label_area_size(50)
@@ -710,11 +513,11 @@ pub fn phase_portrait_png(
             .y_label_formatter(&|t| lin_tick_label(*t, vr.1 - vr.0))
             .x_desc(with_unit("x", x_unit))
             .y_desc(with_unit("v", v_unit))
-            .label_style(("sans-serif", 14))
-            .axis_desc_style(("sans-serif", 15))
+            .label_style(font(14))
+            .axis_desc_style(font(15))
             .draw()
             .map_err(|e| e.to_string())?;
-        let line = RGBColor(0, 90, 170).mix(0.6).stroke_width(1);
+        let line = TRACE_BLUE.mix(0.6).stroke_width(1);
         for seg in &segments {
             chart
                 .draw_series(std::iter::once(PathElement::new(seg.clone(), line)))
@@ -742,14 +545,7 @@ pub fn phase_portrait_png(
                     RGBColor(213, 30, 0).filled(),
                 )
             });
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font(("sans-serif", 13))
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.85))
-            .draw()
-            .map_err(|e| e.to_string())?;
+        draw_legend(&mut chart, Legend::at(SeriesLabelPosition::UpperRight, 13))?;
         Ok(())
     })
 }
@@ -778,7 +574,7 @@ pub fn spectrum_png(
             ),
         ));
     }
-    let positive = |a: f64| a.is_finite() && a > 0.0 && a < 1e300;
+    let positive = |a: f64| usable(a) && a > 0.0;
     let (fa, fb) = match f_range_hz {
         Some((a, b)) => {
             if a.is_nan() || b.is_nan() || b <= a.max(0.0) {
@@ -821,8 +617,10 @@ pub fn spectrum_png(
                 (a / 1.2, a * 1.2)
             }
         }
-        None if xr.1 > xr.0 => (xr.0 / 1.1, xr.1 * 1.1),
-        None => (xr.0 / 2.0, xr.0 * 2.0),
+        None => {
+            let r = log_padded(xr.0, xr.1, 1.1);
+            (r.start, r.end)
+        }
     };
     let floor = yr.0.max(yr.1 * 1e-8);
     // Room above the top for the peak labels.
@@ -833,24 +631,7 @@ pub fn spectrum_png(
     };
     // Long spectra: min and max of each log-spaced bin, in frequency order.
     if pts.len() > SPECTRUM_DECIMATE_ABOVE && xr.1 > xr.0 {
-        let (l0, l1) = (xr.0.ln(), xr.1.ln());
-        let scale = (SPECTRUM_BINS as f64 - 1e-9) / (l1 - l0);
-        let mut bins: Vec<Option<MinMaxPoints>> = vec![None; SPECTRUM_BINS];
-        for &(f, a) in &pts {
-            let k = (((f.ln() - l0) * scale) as usize).min(SPECTRUM_BINS - 1);
-            let bin = bins[k].get_or_insert(((f, a), (f, a)));
-            if a < bin.0 .1 {
-                bin.0 = (f, a);
-            }
-            if a > bin.1 .1 {
-                bin.1 = (f, a);
-            }
-        }
-        pts = bins
-            .into_iter()
-            .flatten()
-            .flat_map(|(mn, mx)| if mn.0 <= mx.0 { [mn, mx] } else { [mx, mn] })
-            .collect();
+        pts = decimate_log_minmax(&pts, xr.0, xr.1, SPECTRUM_BINS);
     }
     for p in &mut pts {
         p.1 = p.1.max(floor);
@@ -866,7 +647,7 @@ pub fn spectrum_png(
     );
     render_png(path, (820, 560), |root| {
         let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 20))
+            .caption(title, title_font())
             .margin(15)
             .margin_right(25)
             .x_label_area_size(45)
@@ -883,14 +664,14 @@ pub fn spectrum_png(
             .y_label_formatter(&|v| log_tick_label(*v, y_decades))
             .x_desc("frequency (kHz)")
             .y_desc(with_unit("amplitude", unit))
-            .label_style(("sans-serif", 14))
-            .axis_desc_style(("sans-serif", 15))
+            .label_style(font(14))
+            .axis_desc_style(font(15))
             .draw()
             .map_err(|e| e.to_string())?;
         chart
             .draw_series(std::iter::once(PathElement::new(
                 pts.clone(),
-                RGBColor(0, 90, 170).stroke_width(1),
+                TRACE_BLUE.stroke_width(1),
             )))
             .map_err(|e| e.to_string())?;
         if !marks.is_empty() {
@@ -944,7 +725,7 @@ pub fn spectrum_png(
 mod tests {
     use super::*;
 
-    use crate::core::plot::assert_png;
+    use crate::figures::kit::assert_png;
 
     /// A hand-made scalogram of a log chirp 20 → 300 kHz: times, frequencies, |W|, coi, ridge.
     type Chirp = (Vec<f64>, Vec<f64>, Vec<f32>, Vec<f64>, Vec<f64>);
@@ -1220,20 +1001,8 @@ mod tests {
         assert!(!p.exists());
     }
 
-    #[test]
-    fn log_tick_labels() {
-        assert_eq!(log_tick_label(10.0, 2.0), "10");
-        assert_eq!(log_tick_label(20.0, 2.0), "20");
-        assert_eq!(log_tick_label(30.0, 2.0), "");
-        assert_eq!(log_tick_label(30.0, 1.0), "30");
-        assert_eq!(log_tick_label(0.05, 2.0), "0.05");
-        assert_eq!(log_tick_label(200.0, 5.0), "");
-        assert_eq!(log_tick_label(1e-6, 8.0), "1e-6");
-        assert_eq!(log_tick_label(0.0, 2.0), "");
-    }
-
     /// Renders the examples to /tmp/plots_examples for a visual check:
-    /// `cargo test --release --lib plot_analysis -- --ignored`.
+    /// `cargo test --release --lib figures::analysis -- --ignored`.
     #[test]
     #[ignore]
     fn write_examples() {

@@ -3,17 +3,17 @@
 //! (Figs 2.16/2.18), FHM/BV and % solid contact against actuation with marked landmarks
 //! (Figs 2.19/2.22), and stacked time histories at chosen actuations (Figs 2.13–2.14).
 //!
-//! Same conventions as [`crate::core::plot`] (whose font registration and temp-file rendering
-//! this reuses): plots are side outputs, so degenerate input — no series, no finite point,
-//! constant data — still gives a valid (possibly empty, "no data") PNG; only a failure to
-//! draw or write is an error. NaN and infinite points are skipped.
+//! Drawn with the plotting kit: plots are side outputs, so degenerate input — no
+//! series, no finite point, constant data — still gives a valid (possibly empty, "no data")
+//! PNG; only a failure to draw or write is an error. NaN and infinite points are skipped.
 
-use crate::core::plot::{perr, render_png};
-use crate::error::Result;
-use plotters::coord::types::RangedCoordf64;
+use super::kit::{
+    boxed_label, dashed_line, decimate_minmax, draw_legend, draw_no_data, finite_runs, finite_xy,
+    line_key, perr, render_png, text_style, title_font, usable, Chart, DrawResult, Extent, Legend,
+    Result, BAND_FILLS, PALETTE,
+};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
-use std::ops::Range;
 use std::path::Path;
 
 /// A swept quantity: its mean with a ±1 std band, one point per actuation.
@@ -40,97 +40,8 @@ pub struct Panel<'a> {
     pub series: Vec<(&'a str, Vec<(f64, f64)>)>,
 }
 
-/// Line colours (Okabe–Ito, distinguishable for colour-blind readers), then black.
-pub(crate) const PALETTE: [RGBColor; 7] = [
-    RGBColor(0, 114, 178),
-    RGBColor(213, 94, 0),
-    RGBColor(0, 158, 115),
-    RGBColor(204, 121, 167),
-    RGBColor(230, 159, 0),
-    RGBColor(86, 180, 233),
-    RGBColor(0, 0, 0),
-];
-
-/// Light fills for regime bands: blue, green, yellow, red, lavender, grey.
-const BAND_FILLS: [RGBColor; 6] = [
-    RGBColor(214, 230, 246),
-    RGBColor(214, 239, 208),
-    RGBColor(253, 240, 196),
-    RGBColor(252, 213, 200),
-    RGBColor(226, 222, 240),
-    RGBColor(228, 228, 228),
-];
-
 /// Columns per panel for min/max decimation of time histories (≥ the plot width in pixels).
 const DECIMATION_COLUMNS: usize = 1000;
-
-pub(crate) type Chart<'a, 'b> =
-    ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
-
-/// A value that can be placed on a plotters axis (finite and far from overflow).
-pub(crate) fn usable(v: f64) -> bool {
-    v.is_finite() && v.abs() < 1e300
-}
-
-/// Running min/max of usable values.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Extent {
-    pub(crate) lo: f64,
-    pub(crate) hi: f64,
-}
-
-impl Extent {
-    pub(crate) fn new() -> Self {
-        Extent {
-            lo: f64::INFINITY,
-            hi: f64::NEG_INFINITY,
-        }
-    }
-
-    pub(crate) fn add(&mut self, v: f64) {
-        if usable(v) {
-            self.lo = self.lo.min(v);
-            self.hi = self.hi.max(v);
-        }
-    }
-
-    pub(crate) fn is_empty(&self) -> bool {
-        self.lo > self.hi
-    }
-
-    /// The range padded by `frac` of its span below and `frac + top_extra` above; a
-    /// constant (or relatively tiny) span is padded by 5 % of its magnitude (±1 around 0);
-    /// an empty extent gives `fallback`.
-    pub(crate) fn range(&self, frac: f64, top_extra: f64, fallback: Range<f64>) -> Range<f64> {
-        if self.is_empty() {
-            return fallback;
-        }
-        let (lo, hi) = (self.lo, self.hi);
-        let span = hi - lo;
-        let scale = lo.abs().max(hi.abs());
-        if span.is_finite() && span > scale * 1e-9 && span > 0.0 {
-            (lo - frac * span)..(hi + (frac + top_extra) * span)
-        } else {
-            let d = if scale > 0.0 { 0.05 * scale } else { 1.0 };
-            (lo - d)..(hi + d + top_extra * 2.0 * d)
-        }
-    }
-}
-
-fn text_style(size: u32, pos: Pos) -> TextStyle<'static> {
-    ("sans-serif", size).into_font().color(&BLACK).pos(pos)
-}
-
-/// Finite `(x, y)` points, in order.
-fn finite_xy(pts: &[(f64, f64)]) -> impl Iterator<Item = (f64, f64)> + '_ {
-    pts.iter().copied().filter(|&(x, y)| usable(x) && usable(y))
-}
-
-/// The maximal runs of usable points, split at every non-finite one.
-pub(crate) fn finite_runs(pts: &[(f64, f64)]) -> impl Iterator<Item = &[(f64, f64)]> + '_ {
-    pts.split(|&(x, y)| !(usable(x) && usable(y)))
-        .filter(|run| !run.is_empty())
-}
 
 /// Shade the bands (x intervals clipped to the chart) over the full y range, under what is
 /// drawn next, labelled at the top when `label_size` is given (one word per line when the
@@ -139,7 +50,7 @@ fn draw_bands<'a, 'b: 'a>(
     chart: &mut Chart<'a, 'b>,
     bands: &[RegimeBand],
     label_size: Option<u32>,
-) -> std::result::Result<(), String> {
+) -> DrawResult<()> {
     let (xr, yr) = (chart.x_range(), chart.y_range());
     let plot_w = chart.plotting_area().dim_in_pixel().0.max(1) as f64;
     for (k, b) in bands.iter().enumerate() {
@@ -180,63 +91,6 @@ fn draw_bands<'a, 'b: 'a>(
     Ok(())
 }
 
-/// "no data" in the middle of an empty chart.
-pub(crate) fn draw_no_data<'a, 'b: 'a>(
-    chart: &mut Chart<'a, 'b>,
-) -> std::result::Result<(), String> {
-    let (xr, yr) = (chart.x_range(), chart.y_range());
-    let centre = (0.5 * (xr.start + xr.end), 0.5 * (yr.start + yr.end));
-    chart
-        .draw_series(std::iter::once(Text::new(
-            "no data",
-            centre,
-            text_style(18, Pos::new(HPos::Center, VPos::Center)),
-        )))
-        .map_err(|e| e.to_string())?;
-    Ok(())
-}
-
-/// `label` (size 13) at pixel offset `offset` from the data point `at`, anchored by `pos`,
-/// on a translucent white box so that it stays legible over lines and bands.
-fn boxed_label<'a, 'b: 'a>(
-    chart: &mut Chart<'a, 'b>,
-    at: (f64, f64),
-    label: &str,
-    offset: (i32, i32),
-    pos: Pos,
-) -> std::result::Result<(), String> {
-    if label.is_empty() {
-        return Ok(());
-    }
-    let style = text_style(13, pos);
-    let (w, h) = chart
-        .plotting_area()
-        .estimate_text_size(label, &style)
-        .map_err(|e| e.to_string())?;
-    let (w, h) = (w as i32, h as i32);
-    let left = match pos.h_pos {
-        HPos::Left => offset.0,
-        HPos::Center => offset.0 - w / 2,
-        HPos::Right => offset.0 - w,
-    };
-    let top = match pos.v_pos {
-        VPos::Top => offset.1,
-        VPos::Center => offset.1 - h / 2,
-        VPos::Bottom => offset.1 - h,
-    };
-    chart
-        .draw_series(std::iter::once(
-            EmptyElement::at(at)
-                + Rectangle::new(
-                    [(left - 2, top - 1), (left + w + 2, top + h + 1)],
-                    WHITE.mix(0.8).filled(),
-                )
-                + Text::new(label.to_string(), offset, style),
-        ))
-        .map_err(|e| e.to_string())?;
-    Ok(())
-}
-
 /// Outline of marker `shape` (0 circle, 1 triangle, 2 square) centred 10 px right of the
 /// legend entry's origin, as one polygon type for all shapes.
 fn marker_outline(shape: usize) -> Vec<(i32, i32)> {
@@ -262,7 +116,7 @@ fn draw_line_with_markers<'a, 'b: 'a>(
     k: usize,
     label: &str,
     pts: &[(f64, f64)],
-) -> std::result::Result<bool, String> {
+) -> DrawResult<bool> {
     let c = PALETTE[k % PALETTE.len()];
     let line = chart
         .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))
@@ -291,20 +145,6 @@ fn draw_line_with_markers<'a, 'b: 'a>(
     }
     .map_err(|e| e.to_string())?;
     Ok(!label.is_empty())
-}
-
-pub(crate) fn draw_legend<'a, 'b: 'a>(
-    chart: &mut Chart<'a, 'b>,
-    position: SeriesLabelPosition,
-) -> std::result::Result<(), String> {
-    chart
-        .configure_series_labels()
-        .position(position)
-        .label_font(("sans-serif", 14))
-        .border_style(BLACK)
-        .background_style(WHITE.mix(0.85))
-        .draw()
-        .map_err(|e| e.to_string())
 }
 
 /// Clearance (or any swept mean ± std) against actuation: each series' mean as a line with
@@ -357,7 +197,7 @@ pub fn clearance_sweep_png(
     let yr = ye.range(0.05, top, -1.0..1.0);
     render_png(path, (900, 600), |root| {
         let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 20))
+            .caption(title, title_font())
             .margin(12)
             .x_label_area_size(45)
             .y_label_area_size(65)
@@ -378,12 +218,7 @@ pub fn clearance_sweep_png(
                 continue;
             }
             chart
-                .draw_series(DashedLineSeries::new(
-                    vec![(xr.start, y), (xr.end, y)],
-                    8,
-                    5,
-                    BLACK.mix(0.6).stroke_width(1),
-                ))
+                .draw_series(dashed_line(vec![(xr.start, y), (xr.end, y)]))
                 .map_err(|e| e.to_string())?;
             boxed_label(
                 &mut chart,
@@ -423,7 +258,7 @@ pub fn clearance_sweep_png(
             draw_no_data(&mut chart)?;
         }
         if legend {
-            draw_legend(&mut chart, SeriesLabelPosition::LowerLeft)?;
+            draw_legend(&mut chart, Legend::at(SeriesLabelPosition::LowerLeft, 14))?;
         }
         Ok(())
     })
@@ -466,7 +301,7 @@ pub fn metric_sweep_png(
     let yr = ye.range(0.05, top, 0.0..1.0);
     render_png(path, (900, 600), |root| {
         let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 20))
+            .caption(title, title_font())
             .margin(12)
             .x_label_area_size(45)
             .y_label_area_size(65)
@@ -485,12 +320,7 @@ pub fn metric_sweep_png(
         usable_marks.sort_by(|a, b| a.0.total_cmp(&b.0));
         for &(x, _) in &usable_marks {
             chart
-                .draw_series(DashedLineSeries::new(
-                    vec![(x, yr.start), (x, yr.end)],
-                    8,
-                    5,
-                    BLACK.mix(0.6).stroke_width(1),
-                ))
+                .draw_series(dashed_line(vec![(x, yr.start), (x, yr.end)]))
                 .map_err(|e| e.to_string())?;
         }
         // Labels after all lines, on a light box, staggered in x order so that close marks do
@@ -514,69 +344,10 @@ pub fn metric_sweep_png(
             draw_no_data(&mut chart)?;
         }
         if legend {
-            draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+            draw_legend(&mut chart, Legend::at(SeriesLabelPosition::UpperLeft, 14))?;
         }
         Ok(())
     })
-}
-
-/// M4 decimation for drawing: the points falling in each of `columns` equal x bins keep only
-/// their first, last, minimum and maximum (in their original order), so the drawn envelope
-/// is exactly that of the full series. Non-finite points are dropped; series of at most
-/// `4·columns` points are returned as they are (filtered).
-pub(crate) fn decimate_minmax(
-    pts: &[(f64, f64)],
-    x0: f64,
-    x1: f64,
-    columns: usize,
-) -> Vec<(f64, f64)> {
-    let columns = columns.max(1);
-    if pts.len() <= 4 * columns || !(usable(x0) && usable(x1) && x1 > x0) {
-        return finite_xy(pts).collect();
-    }
-    let scale = columns as f64 / (x1 - x0);
-    let bin = |x: f64| (((x - x0) * scale).floor().max(0.0) as usize).min(columns - 1);
-    let mut out = Vec::with_capacity(4 * columns + 4);
-    // (bin, first, min, max, last) as indices into pts.
-    let mut cur: Option<(usize, usize, usize, usize, usize)> = None;
-    let flush = |c: (usize, usize, usize, usize, usize), out: &mut Vec<(f64, f64)>| {
-        let mut idx = [c.1, c.2, c.3, c.4];
-        idx.sort_unstable();
-        let mut last = usize::MAX;
-        for i in idx {
-            if i != last {
-                out.push(pts[i]);
-                last = i;
-            }
-        }
-    };
-    for (i, &(x, y)) in pts.iter().enumerate() {
-        if !(usable(x) && usable(y)) {
-            continue;
-        }
-        let b = bin(x);
-        match cur.as_mut() {
-            Some(c) if c.0 == b => {
-                if y < pts[c.2].1 {
-                    c.2 = i;
-                }
-                if y > pts[c.3].1 {
-                    c.3 = i;
-                }
-                c.4 = i;
-            }
-            _ => {
-                if let Some(c) = cur {
-                    flush(c, &mut out);
-                }
-                cur = Some((b, i, i, i, i));
-            }
-        }
-    }
-    if let Some(c) = cur {
-        flush(c, &mut out);
-    }
-    out
 }
 
 /// Time histories in stacked panels sharing the time axis, several series per panel with a
@@ -611,7 +382,7 @@ pub fn time_histories_banded_png(
         .min(16_000);
     render_png(path, (1000, height), |root| {
         let root = root
-            .titled(title, ("sans-serif", 20))
+            .titled(title, title_font())
             .map_err(|e| e.to_string())?;
         let areas = root.split_evenly((n_panels, 1));
         let empty = Panel {
@@ -674,9 +445,7 @@ pub fn time_histories_banded_png(
                     }
                     labelled = true;
                     legend = true;
-                    line.label(*label).legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                    });
+                    line.label(*label).legend(line_key(20, c.stroke_width(2)));
                 }
             }
             if ye.is_empty() {
@@ -689,7 +458,7 @@ pub fn time_histories_banded_png(
                 } else {
                     SeriesLabelPosition::LowerRight
                 };
-                draw_legend(&mut chart, corner)?;
+                draw_legend(&mut chart, Legend::at(corner, 14))?;
             }
         }
         Ok(())
@@ -700,7 +469,7 @@ pub fn time_histories_banded_png(
 mod tests {
     use super::*;
 
-    use crate::core::plot::assert_png;
+    use crate::figures::kit::assert_png;
 
     fn regimes() -> Vec<RegimeBand<'static>> {
         vec![
@@ -1029,37 +798,5 @@ mod tests {
         let p = dir.path().join("banded.png");
         time_histories_banded_png(&p, "banded", &panels, &bands).unwrap();
         assert_png(&p);
-    }
-
-    #[test]
-    fn decimation_keeps_envelope_and_order() {
-        let pts: Vec<(f64, f64)> = (0..8000)
-            .map(|i| {
-                let x = i as f64;
-                let spike = if i == 4321 {
-                    50.0
-                } else if i == 777 {
-                    -40.0
-                } else {
-                    0.0
-                };
-                (x, (x * 0.37).sin() + spike)
-            })
-            .collect();
-        let d = decimate_minmax(&pts, 0.0, 7999.0, 500);
-        assert!(d.len() <= 4 * 500, "{}", d.len());
-        assert!(d.len() >= 2 * 500);
-        assert!(d.contains(&pts[4321]) && d.contains(&pts[777]));
-        assert_eq!(d[0], pts[0]);
-        assert_eq!(*d.last().unwrap(), pts[7999]);
-        assert!(d.windows(2).all(|w| w[0].0 < w[1].0));
-        // Short, NaN-laden and degenerate-range inputs pass through filtered.
-        let short = [(0.0, 1.0), (f64::NAN, 2.0), (2.0, 3.0)];
-        assert_eq!(
-            decimate_minmax(&short, 0.0, 2.0, 500),
-            vec![(0.0, 1.0), (2.0, 3.0)]
-        );
-        assert_eq!(decimate_minmax(&pts, 1.0, 1.0, 10).len(), 8000);
-        assert!(decimate_minmax(&[(f64::NAN, 0.0); 100], 0.0, 1.0, 10).is_empty());
     }
 }
