@@ -1,8 +1,9 @@
 //! The shipped synthetic sample data (`hdi synth afm`) and the benchmark harness
 //! (`hdi bench`). Deterministic: fixed seeds, so the files are byte-identical on every run.
 
+use crate::numerics::rng::Rng;
 use crate::surface::io::{encode_gwy, encode_nanoscope};
-use crate::surface::synth::{gaussian_acf_surface, GaussianSurfaceSpec, Rng};
+use crate::surface::synth::{gaussian_acf_surface, GaussianSurfaceSpec};
 use crate::surface::HeightMap;
 use anyhow::{Context, Result};
 use serde_json::json;
@@ -50,9 +51,10 @@ pub fn write_ldv_sample(
     seed: Option<u64>,
     with_index: bool,
 ) -> Result<Vec<std::path::PathBuf>> {
-    use crate::dmw::io::{write_ldv, write_ldv_hdf5_counts, LdvFormat};
+    use crate::dmw::io::LdvFormat;
     use crate::dmw::synth::{generate, truth_displacement, LdvSynthSpec};
     use crate::signal::butterworth::{butterworth_sos, FilterKind};
+    use crate::stages::dmw::{write_ldv, write_ldv_hdf5_counts};
     let defaults = LdvSynthSpec::default();
     let spec = LdvSynthSpec {
         n_revolutions: revolutions.unwrap_or(SHIPPED_LDV_REVOLUTIONS),

@@ -5,7 +5,6 @@ pub mod config;
 pub mod engine;
 pub mod executor;
 pub mod hash;
-pub mod memory;
 pub mod plot;
 pub mod plot_analysis;
 pub mod plot_doe;
