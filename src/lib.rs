@@ -16,6 +16,6 @@ pub mod samples;
 pub mod signal;
 pub mod stages;
 pub mod surface;
-pub mod validate;
+pub mod validation;
 
 pub use error::{Error, Result};

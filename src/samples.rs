@@ -2,8 +2,9 @@
 //! fixed seeds, so the files are byte-identical on every run.
 
 use crate::error::Result;
+use crate::numerics::rng::Rng;
 use crate::surface::io::{encode_gwy, encode_nanoscope};
-use crate::surface::synth::{gaussian_acf_surface, GaussianSurfaceSpec, Rng};
+use crate::surface::synth::{gaussian_acf_surface, GaussianSurfaceSpec};
 use crate::surface::HeightMap;
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -74,9 +75,10 @@ pub fn write_ldv_sample(
     seed: Option<u64>,
     with_index: bool,
 ) -> Result<Vec<PathBuf>> {
-    use crate::dmw::io::{write_ldv, write_ldv_hdf5_counts, LdvFormat};
+    use crate::dmw::io::LdvFormat;
     use crate::dmw::synth::{generate, truth_displacement, LdvSynthSpec};
     use crate::signal::butterworth::{butterworth_sos, FilterKind};
+    use crate::stages::dmw::{write_ldv, write_ldv_hdf5_counts};
     let defaults = LdvSynthSpec::default();
     let spec = LdvSynthSpec {
         n_revolutions: revolutions.unwrap_or(SHIPPED_LDV_REVOLUTIONS),

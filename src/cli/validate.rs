@@ -15,9 +15,7 @@ fn fmt_number(x: f64) -> String {
 }
 
 pub(super) fn cmd_validate(as_json: bool, only: &[String], config: &Path) -> Result<()> {
-    let mut known: Vec<&str> = hdi::validate::AREAS.iter().map(|(a, _)| *a).collect();
-    known.push("calibration");
-    known.push("optimisation");
+    let known: Vec<&str> = hdi::validation::AREAS.iter().map(|a| a.name).collect();
     for o in only {
         if !known.contains(&o.as_str()) {
             bail!(
@@ -27,23 +25,18 @@ pub(super) fn cmd_validate(as_json: bool, only: &[String], config: &Path) -> Res
         }
     }
     let wants = |a: &str| only.is_empty() || only.iter().any(|o| o == a);
-    let mut areas: Vec<(&'static str, Vec<hdi::validate::Row>)> = hdi::validate::AREAS
-        .iter()
-        .filter(|(a, _)| wants(a))
-        .map(|(a, rows)| (*a, rows()))
-        .collect();
-    // The fits of the pipeline in the working directory, when there is one (or when asked).
-    if wants("calibration") && (config.exists() || !only.is_empty()) {
-        let rows = hdi::stages::calibrate::validation_rows(config)
-            .with_context(|| format!("calibration rows from {}", config.display()))?;
-        areas.push(("calibration", rows));
+    let mut areas: Vec<(&'static str, Vec<hdi::validation::Row>)> = Vec::new();
+    for area in hdi::validation::AREAS.iter().filter(|a| wants(a.name)) {
+        // The fits of the pipeline in the working directory, when there is one (or when asked).
+        if area.needs_pipeline() && !config.exists() && only.is_empty() {
+            continue;
+        }
+        let rows = area
+            .rows(config)
+            .with_context(|| format!("{} rows from {}", area.name, config.display()))?;
+        areas.push((area.name, rows));
     }
-    if wants("optimisation") && (config.exists() || !only.is_empty()) {
-        let rows = hdi::stages::doe::validation_rows(config)
-            .with_context(|| format!("optimisation rows from {}", config.display()))?;
-        areas.push(("optimisation", rows));
-    }
-    let failed = hdi::validate::failures(&areas);
+    let failed = hdi::validation::failures(&areas);
     let total: usize = areas.iter().map(|(_, r)| r.len()).sum();
     if as_json {
         let out: serde_json::Map<String, Value> = areas
@@ -78,8 +71,8 @@ pub(super) fn cmd_validate(as_json: bool, only: &[String], config: &Path) -> Res
                     }
                 };
                 let tol = match r.tolerance {
-                    hdi::validate::Tolerance::Relative(t) => format!("±{}%", short(t * 100.0)),
-                    hdi::validate::Tolerance::Absolute(t) => format!("±{}", short(t)),
+                    hdi::validation::Tolerance::Relative(t) => format!("±{}%", short(t * 100.0)),
+                    hdi::validation::Tolerance::Absolute(t) => format!("±{}", short(t)),
                 };
                 let unit = if r.unit == "1" {
                     String::new()

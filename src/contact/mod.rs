@@ -7,7 +7,6 @@ pub mod isbl;
 pub mod lookup;
 pub mod mtl;
 pub mod table;
-pub mod validation;
 
 /// Effective (reduced) modulus of two elastic bodies, `E* = [(1−ν1²)/E1 + (1−ν2²)/E2]⁻¹`
 /// (seed eq. A.5): the one formula both the ISBL and the MTL models use.

@@ -5,7 +5,6 @@ pub mod config;
 pub mod engine;
 pub mod executor;
 pub mod hash;
-pub mod memory;
 pub mod progress;
 pub mod store;
 pub mod units;

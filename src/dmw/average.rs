@@ -301,7 +301,7 @@ mod tests {
 
     /// A repeating "revolution" signal plus independent noise per revolution.
     fn record(n_rev: usize, period_samples: f64, noise: f64, seed: u64) -> (Vec<f64>, Vec<f64>) {
-        let mut rng = crate::surface::synth::Rng::new(seed);
+        let mut rng = crate::numerics::rng::Rng::new(seed);
         let n = (n_rev as f64 * period_samples) as usize + 2000;
         let signal = |i: f64| {
             let ph = 2.0 * PI * i / period_samples;

@@ -1,7 +1,7 @@
 //! DMW stage physics and I/O: LDV velocity records → revolution-averaged velocity →
 //! displacement → the three dynamic-microwaviness tracks (signals-and-surfaces.md §3).
 //!
-//! Everything in here is pure except `io` (readers/writers); `crate::stages::dmw` wires it
+//! Everything in here is pure except `io` (readers, text and Parquet writers); the `dmw` stage wires it
 //! into the pipeline. SI inside: seconds, metres, m/s; the raw decoder output is in volts.
 
 pub mod average;
@@ -11,7 +11,6 @@ pub mod synth;
 pub mod synthetic;
 pub mod tracks;
 pub mod triggers;
-pub mod validation;
 
 use std::path::PathBuf;
 

@@ -9,8 +9,8 @@
 //! is a TTL pulse whose rising edge crosses mid-level exactly at the start of each revolution.
 
 use super::{Layout, LdvRecord, VelocityUnit};
+use crate::numerics::rng::Rng;
 use crate::signal::butterworth::{sos_response, Sos};
-use crate::surface::synth::Rng;
 use serde_json::{json, Value};
 use std::f64::consts::PI;
 use std::path::PathBuf;

@@ -28,7 +28,7 @@ mod tests {
 
     fn sample() -> (Vec<f64>, Vec<f64>, f64) {
         let fs = 4e6;
-        let mut rng = crate::surface::synth::Rng::new(3);
+        let mut rng = crate::numerics::rng::Rng::new(3);
         let phases: Vec<f64> = (0..6)
             .map(|_| rng.uniform() * std::f64::consts::TAU)
             .collect();

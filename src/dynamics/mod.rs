@@ -26,7 +26,6 @@ pub mod params;
 pub mod three_dof;
 pub mod three_dof_ab;
 pub mod two_dof;
-pub mod validation;
 
 #[cfg(test)]
 mod tests;

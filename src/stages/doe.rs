@@ -1210,68 +1210,6 @@ impl Stage for DoeStage {
     }
 }
 
-/// `hdi validate` rows (area `optimisation`): each current `[doe]` optimum beside the
-/// dissertation's (a = 4.86 µm, x = 6.35 µm; w and ξ_min were dropped).
-pub fn validation_rows(config: &Path) -> Result<Vec<crate::validate::Row>> {
-    use crate::core::engine::{plan, read_result, State};
-    use crate::validate::{Row, Tolerance};
-    let file = PipelineFile::load(config)?;
-    let stages = super::build(&file)?;
-    let store = crate::core::cache::Store::open_existing(&file.processed_dir());
-    let plan = plan(stages, &store, &Default::default())?;
-    let mut rows = Vec::new();
-    for (name, cfg) in &file.raw.doe {
-        if !cfg.optimise {
-            continue;
-        }
-        let planned = plan.planned.iter().find(|p| &p.name == name);
-        let Some(entry) = planned.filter(|p| p.state == State::Fresh) else {
-            rows.push(Row {
-                source: format!("[doe.{name}]"),
-                quantity: "optimised a_TFC".into(),
-                unit: "um".into(),
-                target: 4.86,
-                ours: f64::NAN,
-                tolerance: Tolerance::Absolute(0.5),
-                reproducible: false,
-                variant: "not run".into(),
-                note: format!("no current result: run `hdi run --only {name}` first"),
-            });
-            continue;
-        };
-        let result = read_result(&store.entry_dir(&entry.kind, &entry.key))?;
-        let o = &result["optimum"];
-        let variant = format!(
-            "ξ = (c̄/FH_nom)(V/100) [assumed, §9]; SA on the {} objective, {} evaluations ({}), seed {}",
-            o["objective"].as_str().unwrap_or("?").to_lowercase(),
-            o["evaluations"],
-            o["stop"].as_str().unwrap_or("?"),
-            cfg.sa_seed
-        );
-        let w = o["w_m"].as_f64().unwrap_or(f64::NAN) / UM;
-        let note = format!(
-            "class D: ξ's formula, the DOE levels and the DMW were dropped from the text and the \
-             model runs at the spec's default inputs (touchdown 10.4 nm, not 9.7); our w_TFC = \
-             {w:.2} µm (dropped); most sensitive: {}",
-            o["most_sensitive"].as_str().unwrap_or("?")
-        );
-        for (q, key, target) in [("a_TFC", "a_m", 4.86), ("x_TFC", "x_m", 6.35)] {
-            rows.push(Row {
-                source: format!("dynamics.md §9 / seed §2.3.2 [doe.{name}]"),
-                quantity: format!("optimised {q}"),
-                unit: "um".into(),
-                target,
-                ours: o[key].as_f64().unwrap_or(f64::NAN) / UM,
-                tolerance: Tolerance::Absolute(0.5),
-                reproducible: false,
-                variant: variant.clone(),
-                note: note.clone(),
-            });
-        }
-    }
-    Ok(rows)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

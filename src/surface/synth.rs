@@ -7,6 +7,7 @@
 //! numerically, equivalent to it.)
 use super::{HeightMap, SourceInfo};
 use crate::numerics::fft2::{angular_wavenumbers, fft2_real, ifft2_real};
+use crate::numerics::rng::Rng;
 use ndarray::Array2;
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -21,9 +22,6 @@ pub struct GaussianSurfaceSpec {
     pub correlation_length: f64,
     pub seed: u64,
 }
-
-/// The project's seeded generator (moved to `numerics::rng`; re-exported for its users).
-pub use crate::numerics::rng::Rng;
 
 fn synthetic_map(
     z: Array2<f64>,

@@ -1,23 +1,17 @@
 //! HDF5 records (layout in the module docs of `io`): read in hyperslabs of [`CHUNK`] samples
-//! converted to f64 as they come, written through `core::store::H5Out` (temp file + rename,
-//! `units`/`long_name` on every dataset, shuffle + deflate for large data).
+//! converted to f64 as they come. (Writing them is the DMW stage's, through the pipeline's
+//! HDF5 writer.)
 
 use super::names::{self, parse_unit, Meta, TimeKind, Unit};
 use super::stream::{Col, Stream, TimeAcc};
-use super::{
-    finish, layout_name, no_panic, read_err, record_err, sample_time, velocity_unit, Raw,
-    ReadOptions, F,
-};
-use crate::core::store::H5Out;
-use crate::dmw::{DmwError, Layout, LdvRecord, VelocityUnit};
+use super::{finish, no_panic, read_err, record_err, velocity_unit, Raw, ReadOptions, F};
+use crate::dmw::{DmwError, Layout, LdvRecord};
 use hdf5::types::{FixedAscii, FixedUnicode, TypeDescriptor, VarLenAscii, VarLenUnicode};
 use ndarray::s;
 use std::path::Path;
 
 /// Samples per hyperslab read: peak memory is the output plus one chunk per channel.
 const CHUNK: usize = 1 << 20;
-/// Above this many samples the explicit `time` dataset is left out (§5).
-const TIME_MAX: usize = 10_000_000;
 
 fn h5err(path: &Path, e: hdf5::Error) -> DmwError {
     read_err(path, format!("HDF5: {e}"))
@@ -350,141 +344,4 @@ fn read_inner(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
         }
     };
     finish(path, raw, opts, &locate)
-}
-
-/// int16 counts of `y` with step `lsb` around the mid-range; `None` if `lsb` is unusable.
-fn quantise(path: &Path, y: &[f64], lsb: f64, what: &str) -> Result<(Vec<i16>, f64), DmwError> {
-    let err = |m: String| DmwError::Processing(format!("writing {}: {m}", path.display()));
-    if !(lsb.is_finite() && lsb > 0.0) {
-        return Err(err(format!(
-            "{what} LSB = {lsb}: must be a positive number"
-        )));
-    }
-    let (lo, hi) = y
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
-            (l.min(x), h.max(x))
-        });
-    if !(lo.is_finite() && hi.is_finite()) || y.iter().any(|x| !x.is_finite()) {
-        return Err(err(format!("{what} has NaN/inf values")));
-    }
-    let offset = 0.5 * (lo + hi);
-    if (hi - offset) / lsb > 32767.0 {
-        return Err(err(format!(
-            "{what} spans {lo}..{hi}, more than 65535 steps of {lsb}; choose a larger LSB"
-        )));
-    }
-    let counts = y
-        .iter()
-        .map(|&x| ((x - offset) / lsb).round().clamp(-32767.0, 32767.0) as i16)
-        .collect();
-    Ok((counts, offset))
-}
-
-/// Writes the layout of the module docs; `counts` = (velocity LSB, index LSB) for int16.
-pub(super) fn write(
-    rec: &LdvRecord,
-    path: &Path,
-    counts: Option<(f64, f64)>,
-) -> Result<(), DmwError> {
-    let werr = |e: crate::error::Error| DmwError::Processing(crate::error::chain(&e));
-    let herr = |e: hdf5::Error| super::write_err(path, e);
-    let (rows, len) = match rec.layout {
-        Layout::Segments {
-            n_segments,
-            segment_len,
-        } => (n_segments, segment_len),
-        _ => (1, rec.velocity.len()),
-    };
-    let shape: Vec<usize> = match rec.layout {
-        Layout::Segments { .. } => vec![rows, len],
-        _ => vec![len],
-    };
-    let out = H5Out::create(path).map_err(werr)?;
-    let root = out.group("", None).map_err(werr)?;
-    out.attr_str(&root, "NX_class", "NXroot").map_err(werr)?;
-    out.attr_str(&root, "default", "ldv").map_err(werr)?;
-    out.attr_str(&root, "hdi_version", env!("CARGO_PKG_VERSION"))
-        .map_err(werr)?;
-    let g = out.group("ldv", Some("NXdata")).map_err(werr)?;
-    let with_time = counts.is_none() && len <= TIME_MAX;
-    out.attr_str(&g, "signal", "velocity").map_err(werr)?;
-    let axes: Vec<&str> = match (shape.len(), with_time) {
-        (1, true) => vec!["time"],
-        (1, false) => vec!["."],
-        (_, true) => vec![".", "time"],
-        (_, false) => vec![".", "."],
-    };
-    out.attr_str_list(&g, "axes", &axes).map_err(werr)?;
-    if with_time {
-        let dim = shape.len() as i64 - 1;
-        g.new_attr::<i64>()
-            .create("time_indices")
-            .and_then(|a| a.write_scalar(&dim))
-            .map_err(herr)?;
-    }
-    if rec.index.is_some() {
-        out.attr_str_list(&g, "auxiliary_signals", &["index"])
-            .map_err(werr)?;
-    }
-    out.attr_f64(&g, "sampling_rate", rec.sample_rate)
-        .map_err(werr)?;
-    out.attr_f64(&g, "t0", rec.t0).map_err(werr)?;
-    if let Some(s) = rec.sensitivity {
-        out.attr_f64(&g, "sensitivity", s).map_err(werr)?;
-    }
-    if let Some(r) = rec.rpm {
-        out.attr_f64(&g, "rpm", r).map_err(werr)?;
-    }
-    out.attr_str(&g, "layout", layout_name(&rec.layout))
-        .map_err(werr)?;
-
-    let (vunit, vlong) = match rec.velocity_unit {
-        VelocityUnit::Volt => ("V", "LDV decoder output voltage"),
-        VelocityUnit::MetrePerSecond => ("m/s", "LDV surface velocity"),
-    };
-    let channels = [
-        Some((
-            "velocity",
-            rec.velocity.as_slice(),
-            vunit,
-            vlong,
-            counts.map(|c| c.0),
-        )),
-        rec.index.as_deref().map(|idx| {
-            (
-                "index",
-                idx,
-                "V",
-                "once-per-revolution index",
-                counts.map(|c| c.1),
-            )
-        }),
-    ];
-    for (name, data, unit, long, lsb) in channels.into_iter().flatten() {
-        let shape_err = |e: ndarray::ShapeError| super::write_err(path, e);
-        match lsb {
-            None => {
-                let view =
-                    ndarray::ArrayViewD::from_shape(shape.as_slice(), data).map_err(shape_err)?;
-                out.write_array(&g, name, view, unit, long).map_err(werr)?;
-            }
-            Some(lsb) => {
-                let (q, offset) = quantise(path, data, lsb, name)?;
-                let view =
-                    ndarray::ArrayViewD::from_shape(shape.as_slice(), &q).map_err(shape_err)?;
-                let ds = out.write_array(&g, name, view, unit, long).map_err(werr)?;
-                out.attr_f64(&ds, "scale", lsb).map_err(werr)?;
-                out.attr_f64(&ds, "offset", offset).map_err(werr)?;
-            }
-        }
-    }
-    if with_time {
-        let t: Vec<f64> = (0..len).map(|i| sample_time(rec, i)).collect();
-        let ds = out.write_1d(&g, "time", &t, "s", "time").map_err(werr)?;
-        out.attr_f64(&ds, "sampling_rate", rec.sample_rate)
-            .map_err(werr)?;
-        out.attr_f64(&ds, "t0", rec.t0).map_err(werr)?;
-    }
-    out.finish().map_err(werr)
 }

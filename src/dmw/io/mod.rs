@@ -23,7 +23,7 @@
 //! (m/s/V; `mm/s/V` accepted), `rpm`, `t0` (s), `layout` (`continuous` or `averaged`) and
 //! `velocity_unit`. Parquet carries the same keys as file key-value metadata.
 //!
-//! # HDF5 layout (written by [`write_ldv`] and [`write_ldv_hdf5_counts`])
+//! # HDF5 layout (written by `stages::dmw::write_ldv` and `write_ldv_hdf5_counts`)
 //!
 //! ```text
 //! / (NX_class = NXroot, default = "ldv")
@@ -72,7 +72,7 @@ mod parquet;
 mod scan;
 mod stream;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 mod text;
 
 use names::{Meta, TimeKind, Unit};
@@ -94,7 +94,7 @@ pub struct ReadOptions {
     pub velocity_unit: Option<VelocityUnit>,
 }
 
-/// The formats [`write_ldv`] writes (and [`read_ldv`] reads).
+/// The formats an LDV record is written in (and [`read_ldv`] reads).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LdvFormat {
     Csv,
@@ -169,36 +169,25 @@ pub fn read_ldv(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> 
     }
 }
 
-/// Write a record (for the synthetic generator and round-trip tests), atomically (temporary
-/// file in the same directory, then rename). CSV: `# key = value` metadata lines, then
-/// `time_s,velocity_V|velocity_m_s[,index_V]` with shortest round-trip floats; Parquet: the
-/// same Float64 columns plus key-value metadata; HDF5: the layout in the module docs.
-/// Text and Parquet hold one time axis, so `Layout::Segments` needs HDF5.
-pub fn write_ldv(rec: &LdvRecord, path: &Path, format: LdvFormat) -> Result<(), DmwError> {
+/// Write a record as delimited text (for the synthetic generator and round-trip tests),
+/// atomically (temporary file in the same directory, then rename): `# key = value` metadata
+/// lines, then `time_s,velocity_V|velocity_m_s[,index_V]` with shortest round-trip floats.
+/// Text holds one time axis, so `Layout::Segments` needs HDF5. (The HDF5 writer of the
+/// layout above lives with the DMW stage, beside the pipeline's other HDF5 outputs.)
+pub fn write_ldv_text(rec: &LdvRecord, path: &Path) -> Result<(), DmwError> {
     check_writable(rec)?;
-    match format {
-        LdvFormat::Csv => text::write(rec, path),
-        LdvFormat::Parquet => parquet::write(rec, path),
-        LdvFormat::Hdf5 => h5::write(rec, path, None),
-    }
+    text::write(rec, path)
 }
 
-/// HDF5 variant that stores channels as int16 ADC counts with `scale`/`offset` attributes
-/// (`y = scale·count + offset`), shuffle + deflate: a compact file for the shipped sample.
-/// `velocity_lsb`/`index_lsb` are the quantisation steps (in the channel's unit); the error is
-/// at most half a step. No `time` dataset: `sampling_rate` and `t0` give the axis.
-pub fn write_ldv_hdf5_counts(
-    rec: &LdvRecord,
-    path: &Path,
-    velocity_lsb: f64,
-    index_lsb: f64,
-) -> Result<(), DmwError> {
+/// Write a record as Parquet: the Float64 columns of [`write_ldv_text`] plus key-value
+/// metadata, atomically. `Layout::Segments` needs HDF5.
+pub fn write_ldv_parquet(rec: &LdvRecord, path: &Path) -> Result<(), DmwError> {
     check_writable(rec)?;
-    h5::write(rec, path, Some((velocity_lsb, index_lsb)))
+    parquet::write(rec, path)
 }
 
 /// What a writer needs to be able to write something the readers accept again.
-fn check_writable(rec: &LdvRecord) -> Result<(), DmwError> {
+pub fn check_writable(rec: &LdvRecord) -> Result<(), DmwError> {
     let n = rec.velocity.len();
     let bad = |what: String| Err(DmwError::Processing(format!("cannot write record: {what}")));
     if !(rec.sample_rate.is_finite() && rec.sample_rate > 0.0) {
@@ -246,7 +235,7 @@ fn record_err(path: &Path, message: impl Into<String>) -> DmwError {
 }
 
 /// Writers have no error variant of their own; `Processing` carries the path in the text.
-fn write_err(path: &Path, e: impl std::fmt::Display) -> DmwError {
+pub fn write_err(path: &Path, e: impl std::fmt::Display) -> DmwError {
     DmwError::Processing(format!(
         "writing {}: {}",
         path.display(),
@@ -657,7 +646,8 @@ fn meta_pairs(rec: &LdvRecord) -> Vec<(String, String)> {
     kv
 }
 
-fn layout_name(layout: &Layout) -> &'static str {
+/// The `layout` metadata value of a layout.
+pub fn layout_name(layout: &Layout) -> &'static str {
     match layout {
         Layout::Continuous => "continuous",
         Layout::Segments { .. } => "segments",
@@ -696,6 +686,6 @@ fn check_flat(rec: &LdvRecord) -> Result<(), DmwError> {
 }
 
 /// Time of sample `i` as the writers store it.
-fn sample_time(rec: &LdvRecord, i: usize) -> f64 {
+pub fn sample_time(rec: &LdvRecord, i: usize) -> f64 {
     rec.t0 + i as f64 / rec.sample_rate
 }

@@ -72,7 +72,7 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
     let lf = LazyFrame::scan_parquet(scan::pl_path(path)?, args())
         .map_err(|e| read_err(path, e))?
         .select(select);
-    // The footer's row count sizes the channel buffers once (on huge pages, core::memory).
+    // The footer's row count sizes the channel buffers once (on huge pages, numerics::buffer).
     let stream = Stream::new(
         unit.scale,
         chosen.index.is_some(),

@@ -173,8 +173,8 @@ impl Stream {
     pub fn new(vel_scale: f64, has_index: bool, has_time: bool, capacity: usize) -> Self {
         Stream {
             vel_scale,
-            velocity: crate::core::memory::sample_buffer(capacity),
-            index: has_index.then(|| crate::core::memory::sample_buffer(capacity)),
+            velocity: crate::numerics::buffer::sample_buffer(capacity),
+            index: has_index.then(|| crate::numerics::buffer::sample_buffer(capacity)),
             time: has_time.then(TimeAcc::default),
             rows: 0,
             run: None,

@@ -201,7 +201,7 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         .map_err(|e| read_err(path, e))?
         .select(select);
     // Room for the rows the file size suggests (with 25 % slack for shorter rows): the big
-    // channel buffers are then allocated once, on huge pages (core::memory).
+    // channel buffers are then allocated once, on huge pages (numerics::buffer).
     let size = std::fs::metadata(path)
         .map(|m| m.len() as usize)
         .unwrap_or(0);

@@ -10,7 +10,6 @@
 //! * [`face`] — truncated area of a tilted flat face (rectangle ∩ half-plane, shoelace).
 //! * [`inputs`] — actuation profile (S3/S5), impulse shock (S4), the Table 4.4 windows.
 //! * [`case`] — one case: equations of motion (z, θ, φ), DMW tracks, shock, histories.
-//! * [`validation`] — `hdi validate` area `three_dof`.
 //! * [`interface`] — ISBL / MTL forces on one feature from its spacing, rate and area.
 
 pub mod case;
@@ -18,4 +17,3 @@ pub mod face;
 pub mod geometry;
 pub mod inputs;
 pub mod interface;
-pub mod validation;

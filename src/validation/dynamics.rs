@@ -5,13 +5,13 @@
 //! docs/validation.md); the same targets after the §12 calibration are the area `calibration`
 //! (`[calibrate.*]` fits of the pipeline, docs/calibration.md).
 
-use super::air_bearing::heave_pitch_modes;
-use super::params::{improved_2dof, initial_2dof, Model2Dof};
-use super::two_dof::{DmwInput, SimOptions, TwoDofCase};
+use super::{Row, Tolerance};
 use crate::contact::isbl::{IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
 use crate::dmw::synthetic::{synthetic_dmw, Excitation};
-use crate::validate::{Row, Tolerance};
+use crate::dynamics::air_bearing::heave_pitch_modes;
+use crate::dynamics::params::{improved_2dof, initial_2dof, Model2Dof};
+use crate::dynamics::two_dof::{DmwInput, SimOptions, TwoDofCase};
 use rayon::prelude::*;
 
 #[allow(clippy::too_many_arguments)]
@@ -177,7 +177,7 @@ fn case_with(
     let c = TwoDofCase::new(model, h, isbl, dmw, options).ok()?;
     let hist = c.run().ok()?;
     let m = hist
-        .metrics(&super::metrics::CaseParams::improved_2dof())
+        .metrics(&crate::dynamics::metrics::CaseParams::improved_2dof())
         .ok()?;
     let contact = m.contact.as_ref();
     Some([
@@ -437,7 +437,7 @@ fn initial_model_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
 /// The optimised design of §2.3 (S2o, §12.2 row 26), w_TFC = 50 µm [assumption].
 fn optimised_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
     let mut rows = Vec::new();
-    let Ok(bulge) = super::params::optimised_bulge(50e-6) else {
+    let Ok(bulge) = crate::dynamics::params::optimised_bulge(50e-6) else {
         return rows;
     };
     let model = improved_2dof().with_bulge(bulge);

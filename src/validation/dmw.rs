@@ -1,13 +1,13 @@
 //! `hdi validate` rows of the DMW chain (signals-and-surfaces.md §1, §3): every number is
 //! computed now by the same functions the stage uses.
 
-use super::average::AverageMode;
-use super::chain::{process, ChainParams};
-use super::synth::{generate, truth_displacement, LdvSynthSpec};
+use super::{Row, Tolerance};
+use crate::dmw::average::AverageMode;
+use crate::dmw::chain::{process, ChainParams};
+use crate::dmw::synth::{generate, truth_displacement, LdvSynthSpec};
 use crate::signal::butterworth::{butterworth_sos, sos_response, zero_phase_gain_db, FilterKind};
 use crate::signal::integrate::trapezoid_gain;
 use crate::signal::resample::HermiteTrack;
-use crate::validate::{Row, Tolerance};
 
 /// The DMW rows.
 pub fn rows() -> Vec<Row> {

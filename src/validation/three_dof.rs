@@ -1,16 +1,16 @@
 //! `hdi validate` area `three_dof`: the 3-DOF numbers that exist without a stage (dynamics.md
 //! §2.7, §3.3, §12 row 30), computed now by the same code a case runs.
 
-use super::case::{Model3Dof, Options3Dof, ThreeDofCase};
-use super::geometry::{Feature, SliderPose};
-use super::inputs::ActuationProfile;
-use super::interface::{FeatureInterface, InterfaceLaw};
+use super::{Row, Tolerance};
 use crate::contact::isbl::{IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
+use crate::dynamics::three_dof::case::{Model3Dof, Options3Dof, ThreeDofCase};
+use crate::dynamics::three_dof::geometry::{Feature, SliderPose};
+use crate::dynamics::three_dof::inputs::ActuationProfile;
+use crate::dynamics::three_dof::interface::{FeatureInterface, InterfaceLaw};
 use crate::dynamics::three_dof_ab::ThreeDofAirBearing;
 use crate::dynamics::two_dof::ContactForceForm;
 use crate::dynamics::{NM, UM};
-use crate::validate::{Row, Tolerance};
 
 /// Fig. 4.8 truncation example through the 3-DOF feature API (class G, ours 187.9 µm²).
 fn truncation_row(model: &Model3Dof) -> Row {

@@ -4,8 +4,14 @@
 //! Each physics area contributes rows; a row says which model variant produced the number,
 //! whether the target is reproducible (class of the spec's validation tables) and, when it is
 //! not, why hdi's number differs.
+//!
+//! The harness sits above the physics it exercises: one file per area ([`AREAS`]), each calling
+//! the physics modules (and, for `calibration` and `optimisation`, the pipeline's current
+//! results); no physics module imports this one.
 
+use crate::error::{Error, Result};
 use serde_json::{json, Value};
+use std::path::Path;
 
 /// How close `ours` must be to `target`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -91,22 +97,82 @@ impl Row {
     }
 }
 
-/// The areas computed from the code alone, with the function that computes each one's rows.
-/// (`hdi validate` adds the area `calibration` from the fits of a pipeline.)
-/// Computes one area's rows.
-pub type AreaRows = fn() -> Vec<Row>;
+pub mod calibration;
+pub mod contact;
+pub mod dmw;
+pub mod dynamics;
+pub mod mtl;
+pub mod optimisation;
+pub mod three_dof;
 
-pub const AREAS: &[(&str, AreaRows)] = &[
-    ("dmw", crate::dmw::validation::rows),
-    ("contact", crate::contact::validation::isbl_rows),
-    ("mtl", crate::contact::validation::mtl_rows),
-    ("dynamics", crate::dynamics::validation::rows),
-    ("three_dof", crate::dynamics::three_dof::validation::rows),
+/// Where an area's rows come from.
+#[derive(Debug, Clone, Copy)]
+pub enum Source {
+    /// Computed from the code alone.
+    Code(fn() -> Vec<Row>),
+    /// Read from the current results of the pipeline in `pipeline.toml` (re-evaluated now).
+    Pipeline(fn(&Path) -> Result<Vec<Row>>),
+}
+
+/// One area of `hdi validate`.
+#[derive(Debug, Clone, Copy)]
+pub struct Area {
+    pub name: &'static str,
+    pub source: Source,
+}
+
+impl Area {
+    const fn code(name: &'static str, rows: fn() -> Vec<Row>) -> Area {
+        Area {
+            name,
+            source: Source::Code(rows),
+        }
+    }
+
+    const fn pipeline(name: &'static str, rows: fn(&Path) -> Result<Vec<Row>>) -> Area {
+        Area {
+            name,
+            source: Source::Pipeline(rows),
+        }
+    }
+
+    /// Whether the rows need a pipeline (its file and cache), not only the code.
+    pub fn needs_pipeline(&self) -> bool {
+        matches!(self.source, Source::Pipeline(_))
+    }
+
+    /// This area's rows; `config` is the pipeline file the pipeline areas read.
+    pub fn rows(&self, config: &Path) -> Result<Vec<Row>> {
+        match self.source {
+            Source::Code(rows) => Ok(rows()),
+            Source::Pipeline(rows) => rows(config),
+        }
+    }
+}
+
+/// Every area in report order: the physics areas, then the fits of a pipeline.
+#[rustfmt::skip]
+pub const AREAS: &[Area] = &[
+    Area::code("dmw", dmw::rows),
+    Area::code("contact", contact::rows),
+    Area::code("mtl", mtl::rows),
+    Area::code("dynamics", dynamics::rows),
+    Area::code("three_dof", three_dof::rows),
+    Area::pipeline("calibration", calibration::rows),
+    Area::pipeline("optimisation", optimisation::rows),
 ];
 
-/// Every row of [`AREAS`], area by area.
-pub fn all_rows() -> Vec<(&'static str, Vec<Row>)> {
-    AREAS.iter().map(|(a, rows)| (*a, rows())).collect()
+/// The area called `name`.
+pub fn area(name: &str) -> Option<&'static Area> {
+    AREAS.iter().find(|a| a.name == name)
+}
+
+/// The rows of the area called `name` (`config`: the pipeline file the pipeline areas read).
+pub fn rows(name: &str, config: &Path) -> Result<Vec<Row>> {
+    match area(name) {
+        Some(a) => a.rows(config),
+        None => Err(Error::Stage(format!("unknown validation area `{name}`"))),
+    }
 }
 
 /// Rows whose target is reproducible but which fail.

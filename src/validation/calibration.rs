@@ -1,0 +1,107 @@
+//! `hdi validate` area `calibration`: the fits of the pipeline in the working directory,
+//! re-evaluated now with the current code.
+
+use super::{Row, Tolerance};
+use crate::core::cache::Store;
+use crate::core::config::PipelineFile;
+use crate::core::engine::{plan, read_result, Stage, State};
+use crate::dynamics::calibration::{evaluate, Evaluation, Knob};
+use crate::error::{Error, Result};
+use crate::stages::calibrate::{
+    base_inputs, base_of, describe_knobs, fitted_knobs, CalibrateStage,
+};
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Re-evaluate a finished calibration now (for `hdi validate`): the targets at its fitted
+/// knobs, computed with the current code from its upstream inputs.
+pub fn re_evaluate(
+    stage: &CalibrateStage,
+    fitted: &[(Knob, f64)],
+    upstream: &BTreeMap<String, Value>,
+    upstream_dirs: &BTreeMap<String, PathBuf>,
+) -> Result<Evaluation> {
+    let (isbl, dmw) = base_inputs(&stage.base, upstream, upstream_dirs)?;
+    let base = base_of(&stage.base, isbl, dmw.as_ref());
+    Ok(evaluate(&base, &stage.settings, fitted)?)
+}
+
+/// `hdi validate` area `calibration`: for every `[calibrate.*]` of the pipeline whose result is
+/// current, its targets re-evaluated now at the fitted knobs (one row per target, class D, the
+/// fitted values in the variant column). A fit that has not run (or is stale) gives one row
+/// without a number that says so.
+pub fn rows(config: &Path) -> Result<Vec<Row>> {
+    let file = PipelineFile::load(config)?;
+    let stages = crate::stages::build(&file)?;
+    let store = Store::open_existing(&file.processed_dir());
+    let plan = plan(stages, &store, &Default::default())?;
+    let mut rows = Vec::new();
+    for (name, cfg) in &file.raw.calibrate {
+        let stage = CalibrateStage::from_config(&file, name, cfg)?;
+        let planned = |n: &str| plan.planned.iter().find(|p| p.name == n);
+        let current = |n: &str| planned(n).is_some_and(|p| p.state == State::Fresh);
+        let upstream = stage.upstream();
+        if !current(name) || !upstream.iter().all(|u| current(u)) {
+            rows.push(Row {
+                source: format!("[calibrate.{name}]"),
+                quantity: format!("calibration of {}", stage.base_name),
+                unit: "1".into(),
+                target: 0.0,
+                ours: f64::NAN,
+                tolerance: Tolerance::Absolute(1.0),
+                reproducible: false,
+                variant: "not run".into(),
+                note: format!("no current result: run `hdi run --only {name}` first"),
+            });
+            continue;
+        }
+        let entry = |n: &str| {
+            let p = planned(n).expect("checked above");
+            store.entry_dir(&p.kind, &p.key)
+        };
+        let result = read_result(&entry(name))?;
+        let fitted = fitted_knobs(&result).ok_or_else(|| {
+            Error::Stage(format!("calibrate `{name}` result has no usable `fitted`"))
+        })?;
+        let mut up = BTreeMap::new();
+        let mut dirs = BTreeMap::new();
+        for u in &upstream {
+            up.insert(u.clone(), read_result(&entry(u))?);
+            dirs.insert(u.clone(), entry(u));
+        }
+        let e = re_evaluate(&stage, &fitted, &up, &dirs)?;
+        let defaults = result["defaults"]["targets"]
+            .as_array()
+            .cloned()
+            .unwrap_or_default();
+        for o in &e.outcomes {
+            let t = &o.target;
+            let before = defaults
+                .iter()
+                .find(|d| d["id"] == t.id)
+                .and_then(|d| d["value"].as_f64())
+                .map_or("–".into(), |v| format!("{:.3}", v * t.display_scale));
+            rows.push(Row {
+                source: format!("dynamics.md §12.2 {} [calibrate.{name}]", t.source),
+                quantity: format!("{} (class D, calibrated)", t.id),
+                unit: t.unit.into(),
+                target: t.published * t.display_scale,
+                ours: o.value.map_or(f64::NAN, |v| v * t.display_scale),
+                tolerance: Tolerance::Absolute(t.tolerance * t.display_scale),
+                reproducible: false,
+                variant: format!("{}: {}", stage.base.model_name, describe_knobs(&fitted)),
+                note: format!(
+                    "spec defaults {before}; residual/tolerance {:+.2}{}",
+                    o.normalised_residual,
+                    if t.weight == 0.0 {
+                        " (reported, not fitted)"
+                    } else {
+                        ""
+                    }
+                ),
+            });
+        }
+    }
+    Ok(rows)
+}
