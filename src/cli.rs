@@ -602,7 +602,7 @@ fn table_name(kind: &str) -> String {
 fn run_cases_on_slurm(config: &Path, args: &SlurmArgs, jobs: Option<usize>) -> Result<bool> {
     use crate::core::executor::slurm::{submit_manifest, ScriptOptions, SlurmClient};
     use crate::core::executor::{manifest_path, CaseManifest};
-    use crate::stages::distributed;
+    use crate::engine::distributed;
     let (file, _) = load(config)?;
     let processed = file.processed_dir();
     let store =
@@ -745,7 +745,7 @@ fn cmd_exec_cases(manifest: &Path, task: usize) -> Result<()> {
         &store,
         manifest,
         task,
-        &crate::stages::distributed::registry(),
+        &crate::engine::distributed::registry(),
         &TaskIdentity::from_env(&processed),
     )?;
     eprintln!(
@@ -1274,7 +1274,11 @@ fn cmd_analyze(a: AnalyzeArgs) -> Result<()> {
 }
 
 fn cmd_simulate(a: SimulateArgs) -> Result<()> {
-    use crate::stages::simulate::{self as sim, SimulateConfig};
+    use crate::artefacts::dmw_tracks::read_dmw_track;
+    use crate::slider::case::simulate_case;
+    use crate::slider::params::{SimulateConfig, SimulateParams};
+    use crate::slider::sweep::{case_rows, sweep_analysis, CaseOutcome};
+    use crate::stages::simulate::plots;
     let mut cfg: SimulateConfig =
         toml::from_str("contact = \"adhoc\"").context("default simulate settings")?;
     cfg.model = a.model.clone();
@@ -1305,7 +1309,7 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     cfg.kr_stiffening_beta = a.kr_stiffening_beta;
     cfg.bulge_width = a.bulge_width;
     cfg.histories = a.histories.clone();
-    let params = sim::validate(&cfg).map_err(|(k, m)| {
+    let params = SimulateParams::check(&cfg).map_err(|(k, m)| {
         // The list key is `actuations` in pipeline.toml, `--actuation` on the command line.
         let flag = if k == "actuations" {
             "actuation".to_string()
@@ -1338,7 +1342,7 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         10.0,
     )?;
     let dmw = match &a.dmw {
-        Some(p) => Some(sim::read_dmw_track(p)?),
+        Some(p) => Some(read_dmw_track(p)?),
         None => None,
     };
     let (root, temporary) = match &a.out {
@@ -1357,17 +1361,17 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     );
     let started = Instant::now();
     use rayon::prelude::*;
-    let results: Vec<Result<sim::CaseOutcome>> = params
+    let results: Vec<Result<CaseOutcome>> = params
         .actuations
         .par_iter()
         .map(|&h| {
             let dir = root.join("cases").join(format!("h_{:06.2}nm", h * 1e9));
             std::fs::create_dir_all(&dir)?;
-            let r = sim::simulate_case(&params, h, &isbl, dmw.as_ref(), &dir)
+            let r = simulate_case(&params, h, &isbl, dmw.as_ref(), &dir)
                 .with_context(|| format!("case h_TFC = {:.3} nm", h * 1e9));
             bar.inc(1);
             let result = r?;
-            Ok(sim::CaseOutcome {
+            Ok(CaseOutcome {
                 actuation: h,
                 metrics: result.clone(),
                 entry: crate::core::cases::CaseEntry {
@@ -1386,11 +1390,11 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     }
     cases.sort_by(|x, y| x.actuation.total_cmp(&y.actuation));
     let wall = started.elapsed().as_secs_f64();
-    let sweep = sim::sweep_analysis(&params, &cases)?;
-    let rows = sim::case_rows(&cases, &sweep);
+    let sweep = sweep_analysis(&params, &cases)?;
+    let rows = case_rows(&cases, &sweep);
     if a.out.is_some() {
         crate::core::store::write_table(&rows, &root.join("sweep"))?;
-        sim::plots(&root, &params, &cases, &sweep, &a.model)?;
+        plots(&root, &params, &cases, &sweep, &a.model)?;
     }
     if temporary {
         let _ = std::fs::remove_dir_all(&root);

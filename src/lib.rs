@@ -2,17 +2,22 @@
 //!
 //! `core` is the small spine every stage uses (config, cache, engine, store, plots);
 //! `surface` (and later physics modules) are pure functions with no I/O besides readers;
-//! `stages` wires physics into the pipeline; `cli` is the thin command-line layer.
+//! `stages` wires physics into the pipeline; `slider` is the case machinery the slider stages
+//! share and `artefacts` what one stage hands another; `engine` runs beyond the pipeline run
+//! (the distributed cases); `cli` is the thin command-line layer.
 pub mod analysis;
+pub mod artefacts;
 pub mod cli;
 pub mod contact;
 pub mod core;
 pub mod dmw;
 pub mod dynamics;
+pub mod engine;
 pub mod error;
 pub mod numerics;
 pub mod samples;
 pub mod signal;
+pub mod slider;
 pub mod stages;
 pub mod surface;
 pub mod validate;
