@@ -36,29 +36,6 @@ pub struct PreparedSweep {
 }
 
 impl PreparedSweep {
-    /// The canonical parameters (cache key input) of the case at `actuation`.
-    pub fn case_params(&self, actuation: f64) -> Value {
-        self.params.case_params(
-            actuation,
-            &self.contact_key,
-            self.dmw.as_ref().map(|d| d.1.as_str()),
-        )
-    }
-
-    /// Simulate the case at `actuation` into `dir` (what the case cache calls, locally or on
-    /// a Slurm worker).
-    pub fn compute_case(&self, actuation: f64, dir: &Path) -> Result<Value> {
-        simulate_case(
-            &self.params,
-            actuation,
-            &self.isbl,
-            self.dmw.as_ref().map(|d| &d.0),
-            dir,
-        )
-    }
-}
-
-impl PreparedSweep {
     /// Resolve the upstream artefacts (contact inputs, DMW track, calibration knobs) into the
     /// shared inputs of the cases of `params`; `key_of` gives an upstream instance's cache key.
     pub fn prepare(
@@ -90,6 +67,43 @@ impl PreparedSweep {
             dmw,
         })
     }
+
+    /// The canonical parameters (cache key input) of the case at `actuation`.
+    pub fn case_params(&self, actuation: f64) -> Value {
+        self.params.case_params(
+            actuation,
+            &self.contact_key,
+            self.dmw.as_ref().map(|d| d.1.as_str()),
+        )
+    }
+
+    /// Simulate the case at `actuation` into `dir` (what the case cache calls, locally or on
+    /// a Slurm worker).
+    pub fn compute_case(&self, actuation: f64, dir: &Path) -> Result<Value> {
+        simulate_case(
+            &self.params,
+            actuation,
+            &self.isbl,
+            self.dmw.as_ref().map(|d| &d.0),
+            dir,
+        )
+    }
+}
+
+/// The case of `p` at `actuation` from the case cache, simulated into it if missing; its key
+/// includes the contact and DMW instances' keys.
+pub fn cached_case(
+    store: &Store,
+    p: &SimulateParams,
+    actuation: f64,
+    isbl: &IsblLookup,
+    contact_key: &str,
+    dmw: Option<(&DmwTrack, &str)>,
+) -> Result<CaseEntry> {
+    let params = p.case_params(actuation, contact_key, dmw.map(|d| d.1));
+    get_or_compute(store, MODEL_VERSION, &params, |dir| {
+        simulate_case(p, actuation, isbl, dmw.map(|d| d.0), dir)
+    })
 }
 
 /// Run every case (cached, parallel, with progress) and return them sorted by actuation.
@@ -110,11 +124,8 @@ pub fn run_cases(
         .actuations
         .par_iter()
         .map(|&a| {
-            let params = p.case_params(a, contact_key, dmw.map(|d| d.1));
-            let entry = get_or_compute(store, MODEL_VERSION, &params, |dir| {
-                simulate_case(p, a, isbl, dmw.map(|d| d.0), dir)
-            })
-            .map_err(|e| Error::Stage(format!("case h_TFC = {:.3} nm: {e}", a * 1e9)));
+            let entry = cached_case(store, p, a, isbl, contact_key, dmw)
+                .map_err(|e| Error::Stage(format!("case h_TFC = {:.3} nm: {e}", a * 1e9)));
             let k = finished.fetch_add(1, Ordering::Relaxed) + 1;
             progress.set_message(format!("{k}/{total} cases"));
             let entry = entry?;

@@ -8,7 +8,7 @@
 use crate::artefacts::dmw_tracks::DmwTrack;
 use crate::contact::isbl::IsblModel;
 use crate::contact::lookup::IsblLookup;
-use crate::core::cases::{self, CaseEntry};
+use crate::core::cases::CaseEntry;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::units::Length;
@@ -19,10 +19,9 @@ use crate::numerics::regression::{
     coded, decoded, full_factorial, FitOptions, Polynomial, PolynomialBasis, ResponseSurface,
 };
 use crate::slider::calibration::base_inputs;
-use crate::slider::case::{self, simulate_case};
 use crate::slider::doe_design::{self, design_cases, design_params};
 use crate::slider::params::{uncalibrated_base, SimulateParams};
-use crate::slider::sweep::{sweep_analysis, CaseOutcome};
+use crate::slider::sweep::{cached_case, sweep_analysis, CaseOutcome};
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
@@ -394,26 +393,17 @@ impl CaseRunner<'_> {
 
     fn run(&self, design: [f64; 3], actuation: f64) -> Result<DesignCase> {
         let p = design_params(self.base, &design, actuation)?;
-        let dmw_key = self.dmw.as_ref().map(|d| d.1.as_str());
-        let params = p.case_params(actuation, &self.contact_key, dmw_key);
-        let entry = cases::get_or_compute(self.store, case::MODEL_VERSION, &params, |dir| {
-            simulate_case(
-                &p,
-                actuation,
-                self.isbl,
-                self.dmw.as_ref().map(|d| d.0),
-                dir,
-            )
-        })
-        .map_err(|e| {
-            Error::Stage(format!(
-                "case a = {:.3} um, w = {:.3} um, x = {:.3} um, h_TFC = {:.3} nm: {e}",
-                design[0] / UM,
-                design[1] / UM,
-                design[2] / UM,
-                actuation / NM
-            ))
-        })?;
+        let dmw = self.dmw.as_ref().map(|(t, k)| (*t, k.as_str()));
+        let entry = cached_case(self.store, &p, actuation, self.isbl, &self.contact_key, dmw)
+            .map_err(|e| {
+                Error::Stage(format!(
+                    "case a = {:.3} um, w = {:.3} um, x = {:.3} um, h_TFC = {:.3} nm: {e}",
+                    design[0] / UM,
+                    design[1] / UM,
+                    design[2] / UM,
+                    actuation / NM
+                ))
+            })?;
         let xi = xi_of(&entry.result, p.model.nominal_flying_height);
         Ok(DesignCase {
             design,
