@@ -6,3 +6,5 @@ pub mod calibration;
 pub mod cases;
 pub mod contact;
 pub mod dmw_tracks;
+pub mod interface;
+pub mod surface;

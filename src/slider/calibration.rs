@@ -1,6 +1,7 @@
 //! The inputs a calibration (and a calibrated or DOE sweep) starts from: the base instance's
-//! interface and DMW track from the upstream artefacts, the calibration base the fit
-//! evaluates (dissertation §2.2's class-D landmarks), and a fit's knobs applied to a sweep.
+//! interface and DMW track from the upstream artefacts, the calibration base the fit evaluates
+//! against the dissertation's class-D landmarks (`docs/calibration.md`), and a fit's knobs
+//! applied to a sweep.
 
 use crate::artefacts::contact::upstream_isbl_params;
 use crate::artefacts::dmw_tracks::{self, DmwTrack};

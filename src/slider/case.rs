@@ -1,6 +1,6 @@
 //! One 2-DOF slider case (dissertation §2.2, Figs 2.13–2.14): run it, summarise it as the
 //! case's `result.json` (its metrics) and write its time histories as `case.h5`; read them
-//! back for the plots. The simulate, calibrate and DOE stages and the Slurm worker all run
+//! back for the plots. The simulate and DOE stages, the Slurm worker and `hdi simulate` run
 //! cases through here, under one case-cache model version.
 
 use crate::artefacts::dmw_tracks::DmwTrack;

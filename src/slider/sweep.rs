@@ -1,7 +1,7 @@
-//! A sweep of 2-DOF cases over the actuation (dissertation §2.2, Figs 2.16–2.22): the inputs
+//! A sweep of 2-DOF cases over the actuation (the dissertation's Figs 2.16–2.22): the inputs
 //! every case shares, prepared from the upstream artefacts; the cases run through the case
-//! cache in parallel; the sweep-level metrics (§2.2.3: touchdown, slopes, regimes, flyability)
-//! and one table row per case.
+//! cache in parallel; the sweep-level metrics (touchdown, slopes, regimes, flyability; see
+//! `docs/dynamics-metrics.md`) and one table row per case.
 
 use crate::artefacts::calibration::upstream_fitted_knobs;
 use crate::artefacts::cases;

@@ -6,6 +6,7 @@ pub mod mtl;
 
 use self::mtl::{MtlAnalysis, MtlKeys, MtlSettings};
 use crate::artefacts::contact::ContactInputs;
+use crate::artefacts::interface::upstream_summits;
 use crate::contact::isbl::{
     surface_energy_at, FrictionLaw, IsblModel, IsblParams, SummitOffset, SurfaceEnergy,
 };
@@ -19,7 +20,7 @@ use crate::core::store::H5Out;
 use crate::core::units::{
     parse_quantity, Area, Dimension, Length, PerArea, Pressure, Velocity, Viscosity,
 };
-use crate::error::{Error, Result};
+use crate::error::Result;
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
@@ -675,17 +676,7 @@ impl Stage for ContactStage {
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         let mut p = self.params.params;
         if let Some(i) = &self.params.interface {
-            let r = ctx
-                .upstream
-                .get(i)
-                .ok_or_else(|| Error::Stage(format!("no result from interface `{i}`")))?;
-            let get = |k: &str| {
-                r[k].as_f64()
-                    .ok_or_else(|| Error::Stage(format!("interface `{i}` result has no `{k}`")))
-            };
-            p.sigma = get("sigma_m")?;
-            p.summit_radius = get("R_m")?;
-            p.summit_density = get("eta_per_m2")?;
+            [p.sigma, p.summit_radius, p.summit_density] = upstream_summits(&ctx.upstream, i)?;
         }
         ctx.progress.set_message("ISBL curves and force table");
         let a = analyse(&p, &self.params)?;
