@@ -2,18 +2,23 @@
 //!
 //! `core` is the small spine every stage uses (config, cache, store, the progress observers);
 //! `figures` draws every plot with one plotting kit; the physics modules are pure functions
-//! with no I/O besides readers; `stages` wires physics into the pipeline. The command line is
+//! with no I/O besides readers; `stages` wires physics into the pipeline; `slider` is the case
+//! machinery the slider stages share and `artefacts` what one stage hands another; `engine`
+//! plans and runs the pipeline; `validation` is `hdi validate`'s harness. The command line is
 //! the binary target (`src/main.rs`, `src/cli/`, feature `cli`), outside this library.
 pub mod analysis;
+pub mod artefacts;
 pub mod contact;
 pub mod core;
 pub mod dmw;
 pub mod dynamics;
+pub mod engine;
 pub mod error;
 pub mod figures;
 pub mod numerics;
 pub mod samples;
 pub mod signal;
+pub mod slider;
 pub mod stages;
 pub mod surface;
 pub mod validation;

@@ -135,7 +135,7 @@ pub(super) fn cmd_exec_cases(manifest: &Path, task: usize) -> Result<()> {
         &store,
         manifest,
         task,
-        &hdi::stages::distributed::registry(),
+        &hdi::engine::distributed::registry(),
         &TaskIdentity::from_env(&processed),
     )?;
     eprintln!(

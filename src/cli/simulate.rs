@@ -9,7 +9,10 @@ use super::progress::CaseBar;
 use hdi::stages::contact::{self, ContactConfig, SurfaceEnergyConfig};
 
 pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
-    use hdi::stages::simulate::{self as sim, SimulateConfig};
+    use hdi::artefacts::dmw_tracks::read_dmw_track;
+    use hdi::slider::params::{SimulateConfig, SimulateParams};
+    use hdi::slider::sweep::{case_rows, run_cases, sweep_analysis, CaseSink};
+    use hdi::stages::simulate::plots;
     let mut cfg: SimulateConfig =
         toml::from_str("contact = \"adhoc\"").context("default simulate settings")?;
     cfg.model = a.model.clone();
@@ -40,7 +43,7 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     cfg.kr_stiffening_beta = a.kr_stiffening_beta;
     cfg.bulge_width = a.bulge_width;
     cfg.histories = a.histories.clone();
-    let params = sim::validate(&cfg).map_err(|(k, m)| {
+    let params = SimulateParams::check(&cfg).map_err(|(k, m)| {
         // The list key is `actuations` in pipeline.toml, `--actuation` on the command line.
         let flag = if k == "actuations" {
             "actuation".to_string()
@@ -73,7 +76,7 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         10.0,
     )?;
     let dmw = match &a.dmw {
-        Some(p) => Some(sim::read_dmw_track(p)?),
+        Some(p) => Some(read_dmw_track(p)?),
         None => None,
     };
     let (root, temporary) = match &a.out {
@@ -87,9 +90,9 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         .with_context(|| format!("creating {}", root.display()))?;
     let bar = CaseBar::new(params.actuations.len());
     let started = Instant::now();
-    let cases = sim::run_cases(
+    let cases = run_cases(
         &params,
-        &sim::CaseSink::Directory(&root.join("cases")),
+        &CaseSink::Directory(&root.join("cases")),
         &isbl,
         dmw.as_ref(),
         &bar,
@@ -97,11 +100,11 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     bar.finish();
     let cases = cases?;
     let wall = started.elapsed().as_secs_f64();
-    let sweep = sim::sweep_analysis(&params, &cases)?;
-    let rows = sim::case_rows(&cases, &sweep);
+    let sweep = sweep_analysis(&params, &cases)?;
+    let rows = case_rows(&cases, &sweep);
     if a.out.is_some() {
         hdi::core::store::write_table(&rows, &root.join("sweep"))?;
-        sim::plots(&root, &params, &cases, &sweep, &a.model)?;
+        plots(&root, &params, &cases, &sweep, &a.model)?;
     }
     if temporary {
         let _ = std::fs::remove_dir_all(&root);

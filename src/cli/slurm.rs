@@ -22,7 +22,7 @@ pub(super) fn run_cases_on_slurm(
 ) -> Result<bool> {
     use hdi::core::executor::manifest_path;
     use hdi::core::executor::slurm::{submit_manifest, ScriptOptions, SlurmClient};
-    use hdi::stages::distributed;
+    use hdi::engine::distributed;
     let (file, _) = load(config)?;
     let processed = file.processed_dir();
     let store =

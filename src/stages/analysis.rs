@@ -5,11 +5,15 @@
 
 use crate::analysis::cwt::FrequencyGrid;
 use crate::analysis::report::{analyze, AnalysisReport, AnalyzeOptions};
+use crate::artefacts::cases as case_files;
+use crate::artefacts::dmw_tracks;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::store::H5Out;
 use crate::core::units::{Frequency, Length, TimeSpan};
 use crate::error::{Error, Result};
+use crate::slider::params::SimulateParams;
+use crate::slider::three_dof_params::ThreeDofParams;
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
@@ -507,7 +511,7 @@ impl AnalysisStage {
         let err = |k: &str, m: String| file.error("analysis", name, k, m);
         let raw = &file.raw;
         let (default_file, dataset, velocity) = if let Some(sim) = raw.simulate.get(&cfg.source) {
-            let p = super::simulate::validate(sim).map_err(|(k, m)| {
+            let p = SimulateParams::check(sim).map_err(|(k, m)| {
                 err(
                     "source",
                     format!("[simulate.{}] is invalid ({k}: {m})", cfg.source),
@@ -535,7 +539,7 @@ impl AnalysisStage {
                 }
             };
             (
-                Some(format!("cases/h_{:06.2}nm.h5", a * 1e9)),
+                Some(case_files::sweep_case_file(a)),
                 DEFAULT_SERIES[0].0,
                 DEFAULT_SERIES[0].1,
             )
@@ -543,7 +547,7 @@ impl AnalysisStage {
             if cfg.actuation.is_some() {
                 return Err(err("actuation", "only for a [simulate] source".into()));
             }
-            let p = super::three_dof::validate(three).map_err(|(k, m)| {
+            let p = ThreeDofParams::check(three).map_err(|(k, m)| {
                 err(
                     "source",
                     format!("[three_dof.{}] is invalid ({k}: {m})", cfg.source),
@@ -551,12 +555,12 @@ impl AnalysisStage {
             })?;
             // One case: its file by default; several: `file` says which.
             let only = match p.cases.as_slice() {
-                [one] => Some(format!("cases/{}.h5", one.label())),
+                [one] => Some(case_files::three_dof_case_file(&one.label())),
                 _ if cfg.file.is_some() => None,
                 several => {
                     let names: Vec<String> = several
                         .iter()
-                        .map(|c| format!("cases/{}.h5", c.label()))
+                        .map(|c| case_files::three_dof_case_file(&c.label()))
                         .collect();
                     return Err(err(
                         "file",
@@ -574,7 +578,7 @@ impl AnalysisStage {
                 return Err(err("actuation", "only for a [simulate] source".into()));
             }
             (
-                Some("dmw.h5".to_string()),
+                Some(dmw_tracks::FILE.to_string()),
                 DEFAULT_SERIES[1].0,
                 DEFAULT_SERIES[1].1,
             )

@@ -3,17 +3,18 @@
 //! only when the base model, its contact set, its DMW record or the calibration settings change.
 //! A `[simulate]` instance with `calibration = "NAME"` then runs with the fitted knobs.
 
-use super::simulate::{self, DmwTrack, SimulateParams};
+use crate::artefacts::calibration::fitted_json;
 use crate::contact::isbl::IsblParams;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::units::Length;
 use crate::dynamics::calibration::{
-    calibrate, default_knobs, targets_for, CalibrationBase, CalibrationResult, CalibrationSettings,
-    Evaluation, Knob, KnobRange,
+    calibrate, default_knobs, targets_for, CalibrationResult, CalibrationSettings, Evaluation,
+    Knob, KnobRange,
 };
-use crate::dynamics::two_dof::DmwInput;
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::slider::calibration::{base_inputs, base_of};
+use crate::slider::params::{uncalibrated_base, SimulateParams};
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
@@ -68,7 +69,7 @@ impl CalibrateStage {
         cfg: &CalibrateConfig,
     ) -> std::result::Result<Self, ConfigError> {
         let err = |k: &str, m: String| file.error("calibrate", name, k, m);
-        let base = simulate::uncalibrated_base(file, "calibrate", name, &cfg.simulate)?;
+        let base = uncalibrated_base(file, "calibrate", name, &cfg.simulate)?;
         if base.geometry != "dissertation" {
             return Err(err(
                 "simulate",
@@ -202,61 +203,6 @@ impl CalibrateStage {
     }
 }
 
-/// The base inputs of a calibration (or of a calibrated run): ISBL parameters from the contact
-/// result, the DMW track from the DMW entry.
-pub fn base_inputs(
-    p: &SimulateParams,
-    upstream: &BTreeMap<String, Value>,
-    upstream_dirs: &BTreeMap<String, PathBuf>,
-) -> Result<(IsblParams, Option<DmwTrack>)> {
-    let contact = upstream
-        .get(&p.contact)
-        .ok_or_else(|| Error::Stage(format!("no result from contact `{}`", p.contact)))?;
-    let isbl = super::contact::isbl_params_from_json(&contact["inputs"]).ok_or_else(|| {
-        Error::Stage(format!(
-            "contact `{}` result has no usable `inputs`",
-            p.contact
-        ))
-    })?;
-    let dmw = match &p.dmw {
-        Some(d) => {
-            let dir = upstream_dirs
-                .get(d)
-                .ok_or_else(|| Error::Stage(format!("no files from dmw `{d}`")))?;
-            Some(simulate::read_dmw_track(&dir.join("dmw.h5"))?)
-        }
-        None => None,
-    };
-    Ok((isbl, dmw))
-}
-
-pub fn base_of<'a>(
-    p: &SimulateParams,
-    isbl: IsblParams,
-    dmw: Option<&'a DmwTrack>,
-) -> CalibrationBase<'a> {
-    CalibrationBase {
-        model: p.model,
-        isbl,
-        dmw: dmw.map(|t| DmwInput {
-            displacement: &t.displacement,
-            velocity: &t.velocity,
-            sample_rate: t.sample_rate,
-        }),
-        options: p.options,
-        case_params: p.case_metric_params(),
-    }
-}
-
-/// Fitted knob values from a calibrate result (`result["fitted"]`).
-pub fn fitted_knobs(result: &Value) -> Option<Vec<(Knob, f64)>> {
-    result["fitted"]
-        .as_array()?
-        .iter()
-        .map(|k| Some((Knob::from_name(k["knob"].as_str()?)?, k["value"].as_f64()?)))
-        .collect()
-}
-
 fn evaluation_json(e: &Evaluation) -> Value {
     json!({
         "objective": e.objective,
@@ -365,9 +311,8 @@ impl Stage for CalibrateStage {
         Vec::new()
     }
     fn upstream(&self) -> Vec<String> {
-        let mut u = vec![self.base.contact.clone()];
-        u.extend(self.base.dmw.iter().cloned());
-        u
+        // The base is uncalibrated: its contact and DMW instances.
+        self.base.upstream()
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         let (isbl, dmw) = base_inputs(&self.base, &ctx.upstream, &ctx.upstream_dirs)?;
@@ -428,9 +373,7 @@ impl Stage for CalibrateStage {
             result: json!({
                 "base": self.base_name,
                 "model": self.base.model_name,
-                "fitted": result.best.knobs.iter().map(|(k, v)| json!({
-                    "knob": k.name(), "unit": k.unit(), "value": v,
-                })).collect::<Vec<_>>(),
+                "fitted": fitted_json(&result.best.knobs),
                 "fitted_description": describe_knobs(&result.best.knobs),
                 "defaults": evaluation_json(&result.initial),
                 "calibrated": evaluation_json(&result.best),

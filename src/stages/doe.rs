@@ -5,20 +5,23 @@
 //! residual diagnostics per level; Table 2.7's predictive equations; simulated annealing on ξ
 //! with a sensitivity check; and Table 2.8, the 2-DOF sweep on the initial and optimised designs.
 
-use super::simulate::{self, CaseOutcome, DmwTrack, SimulateParams};
+use crate::artefacts::dmw_tracks::DmwTrack;
 use crate::contact::isbl::IsblModel;
 use crate::contact::lookup::IsblLookup;
-use crate::core::cases::{self, CaseEntry};
+use crate::core::cases::CaseEntry;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::units::Length;
-use crate::dynamics::geometry::BulgeDesign;
 use crate::dynamics::metrics::{flyability, Regime};
 use crate::error::{Error, Result};
 use crate::numerics::annealing::{sensitivity_points, Annealer, AnnealingOptions, StopReason};
 use crate::numerics::regression::{
     coded, decoded, full_factorial, FitOptions, Polynomial, PolynomialBasis, ResponseSurface,
 };
+use crate::slider::calibration::base_inputs;
+use crate::slider::doe_design::{self, design_cases, design_params};
+use crate::slider::params::{uncalibrated_base, SimulateParams};
+use crate::slider::sweep::{cached_case, sweep_analysis, CaseOutcome};
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
@@ -189,22 +192,12 @@ impl DoeParams {
 
     /// The 27 designs `[a, w, x]` [m] of the 3³ factorial, in `full_factorial` order.
     fn design_points(&self) -> Vec<[f64; 3]> {
-        full_factorial(&[3, 3, 3])
-            .iter()
-            .map(|c| self.decode(c))
-            .collect()
+        doe_design::design_points(&self.levels)
     }
 
     /// Physical design `[a, w, x]` of a coded point.
     fn decode(&self, c: &[f64]) -> [f64; 3] {
-        // The design levels exactly (not to an ulp), so a level shared by two factors compares
-        // equal (a_TFC = x_TFC = 5 µm is allowed).
-        std::array::from_fn(|f| match c[f] {
-            -1.0 => self.levels[f][0],
-            0.0 => self.levels[f][1],
-            1.0 => self.levels[f][2],
-            v => decoded(v, self.levels[f][0], self.levels[f][2]),
-        })
+        doe_design::decode(&self.levels, c)
     }
 
     fn encode(&self, x: &[f64; 3]) -> [f64; 3] {
@@ -375,7 +368,7 @@ pub fn validate(
     })
 }
 
-/// Runs one 2-DOF case of a given bulge through the simulate stage's case cache.
+/// Runs one 2-DOF case of a given bulge through the 2-DOF case cache (`slider::case`).
 struct CaseRunner<'a> {
     base: &'a SimulateParams,
     isbl: &'a IsblLookup,
@@ -393,47 +386,6 @@ struct DesignCase {
     xi: f64,
 }
 
-/// The base instance's parameters with the bulge `[a, w, x]`, for a case at `actuation` (the
-/// local runner and the Slurm worker build the same key from this).
-pub fn design_params(
-    base: &SimulateParams,
-    design: &[f64; 3],
-    actuation: f64,
-) -> Result<SimulateParams> {
-    // An annealing point on the a = x edge may miss it by rounding only.
-    let a = if design[0] > design[2] && design[0] - design[2] < 1e-9 * design[2] {
-        design[2]
-    } else {
-        design[0]
-    };
-    let bulge = BulgeDesign {
-        semi_width_x: a,
-        full_width_y: design[1],
-        offset_from_te: design[2],
-    };
-    bulge.validate()?;
-    let mut p = base.clone();
-    p.model = p.model.with_bulge(bulge);
-    // Only beyond the model's range is the range widened, so every case inside it keeps the
-    // `[simulate]` stage's cache key (Table 2.8's initial design reuses its sweep).
-    if actuation > p.model.max_actuation {
-        p.model.max_actuation = actuation;
-    }
-    Ok(p)
-}
-
-impl DoeStage {
-    /// The design points `[a, w, x]` [m] crossed with the actuation levels, in run order.
-    pub fn design_cases(&self) -> Vec<([f64; 3], f64)> {
-        let p = &self.params;
-        let designs = p.design_points();
-        p.actuations
-            .iter()
-            .flat_map(|&h| designs.iter().map(move |d| (*d, h)))
-            .collect()
-    }
-}
-
 impl CaseRunner<'_> {
     fn params_for(&self, design: &[f64; 3]) -> Result<SimulateParams> {
         design_params(self.base, design, 0.0)
@@ -441,26 +393,17 @@ impl CaseRunner<'_> {
 
     fn run(&self, design: [f64; 3], actuation: f64) -> Result<DesignCase> {
         let p = design_params(self.base, &design, actuation)?;
-        let dmw_key = self.dmw.as_ref().map(|d| d.1.as_str());
-        let params = p.case_params(actuation, &self.contact_key, dmw_key);
-        let entry = cases::get_or_compute(self.store, simulate::MODEL_VERSION, &params, |dir| {
-            simulate::simulate_case(
-                &p,
-                actuation,
-                self.isbl,
-                self.dmw.as_ref().map(|d| d.0),
-                dir,
-            )
-        })
-        .map_err(|e| {
-            Error::Stage(format!(
-                "case a = {:.3} um, w = {:.3} um, x = {:.3} um, h_TFC = {:.3} nm: {e}",
-                design[0] / UM,
-                design[1] / UM,
-                design[2] / UM,
-                actuation / NM
-            ))
-        })?;
+        let dmw = self.dmw.as_ref().map(|(t, k)| (*t, k.as_str()));
+        let entry = cached_case(self.store, &p, actuation, self.isbl, &self.contact_key, dmw)
+            .map_err(|e| {
+                Error::Stage(format!(
+                    "case a = {:.3} um, w = {:.3} um, x = {:.3} um, h_TFC = {:.3} nm: {e}",
+                    design[0] / UM,
+                    design[1] / UM,
+                    design[2] / UM,
+                    actuation / NM
+                ))
+            })?;
         let xi = xi_of(&entry.result, p.model.nominal_flying_height);
         Ok(DesignCase {
             design,
@@ -742,7 +685,7 @@ fn comparison_rows(
     sp: &SimulateParams,
     cases: &[CaseOutcome],
 ) -> Result<Vec<Map<String, Value>>> {
-    let sweep = simulate::sweep_analysis(sp, cases)?;
+    let sweep = sweep_analysis(sp, cases)?;
     let nearest = |h: f64| {
         cases
             .iter()
@@ -812,7 +755,7 @@ impl DoeStage {
         cfg: &DoeConfig,
     ) -> std::result::Result<Self, ConfigError> {
         let err = |k: &str, m: String| file.error("doe", name, k, m);
-        let base = simulate::uncalibrated_base(file, "doe", name, &cfg.simulate)?;
+        let base = uncalibrated_base(file, "doe", name, &cfg.simulate)?;
         let params = validate(cfg, base, &cfg.simulate).map_err(|(k, m)| err(&k, m))?;
         Ok(DoeStage {
             name: name.to_string(),
@@ -838,16 +781,14 @@ impl Stage for DoeStage {
         Vec::new()
     }
     fn upstream(&self) -> Vec<String> {
-        let mut u = vec![self.params.base.contact.clone()];
-        u.extend(self.params.base.dmw.iter().cloned());
-        u
+        // The base is uncalibrated: its contact and DMW instances.
+        self.params.base.upstream()
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         use rayon::prelude::*;
         use std::sync::atomic::{AtomicUsize, Ordering};
         let p = &self.params;
-        let (isbl_params, dmw_track) =
-            super::calibrate::base_inputs(&p.base, &ctx.upstream, &ctx.upstream_dirs)?;
+        let (isbl_params, dmw_track) = base_inputs(&p.base, &ctx.upstream, &ctx.upstream_dirs)?;
         let key_of = |name: &str| {
             ctx.fingerprint
                 .upstream
@@ -873,7 +814,7 @@ impl Stage for DoeStage {
         // The same list the Slurm executor submits (`design_cases`), level by level.
         let coded_points = full_factorial(&[3, 3, 3]);
         let designs = p.design_points();
-        let jobs = self.design_cases();
+        let jobs = design_cases(&p.levels, &p.actuations);
         let total = jobs.len();
         let finished = AtomicUsize::new(0);
         ctx.progress.set_message(format!("0/{total} DOE cases"));
@@ -1283,7 +1224,7 @@ mod tests {
     #[test]
     fn coded_levels_decode_to_the_levels_exactly() {
         let cfg: DoeConfig = toml::from_str("simulate = \"s\"").unwrap();
-        let base = simulate::validate(&toml::from_str("contact = \"c\"").unwrap()).unwrap();
+        let base = SimulateParams::check(&toml::from_str("contact = \"c\"").unwrap()).unwrap();
         let p = validate(&cfg, base, "s").unwrap();
         // a_TFC's top level and x_TFC's bottom level are both 5 µm: equal, not an ulp apart.
         let d = p.decode(&[1.0, 0.0, -1.0]);

@@ -1,11 +1,13 @@
 //! Interface stage: two measured surfaces (or explicit values) → the equivalent rough surface
 //! against a smooth flat (σ, R, η, β) that the contact models use (signals-and-surfaces.md §2.7).
 
+use crate::artefacts::interface::InterfaceRoughness;
+use crate::artefacts::surface::upstream_surface_stats;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::store::H5Out;
 use crate::core::units::{Length, PerArea};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::surface::combine::{combine, CombineRule, InterfaceStats, SurfaceStats};
 use serde::Deserialize;
 use serde_json::{json, Value};
@@ -116,27 +118,8 @@ impl InterfaceStage {
     }
 }
 
-fn stats_from(result: &Value, name: &str) -> Result<SurfaceStats> {
-    let s = &result["stats"];
-    let get = |k: &str| {
-        s[k].as_f64()
-            .ok_or_else(|| Error::Stage(format!("surface `{name}` result has no `{k}`")))
-    };
-    Ok(SurfaceStats {
-        sigma: get("sigma")?,
-        r: get("r")?,
-        eta: get("eta")?,
-        m2: s["m2"].as_f64(),
-        m4: s["m4"].as_f64(),
-    })
-}
-
 pub fn interface_json(st: &InterfaceStats) -> Value {
-    json!({
-        "rule": rule_name(&st.rule),
-        "sigma_m": st.sigma, "R_m": st.r, "eta_per_m2": st.eta, "beta": st.beta,
-        "m2": st.m2, "m4_per_m2": st.m4, "alpha": st.alpha,
-    })
+    InterfaceRoughness::new(st, rule_name(&st.rule)).to_json()
 }
 
 impl Stage for InterfaceStage {
@@ -181,12 +164,7 @@ impl Stage for InterfaceStage {
                 (s, s)
             }
             _ => {
-                let get = |n: &String| {
-                    ctx.upstream
-                        .get(n)
-                        .ok_or_else(|| Error::Stage(format!("no result from surface `{n}`")))
-                        .and_then(|v| stats_from(v, n))
-                };
+                let get = |n: &String| upstream_surface_stats(&ctx.upstream, n);
                 (get(&self.surfaces[0])?, get(&self.surfaces[1])?)
             }
         };

@@ -3,8 +3,6 @@
 pub mod analysis;
 pub mod calibrate;
 pub mod contact;
-pub mod contact_mtl;
-pub mod distributed;
 pub mod dmw;
 pub mod doe;
 pub mod excitation;

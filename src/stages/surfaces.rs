@@ -2,6 +2,7 @@
 //! summit list, histograms, scale sweep), as HDF5 + PNG + a summary row. The same function
 //! serves the pipeline and `hdi surface FILE`.
 
+use crate::artefacts::surface::SummitStats;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::store::H5Out;
@@ -773,10 +774,14 @@ impl Stage for SurfaceStage {
         let mut result = report_json(&a, &self.params);
         if let Value::Object(m) = &mut result {
             // What the interface stage combines.
-            m.insert(
-                "stats".into(),
-                json!({"sigma": r.sigma, "r": r.r, "eta": r.eta, "m2": r.m2, "m4": r.m4}),
-            );
+            let stats = SummitStats {
+                sigma: r.sigma,
+                r: r.r,
+                eta: r.eta,
+                m2: Some(r.m2),
+                m4: Some(r.m4),
+            };
+            m.insert("stats".into(), stats.to_json());
         }
         Ok(StageOutput {
             result,

@@ -2,14 +2,14 @@
 //! re-evaluated now with the current code.
 
 use super::{Row, Tolerance};
+use crate::artefacts::calibration::fitted_knobs;
 use crate::core::cache::Store;
 use crate::core::config::PipelineFile;
 use crate::core::engine::{plan, read_result, Stage, State};
 use crate::dynamics::calibration::{evaluate, Evaluation, Knob};
 use crate::error::{Error, Result};
-use crate::stages::calibrate::{
-    base_inputs, base_of, describe_knobs, fitted_knobs, CalibrateStage,
-};
+use crate::slider::calibration::{base_inputs, base_of};
+use crate::stages::calibrate::{describe_knobs, CalibrateStage};
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

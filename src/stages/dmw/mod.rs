@@ -2,6 +2,7 @@
 //! the three tracks, as HDF5 + PNG + a summary row. The same function serves the pipeline and
 //! `hdi dmw FILE`.
 
+use crate::artefacts::dmw_tracks;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::store::H5Out;
@@ -491,7 +492,7 @@ pub fn write_outputs(
     let fs = r.sample_rate;
     let time: Vec<f64> = (0..n).map(|i| i as f64 / fs).collect();
 
-    let g = out.group("dmw/tracks", Some("NXdata"))?;
+    let g = out.group(dmw_tracks::GROUP, Some("NXdata"))?;
     out.attr_str(&g, "signal", "D1")?;
     out.attr_str_list(&g, "auxiliary_signals", &["D2", "D3"])?;
     out.attr_str_list(&g, "axes", &["time"])?;
@@ -827,7 +828,7 @@ impl Stage for DmwStage {
             &rec,
             &res,
             &self.params,
-            &ctx.out_dir.join("dmw.h5"),
+            &ctx.out_dir.join(dmw_tracks::FILE),
             Some(ctx.out_dir),
             ctx.key,
             &inputs,
@@ -835,7 +836,7 @@ impl Stage for DmwStage {
         let mut result = report_json(&rec, &res, &self.params);
         if let Value::Object(m) = &mut result {
             // Where the simulations find the tracks.
-            m.insert("h5".into(), json!("dmw.h5"));
+            m.insert("h5".into(), json!(dmw_tracks::FILE));
         }
         Ok(StageOutput {
             result,

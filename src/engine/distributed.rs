@@ -2,14 +2,17 @@
 //! `docs/slurm.md`): which cases of the pipeline are stale, and the worker that computes one
 //! on a Slurm node through the same case cache (so the bytes are a local run's).
 
-use super::doe::{design_params, DoeStage};
-use super::simulate::{PreparedSweep, SimulateStage, MODEL_VERSION};
 use crate::core::cache::{Store, Verification};
 use crate::core::cases::{case_fingerprint, CASE_KIND};
 use crate::core::config::PipelineFile;
-use crate::core::engine::{plan, read_result, Plan, Stage, State};
+use crate::core::engine::{plan, read_result, Plan, State};
 use crate::core::executor::{CaseComputer, CaseRegistry, CaseSpec};
 use crate::error::{Error, Result};
+use crate::slider::case::{simulate_case, MODEL_VERSION};
+use crate::slider::doe_design::{design_cases, design_params};
+use crate::slider::params::SimulateParams;
+use crate::slider::sweep::PreparedSweep;
+use crate::stages::doe::DoeStage;
 use serde_json::{json, Value};
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -20,30 +23,29 @@ pub const SIMULATE_CASE: &str = "simulate";
 /// Case kind of a DOE design point (a 2-DOF case of the base sweep with another bulge).
 pub const DOE_CASE: &str = "doe";
 
-/// The stage whose cases are prepared: a `[simulate]` instance, or the base sweep of a
+/// The sweep whose cases are prepared: a `[simulate]` instance's, or the base sweep of a
 /// `[doe]` instance (uncalibrated by construction).
-fn sweep_stage(file: &PipelineFile, kind: &str, instance: &str) -> Result<SimulateStage> {
+fn sweep_params(file: &PipelineFile, kind: &str, instance: &str) -> Result<SimulateParams> {
     match kind {
         SIMULATE_CASE => {
             let cfg =
                 file.raw.simulate.get(instance).ok_or_else(|| {
                     Error::Stage(format!("no [simulate.{instance}] in the pipeline"))
                 })?;
-            Ok(SimulateStage::from_config(file, instance, cfg)?)
+            Ok(SimulateParams::from_config(file, instance, cfg)?)
         }
-        _ => {
-            let cfg = file
-                .raw
-                .doe
-                .get(instance)
-                .ok_or_else(|| Error::Stage(format!("no [doe.{instance}] in the pipeline")))?;
-            let doe = DoeStage::from_config(file, instance, cfg)?;
-            Ok(SimulateStage {
-                name: doe.params.base_name.clone(),
-                params: doe.params.base,
-            })
-        }
+        _ => Ok(doe_stage(file, instance)?.params.base),
     }
+}
+
+/// The `[doe.NAME]` instance, checked.
+fn doe_stage(file: &PipelineFile, instance: &str) -> Result<DoeStage> {
+    let cfg = file
+        .raw
+        .doe
+        .get(instance)
+        .ok_or_else(|| Error::Stage(format!("no [doe.{instance}] in the pipeline")))?;
+    Ok(DoeStage::from_config(file, instance, cfg)?)
 }
 
 /// The prepared sweep of a `[simulate]` or `[doe]` instance from the store's current upstream
@@ -55,9 +57,9 @@ fn prepared(
     kind: &str,
     instance: &str,
 ) -> Result<PreparedSweep> {
-    let stage = sweep_stage(file, kind, instance)?;
+    let params = sweep_params(file, kind, instance)?;
     let (mut results, mut dirs, mut keys) = (BTreeMap::new(), BTreeMap::new(), BTreeMap::new());
-    for u in stage.upstream() {
+    for u in params.upstream() {
         let p = planned
             .planned
             .iter()
@@ -73,7 +75,7 @@ fn prepared(
         dirs.insert(u.clone(), dir);
         keys.insert(u.clone(), p.key.clone());
     }
-    stage.prepare(&results, &dirs, |n| {
+    PreparedSweep::prepare(&params, &results, &dirs, |n| {
         keys.get(n).cloned().unwrap_or_default()
     })
 }
@@ -93,7 +95,7 @@ fn stale_instances(file: &PipelineFile, planned: &Plan) -> Vec<(&'static str, St
 
 /// The pipeline planned against the store (fingerprints hash every input file: done once).
 fn plan_of(file: &PipelineFile, store: &Store) -> Result<Plan> {
-    plan(super::build(file)?, store, &Default::default())
+    plan(crate::stages::build(file)?, store, &Default::default())
 }
 
 /// The upstream instances of every stale `[simulate]` and `[doe]` instance: what must be
@@ -101,7 +103,7 @@ fn plan_of(file: &PipelineFile, store: &Store) -> Result<Plan> {
 pub fn case_upstream(file: &PipelineFile, store: &Store) -> Result<Vec<String>> {
     let mut names = Vec::new();
     for (kind, name) in stale_instances(file, &plan_of(file, store)?) {
-        for u in sweep_stage(file, kind, &name)?.upstream() {
+        for u in sweep_params(file, kind, &name)?.upstream() {
             if !names.contains(&u) {
                 names.push(u);
             }
@@ -123,9 +125,8 @@ pub fn stale_cases(file: &PipelineFile, config: &Path, store: &Store) -> Result<
         let points: Vec<(Option<[f64; 3]>, f64)> = if kind == SIMULATE_CASE {
             sweep.params.actuations.iter().map(|&a| (None, a)).collect()
         } else {
-            let cfg = &file.raw.doe[&name];
-            DoeStage::from_config(file, &name, cfg)?
-                .design_cases()
+            let doe = doe_stage(file, &name)?;
+            design_cases(&doe.params.levels, &doe.params.actuations)
                 .into_iter()
                 .map(|(d, a)| (Some(d), a))
                 .collect()
@@ -202,7 +203,7 @@ impl CaseComputer for SweepWorker {
             Ok(None) => sweep.compute_case(actuation, dir),
             Ok(Some(design)) => {
                 let p = design_params(&sweep.params, &design, actuation)?;
-                super::simulate::simulate_case(
+                simulate_case(
                     &p,
                     actuation,
                     &sweep.isbl,

@@ -2,7 +2,11 @@
 //! the ISBL curves per unit nominal area against the solid separation h and h/σ, and the
 //! verified force table the dynamics interpolate. HDF5 + PNG + a summary row.
 
-use super::contact_mtl::{self, MtlAnalysis, MtlKeys, MtlSettings};
+pub mod mtl;
+
+use self::mtl::{MtlAnalysis, MtlKeys, MtlSettings};
+use crate::artefacts::contact::ContactInputs;
+use crate::artefacts::interface::upstream_summits;
 use crate::contact::isbl::{
     surface_energy_at, FrictionLaw, IsblModel, IsblParams, SummitOffset, SurfaceEnergy,
 };
@@ -15,7 +19,7 @@ use crate::core::store::H5Out;
 use crate::core::units::{
     parse_quantity, Area, Dimension, Length, PerArea, Pressure, Velocity, Viscosity,
 };
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::figures;
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
@@ -249,7 +253,7 @@ pub fn validate(cfg: &ContactConfig) -> std::result::Result<ContactParams, (Stri
             other => ("parameter_set".to_string(), other.to_string()),
         })?;
     }
-    let mtl = contact_mtl::resolve(
+    let mtl = mtl::resolve(
         &MtlKeys {
             lubricant: cfg.lubricant.clone(),
             nominal_area: cfg.nominal_area,
@@ -270,65 +274,9 @@ pub fn validate(cfg: &ContactConfig) -> std::result::Result<ContactParams, (Stri
     })
 }
 
-fn surface_energy_json(s: &SurfaceEnergy) -> Value {
-    match s {
-        SurfaceEnergy::Constant { delta_gamma } => json!({"constant_N_per_m": delta_gamma}),
-        SurfaceEnergy::Variable { c1, c2, c3 } => {
-            json!({"variable": {"c1_N_per_m": c1, "c2_per_m": c2, "c3_N_per_m": c3}})
-        }
-    }
-}
-
+/// The interface parameters as downstream stages read them (`inputs` in the result).
 fn params_json(p: &IsblParams) -> Value {
-    json!({
-        "sigma_m": p.sigma, "R_m": p.summit_radius, "eta_per_m2": p.summit_density,
-        "E1_Pa": p.slider_modulus, "nu1": p.slider_poisson,
-        "E2_Pa": p.disk_modulus, "nu2": p.disk_poisson, "nu_yielding": p.yielding_poisson,
-        "H_Pa": p.hardness, "epsilon_m": p.lj_spacing, "t_m": p.lubricant_thickness,
-        "surface_energy": surface_energy_json(&p.surface_energy),
-        "summit_offset": format!("{:?}", p.summit_offset),
-        "friction_law": format!("{:?}", p.friction_law),
-    })
-}
-
-/// The inverse of the `inputs` block of a contact result: the ISBL parameters a downstream
-/// stage (the simulations) rebuilds the interface from. `None` if a field is missing.
-pub fn isbl_params_from_json(v: &Value) -> Option<IsblParams> {
-    let f = |k: &str| v[k].as_f64();
-    let surface_energy = match &v["surface_energy"] {
-        e if e["constant_N_per_m"].is_number() => SurfaceEnergy::Constant {
-            delta_gamma: e["constant_N_per_m"].as_f64()?,
-        },
-        e => SurfaceEnergy::Variable {
-            c1: e["variable"]["c1_N_per_m"].as_f64()?,
-            c2: e["variable"]["c2_per_m"].as_f64()?,
-            c3: e["variable"]["c3_N_per_m"].as_f64()?,
-        },
-    };
-    Some(IsblParams {
-        sigma: f("sigma_m")?,
-        summit_radius: f("R_m")?,
-        summit_density: f("eta_per_m2")?,
-        slider_modulus: f("E1_Pa")?,
-        slider_poisson: f("nu1")?,
-        disk_modulus: f("E2_Pa")?,
-        disk_poisson: f("nu2")?,
-        yielding_poisson: f("nu_yielding")?,
-        hardness: f("H_Pa")?,
-        lj_spacing: f("epsilon_m")?,
-        lubricant_thickness: f("t_m")?,
-        surface_energy,
-        summit_offset: match v["summit_offset"].as_str()? {
-            "None" => SummitOffset::None,
-            "McCool" => SummitOffset::McCool,
-            _ => return None,
-        },
-        friction_law: match v["friction_law"].as_str()? {
-            "JunctionShear" => FrictionLaw::JunctionShear,
-            "SeedPowerElastic" => FrictionLaw::SeedPowerElastic,
-            _ => return None,
-        },
-    })
+    ContactInputs::from(p).to_json()
 }
 
 impl ContactParams {
@@ -383,7 +331,7 @@ pub fn analyse(params: &IsblParams, c: &ContactParams) -> Result<ContactAnalysis
         c.h_star_max,
     )?);
     let mtl = match &c.mtl {
-        Some(settings) => Some(contact_mtl::analyse(settings, &lookup)?),
+        Some(settings) => Some(mtl::analyse(settings, &lookup)?),
         None => None,
     };
     Ok(ContactAnalysis {
@@ -728,17 +676,7 @@ impl Stage for ContactStage {
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         let mut p = self.params.params;
         if let Some(i) = &self.params.interface {
-            let r = ctx
-                .upstream
-                .get(i)
-                .ok_or_else(|| Error::Stage(format!("no result from interface `{i}`")))?;
-            let get = |k: &str| {
-                r[k].as_f64()
-                    .ok_or_else(|| Error::Stage(format!("interface `{i}` result has no `{k}`")))
-            };
-            p.sigma = get("sigma_m")?;
-            p.summit_radius = get("R_m")?;
-            p.summit_density = get("eta_per_m2")?;
+            [p.sigma, p.summit_radius, p.summit_density] = upstream_summits(&ctx.upstream, i)?;
         }
         ctx.progress.set_message("ISBL curves and force table");
         let a = analyse(&p, &self.params)?;
@@ -800,8 +738,13 @@ mod tests {
     #[test]
     fn isbl_params_round_trip_through_the_result_json() {
         for p in [IsblParams::improved_2dof(), IsblParams::mtl_table_3_2()] {
-            let back = isbl_params_from_json(&params_json(&p)).unwrap();
-            assert_eq!(back, p);
+            let c = ContactParams {
+                params: p,
+                ..validate(&ContactConfig::defaults()).unwrap()
+            };
+            let result = report_json(&analyse(&p, &c).unwrap(), &c);
+            let back = ContactInputs::from_json(&result["inputs"]).unwrap();
+            assert_eq!(back.params().unwrap(), p);
         }
     }
 

@@ -1,0 +1,217 @@
+//! The contact stage's interface parameters (`inputs` in its `result.json`, and the `inputs`
+//! string of `contact.h5`): everything a downstream stage needs to rebuild the ISBL model and
+//! its force table (the 2-DOF and 3-DOF cases, the calibration).
+
+use crate::contact::isbl::{FrictionLaw, IsblParams, SummitOffset, SurfaceEnergy};
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use std::collections::BTreeMap;
+
+/// The ISBL parameters as the contact stage writes them (SI, unit suffixes in the keys). The
+/// field order is the key order of the written JSON, which is also part of the contact
+/// instance's cache key: do not reorder.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ContactInputs {
+    #[serde(rename = "sigma_m")]
+    pub sigma: f64,
+    #[serde(rename = "R_m")]
+    pub summit_radius: f64,
+    #[serde(rename = "eta_per_m2")]
+    pub summit_density: f64,
+    #[serde(rename = "E1_Pa")]
+    pub slider_modulus: f64,
+    #[serde(rename = "nu1")]
+    pub slider_poisson: f64,
+    #[serde(rename = "E2_Pa")]
+    pub disk_modulus: f64,
+    #[serde(rename = "nu2")]
+    pub disk_poisson: f64,
+    #[serde(rename = "nu_yielding")]
+    pub yielding_poisson: f64,
+    #[serde(rename = "H_Pa")]
+    pub hardness: f64,
+    #[serde(rename = "epsilon_m")]
+    pub lj_spacing: f64,
+    #[serde(rename = "t_m")]
+    pub lubricant_thickness: f64,
+    pub surface_energy: SurfaceEnergyInput,
+    /// `None` or `McCool`.
+    pub summit_offset: String,
+    /// `JunctionShear` or `SeedPowerElastic`.
+    pub friction_law: String,
+}
+
+/// Δγ: `{"constant_N_per_m": …}` or `{"variable": {"c1_N_per_m", "c2_per_m", "c3_N_per_m"}}`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum SurfaceEnergyInput {
+    Constant {
+        #[serde(rename = "constant_N_per_m")]
+        delta_gamma: f64,
+    },
+    Variable {
+        variable: VariableSurfaceEnergy,
+    },
+}
+
+/// The coefficients of `Δγ(s) = c1·exp(−c2·s) + c3`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct VariableSurfaceEnergy {
+    #[serde(rename = "c1_N_per_m")]
+    pub c1: f64,
+    #[serde(rename = "c2_per_m")]
+    pub c2: f64,
+    #[serde(rename = "c3_N_per_m")]
+    pub c3: f64,
+}
+
+impl From<&IsblParams> for ContactInputs {
+    fn from(p: &IsblParams) -> Self {
+        ContactInputs {
+            sigma: p.sigma,
+            summit_radius: p.summit_radius,
+            summit_density: p.summit_density,
+            slider_modulus: p.slider_modulus,
+            slider_poisson: p.slider_poisson,
+            disk_modulus: p.disk_modulus,
+            disk_poisson: p.disk_poisson,
+            yielding_poisson: p.yielding_poisson,
+            hardness: p.hardness,
+            lj_spacing: p.lj_spacing,
+            lubricant_thickness: p.lubricant_thickness,
+            surface_energy: match p.surface_energy {
+                SurfaceEnergy::Constant { delta_gamma } => {
+                    SurfaceEnergyInput::Constant { delta_gamma }
+                }
+                SurfaceEnergy::Variable { c1, c2, c3 } => SurfaceEnergyInput::Variable {
+                    variable: VariableSurfaceEnergy { c1, c2, c3 },
+                },
+            },
+            summit_offset: format!("{:?}", p.summit_offset),
+            friction_law: format!("{:?}", p.friction_law),
+        }
+    }
+}
+
+impl ContactInputs {
+    /// The JSON the contact stage writes (`inputs`).
+    pub fn to_json(&self) -> Value {
+        serde_json::to_value(self).unwrap_or(Value::Null)
+    }
+
+    /// The `inputs` block of a contact result; `None` if it is missing or malformed.
+    pub fn from_json(v: &Value) -> Option<Self> {
+        Self::deserialize(v).ok()
+    }
+
+    /// The ISBL parameters; `None` for an unknown summit offset or friction law.
+    pub fn params(&self) -> Option<IsblParams> {
+        Some(IsblParams {
+            sigma: self.sigma,
+            summit_radius: self.summit_radius,
+            summit_density: self.summit_density,
+            slider_modulus: self.slider_modulus,
+            slider_poisson: self.slider_poisson,
+            disk_modulus: self.disk_modulus,
+            disk_poisson: self.disk_poisson,
+            yielding_poisson: self.yielding_poisson,
+            hardness: self.hardness,
+            lj_spacing: self.lj_spacing,
+            lubricant_thickness: self.lubricant_thickness,
+            surface_energy: match self.surface_energy {
+                SurfaceEnergyInput::Constant { delta_gamma } => {
+                    SurfaceEnergy::Constant { delta_gamma }
+                }
+                SurfaceEnergyInput::Variable {
+                    variable: VariableSurfaceEnergy { c1, c2, c3 },
+                } => SurfaceEnergy::Variable { c1, c2, c3 },
+            },
+            summit_offset: match self.summit_offset.as_str() {
+                "None" => SummitOffset::None,
+                "McCool" => SummitOffset::McCool,
+                _ => return None,
+            },
+            friction_law: match self.friction_law.as_str() {
+                "JunctionShear" => FrictionLaw::JunctionShear,
+                "SeedPowerElastic" => FrictionLaw::SeedPowerElastic,
+                _ => return None,
+            },
+        })
+    }
+}
+
+/// The ISBL parameters of the contact instance `contact` from the upstream results.
+pub fn upstream_isbl_params(
+    upstream: &BTreeMap<String, Value>,
+    contact: &str,
+) -> Result<IsblParams> {
+    let result = upstream
+        .get(contact)
+        .ok_or_else(|| Error::Stage(format!("no result from contact `{contact}`")))?;
+    ContactInputs::from_json(&result["inputs"])
+        .and_then(|i| i.params())
+        .ok_or_else(|| Error::Stage(format!("contact `{contact}` result has no usable `inputs`")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    /// The `inputs` block as the contact stage wrote it before the struct existed: the bytes
+    /// (and so the contact cache keys) must not change.
+    fn written_before(p: &IsblParams) -> Value {
+        let surface_energy = match p.surface_energy {
+            SurfaceEnergy::Constant { delta_gamma } => json!({"constant_N_per_m": delta_gamma}),
+            SurfaceEnergy::Variable { c1, c2, c3 } => {
+                json!({"variable": {"c1_N_per_m": c1, "c2_per_m": c2, "c3_N_per_m": c3}})
+            }
+        };
+        json!({
+            "sigma_m": p.sigma, "R_m": p.summit_radius, "eta_per_m2": p.summit_density,
+            "E1_Pa": p.slider_modulus, "nu1": p.slider_poisson,
+            "E2_Pa": p.disk_modulus, "nu2": p.disk_poisson, "nu_yielding": p.yielding_poisson,
+            "H_Pa": p.hardness, "epsilon_m": p.lj_spacing, "t_m": p.lubricant_thickness,
+            "surface_energy": surface_energy,
+            "summit_offset": format!("{:?}", p.summit_offset),
+            "friction_law": format!("{:?}", p.friction_law),
+        })
+    }
+
+    #[test]
+    fn written_json_is_unchanged_and_reads_back() {
+        let mut mccool = IsblParams::improved_2dof();
+        mccool.summit_offset = SummitOffset::McCool;
+        mccool.friction_law = FrictionLaw::SeedPowerElastic;
+        for p in [
+            IsblParams::improved_2dof(),
+            IsblParams::mtl_table_3_2(),
+            mccool,
+        ] {
+            let v = ContactInputs::from(&p).to_json();
+            assert_eq!(v.to_string(), written_before(&p).to_string());
+            let back = ContactInputs::from_json(&v).unwrap().params().unwrap();
+            assert_eq!(back, p);
+        }
+    }
+
+    #[test]
+    fn a_missing_field_or_unknown_law_is_unusable() {
+        let p = IsblParams::improved_2dof();
+        let mut v = ContactInputs::from(&p).to_json();
+        v.as_object_mut().unwrap().remove("H_Pa");
+        assert!(ContactInputs::from_json(&v).is_none());
+        let mut v = ContactInputs::from(&p).to_json();
+        v["friction_law"] = json!("Coulomb");
+        assert!(ContactInputs::from_json(&v).unwrap().params().is_none());
+        let up = BTreeMap::from([("c".to_string(), json!({"inputs": {}}))]);
+        let e = upstream_isbl_params(&up, "c").unwrap_err().to_string();
+        assert!(
+            e.contains("contact `c` result has no usable `inputs`"),
+            "{e}"
+        );
+        let e = upstream_isbl_params(&up, "d").unwrap_err().to_string();
+        assert!(e.contains("no result from contact `d`"), "{e}");
+    }
+}

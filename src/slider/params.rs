@@ -1,0 +1,477 @@
+//! `[simulate]` settings: the raw `pipeline.toml` table (`SimulateConfig`, every key also a
+//! `hdi simulate` option), its check into `SimulateParams`, and the canonical parameters that
+//! key the instance and each of its cases. `[calibrate]`, `[doe]`, `[analysis]` and the Slurm
+//! executor resolve a `[simulate]` instance through here, not through the simulate stage.
+
+use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::units::{Length, TimeSpan};
+use crate::dynamics::air_bearing::RearStiffening;
+use crate::dynamics::metrics::{CaseParams, SteadyWindow};
+use crate::dynamics::params::{improved_2dof, initial_2dof, optimised_bulge, Model2Dof};
+use crate::dynamics::two_dof::{ContactForceForm, Integrator, SimOptions};
+use serde::Deserialize;
+use serde_json::{json, Value};
+
+fn default_model() -> String {
+    "improved_2dof".into()
+}
+fn default_none() -> String {
+    "none".into()
+}
+fn nm(v: f64) -> Length {
+    Length(v * 1e-9)
+}
+fn default_start() -> Length {
+    nm(0.0)
+}
+fn default_stop() -> Length {
+    nm(15.0)
+}
+fn default_step() -> Length {
+    nm(0.2)
+}
+fn default_duration() -> TimeSpan {
+    TimeSpan(2e-3)
+}
+fn default_steady() -> TimeSpan {
+    TimeSpan(0.5e-3)
+}
+fn default_output_step() -> TimeSpan {
+    TimeSpan(0.25e-6)
+}
+fn default_contact_force() -> String {
+    "interference_tangent".into()
+}
+fn default_integrator() -> String {
+    "dopri5".into()
+}
+fn default_rtol() -> f64 {
+    1e-8
+}
+fn default_contact_max_step() -> TimeSpan {
+    TimeSpan(1e-8)
+}
+fn default_max_step() -> TimeSpan {
+    TimeSpan(1e-6)
+}
+fn default_fixed_step() -> TimeSpan {
+    TimeSpan(1e-9)
+}
+fn default_true() -> bool {
+    true
+}
+fn default_geometry() -> String {
+    "dissertation".into()
+}
+
+/// `[simulate.NAME]` as written in `pipeline.toml` (every key is also a `hdi simulate` option).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SimulateConfig {
+    /// `improved_2dof` (§2.2, default) or `initial_2dof` (§2.1).
+    #[serde(default = "default_model")]
+    pub model: String,
+    /// The `[contact.*]` instance whose interface (ISBL table) the cases use.
+    pub contact: String,
+    /// A `[dmw.*]` instance (track 1 under every point) or `none`.
+    #[serde(default = "default_none")]
+    pub dmw: String,
+    /// Explicit actuations; otherwise `actuation_start … actuation_stop` by `actuation_step`.
+    #[serde(default)]
+    pub actuations: Option<Vec<Length>>,
+    #[serde(default = "default_start")]
+    pub actuation_start: Length,
+    #[serde(default = "default_stop")]
+    pub actuation_stop: Length,
+    #[serde(default = "default_step")]
+    pub actuation_step: Length,
+    #[serde(default = "default_duration")]
+    pub duration: TimeSpan,
+    /// Start of the steady-state window (it ends at `duration`).
+    #[serde(default = "default_steady")]
+    pub steady_start: TimeSpan,
+    #[serde(default = "default_output_step")]
+    pub output_step: TimeSpan,
+    /// `interference_tangent` (default, eq. 2.16 as written) or `static_curve`.
+    #[serde(default = "default_contact_force")]
+    pub contact_force: String,
+    /// `dopri5` (adaptive, default) or `rk5_fixed` (the dissertation's fixed small step).
+    #[serde(default = "default_integrator")]
+    pub integrator: String,
+    #[serde(default = "default_rtol")]
+    pub rtol: f64,
+    /// Step cap while the bulge is in contact (dopri5).
+    #[serde(default = "default_contact_max_step")]
+    pub contact_max_step: TimeSpan,
+    /// Step cap everywhere (dopri5).
+    #[serde(default = "default_max_step")]
+    pub max_step: TimeSpan,
+    /// Step of `rk5_fixed`.
+    #[serde(default = "default_fixed_step")]
+    pub fixed_step: TimeSpan,
+    /// DMW under the LE/TE delayed by the disk transit (§6).
+    #[serde(default = "default_true")]
+    pub transit_delay: bool,
+    /// Repeat a DMW record shorter than the run.
+    #[serde(default)]
+    pub dmw_wrap: bool,
+    /// Improved model's rear-spring stiffening amplitude β (§3.2, default 1).
+    #[serde(default)]
+    pub kr_stiffening_beta: Option<f64>,
+    /// `dissertation` (Tables 2.1: a = 3 µm, x = 8 µm) or `optimised` (§2.3: a = 4.86 µm,
+    /// x = 6.35 µm).
+    #[serde(default = "default_geometry")]
+    pub geometry: String,
+    /// Full bulge width w_TFC of the optimised design (dropped in the text; default 50 µm).
+    #[serde(default)]
+    pub bulge_width: Option<Length>,
+    /// Actuations whose time histories are plotted (nearest case).
+    #[serde(default)]
+    pub histories: Vec<Length>,
+    /// `nominal` (§5.4 default: start from the nominal state) or `static` (start from the
+    /// static equilibrium at the case's actuation, recommended for sweeps).
+    #[serde(default = "default_init")]
+    pub init: String,
+    /// A `[calibrate.*]` instance whose fitted knobs (DMW scale, β, Δγ, ε, ζ_c, …) replace
+    /// the spec defaults of this instance.
+    #[serde(default)]
+    pub calibration: Option<String>,
+    /// Heave offset of the start state (from the nominal or static state), e.g. `"1 nm"`: a
+    /// kick whose free decay shows the AB modes (Appendix B's zero excitation).
+    #[serde(default)]
+    pub initial_heave: Option<Length>,
+}
+
+fn default_init() -> String {
+    "nominal".into()
+}
+
+/// Validated settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimulateParams {
+    pub model_name: String,
+    pub model: Model2Dof,
+    pub contact: String,
+    pub dmw: Option<String>,
+    pub actuations: Vec<f64>,
+    pub options: SimOptions,
+    pub steady_start: f64,
+    pub histories: Vec<f64>,
+    pub geometry: String,
+    pub calibration: Option<String>,
+    /// The fitted knob values applied at run time (empty without calibration).
+    pub calibrated_knobs: Vec<(String, f64)>,
+}
+
+/// The uncalibrated `[simulate.<base>]` another stage builds on (`[calibrate]`, `[doe]`),
+/// validated; failures are reported against that stage's `simulate` key.
+pub fn uncalibrated_base(
+    file: &PipelineFile,
+    section: &str,
+    name: &str,
+    base: &str,
+) -> std::result::Result<SimulateParams, ConfigError> {
+    let err = |m: String| file.error(section, name, "simulate", m);
+    let Some(cfg) = file.raw.simulate.get(base) else {
+        return Err(err(format!("no [simulate.{base}] in this file")));
+    };
+    if cfg.calibration.is_some() {
+        return Err(err(format!(
+            "[simulate.{base}] is itself calibrated; [{section}] starts from an uncalibrated \
+             instance"
+        )));
+    }
+    SimulateParams::check(cfg)
+        .map_err(|(k, m)| err(format!("[simulate.{base}] is invalid ({k}: {m})")))
+}
+
+impl SimulateParams {
+    /// Check a `[simulate]` table key by key (no cross-references to other instances);
+    /// failures: (key, message).
+    pub fn check(cfg: &SimulateConfig) -> std::result::Result<SimulateParams, (String, String)> {
+        let bad = |k: &str, m: String| Err((k.to_string(), m));
+        let mut model = match cfg.model.as_str() {
+            "improved_2dof" => improved_2dof(),
+            "initial_2dof" => initial_2dof(),
+            o => {
+                return bad(
+                    "model",
+                    format!("unknown model `{o}` (improved_2dof, initial_2dof)"),
+                )
+            }
+        };
+        match cfg.geometry.as_str() {
+            "dissertation" => {
+                if cfg.bulge_width.is_some() {
+                    return bad(
+                        "bulge_width",
+                        "only used with geometry = \"optimised\"".into(),
+                    );
+                }
+            }
+            "optimised" => {
+                let w = cfg.bulge_width.map_or(50e-6, |l| l.0);
+                match optimised_bulge(w) {
+                    Ok(b) => model = model.with_bulge(b),
+                    Err(e) => return bad("bulge_width", e.to_string()),
+                }
+            }
+            o => {
+                return bad(
+                    "geometry",
+                    format!("unknown geometry `{o}` (dissertation, optimised)"),
+                )
+            }
+        }
+        if let Some(beta) = cfg.kr_stiffening_beta {
+            if !(beta.is_finite() && (0.0..=10.0).contains(&beta)) {
+                return bad(
+                    "kr_stiffening_beta",
+                    format!("{beta} is out of range: 0 ≤ β ≤ 10"),
+                );
+            }
+            model.air_bearing.stiffening = if beta == 0.0 {
+                RearStiffening::Constant
+            } else {
+                RearStiffening::Quadratic { beta }
+            };
+        }
+        if let Err(e) = model.validate() {
+            return bad("model", e.to_string());
+        }
+        let max = model.max_actuation;
+        let actuations: Vec<f64> = match &cfg.actuations {
+            Some(list) => {
+                let mut v: Vec<f64> = list.iter().map(|l| l.0).collect();
+                v.sort_by(f64::total_cmp);
+                v.dedup();
+                v
+            }
+            None => {
+                let (a, b, s) = (
+                    cfg.actuation_start.0,
+                    cfg.actuation_stop.0,
+                    cfg.actuation_step.0,
+                );
+                if !(s > 0.0 && b >= a) {
+                    return bad(
+                    "actuation_step",
+                    format!("need actuation_step > 0 and actuation_stop ≥ actuation_start (got {a:e} … {b:e} by {s:e} m)"),
+                );
+                }
+                let n = ((b - a) / s + 1e-9).floor() as usize;
+                if n > 10_000 {
+                    return bad(
+                        "actuation_step",
+                        format!("{n} cases is too many (≤ 10 000)"),
+                    );
+                }
+                // Rounded to the picometre so 0.2 nm steps give 8.6 nm, not 8.600000000000001.
+                (0..=n)
+                    .map(|i| ((a + i as f64 * s) * 1e12).round() / 1e12)
+                    .collect()
+            }
+        };
+        if actuations.is_empty() {
+            return bad("actuations", "no actuation to simulate".into());
+        }
+        if let Some(a) = actuations.iter().find(|a| !(**a >= 0.0 && **a <= max)) {
+            let key = if cfg.actuations.is_some() {
+                "actuations"
+            } else if *a < 0.0 {
+                "actuation_start"
+            } else {
+                "actuation_stop"
+            };
+            return bad(
+                key,
+                format!(
+                    "{} nm is outside the model's range 0 … {} nm",
+                    a * 1e9,
+                    max * 1e9
+                ),
+            );
+        }
+        let contact_force = match cfg.contact_force.as_str() {
+            "interference_tangent" => ContactForceForm::InterferenceTangent,
+            "static_curve" => ContactForceForm::StaticCurve,
+            o => {
+                return bad(
+                    "contact_force",
+                    format!("unknown `{o}` (interference_tangent, static_curve)"),
+                )
+            }
+        };
+        let integrator = match cfg.integrator.as_str() {
+            "dopri5" => Integrator::Dopri5 {
+                rtol: cfg.rtol,
+                contact_max_step: cfg.contact_max_step.0,
+                max_step: cfg.max_step.0,
+            },
+            "rk5_fixed" => Integrator::Rk5Fixed {
+                step: cfg.fixed_step.0,
+            },
+            o => return bad("integrator", format!("unknown `{o}` (dopri5, rk5_fixed)")),
+        };
+        let static_init = match cfg.init.as_str() {
+            "nominal" => false,
+            "static" => true,
+            o => return bad("init", format!("unknown `{o}` (nominal, static)")),
+        };
+        let z0 = cfg.initial_heave.map_or(0.0, |l| l.0);
+        if !(z0.is_finite() && z0.abs() <= 5e-9) {
+            return bad(
+                "initial_heave",
+                format!("{z0} m is out of range: |z0| ≤ 5 nm"),
+            );
+        }
+        let options = SimOptions {
+            static_init,
+            duration: cfg.duration.0,
+            output_step: cfg.output_step.0,
+            contact_force,
+            integrator,
+            transit_delay: cfg.transit_delay,
+            wrap_dmw: cfg.dmw_wrap,
+            initial_state: [z0, 0.0, 0.0, 0.0],
+        };
+        if !(cfg.duration.0 > 0.0 && cfg.duration.0 <= 0.1) {
+            return bad(
+                "duration",
+                format!("{} s is out of range: 0 < T ≤ 100 ms", cfg.duration.0),
+            );
+        }
+        if !(cfg.steady_start.0 >= 0.0 && cfg.steady_start.0 < 0.9 * cfg.duration.0) {
+            return bad(
+                "steady_start",
+                "must lie in [0, 0.9·duration): the steady window needs samples".into(),
+            );
+        }
+        // The case checks the remaining numbers (rtol, steps, output step) with their ranges.
+        if let Err(e) = options.validate().map_err(|e| e.to_string()) {
+            let key = if e.contains("rtol") {
+                "rtol"
+            } else if e.contains("contact_max_step") {
+                "contact_max_step"
+            } else if e.contains("max_step") {
+                "max_step"
+            } else if e.contains("fixed step") {
+                "fixed_step"
+            } else {
+                "output_step"
+            };
+            return bad(key, e);
+        }
+        let dmw = (cfg.dmw != "none").then(|| cfg.dmw.clone());
+        Ok(SimulateParams {
+            model_name: cfg.model.clone(),
+            model,
+            contact: cfg.contact.clone(),
+            dmw,
+            actuations,
+            options,
+            steady_start: cfg.steady_start.0,
+            histories: cfg.histories.iter().map(|l| l.0).collect(),
+            geometry: cfg.geometry.clone(),
+            calibration: cfg.calibration.clone(),
+            calibrated_knobs: Vec::new(),
+        })
+    }
+    /// Canonical parameters of the whole stage instance (its cache key).
+    pub fn canonical(&self) -> Value {
+        json!({
+            "model": self.model_name,
+            "geometry": self.geometry,
+            "model_parameters": format!("{:?}", self.model),
+            "contact": self.contact,
+            "dmw": self.dmw,
+            "actuations_m": self.actuations,
+            "options": format!("{:?}", self.options),
+            "steady_start_s": self.steady_start,
+            "histories_m": self.histories,
+            "calibration": self.calibration,
+        })
+    }
+
+    pub fn case_params(&self, actuation: f64, contact_key: &str, dmw_key: Option<&str>) -> Value {
+        // `model_parameters` carries the calibrated model; the DMW scale and the calibrated
+        // interface enter through `calibrated_knobs`.
+        json!({
+            "calibrated_knobs": self.calibrated_knobs,
+            "model_parameters": format!("{:?}", self.model),
+            "actuation_m": actuation,
+            "options": format!("{:?}", self.options),
+            "steady_start_s": self.steady_start,
+            "contact_key": contact_key,
+            "dmw_key": dmw_key,
+        })
+    }
+
+    pub fn case_metric_params(&self) -> CaseParams {
+        CaseParams {
+            window: SteadyWindow {
+                start_s: self.steady_start,
+                end_s: self.options.duration,
+            },
+            fh_nom_m: self.model.nominal_flying_height,
+            t0_m: 0.5 * self.model.interface.lubricant_thickness,
+            ..CaseParams::improved_2dof()
+        }
+    }
+
+    /// A `[simulate.NAME]` table checked, and its references to other instances (contact,
+    /// calibration, DMW) resolved against the file; errors name the instance's key.
+    pub fn from_config(
+        file: &PipelineFile,
+        name: &str,
+        cfg: &SimulateConfig,
+    ) -> std::result::Result<Self, ConfigError> {
+        let params =
+            SimulateParams::check(cfg).map_err(|(k, m)| file.error("simulate", name, &k, m))?;
+        if !file.raw.contact.contains_key(&cfg.contact) {
+            return Err(file.error(
+                "simulate",
+                name,
+                "contact",
+                format!("no [contact.{}] in this file", cfg.contact),
+            ));
+        }
+        if let Some(c) = &params.calibration {
+            let Some(cal) = file.raw.calibrate.get(c) else {
+                return Err(file.error(
+                    "simulate",
+                    name,
+                    "calibration",
+                    format!("no [calibrate.{c}] in this file"),
+                ));
+            };
+            if cal.simulate == name {
+                return Err(file.error(
+                    "simulate",
+                    name,
+                    "calibration",
+                    format!("[calibrate.{c}] calibrates this instance; run the calibrated sweep as a second [simulate] instance"),
+                ));
+            }
+        }
+        if let Some(d) = &params.dmw {
+            if !file.raw.dmw.contains_key(d) && !file.raw.excitation.contains_key(d) {
+                return Err(file.error(
+                    "simulate",
+                    name,
+                    "dmw",
+                    format!("no [dmw.{d}] or [excitation.{d}] in this file (or \"none\")"),
+                ));
+            }
+        }
+        Ok(params)
+    }
+
+    /// The instances whose results the cases need: contact, DMW, calibration.
+    pub fn upstream(&self) -> Vec<String> {
+        let mut u = vec![self.contact.clone()];
+        u.extend(self.dmw.iter().cloned());
+        u.extend(self.calibration.iter().cloned());
+        u
+    }
+}

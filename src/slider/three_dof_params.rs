@@ -1,0 +1,364 @@
+//! `[three_dof]` settings: the raw `pipeline.toml` table (`ThreeDofConfig`), its check into
+//! `ThreeDofParams` (scenario, interfaces and lubricant cases of Table 4.4, options) and the
+//! canonical parameters that key the instance. The 3-DOF stage runs them; `[analysis]`
+//! resolves a 3-DOF source's case files through here.
+
+use crate::contact::mtl::LubricantCase;
+use crate::core::units::{Length, TimeSpan};
+use crate::dynamics::three_dof::case::{Init3Dof, Model3Dof, Options3Dof, TrackAssignment};
+use crate::dynamics::three_dof::inputs::{ActuationProfile, ShockPulse};
+use crate::dynamics::three_dof_ab::{PushbackCurve, SpringLaw};
+use serde::Deserialize;
+use serde_json::{json, Value};
+
+fn default_none() -> String {
+    "none".into()
+}
+fn default_scenario() -> String {
+    "constant".into()
+}
+fn default_interfaces() -> Vec<String> {
+    vec!["isbl".into()]
+}
+fn default_lubricants() -> Vec<String> {
+    vec!["reference".into()]
+}
+fn default_duration() -> TimeSpan {
+    TimeSpan(2e-3)
+}
+fn default_steady() -> TimeSpan {
+    TimeSpan(0.5e-3)
+}
+fn default_output_step() -> TimeSpan {
+    TimeSpan(0.25e-6)
+}
+fn default_shock_start() -> TimeSpan {
+    TimeSpan(0.6e-3)
+}
+fn default_shock_duration() -> TimeSpan {
+    TimeSpan(5e-6)
+}
+fn default_shock_impulse() -> f64 {
+    0.25e-6
+}
+fn default_true() -> bool {
+    true
+}
+fn default_word(w: &str) -> String {
+    w.to_string()
+}
+fn default_spring_law() -> String {
+    default_word("integrated")
+}
+fn default_init() -> String {
+    default_word("static")
+}
+fn default_tracks() -> String {
+    default_word("three")
+}
+fn default_pushback() -> String {
+    default_word("linear")
+}
+
+/// `[three_dof.NAME]` as written in `pipeline.toml`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ThreeDofConfig {
+    /// The `[contact.*]` instance whose ISBL interface the features use (σ, R, η, H, t).
+    pub contact: String,
+    /// A `[dmw.*]` or `[excitation.*]` instance (tracks D1–D3) or `none`.
+    #[serde(default = "default_none")]
+    pub dmw: String,
+    /// `constant` (S3), `shock` (S4) or `variable` (S5/S6).
+    #[serde(default = "default_scenario")]
+    pub scenario: String,
+    /// Constant / shock actuation (default 12 nm constant, 5 nm shock).
+    #[serde(default)]
+    pub actuation: Option<Length>,
+    /// Variable scenario: `[["0 ms", "5 nm"], ["0.2 ms", "5 nm"], …]` (default the S5 profile).
+    #[serde(default)]
+    pub profile: Option<Vec<(TimeSpan, Length)>>,
+    /// Any of `isbl`, `mtl`: one case each (MTL once per lubricant).
+    #[serde(default = "default_interfaces")]
+    pub interfaces: Vec<String>,
+    /// Table 4.4 cases for the MTL runs: `reference`, `humidity_temperature`, `more_bonding`,
+    /// `larger_gyration_radius`.
+    #[serde(default = "default_lubricants")]
+    pub lubricants: Vec<String>,
+    #[serde(default = "default_duration")]
+    pub duration: TimeSpan,
+    #[serde(default = "default_steady")]
+    pub steady_start: TimeSpan,
+    #[serde(default = "default_output_step")]
+    pub output_step: TimeSpan,
+    #[serde(default = "default_shock_start")]
+    pub shock_start: TimeSpan,
+    #[serde(default = "default_shock_duration")]
+    pub shock_duration: TimeSpan,
+    /// Impulse of the shock [N·s] (0.25 µN·s).
+    #[serde(default = "default_shock_impulse")]
+    pub shock_impulse: f64,
+    /// `integrated` (default, stable) or `linear` (eqs. 4.11–4.14).
+    #[serde(default = "default_spring_law")]
+    pub ab_spring_law: String,
+    /// `linear` (ΔFH = 0.5·h) or `flattened` (above 12 nm, dynamics.md §3.3).
+    #[serde(default = "default_pushback")]
+    pub pushback_curve: String,
+    /// `static` (the push-back already in place) or `nominal`.
+    #[serde(default = "default_init")]
+    pub init: String,
+    /// `three` (D1 centre, D2 +y, D3 −y) or `one` (D1 everywhere).
+    #[serde(default = "default_tracks")]
+    pub tracks: String,
+    #[serde(default = "default_true")]
+    pub transit_delay: bool,
+    #[serde(default)]
+    pub dmw_wrap: bool,
+}
+
+/// One case of an instance: the interface law and its lubricant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CaseInterface {
+    Isbl,
+    Mtl(LubricantCase),
+}
+
+impl CaseInterface {
+    pub fn label(&self) -> String {
+        match self {
+            CaseInterface::Isbl => "isbl".into(),
+            CaseInterface::Mtl(l) => format!("mtl_{}", lubricant_name(*l)),
+        }
+    }
+}
+
+fn lubricant_name(l: LubricantCase) -> &'static str {
+    match l {
+        LubricantCase::Reference => "reference",
+        LubricantCase::HumidityTemperature => "humidity_temperature",
+        LubricantCase::MoreBonding => "more_bonding",
+        LubricantCase::LargerGyrationRadius => "larger_gyration_radius",
+    }
+}
+
+/// Validated parameters (SI).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ThreeDofParams {
+    pub contact: String,
+    pub dmw: Option<String>,
+    pub scenario: String,
+    pub profile: ActuationProfile,
+    pub shock: Option<ShockPulse>,
+    pub cases: Vec<CaseInterface>,
+    pub options: Options3Dof,
+    pub steady_start: f64,
+    pub spring_law: SpringLaw,
+    pub pushback: String,
+}
+
+type Bad = (String, String);
+
+fn bad<T>(key: &str, m: impl Into<String>) -> std::result::Result<T, Bad> {
+    Err((key.to_string(), m.into()))
+}
+
+impl ThreeDofParams {
+    /// Check a `[three_dof]` table key by key (no cross-references to other instances);
+    /// failures: (key, message).
+    pub fn check(cfg: &ThreeDofConfig) -> std::result::Result<ThreeDofParams, Bad> {
+        let dmw = (cfg.dmw != "none").then(|| cfg.dmw.clone());
+        let nm = 1e-9;
+        let (profile, shock) = match cfg.scenario.as_str() {
+            "constant" | "shock" => {
+                if cfg.profile.is_some() {
+                    return bad("profile", "only the `variable` scenario takes a profile");
+                }
+                let default = if cfg.scenario == "shock" { 5.0 } else { 12.0 };
+                let h = cfg.actuation.map_or(default * nm, |l| l.0);
+                let p = ActuationProfile::constant(h)
+                    .map_err(|e| ("actuation".into(), e.to_string()))?;
+                let shock = if cfg.scenario == "shock" {
+                    Some(
+                        ShockPulse::from_impulse(
+                            cfg.shock_start.0,
+                            cfg.shock_duration.0,
+                            cfg.shock_impulse,
+                        )
+                        .map_err(|e| ("shock_impulse".to_string(), e.to_string()))?,
+                    )
+                } else {
+                    None
+                };
+                (p, shock)
+            }
+            "variable" => {
+                if cfg.actuation.is_some() {
+                    return bad(
+                        "actuation",
+                        "the `variable` scenario takes a `profile` instead",
+                    );
+                }
+                let p = match &cfg.profile {
+                    None => ActuationProfile::variable_default(),
+                    Some(points) => {
+                        ActuationProfile::table(points.iter().map(|(t, h)| (t.0, h.0)).collect())
+                            .map_err(|e| ("profile".to_string(), e.to_string()))?
+                    }
+                };
+                (p, None)
+            }
+            o => {
+                return bad(
+                    "scenario",
+                    format!("unknown `{o}` (constant, shock, variable)"),
+                )
+            }
+        };
+        let b = Model3Dof::dissertation().geometry.bulge_height;
+        if profile.range().0 < b {
+            let key = if cfg.scenario == "variable" {
+                "profile"
+            } else {
+                "actuation"
+            };
+            return bad(
+                key,
+                format!(
+                "{:.2} nm is below the bulge height b_TFC = {:.0} nm (the 3-DOF actuation is the \
+                 bulge bottom's total protrusion)",
+                profile.range().0 * 1e9,
+                b * 1e9
+            ),
+            );
+        }
+        let mut cases = Vec::new();
+        if cfg.interfaces.is_empty() {
+            return bad("interfaces", "name at least one of isbl, mtl");
+        }
+        for i in &cfg.interfaces {
+            match i.as_str() {
+                "isbl" => cases.push(CaseInterface::Isbl),
+                "mtl" => {
+                    if cfg.lubricants.is_empty() {
+                        return bad(
+                            "lubricants",
+                            "the MTL runs need at least one lubricant case",
+                        );
+                    }
+                    for l in &cfg.lubricants {
+                        let case = LubricantCase::ALL
+                            .into_iter()
+                            .find(|c| lubricant_name(*c) == l)
+                            .ok_or_else(|| {
+                                (
+                                    "lubricants".to_string(),
+                                    format!(
+                                    "unknown `{l}` (reference, humidity_temperature, more_bonding, \
+                                     larger_gyration_radius)"
+                                ),
+                                )
+                            })?;
+                        cases.push(CaseInterface::Mtl(case));
+                    }
+                }
+                o => return bad("interfaces", format!("unknown `{o}` (isbl, mtl)")),
+            }
+        }
+        let mut seen = Vec::new();
+        for c in &cases {
+            if seen.contains(c) {
+                return bad("interfaces", format!("`{}` listed twice", c.label()));
+            }
+            seen.push(*c);
+        }
+        let spring_law = match cfg.ab_spring_law.as_str() {
+            "integrated" => SpringLaw::Integrated,
+            "linear" => SpringLaw::Linear,
+            o => {
+                return bad(
+                    "ab_spring_law",
+                    format!("unknown `{o}` (integrated, linear)"),
+                )
+            }
+        };
+        if !matches!(cfg.pushback_curve.as_str(), "linear" | "flattened") {
+            return bad(
+                "pushback_curve",
+                format!("unknown `{}` (linear, flattened)", cfg.pushback_curve),
+            );
+        }
+        let init = match cfg.init.as_str() {
+            "static" => Init3Dof::AirBearingStatic,
+            "nominal" => Init3Dof::Nominal,
+            o => return bad("init", format!("unknown `{o}` (static, nominal)")),
+        };
+        let tracks = match cfg.tracks.as_str() {
+            "three" => TrackAssignment::Three,
+            "one" => TrackAssignment::One,
+            o => return bad("tracks", format!("unknown `{o}` (three, one)")),
+        };
+        let options = Options3Dof {
+            duration: cfg.duration.0,
+            output_step: cfg.output_step.0,
+            transit_delay: cfg.transit_delay,
+            wrap_dmw: cfg.dmw_wrap,
+            tracks,
+            init,
+            ..Options3Dof::default()
+        };
+        options
+            .validate()
+            .map_err(|e| ("duration".to_string(), e.to_string()))?;
+        if !(cfg.steady_start.0 >= 0.0 && cfg.steady_start.0 < cfg.duration.0) {
+            return bad("steady_start", "must lie in [0, duration)");
+        }
+        if let Some(s) = &shock {
+            if s.start + s.duration > cfg.duration.0 {
+                return bad("shock_start", "the pulse must end before `duration`");
+            }
+        }
+        Ok(ThreeDofParams {
+            contact: cfg.contact.clone(),
+            dmw,
+            scenario: cfg.scenario.clone(),
+            profile,
+            shock,
+            cases,
+            options,
+            steady_start: cfg.steady_start.0,
+            spring_law,
+            pushback: cfg.pushback_curve.clone(),
+        })
+    }
+    /// Canonical parameters (part of the instance key).
+    pub fn canonical(&self) -> Value {
+        let o = &self.options;
+        json!({
+            "contact": self.contact,
+            "dmw": self.dmw,
+            "scenario": self.scenario,
+            "profile_s_m": self.profile.points(),
+            "shock": self.shock.map(|s| json!({"start_s": s.start, "duration_s": s.duration, "peak_N": s.peak})),
+            "cases": self.cases.iter().map(|c| c.label()).collect::<Vec<_>>(),
+            "duration_s": o.duration,
+            "output_step_s": o.output_step,
+            "steady_start_s": self.steady_start,
+            "transit_delay": o.transit_delay,
+            "dmw_wrap": o.wrap_dmw,
+            "tracks": format!("{:?}", o.tracks),
+            "init": format!("{:?}", o.init),
+            "ab_spring_law": format!("{:?}", self.spring_law),
+            "pushback_curve": self.pushback,
+        })
+    }
+
+    /// The dissertation's 3-DOF model with this instance's spring law and push-back curve.
+    pub fn model(&self) -> Model3Dof {
+        let mut m = Model3Dof::dissertation();
+        m.air_bearing.spring_law = self.spring_law;
+        if self.pushback == "flattened" {
+            m.pushback = PushbackCurve::flattened();
+        }
+        m
+    }
+}
