@@ -8,11 +8,11 @@ use std::time::Instant;
 
 use crate::core::cache::Store;
 use crate::core::config::PipelineFile;
-use crate::core::engine::{self, Outcome, RunOptions, State};
 use crate::core::executor::ExecutorKind;
 use crate::core::units::{
     Area, Frequency, Length, PerArea, Pressure, Sensitivity, TimeSpan, Velocity, Viscosity,
 };
+use crate::engine::{self, Outcome, RunOptions, State};
 use crate::stages;
 use crate::stages::contact::{self, ContactConfig, SurfaceEnergyConfig};
 use crate::stages::dmw::{self, DmwConfig};
@@ -472,8 +472,8 @@ pub fn main() -> Result<()> {
     }
 }
 
-fn load(config: &Path) -> Result<(PipelineFile, Vec<Box<dyn crate::core::engine::Stage>>)> {
-    let file = PipelineFile::load(config)?;
+fn load(config: &Path) -> Result<(PipelineFile, Vec<Box<dyn crate::stages::Stage>>)> {
+    let file = stages::load(config)?;
     let stages = stages::build(&file)?;
     Ok((file, stages))
 }
@@ -1331,11 +1331,8 @@ fn cmd_simulate(a: SimulateArgs) -> Result<()> {
             anyhow::anyhow!("--{flag}: {m}")
         })?
         .params;
-    let isbl = crate::contact::lookup::IsblLookup::build(
+    let isbl = crate::contact::lookup::IsblLookup::build_standard(
         crate::contact::isbl::IsblModel::new(isbl_params)?,
-        0.05,
-        -2.0,
-        10.0,
     )?;
     let dmw = match &a.dmw {
         Some(p) => Some(sim::read_dmw_track(p)?),

@@ -285,12 +285,7 @@ fn bench_slider() -> Result<()> {
     use crate::dynamics::params::improved_2dof;
     use crate::dynamics::two_dof::{DmwInput, SimOptions, TwoDofCase};
     use rayon::prelude::*;
-    let isbl = IsblLookup::build(
-        IsblModel::new(IsblParams::improved_2dof())?,
-        0.05,
-        -2.0,
-        10.0,
-    )?;
+    let isbl = IsblLookup::build_standard(IsblModel::new(IsblParams::improved_2dof())?)?;
     let track = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1)?;
     let dmw = || {
         Some(DmwInput {

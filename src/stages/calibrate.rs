@@ -4,9 +4,9 @@
 //! A `[simulate]` instance with `calibration = "NAME"` then runs with the fitted knobs.
 
 use super::simulate::{self, DmwTrack, SimulateParams};
+use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::contact::isbl::IsblParams;
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::units::Length;
 use crate::dynamics::calibration::{
     calibrate, default_knobs, evaluate, targets_for, CalibrationBase, CalibrationResult,
@@ -61,8 +61,10 @@ pub struct CalibrateStage {
     pub settings: CalibrationSettings,
 }
 
-impl CalibrateStage {
-    pub fn from_config(
+impl FromConfig for CalibrateStage {
+    type Config = CalibrateConfig;
+
+    fn from_config(
         file: &PipelineFile,
         name: &str,
         cfg: &CalibrateConfig,
@@ -344,25 +346,16 @@ fn knob_rows(stage: &CalibrateStage, r: &CalibrationResult) -> Vec<Map<String, V
         .collect()
 }
 
-impl Stage for CalibrateStage {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn kind(&self) -> &'static str {
-        "calibrate"
-    }
-    fn model_version(&self) -> &'static str {
-        MODEL_VERSION
-    }
+impl StageKind for CalibrateStage {
+    const KIND: &'static str = "calibrate";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
     fn params(&self) -> Value {
         json!({
             "base": self.base_name,
             "base_parameters": self.base.canonical(),
             "settings": format!("{:?}", self.settings),
         })
-    }
-    fn inputs(&self) -> Vec<(String, PathBuf)> {
-        Vec::new()
     }
     fn upstream(&self) -> Vec<String> {
         let mut u = vec![self.base.contact.clone()];
@@ -499,14 +492,14 @@ pub fn re_evaluate(
 /// fitted values in the variant column). A fit that has not run (or is stale) gives one row
 /// without a number that says so.
 pub fn validation_rows(config: &std::path::Path) -> Result<Vec<crate::validate::Row>> {
-    use crate::core::engine::{plan, read_result, State};
+    use crate::engine::{plan, read_result, State};
     use crate::validate::{Row, Tolerance};
-    let file = PipelineFile::load(config)?;
+    let file = super::load(config)?;
     let stages = super::build(&file)?;
     let store = crate::core::cache::Store::open_existing(&file.processed_dir());
     let plan = plan(stages, &store, &Default::default())?;
     let mut rows = Vec::new();
-    for (name, cfg) in &file.raw.calibrate {
+    for (name, cfg) in &file.instances::<CalibrateConfig>("calibrate")? {
         let stage = CalibrateStage::from_config(&file, name, cfg)?;
         let planned = |n: &str| plan.planned.iter().find(|p| p.name == n);
         let current = |n: &str| planned(n).is_some_and(|p| p.state == State::Fresh);

@@ -2,13 +2,14 @@
 //! `docs/slurm.md`): which cases of the pipeline are stale, and the worker that computes one
 //! on a Slurm node through the same case cache (so the bytes are a local run's).
 
-use super::doe::{design_params, DoeStage};
-use super::simulate::{PreparedSweep, SimulateStage, MODEL_VERSION};
+use super::doe::{design_params, DoeConfig, DoeStage};
+use super::simulate::{PreparedSweep, SimulateConfig, SimulateStage, MODEL_VERSION};
+use super::{FromConfig, StageKind};
 use crate::core::cache::{Store, Verification};
 use crate::core::cases::{case_fingerprint, CASE_KIND};
 use crate::core::config::PipelineFile;
-use crate::core::engine::{plan, read_result, Plan, Stage, State};
 use crate::core::executor::{CaseComputer, CaseRegistry, CaseSpec};
+use crate::engine::{plan, read_result, Plan, State};
 use crate::error::{Error, Result};
 use serde_json::{json, Value};
 use std::collections::{BTreeMap, HashMap};
@@ -25,19 +26,16 @@ pub const DOE_CASE: &str = "doe";
 fn sweep_stage(file: &PipelineFile, kind: &str, instance: &str) -> Result<SimulateStage> {
     match kind {
         SIMULATE_CASE => {
-            let cfg =
-                file.raw.simulate.get(instance).ok_or_else(|| {
-                    Error::Stage(format!("no [simulate.{instance}] in the pipeline"))
-                })?;
-            Ok(SimulateStage::from_config(file, instance, cfg)?)
+            let cfg = file
+                .instance::<SimulateConfig>("simulate", instance)?
+                .ok_or_else(|| Error::Stage(format!("no [simulate.{instance}] in the pipeline")))?;
+            Ok(SimulateStage::from_config(file, instance, &cfg)?)
         }
         _ => {
             let cfg = file
-                .raw
-                .doe
-                .get(instance)
+                .instance::<DoeConfig>("doe", instance)?
                 .ok_or_else(|| Error::Stage(format!("no [doe.{instance}] in the pipeline")))?;
-            let doe = DoeStage::from_config(file, instance, cfg)?;
+            let doe = DoeStage::from_config(file, instance, &cfg)?;
             Ok(SimulateStage {
                 name: doe.params.base_name.clone(),
                 params: doe.params.base,
@@ -86,8 +84,14 @@ fn stale_instances(file: &PipelineFile, planned: &Plan) -> Vec<(&'static str, St
             .iter()
             .any(|p| p.name == name && p.state != State::Fresh)
     };
-    let sims = file.raw.simulate.keys().map(|n| (SIMULATE_CASE, n.clone()));
-    let does = file.raw.doe.keys().map(|n| (DOE_CASE, n.clone()));
+    let sims = file
+        .instance_names("simulate")
+        .into_iter()
+        .map(|n| (SIMULATE_CASE, n.to_string()));
+    let does = file
+        .instance_names("doe")
+        .into_iter()
+        .map(|n| (DOE_CASE, n.to_string()));
     sims.chain(does).filter(|(_, n)| stale(n)).collect()
 }
 
@@ -123,8 +127,10 @@ pub fn stale_cases(file: &PipelineFile, config: &Path, store: &Store) -> Result<
         let points: Vec<(Option<[f64; 3]>, f64)> = if kind == SIMULATE_CASE {
             sweep.params.actuations.iter().map(|&a| (None, a)).collect()
         } else {
-            let cfg = &file.raw.doe[&name];
-            DoeStage::from_config(file, &name, cfg)?
+            let cfg = file
+                .instance::<DoeConfig>("doe", &name)?
+                .ok_or_else(|| Error::Stage(format!("no [doe.{name}] in the pipeline")))?;
+            DoeStage::from_config(file, &name, &cfg)?
                 .design_cases()
                 .into_iter()
                 .map(|(d, a)| (Some(d), a))
@@ -190,7 +196,7 @@ impl CaseComputer for SweepWorker {
             match sweeps.get(&k) {
                 Some(s) => Arc::clone(s),
                 None => {
-                    let file = PipelineFile::load(Path::new(&config))?;
+                    let file = super::load(Path::new(&config))?;
                     let planned = plan_of(&file, store)?;
                     let s = Arc::new(prepared(&file, store, &planned, self.kind, &instance)?);
                     sweeps.insert(k, Arc::clone(&s));

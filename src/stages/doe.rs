@@ -6,11 +6,11 @@
 //! with a sensitivity check; and Table 2.8, the 2-DOF sweep on the initial and optimised designs.
 
 use super::simulate::{self, CaseOutcome, DmwTrack, SimulateParams};
+use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::contact::isbl::IsblModel;
 use crate::contact::lookup::IsblLookup;
 use crate::core::cases::{self, CaseEntry};
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::units::Length;
 use crate::dynamics::geometry::BulgeDesign;
 use crate::dynamics::metrics::{flyability, Regime};
@@ -21,7 +21,7 @@ use crate::numerics::regression::{
 };
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Bump when the numbers the stage derives from its cases change (the cases themselves carry
 /// the simulate stage's model version).
@@ -804,8 +804,10 @@ pub struct DoeStage {
     pub params: DoeParams,
 }
 
-impl DoeStage {
-    pub fn from_config(
+impl FromConfig for DoeStage {
+    type Config = DoeConfig;
+
+    fn from_config(
         file: &PipelineFile,
         name: &str,
         cfg: &DoeConfig,
@@ -820,21 +822,12 @@ impl DoeStage {
     }
 }
 
-impl Stage for DoeStage {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn kind(&self) -> &'static str {
-        "doe"
-    }
-    fn model_version(&self) -> &'static str {
-        MODEL_VERSION
-    }
+impl StageKind for DoeStage {
+    const KIND: &'static str = "doe";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
     fn params(&self) -> Value {
         self.params.canonical()
-    }
-    fn inputs(&self) -> Vec<(String, PathBuf)> {
-        Vec::new()
     }
     fn upstream(&self) -> Vec<String> {
         let mut u = vec![self.params.base.contact.clone()];
@@ -856,7 +849,7 @@ impl Stage for DoeStage {
                 .unwrap_or_default()
         };
         ctx.progress.set_message("interface table");
-        let isbl = IsblLookup::build(IsblModel::new(isbl_params)?, 0.05, -2.0, 10.0)?;
+        let isbl = IsblLookup::build_standard(IsblModel::new(isbl_params)?)?;
         let runner = CaseRunner {
             base: &p.base,
             isbl: &isbl,
@@ -1212,14 +1205,14 @@ impl Stage for DoeStage {
 /// `hdi validate` rows (area `optimisation`): each current `[doe]` optimum beside the
 /// dissertation's (a = 4.86 µm, x = 6.35 µm; w and ξ_min were dropped).
 pub fn validation_rows(config: &Path) -> Result<Vec<crate::validate::Row>> {
-    use crate::core::engine::{plan, read_result, State};
+    use crate::engine::{plan, read_result, State};
     use crate::validate::{Row, Tolerance};
-    let file = PipelineFile::load(config)?;
+    let file = super::load(config)?;
     let stages = super::build(&file)?;
     let store = crate::core::cache::Store::open_existing(&file.processed_dir());
     let plan = plan(stages, &store, &Default::default())?;
     let mut rows = Vec::new();
-    for (name, cfg) in &file.raw.doe {
+    for (name, cfg) in &file.instances::<DoeConfig>("doe")? {
         if !cfg.optimise {
             continue;
         }

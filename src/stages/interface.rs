@@ -1,15 +1,14 @@
 //! Interface stage: two measured surfaces (or explicit values) → the equivalent rough surface
 //! against a smooth flat (σ, R, η, β) that the contact models use (signals-and-surfaces.md §2.7).
 
+use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::store::H5Out;
 use crate::core::units::{Length, PerArea};
 use crate::error::{Error, Result};
 use crate::surface::combine::{combine, CombineRule, InterfaceStats, SurfaceStats};
 use serde::Deserialize;
 use serde_json::{json, Value};
-use std::path::PathBuf;
 
 pub const MODEL_VERSION: &str = "interface-1";
 
@@ -50,8 +49,10 @@ fn rule_name(r: &CombineRule) -> &'static str {
     }
 }
 
-impl InterfaceStage {
-    pub fn from_config(
+impl FromConfig for InterfaceStage {
+    type Config = InterfaceConfig;
+
+    fn from_config(
         file: &PipelineFile,
         name: &str,
         cfg: &InterfaceConfig,
@@ -96,8 +97,8 @@ impl InterfaceStage {
                 ));
             }
             for s in &cfg.surfaces {
-                if !file.raw.surface.contains_key(s) {
-                    let names: Vec<&str> = file.raw.surface.keys().map(String::as_str).collect();
+                if !file.has_instance("surface", s) {
+                    let names: Vec<&str> = file.instance_names("surface");
                     let hint = crate::core::config::nearest(s, &names)
                         .map(|n| format!(" (did you mean `{n}`?)"))
                         .unwrap_or_default();
@@ -139,16 +140,10 @@ pub fn interface_json(st: &InterfaceStats) -> Value {
     })
 }
 
-impl Stage for InterfaceStage {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn kind(&self) -> &'static str {
-        "interface"
-    }
-    fn model_version(&self) -> &'static str {
-        MODEL_VERSION
-    }
+impl StageKind for InterfaceStage {
+    const KIND: &'static str = "interface";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
     fn params(&self) -> Value {
         let explicit = match self.rule {
             CombineRule::Explicit { sigma, r, eta } => {
@@ -157,9 +152,6 @@ impl Stage for InterfaceStage {
             _ => Value::Null,
         };
         json!({"rule": rule_name(&self.rule), "surfaces": self.surfaces, "explicit": explicit})
-    }
-    fn inputs(&self) -> Vec<(String, PathBuf)> {
-        Vec::new()
     }
     fn upstream(&self) -> Vec<String> {
         if matches!(self.rule, CombineRule::Explicit { .. }) {

@@ -3,11 +3,11 @@
 //! bar; per-case HDF5 time histories, the sweep table, the flyability metrics of §8 and the
 //! dissertation's plots (Figs 2.13–2.14, 2.16–2.19, 2.22).
 
+use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::contact::isbl::IsblModel;
 use crate::contact::lookup::IsblLookup;
 use crate::core::cases::{self, CaseEntry};
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::store::H5Out;
 use crate::core::units::{Length, TimeSpan};
 use crate::dynamics::air_bearing::RearStiffening;
@@ -187,7 +187,7 @@ pub fn uncalibrated_base(
     base: &str,
 ) -> std::result::Result<SimulateParams, ConfigError> {
     let err = |m: String| file.error(section, name, "simulate", m);
-    let Some(cfg) = file.raw.simulate.get(base) else {
+    let Some(cfg) = &file.instance::<SimulateConfig>("simulate", base)? else {
         return Err(err(format!("no [simulate.{base}] in this file")));
     };
     if cfg.calibration.is_some() {
@@ -1024,14 +1024,23 @@ impl PreparedSweep {
     }
 }
 
-impl SimulateStage {
-    pub fn from_config(
+/// The key of a `[calibrate]` table a calibrated instance checks (the table itself is
+/// validated by its own kind).
+#[derive(Deserialize)]
+struct CalibrateTarget {
+    simulate: String,
+}
+
+impl FromConfig for SimulateStage {
+    type Config = SimulateConfig;
+
+    fn from_config(
         file: &PipelineFile,
         name: &str,
         cfg: &SimulateConfig,
     ) -> std::result::Result<Self, ConfigError> {
         let params = validate(cfg).map_err(|(k, m)| file.error("simulate", name, &k, m))?;
-        if !file.raw.contact.contains_key(&cfg.contact) {
+        if !file.has_instance("contact", &cfg.contact) {
             return Err(file.error(
                 "simulate",
                 name,
@@ -1040,7 +1049,7 @@ impl SimulateStage {
             ));
         }
         if let Some(c) = &params.calibration {
-            let Some(cal) = file.raw.calibrate.get(c) else {
+            let Some(cal) = file.instance::<CalibrateTarget>("calibrate", c)? else {
                 return Err(file.error(
                     "simulate",
                     name,
@@ -1058,7 +1067,7 @@ impl SimulateStage {
             }
         }
         if let Some(d) = &params.dmw {
-            if !file.raw.dmw.contains_key(d) && !file.raw.excitation.contains_key(d) {
+            if !file.has_instance("dmw", d) && !file.has_instance("excitation", d) {
                 return Err(file.error(
                     "simulate",
                     name,
@@ -1164,7 +1173,7 @@ impl SimulateStage {
                 .map(|(k, v)| (k.name().to_string(), *v))
                 .collect();
         }
-        let isbl = IsblLookup::build(IsblModel::new(isbl_params)?, 0.05, -2.0, 10.0)?;
+        let isbl = IsblLookup::build_standard(IsblModel::new(isbl_params)?)?;
         let dmw = match (&calibrated.dmw, dmw_track) {
             (Some(d), Some(t)) => Some((t, key_of(d))),
             _ => None,
@@ -1178,21 +1187,12 @@ impl SimulateStage {
     }
 }
 
-impl Stage for SimulateStage {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn kind(&self) -> &'static str {
-        "simulate"
-    }
-    fn model_version(&self) -> &'static str {
-        MODEL_VERSION
-    }
+impl StageKind for SimulateStage {
+    const KIND: &'static str = "simulate";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
     fn params(&self) -> Value {
         self.params.canonical()
-    }
-    fn inputs(&self) -> Vec<(String, PathBuf)> {
-        Vec::new()
     }
     fn upstream(&self) -> Vec<String> {
         let mut u = vec![self.params.contact.clone()];

@@ -6,12 +6,12 @@
 //! contact shares, peak forces, the features that touched).
 
 use super::simulate::{read_dmw_tracks, DmwTrack};
+use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::contact::isbl::{IsblModel, SurfaceEnergy};
 use crate::contact::lookup::IsblLookup;
 use crate::contact::mtl::{FwmExperiment, LubricantCase, RoughFilm, RoughMtl};
 use crate::core::cases;
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::store::H5Out;
 use crate::core::units::{Length, TimeSpan};
 use crate::dynamics::three_dof::case::{
@@ -24,7 +24,7 @@ use crate::dynamics::two_dof::{ContactForceForm, DmwInput};
 use crate::error::{Error, Result};
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 pub const MODEL_VERSION: &str = "three-dof-2";
 
@@ -383,14 +383,16 @@ pub struct ThreeDofStage {
     pub params: ThreeDofParams,
 }
 
-impl ThreeDofStage {
-    pub fn from_config(
+impl FromConfig for ThreeDofStage {
+    type Config = ThreeDofConfig;
+
+    fn from_config(
         file: &PipelineFile,
         name: &str,
         cfg: &ThreeDofConfig,
     ) -> std::result::Result<Self, ConfigError> {
         let params = validate(cfg).map_err(|(k, m)| file.error("three_dof", name, &k, m))?;
-        if !file.raw.contact.contains_key(&cfg.contact) {
+        if !file.has_instance("contact", &cfg.contact) {
             return Err(file.error(
                 "three_dof",
                 name,
@@ -399,7 +401,7 @@ impl ThreeDofStage {
             ));
         }
         if let Some(d) = &params.dmw {
-            if !file.raw.dmw.contains_key(d) && !file.raw.excitation.contains_key(d) {
+            if !file.has_instance("dmw", d) && !file.has_instance("excitation", d) {
                 return Err(file.error(
                     "three_dof",
                     name,
@@ -842,21 +844,12 @@ fn variable_actuation_pngs(
     )
 }
 
-impl Stage for ThreeDofStage {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn kind(&self) -> &'static str {
-        "three_dof"
-    }
-    fn model_version(&self) -> &'static str {
-        MODEL_VERSION
-    }
+impl StageKind for ThreeDofStage {
+    const KIND: &'static str = "three_dof";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
     fn params(&self) -> Value {
         self.params.canonical()
-    }
-    fn inputs(&self) -> Vec<(String, PathBuf)> {
-        Vec::new()
     }
     fn upstream(&self) -> Vec<String> {
         let mut u = vec![self.params.contact.clone()];
@@ -902,7 +895,7 @@ impl Stage for ThreeDofStage {
             if variable {
                 ip.surface_energy = SurfaceEnergy::seed_variable();
             }
-            Ok(IsblLookup::build(IsblModel::new(ip)?, 0.05, -2.0, 10.0)?)
+            Ok(IsblLookup::build_standard(IsblModel::new(ip)?)?)
         };
         let isbl_solid = build(false)?;
         let isbl_mtl = if p.cases.iter().any(|c| matches!(c, CaseInterface::Mtl(_))) {

@@ -1,55 +1,15 @@
-//! The pipeline engine: stage instances, dependency graph, plan (fresh/stale and why), run
-//! with a thread pool and progress bars, status, gc.
+//! The pipeline engine: the stage instances' dependency graph, plan (fresh/stale and why), run
+//! with a thread pool and progress bars, status, gc. Above the stages: it drives them through
+//! the [`Stage`] contract they define.
 
 use crate::core::cache::{Fingerprint, InputRecord, Manifest, Store, UpstreamRecord, Verification};
 use crate::core::progress;
 use crate::error::{Error, Result};
+use crate::stages::{Stage, StageContext};
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// One stage instance of the pipeline. Implementations hold validated parameters; `run` is
-/// the only place that computes, and it writes only into `ctx.out_dir`.
-pub trait Stage: Send + Sync {
-    fn name(&self) -> &str;
-    /// Stage kind (`surface`, `interface`, ...): the store's folder and the summary table.
-    fn kind(&self) -> &'static str;
-    /// Bumped by hand whenever the stage's numerics change: part of the cache key.
-    fn model_version(&self) -> &'static str;
-    /// Canonical parameters (defaults filled in, SI units): part of the cache key.
-    fn params(&self) -> Value;
-    /// Input files by role.
-    fn inputs(&self) -> Vec<(String, PathBuf)>;
-    /// Names of the stage instances this one consumes.
-    fn upstream(&self) -> Vec<String>;
-    fn run(&self, ctx: &StageContext) -> Result<StageOutput>;
-}
-
-/// What a running stage gets.
-pub struct StageContext<'a> {
-    pub name: &'a str,
-    pub key: &'a str,
-    pub fingerprint: &'a Fingerprint,
-    /// Temporary directory for outputs; renamed into the store on success.
-    pub out_dir: &'a Path,
-    /// Results (`result.json`) of the consumed stages, by name.
-    pub upstream: BTreeMap<String, Value>,
-    /// Store entry directory of each consumed stage (its files, e.g. `dmw.h5`), by name.
-    pub upstream_dirs: BTreeMap<String, PathBuf>,
-    /// The content-addressed store, for stages that cache sub-results of their own (one
-    /// simulation case per sweep point).
-    pub store: &'a Store,
-    pub progress: &'a indicatif::ProgressBar,
-}
-
-/// What a stage returns besides its files.
-pub struct StageOutput {
-    /// Machine-readable result for downstream stages and tables; written as `result.json`.
-    pub result: Value,
-    /// One row for the kind's tidy summary table (column names with unit suffixes).
-    pub summary_row: Option<serde_json::Map<String, Value>>,
-}
 
 /// Per-instance state in a plan.
 #[derive(Debug, Clone, PartialEq)]
