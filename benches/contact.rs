@@ -48,13 +48,7 @@ fn contact(c: &mut Criterion) {
     // the MTL lubricant + solid interface on the tabulated solid (closed-form lubricant law).
     let mut g = c.benchmark_group("lookup");
     let isbl = Arc::new(
-        IsblLookup::build(
-            IsblModel::new(IsblParams::mtl_table_3_2()).unwrap(),
-            0.05,
-            -2.0,
-            10.0,
-        )
-        .unwrap(),
+        IsblLookup::build_standard(IsblModel::new(IsblParams::mtl_table_3_2()).unwrap()).unwrap(),
     );
     g.bench_function("isbl_all_channels", |b| {
         let mut h = 0.0;

@@ -10,13 +10,8 @@ use rayon::prelude::*;
 use std::hint::black_box;
 
 fn simulate(c: &mut Criterion) {
-    let isbl = IsblLookup::build(
-        IsblModel::new(IsblParams::improved_2dof()).unwrap(),
-        0.05,
-        -2.0,
-        10.0,
-    )
-    .unwrap();
+    let isbl =
+        IsblLookup::build_standard(IsblModel::new(IsblParams::improved_2dof()).unwrap()).unwrap();
     let track = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1).unwrap();
     let dmw = || {
         Some(DmwInput {

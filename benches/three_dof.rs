@@ -19,7 +19,7 @@ fn three_dof(c: &mut Criterion) {
         if variable {
             p.surface_energy = SurfaceEnergy::seed_variable();
         }
-        IsblLookup::build(IsblModel::new(p).unwrap(), 0.05, -2.0, 10.0).unwrap()
+        IsblLookup::build_standard(IsblModel::new(p).unwrap()).unwrap()
     };
     let (isbl, isbl_mtl) = (lookup(false), lookup(true));
     let d = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1).unwrap();

@@ -88,12 +88,7 @@ fn bench_slider() -> Result<()> {
     use hdi::dynamics::params::improved_2dof;
     use hdi::dynamics::two_dof::{DmwInput, SimOptions, TwoDofCase};
     use rayon::prelude::*;
-    let isbl = IsblLookup::build(
-        IsblModel::new(IsblParams::improved_2dof())?,
-        0.05,
-        -2.0,
-        10.0,
-    )?;
+    let isbl = IsblLookup::build_standard(IsblModel::new(IsblParams::improved_2dof())?)?;
     let track = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1)?;
     let dmw = || {
         Some(DmwInput {

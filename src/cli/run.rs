@@ -8,11 +8,11 @@ use std::time::Instant;
 use super::progress::StageBars;
 use hdi::core::cache::Store;
 use hdi::core::config::PipelineFile;
-use hdi::core::engine::{self, Outcome, RunOptions, State};
+use hdi::engine::{self, Outcome, RunOptions, State};
 use hdi::stages;
 
-pub(super) fn load(config: &Path) -> Result<(PipelineFile, Vec<Box<dyn engine::Stage>>)> {
-    let file = PipelineFile::load(config)?;
+pub(super) fn load(config: &Path) -> Result<(PipelineFile, Vec<Box<dyn hdi::stages::Stage>>)> {
+    let file = hdi::stages::load(config)?;
     let stages = stages::build(&file)?;
     Ok((file, stages))
 }

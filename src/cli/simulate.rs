@@ -69,11 +69,8 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
             anyhow::anyhow!("--{flag}: {m}")
         })?
         .params;
-    let isbl = hdi::contact::lookup::IsblLookup::build(
+    let isbl = hdi::contact::lookup::IsblLookup::build_standard(
         hdi::contact::isbl::IsblModel::new(isbl_params)?,
-        0.05,
-        -2.0,
-        10.0,
     )?;
     let dmw = match &a.dmw {
         Some(p) => Some(read_dmw_track(p)?),

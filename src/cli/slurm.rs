@@ -8,8 +8,8 @@ use super::args::SlurmArgs;
 use super::progress::{task_bar, StageBars};
 use super::run::{jobs_or_cores, load};
 use hdi::core::cache::Store;
-use hdi::core::engine::{self, RunOptions};
 use hdi::core::executor::CaseManifest;
+use hdi::engine::{self, RunOptions};
 
 /// Bring the `[simulate]` instances' upstream up to date, list their stale cases into a
 /// manifest, submit it as array jobs and wait for them. Returns `false` for `--no-wait`

@@ -23,6 +23,22 @@ const AR: usize = 2;
 const Q: usize = 3;
 const FS: usize = 4;
 
+/// Node step and h* = h/σ range of a force table.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ForceTableGrid {
+    pub step: f64,
+    pub h_star_min: f64,
+    pub h_star_max: f64,
+}
+
+/// The grid every slider model's ISBL table uses (2-DOF and 3-DOF cases, the DOE, the MTL
+/// solid, benches and checks): one definition, so they all tabulate the same curves.
+pub const FORCE_TABLE_GRID: ForceTableGrid = ForceTableGrid {
+    step: 0.05,
+    h_star_min: -2.0,
+    h_star_max: 10.0,
+};
+
 /// Where a lookup was answered from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LookupRange {
@@ -102,6 +118,12 @@ impl IsblLookup {
     /// Tabulate `model` with node step `step` (in h*) over the spec's range widened to
     /// `[h_star_min, h_star_max]`, and verify the table against direct evaluation at the
     /// midpoints and quarter points (values above 10⁻¹² of each channel's peak).
+    /// [`IsblLookup::build`] on [`FORCE_TABLE_GRID`].
+    pub fn build_standard(model: IsblModel) -> Result<Self, ContactError> {
+        let g = FORCE_TABLE_GRID;
+        Self::build(model, g.step, g.h_star_min, g.h_star_max)
+    }
+
     pub fn build(
         model: IsblModel,
         step: f64,

@@ -1,17 +1,18 @@
-//! `pipeline.toml`: parsing with file/line/key errors, then validation into stage instances.
+//! `pipeline.toml`: parsing with file/line/key errors, then typed access to its sections.
 //!
 //! Two levels, as ripgrep does for flags: serde structs with `deny_unknown_fields` (what the
-//! user wrote) → validated stage instances (SI units, ranges, files checked). Every error names
-//! the file, the line and the key, and for a misspelt key the nearest valid one.
+//! user wrote) → validated stage instances (SI units, ranges, files checked). The core knows
+//! only `[project]`: every other top-level table is a stage kind's, kept as written (with the
+//! source spans) until its consumer deserializes it into its own config type. Every error
+//! names the file, the line and the key, and for a misspelt key the nearest valid one.
 
+use serde::de::DeserializeOwned;
 use serde::Deserialize;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
+use std::ops::Range;
 use std::path::{Path, PathBuf};
-
-use crate::stages::contact::ContactConfig;
-use crate::stages::dmw::DmwConfig;
-use crate::stages::interface::InterfaceConfig;
-use crate::stages::surfaces::SurfaceConfig;
+use toml::de::{DeTable, DeValue, ValueDeserializer};
+use toml::Spanned;
 
 /// Errors in a pipeline file. `line` is 1-based; 0 when unknown.
 #[derive(Debug, thiserror::Error)]
@@ -56,78 +57,70 @@ impl Default for ProjectConfig {
     }
 }
 
-/// The file as written: one table per stage kind, one sub-table per named instance.
-#[derive(Debug, Clone, Deserialize, Default)]
-#[serde(deny_unknown_fields)]
-pub struct RawConfig {
-    #[serde(default)]
-    pub project: ProjectConfig,
-    /// `[surface.NAME]`: one height map → roughness parameters.
-    #[serde(default)]
-    pub surface: BTreeMap<String, SurfaceConfig>,
-    /// `[interface.NAME]`: two surfaces (or explicit values) → combined σ, R, η, β.
-    #[serde(default)]
-    pub interface: BTreeMap<String, InterfaceConfig>,
-    /// `[dmw.NAME]`: one LDV record → the three dynamic-microwaviness tracks.
-    #[serde(default)]
-    pub dmw: BTreeMap<String, DmwConfig>,
-    /// `[contact.NAME]`: an interface → ISBL curves and the force table.
-    #[serde(default)]
-    pub contact: BTreeMap<String, ContactConfig>,
-    /// `[simulate.NAME]`: 2-DOF slider cases over an actuation sweep.
-    #[serde(default)]
-    pub simulate: BTreeMap<String, crate::stages::simulate::SimulateConfig>,
-    /// `[three_dof.NAME]`: the 3-DOF slider of Chapter 4 in one scenario.
-    #[serde(default)]
-    pub three_dof: BTreeMap<String, crate::stages::three_dof::ThreeDofConfig>,
-    /// `[excitation.NAME]`: a synthetic disk-motion track (Appendix B) in the DMW layout.
-    #[serde(default)]
-    pub excitation: BTreeMap<String, crate::stages::excitation::ExcitationConfig>,
-    /// `[analysis.NAME]`: spectrum, wavelet transform, Poincaré section of an upstream series.
-    #[serde(default)]
-    pub analysis: BTreeMap<String, crate::stages::analysis::AnalysisConfig>,
-    /// `[calibrate.NAME]`: fit the dropped knobs of a `[simulate]` instance to the published
-    /// class-D landmarks.
-    #[serde(default)]
-    pub calibrate: BTreeMap<String, crate::stages::calibrate::CalibrateConfig>,
-    /// `[doe.NAME]`: the §2.3 design of experiments, response surfaces and optimisation.
-    #[serde(default)]
-    pub doe: BTreeMap<String, crate::stages::doe::DoeConfig>,
-}
-
-/// A loaded pipeline file: its text (for line lookups) and parsed content.
+/// A loaded pipeline file: its text (for line lookups), `[project]`, and one table per stage
+/// kind with one sub-table per named instance, as written.
 #[derive(Debug, Clone)]
 pub struct PipelineFile {
     pub path: PathBuf,
     /// Directory that relative paths in the file are resolved against.
     pub dir: PathBuf,
     pub text: String,
-    pub raw: RawConfig,
+    pub project: ProjectConfig,
+    /// The stage kinds the file has tables for, with their instance names. A kind's tables
+    /// are deserialized from `text` when asked for, so their errors carry the same spans (and
+    /// lines) as a whole-file parse gives.
+    sections: BTreeMap<String, BTreeSet<String>>,
 }
 
 impl PipelineFile {
-    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+    /// Read and parse `path`; `kinds` are the stage sections the file may hold besides
+    /// `[project]` (the registry's list).
+    pub fn load(path: &Path, kinds: &[&str]) -> Result<Self, ConfigError> {
         let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
             path: path.to_path_buf(),
             source,
         })?;
-        Self::parse(path, text)
+        Self::parse(path, text, kinds)
     }
 
-    pub fn parse(path: &Path, text: String) -> Result<Self, ConfigError> {
-        let raw: RawConfig = toml::from_str(&text).map_err(|e| {
-            let line = e
-                .span()
-                .map(|s| line_of_offset(&text, s.start))
-                .unwrap_or(0);
-            let (key, message) = explain_toml_error(e.message());
-            ConfigError::Invalid {
+    /// Parse the TOML, check `[project]` and that every other top-level table is one of
+    /// `kinds`. The stage tables themselves are checked when their kind reads them.
+    pub fn parse(path: &Path, text: String, kinds: &[&str]) -> Result<Self, ConfigError> {
+        let invalid =
+            |span: Option<Range<usize>>, (key, message): (String, String)| ConfigError::Invalid {
                 file: path.to_path_buf(),
-                line,
+                line: span.map(|s| line_of_offset(&text, s.start)).unwrap_or(0),
                 key,
                 message,
+            };
+        let root = DeTable::parse(&text)
+            .map_err(|e| invalid(e.span(), explain_toml_error(e.message())))?
+            .into_inner();
+        let mut project = ProjectConfig::default();
+        let mut sections = BTreeMap::new();
+        // In key order, as one serde pass over the whole file met them.
+        for (key, value) in root {
+            let name: &str = key.get_ref();
+            if name == "project" {
+                let span = value.span();
+                project =
+                    ProjectConfig::deserialize(ValueDeserializer::from(value)).map_err(|e| {
+                        invalid(e.span().or(Some(span)), explain_toml_error(e.message()))
+                    })?;
+            } else if kinds.contains(&name) {
+                let names = value.get_ref().as_table().map(|t| {
+                    t.keys()
+                        .map(|k| -> &str { k.get_ref() })
+                        .map(str::to_string)
+                        .collect()
+                });
+                sections.insert(name.to_string(), names.unwrap_or_default());
+            } else {
+                let mut known = vec!["project"];
+                known.extend_from_slice(kinds);
+                return Err(invalid(Some(key.span()), unknown_key(name, &known)));
             }
-        })?;
+        }
         let dir = path
             .parent()
             .map(|p| {
@@ -142,8 +135,90 @@ impl PipelineFile {
             path: path.to_path_buf(),
             dir,
             text,
-            raw,
+            project,
+            sections,
         })
+    }
+
+    /// Every `[kind.NAME]` instance deserialized into the kind's config type `C`, by name.
+    pub fn instances<C: DeserializeOwned>(
+        &self,
+        kind: &str,
+    ) -> Result<Vec<(String, C)>, ConfigError> {
+        let all = self.with_section(kind, |section| {
+            self.deserialize::<BTreeMap<String, C>>(section)
+        })?;
+        Ok(all.unwrap_or_default().into_iter().collect())
+    }
+
+    /// The `[kind.name]` instance deserialized into `C`, if the file declares it.
+    pub fn instance<C: DeserializeOwned>(
+        &self,
+        kind: &str,
+        name: &str,
+    ) -> Result<Option<C>, ConfigError> {
+        let found = self.with_section(kind, |section| match section.get_ref().as_table() {
+            Some(table) => table
+                .get(name)
+                .map(|value| self.deserialize(value))
+                .transpose(),
+            // Not a table: the whole section's error.
+            None => self
+                .deserialize::<BTreeMap<String, C>>(section)
+                .map(|mut all| all.remove(name)),
+        })?;
+        Ok(found.flatten())
+    }
+
+    /// Whether the file declares `[kind.name]`.
+    pub fn has_instance(&self, kind: &str, name: &str) -> bool {
+        self.sections.get(kind).is_some_and(|n| n.contains(name))
+    }
+
+    /// The instance names of `kind`, sorted.
+    pub fn instance_names(&self, kind: &str) -> Vec<&str> {
+        self.sections
+            .get(kind)
+            .map(|n| n.iter().map(String::as_str).collect())
+            .unwrap_or_default()
+    }
+
+    /// `f` applied to the `kind` table of the file, if it has one. The text is parsed again:
+    /// toml's spanned tree borrows it, and files are small.
+    fn with_section<R>(
+        &self,
+        kind: &str,
+        f: impl FnOnce(&Spanned<DeValue<'_>>) -> Result<R, ConfigError>,
+    ) -> Result<Option<R>, ConfigError> {
+        if !self.sections.contains_key(kind) {
+            return Ok(None);
+        }
+        let root = DeTable::parse(&self.text).map_err(|e| self.toml_error(&e, None))?;
+        root.get_ref().get(kind).map(f).transpose()
+    }
+
+    /// Deserialize a value of the file, reporting errors at their line in `text`.
+    fn deserialize<C: DeserializeOwned>(
+        &self,
+        value: &Spanned<DeValue<'_>>,
+    ) -> Result<C, ConfigError> {
+        C::deserialize(ValueDeserializer::from(value.clone()))
+            .map_err(|e| self.toml_error(&e, Some(value.span())))
+    }
+
+    /// A toml error at its line (or at `fallback`'s when it has no span of its own).
+    fn toml_error(&self, e: &toml::de::Error, fallback: Option<Range<usize>>) -> ConfigError {
+        let (key, message) = explain_toml_error(e.message());
+        ConfigError::Invalid {
+            file: self.path.clone(),
+            line: e
+                .span()
+                .or(fallback)
+                .map(|s| line_of_offset(&self.text, s.start))
+                .unwrap_or(0),
+            key,
+            message,
+        }
     }
 
     /// Resolve a path written in the file relative to the file's directory.
@@ -157,7 +232,7 @@ impl PipelineFile {
 
     /// The output directory.
     pub fn processed_dir(&self) -> PathBuf {
-        self.resolve(&self.raw.project.processed)
+        self.resolve(&self.project.processed)
     }
 
     /// A validation error located at `[section.name] key`.
@@ -221,25 +296,30 @@ pub fn find_key_line(text: &str, table: &str, key: &str) -> Option<usize> {
 fn explain_toml_error(msg: &str) -> (String, String) {
     let msg = msg.trim();
     if let Some(rest) = msg.strip_prefix("unknown field `") {
-        let unknown = rest.split('`').next().unwrap_or("").to_string();
+        let unknown = rest.split('`').next().unwrap_or("");
         let expected: Vec<&str> = rest
             .split_once("expected")
             .map(|(_, list)| list.split('`').skip(1).step_by(2).collect())
             .unwrap_or_default();
-        let hint = nearest(&unknown, &expected)
-            .map(|n| format!(" (did you mean `{n}`?)"))
-            .unwrap_or_default();
-        let valid = if expected.is_empty() {
-            String::new()
-        } else {
-            format!("; valid keys: {}", expected.join(", "))
-        };
-        return (
-            unknown.clone(),
-            format!("unknown key `{unknown}`{hint}{valid}"),
-        );
+        return unknown_key(unknown, &expected);
     }
     (String::new(), msg.replace('\n', " "))
+}
+
+/// (key, message) for a key that is none of `expected`, with the nearest as a hint.
+fn unknown_key(unknown: &str, expected: &[&str]) -> (String, String) {
+    let hint = nearest(unknown, expected)
+        .map(|n| format!(" (did you mean `{n}`?)"))
+        .unwrap_or_default();
+    let valid = if expected.is_empty() {
+        String::new()
+    } else {
+        format!("; valid keys: {}", expected.join(", "))
+    };
+    (
+        unknown.to_string(),
+        format!("unknown key `{unknown}`{hint}{valid}"),
+    )
 }
 
 /// The candidate with the smallest edit distance, if it is close enough to be a typo.
@@ -271,10 +351,30 @@ fn edit_distance(a: &str, b: &str) -> usize {
 mod tests {
     use super::*;
 
+    /// A stage kind's table as the tests need one (the core names no real stage).
+    #[derive(Debug, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Surface {
+        #[allow(dead_code)]
+        file: String,
+        #[serde(default)]
+        #[allow(dead_code)]
+        filter_l: Option<String>,
+    }
+
+    const KINDS: &[&str] = &["surface", "simulate"];
+
+    fn parse(text: &str) -> Result<PipelineFile, ConfigError> {
+        PipelineFile::parse(Path::new("pipeline.toml"), text.to_string(), KINDS)
+    }
+
     #[test]
     fn unknown_key_names_file_line_and_nearest_key() {
-        let text = "[surface.disk]\nfile = \"a.gwy\"\nfilter_k = \"5 um\"\n".to_string();
-        let err = PipelineFile::parse(Path::new("pipeline.toml"), text).unwrap_err();
+        let text = "[surface.disk]\nfile = \"a.gwy\"\nfilter_k = \"5 um\"\n";
+        let err = parse(text)
+            .unwrap()
+            .instances::<Surface>("surface")
+            .unwrap_err();
         let msg = err.to_string();
         assert!(msg.starts_with("pipeline.toml:3:"), "{msg}");
         assert!(msg.contains("unknown key `filter_k`"), "{msg}");
@@ -284,10 +384,36 @@ mod tests {
     #[test]
     fn unknown_stage_kind_is_rejected() {
         let text = "[surfac.disk]\nfile = \"a.gwy\"\n".to_string();
-        let msg = PipelineFile::parse(Path::new("p.toml"), text)
+        let msg = PipelineFile::parse(Path::new("p.toml"), text, KINDS)
             .unwrap_err()
             .to_string();
         assert!(msg.contains("did you mean `surface`"), "{msg}");
+        assert_eq!(
+            msg,
+            "p.toml:1: unknown key `surfac` (did you mean `surface`?); valid keys: project, \
+             surface, simulate"
+        );
+    }
+
+    #[test]
+    fn one_instance_reads_alone_and_reports_its_own_line() {
+        let text = "[project]\nname = \"x\"\n\n[surface.a]\nfile = \"a\"\n\n[surface.b]\n\
+                    file = \"b\"\nfilter = 1\n";
+        let file = parse(text).unwrap();
+        assert!(file.instance::<Surface>("surface", "a").unwrap().is_some());
+        assert!(file.instance::<Surface>("surface", "c").unwrap().is_none());
+        assert!(file.instance::<Surface>("simulate", "a").unwrap().is_none());
+        let msg = file
+            .instance::<Surface>("surface", "b")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.starts_with("pipeline.toml:9: unknown key `filter`"),
+            "{msg}"
+        );
+        assert!(file.has_instance("surface", "b") && !file.has_instance("simulate", "b"));
+        assert_eq!(file.instance_names("surface"), ["a", "b"]);
+        assert_eq!(file.project.name, "x");
     }
 
     #[test]

@@ -1,8 +1,8 @@
-//! The small core every stage uses: configuration, cache/store, engine, outputs.
+//! The small core every stage uses: configuration, cache/store, outputs, plots. It names no
+//! stage: the engine and the stages sit above it.
 pub mod cache;
 pub mod cases;
 pub mod config;
-pub mod engine;
 pub mod executor;
 pub mod hash;
 pub mod progress;

@@ -627,7 +627,7 @@ pub fn apply_knobs(
 /// ISBL table of the 2-DOF cases (the simulate stage's grid).
 pub fn interface_table(isbl: IsblParams) -> Result<IsblLookup> {
     IsblModel::new(isbl)
-        .and_then(|m| IsblLookup::build(m, 0.05, -2.0, 10.0))
+        .and_then(IsblLookup::build_standard)
         .map_err(|e| DynamicsError::Numerical(format!("interface table: {e}")))
 }
 

@@ -5,14 +5,15 @@
 use crate::core::cache::{Store, Verification};
 use crate::core::cases::{case_fingerprint, CASE_KIND};
 use crate::core::config::PipelineFile;
-use crate::core::engine::{plan, read_result, Plan, State};
 use crate::core::executor::{CaseComputer, CaseRegistry, CaseSpec};
+use crate::engine::{plan, read_result, Plan, State};
 use crate::error::{Error, Result};
 use crate::slider::case::{simulate_case, MODEL_VERSION};
 use crate::slider::doe_design::{design_cases, design_params};
-use crate::slider::params::SimulateParams;
+use crate::slider::params::{SimulateConfig, SimulateParams};
 use crate::slider::sweep::PreparedSweep;
-use crate::stages::doe::DoeStage;
+use crate::stages::doe::{DoeConfig, DoeStage};
+use crate::stages::FromConfig;
 use serde_json::{json, Value};
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -28,11 +29,10 @@ pub const DOE_CASE: &str = "doe";
 fn sweep_params(file: &PipelineFile, kind: &str, instance: &str) -> Result<SimulateParams> {
     match kind {
         SIMULATE_CASE => {
-            let cfg =
-                file.raw.simulate.get(instance).ok_or_else(|| {
-                    Error::Stage(format!("no [simulate.{instance}] in the pipeline"))
-                })?;
-            Ok(SimulateParams::from_config(file, instance, cfg)?)
+            let cfg = file
+                .instance::<SimulateConfig>("simulate", instance)?
+                .ok_or_else(|| Error::Stage(format!("no [simulate.{instance}] in the pipeline")))?;
+            Ok(SimulateParams::from_config(file, instance, &cfg)?)
         }
         _ => Ok(doe_stage(file, instance)?.params.base),
     }
@@ -41,11 +41,9 @@ fn sweep_params(file: &PipelineFile, kind: &str, instance: &str) -> Result<Simul
 /// The `[doe.NAME]` instance, checked.
 fn doe_stage(file: &PipelineFile, instance: &str) -> Result<DoeStage> {
     let cfg = file
-        .raw
-        .doe
-        .get(instance)
+        .instance::<DoeConfig>("doe", instance)?
         .ok_or_else(|| Error::Stage(format!("no [doe.{instance}] in the pipeline")))?;
-    Ok(DoeStage::from_config(file, instance, cfg)?)
+    Ok(DoeStage::from_config(file, instance, &cfg)?)
 }
 
 /// The prepared sweep of a `[simulate]` or `[doe]` instance from the store's current upstream
@@ -88,8 +86,14 @@ fn stale_instances(file: &PipelineFile, planned: &Plan) -> Vec<(&'static str, St
             .iter()
             .any(|p| p.name == name && p.state != State::Fresh)
     };
-    let sims = file.raw.simulate.keys().map(|n| (SIMULATE_CASE, n.clone()));
-    let does = file.raw.doe.keys().map(|n| (DOE_CASE, n.clone()));
+    let sims = file
+        .instance_names("simulate")
+        .into_iter()
+        .map(|n| (SIMULATE_CASE, n.to_string()));
+    let does = file
+        .instance_names("doe")
+        .into_iter()
+        .map(|n| (DOE_CASE, n.to_string()));
     sims.chain(does).filter(|(_, n)| stale(n)).collect()
 }
 
@@ -191,7 +195,7 @@ impl CaseComputer for SweepWorker {
             match sweeps.get(&k) {
                 Some(s) => Arc::clone(s),
                 None => {
-                    let file = PipelineFile::load(Path::new(&config))?;
+                    let file = crate::stages::load(Path::new(&config))?;
                     let planned = plan_of(&file, store)?;
                     let s = Arc::new(prepared(&file, store, &planned, self.kind, &instance)?);
                     sweeps.insert(k, Arc::clone(&s));

@@ -163,6 +163,13 @@ pub struct SimulateParams {
     pub calibrated_knobs: Vec<(String, f64)>,
 }
 
+/// The key of a `[calibrate]` table a calibrated instance checks (the table itself is
+/// validated by its own kind).
+#[derive(serde::Deserialize)]
+struct CalibrateTarget {
+    simulate: String,
+}
+
 /// The uncalibrated `[simulate.<base>]` another stage builds on (`[calibrate]`, `[doe]`),
 /// validated; failures are reported against that stage's `simulate` key.
 pub fn uncalibrated_base(
@@ -172,7 +179,7 @@ pub fn uncalibrated_base(
     base: &str,
 ) -> std::result::Result<SimulateParams, ConfigError> {
     let err = |m: String| file.error(section, name, "simulate", m);
-    let Some(cfg) = file.raw.simulate.get(base) else {
+    let Some(cfg) = file.instance::<SimulateConfig>("simulate", base)? else {
         return Err(err(format!("no [simulate.{base}] in this file")));
     };
     if cfg.calibration.is_some() {
@@ -181,7 +188,7 @@ pub fn uncalibrated_base(
              instance"
         )));
     }
-    SimulateParams::check(cfg)
+    SimulateParams::check(&cfg)
         .map_err(|(k, m)| err(format!("[simulate.{base}] is invalid ({k}: {m})")))
 }
 
@@ -428,7 +435,7 @@ impl SimulateParams {
     ) -> std::result::Result<Self, ConfigError> {
         let params =
             SimulateParams::check(cfg).map_err(|(k, m)| file.error("simulate", name, &k, m))?;
-        if !file.raw.contact.contains_key(&cfg.contact) {
+        if !file.has_instance("contact", &cfg.contact) {
             return Err(file.error(
                 "simulate",
                 name,
@@ -437,7 +444,7 @@ impl SimulateParams {
             ));
         }
         if let Some(c) = &params.calibration {
-            let Some(cal) = file.raw.calibrate.get(c) else {
+            let Some(cal) = file.instance::<CalibrateTarget>("calibrate", c)? else {
                 return Err(file.error(
                     "simulate",
                     name,
@@ -455,7 +462,7 @@ impl SimulateParams {
             }
         }
         if let Some(d) = &params.dmw {
-            if !file.raw.dmw.contains_key(d) && !file.raw.excitation.contains_key(d) {
+            if !file.has_instance("dmw", d) && !file.has_instance("excitation", d) {
                 return Err(file.error(
                     "simulate",
                     name,

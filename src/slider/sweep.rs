@@ -56,7 +56,7 @@ impl PreparedSweep {
                 dmw_track.as_mut(),
             )?;
         }
-        let isbl = IsblLookup::build(IsblModel::new(isbl_params)?, 0.05, -2.0, 10.0)?;
+        let isbl = IsblLookup::build_standard(IsblModel::new(isbl_params)?)?;
         let dmw = match (&calibrated.dmw, dmw_track) {
             (Some(d), Some(t)) => Some((t, key_of(d))),
             _ => None,

@@ -3,20 +3,20 @@
 //! amplitude spectrum and peaks, CWT scalogram with ridge and cone of influence, Poincaré
 //! section with a periodicity class, phase space. `hdi analyze FILE` runs the same on any file.
 
+use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::analysis::cwt::FrequencyGrid;
 use crate::analysis::report::{analyze, AnalysisReport, AnalyzeOptions};
 use crate::artefacts::cases as case_files;
 use crate::artefacts::dmw_tracks;
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::store::H5Out;
 use crate::core::units::{Frequency, Length, TimeSpan};
 use crate::error::{Error, Result};
-use crate::slider::params::SimulateParams;
-use crate::slider::three_dof_params::ThreeDofParams;
+use crate::slider::params::{SimulateConfig, SimulateParams};
+use crate::slider::three_dof_params::{ThreeDofConfig, ThreeDofParams};
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 pub const MODEL_VERSION: &str = "analysis-1";
 
@@ -502,15 +502,19 @@ pub struct AnalysisStage {
     pub settings: AnalysisSettings,
 }
 
-impl AnalysisStage {
-    pub fn from_config(
+impl FromConfig for AnalysisStage {
+    type Config = AnalysisConfig;
+
+    fn from_config(
         file: &PipelineFile,
         name: &str,
         cfg: &AnalysisConfig,
     ) -> std::result::Result<Self, ConfigError> {
         let err = |k: &str, m: String| file.error("analysis", name, k, m);
-        let raw = &file.raw;
-        let (default_file, dataset, velocity) = if let Some(sim) = raw.simulate.get(&cfg.source) {
+        let has = |kind: &str| file.has_instance(kind, &cfg.source);
+        let (default_file, dataset, velocity) = if let Some(sim) =
+            &file.instance::<SimulateConfig>("simulate", &cfg.source)?
+        {
             let p = SimulateParams::check(sim).map_err(|(k, m)| {
                 err(
                     "source",
@@ -543,7 +547,7 @@ impl AnalysisStage {
                 DEFAULT_SERIES[0].0,
                 DEFAULT_SERIES[0].1,
             )
-        } else if let Some(three) = raw.three_dof.get(&cfg.source) {
+        } else if let Some(three) = &file.instance::<ThreeDofConfig>("three_dof", &cfg.source)? {
             if cfg.actuation.is_some() {
                 return Err(err("actuation", "only for a [simulate] source".into()));
             }
@@ -573,7 +577,7 @@ impl AnalysisStage {
                 }
             };
             (only, DEFAULT_SERIES[0].0, DEFAULT_SERIES[0].1)
-        } else if raw.dmw.contains_key(&cfg.source) || raw.excitation.contains_key(&cfg.source) {
+        } else if has("dmw") || has("excitation") {
             if cfg.actuation.is_some() {
                 return Err(err("actuation", "only for a [simulate] source".into()));
             }
@@ -583,11 +587,11 @@ impl AnalysisStage {
                 DEFAULT_SERIES[1].1,
             )
         } else {
-            let known = raw.surface.contains_key(&cfg.source)
-                || raw.interface.contains_key(&cfg.source)
-                || raw.contact.contains_key(&cfg.source)
-                || raw.calibrate.contains_key(&cfg.source)
-                || raw.analysis.contains_key(&cfg.source);
+            let known = has("surface")
+                || has("interface")
+                || has("contact")
+                || has("calibrate")
+                || has("analysis");
             if !known {
                 return Err(err(
                     "source",
@@ -647,25 +651,16 @@ impl AnalysisStage {
     }
 }
 
-impl Stage for AnalysisStage {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn kind(&self) -> &'static str {
-        "analysis"
-    }
-    fn model_version(&self) -> &'static str {
-        MODEL_VERSION
-    }
+impl StageKind for AnalysisStage {
+    const KIND: &'static str = "analysis";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
     fn params(&self) -> Value {
         json!({
             "source": self.source,
             "series": format!("{:?}", self.series),
             "settings": format!("{:?}", self.settings),
         })
-    }
-    fn inputs(&self) -> Vec<(String, PathBuf)> {
-        Vec::new()
     }
     fn upstream(&self) -> Vec<String> {
         vec![self.source.clone()]

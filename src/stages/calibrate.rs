@@ -3,10 +3,10 @@
 //! only when the base model, its contact set, its DMW record or the calibration settings change.
 //! A `[simulate]` instance with `calibration = "NAME"` then runs with the fitted knobs.
 
+use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::calibration::fitted_json;
 use crate::contact::isbl::IsblParams;
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::units::Length;
 use crate::dynamics::calibration::{
     calibrate, default_knobs, targets_for, CalibrationResult, CalibrationSettings, Evaluation,
@@ -18,7 +18,6 @@ use crate::slider::params::{uncalibrated_base, SimulateParams};
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 
 pub const MODEL_VERSION: &str = "calibrate-1";
 
@@ -62,8 +61,10 @@ pub struct CalibrateStage {
     pub settings: CalibrationSettings,
 }
 
-impl CalibrateStage {
-    pub fn from_config(
+impl FromConfig for CalibrateStage {
+    type Config = CalibrateConfig;
+
+    fn from_config(
         file: &PipelineFile,
         name: &str,
         cfg: &CalibrateConfig,
@@ -290,25 +291,16 @@ fn knob_rows(stage: &CalibrateStage, r: &CalibrationResult) -> Vec<Map<String, V
         .collect()
 }
 
-impl Stage for CalibrateStage {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn kind(&self) -> &'static str {
-        "calibrate"
-    }
-    fn model_version(&self) -> &'static str {
-        MODEL_VERSION
-    }
+impl StageKind for CalibrateStage {
+    const KIND: &'static str = "calibrate";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
     fn params(&self) -> Value {
         json!({
             "base": self.base_name,
             "base_parameters": self.base.canonical(),
             "settings": format!("{:?}", self.settings),
         })
-    }
-    fn inputs(&self) -> Vec<(String, PathBuf)> {
-        Vec::new()
     }
     fn upstream(&self) -> Vec<String> {
         // The base is uncalibrated: its contact and DMW instances.

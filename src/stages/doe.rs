@@ -5,12 +5,12 @@
 //! residual diagnostics per level; Table 2.7's predictive equations; simulated annealing on ξ
 //! with a sensitivity check; and Table 2.8, the 2-DOF sweep on the initial and optimised designs.
 
+use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::dmw_tracks::DmwTrack;
 use crate::contact::isbl::IsblModel;
 use crate::contact::lookup::IsblLookup;
 use crate::core::cases::CaseEntry;
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::units::Length;
 use crate::dynamics::metrics::{flyability, Regime};
 use crate::error::{Error, Result};
@@ -24,7 +24,7 @@ use crate::slider::params::{uncalibrated_base, SimulateParams};
 use crate::slider::sweep::{cached_case, sweep_analysis, CaseOutcome};
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Bump when the numbers the stage derives from its cases change (the cases themselves carry
 /// the simulate stage's model version).
@@ -748,8 +748,10 @@ pub struct DoeStage {
     pub params: DoeParams,
 }
 
-impl DoeStage {
-    pub fn from_config(
+impl FromConfig for DoeStage {
+    type Config = DoeConfig;
+
+    fn from_config(
         file: &PipelineFile,
         name: &str,
         cfg: &DoeConfig,
@@ -764,21 +766,12 @@ impl DoeStage {
     }
 }
 
-impl Stage for DoeStage {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn kind(&self) -> &'static str {
-        "doe"
-    }
-    fn model_version(&self) -> &'static str {
-        MODEL_VERSION
-    }
+impl StageKind for DoeStage {
+    const KIND: &'static str = "doe";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
     fn params(&self) -> Value {
         self.params.canonical()
-    }
-    fn inputs(&self) -> Vec<(String, PathBuf)> {
-        Vec::new()
     }
     fn upstream(&self) -> Vec<String> {
         // The base is uncalibrated: its contact and DMW instances.
@@ -798,7 +791,7 @@ impl Stage for DoeStage {
                 .unwrap_or_default()
         };
         ctx.progress.set_message("interface table");
-        let isbl = IsblLookup::build(IsblModel::new(isbl_params)?, 0.05, -2.0, 10.0)?;
+        let isbl = IsblLookup::build_standard(IsblModel::new(isbl_params)?)?;
         let runner = CaseRunner {
             base: &p.base,
             isbl: &isbl,

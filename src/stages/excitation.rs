@@ -4,9 +4,9 @@
 //! takes it as its `dmw`. The record runs `margin` beyond `duration` so the leading edge's
 //! transit delay (~62 µs) stays inside it.
 
+use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::dmw_tracks;
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::store::H5Out;
 use crate::core::units::{Frequency, Length, TimeSpan};
 use crate::dmw::synthetic::{
@@ -15,7 +15,7 @@ use crate::dmw::synthetic::{
 use crate::error::{Error, Result};
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 pub const MODEL_VERSION: &str = "excitation-1";
 
@@ -247,8 +247,10 @@ pub struct ExcitationStage {
     pub params: ExcitationParams,
 }
 
-impl ExcitationStage {
-    pub fn from_config(
+impl FromConfig for ExcitationStage {
+    type Config = ExcitationConfig;
+
+    fn from_config(
         file: &PipelineFile,
         name: &str,
         cfg: &ExcitationConfig,
@@ -327,24 +329,12 @@ fn rms(x: &[f64]) -> f64 {
     (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
 }
 
-impl Stage for ExcitationStage {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn kind(&self) -> &'static str {
-        "excitation"
-    }
-    fn model_version(&self) -> &'static str {
-        MODEL_VERSION
-    }
+impl StageKind for ExcitationStage {
+    const KIND: &'static str = "excitation";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
     fn params(&self) -> Value {
         json!({ "excitation": format!("{:?}", self.params) })
-    }
-    fn inputs(&self) -> Vec<(String, PathBuf)> {
-        Vec::new()
-    }
-    fn upstream(&self) -> Vec<String> {
-        Vec::new()
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         let p = &self.params;

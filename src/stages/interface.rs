@@ -1,17 +1,16 @@
 //! Interface stage: two measured surfaces (or explicit values) → the equivalent rough surface
 //! against a smooth flat (σ, R, η, β) that the contact models use (signals-and-surfaces.md §2.7).
 
+use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::interface::InterfaceRoughness;
 use crate::artefacts::surface::upstream_surface_stats;
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::store::H5Out;
 use crate::core::units::{Length, PerArea};
 use crate::error::Result;
 use crate::surface::combine::{combine, CombineRule, InterfaceStats, SurfaceStats};
 use serde::Deserialize;
 use serde_json::{json, Value};
-use std::path::PathBuf;
 
 pub const MODEL_VERSION: &str = "interface-1";
 
@@ -52,8 +51,10 @@ fn rule_name(r: &CombineRule) -> &'static str {
     }
 }
 
-impl InterfaceStage {
-    pub fn from_config(
+impl FromConfig for InterfaceStage {
+    type Config = InterfaceConfig;
+
+    fn from_config(
         file: &PipelineFile,
         name: &str,
         cfg: &InterfaceConfig,
@@ -98,8 +99,8 @@ impl InterfaceStage {
                 ));
             }
             for s in &cfg.surfaces {
-                if !file.raw.surface.contains_key(s) {
-                    let names: Vec<&str> = file.raw.surface.keys().map(String::as_str).collect();
+                if !file.has_instance("surface", s) {
+                    let names: Vec<&str> = file.instance_names("surface");
                     let hint = crate::core::config::nearest(s, &names)
                         .map(|n| format!(" (did you mean `{n}`?)"))
                         .unwrap_or_default();
@@ -122,16 +123,10 @@ pub fn interface_json(st: &InterfaceStats) -> Value {
     InterfaceRoughness::new(st, rule_name(&st.rule)).to_json()
 }
 
-impl Stage for InterfaceStage {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn kind(&self) -> &'static str {
-        "interface"
-    }
-    fn model_version(&self) -> &'static str {
-        MODEL_VERSION
-    }
+impl StageKind for InterfaceStage {
+    const KIND: &'static str = "interface";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
     fn params(&self) -> Value {
         let explicit = match self.rule {
             CombineRule::Explicit { sigma, r, eta } => {
@@ -140,9 +135,6 @@ impl Stage for InterfaceStage {
             _ => Value::Null,
         };
         json!({"rule": rule_name(&self.rule), "surfaces": self.surfaces, "explicit": explicit})
-    }
-    fn inputs(&self) -> Vec<(String, PathBuf)> {
-        Vec::new()
     }
     fn upstream(&self) -> Vec<String> {
         if matches!(self.rule, CombineRule::Explicit { .. }) {

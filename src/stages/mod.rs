@@ -1,5 +1,9 @@
-//! Stage implementations, one module per stage kind, and the registry that turns a parsed
-//! `pipeline.toml` into stage instances.
+//! Stage implementations, one module per stage kind; the contract a stage kind fulfils
+//! ([`FromConfig`] + [`StageKind`]); and the registry that turns a parsed `pipeline.toml` into
+//! stage instances.
+//!
+//! Adding a stage kind: its module (config struct, `impl FromConfig`, `impl StageKind`) and
+//! one line in [`KINDS`].
 pub mod analysis;
 pub mod calibrate;
 pub mod contact;
@@ -11,16 +15,193 @@ pub mod simulate;
 pub mod surfaces;
 pub mod three_dof;
 
+use crate::core::cache::{Fingerprint, Store};
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::Stage;
+use crate::error::Result;
+use serde::de::DeserializeOwned;
+use serde_json::Value;
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// One stage instance of the pipeline, as the engine drives it. Implementations hold
+/// validated parameters; `run` is the only place that computes, and it writes only into
+/// `ctx.out_dir`. Every stage kind gets it through [`Instance`].
+pub trait Stage: Send + Sync {
+    fn name(&self) -> &str;
+    /// Stage kind (`surface`, `interface`, ...): the store's folder and the summary table.
+    fn kind(&self) -> &'static str;
+    /// Bumped by hand whenever the stage's numerics change: part of the cache key.
+    fn model_version(&self) -> &'static str;
+    /// Canonical parameters (defaults filled in, SI units): part of the cache key.
+    fn params(&self) -> Value;
+    /// Input files by role.
+    fn inputs(&self) -> Vec<(String, PathBuf)>;
+    /// Names of the stage instances this one consumes.
+    fn upstream(&self) -> Vec<String>;
+    fn run(&self, ctx: &StageContext) -> Result<StageOutput>;
+}
+
+/// What a running stage gets.
+pub struct StageContext<'a> {
+    pub name: &'a str,
+    pub key: &'a str,
+    pub fingerprint: &'a Fingerprint,
+    /// Temporary directory for outputs; renamed into the store on success.
+    pub out_dir: &'a Path,
+    /// Results (`result.json`) of the consumed stages, by name.
+    pub upstream: BTreeMap<String, Value>,
+    /// Store entry directory of each consumed stage (its files, e.g. `dmw.h5`), by name.
+    pub upstream_dirs: BTreeMap<String, PathBuf>,
+    /// The content-addressed store, for stages that cache sub-results of their own (one
+    /// simulation case per sweep point).
+    pub store: &'a Store,
+    /// Where the stage reports what it is doing (`ctx.progress.set_message(…)`).
+    pub progress: &'a dyn crate::core::progress::Progress,
+}
+
+/// What a stage returns besides its files.
+pub struct StageOutput {
+    /// Machine-readable result for downstream stages and tables; written as `result.json`.
+    pub result: Value,
+    /// One row for the kind's tidy summary table (column names with unit suffixes).
+    pub summary_row: Option<serde_json::Map<String, Value>>,
+}
+
+/// How a stage kind reads one `[KIND.NAME]` table: the table as written, then validation
+/// into the kind's parameters (SI units, ranges, files and referenced instances checked,
+/// errors via [`PipelineFile::error`]).
+pub trait FromConfig: Sized {
+    /// The table as written: serde with `deny_unknown_fields`.
+    type Config: DeserializeOwned + 'static;
+    fn from_config(
+        file: &PipelineFile,
+        name: &str,
+        cfg: &Self::Config,
+    ) -> std::result::Result<Self, ConfigError>;
+}
+
+/// A stage kind: what is the same for all its instances, and what an instance computes.
+/// [`Instance`] turns it into a [`Stage`].
+pub trait StageKind: FromConfig + Send + Sync + 'static {
+    /// Its `pipeline.toml` section, store folder and summary table.
+    const KIND: &'static str;
+    /// Bumped by hand whenever the kind's numerics change: part of the cache key.
+    const MODEL_VERSION: &'static str;
+    /// Canonical parameters (defaults filled in, SI units): part of the cache key.
+    fn params(&self) -> Value;
+    /// Input files by role.
+    fn inputs(&self) -> Vec<(String, PathBuf)> {
+        Vec::new()
+    }
+    /// Names of the stage instances this one consumes.
+    fn upstream(&self) -> Vec<String> {
+        Vec::new()
+    }
+    fn run(&self, ctx: &StageContext) -> Result<StageOutput>;
+}
+
+/// A named instance of a stage kind: the [`Stage`] the engine drives.
+pub struct Instance<K> {
+    pub name: String,
+    pub stage: K,
+}
+
+impl<K: StageKind> Stage for Instance<K> {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn kind(&self) -> &'static str {
+        K::KIND
+    }
+    fn model_version(&self) -> &'static str {
+        K::MODEL_VERSION
+    }
+    fn params(&self) -> Value {
+        self.stage.params()
+    }
+    fn inputs(&self) -> Vec<(String, PathBuf)> {
+        self.stage.inputs()
+    }
+    fn upstream(&self) -> Vec<String> {
+        self.stage.upstream()
+    }
+    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+        self.stage.run(ctx)
+    }
+}
+
+/// A stage kind in the registry: its section name and how its tables are read.
+pub struct Registered {
+    pub kind: &'static str,
+    read: fn(&PipelineFile) -> std::result::Result<Vec<Unbuilt>, ConfigError>,
+}
+
+/// An instance whose table is read but not yet validated.
+type Unbuilt = (
+    String,
+    Box<dyn FnOnce(&PipelineFile, &str) -> std::result::Result<Box<dyn Stage>, ConfigError>>,
+);
+
+const fn kind<K: StageKind>() -> Registered {
+    Registered {
+        kind: K::KIND,
+        read: read::<K>,
+    }
+}
+
+fn read<K: StageKind>(file: &PipelineFile) -> std::result::Result<Vec<Unbuilt>, ConfigError> {
+    let instances = file.instances::<K::Config>(K::KIND)?;
+    Ok(instances
+        .into_iter()
+        .map(|(name, cfg)| -> Unbuilt {
+            let build = move |file: &PipelineFile, name: &str| {
+                let stage = K::from_config(file, name, &cfg)?;
+                let name = name.to_string();
+                Ok(Box::new(Instance { name, stage }) as Box<dyn Stage>)
+            };
+            (name, Box::new(build))
+        })
+        .collect())
+}
+
+/// Every stage kind, one line each, in the order their instances are built.
+pub const KINDS: &[Registered] = &[
+    kind::<surfaces::SurfaceStage>(),
+    kind::<interface::InterfaceStage>(),
+    kind::<contact::ContactStage>(),
+    kind::<dmw::DmwStage>(),
+    kind::<excitation::ExcitationStage>(),
+    kind::<simulate::SimulateStage>(),
+    kind::<calibrate::CalibrateStage>(),
+    kind::<doe::DoeStage>(),
+    kind::<three_dof::ThreeDofStage>(),
+    kind::<analysis::AnalysisStage>(),
+];
+
+/// The stage sections a pipeline file may hold (besides `[project]`).
+pub fn section_names() -> Vec<&'static str> {
+    KINDS.iter().map(|k| k.kind).collect()
+}
+
+/// Read and parse a pipeline file with the registered stage sections.
+pub fn load(path: &Path) -> std::result::Result<PipelineFile, ConfigError> {
+    PipelineFile::load(path, &section_names())
+}
 
 /// Names reserved for hdi's own entries under `processed/`.
 const RESERVED: &[&str] = &["tables", ".hdi"];
 
 /// Every declared stage instance, validated.
-pub fn build(file: &PipelineFile) -> Result<Vec<Box<dyn Stage>>, ConfigError> {
+pub fn build(file: &PipelineFile) -> std::result::Result<Vec<Box<dyn Stage>>, ConfigError> {
+    // Every table is read before any instance is validated, kinds in name order (the order
+    // one serde pass over the file met them), so a misspelt key anywhere is reported first.
+    let by_name: BTreeMap<&str, &Registered> = KINDS.iter().map(|k| (k.kind, k)).collect();
+    let mut read = BTreeMap::new();
+    for (kind, k) in by_name {
+        read.insert(kind, (k.read)(file)?);
+    }
     let mut stages: Vec<Box<dyn Stage>> = Vec::new();
-    let mut seen = std::collections::BTreeSet::new();
+    let mut seen = BTreeSet::new();
     let mut check_name = |section: &str, name: &str| {
         let valid = !name.is_empty()
             && name
@@ -45,61 +226,11 @@ pub fn build(file: &PipelineFile) -> Result<Vec<Box<dyn Stage>>, ConfigError> {
         }
         Ok(())
     };
-    for (name, cfg) in &file.raw.surface {
-        check_name("surface", name)?;
-        stages.push(Box::new(surfaces::SurfaceStage::from_config(
-            file, name, cfg,
-        )?));
-    }
-    for (name, cfg) in &file.raw.interface {
-        check_name("interface", name)?;
-        stages.push(Box::new(interface::InterfaceStage::from_config(
-            file, name, cfg,
-        )?));
-    }
-    for (name, cfg) in &file.raw.contact {
-        check_name("contact", name)?;
-        stages.push(Box::new(contact::ContactStage::from_config(
-            file, name, cfg,
-        )?));
-    }
-    for (name, cfg) in &file.raw.dmw {
-        check_name("dmw", name)?;
-        stages.push(Box::new(dmw::DmwStage::from_config(file, name, cfg)?));
-    }
-    for (name, cfg) in &file.raw.excitation {
-        check_name("excitation", name)?;
-        stages.push(Box::new(excitation::ExcitationStage::from_config(
-            file, name, cfg,
-        )?));
-    }
-    for (name, cfg) in &file.raw.simulate {
-        check_name("simulate", name)?;
-        stages.push(Box::new(simulate::SimulateStage::from_config(
-            file, name, cfg,
-        )?));
-    }
-    for (name, cfg) in &file.raw.calibrate {
-        check_name("calibrate", name)?;
-        stages.push(Box::new(calibrate::CalibrateStage::from_config(
-            file, name, cfg,
-        )?));
-    }
-    for (name, cfg) in &file.raw.doe {
-        check_name("doe", name)?;
-        stages.push(Box::new(doe::DoeStage::from_config(file, name, cfg)?));
-    }
-    for (name, cfg) in &file.raw.three_dof {
-        check_name("three_dof", name)?;
-        stages.push(Box::new(three_dof::ThreeDofStage::from_config(
-            file, name, cfg,
-        )?));
-    }
-    for (name, cfg) in &file.raw.analysis {
-        check_name("analysis", name)?;
-        stages.push(Box::new(analysis::AnalysisStage::from_config(
-            file, name, cfg,
-        )?));
+    for k in KINDS {
+        for (name, build) in read.remove(k.kind).unwrap_or_default() {
+            check_name(k.kind, &name)?;
+            stages.push(build(file, &name)?);
+        }
     }
     Ok(stages)
 }
@@ -121,13 +252,13 @@ pub fn summary_table_name(kind: &str) -> String {
 /// or when it is missing.
 pub fn write_summary_tables(
     store: &crate::core::cache::Store,
-    report: &crate::core::engine::RunReport,
+    report: &crate::engine::RunReport,
 ) -> crate::error::Result<()> {
-    use crate::core::engine::Outcome;
+    use crate::engine::Outcome;
     let tables_dir = store.processed().join("tables");
     let ran = report.count(|o| matches!(o, Outcome::Ran { .. }));
     let failed = report.failed();
-    for (kind, rows) in crate::core::engine::summary_rows(store, &report.current) {
+    for (kind, rows) in crate::engine::summary_rows(store, &report.current) {
         let stem = tables_dir.join(summary_table_name(&kind));
         if (ran > 0 && failed == 0)
             || !stem.with_extension("parquet").exists()
@@ -137,4 +268,44 @@ pub fn write_summary_tables(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> PipelineFile {
+        PipelineFile::parse(Path::new("pipeline.toml"), text.into(), &section_names()).unwrap()
+    }
+
+    #[test]
+    fn every_kind_is_registered_once() {
+        let names = section_names();
+        let unique: BTreeSet<&str> = names.iter().copied().collect();
+        assert_eq!(unique.len(), names.len(), "{names:?}");
+        assert_eq!(names.len(), 10);
+    }
+
+    #[test]
+    fn a_misspelt_key_is_reported_at_its_line_before_any_instance_is_validated() {
+        // The surface's file does not exist: that error comes second, as with one serde pass.
+        let text = "[surface.disk]\nfile = \"nope.gwy\"\n\n[simulate.x]\ncontact = \"c\"\n\
+                    actuations = [\"5 nm\"]\nduraton = \"1 ms\"\n";
+        let msg = build(&parse(text)).err().unwrap().to_string();
+        assert!(
+            msg.starts_with("pipeline.toml:7: unknown key `duraton` (did you mean `duration`?)"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn names_are_checked_in_build_order() {
+        let text = "[surface.tables]\nfile = \"a\"\n";
+        let msg = build(&parse(text)).err().unwrap().to_string();
+        assert_eq!(
+            msg,
+            "pipeline.toml:1: surface.tables: `tables` cannot be a stage name (letters, digits, \
+             - _ . ; not tables)"
+        );
+    }
 }

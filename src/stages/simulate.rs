@@ -3,8 +3,8 @@
 //! progress observer; per-case HDF5 time histories, the sweep table, the flyability metrics
 //! of §8 and the dissertation's plots (Figs 2.13–2.14, 2.16–2.19, 2.22).
 
+use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::dynamics::metrics::{Regime, SweepMetrics};
 use crate::error::Result;
 use crate::slider::case::{read_case_history, CASE_FILE, MODEL_VERSION};
@@ -14,7 +14,7 @@ use crate::slider::sweep::{
     PreparedSweep,
 };
 use serde_json::{json, Map, Value};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The `[simulate.NAME]` table (checked by `SimulateParams`).
 pub use crate::slider::params::SimulateConfig;
@@ -232,8 +232,10 @@ pub struct SimulateStage {
     pub params: SimulateParams,
 }
 
-impl SimulateStage {
-    pub fn from_config(
+impl FromConfig for SimulateStage {
+    type Config = SimulateConfig;
+
+    fn from_config(
         file: &PipelineFile,
         name: &str,
         cfg: &SimulateConfig,
@@ -245,21 +247,12 @@ impl SimulateStage {
     }
 }
 
-impl Stage for SimulateStage {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn kind(&self) -> &'static str {
-        "simulate"
-    }
-    fn model_version(&self) -> &'static str {
-        MODEL_VERSION
-    }
+impl StageKind for SimulateStage {
+    const KIND: &'static str = "simulate";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
     fn params(&self) -> Value {
         self.params.canonical()
-    }
-    fn inputs(&self) -> Vec<(String, PathBuf)> {
-        Vec::new()
     }
     fn upstream(&self) -> Vec<String> {
         self.params.upstream()

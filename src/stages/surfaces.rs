@@ -2,9 +2,9 @@
 //! summit list, histograms, scale sweep), as HDF5 + PNG + a summary row. The same function
 //! serves the pipeline and `hdi surface FILE`.
 
+use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::surface::SummitStats;
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::store::H5Out;
 use crate::core::units::Length;
 use crate::error::Result;
@@ -711,8 +711,10 @@ pub struct SurfaceStage {
     pub params: SurfaceParams,
 }
 
-impl SurfaceStage {
-    pub fn from_config(
+impl FromConfig for SurfaceStage {
+    type Config = SurfaceConfig;
+
+    fn from_config(
         file: &PipelineFile,
         name: &str,
         cfg: &SurfaceConfig,
@@ -738,24 +740,15 @@ impl SurfaceStage {
     }
 }
 
-impl Stage for SurfaceStage {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn kind(&self) -> &'static str {
-        "surface"
-    }
-    fn model_version(&self) -> &'static str {
-        MODEL_VERSION
-    }
+impl StageKind for SurfaceStage {
+    const KIND: &'static str = "surface";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
     fn params(&self) -> Value {
         self.params.canonical()
     }
     fn inputs(&self) -> Vec<(String, PathBuf)> {
         vec![("file".into(), self.params.file.clone())]
-    }
-    fn upstream(&self) -> Vec<String> {
-        Vec::new()
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         ctx.progress.set_message("reading and levelling");

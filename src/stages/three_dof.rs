@@ -5,6 +5,7 @@
 //! table with one row per case (PT, bulge spacing, BV/FHM overall and per Table 4.4 window,
 //! contact shares, peak forces, the features that touched).
 
+use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::cases::{self as case_files};
 use crate::artefacts::contact::upstream_isbl_params;
 use crate::artefacts::dmw_tracks::{self, read_dmw_tracks, DmwTrack};
@@ -13,7 +14,6 @@ use crate::contact::lookup::IsblLookup;
 use crate::contact::mtl::{FwmExperiment, LubricantCase, RoughFilm, RoughMtl};
 use crate::core::cases;
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::store::H5Out;
 use crate::dynamics::three_dof::case::{History3Dof, ThreeDofCase};
 use crate::dynamics::three_dof::inputs::ActuationProfile;
@@ -22,7 +22,7 @@ use crate::dynamics::two_dof::{ContactForceForm, DmwInput};
 use crate::error::{Error, Result};
 use crate::slider::three_dof_params::{CaseInterface, ThreeDofParams};
 use serde_json::{json, Map, Value};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The `[three_dof.NAME]` table (checked by `ThreeDofParams`).
 pub use crate::slider::three_dof_params::ThreeDofConfig;
@@ -34,15 +34,17 @@ pub struct ThreeDofStage {
     pub params: ThreeDofParams,
 }
 
-impl ThreeDofStage {
-    pub fn from_config(
+impl FromConfig for ThreeDofStage {
+    type Config = ThreeDofConfig;
+
+    fn from_config(
         file: &PipelineFile,
         name: &str,
         cfg: &ThreeDofConfig,
     ) -> std::result::Result<Self, ConfigError> {
         let params =
             ThreeDofParams::check(cfg).map_err(|(k, m)| file.error("three_dof", name, &k, m))?;
-        if !file.raw.contact.contains_key(&cfg.contact) {
+        if !file.has_instance("contact", &cfg.contact) {
             return Err(file.error(
                 "three_dof",
                 name,
@@ -51,7 +53,7 @@ impl ThreeDofStage {
             ));
         }
         if let Some(d) = &params.dmw {
-            if !file.raw.dmw.contains_key(d) && !file.raw.excitation.contains_key(d) {
+            if !file.has_instance("dmw", d) && !file.has_instance("excitation", d) {
                 return Err(file.error(
                     "three_dof",
                     name,
@@ -494,21 +496,12 @@ fn variable_actuation_pngs(
     Ok(())
 }
 
-impl Stage for ThreeDofStage {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn kind(&self) -> &'static str {
-        "three_dof"
-    }
-    fn model_version(&self) -> &'static str {
-        MODEL_VERSION
-    }
+impl StageKind for ThreeDofStage {
+    const KIND: &'static str = "three_dof";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
     fn params(&self) -> Value {
         self.params.canonical()
-    }
-    fn inputs(&self) -> Vec<(String, PathBuf)> {
-        Vec::new()
     }
     fn upstream(&self) -> Vec<String> {
         let mut u = vec![self.params.contact.clone()];
@@ -541,7 +534,7 @@ impl Stage for ThreeDofStage {
             if variable {
                 ip.surface_energy = SurfaceEnergy::seed_variable();
             }
-            Ok(IsblLookup::build(IsblModel::new(ip)?, 0.05, -2.0, 10.0)?)
+            Ok(IsblLookup::build_standard(IsblModel::new(ip)?)?)
         };
         let isbl_solid = build(false)?;
         let isbl_mtl = if p.cases.iter().any(|c| matches!(c, CaseInterface::Mtl(_))) {

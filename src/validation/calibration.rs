@@ -4,12 +4,12 @@
 use super::{Row, Tolerance};
 use crate::artefacts::calibration::fitted_knobs;
 use crate::core::cache::Store;
-use crate::core::config::PipelineFile;
-use crate::core::engine::{plan, read_result, Stage, State};
 use crate::dynamics::calibration::{evaluate, Evaluation, Knob};
+use crate::engine::{plan, read_result, State};
 use crate::error::{Error, Result};
 use crate::slider::calibration::{base_inputs, base_of};
-use crate::stages::calibrate::{describe_knobs, CalibrateStage};
+use crate::stages::calibrate::{describe_knobs, CalibrateConfig, CalibrateStage};
+use crate::stages::{FromConfig, StageKind};
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -32,12 +32,12 @@ pub fn re_evaluate(
 /// fitted values in the variant column). A fit that has not run (or is stale) gives one row
 /// without a number that says so.
 pub fn rows(config: &Path) -> Result<Vec<Row>> {
-    let file = PipelineFile::load(config)?;
+    let file = crate::stages::load(config)?;
     let stages = crate::stages::build(&file)?;
     let store = Store::open_existing(&file.processed_dir());
     let plan = plan(stages, &store, &Default::default())?;
     let mut rows = Vec::new();
-    for (name, cfg) in &file.raw.calibrate {
+    for (name, cfg) in &file.instances::<CalibrateConfig>("calibrate")? {
         let stage = CalibrateStage::from_config(&file, name, cfg)?;
         let planned = |n: &str| plan.planned.iter().find(|p| p.name == n);
         let current = |n: &str| planned(n).is_some_and(|p| p.state == State::Fresh);

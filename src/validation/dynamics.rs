@@ -499,7 +499,7 @@ fn dmw_input(track: &Excitation) -> DmwInput<'_> {
 
 fn interface(params: IsblParams) -> Result<IsblLookup, String> {
     IsblModel::new(params)
-        .and_then(|m| IsblLookup::build(m, 0.05, -2.0, 10.0))
+        .and_then(IsblLookup::build_standard)
         .map_err(|e| e.to_string())
 }
 

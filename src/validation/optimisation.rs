@@ -3,21 +3,21 @@
 
 use super::{Row, Tolerance};
 use crate::core::cache::Store;
-use crate::core::config::PipelineFile;
-use crate::core::engine::{plan, read_result, State};
 use crate::dynamics::UM;
+use crate::engine::{plan, read_result, State};
 use crate::error::Result;
+use crate::stages::doe::DoeConfig;
 use std::path::Path;
 
 /// `hdi validate` rows (area `optimisation`): each current `[doe]` optimum beside the
 /// dissertation's (a = 4.86 µm, x = 6.35 µm; w and ξ_min were dropped).
 pub fn rows(config: &Path) -> Result<Vec<Row>> {
-    let file = PipelineFile::load(config)?;
+    let file = crate::stages::load(config)?;
     let stages = crate::stages::build(&file)?;
     let store = Store::open_existing(&file.processed_dir());
     let plan = plan(stages, &store, &Default::default())?;
     let mut rows = Vec::new();
-    for (name, cfg) in &file.raw.doe {
+    for (name, cfg) in &file.instances::<DoeConfig>("doe")? {
         if !cfg.optimise {
             continue;
         }

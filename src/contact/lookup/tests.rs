@@ -11,7 +11,7 @@ fn rel(a: f64, b: f64) -> f64 {
 }
 
 fn isbl(params: IsblParams) -> IsblLookup {
-    IsblLookup::build(IsblModel::new(params).unwrap(), 0.05, -2.0, 10.0).unwrap()
+    IsblLookup::build_standard(IsblModel::new(params).unwrap()).unwrap()
 }
 
 /// Table 3.2 interface with the variable surface energy, `A_n` = 2500 µm².

@@ -27,9 +27,6 @@ pub use plan::{plan_arrays, task_cases, ArraySubmission};
 /// Bumped when the case-manifest layout changes, so an old manifest is refused, not misread.
 pub const MANIFEST_SCHEMA_VERSION: u32 = 1;
 
-/// Case kinds whose workers are still to be registered (docs/slurm.md, *What is left*).
-pub const UNREGISTERED_CASE_KINDS: &[&str] = &["simulate", "three_dof", "doe", "calibrate"];
-
 #[derive(Debug, thiserror::Error)]
 pub enum ExecutorError {
     #[error("unknown executor `{0}` (expected `local` or `slurm`)")]
@@ -72,15 +69,8 @@ pub enum ExecutorError {
         tasks: usize,
         cases_per_task: usize,
     },
-    #[error(
-        "case kind `{kind}` has no worker registered (registered: {registered}); \
-         not yet wired: {unwired} (docs/slurm.md)"
-    )]
-    UnknownCaseKind {
-        kind: String,
-        registered: String,
-        unwired: String,
-    },
+    #[error("case kind `{kind}` has no worker registered (registered: {registered})")]
+    UnknownCaseKind { kind: String, registered: String },
 }
 
 impl ExecutorError {
@@ -517,7 +507,8 @@ where
     }
 }
 
-/// Case kind → worker. `hdi exec-cases` dispatches on [`CaseSpec::kind`] through this.
+/// Case kind → worker. `hdi exec-cases` dispatches on [`CaseSpec::kind`] through this; the
+/// stages fill it (the core names no case kind).
 #[derive(Default)]
 pub struct CaseRegistry {
     computers: BTreeMap<String, Box<dyn CaseComputer>>,
@@ -526,11 +517,6 @@ pub struct CaseRegistry {
 impl CaseRegistry {
     pub fn new() -> Self {
         Self::default()
-    }
-
-    /// The stages' workers. Empty for now: see [`UNREGISTERED_CASE_KINDS`].
-    pub fn builtin() -> Self {
-        Self::new()
     }
 
     pub fn register(&mut self, kind: &str, computer: impl CaseComputer + 'static) {
@@ -557,22 +543,13 @@ impl CaseRegistry {
 
     fn unknown(&self, kind: &str) -> ExecutorError {
         let registered = self.kinds();
-        let unwired: Vec<&str> = UNREGISTERED_CASE_KINDS
-            .iter()
-            .copied()
-            .filter(|k| !self.computers.contains_key(*k))
-            .collect();
-        let list = |v: &[&str]| {
-            if v.is_empty() {
-                "none".to_string()
-            } else {
-                v.join(", ")
-            }
-        };
         ExecutorError::UnknownCaseKind {
             kind: kind.to_string(),
-            registered: list(&registered),
-            unwired: list(&unwired),
+            registered: if registered.is_empty() {
+                "none".to_string()
+            } else {
+                registered.join(", ")
+            },
         }
     }
 }

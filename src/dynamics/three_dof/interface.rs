@@ -209,7 +209,7 @@ mod tests {
         if variable {
             p.surface_energy = SurfaceEnergy::seed_variable();
         }
-        IsblLookup::build(IsblModel::new(p).unwrap(), 0.05, -2.0, 10.0).unwrap()
+        IsblLookup::build_standard(IsblModel::new(p).unwrap()).unwrap()
     }
 
     fn mtl(case: LubricantCase) -> RoughMtl {

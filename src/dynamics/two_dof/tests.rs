@@ -7,13 +7,7 @@ use crate::dynamics::params::improved_2dof;
 use std::f64::consts::PI;
 
 fn lookup() -> IsblLookup {
-    IsblLookup::build(
-        IsblModel::new(IsblParams::improved_2dof()).unwrap(),
-        0.05,
-        -2.0,
-        10.0,
-    )
-    .unwrap()
+    IsblLookup::build_standard(IsblModel::new(IsblParams::improved_2dof()).unwrap()).unwrap()
 }
 
 fn short(duration: f64) -> SimOptions {
@@ -291,15 +285,12 @@ fn agrees_with_the_independent_scipy_implementation() {
 #[test]
 fn static_equilibrium_is_found_across_the_jump_to_contact() {
     for delta_gamma in [0.118, 0.15, 0.2] {
-        let isbl = IsblLookup::build(
+        let isbl = IsblLookup::build_standard(
             IsblModel::new(IsblParams {
                 surface_energy: crate::contact::isbl::SurfaceEnergy::Constant { delta_gamma },
                 ..IsblParams::improved_2dof()
             })
             .unwrap(),
-            0.05,
-            -2.0,
-            10.0,
         )
         .unwrap();
         for h in [9.3, 9.5, 9.7, 9.9] {

@@ -2,6 +2,7 @@
 //! the ISBL curves per unit nominal area against the solid separation h and h/σ, and the
 //! verified force table the dynamics interpolate. HDF5 + PNG + a summary row.
 
+use super::{FromConfig, StageContext, StageKind, StageOutput};
 pub mod mtl;
 
 use self::mtl::{MtlAnalysis, MtlKeys, MtlSettings};
@@ -10,11 +11,11 @@ use crate::artefacts::interface::upstream_summits;
 use crate::contact::isbl::{
     surface_energy_at, FrictionLaw, IsblModel, IsblParams, SummitOffset, SurfaceEnergy,
 };
-use crate::contact::lookup::IsblLookup;
+use crate::contact::lookup::{IsblLookup, FORCE_TABLE_GRID};
 use crate::contact::table::{ChannelError, ForceTable};
 use crate::contact::ContactError;
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::{Stage, StageContext, StageOutput};
+
 use crate::core::store::H5Out;
 use crate::core::units::{
     parse_quantity, Area, Dimension, Length, PerArea, Pressure, Velocity, Viscosity,
@@ -23,7 +24,7 @@ use crate::error::Result;
 use crate::figures;
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 
 /// Bump when the numbers this stage produces change.
@@ -39,13 +40,13 @@ fn default_friction() -> String {
     "junction_shear".into()
 }
 fn default_h_min() -> f64 {
-    -2.0
+    FORCE_TABLE_GRID.h_star_min
 }
 fn default_h_max() -> f64 {
-    10.0
+    FORCE_TABLE_GRID.h_star_max
 }
 fn default_step() -> f64 {
-    0.05
+    FORCE_TABLE_GRID.step
 }
 
 /// A number (N/m), a string with a unit (`"60 mN/m"`) or `"variable"`.
@@ -630,15 +631,17 @@ pub struct ContactStage {
     pub params: ContactParams,
 }
 
-impl ContactStage {
-    pub fn from_config(
+impl FromConfig for ContactStage {
+    type Config = ContactConfig;
+
+    fn from_config(
         file: &PipelineFile,
         name: &str,
         cfg: &ContactConfig,
     ) -> std::result::Result<Self, ConfigError> {
         let params = validate(cfg).map_err(|(k, m)| file.error("contact", name, &k, m))?;
         if let Some(i) = &cfg.interface {
-            if !file.raw.interface.contains_key(i) {
+            if !file.has_instance("interface", i) {
                 return Err(file.error(
                     "contact",
                     name,
@@ -654,21 +657,12 @@ impl ContactStage {
     }
 }
 
-impl Stage for ContactStage {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn kind(&self) -> &'static str {
-        "contact"
-    }
-    fn model_version(&self) -> &'static str {
-        MODEL_VERSION
-    }
+impl StageKind for ContactStage {
+    const KIND: &'static str = "contact";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
     fn params(&self) -> Value {
         self.params.canonical()
-    }
-    fn inputs(&self) -> Vec<(String, PathBuf)> {
-        Vec::new()
     }
     fn upstream(&self) -> Vec<String> {
         self.params.interface.iter().cloned().collect()

@@ -490,7 +490,7 @@ mod tests {
 
     fn lookup() -> Arc<IsblLookup> {
         let model = IsblModel::new(IsblParams::mtl_table_3_2()).unwrap();
-        Arc::new(IsblLookup::build(model, 0.05, -2.0, 10.0).unwrap())
+        Arc::new(IsblLookup::build_standard(model).unwrap())
     }
 
     #[test]

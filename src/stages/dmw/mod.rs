@@ -2,9 +2,9 @@
 //! the three tracks, as HDF5 + PNG + a summary row. The same function serves the pipeline and
 //! `hdi dmw FILE`.
 
+use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::dmw_tracks;
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::engine::{Stage, StageContext, StageOutput};
 use crate::core::store::H5Out;
 use crate::core::units::{Frequency, Sensitivity, TimeSpan};
 use crate::dmw::average::AverageMode;
@@ -773,8 +773,10 @@ pub struct DmwStage {
     pub params: DmwParams,
 }
 
-impl DmwStage {
-    pub fn from_config(
+impl FromConfig for DmwStage {
+    type Config = DmwConfig;
+
+    fn from_config(
         file: &PipelineFile,
         name: &str,
         cfg: &DmwConfig,
@@ -800,24 +802,15 @@ impl DmwStage {
     }
 }
 
-impl Stage for DmwStage {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn kind(&self) -> &'static str {
-        "dmw"
-    }
-    fn model_version(&self) -> &'static str {
-        MODEL_VERSION
-    }
+impl StageKind for DmwStage {
+    const KIND: &'static str = "dmw";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
     fn params(&self) -> Value {
         self.params.canonical()
     }
     fn inputs(&self) -> Vec<(String, PathBuf)> {
         vec![("file".into(), self.params.file.clone())]
-    }
-    fn upstream(&self) -> Vec<String> {
-        Vec::new()
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         ctx.progress.set_message("reading, averaging, filtering");

@@ -6,13 +6,7 @@ use crate::dynamics::two_dof::ContactForceForm;
 use crate::dynamics::NM;
 
 fn isbl() -> IsblLookup {
-    IsblLookup::build(
-        IsblModel::new(IsblParams::three_dof()).unwrap(),
-        0.05,
-        -2.0,
-        10.0,
-    )
-    .unwrap()
+    IsblLookup::build_standard(IsblModel::new(IsblParams::three_dof()).unwrap()).unwrap()
 }
 
 fn interface(lookup: &IsblLookup) -> FeatureInterface<'_> {
