@@ -4,7 +4,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use hdi::dmw::average::{synchronous_average, AverageMode};
 use hdi::dmw::chain::{process, ChainParams};
-use hdi::dmw::synth::{generate, LdvSynthSpec};
+use hdi::dmw::synthetic_ldv::{generate, LdvSynthSpec};
 use hdi::dmw::triggers::{detect_triggers, TriggerOptions};
 use hdi::signal::butterworth::{butterworth_sos, FilterKind};
 use hdi::signal::sosfilt::{sosfiltfilt, PadType};

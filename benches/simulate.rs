@@ -3,7 +3,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use hdi::contact::isbl::{IsblModel, IsblParams};
 use hdi::contact::lookup::IsblLookup;
-use hdi::dmw::synthetic::synthetic_dmw;
+use hdi::dmw::excitation_tracks::synthetic_dmw;
 use hdi::dynamics::params::improved_2dof;
 use hdi::dynamics::two_dof::{DmwInput, SimOptions, TwoDofCase};
 use rayon::prelude::*;

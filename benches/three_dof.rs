@@ -5,11 +5,11 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use hdi::contact::isbl::{IsblModel, IsblParams, SurfaceEnergy};
 use hdi::contact::lookup::IsblLookup;
 use hdi::contact::mtl::{FwmExperiment, LubricantCase, RoughFilm, RoughMtl};
-use hdi::dmw::synthetic::synthetic_dmw;
+use hdi::dmw::excitation_tracks::synthetic_dmw;
+use hdi::dynamics::three_dof::air_bearing::PushbackCurve;
 use hdi::dynamics::three_dof::case::{Model3Dof, Options3Dof, ThreeDofCase};
 use hdi::dynamics::three_dof::inputs::{ActuationProfile, ShockPulse};
 use hdi::dynamics::three_dof::interface::{FeatureInterface, InterfaceLaw};
-use hdi::dynamics::three_dof_ab::PushbackCurve;
 use hdi::dynamics::two_dof::{ContactForceForm, DmwInput};
 use std::hint::black_box;
 

@@ -76,7 +76,7 @@ pub fn write_ldv_sample(
     with_index: bool,
 ) -> Result<Vec<PathBuf>> {
     use crate::dmw::io::LdvFormat;
-    use crate::dmw::synth::{generate, truth_displacement, LdvSynthSpec};
+    use crate::dmw::synthetic_ldv::{generate, truth_displacement, LdvSynthSpec};
     use crate::signal::butterworth::{butterworth_sos, FilterKind};
     use crate::stages::dmw::{write_ldv, write_ldv_hdf5_counts};
     let defaults = LdvSynthSpec::default();
@@ -139,7 +139,7 @@ pub fn write_ldv_sample(
     let truth_std = (d.iter().map(|x| (x - m).powi(2)).sum::<f64>() / d.len() as f64).sqrt();
     let info = json!({
         "file": path.file_name().map(|n| n.to_string_lossy().to_string()),
-        "generator": "hdi synth ldv (src/dmw/synth.rs); model of signals-and-surfaces.md §3.3",
+        "generator": "hdi synth ldv (src/dmw/synthetic_ldv.rs); model of signals-and-surfaces.md §3.3",
         "parameters": spec.to_json(),
         "index_channel": with_index,
         "velocity_lsb_V": if format.starts_with("h5") && format != "h5-f64" { json!(SHIPPED_LDV_LSB) } else { json!(null) },

@@ -573,7 +573,7 @@ pub fn process(rec: &LdvRecord, p: &ChainParams) -> Result<DmwResult, DmwError> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dmw::synth::{generate, truth_displacement, LdvSynthSpec};
+    use crate::dmw::synthetic_ldv::{generate, truth_displacement, LdvSynthSpec};
     use std::path::PathBuf;
 
     fn reference(name: &str) -> Vec<f64> {
@@ -679,7 +679,13 @@ mod tests {
         assert!(resid.fold(0.0f64, |m, x| m.max(x.abs())) < 1e-15);
     }
 
-    fn synthetic(n_rev: usize) -> (LdvSynthSpec, LdvRecord, crate::dmw::synth::SynthTruth) {
+    fn synthetic(
+        n_rev: usize,
+    ) -> (
+        LdvSynthSpec,
+        LdvRecord,
+        crate::dmw::synthetic_ldv::SynthTruth,
+    ) {
         let spec = LdvSynthSpec {
             n_revolutions: n_rev,
             ..Default::default()

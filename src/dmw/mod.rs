@@ -6,9 +6,9 @@
 
 pub mod average;
 pub mod chain;
+pub mod excitation_tracks;
 pub mod io;
-pub mod synth;
-pub mod synthetic;
+pub mod synthetic_ldv;
 pub mod tracks;
 pub mod triggers;
 

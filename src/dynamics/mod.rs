@@ -24,7 +24,6 @@ pub mod geometry;
 pub mod metrics;
 pub mod params;
 pub mod three_dof;
-pub mod three_dof_ab;
 pub mod two_dof;
 
 #[cfg(test)]

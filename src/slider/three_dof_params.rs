@@ -5,9 +5,9 @@
 
 use crate::contact::mtl::LubricantCase;
 use crate::core::units::{Length, TimeSpan};
+use crate::dynamics::three_dof::air_bearing::{PushbackCurve, SpringLaw};
 use crate::dynamics::three_dof::case::{Init3Dof, Model3Dof, Options3Dof, TrackAssignment};
 use crate::dynamics::three_dof::inputs::{ActuationProfile, ShockPulse};
-use crate::dynamics::three_dof_ab::{PushbackCurve, SpringLaw};
 use serde::Deserialize;
 use serde_json::{json, Value};
 

@@ -9,7 +9,7 @@ use crate::artefacts::dmw_tracks;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::store::H5Out;
 use crate::core::units::{Frequency, Length, TimeSpan};
-use crate::dmw::synthetic::{
+use crate::dmw::excitation_tracks::{
     band_limited_random, quadratic_chirp, sinusoid, synthetic_dmw, zero, Excitation, DMW_LINE_HZ,
 };
 use crate::error::{Error, Result};

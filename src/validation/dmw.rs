@@ -4,7 +4,7 @@
 use super::{Row, Tolerance};
 use crate::dmw::average::AverageMode;
 use crate::dmw::chain::{process, ChainParams};
-use crate::dmw::synth::{generate, truth_displacement, LdvSynthSpec};
+use crate::dmw::synthetic_ldv::{generate, truth_displacement, LdvSynthSpec};
 use crate::signal::butterworth::{butterworth_sos, sos_response, zero_phase_gain_db, FilterKind};
 use crate::signal::integrate::trapezoid_gain;
 use crate::signal::resample::HermiteTrack;

@@ -8,7 +8,7 @@
 use super::{Row, Tolerance};
 use crate::contact::isbl::{IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
-use crate::dmw::synthetic::{synthetic_dmw, Excitation};
+use crate::dmw::excitation_tracks::{synthetic_dmw, Excitation};
 use crate::dynamics::air_bearing::heave_pitch_modes;
 use crate::dynamics::params::{improved_2dof, initial_2dof, Model2Dof};
 use crate::dynamics::two_dof::{DmwInput, SimOptions, TwoDofCase};

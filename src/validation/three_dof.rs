@@ -4,11 +4,11 @@
 use super::{Row, Tolerance};
 use crate::contact::isbl::{IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
+use crate::dynamics::three_dof::air_bearing::ThreeDofAirBearing;
 use crate::dynamics::three_dof::case::{Model3Dof, Options3Dof, ThreeDofCase};
 use crate::dynamics::three_dof::geometry::{Feature, SliderPose};
 use crate::dynamics::three_dof::inputs::ActuationProfile;
 use crate::dynamics::three_dof::interface::{FeatureInterface, InterfaceLaw};
-use crate::dynamics::three_dof_ab::ThreeDofAirBearing;
 use crate::dynamics::two_dof::ContactForceForm;
 use crate::dynamics::{NM, UM};
 
@@ -142,8 +142,8 @@ fn twelve_nm_rows(model: &Model3Dof) -> Vec<Row> {
 fn table_4_4_rows() -> Vec<Row> {
     use crate::contact::isbl::SurfaceEnergy;
     use crate::contact::mtl::{FwmExperiment, LubricantCase, RoughFilm, RoughMtl};
-    use crate::dmw::synthetic::synthetic_dmw;
-    use crate::dynamics::three_dof_ab::PushbackCurve;
+    use crate::dmw::excitation_tracks::synthetic_dmw;
+    use crate::dynamics::three_dof::air_bearing::PushbackCurve;
     use crate::dynamics::two_dof::DmwInput;
     use rayon::prelude::*;
     let mut model = Model3Dof::dissertation();

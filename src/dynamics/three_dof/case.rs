@@ -22,7 +22,7 @@ use super::geometry::{
 use super::inputs::{ActuationProfile, ShockPulse};
 use super::interface::{FeatureForces, FeatureInterface};
 use crate::dynamics::geometry::generalised_force;
-use crate::dynamics::three_dof_ab::{
+use crate::dynamics::three_dof::air_bearing::{
     DeltaFabTable, PushbackCurve, SpringSpacings, StaticCondition, ThreeDofAbParams,
     ThreeDofAirBearing,
 };

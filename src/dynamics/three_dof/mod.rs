@@ -10,8 +10,11 @@
 //! * [`face`] — truncated area of a tilted flat face (rectangle ∩ half-plane, shoelace).
 //! * [`inputs`] — actuation profile (S3/S5), impulse shock (S4), the Table 4.4 windows.
 //! * [`case`] — one case: equations of motion (z, θ, φ), DMW tracks, shock, histories.
+//! * [`air_bearing`] — the AB springs k(PT) by modal inversion, damping, ΔF_AB push-back
+//!   calibration (`docs/dynamics-3dof-air-bearing.md`).
 //! * [`interface`] — ISBL / MTL forces on one feature from its spacing, rate and area.
 
+pub mod air_bearing;
 pub mod case;
 pub mod face;
 pub mod geometry;

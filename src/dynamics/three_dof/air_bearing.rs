@@ -14,13 +14,13 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::air_bearing::{
+use crate::dynamics::air_bearing::{
     damping_coefficient, roll_stiffness_from_frequency, springs_from_frequencies, HeavePitchBody,
     RootAssignment,
 };
-use super::geometry::{generalised_force, Attitude};
-use super::params::{SliderBody, Suspension};
-use super::{
+use crate::dynamics::geometry::{generalised_force, Attitude};
+use crate::dynamics::params::{SliderBody, Suspension};
+use crate::dynamics::{
     require_finite, require_in, require_non_negative, require_positive, DynamicsError, Result, NM,
     UM,
 };
