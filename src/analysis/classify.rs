@@ -118,11 +118,64 @@ pub struct Classification {
     pub diagnostics: Diagnostics,
 }
 
-/// Classifies the motion behind a Poincaré section (rule in the module docs).
+/// Classifies the motion behind a Poincaré section (rule in the module docs): each test
+/// gathers its evidence into the diagnostics, then its threshold decides or passes on.
 pub fn classify(
     section: &PoincareSection,
     opts: &ClassifyOptions,
 ) -> Result<Classification, AnalysisError> {
+    check_section(section, opts)?;
+    let scale = Scale::of(section);
+    let mut d = Diagnostics {
+        n_maxima: section.maxima.len(),
+        amplitude: scale.amplitude,
+        ..Default::default()
+    };
+    let verdict = |class, diagnostics| Ok(Classification { class, diagnostics });
+    if scale.amplitude.is_nan() || scale.amplitude <= 0.0 {
+        return verdict(Class::FixedPoint, d);
+    }
+    d.spread = scale.spread;
+
+    // 1. Convergence.
+    let decay = swing_decay(section);
+    d.final_to_initial = decay.final_to_initial;
+    d.decreasing_fraction = decay.decreasing_fraction;
+    d.decay_ratio = decay.decay_ratio;
+    if decay.converges(opts) {
+        return verdict(Class::FixedPoint, d);
+    }
+
+    // 2. Periodicity of maxima and minima.
+    let fit = period_search(section, scale.amplitude, opts);
+    d.best_period = fit.best_period;
+    d.period_residual = fit.residual;
+    if fit.passed {
+        return verdict(
+            Class::Periodic {
+                period: fit.best_period,
+            },
+            d,
+        );
+    }
+
+    // 3. A closed one-dimensional curve in the return map.
+    let curve = return_map_shape(section, scale.amplitude, opts);
+    d.distinct_values = curve.distinct_values;
+    d.distinct_fraction = curve.distinct_fraction;
+    d.coverage = curve.coverage;
+    d.hole = curve.hole;
+    d.neighbour_cosine = curve.neighbour_cosine;
+    let class = if curve.is_closed_curve(opts) {
+        Class::QuasiPeriodic
+    } else {
+        Class::Irregular
+    };
+    verdict(class, d)
+}
+
+/// At least `min_points` (and 4) maxima, 2 minima, all finite.
+fn check_section(section: &PoincareSection, opts: &ClassifyOptions) -> Result<(), AnalysisError> {
     let m = &section.maxima;
     let need = opts.min_points.max(4);
     if m.len() < need || section.minima.len() < 2 {
@@ -145,52 +198,87 @@ pub fn classify(
                 .unwrap_or(f64::NAN),
         });
     }
-    let max = m.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-    let min_max = m.iter().cloned().fold(f64::INFINITY, f64::min);
-    let min = section.minima.iter().cloned().fold(f64::INFINITY, f64::min);
-    let amplitude = 0.5 * (max - min);
-    let mut d = Diagnostics {
-        n_maxima: m.len(),
-        amplitude,
-        ..Default::default()
-    };
-    if amplitude.is_nan() || amplitude <= 0.0 {
-        return Ok(Classification {
-            class: Class::FixedPoint,
-            diagnostics: d,
-        });
-    }
-    d.spread = (max - min_max) / amplitude;
+    Ok(())
+}
 
-    // 1. Convergence.
+/// The section's scale.
+struct Scale {
+    /// `A = (max maxima − min minima)/2`.
+    amplitude: f64,
+    /// (max − min) of the maxima / A.
+    spread: f64,
+}
+
+impl Scale {
+    /// From the largest maximum, the smallest maximum and the smallest minimum.
+    fn of(section: &PoincareSection) -> Scale {
+        let m = &section.maxima;
+        let max = m.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        let min_max = m.iter().cloned().fold(f64::INFINITY, f64::min);
+        let min = section.minima.iter().cloned().fold(f64::INFINITY, f64::min);
+        let amplitude = 0.5 * (max - min);
+        Scale {
+            amplitude,
+            spread: (max - min_max) / amplitude,
+        }
+    }
+}
+
+/// Test 1's evidence: how the half-cycle swings shrink.
+struct Decay {
+    /// Largest swing of the last quarter / largest of the first quarter.
+    final_to_initial: f64,
+    /// Fraction of per-period swing ratios `h_{i+2}/h_i` below 1.
+    decreasing_fraction: f64,
+    /// Their median.
+    decay_ratio: f64,
+}
+
+impl Decay {
+    /// Dies out, or decays steadily.
+    fn converges(&self, opts: &ClassifyOptions) -> bool {
+        self.final_to_initial < opts.convergence_ratio
+            || (self.decreasing_fraction >= 0.95 && self.final_to_initial < 0.5)
+    }
+}
+
+/// Swings `h_i = |e_{i+1} − e_i|` between successive extrema and their decay.
+fn swing_decay(section: &PoincareSection) -> Decay {
     let ext = section.extrema();
     let swings: Vec<f64> = ext.windows(2).map(|w| (w[1].1 - w[0].1).abs()).collect();
     let q = (swings.len() / 4).max(1);
     let largest = |s: &[f64]| s.iter().cloned().fold(0.0, f64::max);
     let first = largest(&swings[..q]);
     let last = largest(&swings[swings.len() - q..]);
-    d.final_to_initial = if first > 0.0 { last / first } else { 0.0 };
     let mut ratios: Vec<f64> = swings
         .windows(3)
         .filter(|w| w[0] > 0.0)
         .map(|w| w[2] / w[0])
         .collect();
-    d.decreasing_fraction = if ratios.is_empty() {
+    let decreasing_fraction = if ratios.is_empty() {
         0.0
     } else {
         ratios.iter().filter(|&&r| r < 1.0).count() as f64 / ratios.len() as f64
     };
-    d.decay_ratio = median(&mut ratios);
-    if d.final_to_initial < opts.convergence_ratio
-        || (d.decreasing_fraction >= 0.95 && d.final_to_initial < 0.5)
-    {
-        return Ok(Classification {
-            class: Class::FixedPoint,
-            diagnostics: d,
-        });
+    Decay {
+        final_to_initial: if first > 0.0 { last / first } else { 0.0 },
+        decreasing_fraction,
+        decay_ratio: median(&mut ratios),
     }
+}
 
-    // 2. Periodicity of maxima and minima.
+/// Test 2's evidence.
+struct PeriodFit {
+    /// The passing k if `passed`, else the k with the smallest residual.
+    best_period: usize,
+    /// max |x_{n+k} − x_n| / A at `best_period`.
+    residual: f64,
+    passed: bool,
+}
+
+/// The smallest `k ≤ max_period` whose maxima and minima repeat within `tolerance·A`.
+fn period_search(section: &PoincareSection, amplitude: f64, opts: &ClassifyOptions) -> PeriodFit {
+    let m = &section.maxima;
     let residual = |k: usize| -> f64 {
         [m, &section.minima]
             .iter()
@@ -199,29 +287,76 @@ pub fn classify(
             / amplitude
     };
     let kmax = opts.max_period.min(m.len() / 2).max(1);
-    d.period_residual = f64::INFINITY;
+    let mut fit = PeriodFit {
+        best_period: 0,
+        residual: f64::INFINITY,
+        passed: false,
+    };
     for k in 1..=kmax {
         let r = residual(k);
-        if r < d.period_residual {
-            d.best_period = k;
-            d.period_residual = r;
+        if r < fit.residual {
+            fit.best_period = k;
+            fit.residual = r;
         }
         if r <= opts.tolerance {
-            d.best_period = k;
-            d.period_residual = r;
-            return Ok(Classification {
-                class: Class::Periodic { period: k },
-                diagnostics: d,
-            });
+            fit.best_period = k;
+            fit.residual = r;
+            fit.passed = true;
+            break;
         }
     }
+    fit
+}
 
-    // 3. A closed one-dimensional curve in the return map.
-    let mut sorted = m.clone();
+/// Test 3's evidence: is the return map a closed one-dimensional curve?
+struct CurveShape {
+    /// Number and fraction of maxima distinct at `distinct_tolerance·A`.
+    distinct_values: usize,
+    distinct_fraction: f64,
+    /// Occupied fraction of the angular sectors around the centroid.
+    coverage: f64,
+    /// r_min/r_max around the centroid.
+    hole: f64,
+    /// Median cosine of the angle between a point's two nearest neighbours.
+    neighbour_cosine: f64,
+}
+
+impl CurveShape {
+    /// Enough distinct values, all around the centroid, a ring not a blob, locally a curve.
+    fn is_closed_curve(&self, opts: &ClassifyOptions) -> bool {
+        let enough_distinct = self.distinct_fraction >= opts.min_distinct_fraction
+            || self.distinct_values >= opts.distinct_cap;
+        enough_distinct
+            && self.coverage >= opts.min_coverage
+            && self.hole >= opts.min_hole
+            && self.neighbour_cosine <= opts.max_neighbour_cosine
+    }
+}
+
+/// Test 3's evidence from the maxima and their return map `(x_n, x_{n+1})`.
+fn return_map_shape(
+    section: &PoincareSection,
+    amplitude: f64,
+    opts: &ClassifyOptions,
+) -> CurveShape {
+    let m = &section.maxima;
+    let distinct = distinct_values(m, opts.distinct_tolerance * amplitude);
+    let pts = section.return_map();
+    let ring = ring_around_centroid(&pts, opts.sectors.max(1));
+    CurveShape {
+        distinct_values: distinct,
+        distinct_fraction: distinct as f64 / m.len() as f64,
+        coverage: ring.coverage,
+        hole: ring.hole,
+        neighbour_cosine: neighbour_cosine(&pts),
+    }
+}
+
+/// Values distinct at `tol`: greedy bins of width `tol` anchored at their first value
+/// (chaining gaps would merge a dense set into one cluster).
+fn distinct_values(values: &[f64], tol: f64) -> usize {
+    let mut sorted = values.to_vec();
     sorted.sort_by(f64::total_cmp);
-    let tol = opts.distinct_tolerance * amplitude;
-    // Greedy bins of width tol anchored at their first value (chaining gaps would merge a
-    // dense set into one cluster).
     let mut distinct = 0;
     let mut anchor = f64::NEG_INFINITY;
     for &v in &sorted {
@@ -230,9 +365,19 @@ pub fn classify(
             anchor = v;
         }
     }
-    d.distinct_values = distinct;
-    d.distinct_fraction = distinct as f64 / m.len() as f64;
-    let pts = section.return_map();
+    distinct
+}
+
+/// How the return map surrounds its centroid.
+struct Ring {
+    /// Occupied fraction of the angular sectors.
+    coverage: f64,
+    /// r_min/r_max (0 if all points sit on the centroid).
+    hole: f64,
+}
+
+/// Angular coverage and hole of `pts` around their centroid, in `sectors` sectors.
+fn ring_around_centroid(pts: &[[f64; 2]], sectors: usize) -> Ring {
     let (cx, cy) = {
         let n = pts.len() as f64;
         (
@@ -240,10 +385,9 @@ pub fn classify(
             pts.iter().map(|p| p[1]).sum::<f64>() / n,
         )
     };
-    let sectors = opts.sectors.max(1);
     let mut occupied = vec![false; sectors];
     let (mut rmin, mut rmax) = (f64::INFINITY, 0.0f64);
-    for p in &pts {
+    for p in pts {
         let (dx, dy) = (p[0] - cx, p[1] - cy);
         let r = dx.hypot(dy);
         rmin = rmin.min(r);
@@ -251,24 +395,10 @@ pub fn classify(
         let a = dy.atan2(dx) + PI; // 0..=2π
         occupied[((a / (2.0 * PI) * sectors as f64) as usize).min(sectors - 1)] = true;
     }
-    d.coverage = occupied.iter().filter(|&&o| o).count() as f64 / sectors as f64;
-    d.hole = if rmax > 0.0 { rmin / rmax } else { 0.0 };
-    d.neighbour_cosine = neighbour_cosine(&pts);
-    let enough_distinct =
-        d.distinct_fraction >= opts.min_distinct_fraction || distinct >= opts.distinct_cap;
-    let class = if enough_distinct
-        && d.coverage >= opts.min_coverage
-        && d.hole >= opts.min_hole
-        && d.neighbour_cosine <= opts.max_neighbour_cosine
-    {
-        Class::QuasiPeriodic
-    } else {
-        Class::Irregular
-    };
-    Ok(Classification {
-        class,
-        diagnostics: d,
-    })
+    Ring {
+        coverage: occupied.iter().filter(|&&o| o).count() as f64 / sectors as f64,
+        hole: if rmax > 0.0 { rmin / rmax } else { 0.0 },
+    }
 }
 
 fn median(v: &mut [f64]) -> f64 {

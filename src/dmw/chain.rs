@@ -2,7 +2,7 @@
 //! scaling, high-pass filtering, integration, resampling, the three tracks and their
 //! statistics. A pure function of the record and the parameters.
 
-use super::average::{synchronous_average, AverageMode};
+use super::average::{synchronous_average, AverageMode, Averaged};
 use super::tracks::{three_tracks, Tracks};
 use super::triggers::{detect_triggers, triggers_from_speed, TriggerOptions};
 use super::{DmwError, Layout, LdvRecord, VelocityUnit};
@@ -10,7 +10,7 @@ use crate::signal::butterworth::{butterworth_sos, zero_phase_gain_db, FilterKind
 use crate::signal::integrate::{cumulative_trapezoid, detrend, trapezoid_gain, Detrend};
 use crate::signal::resample::{rational_ratio, resample_poly};
 use crate::signal::sosfilt::{sosfilt, sosfilt_zi, sosfiltfilt, PadType};
-use crate::signal::spectrum::{amplitude_spectrum, Peak, PeakOptions, Window};
+use crate::signal::spectrum::{amplitude_spectrum, AmplitudeSpectrum, Peak, PeakOptions, Window};
 
 /// A Butterworth filter: order and cutoff (Hz).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -253,7 +253,8 @@ fn filter(sos: &[Sos], x: &[f64], mode: FilterMode, padlen: Padlen) -> Result<Ve
     }
 }
 
-/// Run the chain on one record.
+/// Run the chain on one record: the steps of docs/dmw.md ("The chain"), one function each;
+/// warnings accumulate in step order.
 pub fn process(rec: &LdvRecord, p: &ChainParams) -> Result<DmwResult, DmwError> {
     let fs = rec.sample_rate;
     if !(fs.is_finite() && fs > 0.0) {
@@ -262,74 +263,84 @@ pub fn process(rec: &LdvRecord, p: &ChainParams) -> Result<DmwResult, DmwError> 
         )));
     }
     let mut warnings = Vec::new();
-    let nominal_period = p.rpm.map(|r| 60.0 / r);
 
     // 1. Segmentation and averaging.
-    let (avg, segmentation, layout, trig, level, n_debounced, n_triggers) = match &rec.layout {
-        Layout::Continuous => {
-            let segment_len = (p.segment * fs).round() as usize;
-            let (mut tr, how) = match (&rec.index, p.rpm) {
-                (Some(index), _) => (
-                    detect_triggers(
-                        index,
-                        fs,
-                        nominal_period,
-                        &TriggerOptions {
-                            level: p.trigger_level,
-                            ..Default::default()
-                        },
-                    )?,
-                    "index channel",
-                ),
-                (None, Some(rpm)) => (
-                    triggers_from_speed(rec.velocity.len(), fs, rpm),
-                    "spindle speed",
-                ),
-                (None, None) => {
-                    return Err(DmwError::Processing(
-                        "the record has no index (once-per-revolution) channel and no spindle \
-                         speed is given: set `rpm` (or name the index channel) so revolutions \
-                         can be found"
-                            .into(),
-                    ))
-                }
-            };
-            let n_triggers = tr.times.len();
-            if n_triggers == 0 {
-                return Err(DmwError::Processing(
-                    "no once-per-revolution trigger found in the index channel".into(),
-                ));
-            }
-            if let Some(max) = p.max_revolutions {
-                // Angular averaging needs the edge after the last kept revolution (its period).
-                let keep = if p.averaging == AverageMode::Angular {
-                    max + 1
-                } else {
-                    max
-                };
-                tr.times.truncate(keep);
-            }
-            let avg = synchronous_average(
-                &rec.velocity,
-                fs,
-                &tr.times,
-                segment_len,
-                if tr.times.len() == 1 {
-                    AverageMode::Integer
-                } else {
-                    p.averaging
-                },
-            )?;
-            (
-                avg,
-                how,
-                "continuous",
-                tr.times.clone(),
-                tr.level,
-                tr.n_debounced,
-                n_triggers,
-            )
-        }
+    let seg = segment_and_average(rec, p)?;
+    let revs = revolution_qa(&seg, p, fs, &mut warnings)?;
+    // 2. Scaling.
+    let scaled = scale_velocity(&seg.avg.mean, rec.velocity_unit, p);
+    let n = scaled.velocity.len();
+    // 3. Filters.
+    let filters = design_filters(p, fs, n)?;
+    // 4. Integration.
+    let integrated = integrate(&scaled.velocity, &filters, p, fs)?;
+    let drift = integrated.drift;
+    // 5. Edge transients.
+    let edge = edge_samples(p, fs, n, &mut warnings);
+    // 6. Optional resampling.
+    let out = resample(integrated.d, integrated.v, edge, p, fs, &mut warnings)?;
+    // 7. Tracks and statistics.
+    let st = tracks_and_statistics(&out, &filters.highpass, p, fs, &mut warnings)?;
+
+    Ok(DmwResult {
+        sample_rate: out.sample_rate,
+        averaged_raw: seg.avg.mean.clone(),
+        averaged_raw_unit: rec.velocity_unit,
+        averaged_velocity: scaled.velocity,
+        tracks: st.tracks,
+        edge_transient: out.edge_transient,
+        trigger_times: seg.trigger_times,
+        periods: revs.periods,
+        spectrum_frequency: st.spectrum_d.frequency.clone(),
+        spectrum_displacement: st.spectrum_d.amplitude,
+        spectrum_velocity: st.spectrum_v.amplitude,
+        highpass_sos: filters.highpass,
+        lowpass_sos: filters.lowpass,
+        qa: Qa {
+            layout: seg.layout,
+            segmentation: seg.segmentation,
+            n_triggers: seg.n_triggers,
+            n_avg: seg.avg.n_avg,
+            n_dropped: seg.avg.n_dropped,
+            trigger_level: seg.trigger_level,
+            n_debounced: seg.n_debounced,
+            period_mean: revs.period_mean,
+            period_relstd: revs.period_relstd,
+            phase_wander_275khz: revs.phase_wander,
+            noise_floor: seg.avg.noise_floor * scaled.scale,
+            residual_std: seg.avg.residual_std * scaled.scale,
+            velocity_offset: scaled.offset,
+            drift,
+            integration_gain_275khz: trapezoid_gain(275e3, fs),
+            edge_samples: out.edge,
+            warnings,
+        },
+        stats: st.stats,
+    })
+}
+
+/// Step 1's result: the averaged revolution and how the record was cut into revolutions.
+struct Segmented {
+    avg: Averaged,
+    /// "index channel", "spindle speed", "pre-segmented" or "pre-averaged".
+    segmentation: &'static str,
+    /// "continuous", "segments" or "averaged".
+    layout: &'static str,
+    /// Trigger times kept for averaging (none unless the record is continuous).
+    trigger_times: Vec<f64>,
+    trigger_level: f64,
+    n_debounced: usize,
+    /// Triggers found (continuous) or segments averaged (pre-segmented), before the
+    /// `max_revolutions` cut of a continuous record.
+    n_triggers: usize,
+}
+
+/// Step 1: cut the record into revolutions as its layout says and average them
+/// synchronously (docs/dmw.md, "Segment" and "Average").
+fn segment_and_average(rec: &LdvRecord, p: &ChainParams) -> Result<Segmented, DmwError> {
+    let fs = rec.sample_rate;
+    match &rec.layout {
+        Layout::Continuous => average_continuous(rec, p),
         Layout::Segments {
             n_segments,
             segment_len,
@@ -343,15 +354,122 @@ pub fn process(rec: &LdvRecord, p: &ChainParams) -> Result<DmwResult, DmwError> 
                 *segment_len,
                 AverageMode::Integer,
             )?;
-            (avg, "pre-segmented", "segments", Vec::new(), f64::NAN, 0, n)
+            Ok(Segmented {
+                avg,
+                segmentation: "pre-segmented",
+                layout: "segments",
+                trigger_times: Vec::new(),
+                trigger_level: f64::NAN,
+                n_debounced: 0,
+                n_triggers: n,
+            })
         }
         Layout::Averaged => {
             let x = &rec.velocity;
             let avg = synchronous_average(x, fs, &[0.0], x.len(), AverageMode::Integer)?;
-            (avg, "pre-averaged", "averaged", Vec::new(), f64::NAN, 0, 0)
+            Ok(Segmented {
+                avg,
+                segmentation: "pre-averaged",
+                layout: "averaged",
+                trigger_times: Vec::new(),
+                trigger_level: f64::NAN,
+                n_debounced: 0,
+                n_triggers: 0,
+            })
+        }
+    }
+}
+
+/// Step 1 for a continuous record: triggers from the index channel, or from the spindle
+/// speed when there is none, then the average of `segment` after each kept trigger.
+fn average_continuous(rec: &LdvRecord, p: &ChainParams) -> Result<Segmented, DmwError> {
+    let fs = rec.sample_rate;
+    let nominal_period = p.rpm.map(|r| 60.0 / r);
+    let segment_len = (p.segment * fs).round() as usize;
+    let (mut tr, how) = match (&rec.index, p.rpm) {
+        (Some(index), _) => (
+            detect_triggers(
+                index,
+                fs,
+                nominal_period,
+                &TriggerOptions {
+                    level: p.trigger_level,
+                    ..Default::default()
+                },
+            )?,
+            "index channel",
+        ),
+        (None, Some(rpm)) => (
+            triggers_from_speed(rec.velocity.len(), fs, rpm),
+            "spindle speed",
+        ),
+        (None, None) => {
+            return Err(DmwError::Processing(
+                "the record has no index (once-per-revolution) channel and no spindle \
+                 speed is given: set `rpm` (or name the index channel) so revolutions \
+                 can be found"
+                    .into(),
+            ))
         }
     };
-    let periods: Vec<f64> = trig.windows(2).map(|w| w[1] - w[0]).collect();
+    let n_triggers = tr.times.len();
+    if n_triggers == 0 {
+        return Err(DmwError::Processing(
+            "no once-per-revolution trigger found in the index channel".into(),
+        ));
+    }
+    if let Some(max) = p.max_revolutions {
+        // Angular averaging needs the edge after the last kept revolution (its period).
+        let keep = if p.averaging == AverageMode::Angular {
+            max + 1
+        } else {
+            max
+        };
+        tr.times.truncate(keep);
+    }
+    let avg = synchronous_average(
+        &rec.velocity,
+        fs,
+        &tr.times,
+        segment_len,
+        if tr.times.len() == 1 {
+            AverageMode::Integer
+        } else {
+            p.averaging
+        },
+    )?;
+    Ok(Segmented {
+        avg,
+        segmentation: how,
+        layout: "continuous",
+        trigger_times: tr.times,
+        trigger_level: tr.level,
+        n_debounced: tr.n_debounced,
+        n_triggers,
+    })
+}
+
+/// Revolution periods and what their wander costs the average.
+struct RevolutionQa {
+    periods: Vec<f64>,
+    /// NaN without triggers.
+    period_mean: f64,
+    period_relstd: f64,
+    /// Phase error of a 275 kHz line at the segment's end, rad (0 without triggers).
+    phase_wander: f64,
+}
+
+/// Step 1's checks: an index period more than 1 % off `rpm` is an error (wrong channel, wrong
+/// speed or missed triggers); speed-only segmentation, overlapping segments and a speed wander
+/// that smears high orders are warnings (docs/dmw.md, "Segment" and "Average").
+fn revolution_qa(
+    seg: &Segmented,
+    p: &ChainParams,
+    fs: f64,
+    warnings: &mut Vec<String>,
+) -> Result<RevolutionQa, DmwError> {
+    let nominal_period = p.rpm.map(|r| 60.0 / r);
+    let periods: Vec<f64> = seg.trigger_times.windows(2).map(|w| w[1] - w[0]).collect();
     let (period_mean, period_relstd) = if periods.is_empty() {
         (f64::NAN, f64::NAN)
     } else {
@@ -359,7 +477,7 @@ pub fn process(rec: &LdvRecord, p: &ChainParams) -> Result<DmwResult, DmwError> 
         (m, std_of(&periods) / m)
     };
     if let (Some(nominal), true) = (nominal_period, period_mean.is_finite()) {
-        if segmentation == "index channel" && (period_mean / nominal - 1.0).abs() > 0.01 {
+        if seg.segmentation == "index channel" && (period_mean / nominal - 1.0).abs() > 0.01 {
             return Err(DmwError::Processing(format!(
                 "the index channel's mean period {:.6} ms is more than 1 % off the spindle \
                  speed's {:.6} ms (rpm = {}): wrong `rpm`, wrong index channel or a missed \
@@ -370,7 +488,7 @@ pub fn process(rec: &LdvRecord, p: &ChainParams) -> Result<DmwResult, DmwError> 
             )));
         }
     }
-    if segmentation == "spindle speed" {
+    if seg.segmentation == "spindle speed" {
         warnings.push(
             "segmented from the spindle speed (no index channel): averaging is only as good \
              as the speed's constancy"
@@ -384,13 +502,15 @@ pub fn process(rec: &LdvRecord, p: &ChainParams) -> Result<DmwResult, DmwError> 
             period_mean * 1e3
         ));
     }
-    let segment_duration = avg.mean.len() as f64 / fs;
+    let segment_duration = seg.avg.mean.len() as f64 / fs;
     let phase_wander = if period_relstd.is_finite() {
         2.0 * std::f64::consts::PI * 275e3 * segment_duration * period_relstd
     } else {
         0.0
     };
-    if phase_wander > 0.3 && p.averaging != AverageMode::Angular && segmentation == "index channel"
+    if phase_wander > 0.3
+        && p.averaging != AverageMode::Angular
+        && seg.segmentation == "index channel"
     {
         warnings.push(format!(
             "speed wander smears high orders: a 275 kHz line loses {:.0} % (phase wander {:.2} \
@@ -399,35 +519,78 @@ pub fn process(rec: &LdvRecord, p: &ChainParams) -> Result<DmwResult, DmwError> 
             phase_wander
         ));
     }
+    Ok(RevolutionQa {
+        periods,
+        period_mean,
+        period_relstd,
+        phase_wander,
+    })
+}
 
-    // 2. Scaling: decoder volts → m/s; the mean is an offset, not motion.
-    let scale = match rec.velocity_unit {
+/// The averaged velocity in m/s.
+struct Scaled {
+    /// m/s per recorded unit.
+    scale: f64,
+    /// Offset removed if `remove_offset`, unfiltered.
+    velocity: Vec<f64>,
+    /// Mean of the scaled average, m/s.
+    offset: f64,
+}
+
+/// Step 2: decoder volts → m/s; the mean is a decoder offset, not motion (docs/dmw.md,
+/// "Scale").
+fn scale_velocity(mean: &[f64], unit: VelocityUnit, p: &ChainParams) -> Scaled {
+    let scale = match unit {
         VelocityUnit::Volt => p.sensitivity,
         VelocityUnit::MetrePerSecond => 1.0,
     };
-    let mut v: Vec<f64> = avg.mean.iter().map(|u| u * scale).collect();
-    let velocity_offset = v.iter().sum::<f64>() / v.len() as f64;
+    let mut velocity: Vec<f64> = mean.iter().map(|u| u * scale).collect();
+    let offset = velocity.iter().sum::<f64>() / velocity.len() as f64;
     if p.remove_offset {
-        v.iter_mut().for_each(|x| *x -= velocity_offset);
+        velocity.iter_mut().for_each(|x| *x -= offset);
     }
-    let averaged_velocity = v.clone();
-    let n = v.len();
+    Scaled {
+        scale,
+        velocity,
+        offset,
+    }
+}
 
-    // 3. Filters.
+/// The designed high- and low-pass with their resolved padding.
+struct Filters {
+    highpass: Vec<Sos>,
+    lowpass: Vec<Sos>,
+    hp_padlen: Padlen,
+    lp_padlen: Padlen,
+    mode: FilterMode,
+}
+
+impl Filters {
+    /// High-pass, then low-pass (either may be absent).
+    fn apply(&self, x: &[f64]) -> Result<Vec<f64>, DmwError> {
+        let y = filter(&self.highpass, x, self.mode, self.hp_padlen)?;
+        filter(&self.lowpass, &y, self.mode, self.lp_padlen)
+    }
+}
+
+/// Step 3: Butterworth sections for this record's rate; `Padlen::Auto` becomes `3·fs/fc`
+/// samples (at most `n − 1`), which keeps the transients out of a 2.5 ms record
+/// (docs/dmw.md, "High-pass").
+fn design_filters(p: &ChainParams, fs: f64, n: usize) -> Result<Filters, DmwError> {
     let design = |b: Butterworth, kind: FilterKind, key: &str| {
         butterworth_sos(b.order, b.cutoff, fs, kind)
             .map_err(|e| DmwError::Processing(format!("`{key}` for this record ({} S/s): {e}", fs)))
     };
-    let hp_sos = match p.highpass {
+    let highpass = match p.highpass {
         Some(b) => design(b, FilterKind::HighPass, "highpass_hz")?,
         None => Vec::new(),
     };
-    let lp_sos = match p.lowpass {
+    let lowpass = match p.lowpass {
         Some(b) => design(b, FilterKind::LowPass, "lowpass_hz")?,
         None => Vec::new(),
     };
     let lowest_cut = p.highpass.map(|b| b.cutoff);
-    let padlen = match (p.padlen, lowest_cut) {
+    let hp_padlen = match (p.padlen, lowest_cut) {
         (Padlen::Auto, Some(fc)) => Padlen::Samples(((3.0 * fs / fc).round() as usize).min(n - 1)),
         (Padlen::Auto, None) => Padlen::Scipy,
         (other, _) => other,
@@ -436,35 +599,67 @@ pub fn process(rec: &LdvRecord, p: &ChainParams) -> Result<DmwResult, DmwError> 
         (Padlen::Auto, Some(b)) => {
             Padlen::Samples(((3.0 * fs / b.cutoff).round() as usize).min(n - 1))
         }
-        _ => padlen,
+        _ => hp_padlen,
     };
-    let apply = |x: &[f64]| -> Result<Vec<f64>, DmwError> {
-        let y = filter(&hp_sos, x, p.filter_mode, padlen)?;
-        filter(&lp_sos, &y, p.filter_mode, lp_padlen)
-    };
+    Ok(Filters {
+        highpass,
+        lowpass,
+        hp_padlen,
+        lp_padlen,
+        mode: p.filter_mode,
+    })
+}
 
-    // 4. Integration (order per `p.order`).
-    let (mut d, v_out, drift) = match p.order {
+/// Filtered displacement and velocity at the record's rate.
+struct Integrated {
+    d: Vec<f64>,
+    v: Vec<f64>,
+    /// Slope of the displacement line removed after integrating, m/s.
+    drift: f64,
+}
+
+/// Step 4: trapezoid integration and detrending, before or after the filters as `p.order`
+/// says (docs/dmw.md, "Integrate"); a non-finite result is an error.
+fn integrate(
+    v: &[f64],
+    filters: &Filters,
+    p: &ChainParams,
+    fs: f64,
+) -> Result<Integrated, DmwError> {
+    let out = match p.order {
         ChainOrder::FilterThenIntegrate => {
-            let vf = apply(&v)?;
+            let vf = filters.apply(v)?;
             let mut d = cumulative_trapezoid(&vf, fs);
             let slope = detrend(&mut d, p.detrend) * fs;
-            (d, vf, slope)
+            Integrated {
+                d,
+                v: vf,
+                drift: slope,
+            }
         }
         ChainOrder::IntegrateThenFilter => {
-            let mut d0 = cumulative_trapezoid(&v, fs);
+            let mut d0 = cumulative_trapezoid(v, fs);
             let slope = detrend(&mut d0, p.detrend) * fs;
-            (apply(&d0)?, apply(&v)?, slope)
+            Integrated {
+                d: filters.apply(&d0)?,
+                v: filters.apply(v)?,
+                drift: slope,
+            }
         }
     };
-    if d.iter().chain(&v_out).any(|x| !x.is_finite()) {
+    if out.d.iter().chain(&out.v).any(|x| !x.is_finite()) {
         return Err(DmwError::Processing(
             "the filtered record contains non-finite values (unstable filter settings?)".into(),
         ));
     }
+    Ok(out)
+}
 
-    // 5. Edge transients: 3/fc at each end (zero-phase filters ring both ways).
-    let mut edge = match lowest_cut {
+/// Step 5: samples at each end inside the filter transients, `3·fs/fc` (zero-phase filters
+/// ring both ways); none, with a warning, if they would cover the record (docs/dmw.md,
+/// "Edges").
+fn edge_samples(p: &ChainParams, fs: f64, n: usize, warnings: &mut Vec<String>) -> usize {
+    let edge = match p.highpass.map(|b| b.cutoff) {
         Some(fc) => (3.0 * fs / fc).round() as usize,
         None => 0,
     };
@@ -475,12 +670,32 @@ pub fn process(rec: &LdvRecord, p: &ChainParams) -> Result<DmwResult, DmwError> 
             n as f64 / fs * 1e3,
             edge as f64 / fs * 1e3
         ));
-        edge = 0;
+        return 0;
     }
+    edge
+}
 
-    // 6. Optional resampling to the simulation's rate.
-    let mut out_fs = fs;
-    let mut v_final = v_out;
+/// Displacement and velocity at the output rate, with the edge mask.
+struct Output {
+    sample_rate: f64,
+    d: Vec<f64>,
+    v: Vec<f64>,
+    /// Edge samples at the output rate.
+    edge: usize,
+    edge_transient: Vec<bool>,
+}
+
+/// Step 6: optional band-limited rational resampling to `p.resample_rate`, the edge scaled
+/// with it (docs/dmw.md, "Resample").
+fn resample(
+    mut d: Vec<f64>,
+    mut v: Vec<f64>,
+    mut edge: usize,
+    p: &ChainParams,
+    fs: f64,
+    warnings: &mut Vec<String>,
+) -> Result<Output, DmwError> {
+    let mut sample_rate = fs;
     if let Some(rate) = p.resample_rate {
         let (up, down) = rational_ratio(rate, fs, 1000);
         let achieved = fs * up as f64 / down as f64;
@@ -490,33 +705,60 @@ pub fn process(rec: &LdvRecord, p: &ChainParams) -> Result<DmwResult, DmwError> 
             ));
         }
         d = resample_poly(&d, up, down)?;
-        v_final = resample_poly(&v_final, up, down)?;
+        v = resample_poly(&v, up, down)?;
         edge = (edge as f64 * up as f64 / down as f64).ceil() as usize;
-        out_fs = achieved;
+        sample_rate = achieved;
     }
     let n_out = d.len();
     let edge_transient: Vec<bool> = (0..n_out).map(|i| i < edge || i + edge >= n_out).collect();
+    Ok(Output {
+        sample_rate,
+        d,
+        v,
+        edge,
+        edge_transient,
+    })
+}
 
-    // 7. Tracks and statistics.
-    let tracks = three_tracks(&d, &v_final);
-    let inner = edge..n_out - edge;
+/// Step 7's products.
+struct Statistics {
+    tracks: Tracks,
+    /// Spectra of D1 and V1 over the samples outside the edges.
+    spectrum_d: AmplitudeSpectrum,
+    spectrum_v: AmplitudeSpectrum,
+    stats: TrackStats,
+}
+
+/// Step 7: the three tracks, and statistics and spectra outside the edge transients; a warning
+/// when the dominant line sits within 2·fc of the high-pass, whose gain then scales it
+/// (docs/dmw.md, "Tracks" and "Statistics").
+fn tracks_and_statistics(
+    out: &Output,
+    hp_sos: &[Sos],
+    p: &ChainParams,
+    fs: f64,
+    warnings: &mut Vec<String>,
+) -> Result<Statistics, DmwError> {
+    let (d, edge) = (&out.d, out.edge);
+    let tracks = three_tracks(d, &out.v);
+    let inner = edge..d.len() - edge;
     let d_in = &d[inner.clone()];
-    let v_in = &v_final[inner];
+    let v_in = &out.v[inner];
     let (lo, hi) = d_in
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
             (a.min(x), b.max(x))
         });
-    let spec_d = amplitude_spectrum(d_in, out_fs, Window::Hann)?;
-    let spec_v = amplitude_spectrum(v_in, out_fs, Window::Hann)?;
-    let peaks = spec_d.peaks(&PeakOptions {
+    let spectrum_d = amplitude_spectrum(d_in, out.sample_rate, Window::Hann)?;
+    let spectrum_v = amplitude_spectrum(v_in, out.sample_rate, Window::Hann)?;
+    let peaks = spectrum_d.peaks(&PeakOptions {
         max_peaks: p.n_peaks,
-        min_frequency: lowest_cut.map(|f| 0.5 * f).unwrap_or(0.0),
+        min_frequency: p.highpass.map(|b| 0.5 * b.cutoff).unwrap_or(0.0),
         ..Default::default()
     });
     if let (Some(top), Some(hp)) = (peaks.first(), p.highpass) {
         if top.frequency < 2.0 * hp.cutoff {
-            let g = zero_phase_gain_db(&hp_sos, top.frequency, fs);
+            let g = zero_phase_gain_db(hp_sos, top.frequency, fs);
             warnings.push(format!(
                 "the dominant line ({:.2} kHz) sits close to the {:.1} kHz high-pass, which \
                  scales it by {:.3} ({:.2} dB): its amplitude depends on the filter choice",
@@ -533,39 +775,10 @@ pub fn process(rec: &LdvRecord, p: &ChainParams) -> Result<DmwResult, DmwError> 
         velocity_std: std_of(v_in),
         peaks,
     };
-    Ok(DmwResult {
-        sample_rate: out_fs,
-        averaged_raw: avg.mean.clone(),
-        averaged_raw_unit: rec.velocity_unit,
-        averaged_velocity,
+    Ok(Statistics {
         tracks,
-        edge_transient,
-        trigger_times: trig,
-        periods,
-        spectrum_frequency: spec_d.frequency.clone(),
-        spectrum_displacement: spec_d.amplitude,
-        spectrum_velocity: spec_v.amplitude,
-        highpass_sos: hp_sos,
-        lowpass_sos: lp_sos,
-        qa: Qa {
-            layout,
-            segmentation,
-            n_triggers,
-            n_avg: avg.n_avg,
-            n_dropped: avg.n_dropped,
-            trigger_level: level,
-            n_debounced,
-            period_mean,
-            period_relstd,
-            phase_wander_275khz: phase_wander,
-            noise_floor: avg.noise_floor * scale,
-            residual_std: avg.residual_std * scale,
-            velocity_offset,
-            drift,
-            integration_gain_275khz: trapezoid_gain(275e3, fs),
-            edge_samples: edge,
-            warnings,
-        },
+        spectrum_d,
+        spectrum_v,
         stats,
     })
 }

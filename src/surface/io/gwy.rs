@@ -9,7 +9,7 @@
 //! rather than bad data.
 use super::units::length_factor;
 use super::{find_channel, format_error, heights_with_nan, unsupported, RawMap, ReadOptions};
-use crate::surface::{HeightMap, Result};
+use crate::surface::{HeightMap, Result, SurfaceError};
 use ndarray::Array2;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
@@ -289,67 +289,150 @@ fn parse_field<'a>(
     })
 }
 
+/// One channel of a `.gwy` file as heights in metres.
 pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawMap> {
+    let container = walk_container(path, bytes)?;
+    let channels = parse_channels(path, container.fields, container.titles)?;
+    let listing = channels
+        .iter()
+        .map(|c| format!("{}: {} [{}]", c.number, c.title, c.z_unit))
+        .collect::<Vec<_>>()
+        .join("; ");
+    let channel = &channels[select_channel(path, &channels, &listing, opts)?];
+    let units = length_units(path, channel)?;
+    let z = decode_heights(path, channel, units.z_factor)?;
+
+    let mut header = BTreeMap::new();
+    if let Some(warning) = units.warning {
+        header.insert("warning".into(), warning.into());
+    }
+    header.insert("channels".into(), listing);
+    header.insert("channel_number".into(), channel.number.to_string());
+    header.insert("xres".into(), channel.xres.to_string());
+    header.insert("yres".into(), channel.yres.to_string());
+    header.insert(
+        "xreal".into(),
+        format!("{:e} {}", channel.xreal, channel.xy_unit),
+    );
+    header.insert(
+        "yreal".into(),
+        format!("{:e} {}", channel.yreal, channel.xy_unit),
+    );
+    header.insert("z_unit".into(), channel.z_unit.clone());
+    if container.masks.contains(&channel.number) {
+        header.insert(
+            "mask".into(),
+            format!("/{}/mask present (not applied)", channel.number),
+        );
+    }
+    let xy_factor = units.xy_factor;
+    Ok(RawMap {
+        z,
+        dx: channel.xreal * xy_factor / channel.xres as f64,
+        dy: channel.yreal * xy_factor / channel.yres as f64,
+        x0: channel.xoff * xy_factor,
+        y0: channel.yoff * xy_factor,
+        channel: channel.title.clone(),
+        format: "gwy",
+        header,
+    })
+}
+
+/// A structural error found while walking the object tree.
+fn malformed(path: &Path, e: String) -> SurfaceError {
+    format_error(path, format!("truncated or malformed GWY file: {e}"))
+}
+
+/// What the top-level `GwyContainer` holds, keyed by channel number.
+struct Container<'a> {
+    /// `/N/data` objects, not yet parsed.
+    fields: BTreeMap<u32, GwyObject<'a>>,
+    /// `/N/data/title` strings.
+    titles: BTreeMap<u32, String>,
+    /// Channels with a `/N/mask`.
+    masks: BTreeSet<u32>,
+}
+
+/// The top-level container's channel entries; Gwyddion 1.x files are refused.
+fn walk_container<'a>(path: &Path, bytes: &'a [u8]) -> Result<Container<'a>> {
     if bytes.starts_with(b"GWYO") {
         return Err(unsupported(
             path,
             "Gwyddion 1.x file (magic GWYO); re-save it with Gwyddion 2",
         ));
     }
-    let malformed = |e: String| format_error(path, format!("truncated or malformed GWY file: {e}"));
     let mut cursor = Cursor {
         buf: bytes,
         pos: 4,
         end: bytes.len(),
     };
-    let top = cursor.object().map_err(malformed)?;
+    let top = cursor.object().map_err(|e| malformed(path, e))?;
     if top.name != b"GwyContainer" {
-        return Err(malformed(format!(
-            "top-level object is `{}`, expected GwyContainer",
-            lossy(top.name)
-        )));
+        return Err(malformed(
+            path,
+            format!(
+                "top-level object is `{}`, expected GwyContainer",
+                lossy(top.name)
+            ),
+        ));
     }
-    let mut fields = BTreeMap::new();
-    let mut titles = BTreeMap::new();
-    let mut masks = BTreeSet::new();
+    let mut container = Container {
+        fields: BTreeMap::new(),
+        titles: BTreeMap::new(),
+        masks: BTreeSet::new(),
+    };
     for component in top.components() {
-        let (key, value) = component.map_err(malformed)?;
+        let (key, value) = component.map_err(|e| malformed(path, e))?;
         let Ok(key) = std::str::from_utf8(key) else {
             continue;
         };
         match value {
             Value::Object(o) => {
                 if let Some(n) = channel_number(key, "/data") {
-                    fields.insert(n, o);
+                    container.fields.insert(n, o);
                 } else if let Some(n) = channel_number(key, "/mask") {
-                    masks.insert(n);
+                    container.masks.insert(n);
                 }
             }
             Value::Str(s) => {
                 if let Some(n) = channel_number(key, "/data/title") {
-                    titles.insert(n, lossy(s));
+                    container.titles.insert(n, lossy(s));
                 }
             }
             _ => {}
         }
     }
+    Ok(container)
+}
+
+/// Every `/N/data` field parsed, in channel-number order; at least one is required.
+fn parse_channels<'a>(
+    path: &Path,
+    fields: BTreeMap<u32, GwyObject<'a>>,
+    mut titles: BTreeMap<u32, String>,
+) -> Result<Vec<Channel<'a>>> {
     let mut channels = Vec::new();
     for (number, field) in fields {
         let title = titles.remove(&number).unwrap_or_default();
         let channel = parse_field(number, title, field)
-            .map_err(|e| malformed(format!("channel /{number}/data: {e}")))?;
+            .map_err(|e| malformed(path, format!("channel /{number}/data: {e}")))?;
         channels.push(channel);
     }
     if channels.is_empty() {
         return Err(format_error(path, "GWY file has no data channel (/N/data)"));
     }
-    let listing = channels
-        .iter()
-        .map(|c| format!("{}: {} [{}]", c.number, c.title, c.z_unit))
-        .collect::<Vec<_>>()
-        .join("; ");
+    Ok(channels)
+}
 
-    let chosen = match &opts.channel {
+/// Index of the requested channel (by number or title), else the first height-like titled
+/// channel with a length z unit, else the first with a length z unit.
+fn select_channel(
+    path: &Path,
+    channels: &[Channel],
+    listing: &str,
+    opts: &ReadOptions,
+) -> Result<usize> {
+    match &opts.channel {
         Some(wanted) => {
             let by_number = wanted
                 .trim()
@@ -361,7 +444,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
                 .or_else(|| find_channel(wanted, &titles))
                 .ok_or_else(|| {
                     format_error(path, format!("no channel `{wanted}`; channels: {listing}"))
-                })?
+                })
         }
         None => {
             let is_height = |c: &Channel| {
@@ -383,10 +466,21 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
                         path,
                         format!("no channel with heights (a length z unit); channels: {listing}"),
                     )
-                })?
+                })
         }
-    };
-    let channel = &channels[chosen];
+    }
+}
+
+/// Metres per unit of the chosen channel.
+struct LengthUnits {
+    z_factor: f64,
+    /// 1 when the lateral unit is missing (then `warning` says so).
+    xy_factor: f64,
+    warning: Option<&'static str>,
+}
+
+/// z must be a length; a missing lateral or z unit is taken as metres, with a warning.
+fn length_units(path: &Path, channel: &Channel) -> Result<LengthUnits> {
     let z_factor = channel.z_factor.ok_or_else(|| {
         format_error(
             path,
@@ -397,7 +491,6 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
         )
     })?;
     let xy_factor = length_factor(&channel.xy_unit);
-    let mut header = BTreeMap::new();
     if xy_factor.is_none() && !channel.xy_unit.is_empty() {
         return Err(format_error(
             path,
@@ -407,54 +500,29 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
             ),
         ));
     }
-    if xy_factor.is_none() {
-        header.insert(
-            "warning".into(),
-            "no lateral unit; xreal/yreal taken as metres".into(),
-        );
+    let warning = if xy_factor.is_none() {
+        Some("no lateral unit; xreal/yreal taken as metres")
     } else if channel.z_unit.is_empty() {
-        header.insert(
-            "warning".into(),
-            "no z unit; heights taken as metres".into(),
-        );
-    }
-    let xy_factor = xy_factor.unwrap_or(1.0);
+        Some("no z unit; heights taken as metres")
+    } else {
+        None
+    };
+    Ok(LengthUnits {
+        z_factor,
+        xy_factor: xy_factor.unwrap_or(1.0),
+        warning,
+    })
+}
+
+/// The channel's little-endian doubles × `z_factor`, `yres` rows of `xres`, in file order.
+fn decode_heights(path: &Path, channel: &Channel, z_factor: f64) -> Result<Array2<f64>> {
     let values: Vec<f64> = channel
         .data
         .chunks_exact(8)
         .map(|c| f64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]) * z_factor)
         .collect();
-    let z = Array2::from_shape_vec((channel.yres, channel.xres), values)
-        .map_err(|e| format_error(path, format!("GWY data shape: {e}")))?;
-    header.insert("channels".into(), listing);
-    header.insert("channel_number".into(), channel.number.to_string());
-    header.insert("xres".into(), channel.xres.to_string());
-    header.insert("yres".into(), channel.yres.to_string());
-    header.insert(
-        "xreal".into(),
-        format!("{:e} {}", channel.xreal, channel.xy_unit),
-    );
-    header.insert(
-        "yreal".into(),
-        format!("{:e} {}", channel.yreal, channel.xy_unit),
-    );
-    header.insert("z_unit".into(), channel.z_unit.clone());
-    if masks.contains(&channel.number) {
-        header.insert(
-            "mask".into(),
-            format!("/{}/mask present (not applied)", channel.number),
-        );
-    }
-    Ok(RawMap {
-        z,
-        dx: channel.xreal * xy_factor / channel.xres as f64,
-        dy: channel.yreal * xy_factor / channel.yres as f64,
-        x0: channel.xoff * xy_factor,
-        y0: channel.yoff * xy_factor,
-        channel: channel.title.clone(),
-        format: "gwy",
-        header,
-    })
+    Array2::from_shape_vec((channel.yres, channel.xres), values)
+        .map_err(|e| format_error(path, format!("GWY data shape: {e}")))
 }
 
 /// Serialisation helpers for the writer.

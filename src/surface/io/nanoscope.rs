@@ -6,7 +6,7 @@
 //! being looked up by the name the `Z scale` line gives it.
 use super::units::{decode_text, length_factor};
 use super::{find_channel, format_error, heights_with_nan, unsupported, RawMap, ReadOptions};
-use crate::surface::{HeightMap, Result};
+use crate::surface::{HeightMap, Result, SurfaceError};
 use ndarray::Array2;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -102,7 +102,63 @@ fn parse_scan_size(value: &str) -> Option<(f64, f64)> {
     }
 }
 
+/// One channel of a NanoScope file as heights in metres (layout and scaling in the module docs).
 pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawMap> {
+    let sections = read_header(path, bytes)?;
+    let version_text = check_version(path, &sections)?;
+    let channel = select_channel(path, &sections, opts)?;
+    let layout = data_layout(path, &channel, bytes.len())?;
+    let scan = scan_size(path, &channel)?;
+    let scale = z_scale(path, &sections, &channel, layout.bpp)?;
+    let z = decode_heights(path, bytes, &layout, scale.metres_per_lsb)?;
+
+    let mut header = BTreeMap::new();
+    if let Some(soft) = scale.soft_scale {
+        header.insert("soft_scale".into(), soft);
+    }
+    if let Some(warning) = scale.warning {
+        header.insert("warning".into(), warning);
+    }
+    header.insert("version".into(), version_text.to_string());
+    header.insert("channels".into(), channel.listing);
+    header.insert("channel_internal".into(), channel.internal.clone());
+    header.insert("scan_size".into(), scan.text.to_string());
+    header.insert("z_scale".into(), scale.text.to_string());
+    header.insert("bytes_per_pixel".into(), layout.bpp.to_string());
+    header.insert("data_offset".into(), layout.offset.to_string());
+    header.insert(
+        "metres_per_lsb".into(),
+        format!("{:e}", scale.metres_per_lsb),
+    );
+    let name = if channel.display.is_empty() {
+        channel.internal
+    } else {
+        channel.display
+    };
+    Ok(RawMap {
+        z,
+        dx: scan.x / layout.nx as f64,
+        dy: scan.y / layout.ny as f64,
+        x0: 0.0,
+        y0: 0.0,
+        channel: name,
+        format: "nanoscope",
+        header,
+    })
+}
+
+/// A required header entry is absent.
+fn missing(path: &Path, what: &str) -> SurfaceError {
+    format_error(path, format!("NanoScope header lacks {what}"))
+}
+
+/// The first section called `name` (lower case).
+fn section<'a>(sections: &'a [Section], name: &str) -> Option<&'a Section> {
+    sections.iter().find(|s| s.name == name)
+}
+
+/// The header's sections; ASCII-data files and a missing `\*File list end` are refused.
+fn read_header(path: &Path, bytes: &[u8]) -> Result<Vec<Section>> {
     if bytes.starts_with(b"?*File list") {
         return Err(unsupported(
             path,
@@ -118,14 +174,16 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
                 "NanoScope header has no `\\*File list end` (truncated?)",
             )
         })?;
-    let sections = parse_header(&decode_text(&bytes[..header_end]));
-    let section = |name: &str| sections.iter().find(|s| s.name == name);
-    let missing = |what: &str| format_error(path, format!("NanoScope header lacks {what}"));
+    Ok(parse_header(&decode_text(&bytes[..header_end])))
+}
 
-    let file_list = section("file list").ok_or_else(|| missing("`\\*File list`"))?;
+/// The `\Version` text of the File list, if at least [`MIN_VERSION`].
+fn check_version<'a>(path: &Path, sections: &'a [Section]) -> Result<&'a str> {
+    let file_list =
+        section(sections, "file list").ok_or_else(|| missing(path, "`\\*File list`"))?;
     let version_text = file_list
         .get("version")
-        .ok_or_else(|| missing("`\\Version` in File list"))?;
+        .ok_or_else(|| missing(path, "`\\Version` in File list"))?;
     let version =
         u32::from_str_radix(version_text.trim().trim_start_matches("0x"), 16).map_err(|_| {
             format_error(
@@ -139,7 +197,63 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
             format!("NanoScope version {version_text} is older than 0x04300000 (not read)"),
         ));
     }
-    let scan_list = section("ciao scan list");
+    Ok(version_text)
+}
+
+/// The chosen `\*Ciao image list` and the scan list its keys fall back to.
+struct Channel<'a> {
+    image: &'a Section,
+    scan_list: Option<&'a Section>,
+    /// `[internal]` name from `\@2:Image Data`.
+    internal: String,
+    /// `"display"` name (may be empty).
+    display: String,
+    /// Every channel as `[internal] "display"`, for messages and the header.
+    listing: String,
+}
+
+impl<'a> Channel<'a> {
+    /// Per-image keys, falling back to the scan list where older versions keep them.
+    fn get(&self, key: &str) -> Option<&'a str> {
+        self.image
+            .get(key)
+            .or_else(|| self.scan_list.and_then(|s| s.get(key)))
+    }
+
+    /// A count (first token); data location keys (`image_only`) belong to the image itself.
+    fn count(
+        &self,
+        path: &Path,
+        key: &str,
+        default: Option<usize>,
+        image_only: bool,
+    ) -> Result<usize> {
+        let value = if image_only {
+            self.image.get(key)
+        } else {
+            self.get(key)
+        };
+        match value {
+            None => default.ok_or_else(|| {
+                missing(path, &format!("`\\{key}` for channel [{}]", self.internal))
+            }),
+            Some(text) => text
+                .split_whitespace()
+                .next()
+                .and_then(|t| t.parse::<usize>().ok())
+                .ok_or_else(|| {
+                    format_error(path, format!("NanoScope `\\{key}: {text}` is not a count"))
+                }),
+        }
+    }
+}
+
+/// The requested channel, else ZSensor ("Height Sensor"), else Height.
+fn select_channel<'a>(
+    path: &Path,
+    sections: &'a [Section],
+    opts: &ReadOptions,
+) -> Result<Channel<'a>> {
     let images: Vec<&Section> = sections
         .iter()
         .filter(|s| s.name == "ciao image list")
@@ -179,33 +293,34 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
                 )
             })?,
     };
-    let image = images[chosen];
-    // Per-image keys, falling back to the scan list where older versions keep them.
-    let get = |key: &str| {
-        image
-            .get(key)
-            .or_else(|| scan_list.and_then(|s| s.get(key)))
-    };
-    // Data location keys belong to the image itself: no fall-back for them.
-    let count = |key: &str, default: Option<usize>, image_only: bool| -> Result<usize> {
-        let value = if image_only { image.get(key) } else { get(key) };
-        match value {
-            None => default
-                .ok_or_else(|| missing(&format!("`\\{key}` for channel [{}]", names[chosen][0]))),
-            Some(text) => text
-                .split_whitespace()
-                .next()
-                .and_then(|t| t.parse::<usize>().ok())
-                .ok_or_else(|| {
-                    format_error(path, format!("NanoScope `\\{key}: {text}` is not a count"))
-                }),
-        }
-    };
-    let offset = count("data offset", None, true)?;
-    let data_length = count("data length", None, true)?;
-    let bpp = count("bytes/pixel", Some(2), false)?;
-    let nx = count("samps/line", None, false)?;
-    let ny = count("number of lines", None, false)?;
+    Ok(Channel {
+        image: images[chosen],
+        scan_list: section(sections, "ciao scan list"),
+        internal: names[chosen][0].clone(),
+        display: names[chosen][1].clone(),
+        listing,
+    })
+}
+
+/// Where the chosen image's samples sit and how they are stored.
+struct DataLayout {
+    /// Byte offset of the first sample.
+    offset: usize,
+    /// Bytes per sample: 2 or 4.
+    bpp: usize,
+    nx: usize,
+    ny: usize,
+    /// Bytes of image data, `nx·ny·bpp`, all inside the file.
+    needed: usize,
+}
+
+/// The image's location and size, checked against the file length and `\Data length`.
+fn data_layout(path: &Path, channel: &Channel, file_len: usize) -> Result<DataLayout> {
+    let offset = channel.count(path, "data offset", None, true)?;
+    let data_length = channel.count(path, "data length", None, true)?;
+    let bpp = channel.count(path, "bytes/pixel", Some(2), false)?;
+    let nx = channel.count(path, "samps/line", None, false)?;
+    let ny = channel.count(path, "number of lines", None, false)?;
     if bpp != 2 && bpp != 4 {
         return Err(format_error(
             path,
@@ -221,14 +336,14 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
     let needed = nx.checked_mul(ny).and_then(|n| n.checked_mul(bpp));
     let fits = needed
         .and_then(|n| n.checked_add(offset))
-        .is_some_and(|end| end <= bytes.len());
+        .is_some_and(|end| end <= file_len);
     let Some(needed) = needed.filter(|_| fits) else {
         return Err(format_error(
             path,
             format!(
                 "truncated NanoScope file: image data needs {} bytes at offset {offset} but the file has {}",
                 needed.map_or(format!("{nx}×{ny}×{bpp}"), |n| n.to_string()),
-                bytes.len()
+                file_len
             ),
         ));
     };
@@ -241,18 +356,59 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
             ),
         ));
     }
+    Ok(DataLayout {
+        offset,
+        bpp,
+        nx,
+        ny,
+        needed,
+    })
+}
 
-    let scan_text = get("scan size").ok_or_else(|| missing("`\\Scan Size`"))?;
-    let (size_x, size_y) = parse_scan_size(scan_text).ok_or_else(|| {
+/// Lateral size of the scan, metres, with the header text it came from.
+struct ScanSize<'a> {
+    x: f64,
+    y: f64,
+    text: &'a str,
+}
+
+/// `\Scan Size` of the image, or of the scan list, in metres.
+fn scan_size<'a>(path: &Path, channel: &Channel<'a>) -> Result<ScanSize<'a>> {
+    let text = channel
+        .get("scan size")
+        .ok_or_else(|| missing(path, "`\\Scan Size`"))?;
+    let (x, y) = parse_scan_size(text).ok_or_else(|| {
         format_error(
             path,
-            format!("NanoScope `\\Scan Size: {scan_text}`; expected `<sx> <sy> nm|~m`"),
+            format!("NanoScope `\\Scan Size: {text}`; expected `<sx> <sy> nm|~m`"),
         )
     })?;
-    let z_scale = image
+    Ok(ScanSize { x, y, text })
+}
+
+/// The chosen image's height scale and what the header should record about it.
+struct ZScale<'a> {
+    /// The `\@2:Z scale` text.
+    text: &'a str,
+    metres_per_lsb: f64,
+    /// `name: value` of the soft scale used, if any.
+    soft_scale: Option<String>,
+    /// Set when the bracketed per-LSB figure disagrees with the hard value.
+    warning: Option<String>,
+}
+
+/// Metres per LSB: `hard_value / 2^(8·bpp) × soft_value × unit(soft)`; without a soft scale
+/// the hard value is itself a length (older CIAO files).
+fn z_scale<'a>(
+    path: &Path,
+    sections: &'a [Section],
+    channel: &Channel<'a>,
+    bpp: usize,
+) -> Result<ZScale<'a>> {
+    let z_scale = channel
+        .image
         .get("z scale")
-        .ok_or_else(|| missing("`\\@2:Z scale` in the image list"))?;
-    let mut header = BTreeMap::new();
+        .ok_or_else(|| missing(path, "`\\@2:Z scale` in the image list"))?;
     let lsb_per_range = 2f64.powi(8 * bpp as i32);
     // The hard value follows the bracketed parts: `V [soft] (x V/LSB) <value> V`.
     let tail = z_scale
@@ -270,48 +426,82 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
             format!("NanoScope `Z scale: {z_scale}`; expected `V [soft] (x V/LSB) <value> V`"),
         ));
     };
-    let metres_per_volt = match between(z_scale, '[', ']') {
+    let (metres_per_volt, soft_scale) = match between(z_scale, '[', ']') {
         Some(soft_name) => {
-            let key = format!("@{}", soft_name.trim().to_lowercase());
-            let soft_text = ["scanner list", "ciao scan list"]
-                .iter()
-                .filter_map(|name| section(name))
-                .find_map(|s| s.get(&key))
-                .ok_or_else(|| {
-                    missing(&format!(
-                        "soft scale `\\@{soft_name}` in Scanner list or Ciao scan list"
-                    ))
-                })?;
-            header.insert("soft_scale".into(), format!("{soft_name}: {soft_text}"));
-            parse_soft_scale(soft_text).ok_or_else(|| {
+            let soft = soft_scale(path, sections, soft_name)?;
+            (soft.metres_per_volt, Some(soft.header))
+        }
+        None => (
+            hard_unit.and_then(length_factor).ok_or_else(|| {
                 format_error(
                     path,
-                    format!("soft scale `\\@{soft_name}: {soft_text}`; expected `V <value> nm/V`"),
+                    format!("NanoScope `Z scale: {z_scale}` has no soft scale"),
                 )
-            })?
-        }
-        // No soft scale: the hard value is itself a length (older CIAO files).
-        None => hard_unit.and_then(length_factor).ok_or_else(|| {
-            format_error(
-                path,
-                format!("NanoScope `Z scale: {z_scale}` has no soft scale"),
-            )
-        })?,
+            })?,
+            None,
+        ),
     };
     // The bracketed per-LSB figure should agree with hard_value / 2^(8·bpp).
+    let mut warning = None;
     if let Some(per_lsb) = between(z_scale, '(', ')').and_then(first_number) {
         let derived = hard_value / lsb_per_range;
         if ((per_lsb - derived) / derived).abs() >= 1e-3 {
-            header.insert(
-                "warning".into(),
-                format!("Z scale: bracketed {per_lsb} per LSB disagrees with hard value / 2^{} = {derived}", 8 * bpp),
-            );
+            warning = Some(format!(
+                "Z scale: bracketed {per_lsb} per LSB disagrees with hard value / 2^{} = {derived}",
+                8 * bpp
+            ));
         }
     }
-    let metres_per_lsb = hard_value / lsb_per_range * metres_per_volt;
+    Ok(ZScale {
+        text: z_scale,
+        metres_per_lsb: hard_value / lsb_per_range * metres_per_volt,
+        soft_scale,
+        warning,
+    })
+}
 
-    let data = &bytes[offset..offset + needed];
-    let samples: Vec<f64> = if bpp == 2 {
+/// A soft scale looked up by name.
+struct SoftScale {
+    metres_per_volt: f64,
+    /// `name: value`, as the header records it.
+    header: String,
+}
+
+/// The soft scale `\@<name>` from the Scanner list or the Ciao scan list.
+fn soft_scale(path: &Path, sections: &[Section], soft_name: &str) -> Result<SoftScale> {
+    let key = format!("@{}", soft_name.trim().to_lowercase());
+    let soft_text = ["scanner list", "ciao scan list"]
+        .iter()
+        .filter_map(|name| section(sections, name))
+        .find_map(|s| s.get(&key))
+        .ok_or_else(|| {
+            missing(
+                path,
+                &format!("soft scale `\\@{soft_name}` in Scanner list or Ciao scan list"),
+            )
+        })?;
+    let header = format!("{soft_name}: {soft_text}");
+    let metres_per_volt = parse_soft_scale(soft_text).ok_or_else(|| {
+        format_error(
+            path,
+            format!("soft scale `\\@{soft_name}: {soft_text}`; expected `V <value> nm/V`"),
+        )
+    })?;
+    Ok(SoftScale {
+        metres_per_volt,
+        header,
+    })
+}
+
+/// Samples → metres (saturated codes → NaN), rows flipped from bottom-first to top-first.
+fn decode_heights(
+    path: &Path,
+    bytes: &[u8],
+    layout: &DataLayout,
+    metres_per_lsb: f64,
+) -> Result<Array2<f64>> {
+    let data = &bytes[layout.offset..layout.offset + layout.needed];
+    let samples: Vec<f64> = if layout.bpp == 2 {
         data.chunks_exact(2)
             .map(|c| match i16::from_le_bytes([c[0], c[1]]) {
                 i16::MAX | i16::MIN | -32767 => f64::NAN, // saturated
@@ -326,33 +516,9 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
             })
             .collect()
     };
-    let bottom_first = Array2::from_shape_vec((ny, nx), samples)
+    let bottom_first = Array2::from_shape_vec((layout.ny, layout.nx), samples)
         .map_err(|e| format_error(path, format!("NanoScope data shape: {e}")))?;
-    let z = bottom_first.slice(ndarray::s![..;-1, ..]).to_owned();
-
-    header.insert("version".into(), version_text.to_string());
-    header.insert("channels".into(), listing);
-    header.insert("channel_internal".into(), names[chosen][0].clone());
-    header.insert("scan_size".into(), scan_text.to_string());
-    header.insert("z_scale".into(), z_scale.to_string());
-    header.insert("bytes_per_pixel".into(), bpp.to_string());
-    header.insert("data_offset".into(), offset.to_string());
-    header.insert("metres_per_lsb".into(), format!("{metres_per_lsb:e}"));
-    let channel = if names[chosen][1].is_empty() {
-        &names[chosen][0]
-    } else {
-        &names[chosen][1]
-    };
-    Ok(RawMap {
-        z,
-        dx: size_x / nx as f64,
-        dy: size_y / ny as f64,
-        x0: 0.0,
-        y0: 0.0,
-        channel: channel.clone(),
-        format: "nanoscope",
-        header,
-    })
+    Ok(bottom_first.slice(ndarray::s![..;-1, ..]).to_owned())
 }
 
 /// Soft scale the writer declares (name and value as a real Multimode/Icon file would).
@@ -360,36 +526,32 @@ const SOFT_SCALE_NAME: &str = "Sens. ZsensSens";
 const SOFT_SCALE_NM_PER_V: f64 = 57.39005;
 const HEADER_BLOCK: usize = 8192;
 
-/// Encode as a Bruker NanoScope v5+ file with int16 or int32 data (`bytes_per_pixel` 2 or 4).
-///
-/// The hard value is chosen so that the integer range spans 1.05 × max|z|, so the quantisation
-/// step is 2.1·max|z| / 2^(8·bpp). Invalid pixels are written as the most negative integer
-/// (saturated), which the reader marks invalid. Lateral offsets are not stored.
-///
-/// # Panics
-/// If `bytes_per_pixel` is not 2 or 4 (a programming error, not a data error).
-pub fn encode_nanoscope(map: &HeightMap, bytes_per_pixel: usize) -> Vec<u8> {
-    assert!(
-        bytes_per_pixel == 2 || bytes_per_pixel == 4,
-        "NanoScope bytes/pixel must be 2 or 4, got {bytes_per_pixel}"
-    );
-    let bpp = bytes_per_pixel;
-    let (nx, ny) = (map.nx(), map.ny());
-    let heights = heights_with_nan(map);
-    let max_abs = heights
-        .iter()
-        .filter(|v| v.is_finite())
-        .fold(0.0f64, |m, v| m.max(v.abs()));
-    let max_abs = if max_abs > 0.0 { max_abs } else { 1e-9 };
-    let metres_per_volt = SOFT_SCALE_NM_PER_V * 1e-9;
-    let hard_value = 2.1 * max_abs / metres_per_volt;
-    let lsb_per_range = 2f64.powi(8 * bpp as i32);
-    let metres_per_lsb = hard_value / lsb_per_range * metres_per_volt;
-    let (size_x, size_y) = map.size();
-    let (sx_nm, sy_nm) = (size_x * 1e9, size_y * 1e9);
-    let data_length = nx * ny * bpp;
+/// What the encoder's header states.
+struct EncoderHeader {
+    nx: usize,
+    ny: usize,
+    bpp: usize,
+    /// Scan size, nm.
+    sx_nm: f64,
+    sy_nm: f64,
+    /// Volts spanning the integer range.
+    hard_value: f64,
+    lsb_per_range: f64,
+}
 
-    let header_text = |offset: usize| {
+impl EncoderHeader {
+    /// Header text for image data at `offset` (the File list's `\Data length` is that offset).
+    fn text(&self, offset: usize) -> String {
+        let EncoderHeader {
+            nx,
+            ny,
+            bpp,
+            sx_nm,
+            sy_nm,
+            hard_value,
+            lsb_per_range,
+        } = *self;
+        let data_length = nx * ny * bpp;
         let mut h = String::new();
         let mut line = |s: &str| {
             h.push_str(s);
@@ -430,12 +592,49 @@ pub fn encode_nanoscope(map: &HeightMap, bytes_per_pixel: usize) -> Vec<u8> {
         ));
         line("\\*File list end");
         h
+    }
+}
+
+/// Encode as a Bruker NanoScope v5+ file with int16 or int32 data (`bytes_per_pixel` 2 or 4).
+///
+/// The hard value is chosen so that the integer range spans 1.05 × max|z|, so the quantisation
+/// step is 2.1·max|z| / 2^(8·bpp). Invalid pixels are written as the most negative integer
+/// (saturated), which the reader marks invalid. Lateral offsets are not stored.
+///
+/// # Panics
+/// If `bytes_per_pixel` is not 2 or 4 (a programming error, not a data error).
+pub fn encode_nanoscope(map: &HeightMap, bytes_per_pixel: usize) -> Vec<u8> {
+    assert!(
+        bytes_per_pixel == 2 || bytes_per_pixel == 4,
+        "NanoScope bytes/pixel must be 2 or 4, got {bytes_per_pixel}"
+    );
+    let bpp = bytes_per_pixel;
+    let (nx, ny) = (map.nx(), map.ny());
+    let heights = heights_with_nan(map);
+    let max_abs = heights
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let max_abs = if max_abs > 0.0 { max_abs } else { 1e-9 };
+    let metres_per_volt = SOFT_SCALE_NM_PER_V * 1e-9;
+    let hard_value = 2.1 * max_abs / metres_per_volt;
+    let lsb_per_range = 2f64.powi(8 * bpp as i32);
+    let metres_per_lsb = hard_value / lsb_per_range * metres_per_volt;
+    let (size_x, size_y) = map.size();
+    let header = EncoderHeader {
+        nx,
+        ny,
+        bpp,
+        sx_nm: size_x * 1e9,
+        sy_nm: size_y * 1e9,
+        hard_value,
+        lsb_per_range,
     };
     let mut offset = HEADER_BLOCK;
-    while header_text(offset).len() > offset {
+    while header.text(offset).len() > offset {
         offset += HEADER_BLOCK;
     }
-    let mut out = header_text(offset).into_bytes();
+    let mut out = header.text(offset).into_bytes();
     out.resize(offset, 0);
     let limit = lsb_per_range / 2.0 - 2.0; // stay clear of the saturation codes
     for row in heights.rows().into_iter().rev() {
