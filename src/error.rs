@@ -29,8 +29,6 @@ pub enum Error {
     #[error("writing {}: {message}", path.display())]
     Output { path: PathBuf, message: String },
     /// `hdi synth` could not write the sample data.
-    #[error(transparent)]
-    Samples(#[from] crate::samples::SampleError),
     /// One slider case of a sweep failed.
     #[error("case h_TFC = {:.3} nm", .actuation * 1e9)]
     Case {

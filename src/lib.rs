@@ -21,6 +21,7 @@ pub mod signal;
 pub mod slider;
 pub mod stages;
 pub mod surface;
+pub mod units;
 pub mod validation;
 
 pub use error::{Error, Result};

@@ -1,7 +1,6 @@
 //! The shipped synthetic sample data (`hdi synth afm`, `hdi synth ldv`). Deterministic:
 //! fixed seeds, so the files are byte-identical on every run.
 
-use crate::error::Result;
 use crate::numerics::rng::Rng;
 use crate::surface::io::{encode_gwy, encode_nanoscope};
 use crate::surface::synth::{gaussian_acf_surface, GaussianSurfaceSpec};
@@ -32,7 +31,16 @@ pub enum SampleError {
     Io(#[from] std::io::Error),
     #[error(transparent)]
     Json(#[from] serde_json::Error),
+    /// A failure of the library code the generator uses (readers, writers, filters).
+    #[error(transparent)]
+    Hdi(#[from] crate::Error),
+    #[error(transparent)]
+    Dmw(#[from] crate::dmw::DmwError),
+    #[error(transparent)]
+    Signal(#[from] crate::signal::SignalError),
 }
+
+type Result<T> = std::result::Result<T, SampleError>;
 
 /// Instrument-like defects on top of a clean field: a tilt, per-line offsets (a random walk,
 /// as AFM line jumps look) and white measurement noise. Levelling is expected to remove the

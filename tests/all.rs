@@ -1,5 +1,6 @@
 //! One integration-test binary (one link step on 2 cores), one module per concern.
 mod analysis_cli;
+mod architecture;
 mod bad_input;
 mod calibrate_cli;
 mod common;

@@ -87,7 +87,7 @@ pub(super) fn cmd_run(
             _ => {}
         }
     }
-    stages::write_summary_tables(&store, &report)?;
+    engine::write_summary_tables(&store, &report)?;
     let failed = report.failed();
     let total = report.outcomes.len();
     if ran == 0 && failed == 0 {

@@ -7,4 +7,5 @@ pub mod executor;
 pub mod hash;
 pub mod progress;
 pub mod store;
-pub mod units;
+// Transitional path while branches merge; removed once every `core::units` path is rewritten.
+pub use crate::units;

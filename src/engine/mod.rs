@@ -584,3 +584,25 @@ pub fn gc(plan: &Plan, store: &Store, dry_run: bool) -> Result<Vec<PathBuf>> {
     }
     Ok(removed)
 }
+
+/// After `hdi run`: the summary tables from the current entries, one per kind. A table is
+/// rewritten when something ran and nothing failed (a failed instance keeps its earlier row),
+/// or when it is missing.
+pub fn write_summary_tables(
+    store: &crate::core::cache::Store,
+    report: &RunReport,
+) -> crate::error::Result<()> {
+    let tables_dir = store.processed().join("tables");
+    let ran = report.count(|o| matches!(o, Outcome::Ran { .. }));
+    let failed = report.failed();
+    for (kind, rows) in summary_rows(store, &report.current) {
+        let stem = tables_dir.join(crate::stages::summary_table_name(&kind));
+        if (ran > 0 && failed == 0)
+            || !stem.with_extension("parquet").exists()
+            || !stem.with_extension("csv").exists()
+        {
+            crate::core::store::write_table(&rows, &stem)?;
+        }
+    }
+    Ok(())
+}

@@ -247,29 +247,6 @@ pub fn summary_table_name(kind: &str) -> String {
     }
 }
 
-/// After `hdi run`: the summary tables from the current entries, one per kind. A table is
-/// rewritten when something ran and nothing failed (a failed instance keeps its earlier row),
-/// or when it is missing.
-pub fn write_summary_tables(
-    store: &crate::core::cache::Store,
-    report: &crate::engine::RunReport,
-) -> crate::error::Result<()> {
-    use crate::engine::Outcome;
-    let tables_dir = store.processed().join("tables");
-    let ran = report.count(|o| matches!(o, Outcome::Ran { .. }));
-    let failed = report.failed();
-    for (kind, rows) in crate::engine::summary_rows(store, &report.current) {
-        let stem = tables_dir.join(summary_table_name(&kind));
-        if (ran > 0 && failed == 0)
-            || !stem.with_extension("parquet").exists()
-            || !stem.with_extension("csv").exists()
-        {
-            crate::core::store::write_table(&rows, &stem)?;
-        }
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -3,7 +3,7 @@
 /// Metres per unit for the length units AFM software writes; `None` if not a length.
 /// `~m` is NanoScope's spelling of µm; both the micro sign (U+00B5) and Greek mu are accepted.
 pub(crate) fn length_factor(unit: &str) -> Option<f64> {
-    crate::core::units::length_factor(unit)
+    crate::units::length_factor(unit)
 }
 
 /// Parses `"<number> <unit>"` (e.g. `12.34 µm`) into metres.

@@ -1,0 +1,458 @@
+//! The module map of `docs/architecture.md`, checked on the source: imports point down only.
+//!
+//! Every `crate::<module>` path in a library file (comments and strings stripped) must name a
+//! module its own module may depend on; a stage file may not name another stage kind; the
+//! binary (src/main.rs, src/cli/) reaches the library only through `hdi::`.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// Top-level library modules and what each may import (besides itself). Kept in the order of
+/// docs/architecture.md, top to bottom.
+const ALLOWED: &[(&str, &[&str])] = &[
+    (
+        "validation",
+        &[
+            "engine",
+            "stages",
+            "slider",
+            "artefacts",
+            "figures",
+            "core",
+            "error",
+            PHYS_A,
+            PHYS_B,
+            PHYS_C,
+            PHYS_D,
+            "signal",
+            "numerics",
+            "units",
+        ],
+    ),
+    (
+        "engine",
+        &[
+            "stages",
+            "slider",
+            "artefacts",
+            "figures",
+            "core",
+            "error",
+            PHYS_A,
+            PHYS_B,
+            PHYS_C,
+            PHYS_D,
+            "signal",
+            "numerics",
+            "units",
+        ],
+    ),
+    (
+        "samples",
+        &[
+            "stages", "figures", "core", "error", PHYS_A, PHYS_B, PHYS_C, PHYS_D, "signal",
+            "numerics", "units",
+        ],
+    ),
+    (
+        "stages",
+        &[
+            "slider",
+            "artefacts",
+            "figures",
+            "core",
+            "error",
+            PHYS_A,
+            PHYS_B,
+            PHYS_C,
+            PHYS_D,
+            "signal",
+            "numerics",
+            "units",
+        ],
+    ),
+    (
+        "slider",
+        &[
+            "artefacts",
+            "figures",
+            "core",
+            "error",
+            PHYS_A,
+            PHYS_B,
+            PHYS_C,
+            PHYS_D,
+            "signal",
+            "numerics",
+            "units",
+        ],
+    ),
+    (
+        "artefacts",
+        &[
+            "core", "error", PHYS_A, PHYS_B, PHYS_C, PHYS_D, "signal", "numerics", "units",
+        ],
+    ),
+    (
+        "figures",
+        &[
+            PHYS_A, PHYS_B, PHYS_C, PHYS_D, "signal", "numerics", "units",
+        ],
+    ),
+    (
+        "error",
+        &[
+            "core", "figures", PHYS_A, PHYS_B, PHYS_C, PHYS_D, "signal", "numerics", "units",
+        ],
+    ),
+    ("core", &["units"]),
+    ("dynamics", &["contact", "signal", "numerics", "units"]),
+    ("surface", &["signal", "numerics", "units"]),
+    ("dmw", &["signal", "numerics", "units"]),
+    ("contact", &["signal", "numerics", "units"]),
+    ("analysis", &["signal", "numerics", "units"]),
+    ("signal", &["numerics", "units"]),
+    ("numerics", &["units"]),
+    ("units", &[]),
+];
+const PHYS_A: &str = "surface";
+const PHYS_B: &str = "dmw";
+const PHYS_C: &str = "contact";
+const PHYS_D: &str = "dynamics";
+
+fn src() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src")
+}
+
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            rust_files(&p, out);
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            out.push(p);
+        }
+    }
+}
+
+/// The code of a file without comments, string and char literals (so a doc line or a message
+/// that mentions `crate::x` is not an import).
+fn code_only(text: &str) -> String {
+    let b = text.as_bytes();
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    while i < b.len() {
+        match b[i] {
+            b'/' if b.get(i + 1) == Some(&b'/') => {
+                while i < b.len() && b[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            b'/' if b.get(i + 1) == Some(&b'*') => {
+                let mut depth = 0;
+                while i < b.len() {
+                    if b[i] == b'/' && b.get(i + 1) == Some(&b'*') {
+                        depth += 1;
+                        i += 2;
+                    } else if b[i] == b'*' && b.get(i + 1) == Some(&b'/') {
+                        depth -= 1;
+                        i += 2;
+                        if depth == 0 {
+                            break;
+                        }
+                    } else {
+                        i += 1;
+                    }
+                }
+            }
+            b'r' if b.get(i + 1) == Some(&b'#')
+                || (b.get(i + 1) == Some(&b'"')
+                    && (i == 0 || !b[i - 1].is_ascii_alphanumeric() && b[i - 1] != b'_')) =>
+            {
+                // Raw string r"…" or r#"…"#.
+                let mut j = i + 1;
+                let mut hashes = 0;
+                while b.get(j) == Some(&b'#') {
+                    hashes += 1;
+                    j += 1;
+                }
+                if b.get(j) != Some(&b'"') {
+                    out.push('r');
+                    i += 1;
+                    continue;
+                }
+                j += 1;
+                let close: Vec<u8> = std::iter::once(b'"')
+                    .chain(std::iter::repeat_n(b'#', hashes))
+                    .collect();
+                while j < b.len() && !b[j..].starts_with(&close) {
+                    j += 1;
+                }
+                i = j + close.len();
+                out.push_str("\"\"");
+            }
+            b'"' => {
+                i += 1;
+                while i < b.len() && b[i] != b'"' {
+                    if b[i] == b'\\' {
+                        i += 1;
+                    }
+                    i += 1;
+                }
+                i += 1;
+                out.push_str("\"\"");
+            }
+            b'\'' if b.get(i + 2) == Some(&b'\'') || (b.get(i + 1) == Some(&b'\\')) => {
+                // A char literal ('x' or '\n'); lifetimes ('a) are left alone.
+                i += 1;
+                while i < b.len() && b[i] != b'\'' {
+                    if b[i] == b'\\' {
+                        i += 1;
+                    }
+                    i += 1;
+                }
+                i += 1;
+                out.push_str("' '");
+            }
+            c => {
+                out.push(c as char);
+                i += 1;
+            }
+        }
+    }
+    out
+}
+
+/// Top-level modules named by `crate::X` paths, including `use crate::{a, b::c}` groups.
+fn crate_refs(code: &str) -> BTreeSet<String> {
+    let mut refs = BTreeSet::new();
+    let mut rest = code;
+    while let Some(at) = rest.find("crate::") {
+        let before_ok = at == 0 || {
+            let c = rest.as_bytes()[at - 1];
+            !(c.is_ascii_alphanumeric() || c == b'_' || c == b'$')
+        };
+        rest = &rest[at + "crate::".len()..];
+        if !before_ok {
+            continue;
+        }
+        if let Some(group) = rest.strip_prefix('{') {
+            // Names at nesting depth 0 of the group.
+            let mut depth = 0;
+            let mut name = String::new();
+            let mut at_start = true;
+            for c in group.chars() {
+                match c {
+                    '{' => depth += 1,
+                    '}' if depth == 0 => break,
+                    '}' => depth -= 1,
+                    ',' if depth == 0 => at_start = true,
+                    c if (c.is_alphanumeric() || c == '_') && depth == 0 && at_start => {
+                        name.push(c)
+                    }
+                    _ => {
+                        if !name.is_empty() {
+                            refs.insert(std::mem::take(&mut name));
+                            at_start = false;
+                        }
+                    }
+                }
+            }
+            if !name.is_empty() {
+                refs.insert(name);
+            }
+        } else {
+            let name: String = rest
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect();
+            if !name.is_empty() {
+                refs.insert(name);
+            }
+        }
+    }
+    refs
+}
+
+/// The library's top-level module a file belongs to (`None` for lib.rs and the binary).
+fn module_of(rel: &Path) -> Option<String> {
+    let first = rel.components().next()?.as_os_str().to_str()?.to_string();
+    let first = first.strip_suffix(".rs").unwrap_or(&first).to_string();
+    (!matches!(first.as_str(), "lib" | "main" | "cli")).then_some(first)
+}
+
+struct Violation(String);
+
+fn check_library() -> (usize, Vec<Violation>) {
+    let allowed: BTreeMap<&str, &[&str]> = ALLOWED.iter().copied().collect();
+    let root = src();
+    let mut files = Vec::new();
+    rust_files(&root, &mut files);
+    files.sort();
+    let mut bad = Vec::new();
+    let mut checked = 0;
+    for f in &files {
+        let rel = f.strip_prefix(&root).unwrap();
+        let Some(module) = module_of(rel) else {
+            continue;
+        };
+        checked += 1;
+        let Some(ok) = allowed.get(module.as_str()) else {
+            bad.push(Violation(format!(
+                "{}: top-level module `{module}` is not in the module map (tests/architecture.rs, docs/architecture.md)",
+                rel.display()
+            )));
+            continue;
+        };
+        let code = code_only(&std::fs::read_to_string(f).unwrap());
+        for r in crate_refs(&code) {
+            // `crate::Error`/`crate::Result` are the error module's re-exports.
+            let r = if r == "Error" || r == "Result" {
+                "error".to_string()
+            } else {
+                r
+            };
+            if r == module {
+                continue;
+            }
+            if !ok.contains(&r.as_str()) {
+                bad.push(Violation(format!(
+                    "{}: `{module}` imports `crate::{r}`, which it may not",
+                    rel.display()
+                )));
+            }
+        }
+    }
+    (checked, bad)
+}
+
+#[test]
+fn library_imports_point_down_only() {
+    let (checked, bad) = check_library();
+    assert!(
+        checked > 100,
+        "only {checked} library files found under src/"
+    );
+    let text: Vec<String> = bad.into_iter().map(|v| v.0).collect();
+    assert!(
+        text.is_empty(),
+        "{} import(s) against the module map:\n{}",
+        text.len(),
+        text.join("\n")
+    );
+}
+
+/// Stage kinds: the files and directories of src/stages/ (besides mod.rs).
+fn stage_kinds() -> Vec<String> {
+    let mut kinds = Vec::new();
+    for e in std::fs::read_dir(src().join("stages")).unwrap() {
+        let p = e.unwrap().path();
+        let name = p.file_stem().unwrap().to_str().unwrap().to_string();
+        if name != "mod" {
+            kinds.push(name);
+        }
+    }
+    kinds.sort();
+    kinds
+}
+
+#[test]
+fn no_stage_imports_another_stage() {
+    let kinds = stage_kinds();
+    assert!(kinds.len() >= 10, "stage kinds found: {kinds:?}");
+    let root = src().join("stages");
+    let mut files = Vec::new();
+    rust_files(&root, &mut files);
+    let mut bad = Vec::new();
+    for f in &files {
+        let rel = f.strip_prefix(&root).unwrap();
+        let own = rel
+            .components()
+            .next()
+            .unwrap()
+            .as_os_str()
+            .to_str()
+            .unwrap();
+        let own = own.strip_suffix(".rs").unwrap_or(own);
+        if own == "mod" {
+            continue;
+        }
+        let in_dir = rel.components().count() > 1;
+        let code = code_only(&std::fs::read_to_string(f).unwrap());
+        for other in &kinds {
+            if other == own {
+                continue;
+            }
+            // `crate::stages::other` anywhere; `super::other` from a stage file at the top of
+            // src/stages/ (its `super` is the registry); `super::super::other` from inside a
+            // stage's own directory.
+            let mut needles = vec![format!("crate::stages::{other}")];
+            needles.push(if in_dir {
+                format!("super::super::{other}")
+            } else {
+                format!("super::{other}")
+            });
+            for n in needles {
+                let hit = code.match_indices(&n).any(|(i, _)| {
+                    let after = code[i + n.len()..].chars().next();
+                    !after.is_some_and(|c| c.is_alphanumeric() || c == '_')
+                });
+                if hit {
+                    bad.push(format!(
+                        "stages/{}: names stage `{other}` ({n})",
+                        rel.display()
+                    ));
+                }
+            }
+        }
+    }
+    assert!(bad.is_empty(), "stage → stage imports:\n{}", bad.join("\n"));
+}
+
+#[test]
+fn the_binary_uses_the_library_only_through_its_public_api() {
+    let root = src();
+    let mut files = vec![root.join("main.rs")];
+    rust_files(&root.join("cli"), &mut files);
+    assert!(files.len() >= 2, "no src/cli/ files");
+    for f in &files {
+        let code = code_only(&std::fs::read_to_string(f).unwrap());
+        // The binary is its own crate: `crate::` there means the binary, so library paths are
+        // `hdi::…`; no library module is compiled into it by `#[path]` or `mod` of lib files.
+        assert!(
+            !code.contains("#[path"),
+            "{}: compiles a library file into the binary",
+            f.display()
+        );
+    }
+    // …and the library does not name the binary's dependencies.
+    let mut lib_files = Vec::new();
+    rust_files(&root, &mut lib_files);
+    for f in lib_files {
+        let rel = f.strip_prefix(&root).unwrap();
+        if module_of(rel).is_none() && rel != Path::new("lib.rs") {
+            continue;
+        }
+        let code = code_only(&std::fs::read_to_string(&f).unwrap());
+        for dep in ["clap::", "indicatif::", "anyhow::"] {
+            assert!(
+                !code.contains(dep),
+                "{}: the library uses `{dep}` (CLI-only dependency)",
+                rel.display()
+            );
+        }
+    }
+}
+
+#[test]
+fn the_checker_sees_imports() {
+    // The parser itself: a group import, a path, a commented and a quoted mention.
+    let code = code_only(
+        "use crate::{core::store, figures};\n// crate::stages\nlet s = \"crate::engine\";\nlet x = crate::dmw::x();\n",
+    );
+    let refs = crate_refs(&code);
+    assert_eq!(
+        refs.into_iter().collect::<Vec<_>>(),
+        vec!["core".to_string(), "dmw".into(), "figures".into()]
+    );
+}
