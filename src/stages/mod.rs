@@ -59,6 +59,19 @@ pub struct StageContext<'a> {
     pub progress: &'a dyn crate::core::progress::Progress,
 }
 
+impl StageContext<'_> {
+    /// The cache key of the consumed instance `name` (empty when it is not upstream): case
+    /// keys include the keys of the entries their inputs came from.
+    pub fn upstream_key(&self, name: &str) -> String {
+        self.fingerprint
+            .upstream
+            .iter()
+            .find(|u| u.name == name)
+            .map(|u| u.key.clone())
+            .unwrap_or_default()
+    }
+}
+
 /// What a stage returns besides its files.
 pub struct StageOutput {
     /// Machine-readable result for downstream stages and tables; written as `result.json`.
