@@ -1,10 +1,10 @@
 //! Single-asperity laws: Kogut–Etsion (2002) elastic-plastic sphere-on-flat load and area,
-//! the static-friction laws of contact-isbl.md §5, and the elastic DMT/LJ adhesion factor
+//! the static-friction laws (App. A.1, eq. A.6), and the elastic DMT/LJ adhesion factor
 //! `f_el` of §6.3.
 //!
 //! Everything is in Kogut–Etsion units: interference `ω* = ω/ω_c`, load `P/L_c`, area
 //! `A/A_c`. The published fits jump slightly at `ω* = 1, 6, 110`; they are kept exactly as
-//! published (spec §4) because the Gaussian summit sums are smooth in `h` regardless.
+//! published (eq. A.3) because the Gaussian summit sums are smooth in `h` regardless.
 
 use super::quadrature;
 use crate::contact::ContactError;
@@ -24,7 +24,7 @@ pub enum KeRegime {
 
 impl KeRegime {
     /// Regime of a dimensionless interference `ω*` (boundaries belong to the lower regime,
-    /// as in spec §3).
+    /// as in App. A.1).
     pub fn of(omega_star: f64) -> Self {
         if omega_star <= 1.0 {
             KeRegime::Elastic
@@ -75,7 +75,7 @@ pub fn ke_area_ratio(omega_star: f64) -> f64 {
     ke_area_ratio_in(KeRegime::of(omega_star), omega_star)
 }
 
-/// Seed power law for the static friction of an elastic summit (spec §5, back-solved from
+/// Seed power law for the static friction of an elastic summit (eq. A.6, back-solved from
 /// the two Ch. 3.1 numbers): `Q_max/L_c = 0.4155·ω*^0.970` for `0 < ω* ≤ 1`, zero otherwise.
 pub fn seed_power_friction_ratio(omega_star: f64) -> f64 {
     if omega_star > 0.0 && omega_star <= 1.0 {
@@ -109,7 +109,7 @@ fn hertz_gap(w: f64) -> f64 {
 /// Below this `λ = ω/ε`, `f_el(λ) = 1` to better than 1e-10 (`f_el ≈ 1 + 0.2·λ`).
 const F_EL_SMALL_LAMBDA: f64 = 1e-11;
 
-/// Elastic DMT/LJ adhesion factor of a contacting summit (spec §6.3):
+/// Elastic DMT/LJ adhesion factor of a contacting summit (eq. A.1; docs/contact.md):
 /// `F_s = 2π·Δγ·R·f_el(λ)`, `λ = ω/ε`,
 /// `f_el(λ) = (8/3)·λ·∫_1^∞ [q⁻³ − q⁻⁹]·x dx`, `q = 1 + (λ/π)·G(x)`.
 ///
@@ -282,10 +282,10 @@ mod tests {
             );
         }
         assert_eq!(adhesion_factor_elastic(0.0).unwrap(), 1.0);
-        // Continuity at λ → 0 (f_el(0) = 1, spec §6.3): f_el(1e-6) − 1 is O(1e-6).
+        // Continuity at λ → 0 (f_el(0) = 1, docs/contact.md): f_el(1e-6) − 1 is O(1e-6).
         let small = adhesion_factor_elastic(1e-6).unwrap();
         assert!((small - 1.0).abs() < 1e-5, "{small}");
-        // Large-λ asymptote 0.739·λ^{1/3} (spec §6.3; ratio → 1 slowly).
+        // Large-λ asymptote 0.739·λ^{1/3} (docs/contact.md; ratio → 1 slowly).
         let big = adhesion_factor_elastic(1e7).unwrap();
         assert!(
             (big / (0.739 * 1e7f64.powf(1.0 / 3.0)) - 1.0).abs() < 0.03,

@@ -1,5 +1,5 @@
 //! Tests of the ISBL curves against the reference CSVs (independent numpy/scipy
-//! implementation, tests/data/isbl), closed forms and the spec's §9 numbers.
+//! implementation, tests/data/isbl), closed forms and the landmarks of docs/contact.md.
 
 use super::asperity::KeRegime;
 use super::*;
@@ -46,7 +46,7 @@ fn with_energy(params: IsblParams, surface_energy: SurfaceEnergy) -> IsblModel {
 fn check_reference(name: &str, params: IsblParams) -> [f64; 7] {
     let rows = read_reference(name);
     // The CSVs hold both surface-energy variants: constant Δγ = 0.06 N/m and the seed's
-    // variable law (spec §9 header).
+    // variable law (docs/contact.md).
     let constant = with_energy(params, SurfaceEnergy::Constant { delta_gamma: 0.06 });
     let variable = with_energy(params, SurfaceEnergy::seed_variable());
     let column_max: [f64; 7] =
@@ -111,7 +111,7 @@ fn reference_csv_mtl_table_3_2() {
 // Closed forms and derived constants
 // ---------------------------------------------------------------------------------------
 
-/// DLC sphere on DLC of Ch. 3.1 (spec §5 anchor, §9 #4): E = 180 GPa, ν = 0.24, H = 18 GPa,
+/// DLC sphere on DLC of Ch. 3.1 (Table 3.2; docs/contact.md): E = 180 GPa, ν = 0.24, H = 18 GPa,
 /// R = 102 μm.
 fn dlc_sphere_ch3_1() -> IsblModel {
     IsblModel::new(IsblParams {
@@ -184,7 +184,7 @@ fn derived_constants_match_spec_table_10() {
         digits(dv.plasticity_index, psi, 5e-4);
         digits(dv.plasticity_index_ke, psi_ke, 5e-4);
         assert!(!dv.elastic_plastic_adhesion_assumed);
-        // L_c = (4/3)E*R^½ω_c^{3/2} = (2/3)πKHRω_c (spec §1: two forms of the same number).
+        // L_c = (4/3)E*R^½ω_c^{3/2} = (2/3)πKHRω_c (eq. A.4: two forms of the same number).
         let hertz_lc = 4.0 / 3.0
             * dv.composite_modulus
             * p.summit_radius.sqrt()
@@ -225,7 +225,7 @@ fn hertz_limit_below_critical_interference() {
         "{}",
         c1.friction
     );
-    // Seed power law reproduces the seed's 120 / 1120 μN (spec §5, fitted to 4 digits).
+    // Seed power law reproduces the seed's 120 / 1120 μN (eq. A.6, fitted to 4 digits).
     let seed = IsblModel::new(IsblParams {
         friction_law: FrictionLaw::SeedPowerElastic,
         ..*m.params()
@@ -849,7 +849,7 @@ fn section9_row2d_initial_interface_at_11nm() {
 #[test]
 fn adhesion_far_apart_keeps_the_whole_gaussian() {
     // At h* = 200 every summit is far below the flat: F_s → 2πRηΔγ(4/3)(ε/D)²[1 + 3σ²/D²]
-    // (spec §6.4 tail formula, D = h − t + ε ≫ σ; the next term is O(σ⁴/D⁴) ≈ 1e-9).
+    // (docs/contact.md tail formula, D = h − t + ε ≫ σ; the next term is O(σ⁴/D⁴) ≈ 1e-9).
     let p = IsblParams::improved_2dof();
     let m = IsblModel::new(p).unwrap();
     let h = 200.0 * p.sigma;
