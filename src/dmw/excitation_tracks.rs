@@ -1,5 +1,5 @@
 //! Deterministic synthetic excitation tracks for the slider dynamics (§2.1.2, App. B, and
-//! the S7 excitation studies of §7): a synthetic DMW, a pure sinusoid, zero excitation,
+//! the excitation studies of App. B): a synthetic DMW, a pure sinusoid, zero excitation,
 //! band-limited random excitation and a quadratic chirp. Each returns the displacement `D`
 //! (m) and velocity `V = dD/dt` (m/s) sampled at `fs`, plus the closed-form [`Model`] they
 //! were sampled from, so the excitation can also be evaluated exactly between samples.
@@ -830,7 +830,7 @@ mod tests {
         assert!((t_cross - 0.75e-3).abs() < 1e-6, "{t_cross}");
         let f = x.model.instantaneous_frequency(t_cross).unwrap();
         assert!(rel(f, 110e3) < 1e-12);
-        // The published landmarks (docs/three-dof.md).
+        // The published landmarks (App. B).
         for (f, t) in [(90e3, 0.634e-3), (120e3, 0.802e-3), (240e3, 1.268e-3)] {
             let tc = t_sweep * ((f - f0) / (f1 - f0)).sqrt();
             assert!((tc - t).abs() < 1e-6, "{f}: {tc}");

@@ -1,4 +1,4 @@
-//! The three DMW tracks of the 3-DOF model (§4.1, App. B; docs/dmw.md):
+//! The three DMW tracks of the 3-DOF model (§4.1.7; docs/dmw.md):
 //! original under the TFC bulge, time-flipped for features at +y, negated time-flipped for
 //! features at −y. Velocities transform with the time reversal (`d/dt` flips sign).
 

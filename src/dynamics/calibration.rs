@@ -240,7 +240,7 @@ pub struct Target {
     pub published: f64,
     /// Half-width of the spec's band, same unit.
     pub tolerance: f64,
-    /// Spec row (docs/validation.md).
+    /// Row of the published-number table (docs/validation.md).
     pub source: &'static str,
     /// Display unit and the factor SI → display.
     pub unit: &'static str,

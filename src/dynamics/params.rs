@@ -197,7 +197,8 @@ pub fn initial_2dof() -> Model2Dof {
     }
 }
 
-/// The improved 2-DOF model of §2.2 (Tables 2.1, 2.4): §11.1 with the differences listed there.
+/// The improved 2-DOF model of §2.2 (Tables 2.1, 2.4): the initial model with the differences
+/// listed there.
 pub fn improved_2dof() -> Model2Dof {
     let base = initial_2dof();
     Model2Dof {

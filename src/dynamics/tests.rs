@@ -1,5 +1,5 @@
-//! Tests of the dynamics building blocks against the dissertation's numbers (§2.1.1, §2.2, §4.1,
-//! §12.1, §12.2 rows 1–5). Every tolerance is stated next to its target.
+//! Tests of the dynamics building blocks against the dissertation's numbers (§2.1.1, §2.2, §4.1;
+//! docs/dynamics-geometry.md, docs/validation.md). Every tolerance is stated next to its target.
 
 use nalgebra::Vector3;
 

@@ -17,7 +17,7 @@ use crate::numerics::ode::{integrate_capped, OdeError, OdeOptions, OdeStats, Sam
 use crate::signal::resample::HermiteTrack;
 use nalgebra::{Matrix2, Vector2};
 
-/// Reading of eq. 2.16 (§2.2.1).
+/// Reading of eq. 2.16 (§2.2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ContactForceForm {
     /// `F_c = A_n k_c(s)·(s_c − s) − c_c ṡ`: the contact stiffness times the interference

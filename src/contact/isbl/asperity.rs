@@ -1,6 +1,6 @@
 //! Single-asperity laws: Kogut–Etsion (2002) elastic-plastic sphere-on-flat load and area,
 //! the static-friction laws (App. A.1, eq. A.6), and the elastic DMT/LJ adhesion factor
-//! `f_el` of §6.3.
+//! `f_el` (docs/contact.md).
 //!
 //! Everything is in Kogut–Etsion units: interference `ω* = ω/ω_c`, load `P/L_c`, area
 //! `A/A_c`. The published fits jump slightly at `ω* = 1, 6, 110`; they are kept exactly as
@@ -263,7 +263,7 @@ mod tests {
 
     #[test]
     fn adhesion_factor_matches_spec_values() {
-        // Spec §6.3 values (5 significant digits); the 16-digit values were produced
+        // docs/contact.md values (5 significant digits); the 16-digit values were produced
         // independently with scipy.integrate.quad on the same integral (x = 1 + u²,
         // epsrel 1e-13, split at λ^-1/3 and λ^-1/4) and agree with the spec's digits.
         let cases = [
@@ -329,7 +329,7 @@ mod tests {
 
     #[test]
     fn ke_fit_jumps_at_regime_boundaries_are_the_published_ones() {
-        // Spec §4: the fits jump by ~3 % at ω* = 1, ~2 % at 6, up to 12 % at 110 (P). The
+        // KE 2002 (eq. A.3): the fits jump by ~3 % at ω* = 1, ~2 % at 6, up to 12 % at 110 (P). The
         // expected jumps are recomputed here from the published coefficients by hand:
         // 1.03·1 / 1 = 1.03; 1.40·6^1.263 / (1.03·6^1.425) = 1.0168;
         // (3/K)·110 / (1.40·110^1.263) = 1.1185 with K = 0.5565 (python one-liner).
@@ -370,7 +370,7 @@ mod tests {
 
     #[test]
     fn ke_mean_pressure_reproduces_published_fits_for_nu_0_3() {
-        // Spec §1 consistency check: (P/P_c)/(A/A_c)·(2/3)·K·H/Y with H = 2.8·Y and ν = 0.3
+        // Consistency check (eq. A.4): (P/P_c)/(A/A_c)·(2/3)·K·H/Y with H = 2.8·Y and ν = 0.3
         // reproduces KE 2002's p/Y ≈ 1.19·ω*^0.289 (1–6) and 1.61·ω*^0.117 (6–110).
         let k = 0.454 + 0.41 * 0.3;
         let mean_pressure = |w: f64| ke_load_ratio(w, k) / ke_area_ratio(w) * 2.0 / 3.0 * k * 2.8;

@@ -95,7 +95,7 @@ pub struct IsblParams {
     pub friction_law: FrictionLaw,
 }
 
-/// The DLC overcoats of every §10 set: `E1 = E2 = 280 GPa` [seed: T2.2, T2.4, T4.2],
+/// The DLC overcoats of every parameter set: `E1 = E2 = 280 GPa` [seed: T2.2, T2.4, T4.2],
 /// `ν = 0.25` [seed, back-solved from ψ = 0.52 in Ch. 2.1; dropped in the tables].
 const DLC_MODULUS: f64 = 280e9;
 const DLC_POISSON: f64 = 0.25;
@@ -248,7 +248,7 @@ const QUADRATURE_MAX_SEGMENTS: usize = 2000;
 /// (rounding of `|d|·ε_mach` against `σ`), and the interface is meaningless anyway (the
 /// contact curves are exactly 0 from `h* ≈ 40`; the adhesion tail is the §6.4 formula).
 const MAX_SEPARATION_SIGMAS: f64 = 1e4;
-/// Below `h* = −4` the spec (§8 item 6) calls the state deep interference and asks for a flag.
+/// Below `h* = −4` is deep interference, flagged (docs/contact.md).
 const DEEP_INTERFERENCE_H_STAR: f64 = -4.0;
 
 /// Quantities derived once from [`IsblParams`] (App. A.1; docs/contact.md).

@@ -96,8 +96,9 @@ impl ViscosityModel {
         })
     }
 
-    /// Spec §3.4 default: `η = η_bulk + (η0 − η_bulk)·((d_b − d0)/(d_b − κ))²`, i.e. a parabola
-    /// with its vertex (value `η_bulk`) at `d_b`, through `η0` at `κ`; expanded into (3.9).
+    /// Default of eqs. 3.9–3.12: `η = η_bulk + (η0 − η_bulk)·((d_b − d0)/(d_b − κ))²`, i.e. a
+    /// parabola with its vertex (value `η_bulk`) at `d_b`, through `η0` at `κ`; expanded into
+    /// (3.9).
     pub fn vertex_parabola(
         limiting: f64,
         bulk: f64,

@@ -351,7 +351,7 @@ fn v1_v14_v15_solid_numbers() {
         40e-6,
         0.2,
     );
-    // Spec §3.10 / §8 exact Hertz values (numpy 1.28602e-6, 4.06674e-5 N).
+    // Exact Hertz values (eqs. 3.3–3.4; docs/contact.md) (numpy 1.28602e-6, 4.06674e-5 N).
     assert_rel(
         "Hertz 1 A",
         hertz_normal_force(e_star, r0, 1e-10),

@@ -1,5 +1,5 @@
 //! Interfacial forces of one 3-DOF feature (§4.1, eqs. 3.55–3.60, App. A;
-//! §7 "coupling to the dynamics"): from the feature's solid spacing `s`, its rate and its nominal
+//! docs/contact.md): from the feature's solid spacing `s`, its rate and its nominal
 //! area `A_n`, the upward normal force `N = F_c + P_lub − F_s`, the friction `Q` (solid +
 //! lubricant, along −X), the adhesion and the real area. Pure; SI.
 //!
