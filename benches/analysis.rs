@@ -1,4 +1,4 @@
-//! criterion bench of the analysis numerics (signals-and-surfaces.md §4): the CWT of a
+//! criterion bench of the analysis numerics (docs/analysis.md): the CWT of a
 //! 10⁶-sample series (4 MS/s, 0.25 s) at 100 log-spaced frequencies from 5 kHz to 1 MHz
 //! (analytic Morlet ω0 = 6, L1, magnitude as f32), and the Hann amplitude spectrum of 10⁷
 //! samples. `bench/analysis_numpy.py` times numpy / PyWavelets on the same cases.

@@ -1,7 +1,7 @@
 //! criterion bench of the ODE integrator (`numerics::ode`): a damped, coupled 2-DOF oscillator
 //! with the slider's air-bearing frequencies (110 kHz pitch, 275 kHz heave, ζ = 0.02) driven by
 //! a DMW-like 1 nm, 10.7 kHz line plus a small 200 kHz component, integrated for 2 ms of
-//! simulated time with rtol 1e-8 (dynamics.md §10 tolerances) and sampled at 0.25 µs by dense
+//! simulated time with rtol 1e-8 (docs/integrator.md tolerances) and sampled at 0.25 µs by dense
 //! output. Prints the step and RHS counts once, so ns/step = time / accepted steps.
 //! Not run in CI.
 use criterion::{criterion_group, criterion_main, Criterion};

@@ -24,7 +24,7 @@ fn ad_hoc_cases_land_on_the_published_clearance_and_contact() {
     let j = json_of(&o);
     let cases = j["cases"].as_array().unwrap();
     assert_eq!(cases.len(), 2);
-    // dynamics.md §12 row 18 (class K): c = 2.54 nm at 8.5 nm, ±0.05 nm; no DMW here.
+    // docs/validation.md (class K): c = 2.54 nm at 8.5 nm, ±0.05 nm; no DMW here.
     let c85 = cases[0]["clearance_mean_nm"].as_f64().unwrap();
     assert!((c85 - 2.54).abs() < 0.05, "{c85}");
     assert_eq!(cases[0]["regime"], "flying");

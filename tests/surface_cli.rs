@@ -151,7 +151,7 @@ fn out_option_writes_hdf5_and_plots() {
     assert!(text.contains("β = σRη"), "{text}");
 }
 
-/// The spec's §2.6 reference table on the canonical surface in tests/data, through the
+/// The docs/surfaces.md reference table on the canonical surface in tests/data, through the
 /// real reader and the CLI (the unit tests in roughness.rs check the full table).
 #[test]
 fn canonical_surface_reproduces_the_reference_table_through_the_cli() {

@@ -62,7 +62,7 @@ fn shipped_three_dof_scenarios_run_and_cache_per_case() {
         .find(|r| r["stage"] == "shock_response")
         .expect("shock_response row");
     let khz = |k: &str| -> f64 { shock_row[k].parse().unwrap() };
-    // Pitch/roll modes at 100–110 kHz (spec §3.3); the ridge follows the DMW most of the time.
+    // Pitch/roll modes at 100–110 kHz (§4.1.7, App. B); the ridge follows the DMW most of the time.
     assert!((80.0..130.0).contains(&khz("peak1_kHz")), "{shock_row:?}");
     assert!(
         (9.5..12.0).contains(&khz("ridge_median_kHz")),

@@ -1,5 +1,5 @@
 //! Continuous wavelet transform with a complex Morlet wavelet, computed in the Fourier domain
-//! (signals-and-surfaces.md §4.2).
+//! (docs/analysis.md).
 //!
 //! The signal (mean removed by default) is zero-padded and transformed once; for every scale
 //! `s` the spectrum is multiplied by the wavelet's Fourier transform `Ψ̂(sω)` and inverse

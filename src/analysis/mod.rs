@@ -1,4 +1,4 @@
-//! Analysis-stage numerics (signals-and-surfaces.md §4): amplitude spectra and Welch PSD of a
+//! Analysis-stage numerics (App. B; docs/analysis.md): amplitude spectra and Welch PSD of a
 //! time window, the continuous complex-Morlet wavelet transform, Poincaré sections and phase
 //! space, and a periodicity classification of the section points.
 //!

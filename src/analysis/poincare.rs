@@ -1,4 +1,4 @@
-//! Poincaré sections and phase space (signals-and-surfaces.md §4.3).
+//! Poincaré sections and phase space (docs/analysis.md).
 //!
 //! The section is the dissertation's "displacement values for zero velocity within the
 //! half-period": Σ = {v = 0}. Between consecutive samples where the velocity changes sign

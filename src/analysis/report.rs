@@ -1,4 +1,4 @@
-//! One series → everything the analysis stage reports (signals-and-surfaces.md §4): the time
+//! One series → everything the analysis stage reports (docs/analysis.md): the time
 //! window, the amplitude spectrum and its peaks, the CWT scalogram with its ridge and cone of
 //! influence, the Poincaré section with its classification, and the decimated phase space.
 //! Pure: the stage and `hdi analyze` do the reading and writing.

@@ -1,4 +1,4 @@
-//! Acceptance tests of the analysis numerics (signals-and-surfaces.md §4.4).
+//! Acceptance tests of the analysis numerics (docs/analysis.md).
 
 use super::classify::{classify, Class, ClassifyOptions};
 use super::cwt::{

@@ -1,6 +1,6 @@
 //! What the dynamics call in their inner loop: the ISBL curves per unit nominal area,
 //! tabulated once per interface and looked up in O(1) with the out-of-range rules of
-//! contact-isbl.md §8 item 6, and the same table as the solid of the MTL law.
+//! docs/contact.md, and the same table as the solid of the MTL law.
 
 use super::isbl::{IsblModel, IsblPoint};
 use super::mtl::rough::{SolidContact, SolidResponse};
@@ -110,7 +110,7 @@ pub struct IsblLookup {
     error: Vec<ChannelError>,
     inv_sigma: f64,
     /// Far-tail adhesion `F_s ≈ a·(ε/D)²·(1 + 3σ_s²/D²)`, `D = h − y_s − t + ε`
-    /// (contact-isbl.md §6.4), scaled so it meets the table at its last node.
+    /// (docs/contact.md), scaled so it meets the table at its last node.
     tail_scale: f64,
 }
 
@@ -225,7 +225,7 @@ impl IsblLookup {
     }
 
     /// The separation `h` [m] at which the contact pressure equals `pressure` [Pa]
-    /// (`P⁻¹`, monotone inversion of the table; dynamics.md §4): `None` for `pressure ≤ 0`
+    /// (`P⁻¹`, monotone inversion of the table; eq. 2.16): `None` for `pressure ≤ 0`
     /// or NaN; a pressure above the table's largest is clamped to its deepest node.
     pub fn separation_for_pressure(&self, pressure: f64) -> Option<f64> {
         if pressure.is_nan() || pressure <= 0.0 {
@@ -266,7 +266,7 @@ impl IsblLookup {
 /// [`IsblLookup`] times a nominal area, as a [`SolidContact`] for the MTL law.
 ///
 /// `MtlInterface<ScaledIsbl>` is the fast path of the combined lubricant + solid model: the
-/// MTL law is closed-form per `h` once its anchors are computed (contact-mtl.md §7), so only
+/// MTL law is closed-form per `h` once its anchors are computed (docs/contact.md), so only
 /// the solid needs a table; no cubic straddles the stiffness jumps at `3σ + 2κ` and `3σ + t`.
 #[derive(Debug, Clone)]
 pub struct ScaledIsbl {

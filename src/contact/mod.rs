@@ -1,4 +1,4 @@
-//! Contact physics of the head-disk interface (contact-isbl.md, contact-mtl.md): the ISBL
+//! Contact physics of the head-disk interface (App. A; docs/contact.md): the ISBL
 //! rough-surface model (Greenwood–Williamson statistics, Kogut–Etsion asperities, friction,
 //! adhesion, real area), the molecularly-thin-lubricant model, and fast force tables for the
 //! dynamics. Pure functions; no I/O.

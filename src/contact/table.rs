@@ -1,5 +1,5 @@
 //! Force tables: contact curves tabulated once per interface and interpolated in O(1) inside
-//! the dynamics' inner loop (contact-isbl.md §8).
+//! the dynamics' inner loop (docs/contact.md).
 //!
 //! The grid is uniform in the abscissa (e.g. h* = h/σ), so a lookup is one multiply, one
 //! floor and a cubic. Each channel stores its values and *exact* derivatives at the nodes
@@ -251,7 +251,7 @@ impl ForceTable {
     /// The abscissa where a channel that decreases strictly over the table takes the value
     /// `y`: binary search over the nodes, then Newton on the cell's cubic, safeguarded by
     /// bisection. `None` for an unknown channel or a `y` outside the tabulated values (the
-    /// caller clamps). Used for `P⁻¹` (friction from a dynamic contact force, dynamics.md §4).
+    /// caller clamps). Used for `P⁻¹` (friction from a dynamic contact force, eq. 2.16).
     pub fn invert_decreasing(&self, c: usize, y: f64) -> Option<f64> {
         let ch = self.channels.get(c)?;
         let target = match ch.interp {

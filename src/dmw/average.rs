@@ -1,4 +1,4 @@
-//! Synchronous (revolution) averaging (signals-and-surfaces.md §3.3).
+//! Synchronous (revolution) averaging (docs/dmw.md).
 //!
 //! Segment k starts at trigger time `T_k`; the average keeps what repeats every revolution
 //! (the disk's topography, and LDV speckle) and lowers everything else by ≈ 1/√N. Three ways

@@ -1,4 +1,4 @@
-//! The LDV → DMW chain (signals-and-surfaces.md §3): segmentation, synchronous averaging,
+//! The LDV → DMW chain (App. B; docs/dmw.md): segmentation, synchronous averaging,
 //! scaling, high-pass filtering, integration, resampling, the three tracks and their
 //! statistics. A pure function of the record and the parameters.
 
@@ -152,7 +152,7 @@ impl Default for ChainParams {
     }
 }
 
-/// Quality figures of the chain (signals-and-surfaces.md §3.9).
+/// Quality figures of the chain (docs/dmw.md).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Qa {
     pub layout: &'static str,

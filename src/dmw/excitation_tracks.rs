@@ -1,5 +1,5 @@
-//! Deterministic synthetic excitation tracks for the slider dynamics (dynamics.md §6, and
-//! the S7 excitation studies of §7): a synthetic DMW, a pure sinusoid, zero excitation,
+//! Deterministic synthetic excitation tracks for the slider dynamics (§2.1.2, App. B, and
+//! the excitation studies of App. B): a synthetic DMW, a pure sinusoid, zero excitation,
 //! band-limited random excitation and a quadratic chirp. Each returns the displacement `D`
 //! (m) and velocity `V = dD/dt` (m/s) sampled at `fs`, plus the closed-form [`Model`] they
 //! were sampled from, so the excitation can also be evaluated exactly between samples.
@@ -22,7 +22,7 @@ use super::DmwError;
 use rayon::prelude::*;
 use std::f64::consts::TAU;
 
-/// The dominant DMW line (dynamics.md §6, [seed App. B]), Hz.
+/// The dominant DMW line (App. B), Hz.
 pub const DMW_LINE_HZ: f64 = 10.7e3;
 
 /// Most samples a generator will allocate (2²⁸, 2 GiB per channel); more is an error.
@@ -147,7 +147,7 @@ impl Excitation {
     }
 }
 
-/// The synthetic DMW of dynamics.md §6. Defaults ([`SyntheticDmwSpec::new`]): σ total, 80 %
+/// The synthetic DMW of §2.1.2 and App. B. Defaults ([`SyntheticDmwSpec::new`]): σ total, 80 %
 /// of the variance in a quasi-periodic line at 10.7 kHz, 20 % in 64 broadband tones
 /// 10–500 kHz with amplitude ∝ f⁻².
 ///
@@ -165,7 +165,7 @@ pub struct SyntheticDmwSpec {
     /// Total standard deviation σ_DMW, m (spec: 1.0 nm).
     pub sigma_m: f64,
     /// Share of the variance in the broadband part, 0…1 (spec: 0.2). The calibration knob
-    /// for the flying FHM target (dynamics.md §6, §12); the line gets `1 − hf_share`.
+    /// for the flying FHM target (docs/calibration.md); the line gets `1 − hf_share`.
     pub hf_share: f64,
     /// Line carrier frequency, Hz.
     pub line_hz: f64,
@@ -830,7 +830,7 @@ mod tests {
         assert!((t_cross - 0.75e-3).abs() < 1e-6, "{t_cross}");
         let f = x.model.instantaneous_frequency(t_cross).unwrap();
         assert!(rel(f, 110e3) < 1e-12);
-        // The published landmarks (dynamics.md §7 S7e).
+        // The published landmarks (App. B).
         for (f, t) in [(90e3, 0.634e-3), (120e3, 0.802e-3), (240e3, 1.268e-3)] {
             let tc = t_sweep * ((f - f0) / (f1 - f0)).sqrt();
             assert!((tc - t).abs() < 1e-6, "{f}: {tc}");

@@ -1,5 +1,5 @@
 //! DMW stage physics and I/O: LDV velocity records → revolution-averaged velocity →
-//! displacement → the three dynamic-microwaviness tracks (signals-and-surfaces.md §3).
+//! displacement → the three dynamic-microwaviness tracks (App. B; docs/dmw.md).
 //!
 //! Everything in here is pure except `io` (readers, text and Parquet writers); the `dmw` stage wires it
 //! into the pipeline. SI inside: seconds, metres, m/s; the raw decoder output is in volts.
@@ -32,7 +32,7 @@ impl VelocityUnit {
     }
 }
 
-/// How the samples of a record are arranged (signals-and-surfaces.md §3.1).
+/// How the samples of a record are arranged (docs/dmw.md).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Layout {
     /// One long record, optionally with a once-per-revolution index channel.

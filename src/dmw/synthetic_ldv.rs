@@ -1,4 +1,4 @@
-//! Synthetic LDV records (signals-and-surfaces.md §3.3, §3.9): the shipped `raw/ldv/` sample
+//! Synthetic LDV records (docs/dmw.md): the shipped `raw/ldv/` sample
 //! and the test fixtures. No registry package ships an LDV record with a once-per-revolution
 //! index, so the sample is generated from a documented disk model, deterministically.
 //!

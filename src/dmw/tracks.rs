@@ -1,4 +1,4 @@
-//! The three DMW tracks of the 3-DOF model (signals-and-surfaces.md §3.8, dynamics.md §6):
+//! The three DMW tracks of the 3-DOF model (§4.1.7; docs/dmw.md):
 //! original under the TFC bulge, time-flipped for features at +y, negated time-flipped for
 //! features at −y. Velocities transform with the time reversal (`d/dt` flips sign).
 

@@ -1,4 +1,4 @@
-//! Once-per-revolution trigger detection (signals-and-surfaces.md §3.2) and segmentation from
+//! Once-per-revolution trigger detection (docs/dmw.md) and segmentation from
 //! the spindle speed when there is no index channel.
 
 use super::DmwError;

@@ -1,4 +1,4 @@
-//! Linear air bearing of the 2-DOF models (spec `dynamics.md` §3.1, §3.2, §3.4, §5.1).
+//! Linear air bearing of the 2-DOF models (§2.1, §2.2, eqs. 2.8–2.15; docs/dynamics-geometry.md).
 //!
 //! The AB is a front spring at `x = +d_f` and a rear spring at `x = −d_r` (ABS level). Their
 //! stiffnesses come from the two AB natural frequencies by modal inversion (closed form,

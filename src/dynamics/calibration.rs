@@ -1,4 +1,4 @@
-//! Class-D calibration (dynamics.md §12): fit the `[assumption]` knobs whose values the
+//! Class-D calibration (docs/calibration.md): fit the `[assumption]` knobs whose values the
 //! dissertation dropped to its published class-D landmarks, reproducibly. Pure: no I/O.
 //!
 //! * **Knobs** ([`Knob`]) — DMW amplitude (the record's standard deviation was dropped),
@@ -229,7 +229,7 @@ pub enum TargetGeometry {
     Optimised,
 }
 
-/// A published number and its tolerance (spec §12.2). The objective is
+/// A published number and its tolerance (docs/validation.md). The objective is
 /// `Σ weight·((value − published)/tolerance)²`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Target {
@@ -240,7 +240,7 @@ pub struct Target {
     pub published: f64,
     /// Half-width of the spec's band, same unit.
     pub tolerance: f64,
-    /// Spec row (dynamics.md §12.2 #…).
+    /// Row of the published-number table (docs/validation.md).
     pub source: &'static str,
     /// Display unit and the factor SI → display.
     pub unit: &'static str,
@@ -465,7 +465,7 @@ pub fn targets_for(variant: ModelVariant) -> Vec<Target> {
     }
 }
 
-/// The knobs calibrated by default for a model variant (dynamics.md §12: DMW content, β, Δγ,
+/// The knobs calibrated by default for a model variant (docs/calibration.md: DMW content, β, Δγ,
 /// ε, ζ_c; the initial model has no stiffening and calibrates `n` instead, S1c).
 pub fn default_knobs(variant: ModelVariant) -> Vec<Knob> {
     match variant {

@@ -1,4 +1,4 @@
-//! TFC-bulge and slider geometry (spec `dynamics.md` §1.1, §2.1–2.4, §5.1, §5.3).
+//! TFC-bulge and slider geometry (§2.1.1, eqs. 2.1–2.7; docs/dynamics-geometry.md).
 //!
 //! Frames: world `+Z` up (away from the disk), `+X` toward the leading edge (LE); body frame at
 //! the slider centre of mass (COM), equal to the world axes at zero attitude. Pitch `θ > 0`

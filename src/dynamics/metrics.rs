@@ -1,4 +1,4 @@
-//! Post-processing metrics of the slider dynamics (dynamics.md §8, §1.2): pure functions on
+//! Post-processing metrics of the slider dynamics (docs/dynamics-metrics.md): pure functions on
 //! uniformly sampled time series of one case (steady window, mean/std, FHM/BV, % solid contact,
 //! contact severity, HMS) and on the per-case results of an actuation sweep (regime, touchdown,
 //! slopes A–D and critical point, optimum operating point).
@@ -83,7 +83,7 @@ pub struct SteadyWindow {
 }
 
 impl SteadyWindow {
-    /// 0.5–2.0 ms (dynamics.md §7).
+    /// 0.5–2.0 ms (docs/dynamics-metrics.md).
     pub const DEFAULT: SteadyWindow = SteadyWindow {
         start_s: 0.5e-3,
         end_s: 2.0e-3,
@@ -347,7 +347,7 @@ pub fn plasticity_index(e_star_pa: f64, hardness_pa: f64, sigma_m: f64, radius_m
     (e_star_pa / hardness_pa) * (sigma_m / radius_m).sqrt()
 }
 
-/// Flyability parameter `ξ = (c̄/FH_nom)·(V/100)` (dynamics.md §9, an assumption there).
+/// Flyability parameter `ξ = (c̄/FH_nom)·(V/100)` (§2.3; an assumption, docs/doe.md).
 pub fn flyability(mean_clearance_m: f64, fh_nom_m: f64, vibration_percent: f64) -> f64 {
     (mean_clearance_m / fh_nom_m) * (vibration_percent / 100.0)
 }

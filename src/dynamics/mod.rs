@@ -1,6 +1,6 @@
-//! Slider dynamics building blocks (spec `dynamics.md`): TFC-bulge geometry, the linear air
-//! bearing of the 2-DOF models and their parameter sets. Pure physics, no I/O; SI units inside
-//! (m, kg, s, N, rad).
+//! Slider dynamics building blocks (Ch. 2, 4; docs/dynamics-geometry.md): TFC-bulge geometry, the
+//! linear air bearing of the 2-DOF models and their parameter sets. Pure physics, no I/O; SI units
+//! inside (m, kg, s, N, rad).
 //!
 //! * [`geometry`] — attitude and body→world rotation (§1.1), the TFC bulge as a lower
 //!   half-ellipsoid, its lowest point (POC) in closed form (§2.2), lever arms and generalised

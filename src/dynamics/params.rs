@@ -1,8 +1,9 @@
-//! Parameter sets of the 2-DOF models (spec `dynamics.md` §11.1, §11.2), SI units.
+//! Parameter sets of the 2-DOF models (Tables 2.1, 2.2, 2.4), SI units.
 //!
 //! Provenance tags as in the spec: `[seed …]` survives in the dissertation text, `[derived …]`
 //! computed from seed numbers, `[assumption …]` chosen by the spec (with what to calibrate it
-//! against). Contact-material values are listed for completeness; `contact-isbl.md` owns them.
+//! against). Contact-material values are listed for completeness; the contact module (Table 3.2)
+//! owns them.
 
 use super::air_bearing::{
     damping_coefficient, springs_from_frequencies, AirBearing2Dof, HeavePitchBody, RearStiffening,
@@ -149,7 +150,7 @@ pub struct Model2Dof {
     pub disk_speed: f64,
 }
 
-/// The initial 2-DOF model of §2.1 (spec §11.1).
+/// The initial 2-DOF model of §2.1 (Tables 2.1, 2.2).
 pub fn initial_2dof() -> Model2Dof {
     Model2Dof {
         variant: ModelVariant::Initial,
@@ -176,7 +177,7 @@ pub fn initial_2dof() -> Model2Dof {
             second_frequency_hz: 300e3, // [assumption §3.2: normal mode near 11 nm]
             front_damping_ratio: 0.03,  // [assumption §3.4]
             rear_damping_ratio: 0.03,   // [assumption §3.4]
-            root_assignment: RootAssignment::StiffRear, // [spec §3.1 default]
+            root_assignment: RootAssignment::StiffRear, // [docs/dynamics-geometry.md default]
             stiffening: RearStiffening::Constant, // [seed §2.1.1]
         },
         interface: Interface {
@@ -196,7 +197,8 @@ pub fn initial_2dof() -> Model2Dof {
     }
 }
 
-/// The improved 2-DOF model of §2.2 (spec §11.2): §11.1 with the differences listed there.
+/// The improved 2-DOF model of §2.2 (Tables 2.1, 2.4): the initial model with the differences
+/// listed there.
 pub fn improved_2dof() -> Model2Dof {
     let base = initial_2dof();
     Model2Dof {
@@ -224,7 +226,7 @@ pub const OPTIMISED_SEMI_WIDTH_X: f64 = 4.86 * UM;
 pub const OPTIMISED_OFFSET_FROM_TE: f64 = 6.35 * UM;
 
 /// The optimised bulge of §2.3 (a = 4.86 µm, x = 6.35 µm). Its width `w_TFC` was dropped from
-/// the text, so the caller supplies it (spec §7 S2o: from the re-run optimisation).
+/// the text, so the caller supplies it (docs/doe.md: from the re-run optimisation).
 pub fn optimised_bulge(full_width_y: f64) -> Result<BulgeDesign> {
     let bulge = BulgeDesign {
         semi_width_x: OPTIMISED_SEMI_WIDTH_X,

@@ -1,5 +1,5 @@
-//! Tests of the dynamics building blocks against the dissertation's numbers (spec §2.7, §3,
-//! §12.1, §12.2 rows 1–5). Every tolerance is stated next to its target.
+//! Tests of the dynamics building blocks against the dissertation's numbers (§2.1.1, §2.2, §4.1;
+//! docs/dynamics-geometry.md, docs/validation.md). Every tolerance is stated next to its target.
 
 use nalgebra::Vector3;
 
@@ -72,7 +72,7 @@ fn initial_areas_and_curvatures_match_dissertation() {
             1e-12,
         );
     }
-    // Zero pitch: 124.48 / 68.02 / 46.63 µm² (spec §2.7).
+    // Zero pitch: 124.48 / 68.02 / 46.63 µm² (§2.1.1).
     let geo = model.geometry();
     for (h, want) in [(5.0, 124.48), (10.0, 68.02), (15.0, 46.63)] {
         let a = geo
@@ -136,7 +136,7 @@ fn truncation_rules() {
 }
 
 /// Optimised design (a = 4.86 µm, x = 6.35 µm; w dropped): A_n at 9.7 / 12 nm for
-/// w = 10, 20, 30, 50 µm, spec §2.7 (0.3 %: the spec prints one decimal).
+/// w = 10, 20, 30, 50 µm, §2.1.1 (0.3 %: one decimal printed).
 #[test]
 fn optimised_design_areas() {
     let model = improved_2dof();
@@ -447,10 +447,11 @@ fn c5_ab_force_budget() {
 // ---------------------------------------------------------------------------------------------
 // Air bearing
 
-/// Modal inversion (110 / 300 kHz, stiff rear): k_f = 1.865e5, k_r = 9.683e5 N/m (spec §3.2,
-/// 0.1 %); the nalgebra eigen-solve of the assembled 2×2 system (suspension included)
-/// reproduces both frequencies to 1e-9 (brief: 0.5 %; spec §10: 1e-9); the other root pair
-/// gives the same frequencies with the springs swapped.
+/// Modal inversion (110 / 300 kHz, stiff rear): k_f = 1.865e5, k_r = 9.683e5 N/m
+/// (docs/dynamics-geometry.md, 0.1 %); the nalgebra eigen-solve of the assembled 2×2 system
+/// (suspension included) reproduces both frequencies to 1e-9 (brief: 0.5 %;
+/// docs/dynamics-geometry.md: 1e-9); the other root pair gives the same frequencies with the
+/// springs swapped.
 #[test]
 fn modal_inversion_round_trip() {
     let model = initial_2dof();
@@ -490,8 +491,8 @@ fn modal_inversion_round_trip() {
     assert_rel("model f2", m[1].frequency_hz, 300e3, 1e-9);
 }
 
-/// Mode shapes with the stiff-rear assignment (spec §3.1, derived): the 1st mode's TE/LE
-/// amplitude ratio is 0.11 and the 2nd mode's node lies 175 µm toward the LE (5 %).
+/// Mode shapes with the stiff-rear assignment (docs/dynamics-geometry.md, derived): the 1st mode's
+/// TE/LE amplitude ratio is 0.11 and the 2nd mode's node lies 175 µm toward the LE (5 %).
 #[test]
 fn mode_shapes_stiff_rear() {
     let model = initial_2dof();
@@ -522,8 +523,9 @@ fn modal_inversion_rejects_impossible_frequencies() {
     );
 }
 
-/// Damping coefficients of spec §11.1 (c_f, c_r, c: N·s/m; c_θ: N·m·s/rad), 0.1 %, and the
-/// resulting modal damping ≈ 4.9 % (110 kHz) and 6.5 % (300 kHz) (spec §3.4, ±0.2 points).
+/// Damping coefficients of Tables 2.1, 2.2 (c_f, c_r, c: N·s/m; c_θ: N·m·s/rad), 0.1 %, and the
+/// resulting modal damping ≈ 4.9 % (110 kHz) and 6.5 % (300 kHz) (docs/dynamics-geometry.md, ±0.2
+/// points).
 #[test]
 fn damping_coefficients_and_modal_damping() {
     let model = initial_2dof();

@@ -1,4 +1,4 @@
-//! One 2-DOF slider case (dynamics.md §4, §5.1, §6, §10): a parameter set, a constant TFC
+//! One 2-DOF slider case (eqs. 2.8–2.16; docs/simulation.md): a parameter set, a constant TFC
 //! actuation, an interface (the contact stage's ISBL table) and a DMW track → time histories of
 //! the bulge spacing, clearance and interfacial forces, sampled uniformly. Pure: no I/O.
 //!
@@ -17,7 +17,7 @@ use crate::numerics::ode::{integrate_capped, OdeError, OdeOptions, OdeStats, Sam
 use crate::signal::resample::HermiteTrack;
 use nalgebra::{Matrix2, Vector2};
 
-/// Reading of eq. 2.16 (dynamics.md §4).
+/// Reading of eq. 2.16 (§2.2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ContactForceForm {
     /// `F_c = A_n k_c(s)·(s_c − s) − c_c ṡ`: the contact stiffness times the interference
@@ -27,7 +27,7 @@ pub enum ContactForceForm {
     StaticCurve,
 }
 
-/// Time integration (dynamics.md §10).
+/// Time integration (docs/integrator.md).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Integrator {
     /// Dormand–Prince 5(4), `rtol`, with the step capped at `contact_max_step` while the POC is
@@ -223,7 +223,7 @@ pub struct CaseHistory {
 }
 
 impl CaseHistory {
-    /// Steady-state metrics (dynamics.md §8).
+    /// Steady-state metrics (docs/dynamics-metrics.md).
     pub fn metrics(&self, params: &CaseParams) -> Result<CaseMetrics, DynamicsError> {
         let series = CaseSeries {
             t0_s: 0.0,
@@ -319,7 +319,7 @@ impl<'a> TwoDofCase<'a> {
         let sigma = model.interface.sigma;
         let criterion = model.interface.criterion;
         let contact_threshold = criterion.contact_threshold(sigma);
-        // c_c = 2ζ_c √(k_c,ref m), k_c,ref at 0.5σ interference (dynamics.md §3.4).
+        // c_c = 2ζ_c √(k_c,ref m), k_c,ref at 0.5σ interference (docs/dynamics-geometry.md).
         let reference = isbl
             .at(contact_threshold - 0.5 * sigma)
             .map_err(|e| DynamicsError::Numerical(e.to_string()))?;
@@ -474,7 +474,7 @@ impl<'a> TwoDofCase<'a> {
         }
         let (mut friction, mut real_area) = (0.0, 0.0);
         if contact_force > 0.0 {
-            // Quasi-static equivalence P(h*) = F_c / A_n (dynamics.md §4).
+            // Quasi-static equivalence P(h*) = F_c / A_n (eq. 2.16).
             if let Some(h_star) = self.isbl.separation_for_pressure(contact_force / area) {
                 let at = self.isbl.at(h_star).map_err(numerical)?;
                 friction = area * at.friction;
@@ -716,7 +716,7 @@ impl<'a> TwoDofCase<'a> {
                 }
             }
         };
-        // atol: 1e-14 m, 1e-11 rad; rates × 2π × 1 MHz (dynamics.md §10).
+        // atol: 1e-14 m, 1e-11 rad; rates × 2π × 1 MHz (docs/integrator.md).
         let w = 2.0 * std::f64::consts::PI * 1e6;
         let atol = [1e-14, 1e-11, 1e-14 * w, 1e-11 * w];
         let mut start = o.initial_state;

@@ -1,7 +1,7 @@
-//! PNG plots of slider-dynamics actuation sweeps (dynamics.md §7–§8), the analogues of the
-//! dissertation's figures: clearance against TFC actuation with the contact regimes shaded
-//! (Figs 2.16/2.18), FHM/BV and % solid contact against actuation with marked landmarks
-//! (Figs 2.19/2.22), and stacked time histories at chosen actuations (Figs 2.13–2.14).
+//! PNG plots of slider-dynamics actuation sweeps (docs/simulation.md, docs/dynamics-metrics.md),
+//! the analogues of the dissertation's figures: clearance against TFC actuation with the contact
+//! regimes shaded (Figs 2.16/2.18), FHM/BV and % solid contact against actuation with marked
+//! landmarks (Figs 2.19/2.22), and stacked time histories at chosen actuations (Figs 2.13–2.14).
 //!
 //! Drawn with the plotting kit: plots are side outputs, so degenerate input — no
 //! series, no finite point, constant data — still gives a valid (possibly empty, "no data")

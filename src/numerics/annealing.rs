@@ -1,4 +1,4 @@
-//! Bounded simulated annealing (dynamics.md §9), mirroring MATLAB's `simulannealbnd` defaults,
+//! Bounded simulated annealing (§2.3; docs/doe.md), mirroring MATLAB's `simulannealbnd` defaults,
 //! the tool of the period, plus a one-coordinate-at-a-time sensitivity table.
 //!
 //! The search runs in coded coordinates (`−1` at the lower bound, `+1` at the upper) so one
@@ -49,7 +49,7 @@ impl AnnealingError {
     }
 }
 
-/// Schedule and stopping rules; the defaults are the spec's (dynamics.md §9).
+/// Schedule and stopping rules; defaults as in docs/doe.md.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AnnealingOptions {
     /// `T0`, in objective units for the acceptance test and in coded units for the step.

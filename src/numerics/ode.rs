@@ -1,4 +1,4 @@
-//! Explicit embedded Runge–Kutta integrator for the slider dynamics (dynamics.md §10):
+//! Explicit embedded Runge–Kutta integrator for the slider dynamics (docs/integrator.md):
 //! Dormand–Prince 5(4) with FSAL, mixed absolute/relative error control per component, a PI
 //! step-size controller, `max_step`/`min_step`, mandatory stop times, a fixed-step
 //! "reproduction" mode and the order-4 continuous extension (dense output), so that samples land
@@ -323,7 +323,7 @@ where
 /// [`integrate`] with a state-dependent step limit (adaptive mode): before each step attempt
 /// `step_cap(t, y)` bounds the step from the current accepted state. The slider dynamics use
 /// it to shorten steps only while a contact is near or active (a fixed `max_step` everywhere
-/// would cost 100× more steps in free flight, dynamics.md §10 item 6). Ignored in fixed mode.
+/// would cost 100× more steps in free flight, docs/integrator.md). Ignored in fixed mode.
 #[allow(clippy::too_many_arguments)]
 pub fn integrate_capped<const N: usize, E, F, C, O>(
     mut rhs: F,

@@ -1,5 +1,5 @@
 //! Polynomial response surfaces in coded factors, least squares and sequential ANOVA
-//! (dynamics.md §9: the 3³ DOE, the 23- and 26-term models, Table 2.7's predictive equations).
+//! (§2.3, docs/doe.md: the 3³ DOE, the 23- and 26-term models, Table 2.7's predictive equations).
 //!
 //! - A model is a [`PolynomialBasis`]: an ordered list of [`Monomial`]s. The order matters: it
 //!   is the order of the sequential (type I) sums of squares. [`PolynomialBasis::bounded`]
@@ -822,7 +822,7 @@ mod tests {
 
     #[test]
     fn coded_levels_and_full_factorial() {
-        // dynamics.md §9: w_TFC = 10, 50, 90 µm are coded −1, 0, +1.
+        // §2.3 (docs/doe.md): w_TFC = 10, 50, 90 µm are coded −1, 0, +1.
         assert_eq!(coded(10.0, 10.0, 90.0), -1.0);
         assert_eq!(coded(50.0, 10.0, 90.0), 0.0);
         assert_eq!(coded(90.0, 10.0, 90.0), 1.0);

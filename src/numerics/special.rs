@@ -1,4 +1,4 @@
-//! Special functions for the response-surface statistics (dynamics.md §9): log-gamma, the
+//! Special functions for the response-surface statistics (§2.3; docs/doe.md): log-gamma, the
 //! regularised incomplete beta function, F and Student-t tail probabilities, and the
 //! standard-normal quantile for normal-probability plots of residuals.
 //!

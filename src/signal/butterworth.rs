@@ -402,7 +402,7 @@ mod tests {
             .fold(0.0, f64::max)
     }
 
-    // spec §3.6 and tests/data/signals/sosfiltfilt_testvector/sos.csv;
+    // docs/dmw.md and tests/data/signals/sosfiltfilt_testvector/sos.csv;
     // scipy 1.17.1: signal.butter(4, 10e3, 'highpass', fs=4e6, output='sos')
     const HP4_10K: [Sos; 2] = [
         [

@@ -1,4 +1,4 @@
-//! Velocity → displacement (signals-and-surfaces.md §3.5).
+//! Velocity → displacement (docs/dmw.md).
 //!
 //! `cumulative_trapezoid` works on any record; its response relative to the ideal integrator
 //! `1/(jω)` is `(πf/fs)·cot(πf/fs)` (0.98440 at 275 kHz, 4 MS/s), which `trapezoid_gain`

@@ -1,4 +1,4 @@
-//! Changing the time grid of a uniformly sampled track (spec §3.7): band-limited rational
+//! Changing the time grid of a uniformly sampled track (docs/dmw.md): band-limited rational
 //! resampling (scipy `resample_poly`) for a different uniform rate, and cubic Hermite
 //! evaluation of a displacement/velocity pair at arbitrary times, which is how the dynamics
 //! read the DMW without materialising a 1 ns copy of it.
@@ -202,7 +202,7 @@ pub fn rational_ratio(new_rate: f64, old_rate: f64, max_den: usize) -> (usize, u
 /// Cubic Hermite evaluation of a uniformly sampled track from its displacement `D` and its
 /// (measured) derivative `V`: C¹, passes exactly through `D` and `V` at the samples, and for
 /// a tone of angular frequency ω the error is at most `(ωh)⁴/384` (h = sample spacing), i.e.
-/// 9·10⁻⁵ relative at 275 kHz for 4 MS/s (spec §3.7). Using the measured `V` instead of a
+/// 9·10⁻⁵ relative at 275 kHz for 4 MS/s (docs/dmw.md). Using the measured `V` instead of a
 /// differentiated `D` is what makes this accurate enough for the dynamics, which evaluate the
 /// DMW at arbitrary ODE times.
 #[derive(Debug, Clone, Copy)]
@@ -614,7 +614,7 @@ mod tests {
 
     #[test]
     fn hermite_error_matches_spec_3_7() {
-        // spec §3.7 [ref]: 2.1e-10 at 10.7 kHz, 9.0e-5 at 275 kHz, 9.1e-4 at 500 kHz
+        // reference (docs/dmw.md): 2.1e-10 at 10.7 kHz, 9.0e-5 at 275 kHz, 9.1e-4 at 500 kHz
         // (theory (ωh)⁴/384 with h = 0.25 µs)
         for (f, spec) in [(10.7e3, 2.1e-10), (275e3, 9.0e-5), (500e3, 9.1e-4)] {
             let err = hermite_max_error(f);

@@ -1,6 +1,6 @@
 //! Filtering with cascaded second-order sections: single pass ([`sosfilt`]) and zero-phase
 //! forward–backward ([`sosfiltfilt`]), ported from scipy's algorithms so that results agree
-//! with scipy to rounding (the DMW high-pass of spec §3.6 is specified as scipy
+//! with scipy to rounding (the DMW high-pass of docs/dmw.md is specified as scipy
 //! `sosfiltfilt`).
 //!
 //! Both use the direct-form-II-transposed recurrence per section, sample-major (all sections
@@ -433,7 +433,7 @@ mod tests {
         let x = read_column("x.csv");
         let want = read_column("y.csv");
         assert_eq!(x.len(), 4096);
-        // The vector is the formula of spec §3.6.
+        // The vector is the formula of docs/dmw.md.
         for (k, &xk) in x.iter().enumerate() {
             let t = k as f64 / FS;
             let formula = (2.0 * PI * 1e3 * t).sin()
@@ -453,7 +453,7 @@ mod tests {
     fn reference_test_vector_quoted_values_of_spec() {
         let x = read_column("x.csv");
         let y = sosfiltfilt(&hp4(), &x, PadType::Odd, None).unwrap();
-        // spec §3.6 (scipy sosfiltfilt with defaults)
+        // docs/dmw.md (scipy sosfiltfilt with defaults)
         let head = [
             0.060248067197272076,
             0.08012872797091866,
@@ -517,7 +517,7 @@ mod tests {
 
     #[test]
     fn one_khz_is_removed_and_edges_follow_spec() {
-        // 2.5 ms record (10 000 samples) of a unit 1 kHz sine; spec §3.6 edges [ref] figures
+        // 2.5 ms record (10 000 samples) of a unit 1 kHz sine; docs/dmw.md edge figures
         // (rms ratios, reproduced with scipy 1.17.1).
         let n = 10_000;
         let x = tone(1e3, n);
@@ -552,7 +552,8 @@ mod tests {
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max);
         assert!(max_dev < 1e-5, "{max_dev}"); // spec: measured 2.7e-6
-                                              // whole-record gain error, spec §3.6: −0.0016 dB with padlen 1200, +0.028 dB with 15
+                                              // whole-record gain error, docs/dmw.md: −0.0016 dB
+                                              // with padlen 1200, +0.028 dB with 15
         let whole = db(&y, &x);
         assert!((whole + 0.0016).abs() < 5e-5, "{whole}");
         let y = sosfiltfilt(&hp4(), &x, PadType::Odd, None).unwrap();

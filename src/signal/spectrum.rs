@@ -1,4 +1,4 @@
-//! One-sided amplitude spectrum and peak picking (signals-and-surfaces.md §4.1).
+//! One-sided amplitude spectrum and peak picking (docs/analysis.md).
 //!
 //! Scaling: a sinusoid of amplitude A centred on a bin reads A (`A_k = 2|X_k|/Σw`), the same
 //! as `sqrt(2·P)` of scipy `periodogram(window='hann', scaling='spectrum')`. Peaks between

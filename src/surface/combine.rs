@@ -1,4 +1,4 @@
-//! Combining two surfaces into the equivalent rough surface (signals-and-surfaces.md §2.7).
+//! Combining two surfaces into the equivalent rough surface (Table 2.2; docs/surfaces.md).
 //!
 //! σ always adds in quadrature. `SumSurface` adds the spectral moments of the two independent
 //! surfaces (McCool 1986) and derives η, R, α, β from Nayak's relations; `HarmonicR` is the

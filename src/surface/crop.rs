@@ -1,4 +1,4 @@
-//! Crops (signals-and-surfaces.md §2.5): the dissertation analysed 1 × 1 µm sub-areas of larger
+//! Crops (docs/surfaces.md): the dissertation analysed 1 × 1 µm sub-areas of larger
 //! scans, chosen to exclude artefacts.
 
 use super::{HeightMap, Result, SurfaceError};

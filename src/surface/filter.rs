@@ -1,4 +1,4 @@
-//! ISO 16610-61 areal Gaussian filter (signals-and-surfaces.md §2.4).
+//! ISO 16610-61 areal Gaussian filter (docs/surfaces.md).
 //!
 //! The analytic transfer function `H(λ) = exp(−π(αλc/λ)²)`, `α = √(ln2/π)`, is applied in the
 //! frequency domain, so the transmission of every Fourier mode is exact (no kernel truncation).

@@ -1,4 +1,4 @@
-//! Levelling (signals-and-surfaces.md §2.3).
+//! Levelling (docs/surfaces.md).
 //!
 //! Every fit is least squares over the valid pixels (`map.valid`); the fitted background is
 //! subtracted from every pixel, valid or not. Polynomial fits use Householder QR (nalgebra) on

@@ -1,7 +1,7 @@
 //! Surfaces stage physics and I/O: AFM height maps → levelled field → σ, R, η, β.
 //!
 //! Everything in here is pure (no pipeline, no cache); the `surfaces` stage wires it into
-//! the pipeline. Conventions (signals-and-surfaces.md §2.1): `z[[j, i]]`, row `j` = slow-scan
+//! the pipeline. Conventions (docs/surfaces.md): `z[[j, i]]`, row `j` = slow-scan
 //! axis y (one scan line per row), column `i` = fast-scan axis x; row 0 is the top of the image
 //! as the instrument software displays it; heights and lengths in metres.
 

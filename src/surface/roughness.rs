@@ -1,4 +1,4 @@
-//! Roughness parameters (signals-and-surfaces.md §2.6).
+//! Roughness parameters (docs/surfaces.md).
 //!
 //! All statistics use the valid, finite pixels of the map with their mean removed (the map is
 //! expected to be levelled already; removing the mean here makes the numbers independent of a

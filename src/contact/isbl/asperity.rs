@@ -1,10 +1,10 @@
 //! Single-asperity laws: Kogut–Etsion (2002) elastic-plastic sphere-on-flat load and area,
-//! the static-friction laws of contact-isbl.md §5, and the elastic DMT/LJ adhesion factor
-//! `f_el` of §6.3.
+//! the static-friction laws (App. A.1, eq. A.6), and the elastic DMT/LJ adhesion factor
+//! `f_el` (docs/contact.md).
 //!
 //! Everything is in Kogut–Etsion units: interference `ω* = ω/ω_c`, load `P/L_c`, area
 //! `A/A_c`. The published fits jump slightly at `ω* = 1, 6, 110`; they are kept exactly as
-//! published (spec §4) because the Gaussian summit sums are smooth in `h` regardless.
+//! published (eq. A.3) because the Gaussian summit sums are smooth in `h` regardless.
 
 use super::quadrature;
 use crate::contact::ContactError;
@@ -24,7 +24,7 @@ pub enum KeRegime {
 
 impl KeRegime {
     /// Regime of a dimensionless interference `ω*` (boundaries belong to the lower regime,
-    /// as in spec §3).
+    /// as in App. A.1).
     pub fn of(omega_star: f64) -> Self {
         if omega_star <= 1.0 {
             KeRegime::Elastic
@@ -75,7 +75,7 @@ pub fn ke_area_ratio(omega_star: f64) -> f64 {
     ke_area_ratio_in(KeRegime::of(omega_star), omega_star)
 }
 
-/// Seed power law for the static friction of an elastic summit (spec §5, back-solved from
+/// Seed power law for the static friction of an elastic summit (eq. A.6, back-solved from
 /// the two Ch. 3.1 numbers): `Q_max/L_c = 0.4155·ω*^0.970` for `0 < ω* ≤ 1`, zero otherwise.
 pub fn seed_power_friction_ratio(omega_star: f64) -> f64 {
     if omega_star > 0.0 && omega_star <= 1.0 {
@@ -109,7 +109,7 @@ fn hertz_gap(w: f64) -> f64 {
 /// Below this `λ = ω/ε`, `f_el(λ) = 1` to better than 1e-10 (`f_el ≈ 1 + 0.2·λ`).
 const F_EL_SMALL_LAMBDA: f64 = 1e-11;
 
-/// Elastic DMT/LJ adhesion factor of a contacting summit (spec §6.3):
+/// Elastic DMT/LJ adhesion factor of a contacting summit (eq. A.1; docs/contact.md):
 /// `F_s = 2π·Δγ·R·f_el(λ)`, `λ = ω/ε`,
 /// `f_el(λ) = (8/3)·λ·∫_1^∞ [q⁻³ − q⁻⁹]·x dx`, `q = 1 + (λ/π)·G(x)`.
 ///
@@ -263,7 +263,7 @@ mod tests {
 
     #[test]
     fn adhesion_factor_matches_spec_values() {
-        // Spec §6.3 values (5 significant digits); the 16-digit values were produced
+        // docs/contact.md values (5 significant digits); the 16-digit values were produced
         // independently with scipy.integrate.quad on the same integral (x = 1 + u²,
         // epsrel 1e-13, split at λ^-1/3 and λ^-1/4) and agree with the spec's digits.
         let cases = [
@@ -282,10 +282,10 @@ mod tests {
             );
         }
         assert_eq!(adhesion_factor_elastic(0.0).unwrap(), 1.0);
-        // Continuity at λ → 0 (f_el(0) = 1, spec §6.3): f_el(1e-6) − 1 is O(1e-6).
+        // Continuity at λ → 0 (f_el(0) = 1, docs/contact.md): f_el(1e-6) − 1 is O(1e-6).
         let small = adhesion_factor_elastic(1e-6).unwrap();
         assert!((small - 1.0).abs() < 1e-5, "{small}");
-        // Large-λ asymptote 0.739·λ^{1/3} (spec §6.3; ratio → 1 slowly).
+        // Large-λ asymptote 0.739·λ^{1/3} (docs/contact.md; ratio → 1 slowly).
         let big = adhesion_factor_elastic(1e7).unwrap();
         assert!(
             (big / (0.739 * 1e7f64.powf(1.0 / 3.0)) - 1.0).abs() < 0.03,
@@ -329,7 +329,7 @@ mod tests {
 
     #[test]
     fn ke_fit_jumps_at_regime_boundaries_are_the_published_ones() {
-        // Spec §4: the fits jump by ~3 % at ω* = 1, ~2 % at 6, up to 12 % at 110 (P). The
+        // KE 2002 (eq. A.3): the fits jump by ~3 % at ω* = 1, ~2 % at 6, up to 12 % at 110 (P). The
         // expected jumps are recomputed here from the published coefficients by hand:
         // 1.03·1 / 1 = 1.03; 1.40·6^1.263 / (1.03·6^1.425) = 1.0168;
         // (3/K)·110 / (1.40·110^1.263) = 1.1185 with K = 0.5565 (python one-liner).
@@ -370,7 +370,7 @@ mod tests {
 
     #[test]
     fn ke_mean_pressure_reproduces_published_fits_for_nu_0_3() {
-        // Spec §1 consistency check: (P/P_c)/(A/A_c)·(2/3)·K·H/Y with H = 2.8·Y and ν = 0.3
+        // Consistency check (eq. A.4): (P/P_c)/(A/A_c)·(2/3)·K·H/Y with H = 2.8·Y and ν = 0.3
         // reproduces KE 2002's p/Y ≈ 1.19·ω*^0.289 (1–6) and 1.61·ω*^0.117 (6–110).
         let k = 0.454 + 0.41 * 0.3;
         let mean_pressure = |w: f64| ke_load_ratio(w, k) / ke_area_ratio(w) * 2.0 / 3.0 * k * 2.8;

@@ -1,12 +1,12 @@
-//! ISBL rough-surface contact model (contact-isbl.md): Greenwood–Williamson summit statistics,
-//! Kogut–Etsion elastic-plastic asperities, junction-shear static friction, and adhesion from
-//! non-contacting (LJ), lubricant-contacting (SBL) and solid-contacting (DMT) summits, with a
-//! constant or thickness-dependent surface energy.
+//! ISBL rough-surface contact model (App. A.1; docs/contact.md): Greenwood–Williamson summit
+//! statistics, Kogut–Etsion elastic-plastic asperities, junction-shear static friction, and
+//! adhesion from non-contacting (LJ), lubricant-contacting (SBL) and solid-contacting (DMT)
+//! summits, with a constant or thickness-dependent surface energy.
 //!
 //! All curves are per unit nominal area (`A_n = 1 m²`) as functions of the **solid**
 //! separation `h` (smooth flat ↔ mean plane of the DLC surface heights); callers multiply by
 //! `A_n`. Stiffnesses come from differentiating the Gaussian density under the integral
-//! (spec §8 step 2), never from finite differences, so they are as accurate as the curves.
+//! (docs/contact.md), never from finite differences, so they are as accurate as the curves.
 //!
 //! Pure functions, SI units, no I/O.
 
@@ -23,7 +23,7 @@ use asperity::{
 };
 use std::f64::consts::PI;
 
-/// How summit statistics relate to surface statistics (spec §2).
+/// How summit statistics relate to surface statistics (App. A.1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum SummitOffset {
     /// `d = h`, `σ_s = σ`: what the dissertation evidently used (reproduces its 7.30 μN).
@@ -33,7 +33,7 @@ pub enum SummitOffset {
     McCool,
 }
 
-/// Single-summit static-friction law (spec §5). An enum so KE 2004's fit can be added.
+/// Single-summit static-friction law (eq. A.6). An enum so KE 2004's fit can be added.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FrictionLaw {
     /// `Q_max = τ_s·A(ω)`, `τ_s = H/(2.8·√3)` (von Mises shear yield with KE's `H = 2.8·Y`),
@@ -44,7 +44,7 @@ pub enum FrictionLaw {
     SeedPowerElastic,
 }
 
-/// Surface (adhesion) energy model (spec §6.2, §7).
+/// Surface (adhesion) energy model (eq. 3.50, Fig. 3.17).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum SurfaceEnergy {
     /// `Δγ` constant [N/m] (Chapters 2 and 4).
@@ -56,7 +56,7 @@ pub enum SurfaceEnergy {
 
 impl SurfaceEnergy {
     /// Chapter 3.2.3 variable energy: `c2 = 2.41 nm⁻¹` [seed]; `c1 = 100 mN/m`,
-    /// `c3 = 19 mN/m` [assumption, spec §7: the seed dropped them; replace with a Yeo et al.
+    /// `c3 = 19 mN/m` [assumption, eq. 3.50: the seed dropped them; replace with a Yeo et al.
     /// 2008 fit when available].
     pub const fn seed_variable() -> Self {
         SurfaceEnergy::Variable {
@@ -67,7 +67,7 @@ impl SurfaceEnergy {
     }
 }
 
-/// Interface and material inputs of the ISBL model (spec §1, §10). SI units throughout.
+/// Interface and material inputs of the ISBL model (Tables 2.2, 3.2). SI units throughout.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IsblParams {
     /// `σ`: RMS of the combined surface heights [m].
@@ -95,7 +95,7 @@ pub struct IsblParams {
     pub friction_law: FrictionLaw,
 }
 
-/// The DLC overcoats of every §10 set: `E1 = E2 = 280 GPa` [seed: T2.2, T2.4, T4.2],
+/// The DLC overcoats of every parameter set: `E1 = E2 = 280 GPa` [seed: T2.2, T2.4, T4.2],
 /// `ν = 0.25` [seed, back-solved from ψ = 0.52 in Ch. 2.1; dropped in the tables].
 const DLC_MODULUS: f64 = 280e9;
 const DLC_POISSON: f64 = 0.25;
@@ -241,17 +241,17 @@ impl IsblParams {
 const MCCOOL_MIN_BETA: f64 = 0.0193;
 /// Integration cut-off of the Gaussian, in `σ_s` beyond its centre: `φ(14σ_s)/φ(0) = e^-98`.
 const GAUSSIAN_CUTOFF_SIGMAS: f64 = 14.0;
-/// Relative tolerance of every quadrature (spec §8: 1e-10 is cheap; acceptance is 1e-6).
+/// Relative tolerance of every quadrature (docs/contact.md: 1e-10 is cheap; acceptance is 1e-6).
 const QUADRATURE_REL_TOL: f64 = 1e-10;
 const QUADRATURE_MAX_SEGMENTS: usize = 2000;
 /// Largest `|h|/σ` accepted: beyond it `d + ω` loses the digits the Gaussian needs
 /// (rounding of `|d|·ε_mach` against `σ`), and the interface is meaningless anyway (the
 /// contact curves are exactly 0 from `h* ≈ 40`; the adhesion tail is the §6.4 formula).
 const MAX_SEPARATION_SIGMAS: f64 = 1e4;
-/// Below `h* = −4` the spec (§8 item 6) calls the state deep interference and asks for a flag.
+/// Below `h* = −4` is deep interference, flagged (docs/contact.md).
 const DEEP_INTERFERENCE_H_STAR: f64 = -4.0;
 
-/// Quantities derived once from [`IsblParams`] (spec §1, §2, §8.1 metadata).
+/// Quantities derived once from [`IsblParams`] (App. A.1; docs/contact.md).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IsblDerived {
     /// `E*` [Pa].
@@ -280,7 +280,7 @@ pub struct IsblDerived {
     pub delta_gamma_min: f64,
     pub delta_gamma_max: f64,
     /// True when `ψ_KE > 1`: summits beyond `ω_c` may then carry a noticeable share of the
-    /// solid adhesion, for which the elastic `f_el` is used without KE's fits (spec §6.3).
+    /// solid adhesion, for which the elastic `f_el` is used without KE's fits (docs/contact.md).
     pub elastic_plastic_adhesion_assumed: bool,
 }
 
@@ -312,7 +312,7 @@ pub struct IsblPoint {
     pub adhesion_gradient: f64,
     /// `n_c`: contacting summits per unit nominal area [1/m²].
     pub contacts_per_area: f64,
-    /// `h* < −4`: deeper interference than the dissertation simulates (spec §8 item 6).
+    /// `h* < −4`: deeper interference than the dissertation simulates (docs/contact.md).
     pub deep_interference: bool,
 }
 
@@ -327,7 +327,7 @@ pub struct AsperityContact {
     pub friction: f64,
 }
 
-/// One immutable ISBL interface (spec §8.1): validated inputs plus derived constants.
+/// One immutable ISBL interface (docs/contact.md): validated inputs plus derived constants.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IsblModel {
     params: IsblParams,
@@ -335,7 +335,7 @@ pub struct IsblModel {
 }
 
 impl IsblModel {
-    /// Validates `params` and derives the constants of spec §1/§2.
+    /// Validates `params` and derives the constants of App. A.1.
     pub fn new(params: IsblParams) -> Result<Self, ContactError> {
         params.validate()?;
         let composite_modulus = params.composite_modulus();
@@ -598,7 +598,7 @@ impl IsblModel {
     }
 
     /// Non-contacting summits, in `x = d − t − z ≥ 0` (distance below the mobile-lubricant
-    /// surface; gap `g = x + ε`, spec §6.1 convention):
+    /// surface; gap `g = x + ε`, App. A.1 convention):
     /// `[∫L(x)φ(d−t−x) dx, ∫L(x)φ'(d−t−x) dx]`, `L = (4/3)[(ε/g)² − ¼(ε/g)⁸]`.
     ///
     /// Near the lubricant surface (`x` up to `max(10ε, d − t − 14σ_s)`, split at `ε`, `10ε`)
@@ -646,7 +646,7 @@ impl IsblModel {
     }
 }
 
-/// Surface energy at local lubricant gap `s` [N/m] (spec §7): constant, or
+/// Surface energy at local lubricant gap `s` [N/m] (eq. 3.50): constant, or
 /// `c1·exp(−c2·max(s, ε)) + c3` (held at `Δγ(ε)` below the LJ spacing).
 pub fn surface_energy_at(params: &IsblParams, s: f64) -> f64 {
     match params.surface_energy {

@@ -1,5 +1,5 @@
 //! Tests of the ISBL curves against the reference CSVs (independent numpy/scipy
-//! implementation, tests/data/isbl), closed forms and the spec's §9 numbers.
+//! implementation, tests/data/isbl), closed forms and the landmarks of docs/contact.md.
 
 use super::asperity::KeRegime;
 use super::*;
@@ -46,7 +46,7 @@ fn with_energy(params: IsblParams, surface_energy: SurfaceEnergy) -> IsblModel {
 fn check_reference(name: &str, params: IsblParams) -> [f64; 7] {
     let rows = read_reference(name);
     // The CSVs hold both surface-energy variants: constant Δγ = 0.06 N/m and the seed's
-    // variable law (spec §9 header).
+    // variable law (docs/contact.md).
     let constant = with_energy(params, SurfaceEnergy::Constant { delta_gamma: 0.06 });
     let variable = with_energy(params, SurfaceEnergy::seed_variable());
     let column_max: [f64; 7] =
@@ -111,7 +111,7 @@ fn reference_csv_mtl_table_3_2() {
 // Closed forms and derived constants
 // ---------------------------------------------------------------------------------------
 
-/// DLC sphere on DLC of Ch. 3.1 (spec §5 anchor, §9 #4): E = 180 GPa, ν = 0.24, H = 18 GPa,
+/// DLC sphere on DLC of Ch. 3.1 (Table 3.2; docs/contact.md): E = 180 GPa, ν = 0.24, H = 18 GPa,
 /// R = 102 μm.
 fn dlc_sphere_ch3_1() -> IsblModel {
     IsblModel::new(IsblParams {
@@ -129,7 +129,7 @@ fn dlc_sphere_ch3_1() -> IsblModel {
 
 #[test]
 fn composite_modulus_matches_spec() {
-    // Spec §5: E* = 95.5 GPa for the Ch. 3.1 DLC pair; §10: 149.3 GPa for the DLC overcoats.
+    // Table 3.2: E* = 95.5 GPa for the Ch. 3.1 DLC pair; Tables 2.2/2.4/4.2: 149.3 GPa (overcoats).
     let e = dlc_sphere_ch3_1().derived().composite_modulus;
     assert!((e / 95.5e9 - 1.0).abs() < 5e-4, "{e}");
     let e = IsblParams::initial_2dof().composite_modulus();
@@ -138,9 +138,9 @@ fn composite_modulus_matches_spec() {
 
 #[test]
 fn derived_constants_match_spec_table_10() {
-    // Spec §10: K = 0.5565, ω_c = 2.49 nm (ω_c/σ = 2.86, 4.98), 30.0 nm (36.6) for T3.2,
-    // β = 0.0464 / 0.0267 / 0.050, ψ = 0.517 / 0.392 / 0.145, ψ_KE = 0.591 / 0.448 / 0.165.
-    // Tolerances: half a unit in the last printed digit of the spec's number.
+    // Eq. A.4 with Tables 2.2/2.4/3.2: K = 0.5565, ω_c = 2.49 nm (ω_c/σ = 2.86, 4.98), 30.0 nm
+    // (36.6) for T3.2, β = 0.0464 / 0.0267 / 0.050, ψ = 0.517 / 0.392 / 0.145,
+    // ψ_KE = 0.591 / 0.448 / 0.165. Tolerances: half a unit in the last printed digit.
     let close = |got: f64, want: f64, rel: f64| {
         assert!((got / want - 1.0).abs() < rel, "got {got}, want {want}")
     };
@@ -184,7 +184,7 @@ fn derived_constants_match_spec_table_10() {
         digits(dv.plasticity_index, psi, 5e-4);
         digits(dv.plasticity_index_ke, psi_ke, 5e-4);
         assert!(!dv.elastic_plastic_adhesion_assumed);
-        // L_c = (4/3)E*R^½ω_c^{3/2} = (2/3)πKHRω_c (spec §1: two forms of the same number).
+        // L_c = (4/3)E*R^½ω_c^{3/2} = (2/3)πKHRω_c (eq. A.4: two forms of the same number).
         let hertz_lc = 4.0 / 3.0
             * dv.composite_modulus
             * p.summit_radius.sqrt()
@@ -195,7 +195,7 @@ fn derived_constants_match_spec_table_10() {
 
 #[test]
 fn hertz_limit_below_critical_interference() {
-    // Hertz: P = (4/3)E*√R ω^{3/2}, A = πRω for ω ≤ ω_c (closed form). Spec §9 #4: 1.29 and
+    // Hertz: P = (4/3)E*√R ω^{3/2}, A = πRω for ω ≤ ω_c (closed form). docs/contact.md: 1.29 and
     // 40.7 μN at ω = 0.1 and 1 nm; junction-shear Q = 118.9 and 1189 μN.
     let m = dlc_sphere_ch3_1();
     let dv = *m.derived();
@@ -225,7 +225,7 @@ fn hertz_limit_below_critical_interference() {
         "{}",
         c1.friction
     );
-    // Seed power law reproduces the seed's 120 / 1120 μN (spec §5, fitted to 4 digits).
+    // Seed power law reproduces the seed's 120 / 1120 μN (eq. A.6, fitted to 4 digits).
     let seed = IsblModel::new(IsblParams {
         friction_law: FrictionLaw::SeedPowerElastic,
         ..*m.params()
@@ -376,7 +376,7 @@ fn gaussian_integrals_match_independent_simpson_quadrature() {
 
 #[test]
 fn stiffnesses_match_central_differences() {
-    // Spec §8 step 2: analytic derivatives agree with central differences (step 1e-4σ,
+    // docs/contact.md: analytic derivatives agree with central differences (step 1e-4σ,
     // truncation error ~1e-8·y'''/y').
     for p in [
         IsblParams::improved_2dof(),
@@ -504,7 +504,7 @@ fn curves_are_monotone_finite_and_continuous_at_boundaries() {
 
 #[test]
 fn far_tail_of_adhesion_matches_asymptote() {
-    // Spec §6.4: improved set at h* = 12, reference 1.083e5 Pa; tail formula
+    // docs/contact.md: improved set at h* = 12, reference 1.083e5 Pa; tail formula
     // 2πRNΔγ(4/3)(ε/D)²[1 + 3σ²/D²], D = d − t + ε, gives 1.081e5 Pa.
     let p = IsblParams::improved_2dof();
     let m = IsblModel::new(p).unwrap();
@@ -604,8 +604,8 @@ fn invalid_inputs_are_errors_not_panics() {
 
 #[test]
 fn mccool_offset_and_summit_sigma_match_spec_section_2() {
-    // Spec §2: y_s = 0.99σ for β = 0.046 (initial set), y_s = 1.72σ and σ_s = 0.69σ for
-    // β = 0.027 (improved); §9 #1a: McCool offset gives 81 μN on 62 μm² at h* = 3.
+    // App. A.1: y_s = 0.99σ for β = 0.046 (initial set), y_s = 1.72σ and σ_s = 0.69σ for
+    // β = 0.027 (improved); docs/contact.md: McCool offset gives 81 μN on 62 μm² at h* = 3.
     let initial = IsblModel::new(IsblParams {
         summit_offset: SummitOffset::McCool,
         ..IsblParams::initial_2dof()
@@ -625,7 +625,7 @@ fn mccool_offset_and_summit_sigma_match_spec_section_2() {
 }
 
 // ---------------------------------------------------------------------------------------
-// Spec §9 validation table (numbers quoted there come from the reference implementation;
+// Validation table of docs/contact.md (numbers quoted there come from the reference implementation;
 // tolerances are half a unit in the last quoted digit unless stated)
 // ---------------------------------------------------------------------------------------
 
@@ -849,7 +849,7 @@ fn section9_row2d_initial_interface_at_11nm() {
 #[test]
 fn adhesion_far_apart_keeps_the_whole_gaussian() {
     // At h* = 200 every summit is far below the flat: F_s → 2πRηΔγ(4/3)(ε/D)²[1 + 3σ²/D²]
-    // (spec §6.4 tail formula, D = h − t + ε ≫ σ; the next term is O(σ⁴/D⁴) ≈ 1e-9).
+    // (docs/contact.md tail formula, D = h − t + ε ≫ σ; the next term is O(σ⁴/D⁴) ≈ 1e-9).
     let p = IsblParams::improved_2dof();
     let m = IsblModel::new(p).unwrap();
     let h = 200.0 * p.sigma;
@@ -863,7 +863,8 @@ fn adhesion_far_apart_keeps_the_whole_gaussian() {
 
 #[test]
 fn every_configuration_evaluates_across_the_accepted_range() {
-    // No error and no NaN from −1e4σ to 1e4σ for all §10 sets and the non-default switches.
+    // No error and no NaN from −1e4σ to 1e4σ for all parameter sets (Tables 2.2, 2.4, 3.2) and the
+    // non-default switches.
     let mut configs = vec![
         IsblParams::initial_2dof(),
         IsblParams::improved_2dof(),

@@ -1,4 +1,4 @@
-//! High-shear extrapolation of the FWM measurement (spec §4.1–4.3; dissertation (3.36)–(3.49),
+//! High-shear extrapolation of the FWM measurement (dissertation (3.36)–(3.49),
 //! (A.11)).
 //!
 //! The fibre-wobbling method measures a lubricant whose apparent viscosity saturates at `μ0`
@@ -14,7 +14,7 @@ use std::f64::consts::{LN_10, PI};
 use super::{require_non_negative, require_positive};
 use crate::contact::ContactError;
 
-/// The FWM experiment the extrapolation is calibrated on (spec §5).
+/// The FWM experiment the extrapolation is calibrated on (§3.1.1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FwmExperiment {
     /// Limiting apparent viscosity `μ0 ≡ η0` reached at `d0 = κ0` [Pa·s].
@@ -24,7 +24,7 @@ pub struct FwmExperiment {
     /// Probe (fibre tip) radius `R0` [m].
     pub probe_radius: f64,
     /// Minimum liquid gap of the experiment `κ0` [m]; cancels from every extrapolated law
-    /// when `m = 1/2` (spec §4.2), but fixes `γ̇0`, `P0`, `Q0`.
+    /// when `m = 1/2` (eqs. 3.40–3.43), but fixes `γ̇0`, `P0`, `Q0`.
     pub min_liquid_gap: f64,
 }
 
@@ -122,7 +122,7 @@ impl FwmExperiment {
     /// The dissertation's fits (3.40)–(3.43): `m` and `n` from two points six decades apart,
     /// `γ̇0` and `10⁶·γ̇0` (the dissertation fits "over the HDI range"). Because (3.36) is a
     /// pure power law and (3.37) a pure logarithm, the two-point fit is exact:
-    /// `m = 1/2`, `n = (16π/5)·μ0·U0·R0·ln 10` (spec §4.2).
+    /// `m = 1/2`, `n = (16π/5)·μ0·U0·R0·ln 10` (eqs. 3.40–3.43).
     pub fn high_shear_fit(&self) -> HighShearFit {
         let g1 = self.critical_shear_rate();
         let g2 = 1e6 * g1;

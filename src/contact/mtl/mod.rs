@@ -1,13 +1,13 @@
-//! Molecularly-thin-lubricant (MTL) contact model (contact-mtl.md; Vakis 2011, Ch. 3 and
+//! Molecularly-thin-lubricant (MTL) contact model (Vakis 2011, Ch. 3 and
 //! App. A.2).
 //!
 //! Three layers, each pure and closed-form (no quadrature at run time):
-//! - [`sphere_on_flat`] (spec §3): a rigid sphere sliding over a flat through a lubricant
+//! - [`sphere_on_flat`] (§3.1): a rigid sphere sliding over a flat through a lubricant
 //!   film — apparent viscosity, wall slip, Kapitza pressure and load, shear force for the
 //!   partially and fully submerged sphere, transitional forces.
-//! - [`extrapolation`] (spec §4.1–4.3): the fibre-wobbling (FWM) measurement carried to HDI
+//! - [`extrapolation`] (eqs. 3.36–3.47): the fibre-wobbling (FWM) measurement carried to HDI
 //!   shear rates — `P0`, `Q0`, `m`, `n`, and the lubricant stiffnesses versus liquid gap.
-//! - [`rough`] (spec §4.4–4.6): lubricant stiffness and force between rough surfaces versus
+//! - [`rough`] (eqs. 3.55–3.60): lubricant stiffness and force between rough surfaces versus
 //!   mean-plane separation, composed with a caller-supplied solid contribution
 //!   ([`rough::SolidContact`]) so the ISBL model can be plugged in without this module
 //!   depending on it.
@@ -68,7 +68,7 @@ pub(crate) fn require_non_negative(name: &'static str, value: f64) -> Result<f64
 
 /// Effective (reduced) elastic modulus of two bodies, `E* = [(1−ν1²)/E1 + (1−ν2²)/E2]⁻¹`.
 ///
-/// Kept here only because the sphere-on-flat validation numbers of spec §3.10 (V1, V14, V15)
+/// Kept here only because the sphere-on-flat validation numbers of docs/contact.md (V1, V14, V15)
 /// are quoted with it; the solid model proper lives in `contact::isbl`.
 pub fn effective_modulus(e1: f64, nu1: f64, e2: f64, nu2: f64) -> Result<f64, ContactError> {
     require_positive("E1", e1)?;

@@ -1,5 +1,5 @@
 //! Lubricant stiffness and force between rough surfaces versus mean-plane separation `h`
-//! (spec §4.4–4.6; dissertation (3.54)–(3.60), App. A.2).
+//! (dissertation (3.54)–(3.60), App. A.2).
 //!
 //! With the liquid gap `d0 = h − 3σ − κ` and `s = h − 3σ`:
 //! - `h ≥ 3σ + t`: no lubricant contact;
@@ -10,7 +10,7 @@
 //! - `h < 3σ`: solid contact; the lubricant stiffness is zero and its force is held.
 //!
 //! The lubricant stiffness is the single-probe law calibrated on the FWM probe, applied to
-//! the whole interface without asperity scaling (spec §4.5 decision 1). Forces are the
+//! the whole interface without asperity scaling (docs/contact.md). Forces are the
 //! integrals of the total stiffness from the lubricant surface inward minus the solid force
 //! (decision 2), so they are continuous everywhere and zero outside the film. The solid
 //! contribution (`P_solid`, `Q_solid`, `k_c`, `k_fr`, untruncated GW integrals) comes from the
@@ -139,7 +139,7 @@ impl RoughFilm {
     }
 }
 
-/// The four lubricant cases (Fig. 3.22 cases 1–4 = Table 4.4 cases 0–3; spec §4.6): `μ0`
+/// The four lubricant cases (Fig. 3.22 cases 1–4 = Table 4.4 cases 0–3): `μ0`
 /// changed by exactly ±50 % [derived; Table 4.4 prints 0.16 / 0.46], `κ` by +50 %.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LubricantCase {
@@ -171,7 +171,7 @@ impl LubricantCase {
     }
 
     /// `κ` of the application [m] (the experiment's `κ0` also changes by +50 % in case 4, but
-    /// cancels from the extrapolated laws, spec §4.2, so the FWM `κ0` is kept).
+    /// cancels from the extrapolated laws, eqs. 3.40–3.43, so the FWM `κ0` is kept).
     pub fn kappa(self) -> f64 {
         match self {
             LubricantCase::LargerGyrationRadius => 0.45e-9,
@@ -188,7 +188,7 @@ impl LubricantCase {
     }
 }
 
-/// Regime of the mean-plane separation `h` (spec §2.2).
+/// Regime of the mean-plane separation `h` (§3.2, App. A.2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RoughRegime {
     /// `h ≥ 3σ + t` (also NaN): only the solid tail and adhesion act.
@@ -222,7 +222,7 @@ pub struct RoughMtl {
 
 impl RoughMtl {
     /// Builds the law from a fit (3.40), (3.41) on a film. `U = 0` gives a lubricant that
-    /// carries nothing (no shearing; spec §7).
+    /// carries nothing (no shearing; docs/contact.md).
     pub fn new(film: RoughFilm, fit: HighShearFit) -> Result<Self, ContactError> {
         let film = RoughFilm::new(film.sigma, film.kappa, film.film_thickness, film.speed)?;
         let fit = HighShearFit::new(
@@ -258,7 +258,7 @@ impl RoughMtl {
         }
     }
 
-    /// The law extrapolated from an FWM experiment (exact fit, spec §4.2).
+    /// The law extrapolated from an FWM experiment (exact fit, eqs. 3.40–3.43).
     pub fn from_experiment(
         film: RoughFilm,
         experiment: &FwmExperiment,
@@ -404,7 +404,7 @@ pub struct MtlInterface<S> {
 }
 
 impl<S: SolidContact> MtlInterface<S> {
-    /// Lubricant part in the transition `3σ ≤ h < 3σ + 2κ` (spec §4.4, §4.5):
+    /// Lubricant part in the transition `3σ ≤ h < 3σ + 2κ` (eqs. 3.55–3.60; docs/contact.md):
     /// total stiffness `k_c(3σ) + (k_P,max − k_c(3σ))·s/(2κ)`, lubricant stiffness that minus
     /// `k_c(h)`; `P_lub = P_lub(3σ+2κ) + k_c(3σ)(2κ − s) + (k_P,max − k_c(3σ))(4κ² − s²)/(4κ)
     /// − [P_solid(h) − P_solid(3σ+2κ)]`, likewise for friction.

@@ -1,4 +1,4 @@
-//! Sphere-on-flat hydrodynamics of a molecularly thin film (spec §3; dissertation §3.1).
+//! Sphere-on-flat hydrodynamics of a molecularly thin film (dissertation §3.1).
 //!
 //! A rigid smooth sphere of radius `R` slides at speed `U` over a rigid flat covered by a
 //! lubricant film of total thickness `t`. The bonded layers on both surfaces leave a minimum
@@ -6,7 +6,7 @@
 //! isoviscous at the *apparent* viscosity `η` (the measured one, which already contains wall
 //! slip), so every force here is written in `η` and never divides by the slip factor.
 //!
-//! Regimes of `h0` (spec §2.1): `h0 > t` no lubricant contact; `2κ ≤ h0 ≤ t` hydrodynamic;
+//! Regimes of `h0` (§3.1): `h0 > t` no lubricant contact; `2κ ≤ h0 ≤ t` hydrodynamic;
 //! `0 < h0 < 2κ` transition (linear between the fluid force at `d0 = κ` and the solid force at
 //! a small interference `ω_min`); `h0 ≤ 0` solid contact (supplied by the caller).
 
@@ -28,9 +28,10 @@ pub struct ContactForces {
 /// Gap-dependent apparent viscosity `η(d0) = a·d0² + b·d0 + c` (3.9), bounded to
 /// `[η_bulk, η0]`, equal to `η0` for `d0 ≤ κ` and to `η_bulk` for `d0 ≥ d_b`.
 ///
-/// The dissertation's fitted `a, b, c` are lost (spec §3.4); [`ViscosityModel::vertex_parabola`]
-/// is the spec's default curve through the two surviving anchors. Only the low-shear
-/// sphere-on-flat curves depend on it: at HDI shear rates `η = η0` everywhere.
+/// The dissertation's fitted `a, b, c` are lost (eqs. 3.9–3.12);
+/// [`ViscosityModel::vertex_parabola`] is the spec's default curve through the two surviving
+/// anchors. Only the low-shear sphere-on-flat curves depend on it: at HDI shear rates `η = η0`
+/// everywhere.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ViscosityModel {
     /// `a` [Pa·s/m²].
@@ -95,8 +96,9 @@ impl ViscosityModel {
         })
     }
 
-    /// Spec §3.4 default: `η = η_bulk + (η0 − η_bulk)·((d_b − d0)/(d_b − κ))²`, i.e. a parabola
-    /// with its vertex (value `η_bulk`) at `d_b`, through `η0` at `κ`; expanded into (3.9).
+    /// Default of eqs. 3.9–3.12: `η = η_bulk + (η0 − η_bulk)·((d_b − d0)/(d_b − κ))²`, i.e. a
+    /// parabola with its vertex (value `η_bulk`) at `d_b`, through `η0` at `κ`; expanded into
+    /// (3.9).
     pub fn vertex_parabola(
         limiting: f64,
         bulk: f64,
@@ -117,7 +119,7 @@ impl ViscosityModel {
         )
     }
 
-    /// The dissertation's FWM lubricant (spec §5): `η0 = 0.31 Pa·s`, `η_bulk = 0.06 Pa·s`
+    /// The dissertation's FWM lubricant (§3.1.1): `η0 = 0.31 Pa·s`, `η_bulk = 0.06 Pa·s`
     /// [seed §3.1 viscosity model], `κ0 = 1 nm` [seed §3.1.1], `d_b = 500 nm` (gap where the
     /// FWM data reach bulk [seed]) — with the vertex-parabola assumption for the lost fit.
     pub fn fukuzawa_z03() -> Self {
@@ -169,7 +171,7 @@ pub enum ViscosityLaw {
     /// `η(d0)` as measured (valid when the sphere moves at the measuring speed).
     Gap(ViscosityModel),
     /// `η(γ̇)` with `γ̇ = U/d0` at the sphere's speed, read on the curve measured at
-    /// `experiment_speed` (spec §3.4: capped at `η0` for `γ̇ ≥ γ̇0`).
+    /// `experiment_speed` (eqs. 3.9–3.12: capped at `η0` for `γ̇ ≥ γ̇0`).
     ShearRate {
         model: ViscosityModel,
         experiment_speed: f64,
@@ -240,7 +242,7 @@ pub struct SlipModel {
     pub wall_friction: f64,
 }
 
-/// Slip factors at or below this count as unbounded slip (spec §7).
+/// Slip factors at or below this count as unbounded slip (docs/contact.md).
 const UNBOUNDED_SLIP_FACTOR: f64 = 1e-12;
 
 /// The viscosity with slip removed, or the statement that it is undefined.
@@ -270,7 +272,7 @@ impl SlipModel {
         })
     }
 
-    /// Default (spec §5): no slip (`η_w = ∞`) — the apparent viscosity already contains it.
+    /// Default (§3.1.1): no slip (`η_w = ∞`) — the apparent viscosity already contains it.
     pub fn no_slip() -> Self {
         Self {
             slip_length: 0.0,
@@ -321,7 +323,7 @@ impl SlipModel {
         self.slip_length / self.wall_friction
     }
 
-    /// Admissible for a film with minimum liquid gap `κ`: `L_s/κ < η_w` (spec §3.5), so the
+    /// Admissible for a film with minimum liquid gap `κ`: `L_s/κ < η_w` (eqs. 3.13–3.17), so the
     /// wall still drags the fluid at the smallest gap.
     pub fn is_bounded_at(&self, kappa: f64) -> bool {
         !self.slips() || (kappa > 0.0 && self.slip_length / kappa < self.wall_friction)
@@ -410,7 +412,7 @@ fn immersion(radius: f64, liquid_gap: f64, mobile_thickness: f64) -> Result<f64,
 /// `δ = (t − κ) − d0` (`mobile_thickness = t − κ`), 0 once the sphere leaves the film.
 ///
 /// Faithful to the dissertation's algebra, which evaluates the stress at `x² = R² − y²`, far
-/// outside the wetted zone (spec §3.8 caveat); it gives `≈ 0.40×` the Couette form (3.31).
+/// outside the wetted zone (docs/contact.md); it gives `≈ 0.40×` the Couette form (3.31).
 pub fn shear_force_partial_dissertation(
     eta: f64,
     speed: f64,
@@ -429,8 +431,8 @@ pub fn shear_force_partial_dissertation(
         / (r + 2.0 * d0).powi(2))
 }
 
-/// Partially submerged shear force, lubrication-consistent alternative [derived, spec §3.8]:
-/// (3.27) integrated over the projected wetted disc `r² ≤ 2Rδ`,
+/// Partially submerged shear force, lubrication-consistent alternative [derived from eqs.
+/// 3.27–3.31]: (3.27) integrated over the projected wetted disc `r² ≤ 2Rδ`,
 /// `Q = (4π/5)·η·U·R·[4·ln(1 + δ/d0) − 3δ/(d0 + δ)]`.
 pub fn shear_force_partial_wetted_disc(
     eta: f64,
@@ -489,7 +491,7 @@ pub fn shear_force_fully_submerged(
 // ---------------------------------------------------------------------------------------------
 // The sphere in its film: regimes and transitional forces (3.3), (3.4)
 
-/// Which shear-force formula the hydrodynamic regime uses (spec §3.8, §3.9).
+/// Which shear-force formula the hydrodynamic regime uses (eqs. 3.27–3.35).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ShearModel {
     /// (3.30)/(3.33) as printed (default: reproduces the dissertation's equations).
@@ -500,7 +502,7 @@ pub enum ShearModel {
     FullySubmerged,
 }
 
-/// Regime of the solid–solid gap `h0` (spec §2.1).
+/// Regime of the solid–solid gap `h0` (§3.1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SphereRegime {
     /// `h0 > t` (also NaN gaps): the sphere does not touch the lubricant.
@@ -513,7 +515,7 @@ pub enum SphereRegime {
     Solid,
 }
 
-/// A sphere sliding over a lubricated flat (spec §3).
+/// A sphere sliding over a lubricated flat (§3.1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SphereOnFlat {
     /// Sphere radius `R` [m].
@@ -562,7 +564,7 @@ impl SphereOnFlat {
         })
     }
 
-    /// `t ≪ R`, taken as `R ≥ 100·t` (spec §7); below it the Reynolds reduction is suspect.
+    /// `t ≪ R`, taken as `R ≥ 100·t` (docs/contact.md); below it the Reynolds reduction is suspect.
     pub fn thin_film_assumption_holds(&self) -> bool {
         self.radius >= 100.0 * self.film_thickness
     }
@@ -618,7 +620,7 @@ impl SphereOnFlat {
             .unwrap_or_default()
     }
 
-    /// Forces in every regime (spec §2.1, §3.10). `solid(ω)` is the caller's single-asperity
+    /// Forces in every regime (§3.1, eqs. 3.3–3.4). `solid(ω)` is the caller's single-asperity
     /// solid model at interference `ω ≥ 0` (e.g. the ISBL/Kogut–Etsion asperity, or
     /// [`super::hertz_normal_force`]); it is used for `h0 ≤ 0` and, at `ω = omega_min` (1 Å
     /// in the dissertation), as the transition's inner anchor:

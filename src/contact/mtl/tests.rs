@@ -1,8 +1,8 @@
 //! Tests of the MTL model against closed forms, independent quadrature and the validation
-//! table of contact-mtl.md §6. Reference numbers marked "numpy" were produced by an
+//! table of docs/contact.md. Reference numbers marked "numpy" were produced by an
 //! independent numpy/scipy script (/tmp/mtlref.py, /tmp/gw.py during development: the spec's
 //! formulas typed afresh in Python, scipy.integrate.quad for the GW integrals) and agree with
-//! the spec's §8.
+//! docs/contact.md.
 
 use std::f64::consts::PI;
 
@@ -36,11 +36,12 @@ fn simpson(f: impl Fn(f64) -> f64, a: f64, b: f64, n: usize) -> f64 {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Sphere-on-flat closed forms (spec §3)
+// Sphere-on-flat closed forms (§3.1)
 
 /// (3.24) solves the Reynolds equation (3.22): finite-difference residual of
-/// `∂x(h³∂p/∂x) + ∂y(h³∂p/∂y) − 6ηU ∂h/∂x` relative to the source term (spec §3.6 reports
-/// 4.6×10⁻⁸ for its own FD check). Dimensionless values keep the differences well scaled.
+/// `∂x(h³∂p/∂x) + ∂y(h³∂p/∂y) − 6ηU ∂h/∂x` relative to the source term (eqs. 3.19–3.24; the
+/// reference reports 4.6×10⁻⁸ for its own FD check). Dimensionless values keep the differences well
+/// scaled.
 #[test]
 fn kapitza_pressure_solves_reynolds_equation() {
     let (eta, u, r, d0) = (1.0, 1.0, 1.0, 0.01);
@@ -61,7 +62,7 @@ fn kapitza_pressure_solves_reynolds_equation() {
 }
 
 /// Half-Sommerfeld load by 2-D quadrature of the positive pressure (x < 0 half plane), in
-/// polar coordinates with `r = √(2d0R)·tan φ`, equals (3.26) (spec §3.7: 1×10⁻⁶).
+/// polar coordinates with `r = √(2d0R)·tan φ`, equals (3.26) (reference: 1×10⁻⁶).
 #[test]
 fn kapitza_load_equals_half_sommerfeld_quadrature() {
     let (eta, u, r, d0): (f64, f64, f64, f64) = (0.31, 30.0, 500e-9, 1e-9);
@@ -86,7 +87,7 @@ fn kapitza_load_equals_half_sommerfeld_quadrature() {
 }
 
 /// (3.30) equals the dissertation's integral (3.29), `∫_{R−δ}^{R} τ|_{x²=R²−y²} 2πR dy`
-/// (spec §3.8: 1×10⁻⁹), and (3.31) is its Couette counterpart.
+/// (reference: 1×10⁻⁹), and (3.31) is its Couette counterpart.
 #[test]
 fn shear_partial_dissertation_matches_quadrature_of_3_29() {
     let (eta, u, r, kappa, t) = (0.31, 30.0, 500e-9, 1e-9, 3e-9);
@@ -103,7 +104,7 @@ fn shear_partial_dissertation_matches_quadrature_of_3_29() {
 }
 
 /// The wetted-disc alternative equals 2-D quadrature of (3.27) over `r² ≤ 2Rδ`
-/// (spec §3.8: 1×10⁻⁸).
+/// (reference: 1×10⁻⁸).
 #[test]
 fn shear_partial_wetted_disc_matches_quadrature() {
     let (eta, u, r, d0, mobile): (f64, f64, f64, f64, f64) = (0.31, 30.0, 500e-9, 1e-9, 2e-9);
@@ -125,7 +126,7 @@ fn shear_partial_wetted_disc_matches_quadrature() {
 }
 
 /// Goldman–Cox–Brenner leading term (3.35) and the Fig. 3.7 ratio `Ω_fs/Ω_ps` at `d0 = 1 nm`,
-/// `R = 102 µm`: 2.2×10³ for a 1 µm droplet and 2.4×10⁶ for `t = 3 nm` (spec §3.9; numpy
+/// `R = 102 µm`: 2.2×10³ for a 1 µm droplet and 2.4×10⁶ for `t = 3 nm` (eqs. 3.34–3.35; numpy
 /// 2224.8 and 2.3526×10⁶), "more than three orders of magnitude" [seed].
 #[test]
 fn gcb_fully_submerged_closed_form_and_fig_3_7_ratio() {
@@ -150,7 +151,7 @@ fn gcb_fully_submerged_closed_form_and_fig_3_7_ratio() {
 
 /// V21: `Q(3.30)/Q_Couette(3.31)` = 0.405 for Fig. 3.8's sphere (R = 500 nm, t = 3 nm,
 /// κ = d0 = 1 nm; numpy 0.404778) and → 0.400 for `t ≪ R` — the text's "two orders of
-/// magnitude" is contradicted; pinned (spec §3.8 caveat).
+/// magnitude" is contradicted; pinned (eqs. 3.27–3.33; docs/contact.md).
 #[test]
 fn v21_partial_to_couette_ratio_is_pinned() {
     let ratio = |r: f64| {
@@ -162,8 +163,8 @@ fn v21_partial_to_couette_ratio_is_pinned() {
 }
 
 /// V20 and Fig. 3.8 (R = 500 nm, t = 3 nm, κ = 1 nm, U = 30 m/s, η = η0 = 0.31 Pa·s since
-/// γ̇ ≫ γ̇0): `P_fluid,max = 0.5543 mN` = 51× P0 (spec §6, 1e-6; numpy 5.5435002523e-4);
-/// `Q(3.33) = 0.047 µN`, GCB `Q = 290.5 µN` (spec §8).
+/// γ̇ ≫ γ̇0): `P_fluid,max = 0.5543 mN` = 51× P0 (docs/contact.md, 1e-6; numpy 5.5435002523e-4);
+/// `Q(3.33) = 0.047 µN`, GCB `Q = 290.5 µN` (docs/contact.md).
 #[test]
 fn v20_fig_3_8_high_shear_sphere() {
     let sphere = SphereOnFlat::new(
@@ -186,7 +187,7 @@ fn v20_fig_3_8_high_shear_sphere() {
     assert!(sphere.thin_film_assumption_holds());
 }
 
-/// Apparent viscosity (spec §3.4 default curve): anchors `η(κ) = η0 = 0.31`,
+/// Apparent viscosity (eqs. 3.9–3.12, default curve): anchors `η(κ) = η0 = 0.31`,
 /// `η(d_b = 500 nm) = η_bulk = 0.06`, the spec's 0.301 Pa·s at 10 nm (exact value
 /// `0.06 + 0.25·(490/499)² = 0.301059…`), monotone decreasing in between, and the shear-rate
 /// form (3.10)–(3.12) gives the same curve.
@@ -226,7 +227,7 @@ fn viscosity_model_anchors_caps_and_shear_rate_form() {
     assert_eq!(law.apparent_viscosity(2e-9, 30.0), 0.31);
 }
 
-/// Slip (spec §3.5, Table 3.1): V16 `f* = 0` at `d0 = L_s/η_w = 3 nm` for `η_w = 1`;
+/// Slip (eqs. 3.13–3.17, Table 3.1): V16 `f* = 0` at `d0 = L_s/η_w = 3 nm` for `η_w = 1`;
 /// `η_w = 3` → `f*(1 nm) = 0`; V17 `η_w = 5` → `f*(1 nm) = 0.4`, `η_true/η = 2.5`.
 #[test]
 fn v16_v17_slip_factor_examples() {
@@ -263,7 +264,7 @@ fn v16_v17_slip_factor_examples() {
     assert!(SlipModel::new(-1.0, 1.0).is_err());
 }
 
-/// Sphere regimes (spec §2.1, §3.10): the transition is linear from `solid(ω_min)` at
+/// Sphere regimes (§3.1, eqs. 3.3–3.4): the transition is linear from `solid(ω_min)` at
 /// `h0 → 0⁺` to the fluid maximum at `h0 = 2κ`, `Q` vanishes continuously at `h0 = t`, the
 /// load drops to 0 there (documented flooded-inlet jump), and nothing is NaN.
 #[test]
@@ -332,7 +333,7 @@ fn sphere_regimes_continuity_and_monotonicity() {
 /// V1: DLC/DLC `E* = 95.50 GPa` (0.1 %); V14/V15: Hertz with `R = R0 = 102 µm` gives
 /// 1.29 µN at 1 Å and 40.7 µN at 1 nm, within 20 % of the dissertation's 1.5 and 40 µN. The
 /// dissertation's `Q_solid,min` (120 / 1120 µN) comes from an unidentified model [72] and is
-/// not tested (spec §3.10 flags it).
+/// not tested (eqs. 3.3–3.4 leave it open).
 #[test]
 fn v1_v14_v15_solid_numbers() {
     let e_star = effective_modulus(180e9, 0.24, 180e9, 0.24).unwrap();
@@ -350,7 +351,7 @@ fn v1_v14_v15_solid_numbers() {
         40e-6,
         0.2,
     );
-    // Spec §3.10 / §8 exact Hertz values (numpy 1.28602e-6, 4.06674e-5 N).
+    // Exact Hertz values (eqs. 3.3–3.4; docs/contact.md) (numpy 1.28602e-6, 4.06674e-5 N).
     assert_rel(
         "Hertz 1 A",
         hertz_normal_force(e_star, r0, 1e-10),
@@ -386,7 +387,7 @@ fn sphere_parameter_validation() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// High-shear extrapolation (spec §4.1–4.3)
+// High-shear extrapolation (eqs. 3.36–3.47)
 
 /// V2 `Q0 = 0.7332 µN` (1 %, seed 0.73 µN), V3 `P0 = 10.768 µN` (1e-6 vs the closed form
 /// (3.38) typed here), V6 `γ̇0 = 2×10⁵ 1/s` (exact).
@@ -406,7 +407,7 @@ fn v2_v3_v6_p0_q0_critical_shear_rate() {
 
 /// V4 `m = 0.5` exactly and V5 `n = 1.46389×10⁻⁷ N/decade` (1e-6; numpy
 /// 1.4638864840e-7 = (16π/5)·μ0·U0·R0·ln 10) from the two-point fits (3.42), (3.43); the fit
-/// reproduces (3.36), (3.37) at every shear rate (spec §4.2: identical, not approximate).
+/// reproduces (3.36), (3.37) at every shear rate (eqs. 3.40–3.43: identical, not approximate).
 #[test]
 fn v4_v5_fit_exponent_and_slope() {
     let fwm = FwmExperiment::fukuzawa_z03();
@@ -527,7 +528,7 @@ fn v9_v10_stiffness_ranges_and_derivatives() {
             1e-7,
         );
     }
-    // k_P does not depend on κ0 when m = 1/2 (spec §4.2).
+    // k_P does not depend on κ0 when m = 1/2 (eqs. 3.40–3.43).
     let other = FwmExperiment::new(0.31, 200e-6, 102e-6, 1.5e-9)
         .unwrap()
         .high_shear_fit();
@@ -558,9 +559,9 @@ fn v19_stiffness_ratio_orders_of_magnitude() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Rough surfaces (spec §4.4–4.6)
+// Rough surfaces (eqs. 3.55–3.60, App. A.2)
 
-/// Illustrative GW-elastic solid of spec §8 (η = 12.5 µm⁻², E* = 95.5 GPa, A_n = 2500 µm²,
+/// Illustrative GW-elastic solid of docs/contact.md (η = 12.5 µm⁻², E* = 95.5 GPa, A_n = 2500 µm²,
 /// R = 3.89 µm, Gaussian asperity heights with σ = 0.82 nm), untruncated. Integrals with
 /// `z = h + u²` (smooth integrands) by Simpson — an independent test double for the ISBL
 /// model, not the model itself.
@@ -663,7 +664,7 @@ fn v13_maximum_lubricant_force_pinned_not_reproduced() {
     }
 }
 
-/// Lubricant cases (spec §4.6 table; numpy values) and the seed's qualitative orderings.
+/// Lubricant cases (Fig. 3.22, Table 4.4; numpy values) and the seed's qualitative orderings.
 #[test]
 fn lubricant_cases_table() {
     // (case, k_P,max, P_lub(3σ+2κ), P_lub(3σ) no solid, k_Q,max, h* of the peak)
@@ -735,7 +736,7 @@ fn lubricant_cases_table() {
     );
 }
 
-/// Total force equals the integral of total stiffness from far outside (spec §7: 1e-7),
+/// Total force equals the integral of total stiffness from far outside (docs/contact.md: 1e-7),
 /// piecewise Simpson per regime (the stiffness jumps at the boundaries), with the solid tail
 /// beyond the last node added as `P_solid(h_far)`.
 #[test]
@@ -786,7 +787,7 @@ fn forces_equal_integral_of_total_stiffness() {
 
 /// Forces continuous at `3σ`, `3σ + 2κ`, `3σ + t`; stiffness jumps only by the documented
 /// amounts: `k_P(d0 = t − κ)` at `3σ + t` and the solid tail `k_c(3σ + 2κ)` at `3σ + 2κ`
-/// (spec §7); nothing NaN for any input.
+/// (docs/contact.md); nothing NaN for any input.
 #[test]
 fn continuity_at_regime_boundaries() {
     let mtl = RoughMtl::reference();
@@ -821,7 +822,7 @@ fn continuity_at_regime_boundaries() {
     let jump =
         iface.evaluate(b).total.normal_stiffness - iface.evaluate(b - eps).total.normal_stiffness;
     assert_rel("k jump at 3σ+2κ", jump, gw_solid(b).normal_stiffness, 1e-6);
-    // At 3σ + t: jump = k_P(t − κ) (1.6×10⁶ N/m reference, spec §7; = 1121674.458·√2).
+    // At 3σ + t: jump = k_P(t − κ) (1.6×10⁶ N/m reference, docs/contact.md; = 1121674.458·√2).
     let c = mtl.lubricant_surface();
     let jump =
         iface.evaluate(c - eps).total.normal_stiffness - iface.evaluate(c).total.normal_stiffness;
@@ -893,7 +894,7 @@ fn monotonicity_of_forces_and_stiffness() {
     }
 }
 
-/// `U = 0`: no shearing, so no lubricant force or stiffness (spec §7), and the total is the
+/// `U = 0`: no shearing, so no lubricant force or stiffness (docs/contact.md), and the total is the
 /// solid alone; parameters are validated with the key named.
 #[test]
 fn zero_speed_and_rough_parameter_validation() {

@@ -1,4 +1,4 @@
-//! LDV record readers and writers (signals-and-surfaces.md §3.1, §5).
+//! LDV record readers and writers (docs/dmw.md).
 //!
 //! The format is detected from the content, never from the extension: `PAR1` → Parquet,
 //! `\x89HDF\r\n\x1a\n` (at offset 0 or a power-of-two user-block offset) → HDF5, anything

@@ -1,4 +1,4 @@
-//! Pure 3-DOF air bearing (spec `dynamics.md` §3.1, §3.3, §3.4, §5.2, §11.3, §11.4).
+//! Pure 3-DOF air bearing (§4.1.1, eqs. 4.1–4.17; docs/dynamics-3dof-air-bearing.md).
 //!
 //! Two AB springs on the ABS centre line (front at `x = +d_f`, rear at `x = −d_r`) whose
 //! stiffnesses follow the pole-tip flying height `PT` through a table of AB natural frequencies

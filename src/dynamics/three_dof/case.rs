@@ -1,5 +1,5 @@
-//! One 3-DOF slider case (dynamics.md §5.2, §6, §7, §10): the Table 4.1–4.3 slider with its
-//! features, the PT-dependent air bearing with TFC push-back, the ISBL or MTL interface per
+//! One 3-DOF slider case (§4.1, eqs. 4.1–4.35; docs/three-dof.md): the Table 4.1–4.3 slider with
+//! its features, the PT-dependent air bearing with TFC push-back, the ISBL or MTL interface per
 //! feature, the three DMW tracks, an actuation profile and an optional shock → sampled time
 //! histories. Pure: no I/O.
 //!
@@ -212,8 +212,8 @@ impl History3Dof {
             .map(|k| k as f64 * self.dt)
     }
 
-    /// Table 4.4 vibrations of a variable-actuation case (dynamics.md §8 windows): flying FHM,
-    /// jump-to-contact BV, steady-contact BV. The flying window ends at the first ramp of the
+    /// Table 4.4 vibrations of a variable-actuation case (docs/dynamics-metrics.md windows): flying
+    /// FHM, jump-to-contact BV, steady-contact BV. The flying window ends at the first ramp of the
     /// profile (over a ramp the formula measures the ramp, not vibration).
     pub fn table_4_4(&self, profile: &ActuationProfile, lubricant_surface: f64) -> Table44 {
         let entry = self.first_time_below(lubricant_surface);

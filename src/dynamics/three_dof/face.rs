@@ -1,4 +1,4 @@
-//! Flat faces of the 3-DOF slider (spec `dynamics.md` §2.4 "truncation of cuboids"): the part
+//! Flat faces of the 3-DOF slider (docs/dynamics-3dof-geometry.md, "Truncation"): the part
 //! of a body-plane rectangle whose world altitude lies within the truncation height of its
 //! lowest corner, by one Sutherland–Hodgman clip against a line and the shoelace formula.
 

@@ -1,4 +1,4 @@
-//! Pure geometry of the 3-DOF slider (spec `dynamics.md` §1.1, §2, §5.2–5.3, §6, §11.3).
+//! Pure geometry of the 3-DOF slider (§4.1, eqs. 4.22–4.28; docs/dynamics-3dof-geometry.md).
 //!
 //! Frames and signs as in [`crate::dynamics::geometry`]: world `+Z` up, `+X` toward the LE, body
 //! frame at the COM; pitch `θ > 0` raises the LE, roll `φ > 0` raises the `+y` side.
@@ -310,7 +310,7 @@ impl PoseTrig {
     }
 }
 
-/// Geometry of the 3-DOF slider (Tables 4.1, 4.3; spec §2.1, §2.5, §2.6, §5.2, §11.3).
+/// Geometry of the 3-DOF slider (Tables 4.1, 4.3; eqs. 4.22–4.28).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Slider3DofGeometry {
     /// `l` along x (m); TE at `x = −l/2`.
@@ -351,7 +351,7 @@ pub struct Slider3DofGeometry {
 }
 
 impl Slider3DofGeometry {
-    /// Tables 4.1 and 4.3 (spec §11.3), both sides evaluated.
+    /// Tables 4.1 and 4.3 (docs/dynamics-3dof-geometry.md), both sides evaluated.
     pub fn dissertation() -> Self {
         Slider3DofGeometry {
             length: 1.23e-3,
@@ -650,7 +650,7 @@ impl Slider3DofGeometry {
         }
     }
 
-    /// Body point of a flat feature (spec §2.5 table); the bulge and pads map to their tangent
+    /// Body point of a flat feature (eqs. 4.23–4.26); the bulge and pads map to their tangent
     /// point on the base / ABS.
     fn flat_feature_point(&self, feature: Feature, actuation: f64) -> Vector3<f64> {
         let (half_l, half_w, half_t) = (0.5 * self.length, 0.5 * self.width, 0.5 * self.thickness);

@@ -1,4 +1,4 @@
-//! Time-dependent inputs of the 3-DOF scenarios (dynamics.md §7): the TFC actuation as a
+//! Time-dependent inputs of the 3-DOF scenarios (§4.1; docs/three-dof.md): the TFC actuation as a
 //! piecewise-linear profile (S3 constant, S5/S6 variable) and the impulse shock of S4. Pure; SI.
 //!
 //! Both know their non-smooth instants (profile breakpoints, pulse start and end): the
@@ -56,7 +56,7 @@ impl ActuationProfile {
         Ok(ActuationProfile { points })
     }
 
-    /// S5 (Fig. 4.13) [assumption, dynamics.md §7]: 5 nm to 0.2 ms, ramp to 18 nm at 0.6 ms,
+    /// S5 (Fig. 4.13) [assumption, docs/three-dof.md]: 5 nm to 0.2 ms, ramp to 18 nm at 0.6 ms,
     /// plateau to 1.4 ms, ramp back to 5 nm at 1.8 ms, hold to 2 ms.
     pub fn variable_default() -> Self {
         ActuationProfile {
@@ -139,7 +139,7 @@ impl ActuationProfile {
 }
 
 /// S4 impulse shock toward the disk at the COM: a haversine
-/// `F(t) = (F_pk/2)(1 − cos(2π(t − t0)/T))` on `[t0, t0 + T]` [derived, dynamics.md §7: only
+/// `F(t) = (F_pk/2)(1 − cos(2π(t − t0)/T))` on `[t0, t0 + T]` [derived, docs/three-dof.md: only
 /// a haversine or triangle carries 0.25 µN·s with a 100 mN peak over 5 µs].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ShockPulse {
@@ -213,8 +213,8 @@ impl ShockPulse {
     }
 }
 
-/// Table 4.4 windows of a variable-actuation case [assumption, dynamics.md §8]: flying from
-/// 0.1 ms to the first entry of any feature into lubricant contact; jump-to-contact from that
+/// Table 4.4 windows of a variable-actuation case [assumption, docs/dynamics-metrics.md]: flying
+/// from 0.1 ms to the first entry of any feature into lubricant contact; jump-to-contact from that
 /// entry to 0.1 ms after the plateau starts; steady contact the rest of the plateau.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RegimeWindows {
@@ -289,7 +289,7 @@ mod tests {
         assert!((s.peak - 0.1).abs() < 1e-15, "peak {}", s.peak);
         let d = ShockPulse::dissertation();
         assert!(d.start == s.start && d.duration == s.duration && (d.peak - s.peak).abs() < 1e-15);
-        // Simpson over the pulse: the impulse integral to 1e-6 (dynamics.md §10 item 7).
+        // Simpson over the pulse: the impulse integral to 1e-6 (docs/three-dof.md).
         let n = 2000;
         let h = s.duration / n as f64;
         let mut sum = s.force(s.start) + s.force(s.start + s.duration);

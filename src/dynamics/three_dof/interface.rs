@@ -1,5 +1,5 @@
-//! Interfacial forces of one 3-DOF feature (dynamics.md §4 3-DOF row, contact-mtl.md §4.4–4.5,
-//! §7 "coupling to the dynamics"): from the feature's solid spacing `s`, its rate and its nominal
+//! Interfacial forces of one 3-DOF feature (§4.1, eqs. 3.55–3.60, App. A;
+//! docs/contact.md): from the feature's solid spacing `s`, its rate and its nominal
 //! area `A_n`, the upward normal force `N = F_c + P_lub − F_s`, the friction `Q` (solid +
 //! lubricant, along −X), the adhesion and the real area. Pure; SI.
 //!

@@ -1,4 +1,4 @@
-//! The 3-DOF slider model (spec `dynamics.md` §2, §5.2–5.3, §11.3; dissertation chapter 4):
+//! The 3-DOF slider model (dissertation chapter 4; docs/three-dof.md):
 //! heave `z`, pitch `θ` and roll `φ` of a slider carrying a constant TFC bulge on an actuated
 //! base, contact pads and recessed TE/LE corners. Pure physics, no I/O, SI units.
 //!

@@ -33,7 +33,7 @@ fn energy(case: &TwoDofCase, y: &[f64; 4]) -> f64 {
 
 #[test]
 fn nominal_state_stays_put_without_dmw_or_interfacial_forces() {
-    // h_TFC = 0: no nominal area, so no contact or adhesion; no DMW (dynamics.md §10 item 7:
+    // h_TFC = 0: no nominal area, so no contact or adhesion; no DMW (docs/simulation.md:
     // drift < 1e-15 m over 2 ms).
     let isbl = lookup();
     let case = TwoDofCase::new(&improved_2dof(), 0.0, &isbl, None, short(2e-3)).unwrap();

@@ -1,6 +1,6 @@
 //! Height-map readers (detect by magic bytes, never by extension) and writers.
 //!
-//! Formats (signals-and-surfaces.md §2.2): Bruker NanoScope v4.3+ binary (`nanoscope`),
+//! Formats (docs/surfaces.md): Bruker NanoScope v4.3+ binary (`nanoscope`),
 //! Gwyddion native (`gwy`), Gwyddion Simple Field (`gsf`), ASCII matrix / Gwyddion ASCII export /
 //! CSV (`ascii`) and XYZ on a rectangular lattice (`xyz`). Every reader returns heights and
 //! lengths in metres with row 0 = top of the image as the instrument software shows it.

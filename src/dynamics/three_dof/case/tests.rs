@@ -84,7 +84,7 @@ fn without_dmw_and_contact_the_slider_rests_at_the_air_bearing_equilibrium() {
     let z0 = h.heave[0];
     let drift = h.heave.iter().map(|z| (z - z0).abs()).fold(0.0, f64::max);
     assert!(drift < 1e-14, "heave drift {drift:e} m");
-    // Static PT at 5 nm: 11.29 nm (dynamics.md §3.3 reference, AB calibration).
+    // Static PT at 5 nm: 11.29 nm (docs/dynamics-3dof-air-bearing.md).
     assert!(
         (h.pole_tip[0] / NM - 11.29).abs() < 0.01,
         "PT {}",
@@ -150,7 +150,7 @@ fn pole_tip_at_12_nm_near_the_dissertation_7_5_nm() {
     .unwrap();
     let pt = mean(&h.pole_tip) / NM;
     eprintln!("PT at 12 nm: {pt:.4} nm");
-    // dynamics.md §12 row 30: PT 7.5 ± 1.0 nm (class K); the static AB reference is 7.79 nm.
+    // docs/validation.md: PT 7.5 ± 1.0 nm (class K); the static AB reference is 7.79 nm.
     assert!((pt - 7.5).abs() < 1.0, "PT {pt} nm");
     assert!((pt - 7.787).abs() < 0.01, "PT {pt} nm vs the static 7.787");
 }

@@ -1,4 +1,4 @@
-//! Acceptance tests of the 3-DOF geometry (issue 7; spec §1.1, §2, §5.2–5.3, §11.3). Every
+//! Acceptance tests of the 3-DOF geometry (issue 7; §4.1, Tables 4.1–4.3). Every
 //! tolerance is stated next to its target.
 
 use nalgebra::Vector3;
@@ -174,7 +174,7 @@ fn brute_force_lowest_altitude(semi_axes: &Vector3<f64>, n: &Vector3<f64>) -> f6
 
 const PI_: f64 = std::f64::consts::PI;
 
-/// Chapter-4 truncation example (Fig. 4.8; spec §2.7): a = 5 µm, b = 5 nm, h = 20 nm,
+/// Chapter-4 truncation example (Fig. 4.8): a = 5 µm, b = 5 nm, h = 20 nm,
 /// w = 50 µm, x_TFC = 15 µm, θ = 100 µrad, φ = −50 µrad, cut 1.5 nm → A_n = 187.9 µm² (5e-4)
 /// through the feature API (both `h_T` and `s ≤ 3σ` entry points), and a grid count of the
 /// horizontal cut plane inside the ellipsoid (1601² grid over the footprint, 0.5 %). Also
