@@ -4,13 +4,13 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use hdi::contact::isbl::{IsblModel, IsblParams};
 use hdi::contact::lookup::IsblLookup;
 use hdi::contact::mtl::rough::RoughMtl;
-use hdi::stages::contact::{analyse, validate, ContactConfig};
+use hdi::stages::contact::{analyse, check, ContactConfig};
 use std::hint::black_box;
 use std::sync::Arc;
 
 fn contact(c: &mut Criterion) {
     let cfg = ContactConfig::defaults();
-    let params = validate(&cfg).unwrap();
+    let params = check(&cfg).unwrap();
     let model = IsblModel::new(IsblParams::improved_2dof()).unwrap();
     let table = analyse(&params.params, &params).unwrap().table().clone();
     let mut g = c.benchmark_group("contact");

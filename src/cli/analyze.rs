@@ -19,8 +19,8 @@ pub(super) fn cmd_analyze(a: AnalyzeArgs) -> Result<()> {
         peaks: a.peaks,
         min_peak_frequency: a.min_peak_frequency.map_or(0.0, |f| f.0),
     };
-    if let Err((k, m)) = settings.check() {
-        bail!("--{}: {m}", k.replace('_', "-"));
+    if let Err(e) = settings.check() {
+        bail!("--{}: {}", e.key.replace('_', "-"), e.message);
     }
     if !a.file.is_file() {
         bail!("{}: no such file", a.file.display());

@@ -10,7 +10,7 @@ use std::time::Instant;
 
 /// `hdi bench`: figures for docs/performance.md.
 pub(super) fn cmd_bench(config: &Path, size: usize) -> Result<()> {
-    use hdi::stages::surfaces::{analyse, validate, write_outputs, SurfaceConfig};
+    use hdi::stages::surfaces::{analyse, check, write_outputs, SurfaceConfig};
     let tmp = std::env::temp_dir().join(format!("hdi-bench-{}", std::process::id()));
     std::fs::create_dir_all(&tmp)?;
     let spec = GaussianSurfaceSpec {
@@ -24,7 +24,7 @@ pub(super) fn cmd_bench(config: &Path, size: usize) -> Result<()> {
     let file = tmp.join("bench.gwy");
     std::fs::write(&file, encode_gwy(&map))?;
     let cfg: SurfaceConfig = toml::from_str(&format!("file = {:?}", file.to_string_lossy()))?;
-    let params = validate(&cfg, file.clone()).map_err(|(k, m)| anyhow::anyhow!("{k}: {m}"))?;
+    let params = check(&cfg, file.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
     let mut best = (f64::INFINITY, f64::INFINITY);
     for _ in 0..3 {
         let t = Instant::now();

@@ -41,7 +41,8 @@ pub(super) fn cmd_contact(a: ContactArgs) -> Result<()> {
     cfg.sliding_speed = a.sliding_speed;
     cfg.lubricant_viscosity = a.lubricant_viscosity;
     cfg.gyration_radius = a.gyration_radius;
-    let params = contact::validate(&cfg).map_err(|(k, m)| anyhow::anyhow!("{}: {m}", flag(&k)))?;
+    let params =
+        contact::check(&cfg).map_err(|e| anyhow::anyhow!("{}: {}", flag(&e.key), e.message))?;
     let analysis = contact::analyse(&params.params, &params)?;
     if let Some(out) = &a.out {
         let dir = out_parent(out)?;

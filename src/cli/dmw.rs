@@ -58,8 +58,8 @@ pub(super) fn cmd_dmw(a: DmwArgs) -> Result<()> {
     if let Some(v) = a.peaks {
         cfg.peaks = v;
     }
-    let params = dmw::validate(&cfg, a.file.clone())
-        .map_err(|(k, m)| anyhow::anyhow!("{}: {m}", flag(&k)))?;
+    let params = dmw::check(&cfg, a.file.clone())
+        .map_err(|e| anyhow::anyhow!("{}: {}", flag(&e.key), e.message))?;
     let (rec, res) = dmw::analyse(&params)?;
     if let Some(out) = &a.out {
         let dir = out_parent(out)?;

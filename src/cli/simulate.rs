@@ -43,14 +43,14 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     cfg.kr_stiffening_beta = a.kr_stiffening_beta;
     cfg.bulge_width = a.bulge_width;
     cfg.histories = a.histories.clone();
-    let params = SimulateParams::check(&cfg).map_err(|(k, m)| {
+    let params = SimulateParams::check(&cfg).map_err(|e| {
         // The list key is `actuations` in pipeline.toml, `--actuation` on the command line.
-        let flag = if k == "actuations" {
+        let flag = if e.key == "actuations" {
             "actuation".to_string()
         } else {
-            k.replace('_', "-")
+            e.key.replace('_', "-")
         };
-        anyhow::anyhow!("--{flag}: {m}")
+        anyhow::anyhow!("--{flag}: {}", e.message)
     })?;
     let mut interface = ContactConfig::defaults();
     interface.parameter_set = a.contact_set.clone().unwrap_or_else(|| a.model.clone());
@@ -59,14 +59,14 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     interface.r = a.r;
     interface.eta = a.eta;
     interface.hardness = a.hardness;
-    let isbl_params = contact::validate(&interface)
-        .map_err(|(k, m)| {
-            let flag = if k == "parameter_set" {
+    let isbl_params = contact::check(&interface)
+        .map_err(|e| {
+            let flag = if e.key == "parameter_set" {
                 "contact-set".to_string()
             } else {
-                k.replace('_', "-")
+                e.key.replace('_', "-")
             };
-            anyhow::anyhow!("--{flag}: {m}")
+            anyhow::anyhow!("--{flag}: {}", e.message)
         })?
         .params;
     let isbl = hdi::contact::lookup::IsblLookup::build_standard(

@@ -26,8 +26,8 @@ pub(super) fn cmd_surface(a: SurfaceArgs) -> Result<()> {
         histogram_bins: a.histogram_bins,
         scale_sweep: a.out.is_some(),
     };
-    let params = surfaces::validate(&cfg, a.file.clone())
-        .map_err(|(k, m)| anyhow::anyhow!("{}: {m}", flag(&k)))?;
+    let params = surfaces::check(&cfg, a.file.clone())
+        .map_err(|e| anyhow::anyhow!("{}: {}", flag(&e.key), e.message))?;
     let analysis = surfaces::analyse(&params)?;
     if let Some(out) = &a.out {
         let dir = out_parent(out)?;

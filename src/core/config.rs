@@ -32,6 +32,29 @@ pub enum ConfigError {
     },
 }
 
+/// A config check's failure, before it is located in a file: the offending key of the
+/// section (empty for the section as a whole) and why.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{key}: {message}")]
+pub struct KeyError {
+    pub key: String,
+    pub message: String,
+}
+
+impl KeyError {
+    pub fn new(key: impl Into<String>, message: impl Into<String>) -> Self {
+        Self {
+            key: key.into(),
+            message: message.into(),
+        }
+    }
+
+    /// The error located at `[section.name] key` in `file`.
+    pub fn locate(self, file: &PipelineFile, section: &str, name: &str) -> ConfigError {
+        file.error(section, name, &self.key, self.message)
+    }
+}
+
 /// `[project]`: where outputs go.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]

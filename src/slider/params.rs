@@ -3,7 +3,7 @@
 //! key the instance and each of its cases. `[calibrate]`, `[doe]`, `[analysis]` and the Slurm
 //! executor resolve a `[simulate]` instance through here, not through the simulate stage.
 
-use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::config::{ConfigError, KeyError, PipelineFile};
 use crate::core::units::{Length, TimeSpan};
 use crate::dynamics::air_bearing::RearStiffening;
 use crate::dynamics::metrics::{CaseParams, SteadyWindow};
@@ -188,187 +188,213 @@ pub fn uncalibrated_base(
              instance"
         )));
     }
-    SimulateParams::check(&cfg)
-        .map_err(|(k, m)| err(format!("[simulate.{base}] is invalid ({k}: {m})")))
+    SimulateParams::check(&cfg).map_err(|e| err(format!("[simulate.{base}] is invalid ({e})")))
 }
 
-impl SimulateParams {
-    /// Check a `[simulate]` table key by key (no cross-references to other instances);
-    /// failures: (key, message).
-    pub fn check(cfg: &SimulateConfig) -> std::result::Result<SimulateParams, (String, String)> {
-        let bad = |k: &str, m: String| Err((k.to_string(), m));
-        let mut model = match cfg.model.as_str() {
-            "improved_2dof" => improved_2dof(),
-            "initial_2dof" => initial_2dof(),
-            o => {
-                return bad(
-                    "model",
-                    format!("unknown model `{o}` (improved_2dof, initial_2dof)"),
-                )
+/// A failed `[simulate]` check at `key`.
+fn bad<T>(key: &str, message: impl Into<String>) -> std::result::Result<T, KeyError> {
+    Err(KeyError::new(key, message))
+}
+
+/// `model`, `geometry` and `kr_stiffening_beta`: the 2-DOF model, checked as a whole.
+fn check_model(cfg: &SimulateConfig) -> std::result::Result<Model2Dof, KeyError> {
+    let mut model = match cfg.model.as_str() {
+        "improved_2dof" => improved_2dof(),
+        "initial_2dof" => initial_2dof(),
+        o => {
+            return bad(
+                "model",
+                format!("unknown model `{o}` (improved_2dof, initial_2dof)"),
+            )
+        }
+    };
+    match cfg.geometry.as_str() {
+        "dissertation" => {
+            if cfg.bulge_width.is_some() {
+                return bad("bulge_width", "only used with geometry = \"optimised\"");
             }
+        }
+        "optimised" => {
+            let w = cfg.bulge_width.map_or(50e-6, |l| l.0);
+            match optimised_bulge(w) {
+                Ok(b) => model = model.with_bulge(b),
+                Err(e) => return bad("bulge_width", e.to_string()),
+            }
+        }
+        o => {
+            return bad(
+                "geometry",
+                format!("unknown geometry `{o}` (dissertation, optimised)"),
+            )
+        }
+    }
+    if let Some(beta) = cfg.kr_stiffening_beta {
+        if !(beta.is_finite() && (0.0..=10.0).contains(&beta)) {
+            return bad(
+                "kr_stiffening_beta",
+                format!("{beta} is out of range: 0 ≤ β ≤ 10"),
+            );
+        }
+        model.air_bearing.stiffening = if beta == 0.0 {
+            RearStiffening::Constant
+        } else {
+            RearStiffening::Quadratic { beta }
         };
-        match cfg.geometry.as_str() {
-            "dissertation" => {
-                if cfg.bulge_width.is_some() {
-                    return bad(
-                        "bulge_width",
-                        "only used with geometry = \"optimised\"".into(),
-                    );
-                }
-            }
-            "optimised" => {
-                let w = cfg.bulge_width.map_or(50e-6, |l| l.0);
-                match optimised_bulge(w) {
-                    Ok(b) => model = model.with_bulge(b),
-                    Err(e) => return bad("bulge_width", e.to_string()),
-                }
-            }
-            o => {
+    }
+    if let Err(e) = model.validate() {
+        return bad("model", e.to_string());
+    }
+    Ok(model)
+}
+
+/// `actuations`, or the `actuation_start … actuation_stop` range by `actuation_step`, each
+/// within the model's range `0 … max`.
+fn check_actuations(cfg: &SimulateConfig, max: f64) -> std::result::Result<Vec<f64>, KeyError> {
+    let actuations: Vec<f64> = match &cfg.actuations {
+        Some(list) => {
+            let mut v: Vec<f64> = list.iter().map(|l| l.0).collect();
+            v.sort_by(f64::total_cmp);
+            v.dedup();
+            v
+        }
+        None => {
+            let (a, b, s) = (
+                cfg.actuation_start.0,
+                cfg.actuation_stop.0,
+                cfg.actuation_step.0,
+            );
+            if !(s > 0.0 && b >= a) {
                 return bad(
-                    "geometry",
-                    format!("unknown geometry `{o}` (dissertation, optimised)"),
-                )
-            }
-        }
-        if let Some(beta) = cfg.kr_stiffening_beta {
-            if !(beta.is_finite() && (0.0..=10.0).contains(&beta)) {
-                return bad(
-                    "kr_stiffening_beta",
-                    format!("{beta} is out of range: 0 ≤ β ≤ 10"),
-                );
-            }
-            model.air_bearing.stiffening = if beta == 0.0 {
-                RearStiffening::Constant
-            } else {
-                RearStiffening::Quadratic { beta }
-            };
-        }
-        if let Err(e) = model.validate() {
-            return bad("model", e.to_string());
-        }
-        let max = model.max_actuation;
-        let actuations: Vec<f64> = match &cfg.actuations {
-            Some(list) => {
-                let mut v: Vec<f64> = list.iter().map(|l| l.0).collect();
-                v.sort_by(f64::total_cmp);
-                v.dedup();
-                v
-            }
-            None => {
-                let (a, b, s) = (
-                    cfg.actuation_start.0,
-                    cfg.actuation_stop.0,
-                    cfg.actuation_step.0,
-                );
-                if !(s > 0.0 && b >= a) {
-                    return bad(
                     "actuation_step",
                     format!("need actuation_step > 0 and actuation_stop ≥ actuation_start (got {a:e} … {b:e} by {s:e} m)"),
                 );
-                }
-                let n = ((b - a) / s + 1e-9).floor() as usize;
-                if n > 10_000 {
-                    return bad(
-                        "actuation_step",
-                        format!("{n} cases is too many (≤ 10 000)"),
-                    );
-                }
-                // Rounded to the picometre so 0.2 nm steps give 8.6 nm, not 8.600000000000001.
-                (0..=n)
-                    .map(|i| ((a + i as f64 * s) * 1e12).round() / 1e12)
-                    .collect()
             }
-        };
-        if actuations.is_empty() {
-            return bad("actuations", "no actuation to simulate".into());
-        }
-        if let Some(a) = actuations.iter().find(|a| !(**a >= 0.0 && **a <= max)) {
-            let key = if cfg.actuations.is_some() {
-                "actuations"
-            } else if *a < 0.0 {
-                "actuation_start"
-            } else {
-                "actuation_stop"
-            };
-            return bad(
-                key,
-                format!(
-                    "{} nm is outside the model's range 0 … {} nm",
-                    a * 1e9,
-                    max * 1e9
-                ),
-            );
-        }
-        let contact_force = match cfg.contact_force.as_str() {
-            "interference_tangent" => ContactForceForm::InterferenceTangent,
-            "static_curve" => ContactForceForm::StaticCurve,
-            o => {
+            let n = ((b - a) / s + 1e-9).floor() as usize;
+            if n > 10_000 {
                 return bad(
-                    "contact_force",
-                    format!("unknown `{o}` (interference_tangent, static_curve)"),
-                )
+                    "actuation_step",
+                    format!("{n} cases is too many (≤ 10 000)"),
+                );
             }
+            // Rounded to the picometre so 0.2 nm steps give 8.6 nm, not 8.600000000000001.
+            (0..=n)
+                .map(|i| ((a + i as f64 * s) * 1e12).round() / 1e12)
+                .collect()
+        }
+    };
+    if actuations.is_empty() {
+        return bad("actuations", "no actuation to simulate");
+    }
+    if let Some(a) = actuations.iter().find(|a| !(**a >= 0.0 && **a <= max)) {
+        let key = if cfg.actuations.is_some() {
+            "actuations"
+        } else if *a < 0.0 {
+            "actuation_start"
+        } else {
+            "actuation_stop"
         };
-        let integrator = match cfg.integrator.as_str() {
-            "dopri5" => Integrator::Dopri5 {
-                rtol: cfg.rtol,
-                contact_max_step: cfg.contact_max_step.0,
-                max_step: cfg.max_step.0,
-            },
-            "rk5_fixed" => Integrator::Rk5Fixed {
-                step: cfg.fixed_step.0,
-            },
-            o => return bad("integrator", format!("unknown `{o}` (dopri5, rk5_fixed)")),
-        };
-        let static_init = match cfg.init.as_str() {
-            "nominal" => false,
-            "static" => true,
-            o => return bad("init", format!("unknown `{o}` (nominal, static)")),
-        };
-        let z0 = cfg.initial_heave.map_or(0.0, |l| l.0);
-        if !(z0.is_finite() && z0.abs() <= 5e-9) {
+        return bad(
+            key,
+            format!(
+                "{} nm is outside the model's range 0 … {} nm",
+                a * 1e9,
+                max * 1e9
+            ),
+        );
+    }
+    Ok(actuations)
+}
+
+/// `contact_force`, `integrator` and `init`: the choices among named forms.
+fn check_forms(
+    cfg: &SimulateConfig,
+) -> std::result::Result<(ContactForceForm, Integrator, bool), KeyError> {
+    let contact_force = match cfg.contact_force.as_str() {
+        "interference_tangent" => ContactForceForm::InterferenceTangent,
+        "static_curve" => ContactForceForm::StaticCurve,
+        o => {
             return bad(
-                "initial_heave",
-                format!("{z0} m is out of range: |z0| ≤ 5 nm"),
-            );
+                "contact_force",
+                format!("unknown `{o}` (interference_tangent, static_curve)"),
+            )
         }
-        let options = SimOptions {
-            static_init,
-            duration: cfg.duration.0,
-            output_step: cfg.output_step.0,
-            contact_force,
-            integrator,
-            transit_delay: cfg.transit_delay,
-            wrap_dmw: cfg.dmw_wrap,
-            initial_state: [z0, 0.0, 0.0, 0.0],
+    };
+    let integrator = match cfg.integrator.as_str() {
+        "dopri5" => Integrator::Dopri5 {
+            rtol: cfg.rtol,
+            contact_max_step: cfg.contact_max_step.0,
+            max_step: cfg.max_step.0,
+        },
+        "rk5_fixed" => Integrator::Rk5Fixed {
+            step: cfg.fixed_step.0,
+        },
+        o => return bad("integrator", format!("unknown `{o}` (dopri5, rk5_fixed)")),
+    };
+    let static_init = match cfg.init.as_str() {
+        "nominal" => false,
+        "static" => true,
+        o => return bad("init", format!("unknown `{o}` (nominal, static)")),
+    };
+    Ok((contact_force, integrator, static_init))
+}
+
+/// The integrator options: the named forms, `initial_heave`, `duration`, `steady_start`, then
+/// the remaining numbers (rtol, steps, output step), which the case checks with their ranges.
+fn check_options(cfg: &SimulateConfig) -> std::result::Result<SimOptions, KeyError> {
+    let (contact_force, integrator, static_init) = check_forms(cfg)?;
+    let z0 = cfg.initial_heave.map_or(0.0, |l| l.0);
+    if !(z0.is_finite() && z0.abs() <= 5e-9) {
+        return bad(
+            "initial_heave",
+            format!("{z0} m is out of range: |z0| ≤ 5 nm"),
+        );
+    }
+    let options = SimOptions {
+        static_init,
+        duration: cfg.duration.0,
+        output_step: cfg.output_step.0,
+        contact_force,
+        integrator,
+        transit_delay: cfg.transit_delay,
+        wrap_dmw: cfg.dmw_wrap,
+        initial_state: [z0, 0.0, 0.0, 0.0],
+    };
+    if !(cfg.duration.0 > 0.0 && cfg.duration.0 <= 0.1) {
+        return bad(
+            "duration",
+            format!("{} s is out of range: 0 < T ≤ 100 ms", cfg.duration.0),
+        );
+    }
+    if !(cfg.steady_start.0 >= 0.0 && cfg.steady_start.0 < 0.9 * cfg.duration.0) {
+        return bad(
+            "steady_start",
+            "must lie in [0, 0.9·duration): the steady window needs samples",
+        );
+    }
+    if let Err(e) = options.validate().map_err(|e| e.to_string()) {
+        let key = if e.contains("rtol") {
+            "rtol"
+        } else if e.contains("contact_max_step") {
+            "contact_max_step"
+        } else if e.contains("max_step") {
+            "max_step"
+        } else if e.contains("fixed step") {
+            "fixed_step"
+        } else {
+            "output_step"
         };
-        if !(cfg.duration.0 > 0.0 && cfg.duration.0 <= 0.1) {
-            return bad(
-                "duration",
-                format!("{} s is out of range: 0 < T ≤ 100 ms", cfg.duration.0),
-            );
-        }
-        if !(cfg.steady_start.0 >= 0.0 && cfg.steady_start.0 < 0.9 * cfg.duration.0) {
-            return bad(
-                "steady_start",
-                "must lie in [0, 0.9·duration): the steady window needs samples".into(),
-            );
-        }
-        // The case checks the remaining numbers (rtol, steps, output step) with their ranges.
-        if let Err(e) = options.validate().map_err(|e| e.to_string()) {
-            let key = if e.contains("rtol") {
-                "rtol"
-            } else if e.contains("contact_max_step") {
-                "contact_max_step"
-            } else if e.contains("max_step") {
-                "max_step"
-            } else if e.contains("fixed step") {
-                "fixed_step"
-            } else {
-                "output_step"
-            };
-            return bad(key, e);
-        }
+        return bad(key, e);
+    }
+    Ok(options)
+}
+
+impl SimulateParams {
+    /// Check a `[simulate]` table key by key (no cross-references to other instances): the
+    /// model, its actuations, then the integrator options.
+    pub fn check(cfg: &SimulateConfig) -> std::result::Result<SimulateParams, KeyError> {
+        let model = check_model(cfg)?;
+        let actuations = check_actuations(cfg, model.max_actuation)?;
+        let options = check_options(cfg)?;
         let dmw = (cfg.dmw != "none").then(|| cfg.dmw.clone());
         Ok(SimulateParams {
             model_name: cfg.model.clone(),
@@ -433,8 +459,7 @@ impl SimulateParams {
         name: &str,
         cfg: &SimulateConfig,
     ) -> std::result::Result<Self, ConfigError> {
-        let params =
-            SimulateParams::check(cfg).map_err(|(k, m)| file.error("simulate", name, &k, m))?;
+        let params = SimulateParams::check(cfg).map_err(|e| e.locate(file, "simulate", name))?;
         if !file.has_instance("contact", &cfg.contact) {
             return Err(file.error(
                 "simulate",

@@ -4,6 +4,7 @@
 //! resolves a 3-DOF source's case files through here.
 
 use crate::contact::mtl::LubricantCase;
+use crate::core::config::KeyError;
 use crate::core::units::{Length, TimeSpan};
 use crate::dynamics::three_dof::air_bearing::{PushbackCurve, SpringLaw};
 use crate::dynamics::three_dof::case::{Init3Dof, Model3Dof, Options3Dof, TrackAssignment};
@@ -156,167 +157,191 @@ pub struct ThreeDofParams {
     pub pushback: String,
 }
 
-type Bad = (String, String);
-
-fn bad<T>(key: &str, m: impl Into<String>) -> std::result::Result<T, Bad> {
-    Err((key.to_string(), m.into()))
+/// A failed `[three_dof]` check at `key`.
+fn bad<T>(key: &str, m: impl Into<String>) -> std::result::Result<T, KeyError> {
+    Err(KeyError::new(key, m))
 }
 
-impl ThreeDofParams {
-    /// Check a `[three_dof]` table key by key (no cross-references to other instances);
-    /// failures: (key, message).
-    pub fn check(cfg: &ThreeDofConfig) -> std::result::Result<ThreeDofParams, Bad> {
-        let dmw = (cfg.dmw != "none").then(|| cfg.dmw.clone());
-        let nm = 1e-9;
-        let (profile, shock) = match cfg.scenario.as_str() {
-            "constant" | "shock" => {
-                if cfg.profile.is_some() {
-                    return bad("profile", "only the `variable` scenario takes a profile");
-                }
-                let default = if cfg.scenario == "shock" { 5.0 } else { 12.0 };
-                let h = cfg.actuation.map_or(default * nm, |l| l.0);
-                let p = ActuationProfile::constant(h)
-                    .map_err(|e| ("actuation".into(), e.to_string()))?;
-                let shock = if cfg.scenario == "shock" {
-                    Some(
-                        ShockPulse::from_impulse(
-                            cfg.shock_start.0,
-                            cfg.shock_duration.0,
-                            cfg.shock_impulse,
-                        )
-                        .map_err(|e| ("shock_impulse".to_string(), e.to_string()))?,
+/// `scenario` with its `actuation` or `profile` and shock pulse; the actuation must reach
+/// the bulge bottom.
+fn check_actuation(
+    cfg: &ThreeDofConfig,
+) -> std::result::Result<(ActuationProfile, Option<ShockPulse>), KeyError> {
+    let nm = 1e-9;
+    let (profile, shock) = match cfg.scenario.as_str() {
+        "constant" | "shock" => {
+            if cfg.profile.is_some() {
+                return bad("profile", "only the `variable` scenario takes a profile");
+            }
+            let default = if cfg.scenario == "shock" { 5.0 } else { 12.0 };
+            let h = cfg.actuation.map_or(default * nm, |l| l.0);
+            let p = ActuationProfile::constant(h)
+                .map_err(|e| KeyError::new("actuation", e.to_string()))?;
+            let shock = if cfg.scenario == "shock" {
+                Some(
+                    ShockPulse::from_impulse(
+                        cfg.shock_start.0,
+                        cfg.shock_duration.0,
+                        cfg.shock_impulse,
                     )
-                } else {
-                    None
-                };
-                (p, shock)
-            }
-            "variable" => {
-                if cfg.actuation.is_some() {
-                    return bad(
-                        "actuation",
-                        "the `variable` scenario takes a `profile` instead",
-                    );
-                }
-                let p = match &cfg.profile {
-                    None => ActuationProfile::variable_default(),
-                    Some(points) => {
-                        ActuationProfile::table(points.iter().map(|(t, h)| (t.0, h.0)).collect())
-                            .map_err(|e| ("profile".to_string(), e.to_string()))?
-                    }
-                };
-                (p, None)
-            }
-            o => {
-                return bad(
-                    "scenario",
-                    format!("unknown `{o}` (constant, shock, variable)"),
+                    .map_err(|e| KeyError::new("shock_impulse", e.to_string()))?,
                 )
-            }
-        };
-        let b = Model3Dof::dissertation().geometry.bulge_height;
-        if profile.range().0 < b {
-            let key = if cfg.scenario == "variable" {
-                "profile"
             } else {
-                "actuation"
+                None
             };
+            (p, shock)
+        }
+        "variable" => {
+            if cfg.actuation.is_some() {
+                return bad(
+                    "actuation",
+                    "the `variable` scenario takes a `profile` instead",
+                );
+            }
+            let p = match &cfg.profile {
+                None => ActuationProfile::variable_default(),
+                Some(points) => {
+                    ActuationProfile::table(points.iter().map(|(t, h)| (t.0, h.0)).collect())
+                        .map_err(|e| KeyError::new("profile", e.to_string()))?
+                }
+            };
+            (p, None)
+        }
+        o => {
             return bad(
-                key,
-                format!(
+                "scenario",
+                format!("unknown `{o}` (constant, shock, variable)"),
+            )
+        }
+    };
+    let b = Model3Dof::dissertation().geometry.bulge_height;
+    if profile.range().0 < b {
+        let key = if cfg.scenario == "variable" {
+            "profile"
+        } else {
+            "actuation"
+        };
+        return bad(
+            key,
+            format!(
                 "{:.2} nm is below the bulge height b_TFC = {:.0} nm (the 3-DOF actuation is the \
                  bulge bottom's total protrusion)",
                 profile.range().0 * 1e9,
                 b * 1e9
             ),
-            );
-        }
-        let mut cases = Vec::new();
-        if cfg.interfaces.is_empty() {
-            return bad("interfaces", "name at least one of isbl, mtl");
-        }
-        for i in &cfg.interfaces {
-            match i.as_str() {
-                "isbl" => cases.push(CaseInterface::Isbl),
-                "mtl" => {
-                    if cfg.lubricants.is_empty() {
-                        return bad(
-                            "lubricants",
-                            "the MTL runs need at least one lubricant case",
-                        );
-                    }
-                    for l in &cfg.lubricants {
-                        let case = LubricantCase::ALL
-                            .into_iter()
-                            .find(|c| lubricant_name(*c) == l)
-                            .ok_or_else(|| {
-                                (
-                                    "lubricants".to_string(),
-                                    format!(
+        );
+    }
+    Ok((profile, shock))
+}
+
+/// `interfaces` and, for the MTL runs, `lubricants`: the cases, each once.
+fn check_cases(cfg: &ThreeDofConfig) -> std::result::Result<Vec<CaseInterface>, KeyError> {
+    let mut cases = Vec::new();
+    if cfg.interfaces.is_empty() {
+        return bad("interfaces", "name at least one of isbl, mtl");
+    }
+    for i in &cfg.interfaces {
+        match i.as_str() {
+            "isbl" => cases.push(CaseInterface::Isbl),
+            "mtl" => {
+                if cfg.lubricants.is_empty() {
+                    return bad(
+                        "lubricants",
+                        "the MTL runs need at least one lubricant case",
+                    );
+                }
+                for l in &cfg.lubricants {
+                    let case = LubricantCase::ALL
+                        .into_iter()
+                        .find(|c| lubricant_name(*c) == l)
+                        .ok_or_else(|| {
+                            KeyError::new(
+                                "lubricants",
+                                format!(
                                     "unknown `{l}` (reference, humidity_temperature, more_bonding, \
                                      larger_gyration_radius)"
                                 ),
-                                )
-                            })?;
-                        cases.push(CaseInterface::Mtl(case));
-                    }
+                            )
+                        })?;
+                    cases.push(CaseInterface::Mtl(case));
                 }
-                o => return bad("interfaces", format!("unknown `{o}` (isbl, mtl)")),
             }
+            o => return bad("interfaces", format!("unknown `{o}` (isbl, mtl)")),
         }
-        let mut seen = Vec::new();
-        for c in &cases {
-            if seen.contains(c) {
-                return bad("interfaces", format!("`{}` listed twice", c.label()));
-            }
-            seen.push(*c);
+    }
+    let mut seen = Vec::new();
+    for c in &cases {
+        if seen.contains(c) {
+            return bad("interfaces", format!("`{}` listed twice", c.label()));
         }
-        let spring_law = match cfg.ab_spring_law.as_str() {
-            "integrated" => SpringLaw::Integrated,
-            "linear" => SpringLaw::Linear,
-            o => {
-                return bad(
-                    "ab_spring_law",
-                    format!("unknown `{o}` (integrated, linear)"),
-                )
-            }
-        };
-        if !matches!(cfg.pushback_curve.as_str(), "linear" | "flattened") {
+        seen.push(*c);
+    }
+    Ok(cases)
+}
+
+/// `ab_spring_law`, `pushback_curve`, then the integrator options (`init`, `tracks`,
+/// `duration`, steps), `steady_start` and the shock pulse's end within `duration`.
+fn check_options(
+    cfg: &ThreeDofConfig,
+    shock: Option<&ShockPulse>,
+) -> std::result::Result<(Options3Dof, SpringLaw), KeyError> {
+    let spring_law = match cfg.ab_spring_law.as_str() {
+        "integrated" => SpringLaw::Integrated,
+        "linear" => SpringLaw::Linear,
+        o => {
             return bad(
-                "pushback_curve",
-                format!("unknown `{}` (linear, flattened)", cfg.pushback_curve),
-            );
+                "ab_spring_law",
+                format!("unknown `{o}` (integrated, linear)"),
+            )
         }
-        let init = match cfg.init.as_str() {
-            "static" => Init3Dof::AirBearingStatic,
-            "nominal" => Init3Dof::Nominal,
-            o => return bad("init", format!("unknown `{o}` (static, nominal)")),
-        };
-        let tracks = match cfg.tracks.as_str() {
-            "three" => TrackAssignment::Three,
-            "one" => TrackAssignment::One,
-            o => return bad("tracks", format!("unknown `{o}` (three, one)")),
-        };
-        let options = Options3Dof {
-            duration: cfg.duration.0,
-            output_step: cfg.output_step.0,
-            transit_delay: cfg.transit_delay,
-            wrap_dmw: cfg.dmw_wrap,
-            tracks,
-            init,
-            ..Options3Dof::default()
-        };
-        options
-            .validate()
-            .map_err(|e| ("duration".to_string(), e.to_string()))?;
-        if !(cfg.steady_start.0 >= 0.0 && cfg.steady_start.0 < cfg.duration.0) {
-            return bad("steady_start", "must lie in [0, duration)");
+    };
+    if !matches!(cfg.pushback_curve.as_str(), "linear" | "flattened") {
+        return bad(
+            "pushback_curve",
+            format!("unknown `{}` (linear, flattened)", cfg.pushback_curve),
+        );
+    }
+    let init = match cfg.init.as_str() {
+        "static" => Init3Dof::AirBearingStatic,
+        "nominal" => Init3Dof::Nominal,
+        o => return bad("init", format!("unknown `{o}` (static, nominal)")),
+    };
+    let tracks = match cfg.tracks.as_str() {
+        "three" => TrackAssignment::Three,
+        "one" => TrackAssignment::One,
+        o => return bad("tracks", format!("unknown `{o}` (three, one)")),
+    };
+    let options = Options3Dof {
+        duration: cfg.duration.0,
+        output_step: cfg.output_step.0,
+        transit_delay: cfg.transit_delay,
+        wrap_dmw: cfg.dmw_wrap,
+        tracks,
+        init,
+        ..Options3Dof::default()
+    };
+    options
+        .validate()
+        .map_err(|e| KeyError::new("duration", e.to_string()))?;
+    if !(cfg.steady_start.0 >= 0.0 && cfg.steady_start.0 < cfg.duration.0) {
+        return bad("steady_start", "must lie in [0, duration)");
+    }
+    if let Some(s) = shock {
+        if s.start + s.duration > cfg.duration.0 {
+            return bad("shock_start", "the pulse must end before `duration`");
         }
-        if let Some(s) = &shock {
-            if s.start + s.duration > cfg.duration.0 {
-                return bad("shock_start", "the pulse must end before `duration`");
-            }
-        }
+    }
+    Ok((options, spring_law))
+}
+
+impl ThreeDofParams {
+    /// Check a `[three_dof]` table key by key (no cross-references to other instances): the
+    /// actuation scenario, the interface cases, then the options.
+    pub fn check(cfg: &ThreeDofConfig) -> std::result::Result<ThreeDofParams, KeyError> {
+        let dmw = (cfg.dmw != "none").then(|| cfg.dmw.clone());
+        let (profile, shock) = check_actuation(cfg)?;
+        let cases = check_cases(cfg)?;
+        let (options, spring_law) = check_options(cfg, shock.as_ref())?;
         Ok(ThreeDofParams {
             contact: cfg.contact.clone(),
             dmw,

@@ -92,8 +92,8 @@ pub struct AnalysisSettings {
 }
 
 impl AnalysisSettings {
-    pub fn check(&self) -> std::result::Result<(), (String, String)> {
-        let bad = |k: &str, m: String| Err((k.to_string(), m));
+    pub fn check(&self) -> std::result::Result<(), crate::core::config::KeyError> {
+        let bad = |k: &str, m: String| Err(crate::core::config::KeyError::new(k, m));
         if !(self.f_min > 0.0 && self.f_max > self.f_min && self.f_max.is_finite()) {
             return bad(
                 "f_min",
@@ -515,10 +515,10 @@ impl FromConfig for AnalysisStage {
         let (default_file, dataset, velocity) = if let Some(sim) =
             &file.instance::<SimulateConfig>("simulate", &cfg.source)?
         {
-            let p = SimulateParams::check(sim).map_err(|(k, m)| {
+            let p = SimulateParams::check(sim).map_err(|e| {
                 err(
                     "source",
-                    format!("[simulate.{}] is invalid ({k}: {m})", cfg.source),
+                    format!("[simulate.{}] is invalid ({e})", cfg.source),
                 )
             })?;
             let a = match (cfg.actuation, p.actuations.as_slice()) {
@@ -551,10 +551,10 @@ impl FromConfig for AnalysisStage {
             if cfg.actuation.is_some() {
                 return Err(err("actuation", "only for a [simulate] source".into()));
             }
-            let p = ThreeDofParams::check(three).map_err(|(k, m)| {
+            let p = ThreeDofParams::check(three).map_err(|e| {
                 err(
                     "source",
-                    format!("[three_dof.{}] is invalid ({k}: {m})", cfg.source),
+                    format!("[three_dof.{}] is invalid ({e})", cfg.source),
                 )
             })?;
             // One case: its file by default; several: `file` says which.
@@ -637,7 +637,7 @@ impl FromConfig for AnalysisStage {
             peaks: cfg.peaks,
             min_peak_frequency: cfg.min_peak_frequency.map_or(0.0, |f| f.0),
         };
-        settings.check().map_err(|(k, m)| err(&k, m))?;
+        settings.check().map_err(|e| err(&e.key, e.message))?;
         Ok(AnalysisStage {
             name: name.to_string(),
             source: cfg.source.clone(),

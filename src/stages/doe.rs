@@ -31,7 +31,7 @@ use std::path::Path;
 pub const MODEL_VERSION: &str = "doe-2";
 
 const UM: f64 = 1e-6;
-/// Highest actuation a DOE case may use [m] (see `validate`).
+/// Highest actuation a DOE case may use [m] (see `check`).
 const DOE_MAX_ACTUATION: f64 = 20e-9;
 const NM: f64 = 1e-9;
 /// Factor names, in the coded order `x1 = a_TFC`, `x2 = w_TFC`, `x3 = x_TFC` (so `b_1122`
@@ -205,18 +205,19 @@ impl DoeParams {
     }
 }
 
-type Bad = (String, String);
-
-fn bad<T>(key: &str, m: impl Into<String>) -> std::result::Result<T, Bad> {
-    Err((key.to_string(), m.into()))
+fn bad<T>(
+    key: &str,
+    m: impl Into<String>,
+) -> std::result::Result<T, crate::core::config::KeyError> {
+    Err(crate::core::config::KeyError::new(key, m))
 }
 
 /// Check `[doe]` keys against the base instance; failures name the key.
-pub fn validate(
+pub fn check(
     cfg: &DoeConfig,
     base: SimulateParams,
     base_name: &str,
-) -> std::result::Result<DoeParams, Bad> {
+) -> std::result::Result<DoeParams, crate::core::config::KeyError> {
     let levels = [cfg.a_tfc, cfg.w_tfc, cfg.x_tfc].map(|l| l.map(|v| v.0));
     for (f, l) in levels.iter().enumerate() {
         if !(l.iter().all(|v| v.is_finite() && *v > 0.0) && l[0] < l[1] && l[1] < l[2]) {
@@ -265,8 +266,8 @@ pub fn validate(
             list.iter()
                 .map(|n| {
                     FACTORS.iter().position(|f| f == n).ok_or_else(|| {
-                        (
-                            "fixed_factors".to_string(),
+                        crate::core::config::KeyError::new(
+                            "fixed_factors",
                             format!("unknown factor `{n}` ({})", FACTORS.join(", ")),
                         )
                     })
@@ -758,7 +759,7 @@ impl FromConfig for DoeStage {
     ) -> std::result::Result<Self, ConfigError> {
         let err = |k: &str, m: String| file.error("doe", name, k, m);
         let base = uncalibrated_base(file, "doe", name, &cfg.simulate)?;
-        let params = validate(cfg, base, &cfg.simulate).map_err(|(k, m)| err(&k, m))?;
+        let params = check(cfg, base, &cfg.simulate).map_err(|e| err(&e.key, e.message))?;
         Ok(DoeStage {
             name: name.to_string(),
             params,
@@ -1218,7 +1219,7 @@ mod tests {
     fn coded_levels_decode_to_the_levels_exactly() {
         let cfg: DoeConfig = toml::from_str("simulate = \"s\"").unwrap();
         let base = SimulateParams::check(&toml::from_str("contact = \"c\"").unwrap()).unwrap();
-        let p = validate(&cfg, base, "s").unwrap();
+        let p = check(&cfg, base, "s").unwrap();
         // a_TFC's top level and x_TFC's bottom level are both 5 µm: equal, not an ulp apart.
         let d = p.decode(&[1.0, 0.0, -1.0]);
         assert_eq!(d[0], d[2]);

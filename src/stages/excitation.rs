@@ -6,7 +6,7 @@
 
 use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::dmw_tracks;
-use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::config::{ConfigError, KeyError, PipelineFile};
 use crate::core::store::H5Out;
 use crate::core::units::{Frequency, Length, TimeSpan};
 use crate::dmw::excitation_tracks::{
@@ -110,9 +110,9 @@ impl ExcitationParams {
     }
 }
 
-/// Validation failures: (key, message).
-pub fn validate(cfg: &ExcitationConfig) -> std::result::Result<ExcitationParams, (String, String)> {
-    let bad = |k: &str, m: String| Err((k.to_string(), m));
+/// Check an `[excitation]` table key by key.
+pub fn check(cfg: &ExcitationConfig) -> std::result::Result<ExcitationParams, KeyError> {
+    let bad = |k: &str, m: String| Err(KeyError::new(k, m));
     let fs = cfg.sample_rate.0;
     if !(fs.is_finite() && (1e4..=1e9).contains(&fs)) {
         return bad(
@@ -128,10 +128,10 @@ pub fn validate(cfg: &ExcitationConfig) -> std::result::Result<ExcitationParams,
         return bad("margin", format!("{margin} s is out of range: 0 … 1 s"));
     }
     let rms = cfg.rms.map_or(1e-9, |l| l.0);
-    let unused = |keys: &[(&str, bool)]| -> std::result::Result<(), (String, String)> {
+    let unused = |keys: &[(&str, bool)]| -> std::result::Result<(), KeyError> {
         match keys.iter().find(|(_, set)| *set) {
-            Some((k, _)) => Err((
-                k.to_string(),
+            Some((k, _)) => Err(KeyError::new(
+                *k,
                 format!("not used by kind = \"{}\"", cfg.kind),
             )),
             None => Ok(()),
@@ -255,7 +255,7 @@ impl FromConfig for ExcitationStage {
         name: &str,
         cfg: &ExcitationConfig,
     ) -> std::result::Result<Self, ConfigError> {
-        let params = validate(cfg).map_err(|(k, m)| file.error("excitation", name, &k, m))?;
+        let params = check(cfg).map_err(|e| e.locate(file, "excitation", name))?;
         Ok(Self {
             name: name.to_string(),
             params,
@@ -382,7 +382,7 @@ mod tests {
     #[test]
     fn written_tracks_read_back_through_the_artefact_reader() {
         let cfg: ExcitationConfig = toml::from_str("kind = \"sinusoid\"").unwrap();
-        let p = validate(&cfg).unwrap();
+        let p = check(&cfg).unwrap();
         let x = generate(&p).unwrap();
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join(dmw_tracks::FILE);

@@ -140,12 +140,12 @@ pub struct SurfaceParams {
     pub scale_sweep: bool,
 }
 
-/// Validation failures: (key, message).
-pub fn validate(
+/// Check a `[surface]` table (or `hdi surface`'s options) key by key.
+pub fn check(
     cfg: &SurfaceConfig,
     file: PathBuf,
-) -> std::result::Result<SurfaceParams, (String, String)> {
-    let bad = |k: &str, m: String| Err((k.to_string(), m));
+) -> std::result::Result<SurfaceParams, crate::core::config::KeyError> {
+    let bad = |k: &str, m: String| Err(crate::core::config::KeyError::new(k, m));
     let level = cfg
         .level
         .iter()
@@ -732,7 +732,7 @@ impl FromConfig for SurfaceStage {
                 },
             ));
         }
-        let params = validate(cfg, path).map_err(|(k, m)| file.error("surface", name, &k, m))?;
+        let params = check(cfg, path).map_err(|e| e.locate(file, "surface", name))?;
         Ok(Self {
             name: name.to_string(),
             params,

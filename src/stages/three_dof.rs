@@ -42,8 +42,7 @@ impl FromConfig for ThreeDofStage {
         name: &str,
         cfg: &ThreeDofConfig,
     ) -> std::result::Result<Self, ConfigError> {
-        let params =
-            ThreeDofParams::check(cfg).map_err(|(k, m)| file.error("three_dof", name, &k, m))?;
+        let params = ThreeDofParams::check(cfg).map_err(|e| e.locate(file, "three_dof", name))?;
         if !file.has_instance("contact", &cfg.contact) {
             return Err(file.error(
                 "three_dof",

@@ -156,9 +156,11 @@ pub fn parameter_set(name: &str) -> Option<IsblParams> {
     })
 }
 
-/// Validation failures: (key, message).
-pub fn validate(cfg: &ContactConfig) -> std::result::Result<ContactParams, (String, String)> {
-    let bad = |k: &str, m: String| Err((k.to_string(), m));
+/// Check a `[contact]` table (or `hdi contact`'s options) key by key.
+pub fn check(
+    cfg: &ContactConfig,
+) -> std::result::Result<ContactParams, crate::core::config::KeyError> {
+    let bad = |k: &str, m: String| Err(crate::core::config::KeyError::new(k, m));
     let Some(mut p) = parameter_set(&cfg.parameter_set) else {
         return bad(
             "parameter_set",
@@ -250,8 +252,10 @@ pub fn validate(cfg: &ContactConfig) -> std::result::Result<ContactParams, (Stri
     }
     if cfg.interface.is_none() {
         p.validate().map_err(|e| match e {
-            ContactError::Parameter { name, .. } => (name.to_string(), e.to_string()),
-            other => ("parameter_set".to_string(), other.to_string()),
+            ContactError::Parameter { name, .. } => {
+                crate::core::config::KeyError::new(name, e.to_string())
+            }
+            other => crate::core::config::KeyError::new("parameter_set", other.to_string()),
         })?;
     }
     let mtl = mtl::resolve(
@@ -639,7 +643,7 @@ impl FromConfig for ContactStage {
         name: &str,
         cfg: &ContactConfig,
     ) -> std::result::Result<Self, ConfigError> {
-        let params = validate(cfg).map_err(|(k, m)| file.error("contact", name, &k, m))?;
+        let params = check(cfg).map_err(|e| e.locate(file, "contact", name))?;
         if let Some(i) = &cfg.interface {
             if !file.has_instance("interface", i) {
                 return Err(file.error(
@@ -703,7 +707,7 @@ mod tests {
         // Acceptance: ≤ 1e-4 relative everywhere the curves matter, no NaN or jump at 3σ,
         // 3σ + t and the table's ends (measured: ≤ 1.1e-8, F_s the worst).
         let cfg = ContactConfig::defaults();
-        let c = validate(&cfg).unwrap();
+        let c = check(&cfg).unwrap();
         let a = analyse(&c.params, &c).unwrap();
         for e in a.table_error() {
             assert!(e.max_rel < 1e-4, "{e:?}");
@@ -734,7 +738,7 @@ mod tests {
         for p in [IsblParams::improved_2dof(), IsblParams::mtl_table_3_2()] {
             let c = ContactParams {
                 params: p,
-                ..validate(&ContactConfig::defaults()).unwrap()
+                ..check(&ContactConfig::defaults()).unwrap()
             };
             let result = report_json(&analyse(&p, &c).unwrap(), &c);
             let back = ContactInputs::from_json(&result["inputs"]).unwrap();
@@ -746,15 +750,15 @@ mod tests {
     fn bad_keys_name_themselves() {
         let mut cfg = ContactConfig::defaults();
         cfg.parameter_set = "nope".into();
-        assert_eq!(validate(&cfg).unwrap_err().0, "parameter_set");
+        assert_eq!(check(&cfg).unwrap_err().key, "parameter_set");
         let mut cfg = ContactConfig::defaults();
         cfg.hardness = Some(Pressure(-1.0));
-        assert_eq!(validate(&cfg).unwrap_err().0, "hardness");
+        assert_eq!(check(&cfg).unwrap_err().key, "hardness");
         let mut cfg = ContactConfig::defaults();
         cfg.step = 0.0;
-        assert_eq!(validate(&cfg).unwrap_err().0, "step");
+        assert_eq!(check(&cfg).unwrap_err().key, "step");
         let mut cfg = ContactConfig::defaults();
         cfg.surface_energy = Some(SurfaceEnergyConfig::Text("lots".into()));
-        assert_eq!(validate(&cfg).unwrap_err().0, "surface_energy");
+        assert_eq!(check(&cfg).unwrap_err().key, "surface_energy");
     }
 }

@@ -9,6 +9,7 @@ use crate::contact::mtl::rough::{
 };
 use crate::contact::mtl::FwmExperiment;
 use crate::contact::ContactError;
+use crate::core::config::KeyError;
 use crate::core::store::H5Out;
 use crate::core::units::{Area, Length, Velocity, Viscosity};
 use crate::error::Result;
@@ -68,11 +69,11 @@ pub struct MtlKeys {
     pub gyration_radius: Option<Length>,
 }
 
-/// Resolve the keys; errors are (key, message).
+/// Check and resolve the lubricant-model keys.
 pub fn resolve(
     keys: &MtlKeys,
     isbl: &IsblParams,
-) -> std::result::Result<Option<MtlSettings>, (String, String)> {
+) -> std::result::Result<Option<MtlSettings>, KeyError> {
     let Some(name) = &keys.lubricant else {
         for (key, set) in [
             ("nominal_area", keys.nominal_area.is_some()),
@@ -81,19 +82,18 @@ pub fn resolve(
             ("gyration_radius", keys.gyration_radius.is_some()),
         ] {
             if set {
-                return Err((
-                    key.into(),
+                return Err(KeyError::new(
+                    key,
                     "only used by the lubricant model: also set `lubricant` (reference, \
-                     humidity_temperature, more_bonding, larger_gyration_radius)"
-                        .into(),
+                     humidity_temperature, more_bonding, larger_gyration_radius)",
                 ));
             }
         }
         return Ok(None);
     };
     let Some(case) = case_by_name(name) else {
-        return Err((
-            "lubricant".into(),
+        return Err(KeyError::new(
+            "lubricant",
             format!(
                 "unknown lubricant case `{name}` ({})",
                 CASE_NAMES.join(", ")
@@ -110,8 +110,8 @@ pub fn resolve(
         kappa: keys.gyration_radius.map_or(case.kappa(), |l| l.0),
     };
     if !(s.nominal_area > 0.0 && s.nominal_area <= 1e-6) {
-        return Err((
-            "nominal_area".into(),
+        return Err(KeyError::new(
+            "nominal_area",
             format!(
                 "{} m² is out of range: 0 < A_n ≤ 1 mm² (slider contacts are µm²)",
                 s.nominal_area
@@ -119,14 +119,14 @@ pub fn resolve(
         ));
     }
     if !(0.0..=200.0).contains(&s.speed) {
-        return Err((
-            "sliding_speed".into(),
+        return Err(KeyError::new(
+            "sliding_speed",
             format!("{} m/s is out of range: 0 ≤ U ≤ 200 m/s", s.speed),
         ));
     }
     if !(s.limiting_viscosity > 0.0 && s.limiting_viscosity <= 100.0) {
-        return Err((
-            "lubricant_viscosity".into(),
+        return Err(KeyError::new(
+            "lubricant_viscosity",
             format!(
                 "{} Pa·s is out of range: 0 < μ0 ≤ 100 Pa·s",
                 s.limiting_viscosity
@@ -134,8 +134,8 @@ pub fn resolve(
         ));
     }
     if !(s.kappa > 0.0 && 2.0 * s.kappa < isbl.lubricant_thickness) {
-        return Err((
-            "gyration_radius".into(),
+        return Err(KeyError::new(
+            "gyration_radius",
             format!(
                 "κ = {} nm is out of range: 0 < 2κ < t = {} nm (no mobile layer otherwise)",
                 s.kappa * 1e9,
@@ -526,7 +526,7 @@ mod tests {
     #[test]
     fn keys_are_checked() {
         let p = IsblParams::mtl_table_3_2();
-        let bad = |k: MtlKeys| resolve(&k, &p).unwrap_err().0;
+        let bad = |k: MtlKeys| resolve(&k, &p).unwrap_err().key;
         assert_eq!(
             bad(MtlKeys {
                 lubricant: Some("olive_oil".into()),

@@ -174,23 +174,27 @@ pub struct DmwParams {
     pub chain: ChainParams,
 }
 
-fn positive(key: &str, v: f64, what: &str) -> std::result::Result<(), (String, String)> {
+fn positive(
+    key: &str,
+    v: f64,
+    what: &str,
+) -> std::result::Result<(), crate::core::config::KeyError> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
-        Err((
-            key.into(),
+        Err(crate::core::config::KeyError::new(
+            key,
             format!("{v} is out of range: {what} must be > 0"),
         ))
     }
 }
 
-/// Validation failures: (key, message).
-pub fn validate(
+/// Check a `[dmw]` table (or `hdi dmw`'s options) key by key.
+pub fn check(
     cfg: &DmwConfig,
     file: PathBuf,
-) -> std::result::Result<DmwParams, (String, String)> {
-    let bad = |k: &str, m: String| Err((k.to_string(), m));
+) -> std::result::Result<DmwParams, crate::core::config::KeyError> {
+    let bad = |k: &str, m: String| Err(crate::core::config::KeyError::new(k, m));
     if let Some(f) = cfg.sample_rate {
         positive("sample_rate", f.0, "a sample rate")?;
     }
@@ -794,7 +798,7 @@ impl FromConfig for DmwStage {
                 },
             ));
         }
-        let params = validate(cfg, path).map_err(|(k, m)| file.error("dmw", name, &k, m))?;
+        let params = check(cfg, path).map_err(|e| e.locate(file, "dmw", name))?;
         Ok(Self {
             name: name.to_string(),
             params,
