@@ -347,6 +347,21 @@ pub fn write_outputs(
     let entry = out.group("analysis", Some("NXentry"))?;
     out.attr_str(&entry, "default", "spectrum")?;
     out.attr_str(&entry, "class", &r.class_label())?;
+    write_spectrum(&out, r, s)?;
+    write_scalogram(&out, r, s)?;
+    write_poincare(&out, r, s)?;
+    write_phase_space(&out, r, s)?;
+    out.finish()?;
+    write_figures(dir, label, r, s)
+}
+
+/// Stored time values shifted to the window start (the report's times start at 0).
+fn shifted(r: &AnalysisReport, t: &[f64]) -> Vec<f64> {
+    t.iter().map(|t| t + r.t0_s).collect()
+}
+
+/// `analysis/spectrum`: amplitude spectrum and refined peaks.
+fn write_spectrum(out: &H5Out, r: &AnalysisReport, s: &Series) -> Result<()> {
     let g = out.group("analysis/spectrum", Some("NXdata"))?;
     out.attr_str(&g, "signal", "amplitude")?;
     out.attr_str_list(&g, "axes", &["frequency"])?;
@@ -362,7 +377,11 @@ pub fn write_outputs(
     let pa: Vec<f64> = r.peaks.iter().map(|p| p.amplitude).collect();
     out.write_1d(&g, "peak_frequency", &pf, "Hz", "refined peak frequency")?;
     out.write_1d(&g, "peak_amplitude", &pa, &s.unit, "refined peak amplitude")?;
+    Ok(())
+}
 
+/// `analysis/scalogram`: CWT magnitude, cone of influence and ridge.
+fn write_scalogram(out: &H5Out, r: &AnalysisReport, s: &Series) -> Result<()> {
     let sc = &r.scalogram;
     let g = out.group("analysis/scalogram", Some("NXdata"))?;
     out.attr_str(&g, "signal", "magnitude")?;
@@ -380,8 +399,7 @@ pub fn write_outputs(
         "|W| (L1: a tone of amplitude A reads A)",
     )?;
     out.write_1d(&g, "frequency", &sc.frequencies_hz, "Hz", "frequency")?;
-    let time: Vec<f64> = sc.time_s().iter().map(|t| t + r.t0_s).collect();
-    out.write_1d(&g, "time", &time, "s", "time")?;
+    out.write_1d(&g, "time", &shifted(r, &sc.time_s()), "s", "time")?;
     out.write_1d(
         &g,
         "coi_frequency",
@@ -396,11 +414,15 @@ pub fn write_outputs(
         "Hz",
         "ridge (dominant frequency)",
     )?;
+    Ok(())
+}
 
+/// `analysis/poincare`: the maxima and minima section.
+fn write_poincare(out: &H5Out, r: &AnalysisReport, s: &Series) -> Result<()> {
     let g = out.group("analysis/poincare", Some("NXdata"))?;
     out.attr_str(&g, "signal", "maxima")?;
     out.attr_str_list(&g, "axes", &["maxima_time"])?;
-    let shift = |t: &[f64]| t.iter().map(|t| t + r.t0_s).collect::<Vec<_>>();
+    let shift = |t: &[f64]| shifted(r, t);
     out.write_1d(
         &g,
         "maxima_time",
@@ -423,16 +445,23 @@ pub fn write_outputs(
         "time of the minima",
     )?;
     out.write_1d(&g, "minima", &r.section.minima, &s.unit, "minima")?;
+    Ok(())
+}
 
+/// `analysis/phase_space`: displacement against velocity.
+fn write_phase_space(out: &H5Out, r: &AnalysisReport, s: &Series) -> Result<()> {
     let ps = &r.phase_space;
     let g = out.group("analysis/phase_space", Some("NXdata"))?;
     out.attr_str(&g, "signal", "velocity")?;
     out.attr_str_list(&g, "axes", &["displacement"])?;
-    out.write_1d(&g, "time", &shift(&ps.time_s), "s", "time")?;
+    out.write_1d(&g, "time", &shifted(r, &ps.time_s), "s", "time")?;
     out.write_1d(&g, "displacement", &ps.x, &s.unit, "series (detrended)")?;
     out.write_1d(&g, "velocity", &ps.v, &s.velocity_unit, "velocity")?;
-    out.finish()?;
+    Ok(())
+}
 
+/// Spectrum, scalogram, Poincaré map and phase portrait PNGs, in display units.
+fn write_figures(dir: &Path, label: &str, r: &AnalysisReport, s: &Series) -> Result<()> {
     let (du, k) = display(&s.unit);
     let (vu, kv) = display(&s.velocity_unit);
     use crate::figures;
@@ -451,6 +480,8 @@ pub fn write_outputs(
         du,
         None,
     )?;
+    let sc = &r.scalogram;
+    let time = shifted(r, &sc.time_s());
     let mag: Vec<f32> = sc
         .magnitude
         .iter()
@@ -481,6 +512,7 @@ pub fn write_outputs(
             &r.class_label(),
         )?;
     }
+    let ps = &r.phase_space;
     let x: Vec<f64> = ps.x.iter().map(|x| x * k).collect();
     let v: Vec<f64> = ps.v.iter().map(|v| v * kv).collect();
     figures::phase_portrait_png(

@@ -78,9 +78,30 @@ pub fn plots(
     s: &SweepMetrics,
     title: &str,
 ) -> Result<()> {
-    use crate::figures::{
-        clearance_sweep_png, metric_sweep_png, time_histories_png, Panel, RegimeBand, SweepSeries,
-    };
+    sweep_figures(dir, p, cases, s, title)?;
+    for &want in &p.histories {
+        let Some(c) = cases.iter().min_by(|a, b| {
+            (a.actuation - want)
+                .abs()
+                .total_cmp(&(b.actuation - want).abs())
+        }) else {
+            continue;
+        };
+        history_figure(dir, c, title)?;
+    }
+    Ok(())
+}
+
+/// Figs 2.16/2.18 (clearance ± std with regimes), 2.19 (FHM/BV) and 2.22 (% solid contact)
+/// against the actuation.
+fn sweep_figures(
+    dir: &Path,
+    p: &SimulateParams,
+    cases: &[CaseOutcome],
+    s: &SweepMetrics,
+    title: &str,
+) -> Result<()> {
+    use crate::figures::{clearance_sweep_png, metric_sweep_png, RegimeBand, SweepSeries};
     let nm_of = |v: &Value| v.as_f64().unwrap_or(f64::NAN) * 1e9;
     let clearance: Vec<(f64, f64, f64)> = cases
         .iter()
@@ -157,72 +178,69 @@ pub fn plots(
         &[("solid contact", series("percent_solid_contact"))],
         &marks,
     )?;
-    for &want in &p.histories {
-        let Some(c) = cases.iter().min_by(|a, b| {
-            (a.actuation - want)
-                .abs()
-                .total_cmp(&(b.actuation - want).abs())
-        }) else {
-            continue;
-        };
-        let (time, series) = read_case_history(&c.entry.dir.join(CASE_FILE))?;
-        let ms: Vec<f64> = time.iter().map(|t| t * 1e3).collect();
-        let get = |n: &str| {
-            series
-                .iter()
-                .find(|(k, _)| k == n)
-                .map(|(_, v)| v.as_slice())
-                .unwrap_or(&[])
-        };
-        let pair = |v: &[f64], scale: f64| -> Vec<(f64, f64)> {
-            ms.iter().zip(v).map(|(t, y)| (*t, y * scale)).collect()
-        };
-        let fc = get("contact_force");
-        let q = get("friction");
-        let ar = get("real_area");
-        // μ, P_m and τ only where F_c > 1 µN, as the metrics define them (dynamics.md §8).
-        let loaded = |num: &[f64], den: &[f64], scale: f64| -> Vec<(f64, f64)> {
-            ms.iter()
-                .zip(fc)
-                .zip(num.iter().zip(den))
-                .filter(|((_, f), _)| **f > 1e-6)
-                .map(|((t, _), (n, d))| (*t, n / d * scale))
-                .collect()
-        };
-        let mu = loaded(q, fc, 1.0);
-        let pm = loaded(fc, ar, 1e-9);
-        let tau = loaded(q, ar, 1e-9);
-        let name = format!("history_{:.2}nm.png", c.actuation * 1e9);
-        time_histories_png(
-            &dir.join(name),
-            &format!(
-                "{title}: h_TFC = {:.2} nm (Figs 2.13–2.14, 2.17)",
-                c.actuation * 1e9
-            ),
-            &[
-                Panel {
-                    y_desc: "clearance (nm)",
-                    series: vec![("clearance", pair(get("clearance"), 1e9))],
-                },
-                Panel {
-                    y_desc: "force (mN)",
-                    series: vec![
-                        ("contact F_c", pair(fc, 1e3)),
-                        ("friction Q", pair(q, 1e3)),
-                        ("adhesion F_s", pair(get("adhesion"), 1e3)),
-                    ],
-                },
-                Panel {
-                    y_desc: "μ = Q/F_c",
-                    series: vec![("μ", mu)],
-                },
-                Panel {
-                    y_desc: "GPa",
-                    series: vec![("P_m = F_c/A_r", pm), ("τ = Q/A_r", tau)],
-                },
-            ],
-        )?;
-    }
+    Ok(())
+}
+
+/// Time histories of one case (Figs 2.13–2.14, 2.17): clearance, forces, μ, P_m and τ.
+fn history_figure(dir: &Path, c: &CaseOutcome, title: &str) -> Result<()> {
+    use crate::figures::{time_histories_png, Panel};
+    let (time, series) = read_case_history(&c.entry.dir.join(CASE_FILE))?;
+    let ms: Vec<f64> = time.iter().map(|t| t * 1e3).collect();
+    let get = |n: &str| {
+        series
+            .iter()
+            .find(|(k, _)| k == n)
+            .map(|(_, v)| v.as_slice())
+            .unwrap_or(&[])
+    };
+    let pair = |v: &[f64], scale: f64| -> Vec<(f64, f64)> {
+        ms.iter().zip(v).map(|(t, y)| (*t, y * scale)).collect()
+    };
+    let fc = get("contact_force");
+    let q = get("friction");
+    let ar = get("real_area");
+    // μ, P_m and τ only where F_c > 1 µN, as the metrics define them (dynamics.md §8).
+    let loaded = |num: &[f64], den: &[f64], scale: f64| -> Vec<(f64, f64)> {
+        ms.iter()
+            .zip(fc)
+            .zip(num.iter().zip(den))
+            .filter(|((_, f), _)| **f > 1e-6)
+            .map(|((t, _), (n, d))| (*t, n / d * scale))
+            .collect()
+    };
+    let mu = loaded(q, fc, 1.0);
+    let pm = loaded(fc, ar, 1e-9);
+    let tau = loaded(q, ar, 1e-9);
+    let name = format!("history_{:.2}nm.png", c.actuation * 1e9);
+    time_histories_png(
+        &dir.join(name),
+        &format!(
+            "{title}: h_TFC = {:.2} nm (Figs 2.13–2.14, 2.17)",
+            c.actuation * 1e9
+        ),
+        &[
+            Panel {
+                y_desc: "clearance (nm)",
+                series: vec![("clearance", pair(get("clearance"), 1e9))],
+            },
+            Panel {
+                y_desc: "force (mN)",
+                series: vec![
+                    ("contact F_c", pair(fc, 1e3)),
+                    ("friction Q", pair(q, 1e3)),
+                    ("adhesion F_s", pair(get("adhesion"), 1e3)),
+                ],
+            },
+            Panel {
+                y_desc: "μ = Q/F_c",
+                series: vec![("μ", mu)],
+            },
+            Panel {
+                y_desc: "GPa",
+                series: vec![("P_m = F_c/A_r", pm), ("τ = Q/A_r", tau)],
+            },
+        ],
+    )?;
     Ok(())
 }
 

@@ -443,16 +443,40 @@ pub fn write_outputs(
         "levelled"
     };
     out.attr_str(&entry, "default", default)?;
-    write_map(&out, "surface/raw", &a.raw, "height as read")?;
+    write_maps(&out, &entry, a)?;
+    write_summits(&out, &a.report)?;
+    write_parameters(&out, &a.report, a.final_map())?;
+    if !a.sweep.is_empty() {
+        write_sweeps(&out, &a.sweep)?;
+    }
+    let fm = a.final_map();
+    let history: Vec<Value> = fm
+        .history
+        .iter()
+        .map(|s| json!({"name": s.name, "params": s.params}))
+        .collect();
+    out.write_string(&entry, "history", &Value::Array(history).to_string())?;
+    out.write_string(&entry, "warnings", &a.report.warnings.join("\n"))?;
+    out.finish()?;
+
+    if let Some(dir) = plot_dir {
+        write_figures(a, dir)?;
+    }
+    Ok(())
+}
+
+/// `surface/{raw,levelled,filtered}` and the invalid-pixel mask of the final map.
+fn write_maps(out: &H5Out, entry: &hdf5::Group, a: &SurfaceAnalysis) -> Result<()> {
+    write_map(out, "surface/raw", &a.raw, "height as read")?;
     write_map(
-        &out,
+        out,
         "surface/levelled",
         &a.levelled,
         "height after levelling",
     )?;
     if let Some(f) = &a.filtered {
         write_map(
-            &out,
+            out,
             "surface/filtered",
             f,
             "height after levelling and filtering",
@@ -462,14 +486,18 @@ pub fn write_outputs(
     if let Some(valid) = &fm.valid {
         let mask = valid.mapv(|ok| u8::from(!ok));
         out.write_array(
-            &entry,
+            entry,
             "mask",
             mask.view(),
             "1",
             "1 = invalid pixel (NaN, saturated, masked)",
         )?;
     }
-    let r = &a.report;
+    Ok(())
+}
+
+/// `surface/summits` and the height and summit-height histograms.
+fn write_summits(out: &H5Out, r: &RoughnessReport) -> Result<()> {
     let g = out.group("surface/summits", None)?;
     let col = |f: fn(&crate::surface::roughness::Summit) -> f64| -> Vec<f64> {
         r.summits.iter().map(f).collect()
@@ -514,6 +542,12 @@ pub fn write_outputs(
             "Gaussian density, same mean and sigma",
         )?;
     }
+    Ok(())
+}
+
+/// `surface/parameters` (roughness and summit statistics) and `surface/nayak` (the same from
+/// the spectral moments).
+fn write_parameters(out: &H5Out, r: &RoughnessReport, fm: &HeightMap) -> Result<()> {
     let g = out.group("surface/parameters", None)?;
     for (name, v, u, ln) in [
         ("sigma", r.sigma, "m", "RMS roughness Sq"),
@@ -591,80 +625,76 @@ pub fn write_outputs(
         "m",
         "summit height std (Nayak)",
     )?;
-    if !a.sweep.is_empty() {
-        let g = out.group("surface/sweeps", None)?;
-        let kinds: Vec<&str> = a.sweep.iter().map(|s| s.kind.as_str()).collect();
-        out.attr_str_list(&g, "kind", &kinds)?;
-        let c = |f: fn(&SweepRow) -> f64| -> Vec<f64> { a.sweep.iter().map(f).collect() };
-        out.write_1d(
-            &g,
-            "value",
-            &c(|s| s.value),
-            "1",
-            "sub-sampling factor or S-filter cutoff in pixels",
-        )?;
-        out.write_1d(
-            &g,
-            "sampling_interval",
-            &c(|s| s.sampling_interval),
-            "m",
-            "pixel spacing",
-        )?;
-        out.write_1d(&g, "sigma", &c(|s| s.sigma), "m", "RMS roughness")?;
-        out.write_1d(&g, "eta", &c(|s| s.eta), "m^-2", "summit density")?;
-        out.write_1d(&g, "R", &c(|s| s.r), "m", "mean summit radius")?;
-        out.write_1d(&g, "beta", &c(|s| s.beta), "1", "sigma R eta")?;
-    }
-    let history: Vec<Value> = fm
-        .history
-        .iter()
-        .map(|s| json!({"name": s.name, "params": s.params}))
-        .collect();
-    out.write_string(&entry, "history", &Value::Array(history).to_string())?;
-    out.write_string(&entry, "warnings", &r.warnings.join("\n"))?;
-    out.finish()?;
-
-    if let Some(dir) = plot_dir {
-        let z = &fm.z;
-        figures::heatmap_png(
-            &dir.join("height_map.png"),
-            z.view(),
-            fm.dx,
-            fm.dy,
-            &format!("{} — σ = {:.3} nm", fm.channel, r.sigma * 1e9),
-        )?;
-        let h = &r.height_histogram;
-        figures::histogram_png(
-            &dir.join("height_histogram.png"),
-            &h.edges,
-            &h.density,
-            &h.gaussian,
-            1e9,
-            "Height distribution",
-            "height (nm)",
-            "Gaussian, same σ",
-        )?;
-        let s = &r.summit_histogram;
-        if r.n_summits > 0 && s.density.iter().any(|d| *d > 0.0) {
-            figures::histogram_png(
-                &dir.join("summit_height_histogram.png"),
-                &s.edges,
-                &s.density,
-                &s.gaussian,
-                1e9,
-                &format!(
-                    "Summit heights ({} summits, {})",
-                    r.n_summits, r.summit_scheme
-                ),
-                "summit height (nm)",
-                "Gaussian, same mean and σ_s",
-            )?;
-        }
-    }
-    if let Some(dir) = plot_dir {
-        write_sweep_plot(&dir.join("scale_sweep.png"), &a.sweep, fm.dx.max(fm.dy))?;
-    }
     Ok(())
+}
+
+/// `surface/sweeps`: the sub-sampling and S-filter rows.
+fn write_sweeps(out: &H5Out, sweep: &[SweepRow]) -> Result<()> {
+    let g = out.group("surface/sweeps", None)?;
+    let kinds: Vec<&str> = sweep.iter().map(|s| s.kind.as_str()).collect();
+    out.attr_str_list(&g, "kind", &kinds)?;
+    let c = |f: fn(&SweepRow) -> f64| -> Vec<f64> { sweep.iter().map(f).collect() };
+    out.write_1d(
+        &g,
+        "value",
+        &c(|s| s.value),
+        "1",
+        "sub-sampling factor or S-filter cutoff in pixels",
+    )?;
+    out.write_1d(
+        &g,
+        "sampling_interval",
+        &c(|s| s.sampling_interval),
+        "m",
+        "pixel spacing",
+    )?;
+    out.write_1d(&g, "sigma", &c(|s| s.sigma), "m", "RMS roughness")?;
+    out.write_1d(&g, "eta", &c(|s| s.eta), "m^-2", "summit density")?;
+    out.write_1d(&g, "R", &c(|s| s.r), "m", "mean summit radius")?;
+    out.write_1d(&g, "beta", &c(|s| s.beta), "1", "sigma R eta")?;
+    Ok(())
+}
+
+/// Height map, height and summit-height histograms, and the β scale sweep.
+fn write_figures(a: &SurfaceAnalysis, dir: &Path) -> Result<()> {
+    let fm = a.final_map();
+    let r = &a.report;
+    let z = &fm.z;
+    figures::heatmap_png(
+        &dir.join("height_map.png"),
+        z.view(),
+        fm.dx,
+        fm.dy,
+        &format!("{} — σ = {:.3} nm", fm.channel, r.sigma * 1e9),
+    )?;
+    let h = &r.height_histogram;
+    figures::histogram_png(
+        &dir.join("height_histogram.png"),
+        &h.edges,
+        &h.density,
+        &h.gaussian,
+        1e9,
+        "Height distribution",
+        "height (nm)",
+        "Gaussian, same σ",
+    )?;
+    let s = &r.summit_histogram;
+    if r.n_summits > 0 && s.density.iter().any(|d| *d > 0.0) {
+        figures::histogram_png(
+            &dir.join("summit_height_histogram.png"),
+            &s.edges,
+            &s.density,
+            &s.gaussian,
+            1e9,
+            &format!(
+                "Summit heights ({} summits, {})",
+                r.n_summits, r.summit_scheme
+            ),
+            "summit height (nm)",
+            "Gaussian, same mean and σ_s",
+        )?;
+    }
+    write_sweep_plot(&dir.join("scale_sweep.png"), &a.sweep, fm.dx.max(fm.dy))
 }
 
 /// β against the lateral scale it was measured at: the sampling interval (sub-sampling) or the

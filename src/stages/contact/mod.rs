@@ -419,6 +419,23 @@ pub fn write_outputs(
     out.root_attributes("contact", cache_key, &c.canonical(), inputs, "contact")?;
     let entry = out.group("contact", Some("NXentry"))?;
     out.attr_str(&entry, "default", "isbl")?;
+    write_isbl(&out, a)?;
+    write_derived(&out, a)?;
+    write_table(&out, a)?;
+    out.write_string(&entry, "inputs", &params_json(a.model.params()).to_string())?;
+    if let Some(mtl) = &a.mtl {
+        mtl.write_hdf5(&out)?;
+    }
+    out.finish()?;
+
+    if let Some(dir) = plot_dir {
+        write_figures(a, c, dir)?;
+    }
+    Ok(())
+}
+
+/// `contact/isbl`: the ISBL curves per unit nominal area against h/σ and h.
+fn write_isbl(out: &H5Out, a: &ContactAnalysis) -> Result<()> {
     let g = out.group("contact/isbl", Some("NXdata"))?;
     out.attr_str(&g, "signal", "P")?;
     out.attr_str_list(&g, "auxiliary_signals", &["Q", "F_s"])?;
@@ -499,6 +516,11 @@ pub fn write_outputs(
     ] {
         out.write_1d(&g, name, &col(f), unit, ln)?;
     }
+    Ok(())
+}
+
+/// `contact/derived`: the interface's derived constants.
+fn write_derived(out: &H5Out, a: &ContactAnalysis) -> Result<()> {
     let d = a.model.derived();
     let g = out.group("contact/derived", None)?;
     for (name, v, u, ln) in [
@@ -545,6 +567,11 @@ pub fn write_outputs(
     ] {
         out.write_scalar(&g, name, v, u, ln)?;
     }
+    Ok(())
+}
+
+/// `contact/table`: the force table's range, spacing and interpolation error per channel.
+fn write_table(out: &H5Out, a: &ContactAnalysis) -> Result<()> {
     let g = out.group("contact/table", None)?;
     let (lo, hi) = a.table().range();
     out.write_scalar(&g, "h_star_min", lo, "1", "first node")?;
@@ -560,71 +587,69 @@ pub fn write_outputs(
         "1",
         "interpolation error vs direct evaluation (midpoints and quarter points), per channel",
     )?;
-    out.write_string(&entry, "inputs", &params_json(a.model.params()).to_string())?;
-    if let Some(mtl) = &a.mtl {
-        mtl.write_hdf5(&out)?;
-    }
-    out.finish()?;
+    Ok(())
+}
 
-    if let Some(dir) = plot_dir {
-        let series = |f: fn(&crate::contact::isbl::IsblPoint) -> f64| -> Vec<(f64, f64)> {
-            a.h_star
-                .iter()
-                .zip(&a.points)
-                .map(|(x, p)| (*x, f(p)))
-                .collect()
-        };
-        figures::semilogy_png(
-            &dir.join("isbl_forces.png"),
-            &format!(
-                "ISBL per unit nominal area ({}, σ = {:.2} nm)",
-                c.parameter_set,
-                a.model.params().sigma * 1e9
-            ),
+/// ISBL forces, real area and stiffness, variable surface energy (Fig. 3.18), and the MTL
+/// figures when that analysis ran.
+fn write_figures(a: &ContactAnalysis, c: &ContactParams, dir: &Path) -> Result<()> {
+    let series = |f: fn(&crate::contact::isbl::IsblPoint) -> f64| -> Vec<(f64, f64)> {
+        a.h_star
+            .iter()
+            .zip(&a.points)
+            .map(|(x, p)| (*x, f(p)))
+            .collect()
+    };
+    figures::semilogy_png(
+        &dir.join("isbl_forces.png"),
+        &format!(
+            "ISBL per unit nominal area ({}, σ = {:.2} nm)",
+            c.parameter_set,
+            a.model.params().sigma * 1e9
+        ),
+        "h/σ",
+        "Pa",
+        &[
+            ("contact P", series(|p| p.contact_pressure)),
+            ("static friction Q", series(|p| p.friction_stress)),
+            ("adhesion F_s", series(|p| p.adhesion)),
+        ],
+        &[],
+    )?;
+    figures::semilogy_png(
+        &dir.join("isbl_area_stiffness.png"),
+        "Real area fraction and contact stiffness",
+        "h/σ",
+        "A_r/A_n (1), k_c (Pa/nm)",
+        &[
+            ("A_r/A_n", series(|p| p.real_area_fraction)),
+            ("k_c (Pa/nm)", series(|p| p.contact_stiffness * 1e-9)),
+        ],
+        &[],
+    )?;
+    let params = a.model.params();
+    if matches!(params.surface_energy, SurfaceEnergy::Variable { .. }) {
+        // Fig. 3.18: Δγ against the (dimensionless) lubricant gap, held at its maximum
+        // below ε, and the total adhesion it produces.
+        let energy: Vec<(f64, f64)> = a
+            .h_star
+            .iter()
+            .filter(|x| **x >= 0.0)
+            .map(|x| (*x, surface_energy_at(params, x * params.sigma) * 1e3))
+            .collect();
+        figures::stacked_png(
+            &dir.join("surface_energy.png"),
+            "Variable surface energy and total adhesion — Fig. 3.18 (shaded: gap < ε)",
             "h/σ",
-            "Pa",
             &[
-                ("contact P", series(|p| p.contact_pressure)),
-                ("static friction Q", series(|p| p.friction_stress)),
-                ("adhesion F_s", series(|p| p.adhesion)),
+                ("Δγ (mN/m) vs gap/σ", energy),
+                ("adhesion F_s (Pa)", series(|p| p.adhesion)),
             ],
-            &[],
+            &[(0.0, params.lj_spacing / params.sigma)],
         )?;
-        figures::semilogy_png(
-            &dir.join("isbl_area_stiffness.png"),
-            "Real area fraction and contact stiffness",
-            "h/σ",
-            "A_r/A_n (1), k_c (Pa/nm)",
-            &[
-                ("A_r/A_n", series(|p| p.real_area_fraction)),
-                ("k_c (Pa/nm)", series(|p| p.contact_stiffness * 1e-9)),
-            ],
-            &[],
-        )?;
-        let params = a.model.params();
-        if matches!(params.surface_energy, SurfaceEnergy::Variable { .. }) {
-            // Fig. 3.18: Δγ against the (dimensionless) lubricant gap, held at its maximum
-            // below ε, and the total adhesion it produces.
-            let energy: Vec<(f64, f64)> = a
-                .h_star
-                .iter()
-                .filter(|x| **x >= 0.0)
-                .map(|x| (*x, surface_energy_at(params, x * params.sigma) * 1e3))
-                .collect();
-            figures::stacked_png(
-                &dir.join("surface_energy.png"),
-                "Variable surface energy and total adhesion — Fig. 3.18 (shaded: gap < ε)",
-                "h/σ",
-                &[
-                    ("Δγ (mN/m) vs gap/σ", energy),
-                    ("adhesion F_s (Pa)", series(|p| p.adhesion)),
-                ],
-                &[(0.0, params.lj_spacing / params.sigma)],
-            )?;
-        }
-        if let Some(mtl) = &a.mtl {
-            mtl.plots(dir)?;
-        }
+    }
+    if let Some(mtl) = &a.mtl {
+        mtl.plots(dir)?;
     }
     Ok(())
 }

@@ -492,6 +492,33 @@ pub fn write_outputs(
     out.root_attributes("dmw", cache_key, &p.canonical(), inputs, "dmw")?;
     let entry = out.group("dmw", Some("NXentry"))?;
     out.attr_str(&entry, "default", "tracks")?;
+    write_tracks(&out, r)?;
+    write_average(&out, rec, r)?;
+    write_spectrum(&out, r)?;
+    if !r.trigger_times.is_empty() {
+        let g = out.group("dmw/triggers", None)?;
+        out.write_1d(
+            &g,
+            "time",
+            &r.trigger_times,
+            "s",
+            "once-per-revolution trigger times",
+        )?;
+        out.write_1d(&g, "period", &r.periods, "s", "revolution periods")?;
+    }
+    write_qa(&out, r)?;
+    write_process(&out, rec, r, p)?;
+    out.finish()?;
+
+    if let Some(dir) = plot_dir {
+        write_plots(r, dir)?;
+    }
+    Ok(())
+}
+
+/// `dmw/tracks`: time, the three displacement tracks D1–D3 and velocities V1–V3, and the
+/// filter-transient flags.
+fn write_tracks(out: &H5Out, r: &DmwResult) -> Result<()> {
     let n = r.tracks.d[0].len();
     let fs = r.sample_rate;
     let time: Vec<f64> = (0..n).map(|i| i as f64 / fs).collect();
@@ -532,7 +559,11 @@ pub fn write_outputs(
         "1",
         "1 = inside the filter's start/end transient (excluded from statistics)",
     )?;
+    Ok(())
+}
 
+/// `dmw/average`: the revolution-averaged record as recorded and as velocity.
+fn write_average(out: &H5Out, rec: &LdvRecord, r: &DmwResult) -> Result<()> {
     let g = out.group("dmw/average", Some("NXdata"))?;
     out.attr_str(&g, "signal", "velocity")?;
     out.attr_str_list(&g, "axes", &["time"])?;
@@ -563,7 +594,11 @@ pub fn write_outputs(
         "m/s",
         "revolution-averaged velocity, offset removed, unfiltered",
     )?;
+    Ok(())
+}
 
+/// `dmw/spectrum` and its peaks.
+fn write_spectrum(out: &H5Out, r: &DmwResult) -> Result<()> {
     let g = out.group("dmw/spectrum", Some("NXdata"))?;
     out.attr_str(&g, "signal", "amplitude")?;
     out.attr_str_list(&g, "auxiliary_signals", &["velocity_amplitude"])?;
@@ -594,19 +629,11 @@ pub fn write_outputs(
         "spectral peak frequency (Hann-interpolated)",
     )?;
     out.write_1d(&g, "amplitude", &pa, "m", "spectral peak amplitude")?;
+    Ok(())
+}
 
-    if !r.trigger_times.is_empty() {
-        let g = out.group("dmw/triggers", None)?;
-        out.write_1d(
-            &g,
-            "time",
-            &r.trigger_times,
-            "s",
-            "once-per-revolution trigger times",
-        )?;
-        out.write_1d(&g, "period", &r.periods, "s", "revolution periods")?;
-    }
-
+/// `dmw/qa`: trigger and averaging quality, integration corrections, DMW statistics.
+fn write_qa(out: &H5Out, r: &DmwResult) -> Result<()> {
     let q = &r.qa;
     let g = out.group("dmw/qa", None)?;
     out.write_count(&g, "n_avg", q.n_avg as u64, "revolutions averaged")?;
@@ -671,7 +698,11 @@ pub fn write_outputs(
         out.write_scalar(&g, name, v, u, ln)?;
     }
     out.write_string(&g, "warnings", &q.warnings.join("\n"))?;
+    Ok(())
+}
 
+/// `dmw/process`: program, parameters, source provenance and the filter sections.
+fn write_process(out: &H5Out, rec: &LdvRecord, r: &DmwResult, p: &DmwParams) -> Result<()> {
     let g = out.group("dmw/process", Some("NXprocess"))?;
     out.write_string(&g, "program", "hdi")?;
     out.write_string(&g, "version", env!("CARGO_PKG_VERSION"))?;
@@ -702,11 +733,6 @@ pub fn write_outputs(
             "1",
             "low-pass second-order sections [b0 b1 b2 a0 a1 a2]",
         )?;
-    }
-    out.finish()?;
-
-    if let Some(dir) = plot_dir {
-        write_plots(r, dir)?;
     }
     Ok(())
 }
