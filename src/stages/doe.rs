@@ -1110,8 +1110,8 @@ fn draw_fit_figures(
     Ok(())
 }
 
-/// ξ at a coded point for the annealing and the sensitivity check (§9): a cached simulation
-/// case at `sa_actuation`, or the level surfaces interpolated to it.
+/// ξ at a coded point for the annealing and the sensitivity check (dissertation §2.3): a cached
+/// simulation case at `sa_actuation`, or the level surfaces interpolated to it.
 struct Objective<'a> {
     p: &'a DoeParams,
     runner: &'a CaseRunner<'a>,
