@@ -9,12 +9,15 @@ use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::dmw_tracks::DmwTrack;
 use crate::contact::isbl::IsblModel;
 use crate::contact::lookup::IsblLookup;
+use crate::core::cache::Store;
 use crate::core::cases::CaseEntry;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::units::Length;
 use crate::dynamics::metrics::{flyability, Regime};
 use crate::error::{Error, Result};
-use crate::numerics::annealing::{sensitivity_points, Annealer, AnnealingOptions, StopReason};
+use crate::numerics::annealing::{
+    sensitivity_points, Annealer, AnnealingOptions, AnnealingRecord, StopReason,
+};
 use crate::numerics::regression::{
     coded, decoded, full_factorial, FitOptions, Polynomial, PolynomialBasis, ResponseSurface,
 };
@@ -22,9 +25,11 @@ use crate::slider::calibration::base_inputs;
 use crate::slider::doe_design::{self, design_cases, design_params};
 use crate::slider::params::{uncalibrated_base, SimulateParams};
 use crate::slider::sweep::{cached_case, sweep_analysis, CaseOutcome};
+use rayon::prelude::*;
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Bump when the numbers the stage derives from its cases change (the cases themselves carry
 /// the simulate stage's model version).
@@ -373,9 +378,9 @@ pub fn check(
 struct CaseRunner<'a> {
     base: &'a SimulateParams,
     isbl: &'a IsblLookup,
-    store: &'a crate::core::cache::Store,
-    contact_key: String,
-    dmw: Option<(&'a DmwTrack, String)>,
+    store: &'a Store,
+    contact_key: &'a str,
+    dmw: Option<(&'a DmwTrack, &'a str)>,
 }
 
 /// One finished case of a design: its metrics and ξ.
@@ -394,17 +399,23 @@ impl CaseRunner<'_> {
 
     fn run(&self, design: [f64; 3], actuation: f64) -> Result<DesignCase> {
         let p = design_params(self.base, &design, actuation)?;
-        let dmw = self.dmw.as_ref().map(|(t, k)| (*t, k.as_str()));
-        let entry = cached_case(self.store, &p, actuation, self.isbl, &self.contact_key, dmw)
-            .map_err(|e| {
-                Error::Stage(format!(
-                    "case a = {:.3} um, w = {:.3} um, x = {:.3} um, h_TFC = {:.3} nm: {e}",
-                    design[0] / UM,
-                    design[1] / UM,
-                    design[2] / UM,
-                    actuation / NM
-                ))
-            })?;
+        let entry = cached_case(
+            self.store,
+            &p,
+            actuation,
+            self.isbl,
+            self.contact_key,
+            self.dmw,
+        )
+        .map_err(|e| {
+            Error::Stage(format!(
+                "case a = {:.3} um, w = {:.3} um, x = {:.3} um, h_TFC = {:.3} nm: {e}",
+                design[0] / UM,
+                design[1] / UM,
+                design[2] / UM,
+                actuation / NM
+            ))
+        })?;
         let xi = xi_of(&entry.result, p.model.nominal_flying_height);
         Ok(DesignCase {
             design,
@@ -481,6 +492,70 @@ fn table_value(v: f64) -> Value {
     } else {
         Value::Null
     }
+}
+
+/// The design table: one row per case, level by level.
+fn design_rows(
+    coded_points: &[Vec<f64>],
+    per_level: usize,
+    cases: &[DesignCase],
+) -> Vec<Map<String, Value>> {
+    let mut rows = Vec::new();
+    for (i, c) in cases.iter().enumerate() {
+        let coded_point = &coded_points[i % per_level];
+        let mut row = Map::new();
+        row.insert("run".into(), json!(i + 1));
+        for f in 0..3 {
+            row.insert(format!("{}_coded", FACTORS[f]), json!(coded_point[f]));
+        }
+        row.insert("a_um".into(), table_value(c.design[0] / UM));
+        row.insert("w_um".into(), table_value(c.design[1] / UM));
+        row.insert("x_um".into(), table_value(c.design[2] / UM));
+        row.insert("actuation_nm".into(), table_value(c.actuation / NM));
+        let m = &c.entry.result;
+        row.insert(
+            "clearance_nm".into(),
+            m["clearance_m"]["mean"]
+                .as_f64()
+                .map_or(Value::Null, |v| table_value(v / NM)),
+        );
+        row.insert(
+            "fhm_or_bv_percent".into(),
+            m["vibration_percent"]
+                .as_f64()
+                .map_or(Value::Null, table_value),
+        );
+        row.insert("regime".into(), m["regime"].clone());
+        row.insert("xi".into(), table_value(c.xi));
+        row.insert("case_key".into(), json!(c.entry.key));
+        rows.push(row);
+    }
+    rows
+}
+
+/// The annealing table: one row per evaluation, with its ξ.
+fn annealing_rows(
+    p: &DoeParams,
+    history: &[AnnealingRecord],
+    xis: &[f64],
+) -> Vec<Map<String, Value>> {
+    let mut rows = Vec::new();
+    for (r, xi) in history.iter().zip(xis) {
+        let d = p.decode(&r.candidate);
+        let mut m = Map::new();
+        m.insert("iteration".into(), json!(r.iteration));
+        m.insert("temperature".into(), table_value(r.temperature));
+        m.insert("a_um".into(), table_value(d[0] / UM));
+        m.insert("w_um".into(), table_value(d[1] / UM));
+        m.insert("x_um".into(), table_value(d[2] / UM));
+        m.insert("xi".into(), table_value(*xi));
+        m.insert("candidate_j".into(), table_value(r.candidate_j));
+        m.insert("accepted".into(), json!(r.accepted));
+        m.insert("current_j".into(), table_value(r.current_j));
+        m.insert("best_j".into(), table_value(r.best_j));
+        rows.push(m);
+    }
+    rows
 }
 
 /// Table 2.7 coefficient names of a two-factor reduced polynomial, in output order.
@@ -609,6 +684,72 @@ fn model_selection(lf: &LevelFit) -> (Option<f64>, Option<f64>, u32) {
     (Some(f), Some(p), if p < 0.05 { 5 } else { 4 })
 }
 
+/// One condition of Table 2.8 for a design.
+fn comparison_rows(
+    label: &str,
+    design: &[f64; 3],
+    sp: &SimulateParams,
+    cases: &[CaseOutcome],
+) -> Result<Vec<Map<String, Value>>> {
+    let sweep = sweep_analysis(sp, cases)?;
+    let nearest = |h: f64| {
+        cases
+            .iter()
+            .enumerate()
+            .min_by(|a, b| {
+                (a.1.actuation - h)
+                    .abs()
+                    .total_cmp(&(b.1.actuation - h).abs())
+            })
+            .map(|(i, _)| i)
+    };
+    let critical = sweep
+        .slopes
+        .critical_point
+        .as_ref()
+        .and_then(|c| nearest(c.actuation_m));
+    let steady = sweep
+        .touchdown_index
+        .and_then(|td| (td..cases.len()).find(|&i| sweep.regimes[i] == Regime::SolidContact));
+    let mut rows = Vec::new();
+    for (condition, idx) in [
+        ("critical actuation", critical),
+        ("optimum actuation", sweep.optimum_index),
+        ("touchdown", sweep.touchdown_index),
+        ("steady contact", steady),
+    ] {
+        let mut row = Map::new();
+        row.insert("design".into(), json!(label));
+        row.insert("a_um".into(), table_value(design[0] / UM));
+        row.insert("w_um".into(), table_value(design[1] / UM));
+        row.insert("x_um".into(), table_value(design[2] / UM));
+        row.insert("condition".into(), json!(condition));
+        let m = idx.map(|i| (&cases[i].metrics, cases[i].actuation));
+        let get = |k: &str| m.and_then(|(m, _)| m[k].as_f64());
+        row.insert(
+            "h_tfc_nm".into(),
+            m.map_or(Value::Null, |(_, h)| table_value(h / NM)),
+        );
+        row.insert(
+            "clearance_nm".into(),
+            m.and_then(|(m, _)| m["clearance_m"]["mean"].as_f64())
+                .map_or(Value::Null, |v| table_value(v / NM)),
+        );
+        row.insert(
+            "hms_nm".into(),
+            get("hms_mean_m").map_or(Value::Null, |v| table_value(v / NM)),
+        );
+        row.insert(
+            "fhm_or_bv_percent".into(),
+            get("vibration_percent").map_or(Value::Null, table_value),
+        );
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+// ---- Figures: these helpers only assemble data for `crate::figures` ----
+
 /// Contour panels of one level: ξ over the two free factors at the fixed one's three levels.
 fn contour_png(path: &Path, p: &DoeParams, lf: &LevelFit, points: &[[f64; 3]]) -> Result<()> {
     use crate::figures::{contour_panels_png, ContourPanel};
@@ -679,68 +820,77 @@ fn contour_png(path: &Path, p: &DoeParams, lf: &LevelFit, points: &[[f64; 3]]) -
     Ok(())
 }
 
-/// One condition of Table 2.8 for a design.
-fn comparison_rows(
-    label: &str,
-    design: &[f64; 3],
-    sp: &SimulateParams,
-    cases: &[CaseOutcome],
-) -> Result<Vec<Map<String, Value>>> {
-    let sweep = sweep_analysis(sp, cases)?;
-    let nearest = |h: f64| {
-        cases
-            .iter()
-            .enumerate()
-            .min_by(|a, b| {
-                (a.1.actuation - h)
-                    .abs()
-                    .total_cmp(&(b.1.actuation - h).abs())
-            })
-            .map(|(i, _)| i)
-    };
-    let critical = sweep
-        .slopes
-        .critical_point
-        .as_ref()
-        .and_then(|c| nearest(c.actuation_m));
-    let steady = sweep
-        .touchdown_index
-        .and_then(|td| (td..cases.len()).find(|&i| sweep.regimes[i] == Regime::SolidContact));
-    let mut rows = Vec::new();
-    for (condition, idx) in [
-        ("critical actuation", critical),
-        ("optimum actuation", sweep.optimum_index),
-        ("touchdown", sweep.touchdown_index),
-        ("steady contact", steady),
-    ] {
-        let mut row = Map::new();
-        row.insert("design".into(), json!(label));
-        row.insert("a_um".into(), table_value(design[0] / UM));
-        row.insert("w_um".into(), table_value(design[1] / UM));
-        row.insert("x_um".into(), table_value(design[2] / UM));
-        row.insert("condition".into(), json!(condition));
-        let m = idx.map(|i| (&cases[i].metrics, cases[i].actuation));
-        let get = |k: &str| m.and_then(|(m, _)| m[k].as_f64());
-        row.insert(
-            "h_tfc_nm".into(),
-            m.map_or(Value::Null, |(_, h)| table_value(h / NM)),
-        );
-        row.insert(
-            "clearance_nm".into(),
-            m.and_then(|(m, _)| m["clearance_m"]["mean"].as_f64())
-                .map_or(Value::Null, |v| table_value(v / NM)),
-        );
-        row.insert(
-            "hms_nm".into(),
-            get("hms_mean_m").map_or(Value::Null, |v| table_value(v / NM)),
-        );
-        row.insert(
-            "fhm_or_bv_percent".into(),
-            get("vibration_percent").map_or(Value::Null, table_value),
-        );
-        rows.push(row);
-    }
-    Ok(rows)
+/// Residual diagnostics of one level's degree-4 surface.
+fn residuals_png(path: &Path, lf: &LevelFit) -> Result<()> {
+    let diag = lf.quartic.fit.residual_diagnostics();
+    crate::figures::residual_panels_png(
+        path,
+        &format!(
+            "Residuals of the degree-4 ξ surface, h_TFC = {:.1} nm",
+            lf.actuation / NM
+        ),
+        &diag.fitted_residual,
+        &diag.normal_probability,
+    )?;
+    Ok(())
+}
+
+/// The annealing's convergence: current and best J per iteration, with the temperature.
+fn annealing_convergence_png(
+    path: &Path,
+    p: &DoeParams,
+    history: &[AnnealingRecord],
+) -> Result<()> {
+    let curve: Vec<(f64, f64, f64)> = history
+        .iter()
+        .map(|r| (r.iteration as f64, r.current_j, r.best_j))
+        .collect();
+    let temps: Vec<f64> = history.iter().map(|r| r.temperature).collect();
+    crate::figures::annealing_png(
+        path,
+        &format!(
+            "Simulated annealing of ξ at h_TFC = {:.1} nm (Fig. 2.30)",
+            p.sa_actuation / NM
+        ),
+        &curve,
+        Some(&temps),
+    )?;
+    Ok(())
+}
+
+/// Steady clearance over actuation of the initial and the optimised design (Table 2.8).
+fn comparison_png(path: &Path, p: &DoeParams, sweeps: &[DesignSweep]) -> Result<()> {
+    let t0 = 0.5 * p.base.model.interface.lubricant_thickness / NM;
+    let sweep_series: Vec<crate::figures::SweepSeries> = sweeps
+        .iter()
+        .map(|s| crate::figures::SweepSeries {
+            label: s.label,
+            points: s
+                .outcomes
+                .iter()
+                .map(|c| {
+                    (
+                        c.actuation / NM,
+                        c.metrics["clearance_m"]["mean"]
+                            .as_f64()
+                            .unwrap_or(f64::NAN)
+                            / NM,
+                        c.metrics["clearance_m"]["std"].as_f64().unwrap_or(f64::NAN) / NM,
+                    )
+                })
+                .collect(),
+        })
+        .collect();
+    crate::figures::clearance_sweep_png(
+        path,
+        "Initial vs optimised design: steady clearance (Table 2.8)",
+        "TFC actuation (nm)",
+        "clearance (nm)",
+        &sweep_series,
+        &[],
+        &[(0.0, "solid contact"), (t0, "T0"), (2.0 * t0, "2T0")],
+    )?;
+    Ok(())
 }
 
 /// Validated stage instance.
@@ -779,369 +929,481 @@ impl StageKind for DoeStage {
         self.params.base.upstream()
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
-        use rayon::prelude::*;
-        use std::sync::atomic::{AtomicUsize, Ordering};
         let p = &self.params;
-        let (isbl_params, dmw_track) = base_inputs(&p.base, &ctx.upstream, &ctx.upstream_dirs)?;
-        let key_of = |name: &str| {
-            ctx.fingerprint
-                .upstream
-                .iter()
-                .find(|u| u.name == name)
-                .map(|u| u.key.clone())
-                .unwrap_or_default()
+        let inputs = prepare_inputs(p, ctx)?;
+        let runner = inputs.runner(p, ctx.store);
+        let design = run_design(p, ctx, &runner)?;
+        let surfaces = fit_surfaces(p, ctx, &design)?;
+        draw_fit_figures(p, ctx, &surfaces.fits, &design.designs)?;
+        let optimum = if p.optimise {
+            let objective = Objective {
+                p,
+                runner: &runner,
+                fits: &surfaces.fits,
+            };
+            let annealing = anneal(p, ctx, &objective)?;
+            let sensitivity = check_sensitivity(p, ctx, &objective, &annealing)?;
+            let comparison = if p.compare {
+                Some(compare_designs(p, ctx, &runner, annealing.best)?)
+            } else {
+                None
+            };
+            Some(Optimum {
+                annealing,
+                sensitivity,
+                comparison,
+            })
+        } else {
+            None
         };
-        ctx.progress.set_message("interface table");
-        let isbl = IsblLookup::build_standard(IsblModel::new(isbl_params)?)?;
-        let runner = CaseRunner {
-            base: &p.base,
-            isbl: &isbl,
-            store: ctx.store,
-            contact_key: key_of(&p.base.contact),
-            dmw: match (&p.base.dmw, dmw_track.as_ref()) {
-                (Some(d), Some(t)) => Some((t, key_of(d))),
-                _ => None,
-            },
-        };
+        Ok(assemble_output(p, &design, &surfaces, optimum))
+    }
+}
 
-        // 1. The design: 27 coded points × the actuation levels, in parallel.
-        // The same list the Slurm executor submits (`design_cases`), level by level.
-        let coded_points = full_factorial(&[3, 3, 3]);
-        let designs = p.design_points();
-        let jobs = design_cases(&p.levels, &p.actuations);
-        let total = jobs.len();
-        let finished = AtomicUsize::new(0);
-        ctx.progress.set_message(format!("0/{total} DOE cases"));
-        let outcomes: Vec<Result<DesignCase>> = jobs
-            .par_iter()
-            .map(|&(design, actuation)| {
-                let r = runner.run(design, actuation);
-                let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
-                ctx.progress.set_message(format!("{n}/{total} DOE cases"));
-                r
+// ---- The phases of `DoeStage::run`, in order ----
+
+/// The annealing's box, in coded units.
+const CODED_LOWER: [f64; 3] = [-1.0; 3];
+const CODED_UPPER: [f64; 3] = [1.0; 3];
+
+/// The base's upstream inputs: the interface table, the DMW track, and the cache keys of the
+/// instances they come from (part of every case's key).
+struct BaseInputs {
+    isbl: IsblLookup,
+    contact_key: String,
+    dmw: Option<(DmwTrack, String)>,
+}
+
+impl BaseInputs {
+    fn runner<'a>(&'a self, p: &'a DoeParams, store: &'a Store) -> CaseRunner<'a> {
+        CaseRunner {
+            base: &p.base,
+            isbl: &self.isbl,
+            store,
+            contact_key: &self.contact_key,
+            dmw: self.dmw.as_ref().map(|(t, k)| (t, k.as_str())),
+        }
+    }
+}
+
+fn prepare_inputs(p: &DoeParams, ctx: &StageContext) -> Result<BaseInputs> {
+    let (isbl_params, dmw_track) = base_inputs(&p.base, &ctx.upstream, &ctx.upstream_dirs)?;
+    let key_of = |name: &str| {
+        ctx.fingerprint
+            .upstream
+            .iter()
+            .find(|u| u.name == name)
+            .map(|u| u.key.clone())
+            .unwrap_or_default()
+    };
+    ctx.progress.set_message("interface table");
+    let isbl = IsblLookup::build_standard(IsblModel::new(isbl_params)?)?;
+    Ok(BaseInputs {
+        isbl,
+        contact_key: key_of(&p.base.contact),
+        dmw: match (&p.base.dmw, dmw_track) {
+            (Some(d), Some(t)) => Some((t, key_of(d))),
+            _ => None,
+        },
+    })
+}
+
+/// The finished design: the coded points, their bulges [m], and every case, level by level.
+struct DesignRun {
+    coded_points: Vec<Vec<f64>>,
+    designs: Vec<[f64; 3]>,
+    cases: Vec<DesignCase>,
+}
+
+/// The 27 coded points × the actuation levels, in parallel through the case cache; writes the
+/// design table. The same list the Slurm executor submits (`design_cases`), level by level.
+fn run_design(p: &DoeParams, ctx: &StageContext, runner: &CaseRunner) -> Result<DesignRun> {
+    let coded_points = full_factorial(&[3, 3, 3]);
+    let designs = p.design_points();
+    let jobs = design_cases(&p.levels, &p.actuations);
+    let total = jobs.len();
+    let finished = AtomicUsize::new(0);
+    ctx.progress.set_message(format!("0/{total} DOE cases"));
+    let outcomes: Vec<Result<DesignCase>> = jobs
+        .par_iter()
+        .map(|&(design, actuation)| {
+            let r = runner.run(design, actuation);
+            let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
+            ctx.progress.set_message(format!("{n}/{total} DOE cases"));
+            r
+        })
+        .collect();
+    let mut cases = Vec::with_capacity(total);
+    for o in outcomes {
+        cases.push(o?);
+    }
+    crate::core::store::write_table(
+        &design_rows(&coded_points, designs.len(), &cases),
+        &ctx.out_dir.join("design"),
+    )?;
+    Ok(DesignRun {
+        coded_points,
+        designs,
+        cases,
+    })
+}
+
+/// The response surfaces of every actuation level and the degree each selects.
+struct SurfaceFits {
+    fits: Vec<LevelFit>,
+    selected_degrees: Vec<String>,
+}
+
+/// Fits the surfaces per level; writes the coefficient, ANOVA and predictive-equation tables.
+fn fit_surfaces(p: &DoeParams, ctx: &StageContext, design: &DesignRun) -> Result<SurfaceFits> {
+    ctx.progress.set_message("response surfaces");
+    let per_level = design.designs.len();
+    let mut fits = Vec::new();
+    for (k, &h) in p.actuations.iter().enumerate() {
+        let xi: Vec<f64> = design.cases[k * per_level..(k + 1) * per_level]
+            .iter()
+            .map(|c| c.xi)
+            .collect();
+        if let Some(i) = xi.iter().position(|v| !v.is_finite()) {
+            return Err(Error::Stage(format!(
+                "ξ is not finite for design {:?} µm at {:.1} nm (a case without a steady \
+                 clearance or vibration)",
+                design.designs[i].map(|v| v / UM),
+                h / NM
+            )));
+        }
+        fits.push(fit_level(h, p.fixed[k], &design.coded_points, &xi)?);
+    }
+    let selected_degrees: Vec<String> = fits
+        .iter()
+        .map(|f| model_selection(f).2.to_string())
+        .collect();
+    crate::core::store::write_table(&coefficient_rows(&fits), &ctx.out_dir.join("coefficients"))?;
+    crate::core::store::write_table(&anova_rows(&fits), &ctx.out_dir.join("anova"))?;
+    crate::core::store::write_table(
+        &predictive_rows(p, &fits)?,
+        &ctx.out_dir.join("predictive_equations"),
+    )?;
+    Ok(SurfaceFits {
+        fits,
+        selected_degrees,
+    })
+}
+
+/// Contour and residual plots of every level (Figs 2.26–2.29).
+fn draw_fit_figures(
+    p: &DoeParams,
+    ctx: &StageContext,
+    fits: &[LevelFit],
+    designs: &[[f64; 3]],
+) -> Result<()> {
+    ctx.progress.set_message("contour and residual plots");
+    for lf in fits {
+        let tag = format!("{:.1}nm", lf.actuation / NM).replace('.', "p");
+        contour_png(
+            &ctx.out_dir.join(format!("contours_{tag}.png")),
+            p,
+            lf,
+            designs,
+        )?;
+        residuals_png(&ctx.out_dir.join(format!("residuals_{tag}.png")), lf)?;
+    }
+    Ok(())
+}
+
+/// ξ at a coded point for the annealing and the sensitivity check (dissertation §2.3): a cached
+/// simulation case at `sa_actuation`, or the level surfaces interpolated to it.
+struct Objective<'a> {
+    p: &'a DoeParams,
+    runner: &'a CaseRunner<'a>,
+    fits: &'a [LevelFit],
+}
+
+/// One objective evaluation: ξ and, for a simulation, the case it used.
+struct Evaluation {
+    xi: f64,
+    case_key: Option<String>,
+}
+
+impl Objective<'_> {
+    fn evaluate(&self, c: &[f64]) -> Result<Evaluation> {
+        let p = self.p;
+        match p.sa_objective {
+            SaObjective::Simulation => {
+                let r = self.runner.run(p.decode(c), p.sa_actuation)?;
+                Ok(Evaluation {
+                    xi: r.xi,
+                    case_key: Some(r.entry.key),
+                })
+            }
+            SaObjective::Surrogate => Ok(Evaluation {
+                xi: surrogate_xi(self.fits, p.sa_actuation, c),
+                case_key: None,
+            }),
+        }
+    }
+}
+
+/// The annealing's optimum and what it cost.
+struct Annealing {
+    /// The optimum in coded units, and decoded [m].
+    coded: Vec<f64>,
+    best: [f64; 3],
+    best_xi: f64,
+    evaluations: usize,
+    reanneals: usize,
+    stop: StopReason,
+    case_keys: Vec<String>,
+}
+
+/// Simulated annealing on ξ at `sa_actuation`, in coded units; writes the annealing table and
+/// its convergence plot (Fig. 2.30).
+fn anneal(p: &DoeParams, ctx: &StageContext, objective: &Objective) -> Result<Annealing> {
+    ctx.progress.set_message("simulated annealing");
+    let start = p.encode(&p.sa_start);
+    let mut annealer = Annealer::new(&CODED_LOWER, &CODED_UPPER, &start, &p.sa)
+        .map_err(|e| Error::Stage(format!("annealing: {e}")))?;
+    let mut case_keys = Vec::new();
+    let mut xis = Vec::new();
+    while let Some(c) = annealer.ask() {
+        let e = objective.evaluate(&c)?;
+        case_keys.extend(e.case_key);
+        xis.push(e.xi);
+        annealer.tell(annealing_objective(e.xi));
+        ctx.progress.set_message(format!(
+            "simulated annealing: {} evaluations, best J {:.4e}",
+            annealer.evaluations(),
+            annealer.best().1
+        ));
+    }
+    let stop = annealer.stop_reason();
+    let res = annealer.into_result();
+    let best = p.decode(&res.x);
+    crate::core::store::write_table(
+        &annealing_rows(p, &res.history, &xis),
+        &ctx.out_dir.join("annealing"),
+    )?;
+    annealing_convergence_png(&ctx.out_dir.join("annealing.png"), p, &res.history)?;
+    // The optimum is an evaluated point: a simulation finds its case cached, already listed.
+    let best_xi = objective.evaluate(&res.x)?.xi;
+    Ok(Annealing {
+        best,
+        best_xi,
+        evaluations: res.evaluations,
+        reanneals: res.reanneals,
+        stop: stop.unwrap_or(res.stop),
+        case_keys,
+        coded: res.x,
+    })
+}
+
+/// The one-step ξ spread per factor around the optimum.
+struct Sensitivity {
+    spread: [f64; 3],
+    most_sensitive: Option<&'static str>,
+    case_keys: Vec<String>,
+}
+
+/// ± steps of `sensitivity_step` per factor around the optimum; writes the sensitivity table.
+fn check_sensitivity(
+    p: &DoeParams,
+    ctx: &StageContext,
+    objective: &Objective,
+    annealing: &Annealing,
+) -> Result<Sensitivity> {
+    ctx.progress.set_message("sensitivity check");
+    let step: Vec<f64> = (0..3)
+        .map(|f| p.sensitivity_step / (0.5 * (p.levels[f][2] - p.levels[f][0])))
+        .collect();
+    let pts = sensitivity_points(
+        &annealing.coded,
+        &step,
+        p.sensitivity_steps,
+        &CODED_LOWER,
+        &CODED_UPPER,
+    )
+    .map_err(|e| Error::Stage(format!("sensitivity: {e}")))?;
+    let values: Vec<Result<Evaluation>> =
+        pts.par_iter().map(|s| objective.evaluate(&s.x)).collect();
+    let mut case_keys = Vec::new();
+    let mut sens_rows = Vec::new();
+    let mut spread = [0.0f64; 3];
+    for (s, v) in pts.iter().zip(values) {
+        let e = v?;
+        let xi = e.xi;
+        case_keys.extend(e.case_key);
+        let d = p.decode(&s.x);
+        if s.offset.abs() == 1 {
+            spread[s.coordinate] = spread[s.coordinate].max((xi - annealing.best_xi).abs());
+        }
+        let mut m = Map::new();
+        m.insert("factor".into(), json!(FACTORS[s.coordinate]));
+        m.insert("offset_steps".into(), json!(s.offset));
+        m.insert(
+            "offset_nm".into(),
+            table_value(f64::from(s.offset) * p.sensitivity_step / NM),
+        );
+        m.insert("a_um".into(), table_value(d[0] / UM));
+        m.insert("w_um".into(), table_value(d[1] / UM));
+        m.insert("x_um".into(), table_value(d[2] / UM));
+        m.insert("xi".into(), table_value(xi));
+        sens_rows.push(m);
+    }
+    crate::core::store::write_table(&sens_rows, &ctx.out_dir.join("sensitivity"))?;
+    let most_sensitive = (0..3)
+        .max_by(|a, b| spread[*a].total_cmp(&spread[*b]))
+        .map(|f| FACTORS[f]);
+    Ok(Sensitivity {
+        spread,
+        most_sensitive,
+        case_keys,
+    })
+}
+
+/// One design's 2-DOF sweep of Table 2.8.
+struct DesignSweep {
+    label: &'static str,
+    outcomes: Vec<CaseOutcome>,
+}
+
+/// Table 2.8's rows and the cases they used.
+struct Comparison {
+    rows: Vec<Map<String, Value>>,
+    case_keys: Vec<String>,
+}
+
+/// Table 2.8: the 2-DOF sweep on the initial and the optimised design; writes the comparison
+/// table and plot.
+fn compare_designs(
+    p: &DoeParams,
+    ctx: &StageContext,
+    runner: &CaseRunner,
+    best: [f64; 3],
+) -> Result<Comparison> {
+    let initial = {
+        let b = p.base.model.bulge;
+        [b.semi_width_x, b.full_width_y, b.offset_from_te]
+    };
+    let n = p.compare_actuations.len();
+    let total = 2 * n;
+    let done = AtomicUsize::new(0);
+    let runs: Vec<Result<DesignCase>> = (0..total)
+        .into_par_iter()
+        .map(|i| {
+            let design = if i < n { initial } else { best };
+            let r = runner.run(design, p.compare_actuations[i % n]);
+            let k = done.fetch_add(1, Ordering::Relaxed) + 1;
+            ctx.progress
+                .set_message(format!("Table 2.8 sweeps: {k}/{total} cases"));
+            r
+        })
+        .collect();
+    let mut all = Vec::with_capacity(total);
+    for r in runs {
+        all.push(r?);
+    }
+    let case_keys = all.iter().map(|c| c.entry.key.clone()).collect();
+    let mut rows = Vec::new();
+    let mut sweeps = Vec::new();
+    for (label, chunk) in [("initial", &all[..n]), ("optimised", &all[n..])] {
+        let design = chunk[0].design;
+        let sp = runner.params_for(&design)?;
+        let outcomes: Vec<CaseOutcome> = chunk
+            .iter()
+            .map(|c| CaseOutcome {
+                actuation: c.actuation,
+                metrics: c.entry.result.clone(),
+                entry: c.entry.clone(),
             })
             .collect();
-        let mut doe_cases = Vec::with_capacity(total);
-        for o in outcomes {
-            doe_cases.push(o?);
-        }
-        let mut design_rows = Vec::new();
-        for (i, c) in doe_cases.iter().enumerate() {
-            let coded_point = &coded_points[i % designs.len()];
-            let mut row = Map::new();
-            row.insert("run".into(), json!(i + 1));
-            for f in 0..3 {
-                row.insert(format!("{}_coded", FACTORS[f]), json!(coded_point[f]));
-            }
-            row.insert("a_um".into(), table_value(c.design[0] / UM));
-            row.insert("w_um".into(), table_value(c.design[1] / UM));
-            row.insert("x_um".into(), table_value(c.design[2] / UM));
-            row.insert("actuation_nm".into(), table_value(c.actuation / NM));
-            let m = &c.entry.result;
-            row.insert(
-                "clearance_nm".into(),
-                m["clearance_m"]["mean"]
-                    .as_f64()
-                    .map_or(Value::Null, |v| table_value(v / NM)),
-            );
-            row.insert(
-                "fhm_or_bv_percent".into(),
-                m["vibration_percent"]
-                    .as_f64()
-                    .map_or(Value::Null, table_value),
-            );
-            row.insert("regime".into(), m["regime"].clone());
-            row.insert("xi".into(), table_value(c.xi));
-            row.insert("case_key".into(), json!(c.entry.key));
-            design_rows.push(row);
-        }
-        crate::core::store::write_table(&design_rows, &ctx.out_dir.join("design"))?;
+        rows.extend(comparison_rows(label, &design, &sp, &outcomes)?);
+        sweeps.push(DesignSweep { label, outcomes });
+    }
+    crate::core::store::write_table(&rows, &ctx.out_dir.join("comparison"))?;
+    comparison_png(&ctx.out_dir.join("comparison.png"), p, &sweeps)?;
+    Ok(Comparison { rows, case_keys })
+}
 
-        // 2. Response surfaces per level.
-        ctx.progress.set_message("response surfaces");
-        let mut fits = Vec::new();
-        for (k, &h) in p.actuations.iter().enumerate() {
-            let xi: Vec<f64> = doe_cases[k * designs.len()..(k + 1) * designs.len()]
-                .iter()
-                .map(|c| c.xi)
-                .collect();
-            if let Some(i) = xi.iter().position(|v| !v.is_finite()) {
-                return Err(Error::Stage(format!(
-                    "ξ is not finite for design {:?} µm at {:.1} nm (a case without a steady \
-                     clearance or vibration)",
-                    designs[i].map(|v| v / UM),
-                    h / NM
-                )));
-            }
-            fits.push(fit_level(h, p.fixed[k], &coded_points, &xi)?);
-        }
-        let degrees: Vec<String> = fits
-            .iter()
-            .map(|f| model_selection(f).2.to_string())
-            .collect();
-        crate::core::store::write_table(
-            &coefficient_rows(&fits),
-            &ctx.out_dir.join("coefficients"),
-        )?;
-        crate::core::store::write_table(&anova_rows(&fits), &ctx.out_dir.join("anova"))?;
-        crate::core::store::write_table(
-            &predictive_rows(p, &fits)?,
-            &ctx.out_dir.join("predictive_equations"),
-        )?;
-        ctx.progress.set_message("contour and residual plots");
-        for lf in &fits {
-            let tag = format!("{:.1}nm", lf.actuation / NM).replace('.', "p");
-            contour_png(
-                &ctx.out_dir.join(format!("contours_{tag}.png")),
-                p,
-                lf,
-                &designs,
-            )?;
-            let diag = lf.quartic.fit.residual_diagnostics();
-            crate::figures::residual_panels_png(
-                &ctx.out_dir.join(format!("residuals_{tag}.png")),
-                &format!(
-                    "Residuals of the degree-4 ξ surface, h_TFC = {:.1} nm",
-                    lf.actuation / NM
-                ),
-                &diag.fitted_residual,
-                &diag.normal_probability,
-            )?;
-        }
+/// What the optimisation found, when it ran.
+struct Optimum {
+    annealing: Annealing,
+    sensitivity: Sensitivity,
+    comparison: Option<Comparison>,
+}
 
-        // Every case this instance used, so `hdi gc` keeps them with it.
-        let mut case_keys: Vec<String> = doe_cases.iter().map(|c| c.entry.key.clone()).collect();
-        let mut result = json!({
-            "cases": total,
-            "cases_cached": doe_cases.iter().filter(|c| c.entry.cached).count(),
-            "fits": fits.iter().map(fit_summary).collect::<Vec<_>>(),
-            "tables": ["design", "coefficients", "anova", "predictive_equations"],
+/// The result JSON and the summary row.
+fn assemble_output(
+    p: &DoeParams,
+    design: &DesignRun,
+    surfaces: &SurfaceFits,
+    optimum: Option<Optimum>,
+) -> StageOutput {
+    let total = design.cases.len();
+    // Every case this instance used, so `hdi gc` keeps them with it.
+    let mut case_keys: Vec<String> = design.cases.iter().map(|c| c.entry.key.clone()).collect();
+    let mut result = json!({
+        "cases": total,
+        "cases_cached": design.cases.iter().filter(|c| c.entry.cached).count(),
+        "fits": surfaces.fits.iter().map(fit_summary).collect::<Vec<_>>(),
+        "tables": ["design", "coefficients", "anova", "predictive_equations"],
+    });
+    let mut row = Map::new();
+    row.insert("simulate".into(), json!(p.base_name));
+    row.insert("cases".into(), json!(total));
+    row.insert(
+        "selected_degrees".into(),
+        json!(surfaces.selected_degrees.join(" ")),
+    );
+    if let Some(Optimum {
+        annealing: a,
+        sensitivity: s,
+        comparison,
+    }) = optimum
+    {
+        case_keys.extend(a.case_keys);
+        case_keys.extend(s.case_keys);
+        let best = a.best;
+        let spread = s.spread;
+        let optimum = json!({
+            "a_m": best[0], "w_m": best[1], "x_m": best[2],
+            "xi": a.best_xi,
+            "objective": format!("{:?}", p.sa_objective).to_lowercase(),
+            "evaluations": a.evaluations,
+            "reanneals": a.reanneals,
+            "stop": match a.stop {
+                StopReason::Stalled => "converged (stalled)",
+                StopReason::MaxEvaluations => "evaluation budget",
+            },
+            "sensitivity_one_step": {"a_tfc": spread[0], "w_tfc": spread[1], "x_tfc": spread[2]},
+            "most_sensitive": s.most_sensitive,
         });
-        let mut row = Map::new();
-        row.insert("simulate".into(), json!(p.base_name));
-        row.insert("cases".into(), json!(total));
-        row.insert("selected_degrees".into(), json!(degrees.join(" ")));
-
-        // 3. Simulated annealing on ξ at sa_actuation, in coded units.
-        if p.optimise {
-            ctx.progress.set_message("simulated annealing");
-            let lower = [-1.0; 3];
-            let upper = [1.0; 3];
-            let start = p.encode(&p.sa_start);
-            let evaluate = |c: &[f64]| -> Result<(f64, Option<String>)> {
-                match p.sa_objective {
-                    SaObjective::Simulation => {
-                        let r = runner.run(p.decode(c), p.sa_actuation)?;
-                        Ok((r.xi, Some(r.entry.key)))
-                    }
-                    SaObjective::Surrogate => Ok((surrogate_xi(&fits, p.sa_actuation, c), None)),
-                }
-            };
-            let mut annealer = Annealer::new(&lower, &upper, &start, &p.sa)
-                .map_err(|e| Error::Stage(format!("annealing: {e}")))?;
-            let mut xis = Vec::new();
-            while let Some(c) = annealer.ask() {
-                let (xi, key) = evaluate(&c)?;
-                case_keys.extend(key);
-                xis.push(xi);
-                annealer.tell(annealing_objective(xi));
-                ctx.progress.set_message(format!(
-                    "simulated annealing: {} evaluations, best J {:.4e}",
-                    annealer.evaluations(),
-                    annealer.best().1
-                ));
-            }
-            let stop = annealer.stop_reason();
-            let res = annealer.into_result();
-            let best = p.decode(&res.x);
-            let mut sa_rows = Vec::new();
-            for (r, xi) in res.history.iter().zip(&xis) {
-                let d = p.decode(&r.candidate);
-                let mut m = Map::new();
-                m.insert("iteration".into(), json!(r.iteration));
-                m.insert("temperature".into(), table_value(r.temperature));
-                m.insert("a_um".into(), table_value(d[0] / UM));
-                m.insert("w_um".into(), table_value(d[1] / UM));
-                m.insert("x_um".into(), table_value(d[2] / UM));
-                m.insert("xi".into(), table_value(*xi));
-                m.insert("candidate_j".into(), table_value(r.candidate_j));
-                m.insert("accepted".into(), json!(r.accepted));
-                m.insert("current_j".into(), table_value(r.current_j));
-                m.insert("best_j".into(), table_value(r.best_j));
-                sa_rows.push(m);
-            }
-            crate::core::store::write_table(&sa_rows, &ctx.out_dir.join("annealing"))?;
-            let curve: Vec<(f64, f64, f64)> = res
-                .history
-                .iter()
-                .map(|r| (r.iteration as f64, r.current_j, r.best_j))
-                .collect();
-            let temps: Vec<f64> = res.history.iter().map(|r| r.temperature).collect();
-            crate::figures::annealing_png(
-                &ctx.out_dir.join("annealing.png"),
-                &format!(
-                    "Simulated annealing of ξ at h_TFC = {:.1} nm (Fig. 2.30)",
-                    p.sa_actuation / NM
-                ),
-                &curve,
-                Some(&temps),
-            )?;
-            let best_xi = match p.sa_objective {
-                SaObjective::Simulation => runner.run(best, p.sa_actuation)?.xi,
-                SaObjective::Surrogate => surrogate_xi(&fits, p.sa_actuation, &res.x),
-            };
-
-            // 4. Sensitivity: ± steps of `sensitivity_step` per factor around the optimum.
-            ctx.progress.set_message("sensitivity check");
-            let step: Vec<f64> = (0..3)
-                .map(|f| p.sensitivity_step / (0.5 * (p.levels[f][2] - p.levels[f][0])))
-                .collect();
-            let pts = sensitivity_points(&res.x, &step, p.sensitivity_steps, &lower, &upper)
-                .map_err(|e| Error::Stage(format!("sensitivity: {e}")))?;
-            let values: Vec<Result<(f64, Option<String>)>> =
-                pts.par_iter().map(|s| evaluate(&s.x)).collect();
-            let mut sens_rows = Vec::new();
-            let mut spread = [0.0f64; 3];
-            for (s, v) in pts.iter().zip(values) {
-                let (xi, key) = v?;
-                case_keys.extend(key);
-                let d = p.decode(&s.x);
-                if s.offset.abs() == 1 {
-                    spread[s.coordinate] = spread[s.coordinate].max((xi - best_xi).abs());
-                }
-                let mut m = Map::new();
-                m.insert("factor".into(), json!(FACTORS[s.coordinate]));
-                m.insert("offset_steps".into(), json!(s.offset));
-                m.insert(
-                    "offset_nm".into(),
-                    table_value(f64::from(s.offset) * p.sensitivity_step / NM),
-                );
-                m.insert("a_um".into(), table_value(d[0] / UM));
-                m.insert("w_um".into(), table_value(d[1] / UM));
-                m.insert("x_um".into(), table_value(d[2] / UM));
-                m.insert("xi".into(), table_value(xi));
-                sens_rows.push(m);
-            }
-            crate::core::store::write_table(&sens_rows, &ctx.out_dir.join("sensitivity"))?;
-            let most = (0..3)
-                .max_by(|a, b| spread[*a].total_cmp(&spread[*b]))
-                .map(|f| FACTORS[f]);
-
-            let optimum = json!({
-                "a_m": best[0], "w_m": best[1], "x_m": best[2],
-                "xi": best_xi,
-                "objective": format!("{:?}", p.sa_objective).to_lowercase(),
-                "evaluations": res.evaluations,
-                "reanneals": res.reanneals,
-                "stop": match stop.unwrap_or(res.stop) {
-                    StopReason::Stalled => "converged (stalled)",
-                    StopReason::MaxEvaluations => "evaluation budget",
-                },
-                "sensitivity_one_step": {"a_tfc": spread[0], "w_tfc": spread[1], "x_tfc": spread[2]},
-                "most_sensitive": most,
-            });
-            row.insert("optimum_a_um".into(), table_value(best[0] / UM));
-            row.insert("optimum_w_um".into(), table_value(best[1] / UM));
-            row.insert("optimum_x_um".into(), table_value(best[2] / UM));
-            row.insert("optimum_xi".into(), table_value(best_xi));
-            row.insert("sa_evaluations".into(), json!(res.evaluations));
-            row.insert("most_sensitive".into(), json!(most));
-            result["optimum"] = optimum;
-
-            // 5. Table 2.8: the 2-DOF sweep on the initial and the optimised design.
-            if p.compare {
-                let initial = {
-                    let b = p.base.model.bulge;
-                    [b.semi_width_x, b.full_width_y, b.offset_from_te]
-                };
-                let n = p.compare_actuations.len();
-                let total = 2 * n;
-                let done = AtomicUsize::new(0);
-                let runs: Vec<Result<DesignCase>> = (0..total)
-                    .into_par_iter()
-                    .map(|i| {
-                        let design = if i < n { initial } else { best };
-                        let r = runner.run(design, p.compare_actuations[i % n]);
-                        let k = done.fetch_add(1, Ordering::Relaxed) + 1;
-                        ctx.progress
-                            .set_message(format!("Table 2.8 sweeps: {k}/{total} cases"));
-                        r
-                    })
-                    .collect();
-                let mut all = Vec::with_capacity(total);
-                for r in runs {
-                    all.push(r?);
-                }
-                case_keys.extend(all.iter().map(|c| c.entry.key.clone()));
-                let mut cmp_rows = Vec::new();
-                let mut series = Vec::new();
-                for (label, chunk) in [("initial", &all[..n]), ("optimised", &all[n..])] {
-                    let design = chunk[0].design;
-                    let sp = runner.params_for(&design)?;
-                    let outcomes: Vec<CaseOutcome> = chunk
-                        .iter()
-                        .map(|c| CaseOutcome {
-                            actuation: c.actuation,
-                            metrics: c.entry.result.clone(),
-                            entry: c.entry.clone(),
-                        })
-                        .collect();
-                    cmp_rows.extend(comparison_rows(label, &design, &sp, &outcomes)?);
-                    series.push((
-                        label,
-                        outcomes
-                            .iter()
-                            .map(|c| {
-                                (
-                                    c.actuation / NM,
-                                    c.metrics["clearance_m"]["mean"]
-                                        .as_f64()
-                                        .unwrap_or(f64::NAN)
-                                        / NM,
-                                    c.metrics["clearance_m"]["std"].as_f64().unwrap_or(f64::NAN)
-                                        / NM,
-                                )
-                            })
-                            .collect::<Vec<_>>(),
-                    ));
-                }
-                crate::core::store::write_table(&cmp_rows, &ctx.out_dir.join("comparison"))?;
-                let t0 = 0.5 * p.base.model.interface.lubricant_thickness / NM;
-                let sweep_series: Vec<crate::figures::SweepSeries> = series
-                    .iter()
-                    .map(|(label, pts)| crate::figures::SweepSeries {
-                        label,
-                        points: pts.clone(),
-                    })
-                    .collect();
-                crate::figures::clearance_sweep_png(
-                    &ctx.out_dir.join("comparison.png"),
-                    "Initial vs optimised design: steady clearance (Table 2.8)",
-                    "TFC actuation (nm)",
-                    "clearance (nm)",
-                    &sweep_series,
-                    &[],
-                    &[(0.0, "solid contact"), (t0, "T0"), (2.0 * t0, "2T0")],
-                )?;
-                result["comparison"] = json!(cmp_rows);
-            }
+        row.insert("optimum_a_um".into(), table_value(best[0] / UM));
+        row.insert("optimum_w_um".into(), table_value(best[1] / UM));
+        row.insert("optimum_x_um".into(), table_value(best[2] / UM));
+        row.insert("optimum_xi".into(), table_value(a.best_xi));
+        row.insert("sa_evaluations".into(), json!(a.evaluations));
+        row.insert("most_sensitive".into(), json!(s.most_sensitive));
+        result["optimum"] = optimum;
+        if let Some(c) = comparison {
+            case_keys.extend(c.case_keys);
+            result["comparison"] = json!(c.rows);
         }
-        case_keys.sort();
-        case_keys.dedup();
-        result["case_keys"] = json!(case_keys);
-        result["tables"] = json!([
-            "design",
-            "coefficients",
-            "anova",
-            "predictive_equations",
-            "annealing",
-            "sensitivity",
-            "comparison"
-        ]);
-        Ok(StageOutput {
-            result,
-            summary_row: Some(row),
-        })
+    }
+    case_keys.sort();
+    case_keys.dedup();
+    result["case_keys"] = json!(case_keys);
+    result["tables"] = json!([
+        "design",
+        "coefficients",
+        "anova",
+        "predictive_equations",
+        "annealing",
+        "sensitivity",
+        "comparison"
+    ]);
+    StageOutput {
+        result,
+        summary_row: Some(row),
     }
 }
 
