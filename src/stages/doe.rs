@@ -988,21 +988,13 @@ impl BaseInputs {
 
 fn prepare_inputs(p: &DoeParams, ctx: &StageContext) -> Result<BaseInputs> {
     let (isbl_params, dmw_track) = base_inputs(&p.base, &ctx.upstream, &ctx.upstream_dirs)?;
-    let key_of = |name: &str| {
-        ctx.fingerprint
-            .upstream
-            .iter()
-            .find(|u| u.name == name)
-            .map(|u| u.key.clone())
-            .unwrap_or_default()
-    };
     ctx.progress.set_message("interface table");
     let isbl = IsblLookup::build_standard(IsblModel::new(isbl_params)?)?;
     Ok(BaseInputs {
         isbl,
-        contact_key: key_of(&p.base.contact),
+        contact_key: ctx.upstream_key(&p.base.contact),
         dmw: match (&p.base.dmw, dmw_track) {
-            (Some(d), Some(t)) => Some((t, key_of(d))),
+            (Some(d), Some(t)) => Some((t, ctx.upstream_key(d))),
             _ => None,
         },
     })
