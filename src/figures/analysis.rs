@@ -652,6 +652,34 @@ pub fn spectrum_png(
     unit: &str,
     f_range_hz: Option<(f64, f64)>,
 ) -> Result<()> {
+    let plot = spectrum_plot(path, frequency_hz, amplitude, peaks, f_range_hz)?;
+    render_png(path, (820, 560), |root| {
+        draw_spectrum(root, title, unit, &plot)
+    })
+}
+
+/// The spectrum's points and axes in kHz, ready to draw.
+struct SpectrumPlot {
+    /// The trace (decimated if long), raised to the floor.
+    pts: Vec<(f64, f64)>,
+    /// Peaks in range, largest first.
+    marks: Vec<(f64, f64)>,
+    /// The largest few peaks, which get labels.
+    labelled: Vec<(f64, f64)>,
+    /// The lowest amplitude shown.
+    floor: f64,
+    x_axis: (f64, f64),
+    y_axis: (f64, f64),
+}
+
+/// The spectrum's points in range, its axes, the floor and the peaks to circle and label.
+fn spectrum_plot(
+    path: &Path,
+    frequency_hz: &[f64],
+    amplitude: &[f64],
+    peaks: &[(f64, f64)],
+    f_range_hz: Option<(f64, f64)>,
+) -> Result<SpectrumPlot> {
     if frequency_hz.len() != amplitude.len() {
         return Err(perr(
             path,
@@ -727,86 +755,103 @@ pub fn spectrum_png(
     // The largest few peaks get labels.
     marks.sort_by(|a, b| b.1.total_cmp(&a.1));
     let labelled: Vec<(f64, f64)> = marks.iter().copied().take(MAX_PEAK_LABELS).collect();
+    Ok(SpectrumPlot {
+        pts,
+        marks,
+        labelled,
+        floor,
+        x_axis,
+        y_axis,
+    })
+}
+
+/// The log–log axes, the trace, the circled peaks and their labels.
+fn draw_spectrum(root: &Area, title: &str, unit: &str, plot: &SpectrumPlot) -> DrawResult<()> {
+    let (x_axis, y_axis, floor) = (plot.x_axis, plot.y_axis, plot.floor);
     let x_decades = (x_axis.1 / x_axis.0).log10();
     let y_decades = (y_axis.1 / y_axis.0).log10();
     let (x_ticks, y_ticks) = (
         log_key_points(x_axis.0, x_axis.1),
         log_key_points(y_axis.0, y_axis.1),
     );
-    render_png(path, (820, 560), |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, title_font())
-            .margin(15)
-            .margin_right(25)
-            .x_label_area_size(45)
-            .y_label_area_size(75)
-            .build_cartesian_2d(
-                (x_axis.0..x_axis.1).log_scale().with_key_points(x_ticks),
-                (y_axis.0..y_axis.1).log_scale().with_key_points(y_ticks),
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, title_font())
+        .margin(15)
+        .margin_right(25)
+        .x_label_area_size(45)
+        .y_label_area_size(75)
+        .build_cartesian_2d(
+            (x_axis.0..x_axis.1).log_scale().with_key_points(x_ticks),
+            (y_axis.0..y_axis.1).log_scale().with_key_points(y_ticks),
+        )
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .bold_line_style(BLACK.mix(0.07))
+        .x_label_formatter(&|v| log_tick_label(*v, x_decades))
+        .y_label_formatter(&|v| log_tick_label(*v, y_decades))
+        .x_desc("frequency (kHz)")
+        .y_desc(with_unit("amplitude", unit))
+        .label_style(font(14))
+        .axis_desc_style(font(15))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            plot.pts.clone(),
+            TRACE_BLUE.stroke_width(1),
+        )))
+        .map_err(|e| e.to_string())?;
+    if !plot.marks.is_empty() {
+        chart
+            .draw_series(
+                plot.marks
+                    .iter()
+                    .map(|&(f, a)| Circle::new((f, a.max(floor)), 5, RED.stroke_width(2))),
             )
             .map_err(|e| e.to_string())?;
-        chart
-            .configure_mesh()
-            .bold_line_style(BLACK.mix(0.07))
-            .x_label_formatter(&|v| log_tick_label(*v, x_decades))
-            .y_label_formatter(&|v| log_tick_label(*v, y_decades))
-            .x_desc("frequency (kHz)")
-            .y_desc(with_unit("amplitude", unit))
-            .label_style(font(14))
-            .axis_desc_style(font(15))
-            .draw()
-            .map_err(|e| e.to_string())?;
-        chart
-            .draw_series(std::iter::once(PathElement::new(
-                pts.clone(),
-                TRACE_BLUE.stroke_width(1),
-            )))
-            .map_err(|e| e.to_string())?;
-        if !marks.is_empty() {
-            chart
-                .draw_series(
-                    marks
-                        .iter()
-                        .map(|&(f, a)| Circle::new((f, a.max(floor)), 5, RED.stroke_width(2))),
-                )
-                .map_err(|e| e.to_string())?;
+    }
+    let area = chart.plotting_area().strip_coord_spec();
+    let base = chart.plotting_area().get_base_pixel();
+    let by_x: Vec<(i32, i32, f64)> = plot
+        .labelled
+        .iter()
+        .map(|&(f, a)| {
+            let (px, py) = chart.backend_coord(&(f, a.max(floor)));
+            (px - base.0, py - base.1, f)
+        })
+        .collect();
+    label_peaks(&area, by_x)
+}
+
+/// Labels above their peaks (pixel `(x, y, frequency kHz)`), left to right, each moved up
+/// until it overlaps no other.
+fn label_peaks(area: &Area, mut by_x: Vec<(i32, i32, f64)>) -> DrawResult<()> {
+    by_x.sort_by_key(|p| p.0);
+    let mut placed: Vec<PixelRect> = Vec::new();
+    for (px, py, f) in by_x {
+        let text = format!("{} kHz", fmt_sig3(f));
+        let (w, h, _) = measure_text(area, &text, 13)?;
+        let mut top = py - 9 - h;
+        let left = px - w / 2;
+        let clash = |top: i32, placed: &[PixelRect]| {
+            let r = (left - 4, top - 3, left + w + 4, top + h + 3);
+            placed.iter().any(|&p| overlaps(r, p))
+        };
+        while clash(top, &placed) && top > 0 {
+            top -= 2;
         }
-        // Labels above their peaks, left to right, each moved up until it overlaps no other.
-        let area = chart.plotting_area().strip_coord_spec();
-        let base = chart.plotting_area().get_base_pixel();
-        let mut by_x: Vec<(i32, i32, f64)> = labelled
-            .iter()
-            .map(|&(f, a)| {
-                let (px, py) = chart.backend_coord(&(f, a.max(floor)));
-                (px - base.0, py - base.1, f)
-            })
-            .collect();
-        by_x.sort_by_key(|p| p.0);
-        let mut placed: Vec<PixelRect> = Vec::new();
-        for (px, py, f) in by_x {
-            let text = format!("{} kHz", fmt_sig3(f));
-            let (w, h, _) = measure_text(&area, &text, 13)?;
-            let mut top = py - 9 - h;
-            let left = px - w / 2;
-            let clash = |top: i32, placed: &[PixelRect]| {
-                let r = (left - 4, top - 3, left + w + 4, top + h + 3);
-                placed.iter().any(|&p| overlaps(r, p))
-            };
-            while clash(top, &placed) && top > 0 {
-                top -= 2;
-            }
-            let top = top.max(2);
-            let rect = boxed_text(
-                &area,
-                (px, top),
-                &text,
-                Pos::new(HPos::Center, VPos::Top),
-                13,
-            )?;
-            placed.push(rect);
-        }
-        Ok(())
-    })
+        let top = top.max(2);
+        let rect = boxed_text(
+            area,
+            (px, top),
+            &text,
+            Pos::new(HPos::Center, VPos::Top),
+            13,
+        )?;
+        placed.push(rect);
+    }
+    Ok(())
 }
 
 #[cfg(test)]
