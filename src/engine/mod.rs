@@ -231,36 +231,12 @@ pub fn run(
     } else {
         Some(store.lock().map_err(|e| Error::io(store.processed(), e))?)
     };
-    let names: Vec<String> = stages.iter().map(|s| s.name().to_string()).collect();
-    let force: BTreeSet<String> = if opts.force {
-        if opts.only.is_empty() {
-            names.iter().cloned().collect()
-        } else {
-            opts.only.iter().cloned().collect()
-        }
-    } else {
-        BTreeSet::new()
-    };
+    let force = forced(&stages, opts);
     let plan = plan(stages, store, &force)?;
     let selected = selection(&plan, &opts.only)?;
 
     if opts.dry_run {
-        let outcomes = plan
-            .planned
-            .iter()
-            .filter(|p| selected.contains(&p.name))
-            .map(|p| {
-                let o = match &p.state {
-                    State::Fresh => Outcome::Cached,
-                    State::Stale(why) => Outcome::WouldRun(why.clone()),
-                };
-                (p.name.clone(), o)
-            })
-            .collect();
-        return Ok(RunReport {
-            outcomes,
-            current: Vec::new(),
-        });
+        return Ok(dry_run_report(&plan, &selected));
     }
 
     let pool = rayon::ThreadPoolBuilder::new()
@@ -276,107 +252,189 @@ pub fn run(
         .collect();
     observer.run_started(to_run.len());
 
-    // results by name: Ok(result.json) or Err(reason)
-    let mut results: BTreeMap<String, std::result::Result<Value, String>> = BTreeMap::new();
-    let mut manifests: BTreeMap<String, Manifest> = BTreeMap::new();
-    let mut outcomes: BTreeMap<String, Outcome> = BTreeMap::new();
+    let mut settled = read_fresh(&plan, &selected, store);
+    run_waves(&plan, store, &pool, observer, to_run, &mut settled);
+    observer.run_finished();
+
+    report(&plan, store, settled)
+}
+
+/// The instances `--force` re-runs: those named by `--only`, else all.
+fn forced(stages: &[Box<dyn Stage>], opts: &RunOptions) -> BTreeSet<String> {
+    let names: Vec<String> = stages.iter().map(|s| s.name().to_string()).collect();
+    if opts.force {
+        if opts.only.is_empty() {
+            names.iter().cloned().collect()
+        } else {
+            opts.only.iter().cloned().collect()
+        }
+    } else {
+        BTreeSet::new()
+    }
+}
+
+/// What `--dry-run` reports: the selected instances, cached or why they would run.
+fn dry_run_report(plan: &Plan, selected: &BTreeSet<String>) -> RunReport {
+    let outcomes = plan
+        .planned
+        .iter()
+        .filter(|p| selected.contains(&p.name))
+        .map(|p| {
+            let o = match &p.state {
+                State::Fresh => Outcome::Cached,
+                State::Stale(why) => Outcome::WouldRun(why.clone()),
+            };
+            (p.name.clone(), o)
+        })
+        .collect();
+    RunReport {
+        outcomes,
+        current: Vec::new(),
+    }
+}
+
+/// The instances settled so far, by name.
+#[derive(Default)]
+struct Settled {
+    /// `result.json`, or why there is none.
+    results: BTreeMap<String, std::result::Result<Value, String>>,
+    manifests: BTreeMap<String, Manifest>,
+    outcomes: BTreeMap<String, Outcome>,
+}
+
+impl Settled {
+    /// Records one executed instance; "skipped: …" errors are skips, not failures.
+    fn record(&mut self, name: String, r: Executed) {
+        match r {
+            Ok((value, manifest, secs)) => {
+                self.results.insert(name.clone(), Ok(value));
+                self.manifests.insert(name.clone(), manifest);
+                self.outcomes.insert(name, Outcome::Ran { seconds: secs });
+            }
+            Err(e) => {
+                let o = if e.starts_with("skipped:") {
+                    Outcome::Skipped(e.trim_start_matches("skipped: ").to_string())
+                } else {
+                    Outcome::Failed(e.clone())
+                };
+                self.results.insert(name.clone(), Err(e));
+                self.outcomes.insert(name, o);
+            }
+        }
+    }
+}
+
+/// The selected fresh instances, settled from their cached `result.json`.
+fn read_fresh(plan: &Plan, selected: &BTreeSet<String>, store: &Store) -> Settled {
+    let mut s = Settled::default();
     for p in &plan.planned {
         if let (State::Fresh, Some(m)) = (&p.state, &p.manifest) {
             if selected.contains(&p.name) {
                 let dir = store.entry_dir(&p.kind, &p.key);
                 match read_result(&dir) {
                     Ok(v) => {
-                        results.insert(p.name.clone(), Ok(v));
-                        manifests.insert(p.name.clone(), m.clone());
-                        outcomes.insert(p.name.clone(), Outcome::Cached);
+                        s.results.insert(p.name.clone(), Ok(v));
+                        s.manifests.insert(p.name.clone(), m.clone());
+                        s.outcomes.insert(p.name.clone(), Outcome::Cached);
                     }
                     Err(e) => {
                         let e = crate::error::chain(&e);
-                        results.insert(p.name.clone(), Err(e.clone()));
-                        outcomes.insert(p.name.clone(), Outcome::Failed(e));
+                        s.results.insert(p.name.clone(), Err(e.clone()));
+                        s.outcomes.insert(p.name.clone(), Outcome::Failed(e));
                     }
                 }
             }
         }
     }
+    s
+}
 
-    // Waves: every stale instance whose upstream is settled runs in the current wave.
+/// Waves: every stale instance whose upstream is settled runs in the current wave.
+fn run_waves(
+    plan: &Plan,
+    store: &Store,
+    pool: &rayon::ThreadPool,
+    observer: &dyn RunObserver,
+    to_run: Vec<usize>,
+    settled: &mut Settled,
+) {
     let mut remaining: Vec<usize> = to_run;
     while !remaining.is_empty() {
         let (ready, blocked): (Vec<usize>, Vec<usize>) = remaining.iter().partition(|&&i| {
             plan.stages[plan.planned[i].index]
                 .upstream()
                 .iter()
-                .all(|u| results.contains_key(u))
+                .all(|u| settled.results.contains_key(u))
         });
         if ready.is_empty() {
             // Cannot happen with a valid topological order; guard against an infinite loop.
             for i in blocked {
-                outcomes.insert(
+                settled.outcomes.insert(
                     plan.planned[i].name.clone(),
                     Outcome::Skipped("upstream never settled".into()),
                 );
             }
             break;
         }
+        let results = &settled.results;
         let wave: Vec<(usize, Executed)> = pool.install(|| {
             use rayon::prelude::*;
             ready
                 .par_iter()
-                .map(|&i| {
-                    let p = &plan.planned[i];
-                    let stage = &plan.stages[p.index];
-                    let mut upstream = BTreeMap::new();
-                    let mut upstream_dirs = BTreeMap::new();
-                    for u in stage.upstream() {
-                        match results.get(&u) {
-                            Some(Ok(v)) => {
-                                upstream.insert(u.clone(), v.clone());
-                            }
-                            _ => return (i, Err(format!("skipped: upstream `{u}` failed"))),
-                        }
-                        if let Some(up) = plan.planned.iter().find(|q| q.name == u) {
-                            upstream_dirs.insert(u, store.entry_dir(&up.kind, &up.key));
-                        }
-                    }
-                    let progress = observer.stage_started(&p.name);
-                    let r = execute(
-                        stage.as_ref(),
-                        p,
-                        store,
-                        upstream,
-                        upstream_dirs,
-                        progress.as_ref(),
-                    );
-                    observer.stage_finished(&p.name, r.is_ok());
-                    (i, r)
-                })
+                .map(|&i| (i, run_instance(plan, i, store, results, observer)))
                 .collect()
         });
         for (i, r) in wave {
-            let name = plan.planned[i].name.clone();
-            match r {
-                Ok((value, manifest, secs)) => {
-                    results.insert(name.clone(), Ok(value));
-                    manifests.insert(name.clone(), manifest);
-                    outcomes.insert(name, Outcome::Ran { seconds: secs });
-                }
-                Err(e) => {
-                    let o = if e.starts_with("skipped:") {
-                        Outcome::Skipped(e.trim_start_matches("skipped: ").to_string())
-                    } else {
-                        Outcome::Failed(e.clone())
-                    };
-                    results.insert(name.clone(), Err(e));
-                    outcomes.insert(name, o);
-                }
-            }
+            settled.record(plan.planned[i].name.clone(), r);
         }
         remaining = blocked;
     }
-    observer.run_finished();
+}
 
-    // Point the human-friendly names at the current entries.
+/// Runs planned instance `i` on its upstream results (skipped if one of them failed).
+fn run_instance(
+    plan: &Plan,
+    i: usize,
+    store: &Store,
+    results: &BTreeMap<String, std::result::Result<Value, String>>,
+    observer: &dyn RunObserver,
+) -> Executed {
+    let p = &plan.planned[i];
+    let stage = &plan.stages[p.index];
+    let mut upstream = BTreeMap::new();
+    let mut upstream_dirs = BTreeMap::new();
+    for u in stage.upstream() {
+        match results.get(&u) {
+            Some(Ok(v)) => {
+                upstream.insert(u.clone(), v.clone());
+            }
+            _ => return Err(format!("skipped: upstream `{u}` failed")),
+        }
+        if let Some(up) = plan.planned.iter().find(|q| q.name == u) {
+            upstream_dirs.insert(u, store.entry_dir(&up.kind, &up.key));
+        }
+    }
+    let progress = observer.stage_started(&p.name);
+    let r = execute(
+        stage.as_ref(),
+        p,
+        store,
+        upstream,
+        upstream_dirs,
+        progress.as_ref(),
+    );
+    observer.stage_finished(&p.name, r.is_ok());
+    r
+}
+
+/// Points the human-friendly names at the current entries and assembles the report in plan
+/// order.
+fn report(plan: &Plan, store: &Store, settled: Settled) -> Result<RunReport> {
+    let Settled {
+        manifests,
+        mut outcomes,
+        ..
+    } = settled;
     for (name, m) in &manifests {
         store
             .write_ref(m)

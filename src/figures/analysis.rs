@@ -8,7 +8,8 @@
 use super::kit::{
     boxed_text, decimate_log_minmax, draw_legend, finite_min_max, fmt_sig3, font, lin_tick_label,
     line_key, log_key_points, log_padded, log_tick_label, measure_text, overlaps, padded, perr,
-    render_png, title_font, usable, with_unit, Legend, PixelRect, Result, TRACE_BLUE,
+    render_png, title_font, usable, with_unit, Area, DrawResult, Legend, PixelRect, Result,
+    TRACE_BLUE,
 };
 use plotters::coord::combinators::BindKeyPoints;
 use plotters::prelude::*;
@@ -78,6 +79,51 @@ pub fn scalogram_png(
     ridge_hz: Option<&[f64]>,
     magnitude_unit: &str,
 ) -> Result<()> {
+    let order = scalogram_row_order(path, time_s, frequencies_hz, magnitude, coi_hz, ridge_hz)?;
+    let (nt, nf) = (time_s.len(), frequencies_hz.len());
+    let f_khz: Vec<f64> = order.iter().map(|&j| frequencies_hz[j] * 1e-3).collect();
+    let edges = log_edges(&f_khz);
+    let grid = decimate_scalogram(path, magnitude, &order, nt)?;
+    let (rows, cols) = (grid.rows, grid.cols);
+
+    let t_ms = |i: usize| {
+        if i < nt {
+            time_s[i] * 1e3
+        } else {
+            (2.0 * time_s[nt - 1] - time_s[nt - 2]) * 1e3
+        }
+    };
+    let (x0, x1) = (t_ms(0), t_ms(nt));
+    let (y0, y1) = (edges[0], edges[nf]);
+    if !x1.is_finite() || y0 <= 0.0 || !y1.is_finite() {
+        return Err(perr(path, "scalogram axes out of range"));
+    }
+    let layout = ScalogramLayout {
+        col_x: (0..=cols).map(|b| t_ms(block_start(nt, cols, b))).collect(),
+        row_y: (0..=rows)
+            .map(|g| edges[block_start(nf, rows, g)])
+            .collect(),
+        x: (x0, x1),
+        y: (y0, y1),
+        coi: cone_per_column(coi_hz, nt, cols, y0, y1),
+        ridge_segments: ridge_segments(ridge_hz, time_s, y0, y1),
+    };
+    render_png(path, (940, 580), |root| {
+        let (main, bar) = root.split_horizontally(800);
+        draw_scalogram_chart(&main, title, &grid, &layout)?;
+        draw_colour_bar(&bar, grid.lo, grid.hi, magnitude_unit)
+    })
+}
+
+/// Checks the scalogram's inputs; the order of the frequency rows that makes them increase.
+fn scalogram_row_order(
+    path: &Path,
+    time_s: &[f64],
+    frequencies_hz: &[f64],
+    magnitude: &[f32],
+    coi_hz: &[f64],
+    ridge_hz: Option<&[f64]>,
+) -> Result<Vec<usize>> {
     let (nt, nf) = (time_s.len(), frequencies_hz.len());
     if nt < 2 || nf == 0 {
         return Err(perr(
@@ -125,20 +171,36 @@ pub fn scalogram_png(
         ));
     }
     // Rows in increasing frequency.
-    let order: Vec<usize> = if frequencies_hz.windows(2).all(|w| w[1] > w[0]) {
-        (0..nf).collect()
+    if frequencies_hz.windows(2).all(|w| w[1] > w[0]) {
+        Ok((0..nf).collect())
     } else if frequencies_hz.windows(2).all(|w| w[1] < w[0]) {
-        (0..nf).rev().collect()
+        Ok((0..nf).rev().collect())
     } else {
-        return Err(perr(
+        Err(perr(
             path,
             "scalogram frequencies must be strictly monotonic",
-        ));
-    };
-    let f_khz: Vec<f64> = order.iter().map(|&j| frequencies_hz[j] * 1e-3).collect();
-    let edges = log_edges(&f_khz);
+        ))
+    }
+}
 
-    // Decimation: groups of rows, blocks of time samples; each cell is the max of its block.
+/// The decimated scalogram: `rows × cols` cells (row-major), each the maximum of its block,
+/// and the colour scale `lo..hi`.
+struct ScalogramGrid {
+    rows: usize,
+    cols: usize,
+    cells: Vec<f64>,
+    lo: f64,
+    hi: f64,
+}
+
+/// Decimation: groups of rows, blocks of time samples; each cell is the max of its block.
+fn decimate_scalogram(
+    path: &Path,
+    magnitude: &[f32],
+    order: &[usize],
+    nt: usize,
+) -> Result<ScalogramGrid> {
+    let nf = order.len();
     let rows = nf.min(MAX_SCALOGRAM_ROWS);
     let cols = nt
         .min(MAX_SCALOGRAM_COLUMNS)
@@ -169,172 +231,198 @@ pub fn scalogram_png(
     } else {
         1.0
     };
+    Ok(ScalogramGrid {
+        rows,
+        cols,
+        cells,
+        lo,
+        hi,
+    })
+}
 
-    let t_ms = |i: usize| {
-        if i < nt {
-            time_s[i] * 1e3
-        } else {
-            (2.0 * time_s[nt - 1] - time_s[nt - 2]) * 1e3
-        }
-    };
-    let col_x = |b: usize| t_ms(block_start(nt, cols, b));
-    let (x0, x1) = (t_ms(0), t_ms(nt));
-    let (y0, y1) = (edges[0], edges[nf]);
-    let row_y = |g: usize| edges[block_start(nf, rows, g)];
-    if !x1.is_finite() || y0 <= 0.0 || !y1.is_finite() {
-        return Err(perr(path, "scalogram axes out of range"));
+/// Where the scalogram's cells, axes and overlays go, in data coordinates (ms, kHz).
+struct ScalogramLayout {
+    /// Left edges of the columns, then the right edge of the last.
+    col_x: Vec<f64>,
+    /// Lower edges of the row groups, then the upper edge of the last.
+    row_y: Vec<f64>,
+    x: (f64, f64),
+    y: (f64, f64),
+    /// Cone of influence per column (empty: no cone).
+    coi: Vec<f64>,
+    ridge_segments: Vec<Vec<(f64, f64)>>,
+}
+
+/// Cone of influence per column (the highest value in the block), clamped to the axis.
+fn cone_per_column(coi_hz: &[f64], nt: usize, cols: usize, y0: f64, y1: f64) -> Vec<f64> {
+    if coi_hz.is_empty() {
+        return Vec::new();
     }
+    (0..cols)
+        .map(|b| {
+            let c = coi_hz[block_start(nt, cols, b)..block_start(nt, cols, b + 1)]
+                .iter()
+                .filter(|c| !c.is_nan())
+                .fold(f64::NEG_INFINITY, |a, &c| a.max(c * 1e-3));
+            c.clamp(y0, y1)
+        })
+        .collect()
+}
 
-    // Cone of influence per column (the highest value in the block), clamped to the axis.
-    let coi: Vec<f64> = if coi_hz.is_empty() {
-        Vec::new()
-    } else {
-        (0..cols)
-            .map(|b| {
-                let c = coi_hz[block_start(nt, cols, b)..block_start(nt, cols, b + 1)]
-                    .iter()
-                    .filter(|c| !c.is_nan())
-                    .fold(f64::NEG_INFINITY, |a, &c| a.max(c * 1e-3));
-                c.clamp(y0, y1)
-            })
-            .collect()
+/// Ridge as line segments, broken at non-finite or off-axis values.
+fn ridge_segments(
+    ridge_hz: Option<&[f64]>,
+    time_s: &[f64],
+    y0: f64,
+    y1: f64,
+) -> Vec<Vec<(f64, f64)>> {
+    let Some(r) = ridge_hz else {
+        return Vec::new();
     };
-    // Ridge as line segments, broken at non-finite or off-axis values.
-    let ridge_segments: Vec<Vec<(f64, f64)>> = match ridge_hz {
-        None => Vec::new(),
-        Some(r) => {
-            let stride = nt.div_ceil(MAX_RIDGE_POINTS).max(1);
-            let mut segs = vec![Vec::new()];
-            for i in (0..nt).step_by(stride) {
-                let f = r[i] * 1e-3;
-                if f.is_finite() && f >= y0 && f <= y1 {
-                    segs.last_mut().unwrap().push((time_s[i] * 1e3, f));
-                } else if !segs.last().unwrap().is_empty() {
-                    segs.push(Vec::new());
-                }
-            }
-            segs.retain(|s| !s.is_empty());
-            segs
+    let nt = time_s.len();
+    let stride = nt.div_ceil(MAX_RIDGE_POINTS).max(1);
+    let mut segs = vec![Vec::new()];
+    for i in (0..nt).step_by(stride) {
+        let f = r[i] * 1e-3;
+        if f.is_finite() && f >= y0 && f <= y1 {
+            segs.last_mut().unwrap().push((time_s[i] * 1e3, f));
+        } else if !segs.last().unwrap().is_empty() {
+            segs.push(Vec::new());
         }
-    };
+    }
+    segs.retain(|s| !s.is_empty());
+    segs
+}
+
+/// The heat map with its axes, the cone of influence, the ridge and their legend.
+fn draw_scalogram_chart(
+    main: &Area,
+    title: &str,
+    grid: &ScalogramGrid,
+    layout: &ScalogramLayout,
+) -> DrawResult<()> {
+    let ((x0, x1), (y0, y1)) = (layout.x, layout.y);
+    let (rows, cols, lo, hi) = (grid.rows, grid.cols, grid.lo, grid.hi);
+    let (col_x, row_y) = (&layout.col_x, &layout.row_y);
+    let (coi, ridge_segments) = (&layout.coi, &layout.ridge_segments);
     let decades = (y1 / y0).log10();
-
     let y_ticks = log_key_points(y0, y1);
-    let bar_span = hi - lo;
-    render_png(path, (940, 580), |root| {
-        let (main, bar) = root.split_horizontally(800);
-        let mut chart = ChartBuilder::on(&main)
-            .caption(title, title_font())
-            .margin(10)
-            .margin_right(15)
-            .x_label_area_size(45)
-            .y_label_area_size(65)
-            .build_cartesian_2d(x0..x1, (y0..y1).log_scale().with_key_points(y_ticks))
-            .map_err(|e| e.to_string())?;
-        chart
-            .configure_mesh()
-            .disable_mesh()
-            .x_label_formatter(&|t| lin_tick_label(*t, x1 - x0))
-            .x_desc("time (ms)")
-            .y_desc("frequency (kHz)")
-            .y_label_formatter(&|v| log_tick_label(*v, decades))
-            .label_style(font(14))
-            .axis_desc_style(font(15))
-            .draw()
-            .map_err(|e| e.to_string())?;
-        let cell_rects = (0..rows).flat_map(|g| (0..cols).map(move |b| (g, b)));
-        chart
-            .draw_series(cell_rects.filter_map(|(g, b)| {
-                let v = cells[g * cols + b];
-                v.is_finite().then(|| {
-                    Rectangle::new(
-                        [(col_x(b), row_y(g)), (col_x(b + 1), row_y(g + 1))],
-                        ViridisRGB::get_color_normalized(v, lo, hi).filled(),
-                    )
-                })
-            }))
-            .map_err(|e| e.to_string())?;
-        if !coi.is_empty() {
-            // The cone through the block centres, extended to the plot edges.
-            let mut line = Vec::with_capacity(cols + 2);
-            line.push((x0, coi[0]));
-            for (b, &c) in coi.iter().enumerate() {
-                line.push((0.5 * (col_x(b) + col_x(b + 1)), c));
-            }
-            line.push((x1, coi[cols - 1]));
-            let mut region = line.clone();
-            region.push((x1, y0));
-            region.push((x0, y0));
-            chart
-                .draw_series(std::iter::once(Polygon::new(region, WHITE.mix(0.45))))
-                .map_err(|e| e.to_string())?;
-            chart
-                .draw_series(std::iter::once(PathElement::new(
-                    line.clone(),
-                    BLACK.stroke_width(4),
-                )))
-                .map_err(|e| e.to_string())?;
-            chart
-                .draw_series(std::iter::once(PathElement::new(
-                    line,
-                    WHITE.stroke_width(2),
-                )))
-                .map_err(|e| e.to_string())?
-                .label("cone of influence")
-                .legend(|(x, y)| {
-                    EmptyElement::at((x, y))
-                        + Rectangle::new([(0, -5), (16, 5)], RGBColor(200, 200, 200).filled())
-                        + PathElement::new(vec![(0, -5), (16, -5)], BLACK.stroke_width(2))
-                });
-        }
-        for (k, seg) in ridge_segments.iter().enumerate() {
-            let drawn = chart
-                .draw_series(std::iter::once(PathElement::new(
-                    seg.clone(),
-                    RED.stroke_width(2),
-                )))
-                .map_err(|e| e.to_string())?;
-            if k == 0 {
-                drawn
-                    .label("ridge")
-                    .legend(line_key(16, RED.stroke_width(2)));
-            }
-        }
-        if !coi.is_empty() || !ridge_segments.is_empty() {
-            // Low frequencies at late times: usually inside the cone, the least trusted part.
-            draw_legend(&mut chart, Legend::at(SeriesLabelPosition::LowerRight, 13))?;
-        }
-
-        let mut cb = ChartBuilder::on(&bar)
-            .margin_top(40)
-            .margin_bottom(55)
-            .margin_left(4)
-            .margin_right(45)
-            .y_label_area_size(58)
-            .build_cartesian_2d(0.0..1.0, lo..hi)
-            .map_err(|e| e.to_string())?;
-        cb.configure_mesh()
-            .disable_mesh()
-            .disable_x_axis()
-            .y_labels(8)
-            .y_label_formatter(&|v| lin_tick_label(*v, bar_span))
-            .label_style(font(13))
-            .axis_desc_style(font(14))
-            .y_desc(with_unit("|W|", magnitude_unit))
-            .draw()
-            .map_err(|e| e.to_string())?;
-        let n = 128;
-        cb.draw_series((0..n).map(|k| {
-            let a = lo + (hi - lo) * k as f64 / n as f64;
-            let b = lo + (hi - lo) * (k + 1) as f64 / n as f64;
-            Rectangle::new(
-                [(0.0, a), (1.0, b)],
-                ViridisRGB::get_color_normalized(0.5 * (a + b), lo, hi).filled(),
-            )
+    let mut chart = ChartBuilder::on(main)
+        .caption(title, title_font())
+        .margin(10)
+        .margin_right(15)
+        .x_label_area_size(45)
+        .y_label_area_size(65)
+        .build_cartesian_2d(x0..x1, (y0..y1).log_scale().with_key_points(y_ticks))
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_label_formatter(&|t| lin_tick_label(*t, x1 - x0))
+        .x_desc("time (ms)")
+        .y_desc("frequency (kHz)")
+        .y_label_formatter(&|v| log_tick_label(*v, decades))
+        .label_style(font(14))
+        .axis_desc_style(font(15))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let cell_rects = (0..rows).flat_map(|g| (0..cols).map(move |b| (g, b)));
+    chart
+        .draw_series(cell_rects.filter_map(|(g, b)| {
+            let v = grid.cells[g * cols + b];
+            v.is_finite().then(|| {
+                Rectangle::new(
+                    [(col_x[b], row_y[g]), (col_x[b + 1], row_y[g + 1])],
+                    ViridisRGB::get_color_normalized(v, lo, hi).filled(),
+                )
+            })
         }))
         .map_err(|e| e.to_string())?;
-        Ok(())
-    })
+    if !coi.is_empty() {
+        // The cone through the block centres, extended to the plot edges.
+        let mut line = Vec::with_capacity(cols + 2);
+        line.push((x0, coi[0]));
+        for (b, &c) in coi.iter().enumerate() {
+            line.push((0.5 * (col_x[b] + col_x[b + 1]), c));
+        }
+        line.push((x1, coi[cols - 1]));
+        let mut region = line.clone();
+        region.push((x1, y0));
+        region.push((x0, y0));
+        chart
+            .draw_series(std::iter::once(Polygon::new(region, WHITE.mix(0.45))))
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                line.clone(),
+                BLACK.stroke_width(4),
+            )))
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                line,
+                WHITE.stroke_width(2),
+            )))
+            .map_err(|e| e.to_string())?
+            .label("cone of influence")
+            .legend(|(x, y)| {
+                EmptyElement::at((x, y))
+                    + Rectangle::new([(0, -5), (16, 5)], RGBColor(200, 200, 200).filled())
+                    + PathElement::new(vec![(0, -5), (16, -5)], BLACK.stroke_width(2))
+            });
+    }
+    for (k, seg) in ridge_segments.iter().enumerate() {
+        let drawn = chart
+            .draw_series(std::iter::once(PathElement::new(
+                seg.clone(),
+                RED.stroke_width(2),
+            )))
+            .map_err(|e| e.to_string())?;
+        if k == 0 {
+            drawn
+                .label("ridge")
+                .legend(line_key(16, RED.stroke_width(2)));
+        }
+    }
+    if !coi.is_empty() || !ridge_segments.is_empty() {
+        // Low frequencies at late times: usually inside the cone, the least trusted part.
+        draw_legend(&mut chart, Legend::at(SeriesLabelPosition::LowerRight, 13))?;
+    }
+    Ok(())
+}
+
+/// The colour bar: 128 viridis bands over `lo..hi`, labelled `|W|` in `magnitude_unit`.
+fn draw_colour_bar(bar: &Area, lo: f64, hi: f64, magnitude_unit: &str) -> DrawResult<()> {
+    let bar_span = hi - lo;
+    let mut cb = ChartBuilder::on(bar)
+        .margin_top(40)
+        .margin_bottom(55)
+        .margin_left(4)
+        .margin_right(45)
+        .y_label_area_size(58)
+        .build_cartesian_2d(0.0..1.0, lo..hi)
+        .map_err(|e| e.to_string())?;
+    cb.configure_mesh()
+        .disable_mesh()
+        .disable_x_axis()
+        .y_labels(8)
+        .y_label_formatter(&|v| lin_tick_label(*v, bar_span))
+        .label_style(font(13))
+        .axis_desc_style(font(14))
+        .y_desc(with_unit("|W|", magnitude_unit))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let n = 128;
+    cb.draw_series((0..n).map(|k| {
+        let a = lo + (hi - lo) * k as f64 / n as f64;
+        let b = lo + (hi - lo) * (k + 1) as f64 / n as f64;
+        Rectangle::new(
+            [(0.0, a), (1.0, b)],
+            ViridisRGB::get_color_normalized(0.5 * (a + b), lo, hi).filled(),
+        )
+    }))
+    .map_err(|e| e.to_string())?;
+    Ok(())
 }
 
 /// Poincaré return map: points `(x_n, x_{n+1})` on equal, square axes with the diagonal
@@ -564,6 +652,34 @@ pub fn spectrum_png(
     unit: &str,
     f_range_hz: Option<(f64, f64)>,
 ) -> Result<()> {
+    let plot = spectrum_plot(path, frequency_hz, amplitude, peaks, f_range_hz)?;
+    render_png(path, (820, 560), |root| {
+        draw_spectrum(root, title, unit, &plot)
+    })
+}
+
+/// The spectrum's points and axes in kHz, ready to draw.
+struct SpectrumPlot {
+    /// The trace (decimated if long), raised to the floor.
+    pts: Vec<(f64, f64)>,
+    /// Peaks in range, largest first.
+    marks: Vec<(f64, f64)>,
+    /// The largest few peaks, which get labels.
+    labelled: Vec<(f64, f64)>,
+    /// The lowest amplitude shown.
+    floor: f64,
+    x_axis: (f64, f64),
+    y_axis: (f64, f64),
+}
+
+/// The spectrum's points in range, its axes, the floor and the peaks to circle and label.
+fn spectrum_plot(
+    path: &Path,
+    frequency_hz: &[f64],
+    amplitude: &[f64],
+    peaks: &[(f64, f64)],
+    f_range_hz: Option<(f64, f64)>,
+) -> Result<SpectrumPlot> {
     if frequency_hz.len() != amplitude.len() {
         return Err(perr(
             path,
@@ -639,86 +755,103 @@ pub fn spectrum_png(
     // The largest few peaks get labels.
     marks.sort_by(|a, b| b.1.total_cmp(&a.1));
     let labelled: Vec<(f64, f64)> = marks.iter().copied().take(MAX_PEAK_LABELS).collect();
+    Ok(SpectrumPlot {
+        pts,
+        marks,
+        labelled,
+        floor,
+        x_axis,
+        y_axis,
+    })
+}
+
+/// The log–log axes, the trace, the circled peaks and their labels.
+fn draw_spectrum(root: &Area, title: &str, unit: &str, plot: &SpectrumPlot) -> DrawResult<()> {
+    let (x_axis, y_axis, floor) = (plot.x_axis, plot.y_axis, plot.floor);
     let x_decades = (x_axis.1 / x_axis.0).log10();
     let y_decades = (y_axis.1 / y_axis.0).log10();
     let (x_ticks, y_ticks) = (
         log_key_points(x_axis.0, x_axis.1),
         log_key_points(y_axis.0, y_axis.1),
     );
-    render_png(path, (820, 560), |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, title_font())
-            .margin(15)
-            .margin_right(25)
-            .x_label_area_size(45)
-            .y_label_area_size(75)
-            .build_cartesian_2d(
-                (x_axis.0..x_axis.1).log_scale().with_key_points(x_ticks),
-                (y_axis.0..y_axis.1).log_scale().with_key_points(y_ticks),
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, title_font())
+        .margin(15)
+        .margin_right(25)
+        .x_label_area_size(45)
+        .y_label_area_size(75)
+        .build_cartesian_2d(
+            (x_axis.0..x_axis.1).log_scale().with_key_points(x_ticks),
+            (y_axis.0..y_axis.1).log_scale().with_key_points(y_ticks),
+        )
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .bold_line_style(BLACK.mix(0.07))
+        .x_label_formatter(&|v| log_tick_label(*v, x_decades))
+        .y_label_formatter(&|v| log_tick_label(*v, y_decades))
+        .x_desc("frequency (kHz)")
+        .y_desc(with_unit("amplitude", unit))
+        .label_style(font(14))
+        .axis_desc_style(font(15))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            plot.pts.clone(),
+            TRACE_BLUE.stroke_width(1),
+        )))
+        .map_err(|e| e.to_string())?;
+    if !plot.marks.is_empty() {
+        chart
+            .draw_series(
+                plot.marks
+                    .iter()
+                    .map(|&(f, a)| Circle::new((f, a.max(floor)), 5, RED.stroke_width(2))),
             )
             .map_err(|e| e.to_string())?;
-        chart
-            .configure_mesh()
-            .bold_line_style(BLACK.mix(0.07))
-            .x_label_formatter(&|v| log_tick_label(*v, x_decades))
-            .y_label_formatter(&|v| log_tick_label(*v, y_decades))
-            .x_desc("frequency (kHz)")
-            .y_desc(with_unit("amplitude", unit))
-            .label_style(font(14))
-            .axis_desc_style(font(15))
-            .draw()
-            .map_err(|e| e.to_string())?;
-        chart
-            .draw_series(std::iter::once(PathElement::new(
-                pts.clone(),
-                TRACE_BLUE.stroke_width(1),
-            )))
-            .map_err(|e| e.to_string())?;
-        if !marks.is_empty() {
-            chart
-                .draw_series(
-                    marks
-                        .iter()
-                        .map(|&(f, a)| Circle::new((f, a.max(floor)), 5, RED.stroke_width(2))),
-                )
-                .map_err(|e| e.to_string())?;
+    }
+    let area = chart.plotting_area().strip_coord_spec();
+    let base = chart.plotting_area().get_base_pixel();
+    let by_x: Vec<(i32, i32, f64)> = plot
+        .labelled
+        .iter()
+        .map(|&(f, a)| {
+            let (px, py) = chart.backend_coord(&(f, a.max(floor)));
+            (px - base.0, py - base.1, f)
+        })
+        .collect();
+    label_peaks(&area, by_x)
+}
+
+/// Labels above their peaks (pixel `(x, y, frequency kHz)`), left to right, each moved up
+/// until it overlaps no other.
+fn label_peaks(area: &Area, mut by_x: Vec<(i32, i32, f64)>) -> DrawResult<()> {
+    by_x.sort_by_key(|p| p.0);
+    let mut placed: Vec<PixelRect> = Vec::new();
+    for (px, py, f) in by_x {
+        let text = format!("{} kHz", fmt_sig3(f));
+        let (w, h, _) = measure_text(area, &text, 13)?;
+        let mut top = py - 9 - h;
+        let left = px - w / 2;
+        let clash = |top: i32, placed: &[PixelRect]| {
+            let r = (left - 4, top - 3, left + w + 4, top + h + 3);
+            placed.iter().any(|&p| overlaps(r, p))
+        };
+        while clash(top, &placed) && top > 0 {
+            top -= 2;
         }
-        // Labels above their peaks, left to right, each moved up until it overlaps no other.
-        let area = chart.plotting_area().strip_coord_spec();
-        let base = chart.plotting_area().get_base_pixel();
-        let mut by_x: Vec<(i32, i32, f64)> = labelled
-            .iter()
-            .map(|&(f, a)| {
-                let (px, py) = chart.backend_coord(&(f, a.max(floor)));
-                (px - base.0, py - base.1, f)
-            })
-            .collect();
-        by_x.sort_by_key(|p| p.0);
-        let mut placed: Vec<PixelRect> = Vec::new();
-        for (px, py, f) in by_x {
-            let text = format!("{} kHz", fmt_sig3(f));
-            let (w, h, _) = measure_text(&area, &text, 13)?;
-            let mut top = py - 9 - h;
-            let left = px - w / 2;
-            let clash = |top: i32, placed: &[PixelRect]| {
-                let r = (left - 4, top - 3, left + w + 4, top + h + 3);
-                placed.iter().any(|&p| overlaps(r, p))
-            };
-            while clash(top, &placed) && top > 0 {
-                top -= 2;
-            }
-            let top = top.max(2);
-            let rect = boxed_text(
-                &area,
-                (px, top),
-                &text,
-                Pos::new(HPos::Center, VPos::Top),
-                13,
-            )?;
-            placed.push(rect);
-        }
-        Ok(())
-    })
+        let top = top.max(2);
+        let rect = boxed_text(
+            area,
+            (px, top),
+            &text,
+            Pos::new(HPos::Center, VPos::Top),
+            13,
+        )?;
+        placed.push(rect);
+    }
+    Ok(())
 }
 
 #[cfg(test)]

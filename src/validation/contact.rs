@@ -49,15 +49,33 @@ fn failed(quantity: &str, why: String) -> Row {
 
 const VARIANT: &str = "ISBL, summit_offset none (d = h), junction-shear friction";
 
+/// The three §10 parameter sets the rows evaluate.
+struct Sets {
+    initial: IsblModel,
+    improved: IsblModel,
+    mtl: IsblModel,
+}
+
+/// The ISBL state at the dimensionless separation `h_star` (in units of σ).
+fn at(
+    m: &IsblModel,
+    h_star: f64,
+) -> Result<crate::contact::isbl::IsblPoint, crate::contact::ContactError> {
+    m.at(h_star * m.params().sigma)
+}
+
 /// The ISBL rows.
 pub fn rows() -> Vec<Row> {
-    let mut rows = Vec::new();
-    let (initial, improved, mtl) = match (
+    let sets = match (
         IsblModel::new(IsblParams::initial_2dof()),
         IsblModel::new(IsblParams::improved_2dof()),
         IsblModel::new(IsblParams::mtl_table_3_2()),
     ) {
-        (Ok(a), Ok(b), Ok(c)) => (a, b, c),
+        (Ok(initial), Ok(improved), Ok(mtl)) => Sets {
+            initial,
+            improved,
+            mtl,
+        },
         _ => {
             return vec![failed(
                 "ISBL parameter sets",
@@ -65,8 +83,19 @@ pub fn rows() -> Vec<Row> {
             )]
         }
     };
+    let mut rows = derived_rows(&sets.initial);
+    rows.extend(initial_curve_rows(&sets.initial));
+    rows.push(adhesion_12nm_row(&sets.improved));
+    rows.extend(static_contact_force_rows(&sets));
+    rows.extend(sphere_rows());
+    rows.extend(reference_table_rows(&sets));
+    rows
+}
+
+/// §10 derived quantities of the initial set: E*, the plasticity index ψ (Ch. 2.1), ω_c.
+fn derived_rows(initial: &IsblModel) -> Vec<Row> {
     let d = initial.derived();
-    rows.push(
+    vec![
         R {
             source: "contact-isbl §10 [derived]",
             quantity: "composite modulus E* (DLC/DLC, ν = 0.25)",
@@ -79,8 +108,6 @@ pub fn rows() -> Vec<Row> {
             note: "",
         }
         .row(),
-    );
-    rows.push(
         R {
             source: "contact-isbl §9 #3 [seed Ch. 2.1]",
             quantity: "plasticity index ψ, Ch. 2 interface",
@@ -93,8 +120,6 @@ pub fn rows() -> Vec<Row> {
             note: "fixes ν ∈ [0.25, 0.27]",
         }
         .row(),
-    );
-    rows.push(
         R {
             source: "contact-isbl §10 [derived]",
             quantity: "critical interference ω_c",
@@ -107,132 +132,152 @@ pub fn rows() -> Vec<Row> {
             note: "",
         }
         .row(),
-    );
-    let at = |m: &IsblModel, h_star: f64| m.at(h_star * m.params().sigma);
-    match (
-        at(&initial, 3.0),
-        at(&initial, 2.5),
-        at(&initial, 6.0),
-        at(&initial, 0.0),
+    ]
+}
+
+/// #1a–#1c: the initial set's pressure and adhesion curves (Ch. 2.2, Fig. 2.11).
+fn initial_curve_rows(initial: &IsblModel) -> Vec<Row> {
+    let (p3, p25, p6, p0) = match (
+        at(initial, 3.0),
+        at(initial, 2.5),
+        at(initial, 6.0),
+        at(initial, 0.0),
     ) {
-        (Ok(p3), Ok(p25), Ok(p6), Ok(p0)) => {
-            rows.push(
-                R {
-                    source: "contact-isbl §9 #1a [seed Ch. 2.2, Fig. 2.11]",
-                    quantity: "P(h* = 3) per unit nominal area, initial set",
-                    unit: "Pa",
-                    target: 1.097e5,
-                    ours: p3.contact_pressure,
-                    tolerance: Tolerance::Relative(0.01),
-                    reproducible: true,
-                    variant: VARIANT,
-                    note: "",
-                }
-                .row(),
-            );
-            rows.push(
-                R {
-                    source: "contact-isbl §9 #1a [seed: 7.30 μN]",
-                    quantity: "P(h* = 3) on A_n = 66.6 μm², initial set",
-                    unit: "μN",
-                    target: 7.30,
-                    ours: p3.contact_pressure * 66.6e-12 * 1e6,
-                    tolerance: Tolerance::Relative(0.01),
-                    reproducible: true,
-                    variant: VARIANT,
-                    note: "the figure's A_n is not stated; 62–68 μm² (Ch. 2 areas) give 6.8–7.5 μN",
-                }
-                .row(),
-            );
-            rows.push(
-                R {
-                    source: "contact-isbl §9 #1b [seed Ch. 2.2]",
-                    quantity: "P(3)/P(2.5): \"7.30 μN is about 3 % of P at h* = 2.5\"",
-                    unit: "1",
-                    target: 0.03,
-                    ours: p3.contact_pressure / p25.contact_pressure,
-                    tolerance: Tolerance::Relative(0.1),
-                    reproducible: false,
-                    variant: VARIANT,
-                    note:
-                        "not reproducible: a Gaussian of σ gives 0.18; 3 % is reached at h* = 1.90 \
-                           (likely a misread axis in the seed)",
-                }
-                .row(),
-            );
-            rows.push(
-                R {
-                    source: "contact-isbl §9 #1c [seed: adhesion negligible for h* ≥ 6]",
-                    quantity: "F_s(6)/F_s(0), initial set (σ = 0.87 nm)",
-                    unit: "1",
-                    target: 0.008,
-                    ours: p6.adhesion / p0.adhesion,
-                    tolerance: Tolerance::Absolute(0.001),
-                    reproducible: true,
-                    variant: VARIANT,
-                    note: "",
-                }
-                .row(),
-            );
+        (Ok(p3), Ok(p25), Ok(p6), Ok(p0)) => (p3, p25, p6, p0),
+        _ => return vec![failed("initial set curves", "evaluation failed".into())],
+    };
+    vec![
+        R {
+            source: "contact-isbl §9 #1a [seed Ch. 2.2, Fig. 2.11]",
+            quantity: "P(h* = 3) per unit nominal area, initial set",
+            unit: "Pa",
+            target: 1.097e5,
+            ours: p3.contact_pressure,
+            tolerance: Tolerance::Relative(0.01),
+            reproducible: true,
+            variant: VARIANT,
+            note: "",
         }
-        _ => rows.push(failed("initial set curves", "evaluation failed".into())),
-    }
-    // #2c: adhesion at the 12 nm clearance (h_c = 1.16 nm) on A_n = 55 μm², improved set.
+        .row(),
+        R {
+            source: "contact-isbl §9 #1a [seed: 7.30 μN]",
+            quantity: "P(h* = 3) on A_n = 66.6 μm², initial set",
+            unit: "μN",
+            target: 7.30,
+            ours: p3.contact_pressure * 66.6e-12 * 1e6,
+            tolerance: Tolerance::Relative(0.01),
+            reproducible: true,
+            variant: VARIANT,
+            note: "the figure's A_n is not stated; 62–68 μm² (Ch. 2 areas) give 6.8–7.5 μN",
+        }
+        .row(),
+        R {
+            source: "contact-isbl §9 #1b [seed Ch. 2.2]",
+            quantity: "P(3)/P(2.5): \"7.30 μN is about 3 % of P at h* = 2.5\"",
+            unit: "1",
+            target: 0.03,
+            ours: p3.contact_pressure / p25.contact_pressure,
+            tolerance: Tolerance::Relative(0.1),
+            reproducible: false,
+            variant: VARIANT,
+            note: "not reproducible: a Gaussian of σ gives 0.18; 3 % is reached at h* = 1.90 \
+                   (likely a misread axis in the seed)",
+        }
+        .row(),
+        R {
+            source: "contact-isbl §9 #1c [seed: adhesion negligible for h* ≥ 6]",
+            quantity: "F_s(6)/F_s(0), initial set (σ = 0.87 nm)",
+            unit: "1",
+            target: 0.008,
+            ours: p6.adhesion / p0.adhesion,
+            tolerance: Tolerance::Absolute(0.001),
+            reproducible: true,
+            variant: VARIANT,
+            note: "",
+        }
+        .row(),
+    ]
+}
+
+/// #2c: adhesion at the 12 nm clearance (h_c = 1.16 nm) on A_n = 55 μm², improved set.
+fn adhesion_12nm_row(improved: &IsblModel) -> Row {
     match improved.at(1.16e-9) {
-        Ok(p) => rows.push(
-            R {
-                source: "contact-isbl §9 #2c [seed Ch. 2.2.2]",
-                quantity: "adhesion at 12 nm actuation (h = 1.16 nm, A_n = 55 μm²)",
-                unit: "mN",
-                target: 0.98,
-                ours: p.adhesion * 55e-12 * 1e3,
-                tolerance: Tolerance::Relative(0.05),
-                reproducible: true,
-                variant: "ISBL improved set, Δγ = 0.06 N/m (back-solved), ε = 0.3 nm",
-                note: "",
-            }
-            .row(),
-        ),
-        Err(e) => rows.push(failed("adhesion at 12 nm", e.to_string())),
+        Ok(p) => R {
+            source: "contact-isbl §9 #2c [seed Ch. 2.2.2]",
+            quantity: "adhesion at 12 nm actuation (h = 1.16 nm, A_n = 55 μm²)",
+            unit: "mN",
+            target: 0.98,
+            ours: p.adhesion * 55e-12 * 1e3,
+            tolerance: Tolerance::Relative(0.05),
+            reproducible: true,
+            variant: "ISBL improved set, Δγ = 0.06 N/m (back-solved), ε = 0.3 nm",
+            note: "",
+        }
+        .row(),
+        Err(e) => failed("adhesion at 12 nm", e.to_string()),
     }
-    // #2a/#2b/#2d: the dynamic contact force read statically, at the h where P·A_n = F_c.
-    for (label, model, area, force, mu_t, ar_t, mu_repro, note_mu, note_ar) in [
-        (
-            "12 nm, improved set (A_n = 55 μm², F_c = 1.63 mN)",
-            &improved,
-            55e-12,
-            1.63e-3,
-            1.49,
-            0.36,
-            false,
-            "−14 %: the seed's μ lies inside the model's μ(h) range (1.65 at the mean clearance)",
-            "the seed's dynamic F_c (a linearised spring) is not P(h) at the mean separation",
-        ),
-        (
-            "11 nm, initial set (A_n = 62 μm², F_c ≈ 1 mN)",
-            &initial,
-            62e-12,
-            1e-3,
-            1.2,
-            2.7,
-            true,
-            "",
-            "A_r = 2.72 μm² needs h* = 0.21 where P = 8.1 mN: the dynamic-vs-static caveat of #2b",
-        ),
-    ] {
-        match separation_for_load(model, force / area) {
+}
+
+/// One Ch. 2 operating point whose dynamic contact force #2a/#2b/#2d read statically.
+struct ForcePoint<'a> {
+    label: &'a str,
+    model: &'a IsblModel,
+    /// Nominal contact area A_n (m²).
+    area: f64,
+    /// Dynamic contact force F_c (N).
+    force: f64,
+    mu_target: f64,
+    real_area_target: f64,
+    mu_reproducible: bool,
+    note_mu: &'a str,
+    note_real_area: &'a str,
+}
+
+/// #2a/#2b/#2d: the dynamic contact force read statically, at the h where P·A_n = F_c.
+fn static_contact_force_rows(sets: &Sets) -> Vec<Row> {
+    let points = [
+        ForcePoint {
+            label: "12 nm, improved set (A_n = 55 μm², F_c = 1.63 mN)",
+            model: &sets.improved,
+            area: 55e-12,
+            force: 1.63e-3,
+            mu_target: 1.49,
+            real_area_target: 0.36,
+            mu_reproducible: false,
+            note_mu:
+                "−14 %: the seed's μ lies inside the model's μ(h) range (1.65 at the mean clearance)",
+            note_real_area:
+                "the seed's dynamic F_c (a linearised spring) is not P(h) at the mean separation",
+        },
+        ForcePoint {
+            label: "11 nm, initial set (A_n = 62 μm², F_c ≈ 1 mN)",
+            model: &sets.initial,
+            area: 62e-12,
+            force: 1e-3,
+            mu_target: 1.2,
+            real_area_target: 2.7,
+            mu_reproducible: true,
+            note_mu: "",
+            note_real_area:
+                "A_r = 2.72 μm² needs h* = 0.21 where P = 8.1 mN: the dynamic-vs-static caveat of #2b",
+        },
+    ];
+    let mut rows = Vec::new();
+    for pt in points {
+        let label = pt.label;
+        match separation_for_load(pt.model, pt.force / pt.area) {
             Ok(p) => {
                 rows.push(
                     R {
                         source: "contact-isbl §9 #2a/#2d [seed Ch. 2]",
                         quantity: &format!("μ = Q/P at P·A_n = F_c, {label}"),
                         unit: "1",
-                        target: mu_t,
+                        target: pt.mu_target,
                         ours: p.friction_stress / p.contact_pressure,
                         tolerance: Tolerance::Relative(0.10),
-                        reproducible: mu_repro,
+                        reproducible: pt.mu_reproducible,
                         variant: VARIANT,
-                        note: note_mu,
+                        note: pt.note_mu,
                     }
                     .row(),
                 );
@@ -241,12 +286,12 @@ pub fn rows() -> Vec<Row> {
                         source: "contact-isbl §9 #2b/#2d [seed Ch. 2]",
                         quantity: &format!("real area at P·A_n = F_c, {label}"),
                         unit: "μm²",
-                        target: ar_t,
-                        ours: p.real_area_fraction * area * 1e12,
+                        target: pt.real_area_target,
+                        ours: p.real_area_fraction * pt.area * 1e12,
                         tolerance: Tolerance::Relative(0.10),
                         reproducible: false,
                         variant: VARIANT,
-                        note: note_ar,
+                        note: pt.note_real_area,
                     }
                     .row(),
                 );
@@ -254,7 +299,20 @@ pub fn rows() -> Vec<Row> {
             Err(e) => rows.push(failed(label, e.to_string())),
         }
     }
-    // #4: the Ch. 3.1 DLC sphere on DLC (E = 180 GPa, ν = 0.24, H = 18 GPa, R = 102 μm).
+    rows
+}
+
+/// One interference of the Ch. 3.1 sphere with its load and friction targets (μN).
+struct SpherePoint {
+    /// Interference ω (m).
+    omega: f64,
+    load_target: f64,
+    friction_target: f64,
+    load_reproducible: bool,
+}
+
+/// #4: the Ch. 3.1 DLC sphere on DLC (E = 180 GPa, ν = 0.24, H = 18 GPa, R = 102 μm).
+fn sphere_rows() -> Vec<Row> {
     let sphere = IsblModel::new(IsblParams {
         summit_radius: 102e-6,
         slider_modulus: 180e9,
@@ -265,113 +323,128 @@ pub fn rows() -> Vec<Row> {
         hardness: 18e9,
         ..IsblParams::initial_2dof()
     });
-    match sphere {
-        Ok(sphere) => {
-            rows.push(
-                R {
-                    source: "contact-isbl §5 [seed Ch. 3.1]",
-                    quantity: "reduced modulus E*, DLC sphere on DLC",
-                    unit: "GPa",
-                    target: 95.5,
-                    ours: sphere.derived().composite_modulus / 1e9,
-                    tolerance: Tolerance::Absolute(0.05),
-                    reproducible: true,
-                    variant: "E = 180 GPa, ν = 0.24",
-                    note: "",
-                }
-                .row(),
-            );
-            for (omega, p_target, q_target, p_repro) in
-                [(0.1e-9, 1.5, 120.0, false), (1e-9, 40.0, 1120.0, true)]
-            {
-                match sphere.asperity_at(omega) {
-                    Ok(a) => {
-                        rows.push(
-                            R {
-                                source: "contact-isbl §9 #4 [seed Ch. 3.1]",
-                                quantity: &format!("sphere load at ω = {} nm", omega * 1e9),
-                                unit: "μN",
-                                target: p_target,
-                                ours: a.load * 1e6,
-                                tolerance: Tolerance::Relative(0.03),
-                                reproducible: p_repro,
-                                variant: "Hertz (KE elastic)",
-                                note: if p_repro {
-                                    ""
-                                } else {
-                                    "Hertz gives 1.29 μN; the seed's 1.5 μN is 14 % above \
-                                     (likely rounding in the seed)"
-                                },
-                            }
-                            .row(),
-                        );
-                        rows.push(
-                            R {
-                                source: "contact-isbl §9 #4 [seed Ch. 3.1]",
-                                quantity: &format!(
-                                    "sphere static friction at ω = {} nm",
-                                    omega * 1e9
-                                ),
-                                unit: "μN",
-                                target: q_target,
-                                ours: a.friction * 1e6,
-                                tolerance: Tolerance::Relative(0.10),
-                                reproducible: true,
-                                variant: "junction shear τ_s = H/(2.8√3)",
-                                note: "",
-                            }
-                            .row(),
-                        );
-                    }
-                    Err(e) => rows.push(failed("Ch. 3.1 sphere", e.to_string())),
-                }
-            }
-        }
-        Err(e) => rows.push(failed("Ch. 3.1 sphere", e.to_string())),
+    let sphere = match sphere {
+        Ok(sphere) => sphere,
+        Err(e) => return vec![failed("Ch. 3.1 sphere", e.to_string())],
+    };
+    let mut rows = vec![R {
+        source: "contact-isbl §5 [seed Ch. 3.1]",
+        quantity: "reduced modulus E*, DLC sphere on DLC",
+        unit: "GPa",
+        target: 95.5,
+        ours: sphere.derived().composite_modulus / 1e9,
+        tolerance: Tolerance::Absolute(0.05),
+        reproducible: true,
+        variant: "E = 180 GPa, ν = 0.24",
+        note: "",
     }
-    // The reference curves of §9 (independent implementation), all three sets.
-    for (name, model, table) in [
-        ("initial 2-DOF", &initial, REF_INITIAL),
-        ("improved 2-DOF / 3-DOF", &improved, REF_IMPROVED),
-        ("Table 3.2 (MTL)", &mtl, REF_MTL),
-    ] {
-        let worst = table
-            .iter()
-            .map(|r| match at(model, r[0]) {
-                Ok(p) => {
-                    let ours = [
-                        p.contact_pressure,
-                        p.contact_stiffness,
-                        p.real_area_fraction,
-                        p.friction_stress,
-                        p.adhesion,
-                    ];
-                    ours.iter()
-                        .zip(&r[1..])
-                        .map(|(o, t)| ((o - t) / t).abs())
-                        .fold(0.0, f64::max)
-                }
-                Err(_) => f64::INFINITY,
-            })
-            .fold(0.0, f64::max);
-        rows.push(
-            R {
-                source: "contact-isbl §9 reference table",
-                quantity: &format!(
-                    "{name}: worst relative deviation of P, k_c, A_r, Q, F_s (h* = 0…6)"
-                ),
-                unit: "1",
-                target: 0.0,
-                ours: worst,
-                tolerance: Tolerance::Absolute(1e-6),
-                reproducible: true,
-                variant: VARIANT,
-                note: "printed to 7 digits: the bound is their rounding",
+    .row()];
+    let points = [
+        SpherePoint {
+            omega: 0.1e-9,
+            load_target: 1.5,
+            friction_target: 120.0,
+            load_reproducible: false,
+        },
+        SpherePoint {
+            omega: 1e-9,
+            load_target: 40.0,
+            friction_target: 1120.0,
+            load_reproducible: true,
+        },
+    ];
+    for pt in points {
+        let omega = pt.omega;
+        match sphere.asperity_at(omega) {
+            Ok(a) => {
+                rows.push(
+                    R {
+                        source: "contact-isbl §9 #4 [seed Ch. 3.1]",
+                        quantity: &format!("sphere load at ω = {} nm", omega * 1e9),
+                        unit: "μN",
+                        target: pt.load_target,
+                        ours: a.load * 1e6,
+                        tolerance: Tolerance::Relative(0.03),
+                        reproducible: pt.load_reproducible,
+                        variant: "Hertz (KE elastic)",
+                        note: if pt.load_reproducible {
+                            ""
+                        } else {
+                            "Hertz gives 1.29 μN; the seed's 1.5 μN is 14 % above \
+                             (likely rounding in the seed)"
+                        },
+                    }
+                    .row(),
+                );
+                rows.push(
+                    R {
+                        source: "contact-isbl §9 #4 [seed Ch. 3.1]",
+                        quantity: &format!("sphere static friction at ω = {} nm", omega * 1e9),
+                        unit: "μN",
+                        target: pt.friction_target,
+                        ours: a.friction * 1e6,
+                        tolerance: Tolerance::Relative(0.10),
+                        reproducible: true,
+                        variant: "junction shear τ_s = H/(2.8√3)",
+                        note: "",
+                    }
+                    .row(),
+                );
             }
-            .row(),
-        );
+            Err(e) => rows.push(failed("Ch. 3.1 sphere", e.to_string())),
+        }
     }
     rows
+}
+
+/// The worst relative deviation of P, k_c, A_r, Q, F_s from a §9 reference table.
+fn worst_deviation(model: &IsblModel, table: &[[f64; 6]]) -> f64 {
+    table
+        .iter()
+        .map(|r| match at(model, r[0]) {
+            Ok(p) => {
+                let ours = [
+                    p.contact_pressure,
+                    p.contact_stiffness,
+                    p.real_area_fraction,
+                    p.friction_stress,
+                    p.adhesion,
+                ];
+                ours.iter()
+                    .zip(&r[1..])
+                    .map(|(o, t)| ((o - t) / t).abs())
+                    .fold(0.0, f64::max)
+            }
+            Err(_) => f64::INFINITY,
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The reference curves of §9 (independent implementation), all three sets.
+fn reference_table_rows(sets: &Sets) -> Vec<Row> {
+    [
+        ("initial 2-DOF", &sets.initial, REF_INITIAL),
+        ("improved 2-DOF / 3-DOF", &sets.improved, REF_IMPROVED),
+        ("Table 3.2 (MTL)", &sets.mtl, REF_MTL),
+    ]
+    .into_iter()
+    .map(|(name, model, table)| {
+        R {
+            source: "contact-isbl §9 reference table",
+            quantity: &format!(
+                "{name}: worst relative deviation of P, k_c, A_r, Q, F_s (h* = 0…6)"
+            ),
+            unit: "1",
+            target: 0.0,
+            ours: worst_deviation(model, table),
+            tolerance: Tolerance::Absolute(1e-6),
+            reproducible: true,
+            variant: VARIANT,
+            note: "printed to 7 digits: the bound is their rounding",
+        }
+        .row()
+    })
+    .collect()
 }
 
 /// The ISBL state where the contact pressure equals `pressure` (P decreases with h: bisection

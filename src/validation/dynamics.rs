@@ -112,12 +112,32 @@ fn geometry_rows() -> Vec<Row> {
         variant,
         "",
     ));
-    // Modal round trip: the assembled 2×2 AB model has the two target frequencies.
-    let model = improved;
+    rows.extend(air_bearing_mode_rows(&improved));
+    rows.push(row(
+        "dynamics §12.2 #14 [seed §2.1.3]",
+        "initial interface: plasticity index (E*/H)√(σ/R)",
+        "1",
+        0.52,
+        {
+            let p = IsblParams::initial_2dof();
+            (p.composite_modulus() / p.hardness) * (p.sigma / p.summit_radius).sqrt()
+        },
+        Tolerance::Absolute(0.02),
+        true,
+        "E = 280 GPa, ν = 0.25, H = 13 GPa, σ = 0.87 nm, R = 0.43 μm",
+        "",
+    ));
+    rows
+}
+
+/// Modal round trip (§3.1, §10 item 7): the assembled 2×2 AB model has the two target
+/// frequencies.
+fn air_bearing_mode_rows(improved: &Model2Dof) -> Vec<Row> {
+    let mut rows = Vec::new();
     let modes = (|| {
-        let ab = model.air_bearing_model().ok()?;
-        let susp = model.suspension_coefficients().ok()?;
-        let m = ab.eom_matrices(model.slider.mass, model.slider.pitch_inertia, &susp);
+        let ab = improved.air_bearing_model().ok()?;
+        let susp = improved.suspension_coefficients().ok()?;
+        let m = ab.eom_matrices(improved.slider.mass, improved.slider.pitch_inertia, &susp);
         let mut k = m.stiffness;
         // The rear spring sits on the right-hand side of eq. 2.13: add it for the eigenproblem.
         let (d, kr) = (ab.half_length, ab.rear_stiffness_nominal);
@@ -140,36 +160,46 @@ fn geometry_rows() -> Vec<Row> {
             "the 110/300 kHz inputs are assumptions (§3.2); the row checks the inversion",
         ));
     }
-    rows.push(row(
-        "dynamics §12.2 #14 [seed §2.1.3]",
-        "initial interface: plasticity index (E*/H)√(σ/R)",
-        "1",
-        0.52,
-        {
-            let p = IsblParams::initial_2dof();
-            (p.composite_modulus() / p.hardness) * (p.sigma / p.summit_radius).sqrt()
-        },
-        Tolerance::Absolute(0.02),
-        true,
-        "E = 280 GPa, ν = 0.25, H = 13 GPa, σ = 0.87 nm, R = 0.43 μm",
-        "",
-    ));
     rows
 }
 
-/// Steady metrics of one improved-2-DOF case: (mean clearance, FHM/BV %, % solid contact,
-/// mean F_c, mean Q, mean A_r, μ).
-fn case(model: &Model2Dof, isbl: &IsblLookup, h: f64, dmw: Option<DmwInput>) -> Option<[f64; 7]> {
+/// Steady metrics of one improved-2-DOF case.
+#[derive(Clone, Copy)]
+struct CaseMetrics {
+    /// Mean clearance (m).
+    clearance: f64,
+    /// FHM/BV (%).
+    fhm_percent: f64,
+    /// Share of time in solid contact (%).
+    solid_contact_percent: f64,
+    /// Mean contact force F_c (N).
+    contact_force: f64,
+    /// Mean friction Q (N).
+    friction: f64,
+    /// Mean real contact area A_r (m²).
+    real_area: f64,
+    /// Friction coefficient μ = Q̄/F̄_c.
+    mu: f64,
+}
+
+/// Steady metrics of one improved-2-DOF case.
+fn case(
+    model: &Model2Dof,
+    isbl: &IsblLookup,
+    h: f64,
+    dmw: Option<DmwInput>,
+) -> Option<CaseMetrics> {
     case_with(model, isbl, h, dmw, false)
 }
 
+/// As [`case`], optionally starting from the static equilibrium.
 fn case_with(
     model: &Model2Dof,
     isbl: &IsblLookup,
     h: f64,
     dmw: Option<DmwInput>,
     static_init: bool,
-) -> Option<[f64; 7]> {
+) -> Option<CaseMetrics> {
     let options = SimOptions {
         static_init,
         ..SimOptions::default()
@@ -180,62 +210,50 @@ fn case_with(
         .metrics(&crate::dynamics::metrics::CaseParams::improved_2dof())
         .ok()?;
     let contact = m.contact.as_ref();
-    Some([
-        m.clearance_m.mean,
-        m.vibration.percent,
-        m.percent_solid_contact,
-        contact.map_or(0.0, |c| c.contact_force_n.mean),
-        contact.map_or(0.0, |c| c.friction_n.mean),
-        contact.map_or(0.0, |c| c.real_area_m2.mean),
-        contact
+    Some(CaseMetrics {
+        clearance: m.clearance_m.mean,
+        fhm_percent: m.vibration.percent,
+        solid_contact_percent: m.percent_solid_contact,
+        contact_force: contact.map_or(0.0, |c| c.contact_force_n.mean),
+        friction: contact.map_or(0.0, |c| c.friction_n.mean),
+        real_area: contact.map_or(0.0, |c| c.real_area_m2.mean),
+        mu: contact
             .and_then(|c| c.friction_coefficient_ratio_of_means)
             .unwrap_or(f64::NAN),
-    ])
+    })
 }
+
+/// One actuation (nm) and its case's metrics, if the case ran.
+type Actuated = (f64, Option<CaseMetrics>);
+
+/// The first actuation whose case has solid contact (the touchdown), NaN if none.
+fn touchdown<'a>(cases: impl IntoIterator<Item = &'a Actuated>) -> f64 {
+    cases
+        .into_iter()
+        .find(|(_, m)| m.is_some_and(|m| m.solid_contact_percent > 0.0))
+        .map_or(f64::NAN, |(h, _)| *h)
+}
+
+const NM: f64 = 1e-9;
+
+/// Why the class-D rows of the improved model are not reproducible.
+const CLASS_D_NOTE: &str = "class D: depends on dropped inputs (DMW spectrum, AB damping, rear \
+                            stiffening β, Δγ, ε, ζ_c); spec defaults here, the fitted knobs in \
+                            area `calibration` (docs/calibration.md)";
+const CLASS_D_VARIANT: &str = "improved 2-DOF, spec defaults, synthetic DMW σ = 1 nm (seed 1)";
 
 /// Kinematic (K) and dropped-input (D) landmarks of the improved model (§12.2 rows 16–24).
 fn dynamics_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
-    let mut rows = Vec::new();
     let model = improved_2dof();
-    let nm = 1e-9;
-    // Class K without DMW: the static flying line and its slope.
-    let flying: Vec<(f64, Option<[f64; 7]>)> = [4.0, 5.0, 6.0, 7.0, 8.5]
-        .par_iter()
-        .map(|&h| (h, case(&model, isbl, h * nm, None)))
-        .collect();
-    let c85 = flying
-        .iter()
-        .find(|(h, _)| *h == 8.5)
-        .and_then(|(_, m)| *m)
-        .map_or(f64::NAN, |m| m[0] / nm);
-    let variant = "improved 2-DOF, spec defaults, no DMW";
-    rows.push(row(
-        "dynamics §12.2 #18 (K) [seed §2.2.2]",
-        "steady clearance at 8.5 nm",
-        "nm",
-        2.54,
-        c85,
-        Tolerance::Absolute(0.05),
-        true,
-        variant,
-        "",
-    ));
-    rows.push(row(
-        "dynamics §12.2 #18 (K), §1.2",
-        "head–media spacing at 8.5 nm (c − 2T0)",
-        "nm",
-        1.0,
-        c85 - 1.5,
-        Tolerance::Absolute(0.1),
-        true,
-        variant,
-        "",
-    ));
-    let pts: Vec<(f64, f64)> = flying
-        .iter()
-        .filter_map(|(h, m)| m.map(|m| (*h, m[0] / nm)))
-        .collect();
-    let slope = if pts.len() >= 2 {
+    let mut rows = flying_rows(&model, isbl);
+    rows.extend(dmw_landmark_rows(&model, isbl, track));
+    rows.extend(twelve_nm_rows(&model, isbl, track));
+    rows
+}
+
+/// The least-squares slope of `(actuation, clearance)` points, NaN below two points.
+fn approach_slope(pts: &[(f64, f64)]) -> f64 {
+    if pts.len() >= 2 {
         let n = pts.len() as f64;
         let (sx, sy) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
         let (mx, my) = (sx / n, sy / n);
@@ -244,124 +262,182 @@ fn dynamics_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
         sxy / sxx
     } else {
         f64::NAN
-    };
-    rows.push(row(
-        "dynamics §12.2 #21 (K) [seed §2.2.2]",
-        "approach slope A (flying, 4–8.5 nm)",
-        "1",
-        -1.0,
-        slope,
-        Tolerance::Absolute(0.02),
-        true,
-        variant,
-        "",
-    ));
-    // Class D with the spec's synthetic DMW (σ 1 nm, §6), before calibration.
+    }
+}
+
+/// Class K without DMW (§12.2 #18, #21): the static flying line and its slope.
+fn flying_rows(model: &Model2Dof, isbl: &IsblLookup) -> Vec<Row> {
+    let flying: Vec<Actuated> = [4.0, 5.0, 6.0, 7.0, 8.5]
+        .par_iter()
+        .map(|&h| (h, case(model, isbl, h * NM, None)))
+        .collect();
+    let c85 = flying
+        .iter()
+        .find(|(h, _)| *h == 8.5)
+        .and_then(|(_, m)| *m)
+        .map_or(f64::NAN, |m| m.clearance / NM);
+    let variant = "improved 2-DOF, spec defaults, no DMW";
+    let pts: Vec<(f64, f64)> = flying
+        .iter()
+        .filter_map(|(h, m)| m.map(|m| (*h, m.clearance / NM)))
+        .collect();
+    vec![
+        row(
+            "dynamics §12.2 #18 (K) [seed §2.2.2]",
+            "steady clearance at 8.5 nm",
+            "nm",
+            2.54,
+            c85,
+            Tolerance::Absolute(0.05),
+            true,
+            variant,
+            "",
+        ),
+        row(
+            "dynamics §12.2 #18 (K), §1.2",
+            "head–media spacing at 8.5 nm (c − 2T0)",
+            "nm",
+            1.0,
+            c85 - 1.5,
+            Tolerance::Absolute(0.1),
+            true,
+            variant,
+            "",
+        ),
+        row(
+            "dynamics §12.2 #21 (K) [seed §2.2.2]",
+            "approach slope A (flying, 4–8.5 nm)",
+            "1",
+            -1.0,
+            approach_slope(&pts),
+            Tolerance::Absolute(0.02),
+            true,
+            variant,
+            "",
+        ),
+    ]
+}
+
+/// Class D with the spec's synthetic DMW (σ 1 nm, §6), before calibration (§12.2 #16, #18,
+/// #19): touchdown, FHM at 8.5 nm and the clearance at 9.5 nm.
+fn dmw_landmark_rows(model: &Model2Dof, isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
     let dmw = || Some(dmw_input(track));
     let actuations: Vec<f64> = (0..=15).map(|i| 9.0 + 0.2 * i as f64).collect();
-    let mut scan: Vec<(f64, Option<[f64; 7]>)> = actuations
+    let mut scan: Vec<Actuated> = actuations
         .par_iter()
-        .map(|&h| (h, case(&model, isbl, h * nm, dmw())))
+        .map(|&h| (h, case(model, isbl, h * NM, dmw())))
         .collect();
     scan.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let td = scan
-        .iter()
-        .find(|(_, m)| m.is_some_and(|m| m[2] > 0.0))
-        .map_or(f64::NAN, |(h, _)| *h);
-    let note = "class D: depends on dropped inputs (DMW spectrum, AB damping, rear stiffening \
-                β, Δγ, ε, ζ_c); spec defaults here, the fitted knobs in area `calibration` \
-                (docs/calibration.md)";
-    let dvariant = "improved 2-DOF, spec defaults, synthetic DMW σ = 1 nm (seed 1)";
-    rows.push(row(
-        "dynamics §12.2 #16 (D) [seed §2.2.1]",
-        "touchdown (first actuation with solid contact, 0.2 nm steps)",
-        "nm",
-        9.7,
-        td,
-        Tolerance::Absolute(0.2),
-        false,
-        dvariant,
-        note,
-    ));
-    let c12 = case(&model, isbl, 12.0 * nm, dmw());
-    let fhm85 = case(&model, isbl, 8.5 * nm, dmw());
-    rows.push(row(
-        "dynamics §12.2 #18 (D) [seed §2.2.2]",
-        "FHM at 8.5 nm",
-        "%",
-        8.2,
-        fhm85.map_or(f64::NAN, |m| m[1]),
-        Tolerance::Relative(0.5),
-        false,
-        dvariant,
-        note,
-    ));
-    rows.push(row(
-        "dynamics §12.2 #19 (D) [seed §2.2.2]",
-        "steady clearance at 9.5 nm",
-        "nm",
-        0.67,
-        case(&model, isbl, 9.5 * nm, dmw()).map_or(f64::NAN, |m| m[0] / nm),
-        Tolerance::Absolute(0.2),
-        false,
-        dvariant,
-        note,
-    ));
-    for (q, unit, target, idx, scale, tol) in [
-        (
-            "12 nm steady interference (−c̄)",
+    let fhm85 = case(model, isbl, 8.5 * NM, dmw());
+    vec![
+        row(
+            "dynamics §12.2 #16 (D) [seed §2.2.1]",
+            "touchdown (first actuation with solid contact, 0.2 nm steps)",
             "nm",
-            0.34,
-            0usize,
-            -1e9,
-            Tolerance::Absolute(0.15),
-        ),
-        (
-            "12 nm mean contact force F_c",
-            "mN",
-            1.63,
-            3,
-            1e3,
-            Tolerance::Relative(0.5),
-        ),
-        (
-            "12 nm mean friction Q",
-            "mN",
-            2.43,
-            4,
-            1e3,
-            Tolerance::Relative(0.5),
-        ),
-        (
-            "12 nm mean real contact area",
-            "μm²",
-            0.36,
-            5,
-            1e12,
-            Tolerance::Relative(0.5),
-        ),
-        (
-            "12 nm friction coefficient Q̄/F̄_c",
-            "1",
-            1.49,
-            6,
-            1.0,
-            Tolerance::Relative(0.2),
-        ),
-    ] {
-        rows.push(row(
-            "dynamics §12.2 #24 (D) [seed §2.2.2]",
-            q,
-            unit,
-            target,
-            c12.map_or(f64::NAN, |m| m[idx] * scale),
-            tol,
+            9.7,
+            touchdown(&scan),
+            Tolerance::Absolute(0.2),
             false,
-            dvariant,
-            note,
-        ));
-    }
-    rows
+            CLASS_D_VARIANT,
+            CLASS_D_NOTE,
+        ),
+        row(
+            "dynamics §12.2 #18 (D) [seed §2.2.2]",
+            "FHM at 8.5 nm",
+            "%",
+            8.2,
+            fhm85.map_or(f64::NAN, |m| m.fhm_percent),
+            Tolerance::Relative(0.5),
+            false,
+            CLASS_D_VARIANT,
+            CLASS_D_NOTE,
+        ),
+        row(
+            "dynamics §12.2 #19 (D) [seed §2.2.2]",
+            "steady clearance at 9.5 nm",
+            "nm",
+            0.67,
+            case(model, isbl, 9.5 * NM, dmw()).map_or(f64::NAN, |m| m.clearance / NM),
+            Tolerance::Absolute(0.2),
+            false,
+            CLASS_D_VARIANT,
+            CLASS_D_NOTE,
+        ),
+    ]
+}
+
+/// One 12 nm steady-contact landmark of §12.2 #24: a case metric in the row's unit.
+struct Landmark {
+    quantity: &'static str,
+    unit: &'static str,
+    target: f64,
+    metric: fn(&CaseMetrics) -> f64,
+    /// Factor from the metric's SI unit to `unit` (negative: the interference is −c̄).
+    scale: f64,
+    tolerance: Tolerance,
+}
+
+/// The 12 nm steady-contact landmarks (§12.2 #24, class D) of one synthetic-DMW case.
+fn twelve_nm_rows(model: &Model2Dof, isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
+    let c12 = case(model, isbl, 12.0 * NM, Some(dmw_input(track)));
+    let landmarks = [
+        Landmark {
+            quantity: "12 nm steady interference (−c̄)",
+            unit: "nm",
+            target: 0.34,
+            metric: |m| m.clearance,
+            scale: -1e9,
+            tolerance: Tolerance::Absolute(0.15),
+        },
+        Landmark {
+            quantity: "12 nm mean contact force F_c",
+            unit: "mN",
+            target: 1.63,
+            metric: |m| m.contact_force,
+            scale: 1e3,
+            tolerance: Tolerance::Relative(0.5),
+        },
+        Landmark {
+            quantity: "12 nm mean friction Q",
+            unit: "mN",
+            target: 2.43,
+            metric: |m| m.friction,
+            scale: 1e3,
+            tolerance: Tolerance::Relative(0.5),
+        },
+        Landmark {
+            quantity: "12 nm mean real contact area",
+            unit: "μm²",
+            target: 0.36,
+            metric: |m| m.real_area,
+            scale: 1e12,
+            tolerance: Tolerance::Relative(0.5),
+        },
+        Landmark {
+            quantity: "12 nm friction coefficient Q̄/F̄_c",
+            unit: "1",
+            target: 1.49,
+            metric: |m| m.mu,
+            scale: 1.0,
+            tolerance: Tolerance::Relative(0.2),
+        },
+    ];
+    landmarks
+        .into_iter()
+        .map(|l| {
+            row(
+                "dynamics §12.2 #24 (D) [seed §2.2.2]",
+                l.quantity,
+                l.unit,
+                l.target,
+                c12.map_or(f64::NAN, |m| (l.metric)(&m) * l.scale),
+                l.tolerance,
+                false,
+                CLASS_D_VARIANT,
+                CLASS_D_NOTE,
+            )
+        })
+        .collect()
 }
 
 /// Initial 2-DOF model landmarks (§12.2 rows 7–9), static init, synthetic DMW.
@@ -374,7 +450,7 @@ fn initial_model_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
         .into_iter()
         .chain((0..=10).map(|i| 8.0 + 0.2 * i as f64))
         .collect();
-    let mut cases: Vec<(f64, Option<[f64; 7]>)> = actuations
+    let mut cases: Vec<Actuated> = actuations
         .par_iter()
         .map(|&h| (h, case_with(&model, isbl, h * nm, dmw(), true)))
         .collect();
@@ -392,7 +468,7 @@ fn initial_model_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
             &format!("initial model: steady clearance at {h} nm"),
             "nm",
             target,
-            at(h).map_or(f64::NAN, |m| m[0] / nm),
+            at(h).map_or(f64::NAN, |m| m.clearance / nm),
             Tolerance::Absolute(0.2),
             true,
             variant,
@@ -401,7 +477,7 @@ fn initial_model_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
     }
     let fhm: Vec<f64> = [4.0, 5.0, 6.0, 7.0]
         .iter()
-        .filter_map(|h| at(*h).map(|m| m[1]))
+        .filter_map(|h| at(*h).map(|m| m.fhm_percent))
         .collect();
     rows.push(row(
         "dynamics §12.2 #9 (D) [seed §2.1.3]",
@@ -414,10 +490,7 @@ fn initial_model_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
         variant,
         "class D: DMW high-frequency content and AB damping were dropped (docs/validation.md)",
     ));
-    let td = cases
-        .iter()
-        .find(|(_, m)| m.is_some_and(|m| m[2] > 0.0))
-        .map_or(f64::NAN, |(h, _)| *h);
+    let td = touchdown(&cases);
     rows.push(row(
         "dynamics §12.2 #7 (D) [seed §2.1.1]",
         "initial model: touchdown (0.2 nm steps)",
@@ -446,7 +519,7 @@ fn optimised_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
     let actuations: Vec<f64> = std::iter::once(8.6)
         .chain((0..=8).map(|i| 9.0 + 0.2 * i as f64))
         .collect();
-    let mut cases: Vec<(f64, Option<[f64; 7]>)> = actuations
+    let mut cases: Vec<Actuated> = actuations
         .par_iter()
         .map(|&h| (h, case_with(&model, isbl, h * nm, dmw(), true)))
         .collect();
@@ -457,7 +530,7 @@ fn optimised_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
         .iter()
         .find(|(h, _)| (*h - 8.6).abs() < 1e-9)
         .and_then(|(_, m)| *m)
-        .map_or(f64::NAN, |m| m[0] / nm);
+        .map_or(f64::NAN, |m| m.clearance / nm);
     rows.push(row(
         "dynamics §12.2 #26 (D) [seed §2.3.2]",
         "optimised design: clearance at 8.6 nm (critical point)",
@@ -469,11 +542,7 @@ fn optimised_rows(isbl: &IsblLookup, track: &Excitation) -> Vec<Row> {
         variant,
         "class D: w_TFC and the adhesion inputs were dropped (docs/validation.md)",
     ));
-    let td = cases
-        .iter()
-        .filter(|(h, _)| *h >= 9.0)
-        .find(|(_, m)| m.is_some_and(|m| m[2] > 0.0))
-        .map_or(f64::NAN, |(h, _)| *h);
+    let td = touchdown(cases.iter().filter(|(h, _)| *h >= 9.0));
     rows.push(row(
         "dynamics §12.2 #26 (D) [seed §2.3.2]",
         "optimised design: touchdown (0.2 nm steps)",

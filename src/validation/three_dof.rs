@@ -4,6 +4,7 @@
 use super::{Row, Tolerance};
 use crate::contact::isbl::{IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
+use crate::contact::mtl::LubricantCase;
 use crate::dynamics::three_dof::air_bearing::ThreeDofAirBearing;
 use crate::dynamics::three_dof::case::{Model3Dof, Options3Dof, ThreeDofCase};
 use crate::dynamics::three_dof::geometry::{Feature, SliderPose};
@@ -135,147 +136,188 @@ fn twelve_nm_rows(model: &Model3Dof) -> Vec<Row> {
     ]
 }
 
+/// One lubricant case of Table 4.4 with its published BVs (%).
+struct PublishedCase {
+    case: LubricantCase,
+    name: &'static str,
+    jump_to_contact_bv: f64,
+    steady_contact_bv: f64,
+}
+
+/// Table 4.4's four lubricant cases as published.
+const PUBLISHED: [PublishedCase; 4] = [
+    PublishedCase {
+        case: LubricantCase::Reference,
+        name: "case 0 (reference)",
+        jump_to_contact_bv: 61.7,
+        steady_contact_bv: 5.7,
+    },
+    PublishedCase {
+        case: LubricantCase::HumidityTemperature,
+        name: "case 1 (μ0 −50 %)",
+        jump_to_contact_bv: 623.9,
+        steady_contact_bv: 19.4,
+    },
+    PublishedCase {
+        case: LubricantCase::MoreBonding,
+        name: "case 2 (μ0 +50 %)",
+        jump_to_contact_bv: 61.8,
+        steady_contact_bv: 1.7,
+    },
+    PublishedCase {
+        case: LubricantCase::LargerGyrationRadius,
+        name: "case 3 (μ0 +50 %, κ 0.45 nm)",
+        jump_to_contact_bv: 900.0,
+        steady_contact_bv: 23.6,
+    },
+];
+
+/// The BVs (%) one Table 4.4 case gives here.
+#[derive(Clone, Copy)]
+struct CaseBv {
+    jump_to_contact: f64,
+    steady_contact: f64,
+}
+
 /// Table 4.4 (S6, dynamics.md §12 row 35): the variable profile with the flattened push-back
 /// for the four lubricant cases on the MTL interface, synthetic DMW (σ 1 nm, seed 1) as tracks
 /// D1, D2 = flipped, D3 = negated flipped. Class Q: the values depend on dropped inputs; the
 /// orderings are what the dissertation's text claims.
 fn table_4_4_rows() -> Vec<Row> {
-    use crate::contact::isbl::SurfaceEnergy;
-    use crate::contact::mtl::{FwmExperiment, LubricantCase, RoughFilm, RoughMtl};
-    use crate::dmw::excitation_tracks::synthetic_dmw;
     use crate::dynamics::three_dof::air_bearing::PushbackCurve;
-    use crate::dynamics::two_dof::DmwInput;
-    use rayon::prelude::*;
     let mut model = Model3Dof::dissertation();
     model.pushback = PushbackCurve::flattened();
-    let published = [
-        (LubricantCase::Reference, "case 0 (reference)", 61.7, 5.7),
-        (
-            LubricantCase::HumidityTemperature,
-            "case 1 (μ0 −50 %)",
-            623.9,
-            19.4,
-        ),
-        (LubricantCase::MoreBonding, "case 2 (μ0 +50 %)", 61.8, 1.7),
-        (
-            LubricantCase::LargerGyrationRadius,
-            "case 3 (μ0 +50 %, κ 0.45 nm)",
-            900.0,
-            23.6,
-        ),
-    ];
-    let run = || -> Result<Vec<(f64, f64)>, String> {
-        let mut ip = IsblParams::three_dof();
-        ip.surface_energy = SurfaceEnergy::seed_variable();
-        let isbl = IsblModel::new(ip)
-            .and_then(IsblLookup::build_standard)
-            .map_err(|e| e.to_string())?;
-        let d = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1).map_err(|e| e.to_string())?;
-        let flip = |x: &[f64], sign: f64| x.iter().rev().map(|v| sign * v).collect::<Vec<_>>();
-        let (d2, v2) = (flip(&d.displacement, 1.0), flip(&d.velocity, -1.0));
-        let (d3, v3) = (flip(&d.displacement, -1.0), flip(&d.velocity, 1.0));
-        let lubricant_surface = 3.0 * ip.sigma + ip.lubricant_thickness;
-        published
-            .par_iter()
-            .map(|(case, ..)| {
-                let film = RoughFilm::new(
-                    ip.sigma,
-                    case.kappa(),
-                    ip.lubricant_thickness,
-                    model.disk_speed,
-                )
-                .map_err(|e| e.to_string())?;
-                let exp = FwmExperiment::fukuzawa_z03()
-                    .with_limiting_viscosity(case.limiting_viscosity())
-                    .map_err(|e| e.to_string())?;
-                let law = RoughMtl::from_experiment(film, &exp).map_err(|e| e.to_string())?;
-                let interface = FeatureInterface::new(
-                    &isbl,
-                    InterfaceLaw::Mtl(law),
-                    ContactForceForm::InterferenceTangent,
-                    0.05,
-                    model.air_bearing.slider.mass,
-                )
-                .map_err(|e| e.to_string())?;
-                let profile = ActuationProfile::variable_default();
-                let fs = d.fs;
-                let tracks = [
-                    DmwInput {
-                        displacement: &d.displacement,
-                        velocity: &d.velocity,
-                        sample_rate: fs,
-                    },
-                    DmwInput {
-                        displacement: &d2,
-                        velocity: &v2,
-                        sample_rate: fs,
-                    },
-                    DmwInput {
-                        displacement: &d3,
-                        velocity: &v3,
-                        sample_rate: fs,
-                    },
-                ];
-                let h = ThreeDofCase::new(
-                    &model,
-                    interface,
-                    profile.clone(),
-                    None,
-                    Some(tracks),
-                    Options3Dof::default(),
-                )
-                .and_then(|c| c.run())
-                .map_err(|e| e.to_string())?;
-                let t = h.table_4_4(&profile, lubricant_surface);
-                Ok((
-                    t.jump_to_contact_bv.unwrap_or(f64::NAN),
-                    t.steady_contact_bv.unwrap_or(f64::NAN),
-                ))
-            })
-            .collect()
-    };
     let variant = "3-DOF, MTL (variable Δγ), S5 profile 5 → 18 → 5 nm, flattened push-back, \
                    synthetic DMW σ 1 nm seed 1, integrated AB spring law";
-    let values = match run() {
-        Ok(v) => v,
-        Err(e) => {
-            return vec![Row {
-                reproducible: false,
-                ..Row::reproducible(
-                    "dynamics §12 row 35",
-                    "Table 4.4 cases",
-                    "%",
-                    f64::NAN,
-                    f64::NAN,
-                    Tolerance::Absolute(0.0),
-                    variant,
-                    &format!("the cases failed: {e}"),
-                )
-            }]
-        }
-    };
-    let (jtc, steady): (Vec<f64>, Vec<f64>) = values.iter().copied().unzip();
+    match run_table_4_4(&model) {
+        Ok(values) => table_4_4_case_rows(&values, variant),
+        Err(e) => vec![Row {
+            reproducible: false,
+            ..Row::reproducible(
+                "dynamics §12 row 35",
+                "Table 4.4 cases",
+                "%",
+                f64::NAN,
+                f64::NAN,
+                Tolerance::Absolute(0.0),
+                variant,
+                &format!("the cases failed: {e}"),
+            )
+        }],
+    }
+}
+
+/// Runs the four Table 4.4 cases (in parallel) on the variable-Δγ MTL interface.
+fn run_table_4_4(model: &Model3Dof) -> Result<Vec<CaseBv>, String> {
+    use crate::contact::isbl::SurfaceEnergy;
+    use crate::contact::mtl::{FwmExperiment, RoughFilm, RoughMtl};
+    use crate::dmw::excitation_tracks::synthetic_dmw;
+    use crate::dynamics::two_dof::DmwInput;
+    use rayon::prelude::*;
+    let mut ip = IsblParams::three_dof();
+    ip.surface_energy = SurfaceEnergy::seed_variable();
+    let isbl = IsblModel::new(ip)
+        .and_then(IsblLookup::build_standard)
+        .map_err(|e| e.to_string())?;
+    let d = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1).map_err(|e| e.to_string())?;
+    let flip = |x: &[f64], sign: f64| x.iter().rev().map(|v| sign * v).collect::<Vec<_>>();
+    let (d2, v2) = (flip(&d.displacement, 1.0), flip(&d.velocity, -1.0));
+    let (d3, v3) = (flip(&d.displacement, -1.0), flip(&d.velocity, 1.0));
+    let lubricant_surface = 3.0 * ip.sigma + ip.lubricant_thickness;
+    PUBLISHED
+        .par_iter()
+        .map(|p| {
+            let case = &p.case;
+            let film = RoughFilm::new(
+                ip.sigma,
+                case.kappa(),
+                ip.lubricant_thickness,
+                model.disk_speed,
+            )
+            .map_err(|e| e.to_string())?;
+            let exp = FwmExperiment::fukuzawa_z03()
+                .with_limiting_viscosity(case.limiting_viscosity())
+                .map_err(|e| e.to_string())?;
+            let law = RoughMtl::from_experiment(film, &exp).map_err(|e| e.to_string())?;
+            let interface = FeatureInterface::new(
+                &isbl,
+                InterfaceLaw::Mtl(law),
+                ContactForceForm::InterferenceTangent,
+                0.05,
+                model.air_bearing.slider.mass,
+            )
+            .map_err(|e| e.to_string())?;
+            let profile = ActuationProfile::variable_default();
+            let fs = d.fs;
+            let tracks = [
+                DmwInput {
+                    displacement: &d.displacement,
+                    velocity: &d.velocity,
+                    sample_rate: fs,
+                },
+                DmwInput {
+                    displacement: &d2,
+                    velocity: &v2,
+                    sample_rate: fs,
+                },
+                DmwInput {
+                    displacement: &d3,
+                    velocity: &v3,
+                    sample_rate: fs,
+                },
+            ];
+            let h = ThreeDofCase::new(
+                model,
+                interface,
+                profile.clone(),
+                None,
+                Some(tracks),
+                Options3Dof::default(),
+            )
+            .and_then(|c| c.run())
+            .map_err(|e| e.to_string())?;
+            let t = h.table_4_4(&profile, lubricant_surface);
+            Ok(CaseBv {
+                jump_to_contact: t.jump_to_contact_bv.unwrap_or(f64::NAN),
+                steady_contact: t.steady_contact_bv.unwrap_or(f64::NAN),
+            })
+        })
+        .collect()
+}
+
+/// "holds" or `otherwise`.
+fn holds(ok: bool, otherwise: &'static str) -> &'static str {
+    if ok {
+        "holds"
+    } else {
+        otherwise
+    }
+}
+
+/// Two rows per case (steady, then jump-to-contact BV), their notes saying whether the
+/// orderings the dissertation's text claims hold.
+fn table_4_4_case_rows(values: &[CaseBv], variant: &str) -> Vec<Row> {
+    let (jtc, steady): (Vec<f64>, Vec<f64>) = values
+        .iter()
+        .map(|v| (v.jump_to_contact, v.steady_contact))
+        .unzip();
     let steady_order = steady[2] < steady[0] && steady[0] < steady[1];
     let jtc_soft = jtc[1] > jtc[0] && jtc[1] > jtc[2];
     let jtc_gyration = jtc[3] > jtc[0] && jtc[3] > jtc[2];
     let mut rows = Vec::new();
-    for (k, (_, name, jtc_pub, steady_pub)) in published.iter().enumerate() {
+    for (k, p) in PUBLISHED.iter().enumerate() {
+        let name = p.name;
         let note_steady = format!(
             "class Q; steady BV order case 2 < 0 < 1 (stiffer lubricant → smaller BV): {}",
-            if steady_order {
-                "holds"
-            } else {
-                "does not hold"
-            }
+            holds(steady_order, "does not hold")
         );
         let note_jtc = format!(
             "class Q; JTC BV of case 1 above cases 0, 2: {}; of case 3 above cases 0, 2: {}",
-            if jtc_soft { "holds" } else { "does not hold" },
-            if jtc_gyration {
-                "holds"
-            } else {
+            holds(jtc_soft, "does not hold"),
+            holds(
+                jtc_gyration,
                 "does not hold (the radius of gyration enters only through κ)"
-            }
+            )
         );
         rows.push(Row {
             reproducible: false,
@@ -283,7 +325,7 @@ fn table_4_4_rows() -> Vec<Row> {
                 "dynamics §12 row 35 (Table 4.4)",
                 &format!("{name}: steady-contact BV"),
                 "%",
-                *steady_pub,
+                p.steady_contact_bv,
                 steady[k],
                 Tolerance::Relative(0.5),
                 variant,
@@ -296,7 +338,7 @@ fn table_4_4_rows() -> Vec<Row> {
                 "dynamics §12 row 35 (Table 4.4)",
                 &format!("{name}: jump-to-contact BV"),
                 "%",
-                *jtc_pub,
+                p.jump_to_contact_bv,
                 jtc[k],
                 Tolerance::Relative(0.5),
                 variant,
