@@ -31,6 +31,9 @@ pub enum Error {
     /// `hdi synth` could not write the sample data.
     #[error(transparent)]
     Samples(#[from] crate::samples::SampleError),
+    /// Storing a computed case in the cache failed.
+    #[error(transparent)]
+    CaseStore(#[from] crate::core::cases::CaseError),
     /// One slider case of a sweep failed.
     #[error("case h_TFC = {:.3} nm", .actuation * 1e9)]
     Case {
@@ -62,16 +65,7 @@ impl Error {
 pub type Result<T> = std::result::Result<T, Error>;
 
 /// The error and all its sources on one line, `outer: inner: …` (as the binary prints errors).
-pub fn chain(e: &dyn std::error::Error) -> String {
-    let mut text = e.to_string();
-    let mut source = e.source();
-    while let Some(s) = source {
-        text.push_str(": ");
-        text.push_str(&s.to_string());
-        source = s.source();
-    }
-    text
-}
+pub use crate::core::chain;
 
 #[cfg(test)]
 mod tests {

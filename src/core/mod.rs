@@ -8,3 +8,15 @@ pub mod hash;
 pub mod progress;
 pub mod store;
 pub mod units;
+
+/// The error and all its sources on one line, `outer: inner: …` (as the binary prints errors).
+pub fn chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        text.push_str(": ");
+        text.push_str(&s.to_string());
+        source = s.source();
+    }
+    text
+}

@@ -5,7 +5,7 @@
 use crate::core::cache::{Store, Verification};
 use crate::core::cases::{case_fingerprint, CASE_KIND};
 use crate::core::config::PipelineFile;
-use crate::core::executor::{CaseComputer, CaseRegistry, CaseSpec};
+use crate::core::executor::{CaseComputer, CaseFailure, CaseRegistry, CaseSpec};
 use crate::engine::{plan, read_result, Plan, State};
 use crate::error::{Error, Result};
 use crate::slider::case::{simulate_case, MODEL_VERSION};
@@ -175,7 +175,18 @@ impl SweepWorker {
 }
 
 impl CaseComputer for SweepWorker {
-    fn compute(&self, recipe: &Value, store: &Store, dir: &Path) -> Result<Value> {
+    fn compute(
+        &self,
+        recipe: &Value,
+        store: &Store,
+        dir: &Path,
+    ) -> std::result::Result<Value, CaseFailure> {
+        Ok(self.compute_recipe(recipe, store, dir)?)
+    }
+}
+
+impl SweepWorker {
+    fn compute_recipe(&self, recipe: &Value, store: &Store, dir: &Path) -> Result<Value> {
         let field = |k: &str| {
             recipe[k]
                 .as_str()
