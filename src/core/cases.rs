@@ -124,7 +124,7 @@ mod tests {
         let params = json!({"actuation_m": 8.5e-9});
         let mut runs = 0;
         let mut run = |store: &Store| {
-            get_or_compute(store, "test-1", &params, |d| {
+            get_or_compute(store, "test-1", &params, |d| -> Result<Value, CaseError> {
                 runs += 1;
                 std::fs::write(d.join("data.txt"), b"42").unwrap();
                 Ok(json!({"value": 42}))

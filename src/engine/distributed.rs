@@ -31,7 +31,10 @@ fn sweep_params(file: &PipelineFile, kind: &str, instance: &str) -> Result<Simul
         SIMULATE_CASE => {
             let cfg = file
                 .instance::<SimulateConfig>("simulate", instance)?
-                .ok_or_else(|| Error::Stage(format!("no [simulate.{instance}] in the pipeline")))?;
+                .ok_or_else(|| Error::MissingInstance {
+                    kind: "simulate",
+                    name: instance.to_string(),
+                })?;
             Ok(SimulateParams::from_config(file, instance, &cfg)?)
         }
         _ => Ok(doe_stage(file, instance)?.params.base),
@@ -42,7 +45,10 @@ fn sweep_params(file: &PipelineFile, kind: &str, instance: &str) -> Result<Simul
 fn doe_stage(file: &PipelineFile, instance: &str) -> Result<DoeStage> {
     let cfg = file
         .instance::<DoeConfig>("doe", instance)?
-        .ok_or_else(|| Error::Stage(format!("no [doe.{instance}] in the pipeline")))?;
+        .ok_or_else(|| Error::MissingInstance {
+            kind: "doe",
+            name: instance.to_string(),
+        })?;
     Ok(DoeStage::from_config(file, instance, &cfg)?)
 }
 
@@ -191,12 +197,18 @@ impl SweepWorker {
             recipe[k]
                 .as_str()
                 .map(str::to_string)
-                .ok_or_else(|| Error::Stage(format!("{} recipe without `{k}`", self.kind)))
+                .ok_or_else(|| Error::RecipeField {
+                    kind: self.kind,
+                    field: k.to_string(),
+                })
         };
         let (config, instance) = (field("config")?, field("instance")?);
         let actuation = recipe["actuation_m"]
             .as_f64()
-            .ok_or_else(|| Error::Stage(format!("{} recipe without `actuation_m`", self.kind)))?;
+            .ok_or_else(|| Error::RecipeField {
+                kind: self.kind,
+                field: "actuation_m".into(),
+            })?;
         let sweep = {
             let mut sweeps = self
                 .sweeps
@@ -226,10 +238,10 @@ impl SweepWorker {
                     dir,
                 )
             }
-            Err(e) => Err(Error::Stage(format!(
-                "{} recipe: bad `design_m`: {e}",
-                self.kind
-            ))),
+            Err(source) => Err(Error::RecipeDesign {
+                kind: self.kind,
+                source,
+            }),
         }
     }
 }
