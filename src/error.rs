@@ -65,6 +65,14 @@ pub enum Error {
     /// The sweep metrics of a finished sweep could not be computed.
     #[error("sweep metrics")]
     SweepMetrics(#[source] crate::dynamics::metrics::MetricsError),
+    /// A distributed case's upstream is not in the plan, or has no current store entry.
+    #[error("upstream `{upstream}` of `{consumer}` {}", if *.planned { "has no current result (run it first)" } else { "is unknown" })]
+    UpstreamNotReady {
+        upstream: String,
+        consumer: String,
+        /// Whether the upstream is in the plan (then it is only stale).
+        planned: bool,
+    },
     /// A stage names an upstream that the pipeline does not declare.
     #[error("stage `{stage}` consumes `{upstream}`, which is not declared")]
     UndeclaredUpstream { stage: String, upstream: String },
@@ -187,6 +195,16 @@ mod tests {
                 upstream: name()
             }),
             "stage `b` consumes `a`, which is not declared"
+        );
+        let ready = |planned| Error::UpstreamNotReady {
+            upstream: name(),
+            consumer: "b".into(),
+            planned,
+        };
+        assert_eq!(s(ready(false)), "upstream `a` of `b` is unknown");
+        assert_eq!(
+            s(ready(true)),
+            "upstream `a` of `b` has no current result (run it first)"
         );
         assert_eq!(
             s(Error::DependencyCycle(name())),

@@ -68,11 +68,17 @@ fn prepared(
             .planned
             .iter()
             .find(|p| p.name == u)
-            .ok_or_else(|| Error::Stage(format!("upstream `{u}` of `{instance}` is unknown")))?;
+            .ok_or_else(|| Error::UpstreamNotReady {
+                upstream: u.clone(),
+                consumer: instance.to_string(),
+                planned: false,
+            })?;
         if p.state != State::Fresh {
-            return Err(Error::Stage(format!(
-                "upstream `{u}` of `{instance}` has no current result (run it first)"
-            )));
+            return Err(Error::UpstreamNotReady {
+                upstream: u.clone(),
+                consumer: instance.to_string(),
+                planned: true,
+            });
         }
         let dir = store.entry_dir(&p.kind, &p.key);
         results.insert(u.clone(), read_result(&dir)?);
