@@ -28,7 +28,9 @@ pub enum Error {
     /// Writing an output (HDF5, table, plot) failed.
     #[error("writing {}: {message}", path.display())]
     Output { path: PathBuf, message: String },
-    /// `hdi synth` could not write the sample data.
+    /// Storing a computed case in the cache failed.
+    #[error(transparent)]
+    CaseStore(#[from] crate::core::cases::CaseError),
     /// One slider case of a sweep failed.
     #[error("case h_TFC = {:.3} nm", .actuation * 1e9)]
     Case {
@@ -37,6 +39,59 @@ pub enum Error {
         #[source]
         source: Box<Error>,
     },
+    /// An upstream instance's result was not handed to the stage that consumes it.
+    #[error("no result from {kind} `{name}`")]
+    MissingUpstream { kind: &'static str, name: String },
+    /// An upstream instance's store entry was not handed to the stage that reads its files.
+    #[error("no files from {kind} `{name}`")]
+    MissingUpstreamFiles { kind: &'static str, name: String },
+    /// An upstream result lacks a value its consumer needs; `what` names it (e.g. "`sigma`").
+    #[error("{kind} `{name}` result has no {what}")]
+    UpstreamField {
+        kind: &'static str,
+        name: String,
+        what: String,
+    },
+    /// A store entry's `result.json` does not parse.
+    #[error("{}", path.display())]
+    ResultJson {
+        path: PathBuf,
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The sweep metrics of a finished sweep could not be computed.
+    #[error("sweep metrics")]
+    SweepMetrics(#[source] crate::dynamics::metrics::MetricsError),
+    /// A distributed case's upstream is not in the plan, or has no current store entry.
+    #[error("upstream `{upstream}` of `{consumer}` {}", if *.planned { "has no current result (run it first)" } else { "is unknown" })]
+    UpstreamNotReady {
+        upstream: String,
+        consumer: String,
+        /// Whether the upstream is in the plan (then it is only stale).
+        planned: bool,
+    },
+    /// A stage names an upstream that the pipeline does not declare.
+    #[error("stage `{stage}` consumes `{upstream}`, which is not declared")]
+    UndeclaredUpstream { stage: String, upstream: String },
+    /// The stages' upstream links form a cycle.
+    #[error("dependency cycle through stage `{0}`")]
+    DependencyCycle(String),
+    /// The pipeline has no `[kind.name]` instance.
+    #[error("no [{kind}.{name}] in the pipeline")]
+    MissingInstance { kind: &'static str, name: String },
+    /// A distributed case's recipe lacks a field.
+    #[error("{kind} recipe without `{field}`")]
+    RecipeField { kind: &'static str, field: String },
+    /// A distributed case's recipe has a `design_m` that does not parse.
+    #[error("{kind} recipe: bad `design_m`")]
+    RecipeDesign {
+        kind: &'static str,
+        #[source]
+        source: serde_json::Error,
+    },
+    /// `hdi validate` names no known area.
+    #[error("unknown validation area `{0}`")]
+    UnknownArea(String),
     /// A stage could not run for a reason that is not one of the above.
     #[error("{0}")]
     Stage(String),
@@ -60,16 +115,7 @@ impl Error {
 pub type Result<T> = std::result::Result<T, Error>;
 
 /// The error and all its sources on one line, `outer: inner: …` (as the binary prints errors).
-pub fn chain(e: &dyn std::error::Error) -> String {
-    let mut text = e.to_string();
-    let mut source = e.source();
-    while let Some(s) = source {
-        text.push_str(": ");
-        text.push_str(&s.to_string());
-        source = s.source();
-    }
-    text
-}
+pub use crate::core::chain;
 
 #[cfg(test)]
 mod tests {
@@ -90,5 +136,108 @@ mod tests {
             source: io(),
         });
         assert_eq!(chain(&fig), chain(&Error::io("out/a.png", io())));
+    }
+
+    /// The typed variants print exactly what their `Stage(format!(…))` predecessors printed.
+    #[test]
+    fn typed_variants_keep_the_stage_texts() {
+        let s = |e: Error| chain(&e);
+        let name = || "a".to_string();
+        assert_eq!(
+            s(Error::MissingUpstream {
+                kind: "surface",
+                name: name()
+            }),
+            "no result from surface `a`"
+        );
+        assert_eq!(
+            s(Error::MissingUpstreamFiles {
+                kind: "dmw",
+                name: name()
+            }),
+            "no files from dmw `a`"
+        );
+        assert_eq!(
+            s(Error::UpstreamField {
+                kind: "interface",
+                name: name(),
+                what: "`R_m`".into()
+            }),
+            "interface `a` result has no `R_m`"
+        );
+        assert_eq!(
+            s(Error::UpstreamField {
+                kind: "contact",
+                name: name(),
+                what: "usable `inputs`".into()
+            }),
+            "contact `a` result has no usable `inputs`"
+        );
+        let json = || serde_json::from_slice::<serde_json::Value>(b"{").unwrap_err();
+        assert_eq!(
+            s(Error::ResultJson {
+                path: "d/result.json".into(),
+                source: json()
+            }),
+            format!("d/result.json: {}", json())
+        );
+        let metrics = || crate::dynamics::metrics::MetricsError::NotIncreasing { index: 2 };
+        assert_eq!(
+            s(Error::SweepMetrics(metrics())),
+            format!("sweep metrics: {}", metrics())
+        );
+        assert_eq!(
+            s(Error::UndeclaredUpstream {
+                stage: "b".into(),
+                upstream: name()
+            }),
+            "stage `b` consumes `a`, which is not declared"
+        );
+        let ready = |planned| Error::UpstreamNotReady {
+            upstream: name(),
+            consumer: "b".into(),
+            planned,
+        };
+        assert_eq!(s(ready(false)), "upstream `a` of `b` is unknown");
+        assert_eq!(
+            s(ready(true)),
+            "upstream `a` of `b` has no current result (run it first)"
+        );
+        assert_eq!(
+            s(Error::DependencyCycle(name())),
+            "dependency cycle through stage `a`"
+        );
+        assert_eq!(
+            s(Error::MissingInstance {
+                kind: "doe",
+                name: name()
+            }),
+            "no [doe.a] in the pipeline"
+        );
+        assert_eq!(
+            s(Error::RecipeField {
+                kind: "doe",
+                field: "config".into()
+            }),
+            "doe recipe without `config`"
+        );
+        let design =
+            || serde_json::from_value::<Option<[f64; 3]>>(serde_json::json!("x")).unwrap_err();
+        assert_eq!(
+            s(Error::RecipeDesign {
+                kind: "doe",
+                source: design()
+            }),
+            format!("doe recipe: bad `design_m`: {}", design())
+        );
+        assert_eq!(s(Error::UnknownArea(name())), "unknown validation area `a`");
+        let case = crate::core::cases::CaseError::Io {
+            path: "p".into(),
+            source: std::io::Error::other("gone"),
+        };
+        assert_eq!(
+            s(Error::from(case)),
+            chain(&Error::io("p", std::io::Error::other("gone")))
+        );
     }
 }

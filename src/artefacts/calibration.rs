@@ -49,11 +49,14 @@ pub fn upstream_fitted_knobs(
 ) -> Result<Vec<(Knob, f64)>> {
     let result = upstream
         .get(calibration)
-        .ok_or_else(|| Error::Stage(format!("no result from calibrate `{calibration}`")))?;
-    fitted_knobs(result).ok_or_else(|| {
-        Error::Stage(format!(
-            "calibrate `{calibration}` result has no usable `fitted`"
-        ))
+        .ok_or_else(|| Error::MissingUpstream {
+            kind: "calibrate",
+            name: calibration.to_string(),
+        })?;
+    fitted_knobs(result).ok_or_else(|| Error::UpstreamField {
+        kind: "calibrate",
+        name: calibration.to_string(),
+        what: "usable `fitted`".into(),
     })
 }
 

@@ -148,10 +148,17 @@ pub fn upstream_isbl_params(
 ) -> Result<IsblParams> {
     let result = upstream
         .get(contact)
-        .ok_or_else(|| Error::Stage(format!("no result from contact `{contact}`")))?;
+        .ok_or_else(|| Error::MissingUpstream {
+            kind: "contact",
+            name: contact.to_string(),
+        })?;
     ContactInputs::from_json(&result["inputs"])
         .and_then(|i| i.params())
-        .ok_or_else(|| Error::Stage(format!("contact `{contact}` result has no usable `inputs`")))
+        .ok_or_else(|| Error::UpstreamField {
+            kind: "contact",
+            name: contact.to_string(),
+            what: "usable `inputs`".into(),
+        })
 }
 
 #[cfg(test)]

@@ -38,7 +38,10 @@ pub struct DmwTrack {
 pub fn upstream_file(upstream_dirs: &BTreeMap<String, PathBuf>, dmw: &str) -> Result<PathBuf> {
     let dir = upstream_dirs
         .get(dmw)
-        .ok_or_else(|| Error::Stage(format!("no files from dmw `{dmw}`")))?;
+        .ok_or_else(|| Error::MissingUpstreamFiles {
+            kind: "dmw",
+            name: dmw.to_string(),
+        })?;
     Ok(dir.join(FILE))
 }
 

@@ -50,12 +50,16 @@ impl InterfaceRoughness {
 /// σ, R, η [m, m, 1/m²] of the upstream interface instance `name`; a missing value is an
 /// error naming its key.
 pub fn upstream_summits(upstream: &BTreeMap<String, Value>, name: &str) -> Result<[f64; 3]> {
-    let r = upstream
-        .get(name)
-        .ok_or_else(|| Error::Stage(format!("no result from interface `{name}`")))?;
+    let r = upstream.get(name).ok_or_else(|| Error::MissingUpstream {
+        kind: "interface",
+        name: name.to_string(),
+    })?;
     let get = |k: &str| {
-        r[k].as_f64()
-            .ok_or_else(|| Error::Stage(format!("interface `{name}` result has no `{k}`")))
+        r[k].as_f64().ok_or_else(|| Error::UpstreamField {
+            kind: "interface",
+            name: name.to_string(),
+            what: format!("`{k}`"),
+        })
     };
     Ok([get("sigma_m")?, get("R_m")?, get("eta_per_m2")?])
 }

@@ -28,8 +28,11 @@ impl SummitStats {
     pub fn from_result(result: &Value, name: &str) -> Result<Self> {
         let s = &result["stats"];
         let get = |k: &str| {
-            s[k].as_f64()
-                .ok_or_else(|| Error::Stage(format!("surface `{name}` result has no `{k}`")))
+            s[k].as_f64().ok_or_else(|| Error::UpstreamField {
+                kind: "surface",
+                name: name.to_string(),
+                what: format!("`{k}`"),
+            })
         };
         Ok(SummitStats {
             sigma: get("sigma")?,
@@ -56,9 +59,10 @@ pub fn upstream_surface_stats(
     upstream: &BTreeMap<String, Value>,
     name: &str,
 ) -> Result<SurfaceStats> {
-    let result = upstream
-        .get(name)
-        .ok_or_else(|| Error::Stage(format!("no result from surface `{name}`")))?;
+    let result = upstream.get(name).ok_or_else(|| Error::MissingUpstream {
+        kind: "surface",
+        name: name.to_string(),
+    })?;
     Ok(SummitStats::from_result(result, name)?.stats())
 }
 

@@ -4,7 +4,6 @@
 //! renamed into the store; a damaged entry is recomputed.
 
 use crate::core::cache::{Fingerprint, Store, Verification};
-use crate::error::{Error, Result};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -22,6 +21,29 @@ pub struct CaseEntry {
     pub cached: bool,
 }
 
+/// Storing a computed case failed (the computing closure's own errors pass through as they
+/// are).
+#[derive(Debug, thiserror::Error)]
+pub enum CaseError {
+    #[error("{}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+}
+
+impl CaseError {
+    fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        CaseError::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}
+
 /// The cache key of a case: the case's canonical parameters and the model version.
 pub fn case_fingerprint(model_version: &str, params: &Value) -> Fingerprint {
     Fingerprint {
@@ -35,14 +57,15 @@ pub fn case_fingerprint(model_version: &str, params: &Value) -> Fingerprint {
 
 /// The cached case for `params`, or compute it: `compute(dir)` writes the case's files into
 /// `dir` and returns its result (stored as `result.json`).
-pub fn get_or_compute<F>(
+pub fn get_or_compute<F, E>(
     store: &Store,
     model_version: &str,
     params: &Value,
     compute: F,
-) -> Result<CaseEntry>
+) -> Result<CaseEntry, E>
 where
-    F: FnOnce(&Path) -> Result<Value>,
+    F: FnOnce(&Path) -> Result<Value, E>,
+    E: From<CaseError>,
 {
     let fp = case_fingerprint(model_version, params);
     let key = fp.key();
@@ -64,7 +87,7 @@ where
     let started = Instant::now();
     let work = store
         .new_work_dir("case", &key)
-        .map_err(|e| Error::io(store.processed(), e))?;
+        .map_err(|e| CaseError::io(store.processed(), e))?;
     let result = match compute(&work) {
         Ok(r) => r,
         Err(e) => {
@@ -72,15 +95,15 @@ where
             return Err(e);
         }
     };
-    let bytes = serde_json::to_vec_pretty(&result).map_err(|e| Error::Stage(e.to_string()))?;
+    let bytes = serde_json::to_vec_pretty(&result).map_err(CaseError::from)?;
     let path = work.join("result.json");
     if let Err(e) = std::fs::write(&path, bytes) {
         let _ = std::fs::remove_dir_all(&work);
-        return Err(Error::io(path, e));
+        return Err(CaseError::io(path, e).into());
     }
     store
         .commit(&work, "case", &fp, started.elapsed().as_secs_f64())
-        .map_err(|e| Error::io(store.entry_dir(CASE_KIND, &key), e))?;
+        .map_err(|e| CaseError::io(store.entry_dir(CASE_KIND, &key), e))?;
     Ok(CaseEntry {
         dir: store.entry_dir(CASE_KIND, &key),
         key,
@@ -101,7 +124,7 @@ mod tests {
         let params = json!({"actuation_m": 8.5e-9});
         let mut runs = 0;
         let mut run = |store: &Store| {
-            get_or_compute(store, "test-1", &params, |d| {
+            get_or_compute(store, "test-1", &params, |d| -> Result<Value, CaseError> {
                 runs += 1;
                 std::fs::write(d.join("data.txt"), b"42").unwrap();
                 Ok(json!({"value": 42}))
@@ -120,7 +143,7 @@ mod tests {
         assert_eq!(runs, 2);
         // A failing case leaves nothing behind.
         let e = get_or_compute(&store, "test-1", &json!({"x": 1}), |_| {
-            Err(Error::Stage("boom".into()))
+            Err::<Value, Box<dyn std::error::Error + Send + Sync>>("boom".into())
         });
         assert!(e.is_err());
         assert!(store.tmp_dirs().is_empty());

@@ -9,3 +9,15 @@ pub mod progress;
 pub mod store;
 // Transitional path while branches merge; removed once every `core::units` path is rewritten.
 pub use crate::units;
+
+/// The error and all its sources on one line, `outer: inner: …` (as the binary prints errors).
+pub fn chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        text.push_str(": ");
+        text.push_str(&s.to_string());
+        source = s.source();
+    }
+    text
+}

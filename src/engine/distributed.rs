@@ -5,7 +5,7 @@
 use crate::core::cache::{Store, Verification};
 use crate::core::cases::{case_fingerprint, CASE_KIND};
 use crate::core::config::PipelineFile;
-use crate::core::executor::{CaseComputer, CaseRegistry, CaseSpec};
+use crate::core::executor::{CaseComputer, CaseFailure, CaseRegistry, CaseSpec};
 use crate::engine::{plan, read_result, Plan, State};
 use crate::error::{Error, Result};
 use crate::slider::case::{simulate_case, MODEL_VERSION};
@@ -31,7 +31,10 @@ fn sweep_params(file: &PipelineFile, kind: &str, instance: &str) -> Result<Simul
         SIMULATE_CASE => {
             let cfg = file
                 .instance::<SimulateConfig>("simulate", instance)?
-                .ok_or_else(|| Error::Stage(format!("no [simulate.{instance}] in the pipeline")))?;
+                .ok_or_else(|| Error::MissingInstance {
+                    kind: "simulate",
+                    name: instance.to_string(),
+                })?;
             Ok(SimulateParams::from_config(file, instance, &cfg)?)
         }
         _ => Ok(doe_stage(file, instance)?.params.base),
@@ -42,7 +45,10 @@ fn sweep_params(file: &PipelineFile, kind: &str, instance: &str) -> Result<Simul
 fn doe_stage(file: &PipelineFile, instance: &str) -> Result<DoeStage> {
     let cfg = file
         .instance::<DoeConfig>("doe", instance)?
-        .ok_or_else(|| Error::Stage(format!("no [doe.{instance}] in the pipeline")))?;
+        .ok_or_else(|| Error::MissingInstance {
+            kind: "doe",
+            name: instance.to_string(),
+        })?;
     Ok(DoeStage::from_config(file, instance, &cfg)?)
 }
 
@@ -62,11 +68,17 @@ fn prepared(
             .planned
             .iter()
             .find(|p| p.name == u)
-            .ok_or_else(|| Error::Stage(format!("upstream `{u}` of `{instance}` is unknown")))?;
+            .ok_or_else(|| Error::UpstreamNotReady {
+                upstream: u.clone(),
+                consumer: instance.to_string(),
+                planned: false,
+            })?;
         if p.state != State::Fresh {
-            return Err(Error::Stage(format!(
-                "upstream `{u}` of `{instance}` has no current result (run it first)"
-            )));
+            return Err(Error::UpstreamNotReady {
+                upstream: u.clone(),
+                consumer: instance.to_string(),
+                planned: true,
+            });
         }
         let dir = store.entry_dir(&p.kind, &p.key);
         results.insert(u.clone(), read_result(&dir)?);
@@ -175,17 +187,34 @@ impl SweepWorker {
 }
 
 impl CaseComputer for SweepWorker {
-    fn compute(&self, recipe: &Value, store: &Store, dir: &Path) -> Result<Value> {
+    fn compute(
+        &self,
+        recipe: &Value,
+        store: &Store,
+        dir: &Path,
+    ) -> std::result::Result<Value, CaseFailure> {
+        Ok(self.compute_recipe(recipe, store, dir)?)
+    }
+}
+
+impl SweepWorker {
+    fn compute_recipe(&self, recipe: &Value, store: &Store, dir: &Path) -> Result<Value> {
         let field = |k: &str| {
             recipe[k]
                 .as_str()
                 .map(str::to_string)
-                .ok_or_else(|| Error::Stage(format!("{} recipe without `{k}`", self.kind)))
+                .ok_or_else(|| Error::RecipeField {
+                    kind: self.kind,
+                    field: k.to_string(),
+                })
         };
         let (config, instance) = (field("config")?, field("instance")?);
         let actuation = recipe["actuation_m"]
             .as_f64()
-            .ok_or_else(|| Error::Stage(format!("{} recipe without `actuation_m`", self.kind)))?;
+            .ok_or_else(|| Error::RecipeField {
+                kind: self.kind,
+                field: "actuation_m".into(),
+            })?;
         let sweep = {
             let mut sweeps = self
                 .sweeps
@@ -215,10 +244,10 @@ impl CaseComputer for SweepWorker {
                     dir,
                 )
             }
-            Err(e) => Err(Error::Stage(format!(
-                "{} recipe: bad `design_m`: {e}",
-                self.kind
-            ))),
+            Err(source) => Err(Error::RecipeDesign {
+                kind: self.kind,
+                source,
+            }),
         }
     }
 }

@@ -56,22 +56,17 @@ pub fn topo_order(stages: &[Box<dyn Stage>]) -> Result<Vec<usize>> {
     ) -> Result<()> {
         match mark[i] {
             2 => return Ok(()),
-            1 => {
-                return Err(Error::Stage(format!(
-                    "dependency cycle through stage `{}`",
-                    stages[i].name()
-                )))
-            }
+            1 => return Err(Error::DependencyCycle(stages[i].name().to_string())),
             _ => {}
         }
         mark[i] = 1;
         for up in stages[i].upstream() {
-            let j = *index.get(up.as_str()).ok_or_else(|| {
-                Error::Stage(format!(
-                    "stage `{}` consumes `{up}`, which is not declared",
-                    stages[i].name()
-                ))
-            })?;
+            let j = *index
+                .get(up.as_str())
+                .ok_or_else(|| Error::UndeclaredUpstream {
+                    stage: stages[i].name().to_string(),
+                    upstream: up.clone(),
+                })?;
             visit(j, stages, index, mark, order)?;
         }
         mark[i] = 2;
@@ -242,6 +237,8 @@ pub fn run(
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.jobs.max(1))
         .build()
+        // Kept as text: rayon's I/O error displays as its source, so a typed source would print
+        // it twice.
         .map_err(|e| Error::Stage(format!("cannot start worker threads: {e}")))?;
 
     let to_run: Vec<usize> = (0..plan.planned.len())
@@ -458,7 +455,7 @@ fn report(plan: &Plan, store: &Store, settled: Settled) -> Result<RunReport> {
 pub fn read_result(dir: &Path) -> Result<Value> {
     let p = dir.join("result.json");
     let bytes = std::fs::read(&p).map_err(|e| Error::io(&p, e))?;
-    serde_json::from_slice(&bytes).map_err(|e| Error::Stage(format!("{}: {e}", p.display())))
+    serde_json::from_slice(&bytes).map_err(|source| Error::ResultJson { path: p, source })
 }
 
 /// A finished stage: its result, its manifest and the seconds it took; or why it did not run.

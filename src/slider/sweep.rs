@@ -232,7 +232,7 @@ pub fn sweep_analysis(p: &SimulateParams, cases: &[CaseOutcome]) -> Result<Sweep
         &SlopeParams::new(t0),
         p.model.nominal_flying_height,
     )
-    .map_err(|e| Error::Stage(format!("sweep metrics: {e}")))
+    .map_err(Error::SweepMetrics)
 }
 
 pub fn regime_name(r: Regime) -> &'static str {

@@ -61,8 +61,10 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
             store.entry_dir(&p.kind, &p.key)
         };
         let result = read_result(&entry(name))?;
-        let fitted = fitted_knobs(&result).ok_or_else(|| {
-            Error::Stage(format!("calibrate `{name}` result has no usable `fitted`"))
+        let fitted = fitted_knobs(&result).ok_or_else(|| Error::UpstreamField {
+            kind: "calibrate",
+            name: name.to_string(),
+            what: "usable `fitted`".into(),
         })?;
         let mut up = BTreeMap::new();
         let mut dirs = BTreeMap::new();

@@ -171,7 +171,7 @@ pub fn area(name: &str) -> Option<&'static Area> {
 pub fn rows(name: &str, config: &Path) -> Result<Vec<Row>> {
     match area(name) {
         Some(a) => a.rows(config),
-        None => Err(Error::Stage(format!("unknown validation area `{name}`"))),
+        None => Err(Error::UnknownArea(name.to_string())),
     }
 }
 

@@ -495,15 +495,20 @@ pub fn outcome_dir(manifest_path: &Path) -> PathBuf {
 /// Recomputes one kind of case in a worker process from its recipe, writing its files into
 /// `dir` and returning its result (as the stage's own closure does under `get_or_compute`).
 pub trait CaseComputer: Send + Sync {
-    fn compute(&self, recipe: &Value, store: &Store, dir: &Path) -> crate::error::Result<Value>;
+    fn compute(&self, recipe: &Value, store: &Store, dir: &Path) -> Result<Value, CaseFailure>;
 }
 
-impl<F> CaseComputer for F
+/// Why a worker could not compute a case: any error of the layer that registered it (the core
+/// names no stage, so not the crate's error type); recorded in the outcome with its sources.
+pub type CaseFailure = Box<dyn std::error::Error + Send + Sync>;
+
+impl<F, E> CaseComputer for F
 where
-    F: Fn(&Value, &Store, &Path) -> crate::error::Result<Value> + Send + Sync,
+    F: Fn(&Value, &Store, &Path) -> Result<Value, E> + Send + Sync,
+    E: Into<CaseFailure>,
 {
-    fn compute(&self, recipe: &Value, store: &Store, dir: &Path) -> crate::error::Result<Value> {
-        self(recipe, store, dir)
+    fn compute(&self, recipe: &Value, store: &Store, dir: &Path) -> Result<Value, CaseFailure> {
+        self(recipe, store, dir).map_err(Into::into)
     }
 }
 
@@ -534,10 +539,10 @@ impl CaseRegistry {
         recipe: &Value,
         store: &Store,
         dir: &Path,
-    ) -> crate::error::Result<Value> {
+    ) -> Result<Value, CaseFailure> {
         match self.computers.get(kind) {
             Some(c) => c.compute(recipe, store, dir),
-            None => Err(crate::error::Error::Stage(self.unknown(kind).to_string())),
+            None => Err(self.unknown(kind).into()),
         }
     }
 
@@ -599,7 +604,7 @@ pub fn exec_task(
                     ),
                     None,
                 ),
-                Err(e) => (failed_status(crate::error::chain(&e), identity), None),
+                Err(e) => (failed_status(crate::core::chain(&*e), identity), None),
             };
             let outcome = CaseOutcome {
                 index,

@@ -1,5 +1,4 @@
 use super::*;
-use crate::error::Error;
 use serde_json::json;
 use std::time::Instant;
 
@@ -17,7 +16,7 @@ fn registry() -> CaseRegistry {
     let mut r = CaseRegistry::new();
     r.register("double", |recipe: &Value, _: &Store, dir: &Path| {
         if recipe["fail"] == true {
-            return Err(Error::Stage("integrator step size underflow".into()));
+            return Err(std::io::Error::other("integrator step size underflow"));
         }
         let v = recipe["index"].as_u64().unwrap() * 2;
         std::fs::write(dir.join("value.txt"), v.to_string()).unwrap();
@@ -127,9 +126,12 @@ fn tasks_fill_the_cache_record_failures_and_resubmit_only_those() {
     assert_eq!(m.merge_outcomes(&path).unwrap(), 0);
 
     // The cache holds the four good cases, byte for byte what a local run writes.
-    let local = cases::get_or_compute(&store, "test-1", &m.cases[4].spec.params, |_| {
-        panic!("must be cached")
-    })
+    let local = cases::get_or_compute(
+        &store,
+        "test-1",
+        &m.cases[4].spec.params,
+        |_| -> Result<Value, CaseFailure> { panic!("must be cached") },
+    )
     .unwrap();
     assert!(local.cached && local.result == json!({"value": 8}));
 
