@@ -28,6 +28,9 @@ pub enum Error {
     /// Writing an output (HDF5, table, plot) failed.
     #[error("writing {}: {message}", path.display())]
     Output { path: PathBuf, message: String },
+    /// Writing an HDF5 file or a table failed.
+    #[error(transparent)]
+    Store(#[from] crate::core::store::OutputError),
     /// Storing a computed case in the cache failed.
     #[error(transparent)]
     CaseStore(#[from] crate::core::cases::CaseError),

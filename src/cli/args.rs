@@ -2,10 +2,10 @@
 //! command has the name of its `pipeline.toml` key.
 
 use clap::{Args, Parser, Subcommand};
-use hdi::core::units::{
+use hdi::stages::surfaces;
+use hdi::units::{
     Area, Frequency, Length, PerArea, Pressure, Sensitivity, TimeSpan, Velocity, Viscosity,
 };
-use hdi::stages::surfaces;
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]

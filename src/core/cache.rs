@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 /// Bumped when the manifest/fingerprint layout changes.
 pub const SCHEMA_VERSION: u32 = 1;
 
-/// Everything a stage instance's cache key is made of (pipeline.md, *Cache semantics*).
+/// Everything a stage instance's cache key is made of (docs/architecture.md, "The cache, precisely").
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct Fingerprint {
     pub kind: String,

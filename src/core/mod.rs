@@ -1,5 +1,6 @@
-//! The small core every stage uses: configuration, cache/store, outputs, plots. It names no
-//! stage: the engine and the stages sit above it.
+//! The services every stage uses: pipeline-file parsing, the content-addressed cache and the
+//! per-case cache, HDF5 and table writers, progress observers, the Slurm executor. It names no
+//! stage and no physics: the engine and the stages sit above it.
 pub mod cache;
 pub mod cases;
 pub mod config;
@@ -7,8 +8,6 @@ pub mod executor;
 pub mod hash;
 pub mod progress;
 pub mod store;
-// Transitional path while branches merge; removed once every `core::units` path is rewritten.
-pub use crate::units;
 
 /// The error and all its sources on one line, `outer: inner: …` (as the binary prints errors).
 pub fn chain(e: &dyn std::error::Error) -> String {

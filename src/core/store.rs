@@ -1,13 +1,43 @@
-//! Output writers: HDF5 files following signals-and-surfaces.md §5 (units and long_name on
+//! Output writers: HDF5 files following docs/hdf5.md (units and long_name on
 //! every numeric dataset, NXdata groups, shuffle+gzip for large data, no plugins), and tidy
 //! tables through polars (Parquet + CSV). polars lives here and in the LDV readers
 //! (`dmw::io::{text, parquet}`) only: its Rust API churns between minor versions, so an
 //! upgrade touches those files.
 
-use crate::error::{Error, Result};
 use hdf5::types::VarLenUnicode;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
+
+/// Why an output could not be written. `Io`: the filesystem refused (create, rename);
+/// `Write`: the HDF5 or table library failed on the named file.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("{}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("writing {}: {message}", path.display())]
+    Write { path: PathBuf, message: String },
+}
+
+impl OutputError {
+    fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        OutputError::Io {
+            path: path.into(),
+            source,
+        }
+    }
+    fn output(path: impl Into<PathBuf>, message: impl std::fmt::Display) -> Self {
+        OutputError::Write {
+            path: path.into(),
+            message: message.to_string(),
+        }
+    }
+}
+
+type Result<T> = std::result::Result<T, OutputError>;
 
 fn vlu(s: &str) -> VarLenUnicode {
     // Only NUL bytes can make this fail; strip them rather than fail an output.
@@ -28,7 +58,7 @@ const COMPRESS_MIN_BYTES: usize = 64 * 1024;
 impl H5Out {
     pub fn create(path: &Path) -> Result<Self> {
         let tmp = path.with_extension(format!("h5.tmp-{}", std::process::id()));
-        let file = hdf5::File::create(&tmp).map_err(|e| Error::output(path, e))?;
+        let file = hdf5::File::create(&tmp).map_err(|e| OutputError::output(path, e))?;
         Ok(Self {
             file: Some(file),
             tmp,
@@ -42,8 +72,8 @@ impl H5Out {
             .ok_or_else(|| self.err("file already closed"))
     }
 
-    fn err(&self, e: impl std::fmt::Display) -> Error {
-        Error::output(&self.path, e)
+    fn err(&self, e: impl std::fmt::Display) -> OutputError {
+        OutputError::output(&self.path, e)
     }
 
     /// Root attributes every hdi file carries (§5).
@@ -209,9 +239,10 @@ impl H5Out {
     /// Close and move into place.
     pub fn finish(mut self) -> Result<()> {
         if let Some(file) = self.file.take() {
-            file.close().map_err(|e| Error::output(&self.path, e))?;
+            file.close()
+                .map_err(|e| OutputError::output(&self.path, e))?;
         }
-        std::fs::rename(&self.tmp, &self.path).map_err(|e| Error::io(&self.path, e))
+        std::fs::rename(&self.tmp, &self.path).map_err(|e| OutputError::io(&self.path, e))
     }
 }
 
@@ -279,7 +310,7 @@ pub fn write_table(rows: &[serde_json::Map<String, Value>], stem: &Path) -> Resu
         };
         columns.push(col);
     }
-    let mut df = DataFrame::new(rows.len(), columns).map_err(|e| Error::output(stem, e))?;
+    let mut df = DataFrame::new(rows.len(), columns).map_err(|e| OutputError::output(stem, e))?;
 
     let parquet = stem.with_extension("parquet");
     write_via_temp(&parquet, |f| {
@@ -303,14 +334,14 @@ fn write_via_temp(
     write: impl FnOnce(&mut std::fs::File) -> std::result::Result<(), String>,
 ) -> Result<()> {
     if let Some(parent) = path.parent() {
-        std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+        std::fs::create_dir_all(parent).map_err(|e| OutputError::io(parent, e))?;
     }
     let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
-    let mut f = std::fs::File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
+    let mut f = std::fs::File::create(&tmp).map_err(|e| OutputError::io(&tmp, e))?;
     let r = write(&mut f).and_then(|_| f.sync_all().map_err(|e| e.to_string()));
     if let Err(e) = r {
         let _ = std::fs::remove_file(&tmp);
-        return Err(Error::output(path, e));
+        return Err(OutputError::output(path, e));
     }
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+    std::fs::rename(&tmp, path).map_err(|e| OutputError::io(path, e))
 }

@@ -163,7 +163,7 @@ pub fn write_case_h5(path: &Path, h: &CaseHistory, actuation: f64, m: &CaseMetri
     ] {
         out.write_1d(&g, name, data, unit, what)?;
     }
-    out.finish()
+    Ok(out.finish()?)
 }
 
 /// Named series of a case file.

@@ -4,11 +4,11 @@
 //! executor resolve a `[simulate]` instance through here, not through the simulate stage.
 
 use crate::core::config::{ConfigError, KeyError, PipelineFile};
-use crate::core::units::{Length, TimeSpan};
 use crate::dynamics::air_bearing::RearStiffening;
 use crate::dynamics::metrics::{CaseParams, SteadyWindow};
 use crate::dynamics::params::{improved_2dof, initial_2dof, optimised_bulge, Model2Dof};
 use crate::dynamics::two_dof::{ContactForceForm, Integrator, SimOptions};
+use crate::units::{Length, TimeSpan};
 use serde::Deserialize;
 use serde_json::{json, Value};
 

@@ -5,10 +5,10 @@
 
 use crate::contact::mtl::LubricantCase;
 use crate::core::config::KeyError;
-use crate::core::units::{Length, TimeSpan};
 use crate::dynamics::three_dof::air_bearing::{PushbackCurve, SpringLaw};
 use crate::dynamics::three_dof::case::{Init3Dof, Model3Dof, Options3Dof, TrackAssignment};
 use crate::dynamics::three_dof::inputs::{ActuationProfile, ShockPulse};
+use crate::units::{Length, TimeSpan};
 use serde::Deserialize;
 use serde_json::{json, Value};
 
@@ -102,7 +102,7 @@ pub struct ThreeDofConfig {
     /// `integrated` (default, stable) or `linear` (eqs. 4.11–4.14).
     #[serde(default = "default_spring_law")]
     pub ab_spring_law: String,
-    /// `linear` (ΔFH = 0.5·h) or `flattened` (above 12 nm, dynamics.md §3.3).
+    /// `linear` (ΔFH = 0.5·h) or `flattened` (above 12 nm, docs/dynamics-3dof-air-bearing.md).
     #[serde(default = "default_pushback")]
     pub pushback_curve: String,
     /// `static` (the push-back already in place) or `nominal`.

@@ -1,4 +1,4 @@
-//! Analysis stage (signals-and-surfaces.md §4, Appendix B): any time series of an upstream
+//! Analysis stage (Appendix B; docs/analysis.md): any time series of an upstream
 //! stage's HDF5 (a slider case's heave, a DMW or excitation track, …) within a time window →
 //! amplitude spectrum and peaks, CWT scalogram with ridge and cone of influence, Poincaré
 //! section with a periodicity class, phase space. `hdi analyze FILE` runs the same on any file.
@@ -10,10 +10,10 @@ use crate::artefacts::cases as case_files;
 use crate::artefacts::dmw_tracks;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::store::H5Out;
-use crate::core::units::{Frequency, Length, TimeSpan};
 use crate::error::{Error, Result};
 use crate::slider::params::{SimulateConfig, SimulateParams};
 use crate::slider::three_dof_params::{ThreeDofConfig, ThreeDofParams};
+use crate::units::{Frequency, Length, TimeSpan};
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::Path;

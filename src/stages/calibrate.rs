@@ -1,4 +1,4 @@
-//! Calibration stage (dynamics.md §12): fit the dropped `[assumption]` knobs of a `[simulate]`
+//! Calibration stage (docs/calibration.md): fit the dropped `[assumption]` knobs of a `[simulate]`
 //! instance to the dissertation's class-D landmarks. Cached like every stage: the fit reruns
 //! only when the base model, its contact set, its DMW record or the calibration settings change.
 //! A `[simulate]` instance with `calibration = "NAME"` then runs with the fitted knobs.
@@ -7,7 +7,6 @@ use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::calibration::fitted_json;
 use crate::contact::isbl::IsblParams;
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::units::Length;
 use crate::dynamics::calibration::{
     calibrate, default_knobs, targets_for, CalibrationResult, CalibrationSettings, Evaluation,
     Knob, KnobRange,
@@ -15,6 +14,7 @@ use crate::dynamics::calibration::{
 use crate::error::Result;
 use crate::slider::calibration::{base_inputs, base_of};
 use crate::slider::params::{uncalibrated_base, SimulateParams};
+use crate::units::Length;
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;

@@ -1,4 +1,4 @@
-//! Design-of-experiments stage (dynamics.md §9, dissertation §2.3): a 3³ full factorial in the
+//! Design-of-experiments stage (dissertation §2.3; docs/doe.md): a 3³ full factorial in the
 //! bulge geometry (`a_TFC`, `w_TFC`, `x_TFC`) crossed with actuation levels, every point a cached
 //! improved-2-DOF case (the `[simulate]` stage's own case cache, so a killed run loses no
 //! finished case); polynomial response surfaces of the flyability parameter ξ with ANOVA and
@@ -12,7 +12,6 @@ use crate::contact::lookup::IsblLookup;
 use crate::core::cache::Store;
 use crate::core::cases::CaseEntry;
 use crate::core::config::{ConfigError, PipelineFile};
-use crate::core::units::Length;
 use crate::dynamics::metrics::{flyability, Regime};
 use crate::error::{Error, Result};
 use crate::numerics::annealing::{
@@ -25,6 +24,7 @@ use crate::slider::calibration::base_inputs;
 use crate::slider::doe_design::{self, design_cases, design_params};
 use crate::slider::params::{uncalibrated_base, SimulateParams};
 use crate::slider::sweep::{cached_case, sweep_analysis, CaseOutcome};
+use crate::units::Length;
 use rayon::prelude::*;
 use serde::Deserialize;
 use serde_json::{json, Map, Value};

@@ -1,4 +1,4 @@
-//! Excitation stage (Appendix B, dynamics.md §7 S7): a synthetic disk-motion track — pure
+//! Excitation stage (Appendix B; docs/analysis.md): a synthetic disk-motion track — pure
 //! sinusoid, zero, band-limited random, quadratic chirp or the spec's synthetic DMW — written in
 //! the DMW stage's track layout (`dmw.h5`, `dmw/tracks/D1…V3`), so any `[simulate]` instance
 //! takes it as its `dmw`. The record runs `margin` beyond `duration` so the leading edge's
@@ -8,11 +8,11 @@ use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::dmw_tracks;
 use crate::core::config::{ConfigError, KeyError, PipelineFile};
 use crate::core::store::H5Out;
-use crate::core::units::{Frequency, Length, TimeSpan};
 use crate::dmw::excitation_tracks::{
     band_limited_random, quadratic_chirp, sinusoid, synthetic_dmw, zero, Excitation, DMW_LINE_HZ,
 };
 use crate::error::{Error, Result};
+use crate::units::{Frequency, Length, TimeSpan};
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::Path;
@@ -264,7 +264,7 @@ impl FromConfig for ExcitationStage {
 }
 
 /// Write the track in the DMW stage's layout: D1 = the track, D2/D3 its flipped and
-/// negated-flipped copies (signals-and-surfaces.md §3.8), velocities alike.
+/// negated-flipped copies (§4.1.7; docs/dmw.md), velocities alike.
 fn write_tracks(path: &Path, key: &str, p: &ExcitationParams, x: &Excitation) -> Result<()> {
     let out = H5Out::create(path)?;
     out.root_attributes(
@@ -322,7 +322,7 @@ fn write_tracks(path: &Path, key: &str, p: &ExcitationParams, x: &Excitation) ->
         "1",
         "1 where the filter's edge transient affects the track",
     )?;
-    out.finish()
+    Ok(out.finish()?)
 }
 
 fn rms(x: &[f64]) -> f64 {

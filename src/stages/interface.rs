@@ -1,14 +1,14 @@
 //! Interface stage: two measured surfaces (or explicit values) → the equivalent rough surface
-//! against a smooth flat (σ, R, η, β) that the contact models use (signals-and-surfaces.md §2.7).
+//! against a smooth flat (σ, R, η, β) that the contact models use (Table 2.2; docs/surfaces.md).
 
 use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::interface::InterfaceRoughness;
 use crate::artefacts::surface::upstream_surface_stats;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::store::H5Out;
-use crate::core::units::{Length, PerArea};
 use crate::error::Result;
 use crate::surface::combine::{combine, CombineRule, InterfaceStats, SurfaceStats};
+use crate::units::{Length, PerArea};
 use serde::Deserialize;
 use serde_json::{json, Value};
 

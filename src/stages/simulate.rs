@@ -1,4 +1,4 @@
-//! Simulation stage: 2-DOF slider cases (dynamics.md §5.1, §7 S1/S2/S2o) over an actuation
+//! Simulation stage: 2-DOF slider cases (§2.1–2.2; docs/simulation.md) over an actuation
 //! sweep, each case cached by content hash (`core::cases`), run in parallel reporting to a
 //! progress observer; per-case HDF5 time histories, the sweep table, the flyability metrics
 //! of §8 and the dissertation's plots (Figs 2.13–2.14, 2.16–2.19, 2.22).
@@ -199,7 +199,7 @@ fn history_figure(dir: &Path, c: &CaseOutcome, title: &str) -> Result<()> {
     let fc = get("contact_force");
     let q = get("friction");
     let ar = get("real_area");
-    // μ, P_m and τ only where F_c > 1 µN, as the metrics define them (dynamics.md §8).
+    // μ, P_m and τ only where F_c > 1 µN, as the metrics define them (docs/dynamics-metrics.md).
     let loaded = |num: &[f64], den: &[f64], scale: f64| -> Vec<(f64, f64)> {
         ms.iter()
             .zip(fc)
@@ -276,14 +276,7 @@ impl StageKind for SimulateStage {
         self.params.upstream()
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
-        let key_of = |name: &str| {
-            ctx.fingerprint
-                .upstream
-                .iter()
-                .find(|u| u.name == name)
-                .map(|u| u.key.clone())
-                .unwrap_or_default()
-        };
+        let key_of = |name: &str| ctx.upstream_key(name);
         ctx.progress.set_message("interface table");
         let prepared =
             PreparedSweep::prepare(&self.params, &ctx.upstream, &ctx.upstream_dirs, key_of)?;

@@ -6,7 +6,6 @@ use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::surface::SummitStats;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::store::H5Out;
-use crate::core::units::Length;
 use crate::error::Result;
 use crate::figures;
 use crate::surface::crop::{crop, CropRect};
@@ -18,6 +17,7 @@ use crate::surface::roughness::{
     SummitScheme, SweepRow,
 };
 use crate::surface::HeightMap;
+use crate::units::Length;
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 /// Bump when the numbers this stage produces change.
 pub const MODEL_VERSION: &str = "surface-1";
 
-/// The default levelling recipe (signals-and-surfaces.md §2.3).
+/// The default levelling recipe (docs/surfaces.md).
 pub fn default_level() -> Vec<String> {
     vec!["rows:median".into(), "plane".into(), "mean".into()]
 }
@@ -338,7 +338,7 @@ fn filter_text(p: &SurfaceParams) -> String {
     }
 }
 
-/// The `--json` object of `hdi surface` (signals-and-surfaces.md §2.8), SI units.
+/// The `--json` object of `hdi surface` (docs/surfaces.md), SI units.
 pub fn report_json(a: &SurfaceAnalysis, p: &SurfaceParams) -> Value {
     let r = &a.report;
     let m = a.final_map();
@@ -425,7 +425,7 @@ fn write_map(out: &H5Out, path: &str, m: &HeightMap, long_name: &str) -> Result<
     Ok(())
 }
 
-/// HDF5 (layout of signals-and-surfaces.md §5) and PNGs into `dir`.
+/// HDF5 (layout in docs/hdf5.md) and PNGs into `dir`.
 pub fn write_outputs(
     a: &SurfaceAnalysis,
     p: &SurfaceParams,

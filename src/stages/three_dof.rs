@@ -1,4 +1,4 @@
-//! 3-DOF slider stage `[three_dof.NAME]` (dynamics.md §7 S3–S6; issue 7): one scenario —
+//! 3-DOF slider stage `[three_dof.NAME]` (dissertation Chapter 4; docs/three-dof.md): one scenario —
 //! constant actuation, impulse shock or a variable actuation profile — run for each requested
 //! interface (ISBL, MTL with each lubricant case of Table 4.4), one cached case each, in
 //! parallel. Outputs per case an HDF5 of the time histories and a PNG of them; per instance a
@@ -223,7 +223,7 @@ fn case_metrics(
         );
     }
     // Contact severity over the steady window, ratio of means where the solid carries load
-    // (dynamics.md §8: μ = Q/F_c, P_m = F_c/A_r, τ = Q/A_r; F_c > 1 µN).
+    // (docs/dynamics-metrics.md: μ = Q/F_c, P_m = F_c/A_r, τ = Q/A_r; F_c > 1 µN).
     let loaded: Vec<usize> = (i0..h.len())
         .filter(|&k| h.contact_force[k] > 1e-6)
         .collect();
@@ -340,7 +340,7 @@ fn write_case_h5(path: &Path, h: &History3Dof) -> Result<()> {
             "normal force F_c + P_lub − F_s",
         )?;
     }
-    out.finish()
+    Ok(out.finish()?)
 }
 
 /// `(time in ms, value · scale)` of a series sampled every `dt` seconds (the plots' x axis).
@@ -518,14 +518,7 @@ impl StageKind for ThreeDofStage {
             )?)?),
             None => None,
         };
-        let key_of = |name: &str| {
-            ctx.fingerprint
-                .upstream
-                .iter()
-                .find(|u| u.name == name)
-                .map(|u| u.key.clone())
-                .unwrap_or_default()
-        };
+        let key_of = |name: &str| ctx.upstream_key(name);
         ctx.progress.set_message("interface tables");
         // The MTL runs use the variable surface energy of Chapter 3 (contact-isbl §10).
         let build = |variable: bool| -> Result<IsblLookup> {

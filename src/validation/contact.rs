@@ -1,4 +1,4 @@
-//! `hdi validate` rows of the ISBL contact model (contact-isbl.md §9): computed now with the
+//! `hdi validate` rows of the ISBL contact model (docs/contact.md): computed now with the
 //! same model the contact stage and the dynamics use.
 
 use super::{Row, Tolerance};

@@ -1,4 +1,4 @@
-//! `hdi validate` rows of the DMW chain (signals-and-surfaces.md §1, §3): every number is
+//! `hdi validate` rows of the DMW chain (docs/dmw.md): every number is
 //! computed now by the same functions the stage uses.
 
 use super::{Row, Tolerance};

@@ -1,4 +1,4 @@
-//! `hdi validate` rows of the 2-DOF models (dynamics.md §2.7, §3.1, §12): geometry and AB
+//! `hdi validate` rows of the 2-DOF models (Tables 2.1–2.4; docs/validation.md): geometry and AB
 //! (class G: must pass), kinematic landmarks (class K), and the landmarks that depend on
 //! dropped inputs (class D), computed live with the same code the simulation stage runs.
 //! Class-D rows here are the spec defaults (not reproducible: they show hdi's number and why,

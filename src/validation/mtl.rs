@@ -48,7 +48,7 @@ fn shear_rate_bound(u: f64, t: f64, kappa: f64, pick_max: bool) -> f64 {
         .unwrap_or(f64::NAN)
 }
 
-/// The MTL rows (contact-mtl.md §6), computed with the lubricant model.
+/// The MTL rows (docs/contact.md), computed with the lubricant model.
 pub fn rows() -> Vec<Row> {
     let fwm = FwmExperiment::fukuzawa_z03();
     let fit = fwm.high_shear_fit();

@@ -1,5 +1,5 @@
-//! `hdi validate` area `three_dof`: the 3-DOF numbers that exist without a stage (dynamics.md
-//! §2.7, §3.3, §12 row 30), computed now by the same code a case runs.
+//! `hdi validate` area `three_dof`: the 3-DOF numbers that exist without a stage (Fig. 4.8,
+//! Table 4.3, the §4.1 air bearing; docs/three-dof.md), computed now by the same code a case runs.
 
 use super::{Row, Tolerance};
 use crate::contact::isbl::{IsblModel, IsblParams};
@@ -179,7 +179,7 @@ struct CaseBv {
     steady_contact: f64,
 }
 
-/// Table 4.4 (S6, dynamics.md §12 row 35): the variable profile with the flattened push-back
+/// Table 4.4 (S6; docs/validation.md): the variable profile with the flattened push-back
 /// for the four lubricant cases on the MTL interface, synthetic DMW (σ 1 nm, seed 1) as tracks
 /// D1, D2 = flipped, D3 = negated flipped. Class Q: the values depend on dropped inputs; the
 /// orderings are what the dissertation's text claims.

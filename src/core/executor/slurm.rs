@@ -3,7 +3,7 @@
 //!
 //! `squeue` is the progress source because `sacct` needs accounting storage, which small or
 //! single-node installations often leave off (`AccountingStorageType=accounting_storage/none`,
-//! engineering.md §5); `sacct` only adds *why* a task failed when it is available. Whether a
+//! docs/slurm.md); `sacct` only adds *why* a task failed when it is available. Whether a
 //! case succeeded is decided by the store and the workers' outcome files, never by Slurm.
 
 use super::plan::{plan_arrays, ArraySubmission};

@@ -17,11 +17,11 @@ use crate::contact::ContactError;
 use crate::core::config::{ConfigError, PipelineFile};
 
 use crate::core::store::H5Out;
-use crate::core::units::{
-    parse_quantity, Area, Dimension, Length, PerArea, Pressure, Velocity, Viscosity,
-};
 use crate::error::Result;
 use crate::figures;
+use crate::units::{
+    parse_quantity, Area, Dimension, Length, PerArea, Pressure, Velocity, Viscosity,
+};
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::Path;
@@ -318,7 +318,7 @@ impl ContactAnalysis {
     }
 }
 
-/// Build the model, the curves and the table (the table covers the spec's §8 range
+/// Build the model, the curves and the table (the table covers the range docs/contact.md states
 /// h* ∈ [−4, 3 + t/σ + 10] or the output range, whichever is wider).
 pub fn analyse(params: &IsblParams, c: &ContactParams) -> Result<ContactAnalysis> {
     let model = IsblModel::new(*params)?;

@@ -1,5 +1,5 @@
 //! The molecularly-thin-lubricant part of the contact stage: when `[contact.NAME]` names a
-//! `lubricant`, the MTL law (contact-mtl.md §4) on top of the stage's ISBL solid, as curves
+//! `lubricant`, the MTL law (§3.3, eqs. 3.55–3.60; docs/contact.md) on top of the stage's ISBL solid, as curves
 //! against separation and penetration (the dissertation's Figs 3.19–3.22), in HDF5 and PNGs.
 
 use crate::contact::isbl::IsblParams;
@@ -11,9 +11,9 @@ use crate::contact::mtl::FwmExperiment;
 use crate::contact::ContactError;
 use crate::core::config::KeyError;
 use crate::core::store::H5Out;
-use crate::core::units::{Area, Length, Velocity, Viscosity};
 use crate::error::Result;
 use crate::figures;
+use crate::units::{Area, Length, Velocity, Viscosity};
 use serde_json::{json, Map, Value};
 use std::path::Path;
 use std::sync::Arc;
@@ -234,7 +234,7 @@ pub fn analyse(settings: &MtlSettings, isbl: &Arc<IsblLookup>) -> Result<MtlAnal
 }
 
 impl MtlAnalysis {
-    /// Landmarks of the reference discussion (contact-mtl.md §4.5): maximum lubricant
+    /// Landmarks of the reference discussion (Figs 3.19–3.22; docs/contact.md): maximum lubricant
     /// stiffnesses, the total stiffnesses at `3σ + 2κ` and the lubricant bearing force there
     /// and at `3σ`.
     pub fn landmarks(&self) -> Map<String, Value> {
@@ -495,7 +495,7 @@ mod tests {
 
     #[test]
     fn reference_landmarks_match_the_spec() {
-        // contact-mtl.md §4.5: k_P,max = 1.269e7 N/m at h* = 3.7317, P_lub(3σ+2κ) = 3.81 mN,
+        // Figs 3.19–3.22 (docs/contact.md): k_P,max = 1.269e7 N/m at h* = 3.7317, P_lub(3σ+2κ) = 3.81 mN,
         // Q_lub(3σ+2κ) = 0.088 µN; P_lub(3σ) = 7.61 mN plus a small solid-dependent term.
         let keys = MtlKeys {
             lubricant: Some("reference".into()),

@@ -76,7 +76,7 @@ fn quantise(path: &Path, y: &[f64], lsb: f64, what: &str) -> Result<(Vec<i16>, f
 
 /// Writes the HDF5 layout of `dmw::io`; `counts` = (velocity LSB, index LSB) for int16.
 fn write_hdf5(rec: &LdvRecord, path: &Path, counts: Option<(f64, f64)>) -> Result<(), DmwError> {
-    let werr = |e: crate::error::Error| DmwError::Processing(crate::error::chain(&e));
+    let werr = |e: crate::core::store::OutputError| DmwError::Processing(crate::error::chain(&e));
     let herr = |e: hdf5::Error| write_err(path, e);
     let (rows, len) = match rec.layout {
         Layout::Segments {

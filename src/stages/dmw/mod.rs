@@ -6,7 +6,6 @@ use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::dmw_tracks;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::store::H5Out;
-use crate::core::units::{Frequency, Sensitivity, TimeSpan};
 use crate::dmw::average::AverageMode;
 use crate::dmw::chain::{
     process, Butterworth, ChainOrder, ChainParams, DmwResult, FilterMode, Padlen,
@@ -16,6 +15,7 @@ use crate::dmw::{LdvRecord, VelocityUnit};
 use crate::error::Result;
 use crate::figures;
 use crate::signal::integrate::Detrend;
+use crate::units::{Frequency, Sensitivity, TimeSpan};
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
@@ -478,7 +478,7 @@ pub fn summary_row(rec: &LdvRecord, r: &DmwResult, p: &DmwParams) -> Map<String,
     m
 }
 
-/// HDF5 (layout of signals-and-surfaces.md §5) and PNGs into `plot_dir`.
+/// HDF5 (layout in docs/hdf5.md) and PNGs into `plot_dir`.
 pub fn write_outputs(
     rec: &LdvRecord,
     r: &DmwResult,
