@@ -94,7 +94,7 @@ pub fn write_ldv_sample(
         ..defaults
     };
     if spec.n_revolutions == 0 {
-        return Err(SampleError::NoRevolutions.into());
+        return Err(SampleError::NoRevolutions);
     }
     std::fs::create_dir_all(dir).map_err(|source| SampleError::Create {
         path: dir.to_path_buf(),
@@ -126,7 +126,7 @@ pub fn write_ldv_sample(
             write_ldv(&rec, &p, LdvFormat::Parquet)?;
             p
         }
-        other => return Err(SampleError::UnknownFormat(other.to_string()).into()),
+        other => return Err(SampleError::UnknownFormat(other.to_string())),
     };
     // What an ideal chain returns: the repeatable lines at mean speed through the default
     // zero-phase 10 kHz high-pass, over a 2.5 ms segment without its 0.3 ms edges.
