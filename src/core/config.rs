@@ -258,6 +258,33 @@ impl PipelineFile {
         self.resolve(&self.project.processed)
     }
 
+    /// The input file `written` (resolved against the file's directory), which must exist and
+    /// be a file; otherwise an error at `[section.name] key` naming it as `what`.
+    pub fn input_file(
+        &self,
+        section: &str,
+        name: &str,
+        key: &str,
+        written: &Path,
+        what: &str,
+    ) -> Result<PathBuf, ConfigError> {
+        let path = self.resolve(written);
+        if path.is_file() {
+            return Ok(path);
+        }
+        let why = if path.exists() {
+            "is not a file"
+        } else {
+            "not found"
+        };
+        Err(self.error(
+            section,
+            name,
+            key,
+            format!("{what} {} {why}", path.display()),
+        ))
+    }
+
     /// A validation error located at `[section.name] key`.
     pub fn error(&self, section: &str, name: &str, key: &str, message: String) -> ConfigError {
         let line = find_key_line(&self.text, &format!("{section}.{name}"), key).unwrap_or(0);

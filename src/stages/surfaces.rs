@@ -749,19 +749,7 @@ impl FromConfig for SurfaceStage {
         name: &str,
         cfg: &SurfaceConfig,
     ) -> std::result::Result<Self, ConfigError> {
-        let path = file.resolve(&cfg.file);
-        if !path.is_file() {
-            return Err(file.error(
-                "surface",
-                name,
-                "file",
-                if path.exists() {
-                    format!("height map {} is not a file", path.display())
-                } else {
-                    format!("height map {} not found", path.display())
-                },
-            ));
-        }
+        let path = file.input_file("surface", name, "file", &cfg.file, "height map")?;
         let params = check(cfg, path).map_err(|e| e.locate(file, "surface", name))?;
         Ok(Self {
             name: name.to_string(),

@@ -811,19 +811,7 @@ impl FromConfig for DmwStage {
         name: &str,
         cfg: &DmwConfig,
     ) -> std::result::Result<Self, ConfigError> {
-        let path = file.resolve(&cfg.file);
-        if !path.is_file() {
-            return Err(file.error(
-                "dmw",
-                name,
-                "file",
-                if path.exists() {
-                    format!("LDV record {} is not a file", path.display())
-                } else {
-                    format!("LDV record {} not found", path.display())
-                },
-            ));
-        }
+        let path = file.input_file("dmw", name, "file", &cfg.file, "LDV record")?;
         let params = check(cfg, path).map_err(|e| e.locate(file, "dmw", name))?;
         Ok(Self {
             name: name.to_string(),
