@@ -15,6 +15,7 @@ pub mod dynamics;
 pub mod engine;
 pub mod error;
 pub mod figures;
+pub mod formats;
 pub mod numerics;
 pub mod samples;
 pub mod signal;

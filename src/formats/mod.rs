@@ -1,0 +1,3 @@
+//! Container formats that several readers share (docs/formats.md): ZIP archives (ISO 25178-71
+//! `.x3p`, NumPy `.npz`). A leaf module: it knows nothing of surfaces, records or the pipeline.
+pub mod zip;
