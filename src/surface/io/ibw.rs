@@ -59,18 +59,16 @@ pub(crate) fn looks_like(head: &[u8]) -> bool {
     let r = Bytes { b: head, le };
     match version {
         5 => {
-            let (Some(wfm), Some(code), Some(n0)) = (
-                r.i32(4),
-                r.u16(BIN_HEADER + 16),
-                r.i32(BIN_HEADER + 68),
-            ) else {
+            let (Some(wfm), Some(code), Some(n0)) =
+                (r.i32(4), r.u16(BIN_HEADER + 16), r.i32(BIN_HEADER + 68))
+            else {
                 return false;
             };
             wfm >= WAVE_HEADER as i32 && element_size(code).is_some() && n0 > 0
         }
         // v1: 8-byte BinHeader1, v2: 16-byte BinHeader2, v3: 20-byte BinHeader3; the wave
         // header starts with the type.
-        1 | 2 | 3 => {
+        1..=3 => {
             let at = [0, 8, 16, 20][version as usize];
             r.u16(at).is_some_and(|code| element_size(code).is_some())
         }
@@ -197,7 +195,9 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
     })?;
     let mut n_dim = [0usize; 4];
     for (d, n) in n_dim.iter_mut().enumerate() {
-        let v = r.i32(w + 68 + 4 * d).ok_or_else(|| truncated("dimensions"))?;
+        let v = r
+            .i32(w + 68 + 4 * d)
+            .ok_or_else(|| truncated("dimensions"))?;
         *n = usize::try_from(v)
             .map_err(|_| format_error(path, format!("Igor nDim[{d}] = {v} is negative")))?;
     }
@@ -341,9 +341,9 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
     let dy = lateral(1, opts.size_y, ny)?;
     let offset = |d: usize| length_factor(&dim_units[d]).map_or(0.0, |f| sf_b[d] * f);
     let z_unit = if data_units.is_empty() {
-        opts.z_unit.clone().ok_or_else(|| {
-            format_error(path, "Igor wave has no data unit; give z_unit")
-        })?
+        opts.z_unit
+            .clone()
+            .ok_or_else(|| format_error(path, "Igor wave has no data unit; give z_unit"))?
     } else {
         data_units.clone()
     };
@@ -413,18 +413,21 @@ mod tests {
         // physical size is points · sfA = 20.078 µm, asserted there as 20 µm ± 0.01 m.
         assert!(close(map.dx, 20e-6 / 255.0, 1e-6) && close(map.dy, 20e-6 / 255.0, 1e-6));
         let (w, h) = map.size();
-        assert!(close(w, 256.0 * 20e-6 / 255.0, 1e-6) && close(h, w, 1e-12), "{w} × {h}");
-        assert!(close(sigma(&map.z), 8.94548149125641173e-08, 1e-6));
+        assert!(
+            close(w, 256.0 * 20e-6 / 255.0, 1e-6) && close(h, w, 1e-12),
+            "{w} × {h}"
+        );
+        assert!(close(sigma(&map.z), 8.94548149125641e-08, 1e-6));
         assert_eq!(map.source.header["ScanSize"], "2e-05");
         assert_eq!(map.source.header["ImagingMode"], "AC Mode");
 
         let map = read_height_map(&path, &with_channel("heightretrace")).unwrap();
         assert_eq!(map.channel, "HeightRetrace");
-        assert!(close(sigma(&map.z), 1.10284572132634686e-07, 1e-6));
+        assert!(close(sigma(&map.z), 1.10284572132635e-07, 1e-6));
         // Row 0 = Igor line 255 (top), column = x.
-        assert!(close(map.z[[0, 0]], -3.09850463509064866e-07, 1e-6));
-        assert!(close(map.z[[255, 0]], -2.91554385967174312e-07, 1e-6));
-        assert!(close(map.z[[255 - 20, 10]], -2.96780768849203014e-07, 1e-6));
+        assert!(close(map.z[[0, 0]], -3.09850463509065e-07, 1e-6));
+        assert!(close(map.z[[255, 0]], -2.91554385967174e-07, 1e-6));
+        assert!(close(map.z[[255 - 20, 10]], -2.96780768849203e-07, 1e-6));
 
         // An unknown channel name is an error listing the file's channels.
         let err = read_height_map(&path, &with_channel("Deflection")).unwrap_err();
@@ -448,7 +451,7 @@ mod tests {
         assert_eq!(map.z.dim(), (10, 10));
         assert_eq!(map.channel, "layer 0");
         assert!(close(map.dx, 1e-6, 1e-12) && close(map.dy, 0.5e-6, 1e-12));
-        assert!(close(sigma(&map.z), 4.80049350063275981e-01 * 1e-9, 1e-6));
+        assert!(close(sigma(&map.z), 4.80049350063276e-01 * 1e-9, 1e-6));
     }
 
     /// A big-endian int16 wave written by an independent struct-based writer
@@ -460,12 +463,12 @@ mod tests {
         assert_eq!(map.channel, "HeightRetrace", "Height* is the default");
         assert_eq!(map.z.dim(), (6, 8));
         assert!(close(map.dx, 2e-9, 1e-12) && close(map.dy, 3e-9, 1e-12));
-        assert!(close(sigma(&map.z), 1.60955491820634142e-06, 1e-12));
+        assert!(close(sigma(&map.z), 1.60955491820634e-06, 1e-12));
         assert!(close(map.z[[0, 0]], -7.28e-07, 1e-12));
         assert!(close(map.z[[5, 7]], 5.51e-07, 1e-12));
         let map = read_height_map(&path, &with_channel("zsensor")).unwrap();
         assert_eq!(map.channel, "ZSensorRetrace");
-        assert!(close(sigma(&map.z), 1.65527817190612701e-06, 1e-12));
+        assert!(close(sigma(&map.z), 1.65527817190613e-06, 1e-12));
         assert!(close(map.z[[0, 0]], 1.682e-06, 1e-12));
         assert_eq!(map.source.header["ImagingMode"], "AC Mode");
     }
@@ -478,7 +481,10 @@ mod tests {
             let msg = err.to_string();
             assert!(msg.contains("t.ibw"), "{msg}");
             assert!(
-                matches!(err, SurfaceError::Format { .. } | SurfaceError::Unsupported { .. }),
+                matches!(
+                    err,
+                    SurfaceError::Format { .. } | SurfaceError::Unsupported { .. }
+                ),
                 "{msg}"
             );
         }

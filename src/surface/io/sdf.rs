@@ -52,7 +52,10 @@ pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<RawMap> {
         read_ascii(path, bytes)?
     };
     let mut fields = header.fields;
-    fields.insert("variant".into(), if binary { "binary" } else { "ascii" }.into());
+    fields.insert(
+        "variant".into(),
+        if binary { "binary" } else { "ascii" }.into(),
+    );
     Ok(RawMap {
         z,
         dx: header.xscale,
@@ -78,7 +81,12 @@ fn check_header(path: &Path, fields: BTreeMap<String, String>) -> Result<Header>
         text.parse::<usize>()
             .ok()
             .filter(|&n| n > 0)
-            .ok_or_else(|| format_error(path, format!("SDF {key} = `{text}` is not a positive integer")))
+            .ok_or_else(|| {
+                format_error(
+                    path,
+                    format!("SDF {key} = `{text}` is not a positive integer"),
+                )
+            })
     };
     let scale = |key: &str| -> Result<f64> {
         let text = get(key)?;
@@ -317,7 +325,7 @@ mod tests {
             .collect();
         let mean = vals.iter().sum::<f64>() / vals.len() as f64;
         let sd = (vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / vals.len() as f64).sqrt();
-        assert!(close(sd, 2.74729667089921053e-07, 1e-12), "{sd}");
+        assert!(close(sd, 2.74729667089921e-07, 1e-12), "{sd}");
         assert!(close(map.z[[0, 0]], -2.87e-07, 1e-12));
         assert!(close(map.z[[4, 8]], -1.4e-08, 1e-12));
     }
@@ -331,13 +339,19 @@ mod tests {
         assert!(!map.valid.as_ref().unwrap()[[1, 1]]);
         assert!(close(map.z[[2, 0]], 7e-9, 1e-12));
         let short = text.replace("7 8 9", "7 8");
-        let msg = read_bytes("s.sdf", short.as_bytes()).unwrap_err().to_string();
+        let msg = read_bytes("s.sdf", short.as_bytes())
+            .unwrap_err()
+            .to_string();
         assert!(msg.contains("s.sdf") && msg.contains("8 values"), "{msg}");
         let huge = text.replace("NumPoints = 3", "NumPoints = 99999999999");
-        let msg = read_bytes("h.sdf", huge.as_bytes()).unwrap_err().to_string();
+        let msg = read_bytes("h.sdf", huge.as_bytes())
+            .unwrap_err()
+            .to_string();
         assert!(msg.contains("cannot fit"), "{msg}");
         let junk = text.replace("4 BAD 6", "4 x 6");
-        let msg = read_bytes("j.sdf", junk.as_bytes()).unwrap_err().to_string();
+        let msg = read_bytes("j.sdf", junk.as_bytes())
+            .unwrap_err()
+            .to_string();
         assert!(msg.contains("`x` is not a number"), "{msg}");
         let compressed = text.replace("Compression = 0", "Compression = 1");
         assert!(read_bytes("c.sdf", compressed.as_bytes()).is_err());
@@ -348,7 +362,10 @@ mod tests {
         let bytes = std::fs::read(sample("bcr_binary_int16.sdf")).unwrap();
         for cut in [8, 50, 80, 81, 100, bytes.len() - 2] {
             let msg = read_bytes("t.sdf", &bytes[..cut]).unwrap_err().to_string();
-            assert!(msg.contains("t.sdf") && msg.contains("truncated"), "{cut}: {msg}");
+            assert!(
+                msg.contains("t.sdf") && msg.contains("truncated"),
+                "{cut}: {msg}"
+            );
         }
         let mut huge = bytes.clone();
         huge[42..46].copy_from_slice(&[0xFF; 4]);
