@@ -1,6 +1,8 @@
-//! criterion benches of the surfaces kernels on a 1024 × 1024 map (not run in CI).
+//! criterion benches of the surfaces kernels on a 1024 × 1024 map and of the binary readers
+//! (not run in CI).
 use criterion::{criterion_group, criterion_main, Criterion};
 use hdi::surface::filter::gaussian_lowpass;
+use hdi::surface::io::{read_height_map, ReadOptions};
 use hdi::surface::level::{level, LevelOp};
 use hdi::surface::roughness::{roughness, RoughnessOptions};
 use hdi::surface::synth::{gaussian_acf_surface, GaussianSurfaceSpec};
@@ -37,6 +39,21 @@ fn surfaces(c: &mut Criterion) {
     g.bench_function("synth_gaussian_acf", |b| {
         b.iter(|| gaussian_acf_surface(&spec))
     });
+    g.finish();
+
+    // Reader throughput on the largest real samples (tests/data/surfaces, tests/data/README.md):
+    // bytes per second = file size / time per read.
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/surfaces");
+    let mut g = c.benchmark_group("readers");
+    g.sample_size(10);
+    for name in ["spot_1-1000nm.ibw", "sur-2.sur", "sur-3.sur"] {
+        let path = data.join(name);
+        let len = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
+        g.throughput(criterion::Throughput::Bytes(len));
+        g.bench_function(name, |b| {
+            b.iter(|| read_height_map(&path, &ReadOptions::default()).unwrap())
+        });
+    }
     g.finish();
 }
 

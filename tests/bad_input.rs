@@ -169,3 +169,54 @@ fn a_failure_beside_a_successful_rerun_keeps_the_failed_instances_results() {
         );
     }
 }
+
+/// Truncated and garbled copies of the `.ibw`, `.sur` and `.sdf` samples (tests/data/README.md):
+/// one error line naming the file, no panic, no huge allocation from a size field.
+#[test]
+fn corrupt_ibw_sur_sdf_files_fail_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let surfaces = test_data().join("surfaces");
+    // (sample, where to cut (fractions of the length, before any optional trailer), byte
+    // ranges [from, to) of size fields to garble)
+    type Case<'a> = (&'a str, &'a [f64], &'a [(usize, usize)]);
+    let cases: [Case; 4] = [
+        // 0.94 cuts Asylum's note; the file's last 131 kB follow every section the header
+        // lists, so cutting there loses nothing hdi reads.
+        (
+            "spot_1-1000nm.ibw",
+            &[0.1, 0.5, 0.9, 0.94],
+            &[(4, 8), (64 + 68, 64 + 76)],
+        ),
+        (
+            "sur-2.sur",
+            &[0.1, 0.5, 0.9, 0.999],
+            &[(108, 116), (334, 338)],
+        ),
+        ("bcr_binary_int16.sdf", &[0.1, 0.5, 0.9], &[(42, 46)]),
+        // NumPoints starts at byte 79.
+        ("sdf-1.sdf", &[0.05, 0.3, 0.6], &[(60, 80)]),
+    ];
+    for (name, cuts, fields) in cases {
+        let bytes = std::fs::read(surfaces.join(name)).unwrap();
+        let mut variants: Vec<(String, Vec<u8>)> = cuts
+            .iter()
+            .map(|f| {
+                let cut = (bytes.len() as f64 * f) as usize;
+                (format!("cut{cut}-{name}"), bytes[..cut].to_vec())
+            })
+            .collect();
+        for (k, &(from, to)) in fields.iter().enumerate() {
+            let mut garbled = bytes.clone();
+            for b in &mut garbled[from..to] {
+                *b = 0x7F;
+            }
+            variants.push((format!("garbled{k}-{name}"), garbled));
+        }
+        for (file, content) in variants {
+            let path = dir.path().join(&file);
+            std::fs::write(&path, &content).unwrap();
+            let o = hdi().arg("surface").arg(&path).output().unwrap();
+            assert_clean_failure(&o, &file);
+        }
+    }
+}

@@ -1,13 +1,14 @@
 //! Height-map readers (detect by magic bytes, never by extension) and writers.
 //!
 //! Formats (docs/surfaces.md): Bruker NanoScope v4.3+ binary (`nanoscope`),
-//! Gwyddion native (`gwy`), Gwyddion Simple Field (`gsf`), ASCII matrix / Gwyddion ASCII export /
-//! CSV (`ascii`) and XYZ on a rectangular lattice (`xyz`). Every reader returns heights and
+//! Gwyddion native (`gwy`), Gwyddion Simple Field (`gsf`), Asylum Research / Igor binary wave
+//! (`ibw`), Digital Surf (`sur`), Surface Data File ISO 25178-71 (`sdf`), ASCII matrix /
+//! Gwyddion ASCII export / CSV (`ascii`) and XYZ on a rectangular lattice (`xyz`). Every reader returns heights and
 //! lengths in metres with row 0 = top of the image as the instrument software shows it.
 //! NaN and saturated pixels come back as `valid = false` with `z = 0.0`.
 //!
-//! `ReadOptions::channel` only matters for the multi-channel formats (NanoScope, GWY); the
-//! single-channel formats ignore it.
+//! `ReadOptions::channel` only matters for the multi-channel formats (NanoScope, GWY, IBW
+//! layers, SUR objects); the single-channel formats ignore it.
 use super::{HeightMap, Result, SourceInfo, SurfaceError};
 use ndarray::Array2;
 use std::collections::BTreeMap;
@@ -17,6 +18,10 @@ mod ascii;
 mod gsf;
 mod gwy;
 mod nanoscope;
+// Asylum Igor .ibw, Digital Surf .sur, ISO 25178-71 .sdf (docs/surfaces.md).
+mod ibw;
+mod sdf;
+mod sur;
 mod units;
 mod xyz;
 
@@ -44,7 +49,8 @@ pub struct ReadOptions {
 
 /// The formats `read_height_map` reads, for error messages.
 pub const SUPPORTED_FORMATS: &str = "Gwyddion .gwy (GWYP), Bruker NanoScope v4.3+ binary, \
-     Gwyddion Simple Field .gsf, ASCII matrix/CSV, XYZ lattice";
+     Gwyddion Simple Field .gsf, Asylum/Igor .ibw (v5), Digital Surf .sur, \
+     Surface Data File .sdf (ASCII/binary), ASCII matrix/CSV, XYZ lattice";
 
 /// How many leading bytes `read_height_map` shows `detect_format`: enough for several lines of
 /// a wide ASCII matrix (a 256-column row is ~5 kB).
@@ -53,7 +59,9 @@ const SNIFF_BYTES: usize = 64 * 1024;
 /// Short format id of a file's content, from its first bytes; `None` if not recognised.
 ///
 /// Binary formats are recognised by their magic (`GWYP`/`GWYO` → "gwy", `\*File list` /
-/// `?*File list` → "nanoscope", `Gwyddion Simple Field` → "gsf"; the reader then rejects the
+/// `?*File list` → "nanoscope", `Gwyddion Simple Field` → "gsf", `DIGITAL SURF` /
+/// `DSCOMPRESSED` → "sur", `aISO-1.0`/`bISO-1.0`/`aBCR-1.0`/`bBCR-1.0` → "sdf", an Igor
+/// binary-wave version (1, 2, 3, 5 in either byte order) with a known number type → "ibw"; the reader then rejects the
 /// variants it does not support with a clear error). Text is "xyz" if it has an XYZ unit header
 /// (`# xy_unit:`, `# z_unit:`, `# Units:`) or its data lines have three columns whose first two
 /// look like lattice coordinates (the first two lines share x or y), else "ascii".
@@ -66,6 +74,15 @@ pub fn detect_format(head: &[u8]) -> Option<&'static str> {
     }
     if head.starts_with(b"Gwyddion Simple Field ") {
         return Some("gsf");
+    }
+    if head.starts_with(sur::MAGIC) || head.starts_with(sur::MAGIC_COMPRESSED) {
+        return Some("sur");
+    }
+    if sdf::MAGICS.iter().any(|m| head.starts_with(m)) {
+        return Some("sdf");
+    }
+    if ibw::looks_like(head) {
+        return Some("ibw");
     }
     sniff_text(head)
 }
@@ -150,6 +167,9 @@ pub fn read_height_map(path: &Path, opts: &ReadOptions) -> Result<HeightMap> {
         Some("gwy") => gwy::read(path, &bytes, opts)?,
         Some("nanoscope") => nanoscope::read(path, &bytes, opts)?,
         Some("gsf") => gsf::read(path, &bytes, opts)?,
+        Some("ibw") => ibw::read(path, &bytes, opts)?,
+        Some("sur") => sur::read(path, &bytes, opts)?,
+        Some("sdf") => sdf::read(path, &bytes)?,
         Some("xyz") => xyz::read(path, &bytes, opts)?,
         Some(_) => ascii::read(path, &bytes, opts)?,
         None => {
@@ -288,6 +308,19 @@ mod tests {
             detect_format(b"Gwyddion Simple Field 1.0\nXRes = 3\n"),
             Some("gsf")
         );
+        assert_eq!(detect_format(b"DIGITAL SURF\0\0\x01\0"), Some("sur"));
+        assert_eq!(detect_format(b"DSCOMPRESSED\0\0\x01\0"), Some("sur"));
+        assert_eq!(detect_format(b"aISO-1.0\nManufacID = x\n"), Some("sdf"));
+        assert_eq!(detect_format(b"bBCR-1.0ISOTC213  "), Some("sdf"));
+        // Igor v5, little-endian: version 5, wfmSize ≥ 320, float32 type, nDim[0] = 10.
+        let mut ibw = vec![0u8; 384];
+        ibw[0] = 5;
+        ibw[4..8].copy_from_slice(&720i32.to_le_bytes());
+        ibw[64 + 16] = 2;
+        ibw[64 + 68..64 + 72].copy_from_slice(&10i32.to_le_bytes());
+        assert_eq!(detect_format(&ibw), Some("ibw"));
+        ibw[64 + 16] = 3; // not a number type
+        assert_eq!(detect_format(&ibw), None);
         assert_eq!(detect_format(b"# Width: 1 um\n1 2 3\n"), Some("ascii"));
         assert_eq!(detect_format(b"1 2 3 4\n5 6 7 8\n"), Some("ascii"));
         assert_eq!(detect_format(b"0 0 1e-9\n1e-9 0 2e-9\n"), Some("xyz"));
