@@ -44,7 +44,7 @@ pub struct HeightMap {
 
 #[derive(Debug, Clone, Default)]
 pub struct SourceInfo {
-    /// Short format id: "ascii", "xyz", "gwy", "nanoscope", "gsf".
+    /// Short format id: "ascii", "xyz", "gwy", "nanoscope", "gsf", "metropro", "x3p".
     pub format: String,
     pub header: BTreeMap<String, String>,
 }
