@@ -85,7 +85,8 @@ impl<'a> Scanner<'a> {
         if let Some(name) = self.pending_end.take() {
             return Some(Ok(self.close(name)));
         }
-        let rest = &self.s[self.pos..];
+        let s: &'a str = self.s;
+        let rest = &s[self.pos..];
         if rest.is_empty() {
             return match self.stack.last() {
                 Some(open) => {
@@ -182,8 +183,7 @@ impl<'a> Scanner<'a> {
         let start = self.pos + 1;
         let bytes = s.as_bytes();
         let mut at = start;
-        while at < bytes.len() && !matches!(bytes[at], b' ' | b'\t' | b'\r' | b'\n' | b'/' | b'>')
-        {
+        while at < bytes.len() && !matches!(bytes[at], b' ' | b'\t' | b'\r' | b'\n' | b'/' | b'>') {
             at += 1;
         }
         let full_name = &s[start..at];

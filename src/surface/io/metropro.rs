@@ -69,7 +69,10 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
         usize::from(be_u16(bytes, 54)),
         usize::from(be_u16(bytes, 56)),
     );
-    let (cn_w, cn_h) = (usize::from(be_u16(bytes, 68)), usize::from(be_u16(bytes, 70)));
+    let (cn_w, cn_h) = (
+        usize::from(be_u16(bytes, 68)),
+        usize::from(be_u16(bytes, 70)),
+    );
     let scale = be_f32(bytes, 164);
     let wavelength = be_f32(bytes, 168);
     let obliquity = be_f32(bytes, 176);
@@ -103,7 +106,9 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
         Some(req) => find_channel(req, &names).ok_or_else(|| {
             unsupported(
                 path,
-                format!("MetroPro file has no channel `{req}`; channels: height (phase), intensity"),
+                format!(
+                    "MetroPro file has no channel `{req}`; channels: height (phase), intensity"
+                ),
             )
         })?,
     };
@@ -212,13 +217,19 @@ mod tests {
             ..Default::default()
         };
         let map = read_height_map(&sample(), &opts).unwrap();
-        assert_eq!((map.nx(), map.ny(), map.channel.as_str()), (640, 480, "intensity"));
+        assert_eq!(
+            (map.nx(), map.ny(), map.channel.as_str()),
+            (640, 480, "intensity")
+        );
         let opts = ReadOptions {
             channel: Some("amplitude".into()),
             ..Default::default()
         };
         let msg = read_height_map(&sample(), &opts).unwrap_err().to_string();
-        assert!(msg.contains("metropro-1.dat") && msg.contains("intensity"), "{msg}");
+        assert!(
+            msg.contains("metropro-1.dat") && msg.contains("intensity"),
+            "{msg}"
+        );
     }
 
     #[test]
@@ -240,7 +251,10 @@ mod tests {
                 bad[184..188].fill(0);
             }
             let msg = read_bytes("g.dat", &bad).unwrap_err().to_string();
-            assert!(msg.contains("g.dat") && msg.contains("MetroPro"), "{at}: {msg}");
+            assert!(
+                msg.contains("g.dat") && msg.contains("MetroPro"),
+                "{at}: {msg}"
+            );
         }
         assert!(fuzz_reader("f.dat", &bytes) > 0);
     }

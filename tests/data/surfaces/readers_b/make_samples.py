@@ -119,7 +119,7 @@ x3p_case("x3p_float64.x3p", "D", nx, ny, raw, raw, 2e-6, 1e-6, 5e-6, 0.0)
 raw = rng.standard_normal((ny, nx)) * 2e-9
 z = raw.copy()
 z[4, 7] = np.nan
-datums = ["<Datum/>" if np.isnan(v) else f"<Datum>{v!r}</Datum>" for v in z.ravel()]
+datums = ["<Datum/>" if np.isnan(v) else f"<Datum>{float(v)!r}</Datum>" for v in z.ravel()]
 xml = main_xml(nx, ny, 1e-6, 1e-6, 0.0, 0.0, "D", datalist=datums)
 write_x3p("x3p_datalist.x3p", xml, [])
 expected["x3p_datalist.x3p"] = {"nx": nx, "ny": ny, "dx": 1e-6, "dy": 1e-6, "x0": 0.0, "y0": 0.0,
