@@ -210,6 +210,49 @@ mod tests {
         assert!(close(rms, 7.528822204734589e-08, 1e-6), "{rms}");
     }
 
+    /// A byte-built header format 3 file: phase_res 0 (R = 4096), `sign` set, one invalid
+    /// pixel, no intensity; heights checked against z = −phase · S · λ · O / R by hand.
+    #[test]
+    fn byte_built_format_3_file() {
+        let (nx, ny) = (4usize, 3usize);
+        let mut b = vec![0u8; 4096];
+        b[..4].copy_from_slice(&super::MAGICS[2]);
+        b[4..6].copy_from_slice(&3u16.to_be_bytes());
+        b[6..10].copy_from_slice(&4096u32.to_be_bytes());
+        b[68..70].copy_from_slice(&(nx as u16).to_be_bytes());
+        b[70..72].copy_from_slice(&(ny as u16).to_be_bytes());
+        b[164..168].copy_from_slice(&0.5f32.to_be_bytes());
+        b[168..172].copy_from_slice(&632.8e-9f32.to_be_bytes());
+        b[176..180].copy_from_slice(&1.0f32.to_be_bytes());
+        b[184..188].copy_from_slice(&2e-6f32.to_be_bytes());
+        b[232..234].copy_from_slice(&1i16.to_be_bytes());
+        let phase: Vec<i32> = (0..12)
+            .map(|k| if k == 5 { i32::MAX } else { 100 * k - 300 })
+            .collect();
+        for p in &phase {
+            b.extend_from_slice(&p.to_be_bytes());
+        }
+        let map = read_bytes("f3.dat", &b).unwrap();
+        assert_eq!((map.nx(), map.ny()), (nx, ny));
+        assert!(close(map.dx, 2e-6f32 as f64, 1e-15) && close(map.dy, map.dx, 1e-15));
+        let step = 0.5 * (632.8e-9f32 as f64) / 4096.0;
+        let valid = map.valid.as_ref().unwrap();
+        for (k, &p) in phase.iter().enumerate() {
+            let (j, i) = (k / nx, k % nx);
+            if k == 5 {
+                assert!(!valid[[j, i]]);
+            } else {
+                assert!(valid[[j, i]]);
+                let want = -(p as f64) * step;
+                assert!((map.z[[j, i]] - want).abs() <= 1e-12 * step, "{k}");
+            }
+        }
+        let msg = read_bytes("f3.dat", &b[..4096 + 4 * 11])
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("truncated MetroPro"), "{msg}");
+    }
+
     #[test]
     fn intensity_channel_and_unknown_channel() {
         let opts = ReadOptions {
