@@ -220,3 +220,41 @@ fn corrupt_ibw_sur_sdf_files_fail_cleanly() {
         }
     }
 }
+
+/// Truncated and garbled Zygo MetroPro `.dat` and ISO 25178-71 `.x3p` files (the real samples
+/// in `tests/data/surfaces/`): one error line naming the file, no panic.
+#[test]
+fn truncated_and_garbled_metropro_and_x3p_files_fail_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let surfaces = test_data().join("surfaces");
+    let run = |name: &str, bytes: &[u8], needle: &str| {
+        let f = dir.path().join(name);
+        std::fs::write(&f, bytes).unwrap();
+        let o = hdi().arg("surface").arg(&f).output().unwrap();
+        assert_clean_failure(&o, name);
+        assert_clean_failure(&o, needle);
+    };
+    let dat = std::fs::read(surfaces.join("metropro-1.dat")).unwrap();
+    for cut in [10, 834, 700_000, dat.len() - 3] {
+        run(&format!("cut{cut}.dat"), &dat[..cut], "truncated MetroPro");
+    }
+    let mut garbled = dat.clone();
+    garbled[68..72].fill(0xFF); // cn_org_width/height: 65535 × 65535 phase pixels
+    run("garbled.dat", &garbled, "truncated MetroPro");
+
+    let x3p = std::fs::read(surfaces.join("x3p-2.x3p")).unwrap();
+    for cut in [100, x3p.len() / 2, x3p.len() - 30] {
+        run(&format!("cut{cut}.x3p"), &x3p[..cut], "ZIP");
+    }
+    let mut flipped = x3p.clone();
+    flipped[5000] ^= 0x10; // inside the deflated data member: CRC or inflate error
+    run("flipped.x3p", &flipped, "bindata/data.bin");
+    let readers_b = surfaces.join("readers_b");
+    for (name, needle) in [
+        ("bad_no_main.x3p", "no main.xml"),
+        ("bad_md5.x3p", "MD5"),
+        ("bad_huge_size.x3p", "too large"),
+    ] {
+        run(name, &std::fs::read(readers_b.join(name)).unwrap(), needle);
+    }
+}

@@ -44,7 +44,8 @@ pub struct HeightMap {
 
 #[derive(Debug, Clone, Default)]
 pub struct SourceInfo {
-    /// Short format id: "ascii", "xyz", "gwy", "nanoscope", "gsf", "ibw", "sur", "sdf".
+    /// Short format id: "ascii", "xyz", "gwy", "nanoscope", "gsf", "ibw", "sur", "sdf",
+    /// "metropro", "x3p".
     pub format: String,
     pub header: BTreeMap<String, String>,
 }

@@ -2,13 +2,14 @@
 //!
 //! Formats (docs/surfaces.md): Bruker NanoScope v4.3+ binary (`nanoscope`),
 //! Gwyddion native (`gwy`), Gwyddion Simple Field (`gsf`), Asylum Research / Igor binary wave
-//! (`ibw`), Digital Surf (`sur`), Surface Data File ISO 25178-71 (`sdf`), ASCII matrix /
-//! Gwyddion ASCII export / CSV (`ascii`) and XYZ on a rectangular lattice (`xyz`). Every reader returns heights and
+//! (`ibw`), Digital Surf (`sur`), Surface Data File ISO 25178-71 (`sdf`), Zygo MetroPro `.dat`
+//! (`metropro`), ISO 25178-71 `.x3p` (`x3p`), ASCII matrix / Gwyddion ASCII export / CSV
+//! (`ascii`) and XYZ on a rectangular lattice (`xyz`). Every reader returns heights and
 //! lengths in metres with row 0 = top of the image as the instrument software shows it.
 //! NaN and saturated pixels come back as `valid = false` with `z = 0.0`.
 //!
 //! `ReadOptions::channel` only matters for the multi-channel formats (NanoScope, GWY, IBW
-//! layers, SUR objects); the single-channel formats ignore it.
+//! layers, SUR objects, MetroPro); the single-channel formats ignore it.
 use super::{HeightMap, Result, SourceInfo, SurfaceError};
 use ndarray::Array2;
 use std::collections::BTreeMap;
@@ -24,6 +25,9 @@ mod sdf;
 mod sur;
 mod units;
 mod xyz;
+// Zygo MetroPro .dat, Zygo .datx (HDF5), ISO 25178-71 .x3p (ZIP + XML).
+mod metropro;
+mod x3p;
 
 #[cfg(test)]
 mod testutil;
@@ -50,7 +54,8 @@ pub struct ReadOptions {
 /// The formats `read_height_map` reads, for error messages.
 pub const SUPPORTED_FORMATS: &str = "Gwyddion .gwy (GWYP), Bruker NanoScope v4.3+ binary, \
      Gwyddion Simple Field .gsf, Asylum/Igor .ibw (v5), Digital Surf .sur, \
-     Surface Data File .sdf (ASCII/binary), ASCII matrix/CSV, XYZ lattice";
+     Surface Data File .sdf (ASCII/binary), Zygo MetroPro .dat, ISO 25178-71 .x3p, \
+     ASCII matrix/CSV, XYZ lattice";
 
 /// How many leading bytes `read_height_map` shows `detect_format`: enough for several lines of
 /// a wide ASCII matrix (a 256-column row is ~5 kB).
@@ -81,6 +86,14 @@ pub fn detect_format(head: &[u8]) -> Option<&'static str> {
     if sdf::MAGICS.iter().any(|m| head.starts_with(m)) {
         return Some("sdf");
     }
+    if metropro::MAGICS.iter().any(|m| head.starts_with(m)) {
+        return Some("metropro");
+    }
+    // ISO 25178-71 .x3p is a ZIP archive; its reader requires `main.xml` inside.
+    if crate::formats::zip::is_zip(head) {
+        return Some("x3p");
+    }
+    // Igor waves have no magic: a plausibility check of the header, after every magic.
     if ibw::looks_like(head) {
         return Some("ibw");
     }
@@ -170,6 +183,8 @@ pub fn read_height_map(path: &Path, opts: &ReadOptions) -> Result<HeightMap> {
         Some("ibw") => ibw::read(path, &bytes, opts)?,
         Some("sur") => sur::read(path, &bytes, opts)?,
         Some("sdf") => sdf::read(path, &bytes)?,
+        Some("metropro") => metropro::read(path, &bytes, opts)?,
+        Some("x3p") => x3p::read(path, &bytes, opts)?,
         Some("xyz") => xyz::read(path, &bytes, opts)?,
         Some(_) => ascii::read(path, &bytes, opts)?,
         None => {
@@ -328,6 +343,10 @@ mod tests {
         assert_eq!(detect_format(b"1.5 2.5 3.5\n4.5 5.5 6.5\n"), Some("ascii"));
         // A long row cut by the head limit in the middle of a number.
         assert_eq!(detect_format(b"1e-9 2e-9 3e-9 4e-"), Some("ascii"));
+        assert_eq!(detect_format(b"\x88\x1b\x03\x6f\x00\x01"), Some("metropro"));
+        assert_eq!(detect_format(b"\x88\x1b\x03\x71\x00\x03"), Some("metropro"));
+        assert_eq!(detect_format(b"PK\x03\x04\x14\x00"), Some("x3p"));
+        assert_eq!(detect_format(b"\x88\x1b\x03\x72\x00\x03"), None);
         assert_eq!(detect_format(b""), None);
         assert_eq!(detect_format(b"\x7fELF\x02\x01\x01\0\0"), None);
         assert_eq!(detect_format(b"hello world\n"), None);
