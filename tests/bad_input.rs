@@ -169,3 +169,27 @@ fn a_failure_beside_a_successful_rerun_keeps_the_failed_instances_results() {
         );
     }
 }
+
+#[test]
+fn cut_foreign_ldv_records_fail_cleanly_naming_the_file() {
+    // One file per reader of tests/data/ldv/ (independent writers), cut in the data and in
+    // the header: `hdi dmw` must print one error line naming the file, never panic.
+    let dir = tempfile::tempdir().unwrap();
+    for name in [
+        "record_lz4.feather",
+        "record_stream.arrows",
+        "record_ascii.uff",
+        "record_binary.uff",
+        "record_c.npy",
+        "record_deflate.npz",
+        "record_int24.wav",
+    ] {
+        let bytes = std::fs::read(test_data().join("ldv").join(name)).unwrap();
+        for (tag, keep) in [("half", bytes.len() / 2), ("head", 40)] {
+            let cut = dir.path().join(format!("{tag}-{name}"));
+            std::fs::write(&cut, &bytes[..keep]).unwrap();
+            let o = hdi().arg("dmw").arg(&cut).output().unwrap();
+            assert_clean_failure(&o, &format!("{tag}-{name}"));
+        }
+    }
+}

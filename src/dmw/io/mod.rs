@@ -66,14 +66,21 @@ use super::{DmwError, Layout, LdvRecord, VelocityUnit};
 use std::io::{Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
+pub mod arrow;
+mod columns;
+#[cfg(test)]
+mod format_tests;
 mod h5;
 mod names;
+mod npy;
 mod parquet;
 mod scan;
 mod stream;
 #[cfg(test)]
 pub(crate) mod tests;
 mod text;
+mod uff;
+mod wav;
 
 use names::{Meta, TimeKind, Unit};
 use stream::{BadRun, Channel, Stream, TimeFault};
@@ -100,6 +107,16 @@ pub enum LdvFormat {
     Csv,
     Parquet,
     Hdf5,
+    /// Arrow IPC file (Feather v2) or stream; read only.
+    Arrow,
+    /// Universal File Format dataset 58 (ASCII) or 58b (binary); read only.
+    Uff58,
+    /// NumPy `.npy` array; read only.
+    Npy,
+    /// NumPy `.npz` archive of `.npy` members; read only.
+    Npz,
+    /// RIFF/WAVE audio (PCM or IEEE float); read only.
+    Wav,
 }
 
 impl LdvFormat {
@@ -108,6 +125,11 @@ impl LdvFormat {
             LdvFormat::Csv => "csv",
             LdvFormat::Parquet => "parquet",
             LdvFormat::Hdf5 => "hdf5",
+            LdvFormat::Arrow => "arrow",
+            LdvFormat::Uff58 => "uff58",
+            LdvFormat::Npy => "npy",
+            LdvFormat::Npz => "npz",
+            LdvFormat::Wav => "wav",
         }
     }
 }
@@ -129,6 +151,28 @@ pub fn detect_format(path: &Path) -> Result<LdvFormat, DmwError> {
     if head.starts_with(b"PAR1") {
         return Ok(LdvFormat::Parquet);
     }
+    if head.starts_with(arrow::FILE_MAGIC) || head.starts_with(arrow::STREAM_MAGIC) {
+        return Ok(LdvFormat::Arrow);
+    }
+    if head.starts_with(crate::formats::npy::MAGIC) {
+        return Ok(LdvFormat::Npy);
+    }
+    if crate::formats::zip::is_zip(&head) {
+        return Ok(LdvFormat::Npz);
+    }
+    if head.len() >= 12 && &head[..4] == b"RIFF" && &head[8..12] == b"WAVE" {
+        return Ok(LdvFormat::Wav);
+    }
+    if head.starts_with(b"FEA1") {
+        return Err(read_err(
+            path,
+            "Feather v1 is not read; write Feather v2 (pyarrow.feather.write_feather, \
+             version=2, the default)",
+        ));
+    }
+    if uff::is_uff(&head) {
+        return Ok(LdvFormat::Uff58);
+    }
     const HDF5_MAGIC: &[u8; 8] = b"\x89HDF\r\n\x1a\n";
     // The HDF5 superblock sits at 0 or after a user block of 512·2^k bytes.
     let mut offset = 0u64;
@@ -145,15 +189,18 @@ pub fn detect_format(path: &Path) -> Result<LdvFormat, DmwError> {
     if head.contains(&0) {
         return Err(read_err(
             path,
-            "binary content that is neither Parquet nor HDF5; LDV records are read from \
-             CSV/TSV text, Parquet or HDF5",
+            format!("binary content of no known format; {FORMATS}"),
         ));
     }
     Ok(LdvFormat::Csv)
 }
 
-/// Read an LDV record, detecting the format from the content (magic bytes: "PAR1" Parquet,
-/// "\x89HDF\r\n\x1a\n" HDF5, else delimited text), never from the extension.
+/// The formats, for messages.
+pub const FORMATS: &str = "LDV records are read from CSV/TSV text, Parquet, HDF5, Arrow IPC \
+     (Feather v2), UFF dataset 58/58b, NumPy .npy/.npz and WAV";
+
+/// Read an LDV record, detecting the format from the content (magic bytes, see the module
+/// docs), never from the extension.
 pub fn read_ldv(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
     if let Some(fs) = opts.sample_rate {
         if !(fs.is_finite() && fs > 0.0) {
@@ -166,6 +213,11 @@ pub fn read_ldv(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> 
         LdvFormat::Csv => text::read(path, opts),
         LdvFormat::Parquet => parquet::read(path, opts),
         LdvFormat::Hdf5 => h5::read(path, opts),
+        LdvFormat::Arrow => arrow::read(path, opts),
+        LdvFormat::Uff58 => uff::read(path, opts),
+        LdvFormat::Npy => npy::read_npy(path, opts),
+        LdvFormat::Npz => npy::read_npz(path, opts),
+        LdvFormat::Wav => wav::read(path, opts),
     }
 }
 
