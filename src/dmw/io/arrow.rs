@@ -35,12 +35,15 @@ pub struct Decoded {
 /// uncompressed) or stream. Errors are one line naming the file.
 pub fn decode(path: &Path) -> Result<Decoded, DmwError> {
     no_panic(path, "the Arrow IPC reader", || {
-        let file = std::fs::File::open(path).map_err(|e| read_err(path, e))?;
+        use std::io::{Read, Seek, SeekFrom};
+        let mut file = std::fs::File::open(path).map_err(|e| read_err(path, e))?;
         let mut head = [0u8; 8];
-        let n = std::io::Read::read(&mut &file, &mut head).map_err(|e| read_err(path, e))?;
+        let n = file.read(&mut head).map_err(|e| read_err(path, e))?;
         if head[..n].starts_with(FILE_MAGIC) {
             decode_file(path, &file)
         } else {
+            file.seek(SeekFrom::Start(0))
+                .map_err(|e| read_err(path, e))?;
             decode_stream(path, file)
         }
     })
@@ -75,7 +78,9 @@ fn decode_file(path: &Path, file: &std::fs::File) -> Result<Decoded, DmwError> {
     let fb_schema = footer
         .schema()
         .ok_or_else(|| bad("the footer has no schema".into()))?;
-    let schema = Arc::new(arrow_ipc::convert::fb_to_schema(fb_schema));
+    let schema = Arc::new(
+        arrow_ipc::convert::try_fb_to_schema(fb_schema).map_err(|e| bad(e.to_string()))?,
+    );
     let mut decoder = FileDecoder::new(schema.clone(), footer.version());
     let block_bytes = |b: &arrow_ipc::Block| -> Result<Buffer, DmwError> {
         let start = usize::try_from(b.offset()).ok();
@@ -121,7 +126,7 @@ fn decode_file(path: &Path, file: &std::fs::File) -> Result<Decoded, DmwError> {
 
 fn decode_stream(path: &Path, file: std::fs::File) -> Result<Decoded, DmwError> {
     let bad = |e: arrow_schema::ArrowError| read_err(path, format!("Arrow IPC stream: {e}"));
-    let reader = StreamReader::try_new_buffered(file, None).map_err(bad)?;
+    let reader = StreamReader::try_new(std::io::BufReader::new(file), None).map_err(bad)?;
     let schema = reader.schema();
     let batches = reader.collect::<Result<Vec<_>, _>>().map_err(bad)?;
     Ok(Decoded {
@@ -222,7 +227,7 @@ fn segment(arr: &dyn arrow_array::Array, num: Num) -> Seg<'_> {
     let valid = arr
         .nulls()
         .filter(|n| n.null_count() > 0)
-        .map(|n| (n.buffer().values(), n.offset()));
+        .map(|n| (n.buffer().as_slice(), n.offset()));
     Seg::Bytes {
         bytes: values,
         offset: 0,

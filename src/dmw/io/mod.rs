@@ -1,8 +1,25 @@
 //! LDV record readers and writers (docs/dmw.md).
 //!
 //! The format is detected from the content, never from the extension: `PAR1` → Parquet,
-//! `\x89HDF\r\n\x1a\n` (at offset 0 or a power-of-two user-block offset) → HDF5, anything
-//! else that is text → delimited text (CSV, TSV or semicolon-separated).
+//! `\x89HDF\r\n\x1a\n` (at offset 0 or a power-of-two user-block offset) → HDF5, `ARROW1` or
+//! the `FF FF FF FF` continuation marker → Arrow IPC file (Feather v2) or stream
+//! ([`arrow`]), `\x93NUMPY` → `.npy`, `PK\x03\x04` → `.npz`, `RIFF…WAVE` → WAV, a `-1`
+//! delimiter line followed by a dataset number → universal file (UFF 58/58b), anything else
+//! that is text → delimited text (CSV, TSV or semicolon-separated).
+//!
+//! # Binary channel formats (Arrow IPC, UFF 58, `.npy`, `.npz`, WAV)
+//!
+//! These share `columns`: each file's channels are described as typed (possibly strided or
+//! big-endian) byte ranges over a memory map, or parsed values (UFF ASCII), then chosen by the
+//! name rules below and decoded in chunks of 2^16 samples into the shared stream checks.
+//! Channel names: Arrow field names; UFF ID line 1 (also `node:direction` of record 6);
+//! `.npz` member names; structured `.npy` field names; plain `.npy` columns and WAV channels
+//! by position (velocity, index; a 3-column array is time, velocity, index). In UFF, `.npy`
+//! and WAV the column options also take a channel number (from 0). Units: Arrow field
+//! `units` metadata, UFF record 9 units label; WAV integer PCM is a fraction of full scale
+//! (±1 V). Sample rate: Arrow schema metadata, UFF abscissa increment (uneven abscissa →
+//! time column), `.npz` 0-d `sample_rate` member, WAV `fmt ` chunk; `.npy` needs a time
+//! column or the option. docs/dmw.md has the table.
 //!
 //! # Columns (text and Parquet) and datasets (HDF5)
 //!
@@ -57,6 +74,9 @@
 //!
 //! # Memory
 //!
+//! Arrow IPC files, `.npy`, stored `.npz` members, UFF 58b and WAV are memory-mapped and
+//! decoded in place (compressed Arrow buffers and deflated members are decompressed first;
+//! UFF ASCII is parsed into one vector per channel).
 //! Text and Parquet are scanned by polars' streaming engine with projection (only the chosen
 //! columns are parsed) and consumed batch by batch; HDF5 is read in hyperslabs of 2^20
 //! samples. Only the velocity and index channels are materialised (as `Vec<f64>`); the time

@@ -242,8 +242,14 @@ fn parse<'a>(path: &Path, b: &'a [u8]) -> Result<Vec<Function<'a>>, DmwError> {
                 ),
             ));
         }
-        let Some(id) = lines.next() else {
-            return Ok(out);
+        let Some(id) = lines.next().filter(|l| !l.trim_ascii().is_empty()) else {
+            return Err(record_err(
+                path,
+                format!(
+                    "line {}: the file ends after a '    -1' delimiter; is it cut?",
+                    lines.line
+                ),
+            ));
         };
         let id_line = lines.line;
         let id_text = String::from_utf8_lossy(id).to_string();

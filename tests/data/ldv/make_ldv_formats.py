@@ -40,7 +40,6 @@ with open("record.csv", "w", newline="") as f:
 
 # UFF 58 (ASCII double, ASCII single, ASCII uneven) and 58b (binary double).
 def uff(name, binary, single=False, even=True, ids=("velocity", "index")):
-    u = pyuff.UFF(name)
     sets = []
     for k, (data, ident) in enumerate([(v, ids[0]), (idx, ids[1])]):
         d = pyuff.prepare_58(
@@ -52,8 +51,12 @@ def uff(name, binary, single=False, even=True, ids=("velocity", "index")):
         if single:
             d["ord_data_type"] = 2
         sets.append(d)
-    # pyuff writes double precision unless force_double=False.
-    u.write_sets(sets, mode="overwrite", force_double=not single)
+    # pyuff writes double precision unless force_double=False. Its binary writer reopens the
+    # file in "wb" mode for mode="overwrite", which drops what it wrote before: start from an
+    # empty file and append every set.
+    open(name, "w").close()
+    u = pyuff.UFF(name)
+    u.write_sets(sets, mode="add", force_double=not single)
 
 
 uff("record_ascii.uff", 0)
