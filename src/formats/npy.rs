@@ -43,7 +43,10 @@ pub struct Field {
 pub enum Dtype {
     Scalar(Scalar),
     /// List-form structured dtype `[('name', '<f8'), …]`; `itemsize` is the element size.
-    Structured { fields: Vec<Field>, itemsize: usize },
+    Structured {
+        fields: Vec<Field>,
+        itemsize: usize,
+    },
 }
 
 impl Dtype {
@@ -381,7 +384,7 @@ mod tests {
         out.extend([version, 0]);
         let mut h = dict.to_string();
         let pre = if version == 1 { 10 } else { 12 };
-        while (pre + h.len() + 1) % 64 != 0 {
+        while !(pre + h.len() + 1).is_multiple_of(64) {
             h.push(' ');
         }
         h.push('\n');
@@ -429,7 +432,11 @@ mod tests {
         assert_eq!(fields[1].offset, 8);
         assert!(fields[1].scalar.big_endian);
         // 0-d scalar.
-        let b = npy(1, "{'descr': '<i8', 'fortran_order': False, 'shape': (), }", &[0; 8]);
+        let b = npy(
+            1,
+            "{'descr': '<i8', 'fortran_order': False, 'shape': (), }",
+            &[0; 8],
+        );
         assert_eq!(parse(&b, b.len()).unwrap().count(), 1);
     }
 
@@ -450,8 +457,15 @@ mod tests {
             &[],
         );
         assert!(parse(&huge, huge.len()).is_err());
-        let c16 = npy(1, "{'descr': '<c16', 'fortran_order': False, 'shape': (1,), }", &[0; 16]);
-        assert!(matches!(parse(&c16, c16.len()), Err(NpyError::Unsupported(_))));
+        let c16 = npy(
+            1,
+            "{'descr': '<c16', 'fortran_order': False, 'shape': (1,), }",
+            &[0; 16],
+        );
+        assert!(matches!(
+            parse(&c16, c16.len()),
+            Err(NpyError::Unsupported(_))
+        ));
         let junk = npy(1, "{'descr': '<f8', 'fortran_order': Fals", &[]);
         assert!(parse(&junk, junk.len()).is_err());
         let deep = npy(1, &"[".repeat(100), &[]);

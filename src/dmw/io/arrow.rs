@@ -56,7 +56,9 @@ fn decode_file(path: &Path, file: &std::fs::File) -> Result<Decoded, DmwError> {
     let mmap = unsafe { memmap2::Mmap::map(file) }.map_err(|e| read_err(path, e))?;
     let len = mmap.len();
     if len < 8 + 10 {
-        return Err(bad(format!("{len} bytes, too short for the header and footer")));
+        return Err(bad(format!(
+            "{len} bytes, too short for the header and footer"
+        )));
     }
     let tail: [u8; 10] = mmap[len - 10..]
         .try_into()
@@ -78,9 +80,8 @@ fn decode_file(path: &Path, file: &std::fs::File) -> Result<Decoded, DmwError> {
     let fb_schema = footer
         .schema()
         .ok_or_else(|| bad("the footer has no schema".into()))?;
-    let schema = Arc::new(
-        arrow_ipc::convert::try_fb_to_schema(fb_schema).map_err(|e| bad(e.to_string()))?,
-    );
+    let schema =
+        Arc::new(arrow_ipc::convert::try_fb_to_schema(fb_schema).map_err(|e| bad(e.to_string()))?);
     let mut decoder = FileDecoder::new(schema.clone(), footer.version());
     let block_bytes = |b: &arrow_ipc::Block| -> Result<Buffer, DmwError> {
         let start = usize::try_from(b.offset()).ok();
@@ -177,7 +178,10 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         let Some(num) = num_of(field.data_type()) else {
             skipped.push(format!("{} ({})", field.name(), field.data_type()));
             for opt in [&opts.velocity_column, &opts.index_column, &opts.time_column] {
-                if opt.as_deref().is_some_and(|o| o.trim().eq_ignore_ascii_case(field.name())) {
+                if opt
+                    .as_deref()
+                    .is_some_and(|o| o.trim().eq_ignore_ascii_case(field.name()))
+                {
                     return Err(record_err(
                         path,
                         format!(

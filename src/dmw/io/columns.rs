@@ -150,7 +150,11 @@ impl Seg<'_> {
                     Num::I64 => int!(i64, 8),
                     Num::U64 => int!(u64, 8),
                     Num::I24 => each!(3, |a: [u8; 3]| {
-                        let b = if be { [a[0], a[1], a[2], 0] } else { [a[2], a[1], a[0], 0] };
+                        let b = if be {
+                            [a[0], a[1], a[2], 0]
+                        } else {
+                            [a[2], a[1], a[0], 0]
+                        };
                         // Sign-extend through the top byte of an i32.
                         (i32::from_be_bytes(b) >> 8) as f64
                     }),
@@ -250,7 +254,10 @@ fn by_number(
     what: &str,
 ) -> Result<Option<String>, DmwError> {
     let Some(w) = wanted else { return Ok(None) };
-    if names.iter().any(|n| names::clean(n).eq_ignore_ascii_case(names::clean(w))) {
+    if names
+        .iter()
+        .any(|n| names::clean(n).eq_ignore_ascii_case(names::clean(w)))
+    {
         return Ok(Some(w.clone()));
     }
     if let Some(k) = aliases.iter().position(|a| a.as_deref() == Some(w.trim())) {
@@ -269,17 +276,16 @@ fn by_number(
     }
 }
 
-pub(super) fn read(
-    path: &Path,
-    table: Table,
-    opts: &ReadOptions,
-) -> Result<LdvRecord, DmwError> {
+pub(super) fn read(path: &Path, table: Table, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
     let what = table.what;
     for c in &table.columns {
         if !c.segs.iter().all(Seg::in_bounds) {
             return Err(record_err(
                 path,
-                format!("{what} '{}' extends past the end of the data; is the file cut?", c.name),
+                format!(
+                    "{what} '{}' extends past the end of the data; is the file cut?",
+                    c.name
+                ),
             ));
         }
     }
@@ -306,7 +312,11 @@ pub(super) fn read(
                 .and_then(|w| names.iter().position(|n| n == w))
                 .or((names.len() > 1).then_some(1));
             names::Chosen {
-                velocity: if index == Some(0) { 1.min(names.len() - 1) } else { 0 },
+                velocity: if index == Some(0) {
+                    1.min(names.len() - 1)
+                } else {
+                    0
+                },
                 velocity_unit: None,
                 velocity_unknown_unit: None,
                 index,
@@ -347,10 +357,14 @@ pub(super) fn read(
     }
     let layout = flat_layout(path, &table.meta)?;
     let n = vcol.len();
-    let picked: Vec<usize> = [Some(chosen.velocity), chosen.index, chosen.time.map(|t| t.0)]
-        .into_iter()
-        .flatten()
-        .collect();
+    let picked: Vec<usize> = [
+        Some(chosen.velocity),
+        chosen.index,
+        chosen.time.map(|t| t.0),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
     for &k in &picked {
         let len = table.columns[k].len();
         if len != n {
@@ -363,19 +377,18 @@ pub(super) fn read(
             ));
         }
     }
-    let mut stream = Stream::new(
-        unit.scale,
-        chosen.index.is_some(),
-        chosen.time.is_some(),
-        n,
-    );
+    let mut stream = Stream::new(unit.scale, chosen.index.is_some(), chosen.time.is_some(), n);
     let mut bufs: Vec<(Vec<f64>, Vec<bool>)> = (0..3)
         .map(|_| (Vec::with_capacity(CHUNK), Vec::with_capacity(CHUNK)))
         .collect();
     let mut from = 0;
     while from < n {
         let k = CHUNK.min(n - from);
-        let cols = [Some(chosen.velocity), chosen.index, chosen.time.map(|t| t.0)];
+        let cols = [
+            Some(chosen.velocity),
+            chosen.index,
+            chosen.time.map(|t| t.0),
+        ];
         for (slot, c) in cols.iter().enumerate() {
             if let Some(c) = c {
                 let (v, m) = &mut bufs[slot];

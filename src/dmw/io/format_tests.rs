@@ -4,9 +4,9 @@
 //! double-precision rendering (UFF ASCII: 12 significant digits) holds them exactly.
 
 use super::*;
+use crate::dmw::chain::Butterworth;
 use crate::dmw::chain::{process, ChainParams};
 use crate::dmw::{DmwError, LdvRecord};
-use crate::dmw::chain::Butterworth;
 use std::path::PathBuf;
 
 fn data(name: &str) -> PathBuf {
@@ -23,7 +23,10 @@ fn read(name: &str) -> LdvRecord {
 
 fn max_diff(a: &[f64], b: &[f64]) -> f64 {
     assert_eq!(a.len(), b.len());
-    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
 }
 
 /// Chain parameters for the test record: 4 revolutions of 1000 samples at 100 kHz.
@@ -45,7 +48,13 @@ fn same_samples(name: &str, got: &LdvRecord, want: &LdvRecord, tol_v: f64, tol_i
     assert_eq!(got.velocity.len(), want.velocity.len(), "{name}");
     let dv = max_diff(&got.velocity, &want.velocity);
     assert!(dv <= tol_v, "{name}: velocity differs by {dv}");
-    let gi: Vec<f64> = got.index.as_ref().expect(name).iter().map(|x| x * gain).collect();
+    let gi: Vec<f64> = got
+        .index
+        .as_ref()
+        .expect(name)
+        .iter()
+        .map(|x| x * gain)
+        .collect();
     let di = max_diff(&gi, want.index.as_ref().unwrap());
     assert!(di <= tol_i, "{name}: index differs by {di}");
     assert!(
@@ -70,7 +79,10 @@ fn same_tracks(name: &str, got: &LdvRecord, want: &LdvRecord, rtol: f64) {
     assert!(scale > 0.0);
     for k in 0..3 {
         let d = max_diff(&a.tracks.d[k], &b.tracks.d[k]);
-        assert!(d <= rtol * scale, "{name}: track {k} differs by {d} (scale {scale})");
+        assert!(
+            d <= rtol * scale,
+            "{name}: track {k} differs by {d} (scale {scale})"
+        );
     }
 }
 
@@ -115,7 +127,11 @@ fn double_precision_formats_give_the_csv_record_and_tracks() {
 fn single_precision_and_integer_formats_within_their_quantisation() {
     let csv = read("record.csv");
     // Multiples of 2^-10 below 8 are exact in f32.
-    for name in ["record_f32.feather", "record_structured.npy", "record_f32.wav"] {
+    for name in [
+        "record_f32.feather",
+        "record_structured.npy",
+        "record_f32.wav",
+    ] {
         let rec = read(name);
         same_samples(name, &rec, &csv, 0.0, 0.0, 1.0);
         same_tracks(name, &rec, &csv, 1e-12);
@@ -132,11 +148,21 @@ fn single_precision_and_integer_formats_within_their_quantisation() {
     ] {
         let step = 1.0 / f64::powi(2.0, bits - 1);
         let rec = read(name);
-        same_samples(name, &rec, &csv, 0.5 * step + 1e-15, 2.5 * step + 1e-15, 5.0);
+        same_samples(
+            name,
+            &rec,
+            &csv,
+            0.5 * step + 1e-15,
+            2.5 * step + 1e-15,
+            5.0,
+        );
         // Quantisation noise of a half step on a ~0.2 V signal.
         let rtol = if bits == 16 { 1e-3 } else { 1e-6 };
         let mut scaled = rec.clone();
-        scaled.index = rec.index.as_ref().map(|i| i.iter().map(|x| x * 5.0).collect());
+        scaled.index = rec
+            .index
+            .as_ref()
+            .map(|i| i.iter().map(|x| x * 5.0).collect());
         same_tracks(name, &scaled, &csv, rtol);
     }
 }

@@ -71,7 +71,14 @@ fn array_columns<'a>(
             let mut cols = Vec::new();
             for f in fields.iter().filter(|f| f.scalar.kind != 'V') {
                 let n = num(path, f.scalar, &format!("field '{}'", f.name))?;
-                let seg = scalar_seg(bytes, off + f.offset, *itemsize, h.shape[0], n, f.scalar.big_endian);
+                let seg = scalar_seg(
+                    bytes,
+                    off + f.offset,
+                    *itemsize,
+                    h.shape[0],
+                    n,
+                    f.scalar.big_endian,
+                );
                 cols.push(Column::new(f.name.clone(), vec![seg]));
             }
             Ok((cols, false))
@@ -108,7 +115,10 @@ fn array_columns<'a>(
                 } else {
                     (off + j * size, k * size)
                 };
-                cols.push(Column::new(name, vec![scalar_seg(bytes, start, stride, rows, n, s.big_endian)]));
+                cols.push(Column::new(
+                    name,
+                    vec![scalar_seg(bytes, start, stride, rows, n, s.big_endian)],
+                ));
             }
             Ok((cols, k > 3))
         }
@@ -215,4 +225,3 @@ pub(super) fn read_npz(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, Dmw
     };
     columns::read(path, table, opts)
 }
-

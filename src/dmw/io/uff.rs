@@ -29,9 +29,9 @@ pub(super) fn is_uff(head: &[u8]) -> bool {
         .map(|l| l.trim_ascii())
         .skip_while(|l| l.is_empty());
     lines.next() == Some(&b"-1"[..])
-        && lines
-            .next()
-            .is_some_and(|l| !l.is_empty() && l.iter().take_while(|b| b.is_ascii_digit()).count() > 0)
+        && lines.next().is_some_and(|l| {
+            !l.is_empty() && l.iter().take_while(|b| b.is_ascii_digit()).count() > 0
+        })
 }
 
 /// A cursor over the lines of the file (1-based line numbers for messages).
@@ -39,9 +39,36 @@ struct Lines<'a> {
     b: &'a [u8],
     pos: usize,
     line: usize,
+    /// Bytes before this offset have been handed back to the kernel (see `release`).
+    released: usize,
 }
 
+/// ASCII data is parsed once, front to back: every 32 MiB the pages already parsed leave the
+/// resident set, so a large ASCII file costs its parsed values, not its text as well
+/// (docs/performance.md, "LDV reader throughput").
+const RELEASE_STEP: usize = 32 << 20;
+
 impl<'a> Lines<'a> {
+    /// Drops the mapped pages before the cursor from the resident set. The map is a shared,
+    /// read-only file mapping, so a page touched again is simply read back from the file.
+    fn release(&mut self) {
+        if self.pos - self.released < RELEASE_STEP {
+            return;
+        }
+        let page = 1usize << 12;
+        let base = self.b.as_ptr() as usize;
+        let start = (base + self.released).next_multiple_of(page);
+        let end = (base + self.pos) & !(page - 1);
+        if end > start {
+            // SAFETY: [start, end) lies inside the mapping (base is page-aligned by mmap);
+            // MADV_DONTNEED on a shared file mapping only drops cached pages.
+            unsafe {
+                libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_DONTNEED);
+            }
+        }
+        self.released = self.pos;
+    }
+
     fn next(&mut self) -> Option<&'a [u8]> {
         if self.pos >= self.b.len() {
             return None;
@@ -83,8 +110,18 @@ enum Data<'a> {
 }
 
 fn field(line: &[u8], from: usize, to: usize) -> String {
-    let s = String::from_utf8_lossy(line.get(from.min(line.len())..to.min(line.len())).unwrap_or(&[]));
+    let s = String::from_utf8_lossy(
+        line.get(from.min(line.len())..to.min(line.len()))
+            .unwrap_or(&[]),
+    );
     s.trim().to_string()
+}
+
+/// A Fortran real: `1.5E+00`, also with a `D` exponent.
+fn fortran_real(tok: &str) -> Option<f64> {
+    tok.parse::<f64>()
+        .ok()
+        .or_else(|| tok.replace(['D', 'd'], "E").parse::<f64>().ok())
 }
 
 fn label(s: String) -> Option<String> {
@@ -97,7 +134,10 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
     let mmap = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| read_err(path, e))?;
     let functions = parse(path, &mmap)?;
     if functions.is_empty() {
-        return Err(record_err(path, "no dataset 58 (function) in the universal file"));
+        return Err(record_err(
+            path,
+            "no dataset 58 (function) in the universal file",
+        ));
     }
     let first = &functions[0];
     let mut meta = Meta::default();
@@ -170,7 +210,10 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         };
         col.alias = Some(f.alias.clone());
         // Data type 11 is velocity (the units label, when present, says which unit).
-        col.unit = f.y_unit.clone().or((f.spec_type == 11).then(|| "m/s".to_string()));
+        col.unit = f
+            .y_unit
+            .clone()
+            .or((f.spec_type == 11).then(|| "m/s".to_string()));
         columns.push(col);
     }
     // Uneven abscissa: the first function's x values are the time column.
@@ -221,7 +264,12 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
 }
 
 fn parse<'a>(path: &Path, b: &'a [u8]) -> Result<Vec<Function<'a>>, DmwError> {
-    let mut lines = Lines { b, pos: 0, line: 0 };
+    let mut lines = Lines {
+        b,
+        pos: 0,
+        line: 0,
+        released: 0,
+    };
     let mut out = Vec::new();
     loop {
         // Opening delimiter (blank lines between datasets are tolerated).
@@ -335,8 +383,7 @@ fn parse<'a>(path: &Path, b: &'a [u8]) -> Result<Vec<Function<'a>>, DmwError> {
                 ))
             }
         };
-        let n = usize::try_from(n)
-            .map_err(|_| bad(r7_line, format!("'{name}' has {n} points")))?;
+        let n = usize::try_from(n).map_err(|_| bad(r7_line, format!("'{name}' has {n} points")))?;
         let per = if even { 1 } else { 2 };
         let x_unit = field(rec[7], 47, 67);
         let y_unit = label(field(rec[8], 47, 67));
@@ -344,9 +391,15 @@ fn parse<'a>(path: &Path, b: &'a [u8]) -> Result<Vec<Function<'a>>, DmwError> {
         let data = if binary {
             let w: Vec<&str> = id_text.split_whitespace().collect();
             let order = w.get(1).and_then(|s| s.parse::<i64>().ok()).unwrap_or(1);
-            let n_bytes = w.get(4).and_then(|s| s.parse::<u64>().ok()).ok_or_else(|| {
-                bad(id_line, "the 58b line has no byte count (field 6)".to_string())
-            })?;
+            let n_bytes = w
+                .get(4)
+                .and_then(|s| s.parse::<u64>().ok())
+                .ok_or_else(|| {
+                    bad(
+                        id_line,
+                        "the 58b line has no byte count (field 6)".to_string(),
+                    )
+                })?;
             let size = if single { 4 } else { 8 };
             // The byte count must match the points (checked against the file below before
             // anything is read).
@@ -406,6 +459,7 @@ fn parse<'a>(path: &Path, b: &'a [u8]) -> Result<Vec<Function<'a>>, DmwError> {
             let mut x = Vec::with_capacity(if even { 0 } else { cap });
             let mut y = crate::numerics::buffer::sample_buffer(cap);
             let mut k = 0usize;
+            let mut vals: Vec<f64> = Vec::with_capacity(8);
             loop {
                 let Some(l) = lines.next() else {
                     return Err(bad(
@@ -420,44 +474,46 @@ fn parse<'a>(path: &Path, b: &'a [u8]) -> Result<Vec<Function<'a>>, DmwError> {
                 if l.trim_ascii() == b"-1" {
                     break;
                 }
-                let mut push = |v: f64| {
+                lines.release();
+                let text = std::str::from_utf8(l)
+                    .map_err(|_| bad(lines.line, format!("'{name}': data is not text")))?;
+                // Whitespace-separated fields first; touching fixed-width fields (a 3-digit
+                // exponent fills E13.5) are re-read by width.
+                vals.clear();
+                let spaced = text.split_whitespace().all(|tok| match fortran_real(tok) {
+                    Some(v) => {
+                        vals.push(v);
+                        true
+                    }
+                    None => false,
+                });
+                if !spaced {
+                    vals.clear();
+                    let mut at = 0;
+                    let mut j = 0;
+                    while at < text.len() {
+                        let w = width[j % width.len()];
+                        let cell = text.get(at..(at + w).min(text.len())).unwrap_or("");
+                        let v = fortran_real(cell.trim()).ok_or_else(|| {
+                            bad(
+                                lines.line,
+                                format!("'{name}': '{}' is not a number", cell.trim()),
+                            )
+                        })?;
+                        vals.push(v);
+                        at += w;
+                        j += 1;
+                    }
+                }
+                for &v in &vals {
                     if k / per < n {
-                        if !even && k % 2 == 0 {
+                        if !even && k.is_multiple_of(2) {
                             x.push(v);
                         } else {
                             y.push(v);
                         }
                     }
                     k += 1;
-                };
-                let text = std::str::from_utf8(l)
-                    .map_err(|_| bad(lines.line, format!("'{name}': data is not text")))?;
-                let parsed: Option<Vec<f64>> = text
-                    .split_whitespace()
-                    .map(|s| s.replace(['D', 'd'], "E").parse::<f64>().ok())
-                    .collect();
-                match parsed {
-                    Some(vals) => vals.into_iter().for_each(&mut push),
-                    None => {
-                        // Fixed-width fields that touch (a 3-digit exponent fills E13.5).
-                        let mut at = 0;
-                        let mut j = 0;
-                        while at < text.len() {
-                            let w = width[j % width.len()];
-                            let cell = text.get(at..(at + w).min(text.len())).unwrap_or("");
-                            let v = cell.trim().replace(['D', 'd'], "E").parse::<f64>().map_err(
-                                |_| {
-                                    bad(
-                                        lines.line,
-                                        format!("'{name}': '{}' is not a number", cell.trim()),
-                                    )
-                                },
-                            )?;
-                            push(v);
-                            at += w;
-                            j += 1;
-                        }
-                    }
                 }
             }
             if k != n * per {
