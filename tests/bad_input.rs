@@ -258,3 +258,27 @@ fn truncated_and_garbled_metropro_and_x3p_files_fail_cleanly() {
         run(name, &std::fs::read(readers_b.join(name)).unwrap(), needle);
     }
 }
+
+#[test]
+fn cut_foreign_ldv_records_fail_cleanly_naming_the_file() {
+    // One file per reader of tests/data/ldv/ (independent writers), cut in the data and in
+    // the header: `hdi dmw` must print one error line naming the file, never panic.
+    let dir = tempfile::tempdir().unwrap();
+    for name in [
+        "record_lz4.feather",
+        "record_stream.arrows",
+        "record_ascii.uff",
+        "record_binary.uff",
+        "record_c.npy",
+        "record_deflate.npz",
+        "record_int24.wav",
+    ] {
+        let bytes = std::fs::read(test_data().join("ldv").join(name)).unwrap();
+        for (tag, keep) in [("half", bytes.len() / 2), ("head", 40)] {
+            let cut = dir.path().join(format!("{tag}-{name}"));
+            std::fs::write(&cut, &bytes[..keep]).unwrap();
+            let o = hdi().arg("dmw").arg(&cut).output().unwrap();
+            assert_clean_failure(&o, &format!("{tag}-{name}"));
+        }
+    }
+}

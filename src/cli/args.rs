@@ -189,6 +189,8 @@ pub struct SurfaceArgs {
 /// `hdi dmw FILE`: every option has the name of its `[dmw.NAME]` key.
 #[derive(Args, Debug)]
 pub struct DmwArgs {
+    /// LDV record: CSV/TSV, Parquet, HDF5, Arrow IPC/Feather v2, UFF 58/58b, .npy/.npz or WAV
+    /// (detected from the content; docs/dmw.md).
     pub file: PathBuf,
     /// Sample rate when the file has no time column, e.g. "4 MHz".
     #[arg(long)]
@@ -199,6 +201,8 @@ pub struct DmwArgs {
     /// Spindle speed (rpm): checks the index period, or segments a record without index.
     #[arg(long)]
     pub rpm: Option<f64>,
+    /// Velocity column/dataset/channel by name; in UFF, .npy and WAV also by number (from 0)
+    /// or UFF node:direction.
     #[arg(long)]
     pub velocity_column: Option<String>,
     #[arg(long)]

@@ -1,8 +1,25 @@
 //! LDV record readers and writers (docs/dmw.md).
 //!
 //! The format is detected from the content, never from the extension: `PAR1` → Parquet,
-//! `\x89HDF\r\n\x1a\n` (at offset 0 or a power-of-two user-block offset) → HDF5, anything
-//! else that is text → delimited text (CSV, TSV or semicolon-separated).
+//! `\x89HDF\r\n\x1a\n` (at offset 0 or a power-of-two user-block offset) → HDF5, `ARROW1` or
+//! the `FF FF FF FF` continuation marker → Arrow IPC file (Feather v2) or stream
+//! ([`arrow`]), `\x93NUMPY` → `.npy`, `PK\x03\x04` → `.npz`, `RIFF…WAVE` → WAV, a `-1`
+//! delimiter line followed by a dataset number → universal file (UFF 58/58b), anything else
+//! that is text → delimited text (CSV, TSV or semicolon-separated).
+//!
+//! # Binary channel formats (Arrow IPC, UFF 58, `.npy`, `.npz`, WAV)
+//!
+//! These share `columns`: each file's channels are described as typed (possibly strided or
+//! big-endian) byte ranges over a memory map, or parsed values (UFF ASCII), then chosen by the
+//! name rules below and decoded in chunks of 2^16 samples into the shared stream checks.
+//! Channel names: Arrow field names; UFF ID line 1 (also `node:direction` of record 6);
+//! `.npz` member names; structured `.npy` field names; plain `.npy` columns and WAV channels
+//! by position (velocity, index; a 3-column array is time, velocity, index). In UFF, `.npy`
+//! and WAV the column options also take a channel number (from 0). Units: Arrow field
+//! `units` metadata, UFF record 9 units label; WAV integer PCM is a fraction of full scale
+//! (±1 V). Sample rate: Arrow schema metadata, UFF abscissa increment (uneven abscissa →
+//! time column), `.npz` 0-d `sample_rate` member, WAV `fmt ` chunk; `.npy` needs a time
+//! column or the option. docs/dmw.md has the table.
 //!
 //! # Columns (text and Parquet) and datasets (HDF5)
 //!
@@ -57,6 +74,9 @@
 //!
 //! # Memory
 //!
+//! Arrow IPC files, `.npy`, stored `.npz` members, UFF 58b and WAV are memory-mapped and
+//! decoded in place (compressed Arrow buffers and deflated members are decompressed first;
+//! UFF ASCII is parsed into one vector per channel).
 //! Text and Parquet are scanned by polars' streaming engine with projection (only the chosen
 //! columns are parsed) and consumed batch by batch; HDF5 is read in hyperslabs of 2^20
 //! samples. Only the velocity and index channels are materialised (as `Vec<f64>`); the time
@@ -66,14 +86,21 @@ use super::{DmwError, Layout, LdvRecord, VelocityUnit};
 use std::io::{Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
+pub mod arrow;
+mod columns;
+#[cfg(test)]
+mod format_tests;
 mod h5;
 mod names;
+mod npy;
 mod parquet;
 mod scan;
 mod stream;
 #[cfg(test)]
 pub(crate) mod tests;
 mod text;
+mod uff;
+mod wav;
 
 use names::{Meta, TimeKind, Unit};
 use stream::{BadRun, Channel, Stream, TimeFault};
@@ -100,6 +127,16 @@ pub enum LdvFormat {
     Csv,
     Parquet,
     Hdf5,
+    /// Arrow IPC file (Feather v2) or stream; read only.
+    Arrow,
+    /// Universal File Format dataset 58 (ASCII) or 58b (binary); read only.
+    Uff58,
+    /// NumPy `.npy` array; read only.
+    Npy,
+    /// NumPy `.npz` archive of `.npy` members; read only.
+    Npz,
+    /// RIFF/WAVE audio (PCM or IEEE float); read only.
+    Wav,
 }
 
 impl LdvFormat {
@@ -108,6 +145,11 @@ impl LdvFormat {
             LdvFormat::Csv => "csv",
             LdvFormat::Parquet => "parquet",
             LdvFormat::Hdf5 => "hdf5",
+            LdvFormat::Arrow => "arrow",
+            LdvFormat::Uff58 => "uff58",
+            LdvFormat::Npy => "npy",
+            LdvFormat::Npz => "npz",
+            LdvFormat::Wav => "wav",
         }
     }
 }
@@ -129,6 +171,28 @@ pub fn detect_format(path: &Path) -> Result<LdvFormat, DmwError> {
     if head.starts_with(b"PAR1") {
         return Ok(LdvFormat::Parquet);
     }
+    if head.starts_with(arrow::FILE_MAGIC) || head.starts_with(arrow::STREAM_MAGIC) {
+        return Ok(LdvFormat::Arrow);
+    }
+    if head.starts_with(crate::formats::npy::MAGIC) {
+        return Ok(LdvFormat::Npy);
+    }
+    if crate::formats::zip::is_zip(&head) {
+        return Ok(LdvFormat::Npz);
+    }
+    if head.len() >= 12 && &head[..4] == b"RIFF" && &head[8..12] == b"WAVE" {
+        return Ok(LdvFormat::Wav);
+    }
+    if head.starts_with(b"FEA1") {
+        return Err(read_err(
+            path,
+            "Feather v1 is not read; write Feather v2 (pyarrow.feather.write_feather, \
+             version=2, the default)",
+        ));
+    }
+    if uff::is_uff(&head) {
+        return Ok(LdvFormat::Uff58);
+    }
     const HDF5_MAGIC: &[u8; 8] = b"\x89HDF\r\n\x1a\n";
     // The HDF5 superblock sits at 0 or after a user block of 512·2^k bytes.
     let mut offset = 0u64;
@@ -145,15 +209,18 @@ pub fn detect_format(path: &Path) -> Result<LdvFormat, DmwError> {
     if head.contains(&0) {
         return Err(read_err(
             path,
-            "binary content that is neither Parquet nor HDF5; LDV records are read from \
-             CSV/TSV text, Parquet or HDF5",
+            format!("binary content of no known format; {FORMATS}"),
         ));
     }
     Ok(LdvFormat::Csv)
 }
 
-/// Read an LDV record, detecting the format from the content (magic bytes: "PAR1" Parquet,
-/// "\x89HDF\r\n\x1a\n" HDF5, else delimited text), never from the extension.
+/// The formats, for messages.
+pub const FORMATS: &str = "LDV records are read from CSV/TSV text, Parquet, HDF5, Arrow IPC \
+     (Feather v2), UFF dataset 58/58b, NumPy .npy/.npz and WAV";
+
+/// Read an LDV record, detecting the format from the content (magic bytes, see the module
+/// docs), never from the extension.
 pub fn read_ldv(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
     if let Some(fs) = opts.sample_rate {
         if !(fs.is_finite() && fs > 0.0) {
@@ -166,6 +233,11 @@ pub fn read_ldv(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> 
         LdvFormat::Csv => text::read(path, opts),
         LdvFormat::Parquet => parquet::read(path, opts),
         LdvFormat::Hdf5 => h5::read(path, opts),
+        LdvFormat::Arrow => arrow::read(path, opts),
+        LdvFormat::Uff58 => uff::read(path, opts),
+        LdvFormat::Npy => npy::read_npy(path, opts),
+        LdvFormat::Npz => npy::read_npz(path, opts),
+        LdvFormat::Wav => wav::read(path, opts),
     }
 }
 

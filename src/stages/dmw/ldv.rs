@@ -28,6 +28,10 @@ pub fn write_ldv(rec: &LdvRecord, path: &Path, format: LdvFormat) -> Result<(), 
             check_writable(rec)?;
             write_hdf5(rec, path, None)
         }
+        other => Err(DmwError::Processing(format!(
+            "hdi writes LDV records as CSV, Parquet or HDF5; {} is read only",
+            other.name()
+        ))),
     }
 }
 
