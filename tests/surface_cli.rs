@@ -331,7 +331,10 @@ crops = [
     assert!(found("areas.parquet").exists() && found("areas.png").exists());
     let f = repo_root().join("raw/afm/disk_dlc_1um.gwy");
     let mut sig = Vec::new();
-    for (row, crop) in rows.iter().zip(["0um,0um,0.5um,0.5um", "0.5um,0.5um,0.5um,0.5um"]) {
+    for (row, crop) in rows
+        .iter()
+        .zip(["0um,0um,0.5um,0.5um", "0.5um,0.5um,0.5um,0.5um"])
+    {
         let single = surface_json(&f, &["--crop", crop]);
         let s = row["sigma_nm"].parse::<f64>().unwrap();
         let want = single["sigma_m"].as_f64().unwrap() * 1e9;
@@ -347,13 +350,24 @@ crops = [
     let row = &summary[0];
     let got = |k: &str| row[k].parse::<f64>().unwrap();
     assert_eq!(got("n_areas"), 2.0);
-    assert!(rel(got("sigma_nm_mean"), mean) < 1e-9, "{} vs {mean}", got("sigma_nm_mean"));
-    assert!(rel(got("sigma_nm_std"), std) < 1e-9, "{} vs {std}", got("sigma_nm_std"));
+    assert!(
+        rel(got("sigma_nm_mean"), mean) < 1e-9,
+        "{} vs {mean}",
+        got("sigma_nm_mean")
+    );
+    assert!(
+        rel(got("sigma_nm_std"), std) < 1e-9,
+        "{} vs {std}",
+        got("sigma_nm_std")
+    );
     // With two areas the bootstrap means are a, b or (a + b)/2: the interval lies within
     // [min, max] and contains the mean.
     let (lo, hi) = (got("sigma_nm_ci95_low"), got("sigma_nm_ci95_high"));
     let (a, b) = (sig[0].min(sig[1]), sig[0].max(sig[1]));
-    assert!(a - 1e-9 <= lo && lo <= mean && mean <= hi && hi <= b + 1e-9, "{lo} {hi}");
+    assert!(
+        a - 1e-9 <= lo && lo <= mean && mean <= hi && hi <= b + 1e-9,
+        "{lo} {hi}"
+    );
 }
 
 fn walk(dir: &std::path::Path) -> Vec<std::path::PathBuf> {

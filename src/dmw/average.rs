@@ -112,9 +112,7 @@ pub fn synchronous_average_revolutions(
     let mut jobs: Vec<(f64, f64)> = Vec::with_capacity(starts.len());
     for (k, &t) in starts.iter().enumerate() {
         let ratio = match (mode, periods.get(k).copied().flatten()) {
-            (AverageMode::Angular, Some(period)) if mean_period.is_finite() => {
-                period / mean_period
-            }
+            (AverageMode::Angular, Some(period)) if mean_period.is_finite() => period / mean_period,
             (AverageMode::Angular, _) if starts.len() > 1 => {
                 n_dropped += 1;
                 continue;

@@ -2,11 +2,11 @@
 //! scaling, high-pass filtering, integration, resampling, the three tracks and their
 //! statistics. A pure function of the record and the parameters.
 
-use super::average::{
-    synchronous_average, synchronous_average_revolutions, AverageMode, Averaged,
-};
+use super::average::{synchronous_average, synchronous_average_revolutions, AverageMode, Averaged};
 use super::tracks::{three_tracks, Tracks};
-use super::triggers::{detect_triggers, triggers_from_speed, MissingPulse, Polarity, TriggerOptions};
+use super::triggers::{
+    detect_triggers, triggers_from_speed, MissingPulse, Polarity, TriggerOptions,
+};
 use super::{DmwError, Layout, LdvRecord, VelocityUnit};
 use crate::signal::butterworth::{butterworth_sos, zero_phase_gain_db, FilterKind, Sos};
 use crate::signal::integrate::{cumulative_trapezoid, detrend, trapezoid_gain, Detrend};

@@ -351,7 +351,11 @@ pub fn detect_triggers(
 fn place_on_grid(pulses: &[f64]) -> (Vec<(f64, i64)>, Vec<f64>) {
     if pulses.len() < 3 {
         return (
-            pulses.iter().enumerate().map(|(k, &t)| (t, k as i64)).collect(),
+            pulses
+                .iter()
+                .enumerate()
+                .map(|(k, &t)| (t, k as i64))
+                .collect(),
             Vec::new(),
         );
     }
@@ -676,17 +680,27 @@ mod tests {
         let tr = detect_triggers(&x, fs, None, &TriggerOptions::default()).unwrap();
         assert_eq!(tr.missing.len(), 1);
         let expected = (200.0 + 5.0 * p as f64 - 0.5) / fs;
-        assert!((tr.missing[0].time - expected).abs() < 1e-12, "{:?}", tr.missing);
+        assert!(
+            (tr.missing[0].time - expected).abs() < 1e-12,
+            "{:?}",
+            tr.missing
+        );
         assert_eq!(tr.missing[0].gap_periods, 2.0);
         // Revolution 4 (whose end is missing) and 5 (no start) are gone; 10 remain, and no
         // remaining period spans the gap.
         assert_eq!(tr.n_gap_dropped, 2);
         assert_eq!(tr.times.len(), 10);
-        assert!(!tr.times.iter().any(|&t| (t - (200.0 + 4000.0 - 0.5) / fs).abs() < 1e-9));
+        assert!(!tr
+            .times
+            .iter()
+            .any(|&t| (t - (200.0 + 4000.0 - 0.5) / fs).abs() < 1e-9));
         for per in tr.periods() {
             assert!((per * fs - p as f64).abs() < 1e-9, "{per}");
         }
-        assert_eq!(tr.revolution_periods.iter().filter(|p| p.is_none()).count(), 1);
+        assert_eq!(
+            tr.revolution_periods.iter().filter(|p| p.is_none()).count(),
+            1
+        );
         // With rpm given, the debounce uses it and the result is the same.
         let tr2 = detect_triggers(&x, fs, Some(0.1), &TriggerOptions::default()).unwrap();
         assert_eq!(tr2.times, tr.times);
@@ -778,7 +792,10 @@ mod tests {
         )
         .unwrap_err()
         .to_string();
-        assert!(e.contains("0.0000 … 5.000000") || e.contains("0.000000 … 5.000000"), "{e}");
+        assert!(
+            e.contains("0.0000 … 5.000000") || e.contains("0.000000 … 5.000000"),
+            "{e}"
+        );
         assert!(e.contains("0 edge(s)"), "{e}");
     }
 

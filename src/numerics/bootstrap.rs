@@ -105,10 +105,13 @@ mod tests {
         let n = 400;
         let x: Vec<f64> = (0..n).map(|_| 3.0 + 0.5 * rng.normal()).collect();
         let s = summarise(&x);
-        let half = 1.959_963_984_540_054 * s.std * ((n - 1) as f64 / n as f64).sqrt()
-            / (n as f64).sqrt();
+        let half =
+            1.959_963_984_540_054 * s.std * ((n - 1) as f64 / n as f64).sqrt() / (n as f64).sqrt();
         for (got, want) in [(s.ci_low, s.mean - half), (s.ci_high, s.mean + half)] {
-            assert!((got - want).abs() < 0.08 * half, "{got} vs {want} (half {half})");
+            assert!(
+                (got - want).abs() < 0.08 * half,
+                "{got} vs {want} (half {half})"
+            );
         }
     }
 

@@ -290,7 +290,10 @@ pub fn check(
             )
         }
         (_, Some(list)) if list.is_empty() => {
-            return bad("crops", "the list is empty: give at least one rectangle".into())
+            return bad(
+                "crops",
+                "the list is empty: give at least one rectangle".into(),
+            )
         }
         (_, Some(list)) => list
             .iter()
@@ -1024,8 +1027,16 @@ fn run_areas(p: &SurfaceParams, ctx: &StageContext) -> Result<StageOutput> {
         for (suffix, val, what) in [
             ("mean", s.mean, "mean over areas"),
             ("std", s.std, "sample standard deviation over areas"),
-            ("ci95_low", s.ci_low, "95 % percentile-bootstrap interval of the mean, low"),
-            ("ci95_high", s.ci_high, "95 % percentile-bootstrap interval of the mean, high"),
+            (
+                "ci95_low",
+                s.ci_low,
+                "95 % percentile-bootstrap interval of the mean, low",
+            ),
+            (
+                "ci95_high",
+                s.ci_high,
+                "95 % percentile-bootstrap interval of the mean, high",
+            ),
         ] {
             out.write_scalar(&g, &format!("{name}_{suffix}"), val, unit, what)?;
         }
@@ -1141,7 +1152,10 @@ fn write_areas_plot(
         .map(|k| (summaries[k].2.std / summaries[k].2.mean).abs())
         .filter(|v| v.is_finite())
         .fold(0.0, f64::max);
-    let refs: Vec<(&str, Vec<f64>)> = series.iter().map(|(l, v)| (l.as_str(), v.clone())).collect();
+    let refs: Vec<(&str, Vec<f64>)> = series
+        .iter()
+        .map(|(l, v)| (l.as_str(), v.clone()))
+        .collect();
     figures::category_dots_png(
         path,
         "areas: value / mean − 1 (band: ± largest relative std)",

@@ -959,7 +959,11 @@ mod tests {
         assert_eq!(r.qa.trigger_polarity, "rising");
         assert_eq!(r.qa.n_avg, 8);
         assert!(r.qa.missing_pulses.is_empty() && r.qa.extra_pulses.is_empty());
-        assert!((r.qa.period_mean * 1e6 - 11060.0).abs() < 1e-6, "{}", r.qa.period_mean);
+        assert!(
+            (r.qa.period_mean * 1e6 - 11060.0).abs() < 1e-6,
+            "{}",
+            r.qa.period_mean
+        );
         let rel = r.stats.std / want - 1.0;
         eprintln!("DMW std {} m vs scipy {want} m: {rel:+.2e}", r.stats.std);
         assert!(rel.abs() < 0.03, "{} vs {want} ({rel})", r.stats.std);
