@@ -273,7 +273,7 @@ pub fn detect_triggers(
             Some(a) => {
                 if v >= upper && v >= l {
                     let mut j = i - 1;
-                    while j > a && !(y(j) < l) {
+                    while j > a && y(j).partial_cmp(&l) != Some(std::cmp::Ordering::Less) {
                         j -= 1;
                     }
                     let (ya, yb) = (y(j), y(j + 1));
@@ -401,7 +401,7 @@ fn place_on_grid(pulses: &[f64]) -> (Vec<(f64, i64)>, Vec<f64>) {
         &mut extra,
     );
     walk(&mut (0..anchor).rev(), -1.0, &mut accepted, &mut extra);
-    accepted.sort_by(|a, b| a.1.cmp(&b.1));
+    accepted.sort_by_key(|a| a.1);
     extra.sort_by(f64::total_cmp);
     (accepted, extra)
 }
