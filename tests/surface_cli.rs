@@ -290,3 +290,97 @@ fn crop_analyses_only_the_rectangle() {
         .unwrap();
     assert_clean_failure(&o, "crop x");
 }
+
+/// Two crops of the shipped disk scan in one `[surface.NAME]`: each area is the single-crop
+/// analysis (the same numbers as `hdi surface --crop`), the table has one row per area, and
+/// the mean and sample std are those of the rows.
+#[test]
+fn two_crops_give_an_area_table_with_mean_spread_and_bootstrap_interval() {
+    let dir = tempfile::tempdir().unwrap();
+    copy_dir(&repo_root().join("raw"), &dir.path().join("raw"));
+    std::fs::write(
+        dir.path().join("pipeline.toml"),
+        r#"[project]
+name = "areas"
+
+[surface.disk]
+file = "raw/afm/disk_dlc_1um.gwy"
+scale_sweep = false
+crops = [
+  { x0 = "0 um", y0 = "0 um", width = "0.5 um", height = "0.5 um" },
+  { x0 = "0.5 um", y0 = "0.5 um", width = "0.5 um", height = "0.5 um" },
+]
+"#,
+    )
+    .unwrap();
+    let o = hdi()
+        .current_dir(dir.path())
+        .args(["run"])
+        .output()
+        .unwrap();
+    assert_ok(&o);
+    let out = dir.path().join("processed");
+    let found = |name: &str| {
+        walk(&out)
+            .into_iter()
+            .find(|p| p.file_name().is_some_and(|f| f == name))
+            .unwrap_or_else(|| panic!("{name} not written under {}", out.display()))
+    };
+    let rows = csv_rows(&found("areas.csv"));
+    assert_eq!(rows.len(), 2);
+    assert!(found("areas.parquet").exists() && found("areas.png").exists());
+    let f = repo_root().join("raw/afm/disk_dlc_1um.gwy");
+    let mut sig = Vec::new();
+    for (row, crop) in rows
+        .iter()
+        .zip(["0um,0um,0.5um,0.5um", "0.5um,0.5um,0.5um,0.5um"])
+    {
+        let single = surface_json(&f, &["--crop", crop]);
+        let s = row["sigma_nm"].parse::<f64>().unwrap();
+        let want = single["sigma_m"].as_f64().unwrap() * 1e9;
+        assert!(rel(s, want) < 1e-12, "{s} vs {want}");
+        let r = row["R_um"].parse::<f64>().unwrap();
+        assert!(rel(r, single["R_m"].as_f64().unwrap() * 1e6) < 1e-12);
+        sig.push(s);
+    }
+    let mean = 0.5 * (sig[0] + sig[1]);
+    // Sample std of two values: |a − b|/√2.
+    let std = (sig[0] - sig[1]).abs() / 2f64.sqrt();
+    let summary = csv_rows(&found("surfaces.csv"));
+    let row = &summary[0];
+    let got = |k: &str| row[k].parse::<f64>().unwrap();
+    assert_eq!(got("n_areas"), 2.0);
+    assert!(
+        rel(got("sigma_nm_mean"), mean) < 1e-9,
+        "{} vs {mean}",
+        got("sigma_nm_mean")
+    );
+    assert!(
+        rel(got("sigma_nm_std"), std) < 1e-9,
+        "{} vs {std}",
+        got("sigma_nm_std")
+    );
+    // With two areas the bootstrap means are a, b or (a + b)/2: the interval lies within
+    // [min, max] and contains the mean.
+    let (lo, hi) = (got("sigma_nm_ci95_low"), got("sigma_nm_ci95_high"));
+    let (a, b) = (sig[0].min(sig[1]), sig[0].max(sig[1]));
+    assert!(
+        a - 1e-9 <= lo && lo <= mean && mean <= hi && hi <= b + 1e-9,
+        "{lo} {hi}"
+    );
+}
+
+fn walk(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    if let Ok(rd) = std::fs::read_dir(dir) {
+        for e in rd.flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                out.extend(walk(&p));
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    out
+}

@@ -214,6 +214,12 @@ pub struct DmwArgs {
     pub velocity_unit: Option<String>,
     #[arg(long)]
     pub trigger_level: Option<f64>,
+    /// Index edge that starts a revolution: "auto" (default), "rising" or "falling".
+    #[arg(long)]
+    pub trigger_polarity: Option<String>,
+    /// Index pulses per revolution (default 1).
+    #[arg(long)]
+    pub pulses_per_revolution: Option<usize>,
     /// Averaged segment length, e.g. "2.5 ms" (default).
     #[arg(long)]
     pub segment: Option<TimeSpan>,

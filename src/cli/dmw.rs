@@ -19,6 +19,12 @@ pub(super) fn cmd_dmw(a: DmwArgs) -> Result<()> {
     cfg.time_column = a.time_column;
     cfg.velocity_unit = a.velocity_unit;
     cfg.trigger_level = a.trigger_level;
+    if let Some(v) = a.trigger_polarity {
+        cfg.trigger_polarity = v;
+    }
+    if let Some(v) = a.pulses_per_revolution {
+        cfg.pulses_per_revolution = v;
+    }
     if let Some(s) = a.segment {
         cfg.segment = s;
     }

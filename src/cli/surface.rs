@@ -10,11 +10,13 @@ use hdi::stages::surfaces::{self, SurfaceConfig};
 pub(super) fn cmd_surface(a: SurfaceArgs) -> Result<()> {
     let cfg = SurfaceConfig {
         file: a.file.clone(),
+        files: None,
         channel: a.channel,
         size_x: a.size_x,
         size_y: a.size_y,
         z_unit: a.z_unit,
         crop: a.crop,
+        crops: None,
         level: a.level.unwrap_or_else(surfaces::default_level),
         filter_s: a.filter_s,
         filter_l: a.filter_l,

@@ -68,11 +68,28 @@ const SHIFT_PAD: usize = 512;
 const SPLINE_MARGIN: usize = 24;
 
 /// Average `segment_len` samples after each trigger time in `starts` (s) of a record `x`
-/// sampled at `fs`.
+/// sampled at `fs`; each revolution's period is the gap to the next start.
 pub fn synchronous_average(
     x: &[f64],
     fs: f64,
     starts: &[f64],
+    segment_len: usize,
+    mode: AverageMode,
+) -> Result<Averaged, DmwError> {
+    let periods: Vec<Option<f64>> = (0..starts.len())
+        .map(|k| starts.get(k + 1).map(|next| next - starts[k]))
+        .collect();
+    synchronous_average_revolutions(x, fs, starts, &periods, segment_len, mode)
+}
+
+/// Average `segment_len` samples after each revolution start in `starts` (s), with each
+/// revolution's own period (`None`: unknown, e.g. the last one, or after a missing index
+/// pulse; such a revolution is dropped by the `angular` mode, which needs it).
+pub fn synchronous_average_revolutions(
+    x: &[f64],
+    fs: f64,
+    starts: &[f64],
+    periods: &[Option<f64>],
     segment_len: usize,
     mode: AverageMode,
 ) -> Result<Averaged, DmwError> {
@@ -84,19 +101,18 @@ pub fn synchronous_average(
     let mut segments: Vec<Vec<f64>> = Vec::new();
     let mut used = Vec::new();
     let mut n_dropped = 0;
-    let mean_period = if starts.len() >= 2 {
-        (starts[starts.len() - 1] - starts[0]) / (starts.len() - 1) as f64
-    } else {
+    let known: Vec<f64> = periods.iter().flatten().copied().collect();
+    let mean_period = if known.is_empty() {
         f64::NAN
+    } else {
+        known.iter().sum::<f64>() / known.len() as f64
     };
     // Which triggers to use and, for `angular`, each revolution's own period relative to the
-    // mean; the last trigger has no period and is dropped.
+    // mean; a revolution without a period is dropped.
     let mut jobs: Vec<(f64, f64)> = Vec::with_capacity(starts.len());
     for (k, &t) in starts.iter().enumerate() {
-        let ratio = match (mode, starts.get(k + 1)) {
-            (AverageMode::Angular, Some(next)) if mean_period.is_finite() => {
-                (next - t) / mean_period
-            }
+        let ratio = match (mode, periods.get(k).copied().flatten()) {
+            (AverageMode::Angular, Some(period)) if mean_period.is_finite() => period / mean_period,
             (AverageMode::Angular, _) if starts.len() > 1 => {
                 n_dropped += 1;
                 continue;

@@ -2,9 +2,11 @@
 //! scaling, high-pass filtering, integration, resampling, the three tracks and their
 //! statistics. A pure function of the record and the parameters.
 
-use super::average::{synchronous_average, AverageMode, Averaged};
+use super::average::{synchronous_average, synchronous_average_revolutions, AverageMode, Averaged};
 use super::tracks::{three_tracks, Tracks};
-use super::triggers::{detect_triggers, triggers_from_speed, TriggerOptions};
+use super::triggers::{
+    detect_triggers, triggers_from_speed, MissingPulse, Polarity, TriggerOptions,
+};
 use super::{DmwError, Layout, LdvRecord, VelocityUnit};
 use crate::signal::butterworth::{butterworth_sos, zero_phase_gain_db, FilterKind, Sos};
 use crate::signal::integrate::{cumulative_trapezoid, detrend, trapezoid_gain, Detrend};
@@ -106,6 +108,10 @@ pub struct ChainParams {
     /// measured period when there is.
     pub rpm: Option<f64>,
     pub trigger_level: Option<f64>,
+    /// Which index edge starts a revolution (default: the pulse is the rarer state).
+    pub trigger_polarity: Polarity,
+    /// Index pulses per revolution (evenly spaced).
+    pub pulses_per_revolution: usize,
     /// Segment length, s (rounded to samples).
     pub segment: f64,
     /// Average at most this many revolutions (the first ones).
@@ -133,6 +139,8 @@ impl Default for ChainParams {
             sensitivity: 0.025,
             rpm: None,
             trigger_level: None,
+            trigger_polarity: Polarity::Auto,
+            pulses_per_revolution: 1,
             segment: 2.5e-3,
             max_revolutions: None,
             averaging: AverageMode::Angular,
@@ -162,7 +170,17 @@ pub struct Qa {
     pub n_avg: usize,
     pub n_dropped: usize,
     pub trigger_level: f64,
+    /// "rising" or "falling" (the edge used), "" without an index channel.
+    pub trigger_polarity: &'static str,
+    /// Fraction of the time the index channel is in the pulse state (NaN without one).
+    pub duty_cycle: f64,
     pub n_debounced: usize,
+    /// Index pulses the period grid expected but the channel did not show.
+    pub missing_pulses: Vec<MissingPulse>,
+    /// Index pulses off the period grid (ignored), s.
+    pub extra_pulses: Vec<f64>,
+    /// Revolutions not averaged because a missing pulse falls inside or at the start of them.
+    pub n_gap_dropped: usize,
     pub period_mean: f64,
     pub period_relstd: f64,
     /// Phase error of a 275 kHz line at the end of the segment from the period wander.
@@ -289,7 +307,7 @@ pub fn process(rec: &LdvRecord, p: &ChainParams) -> Result<DmwResult, DmwError> 
         averaged_velocity: scaled.velocity,
         tracks: st.tracks,
         edge_transient: out.edge_transient,
-        trigger_times: seg.trigger_times,
+        trigger_times: seg.trigger_times.clone(),
         periods: revs.periods,
         spectrum_frequency: st.spectrum_d.frequency.clone(),
         spectrum_displacement: st.spectrum_d.amplitude,
@@ -303,7 +321,12 @@ pub fn process(rec: &LdvRecord, p: &ChainParams) -> Result<DmwResult, DmwError> 
             n_avg: seg.avg.n_avg,
             n_dropped: seg.avg.n_dropped,
             trigger_level: seg.trigger_level,
+            trigger_polarity: seg.trigger_polarity,
+            duty_cycle: seg.duty_cycle,
             n_debounced: seg.n_debounced,
+            missing_pulses: seg.missing_pulses,
+            extra_pulses: seg.extra_pulses,
+            n_gap_dropped: seg.n_gap_dropped,
             period_mean: revs.period_mean,
             period_relstd: revs.period_relstd,
             phase_wander_275khz: revs.phase_wander,
@@ -328,8 +351,15 @@ struct Segmented {
     layout: &'static str,
     /// Trigger times kept for averaging (none unless the record is continuous).
     trigger_times: Vec<f64>,
+    /// Periods of the averaged revolutions that have one (s).
+    periods: Vec<f64>,
     trigger_level: f64,
+    trigger_polarity: &'static str,
+    duty_cycle: f64,
     n_debounced: usize,
+    missing_pulses: Vec<MissingPulse>,
+    extra_pulses: Vec<f64>,
+    n_gap_dropped: usize,
     /// Triggers found (continuous) or segments averaged (pre-segmented), before the
     /// `max_revolutions` cut of a continuous record.
     n_triggers: usize,
@@ -359,8 +389,14 @@ fn segment_and_average(rec: &LdvRecord, p: &ChainParams) -> Result<Segmented, Dm
                 segmentation: "pre-segmented",
                 layout: "segments",
                 trigger_times: Vec::new(),
+                periods: Vec::new(),
                 trigger_level: f64::NAN,
+                trigger_polarity: "",
+                duty_cycle: f64::NAN,
                 n_debounced: 0,
+                missing_pulses: Vec::new(),
+                extra_pulses: Vec::new(),
+                n_gap_dropped: 0,
                 n_triggers: n,
             })
         }
@@ -372,8 +408,14 @@ fn segment_and_average(rec: &LdvRecord, p: &ChainParams) -> Result<Segmented, Dm
                 segmentation: "pre-averaged",
                 layout: "averaged",
                 trigger_times: Vec::new(),
+                periods: Vec::new(),
                 trigger_level: f64::NAN,
+                trigger_polarity: "",
+                duty_cycle: f64::NAN,
                 n_debounced: 0,
+                missing_pulses: Vec::new(),
+                extra_pulses: Vec::new(),
+                n_gap_dropped: 0,
                 n_triggers: 0,
             })
         }
@@ -394,6 +436,8 @@ fn average_continuous(rec: &LdvRecord, p: &ChainParams) -> Result<Segmented, Dmw
                 nominal_period,
                 &TriggerOptions {
                     level: p.trigger_level,
+                    polarity: p.trigger_polarity,
+                    pulses_per_revolution: p.pulses_per_revolution,
                     ..Default::default()
                 },
             )?,
@@ -419,32 +463,42 @@ fn average_continuous(rec: &LdvRecord, p: &ChainParams) -> Result<Segmented, Dmw
         ));
     }
     if let Some(max) = p.max_revolutions {
-        // Angular averaging needs the edge after the last kept revolution (its period).
-        let keep = if p.averaging == AverageMode::Angular {
-            max + 1
-        } else {
-            max
-        };
-        tr.times.truncate(keep);
+        // The first `max` revolutions (each keeps its own period, so `angular` needs no
+        // extra trigger after them).
+        tr.times.truncate(max);
+        tr.revolution_periods.truncate(max);
     }
-    let avg = synchronous_average(
+    let mode = if tr.times.len() == 1 {
+        AverageMode::Integer
+    } else {
+        p.averaging
+    };
+    let avg = synchronous_average_revolutions(
         &rec.velocity,
         fs,
         &tr.times,
+        &tr.revolution_periods,
         segment_len,
-        if tr.times.len() == 1 {
-            AverageMode::Integer
-        } else {
-            p.averaging
-        },
+        mode,
     )?;
+    let periods = tr.periods();
     Ok(Segmented {
         avg,
         segmentation: how,
         layout: "continuous",
         trigger_times: tr.times,
+        periods,
         trigger_level: tr.level,
+        trigger_polarity: match (how, tr.polarity) {
+            ("index channel", Polarity::Falling) => "falling",
+            ("index channel", _) => "rising",
+            _ => "",
+        },
+        duty_cycle: tr.duty_cycle,
         n_debounced: tr.n_debounced,
+        missing_pulses: tr.missing,
+        extra_pulses: tr.extra,
+        n_gap_dropped: tr.n_gap_dropped,
         n_triggers,
     })
 }
@@ -469,7 +523,29 @@ fn revolution_qa(
     warnings: &mut Vec<String>,
 ) -> Result<RevolutionQa, DmwError> {
     let nominal_period = p.rpm.map(|r| 60.0 / r);
-    let periods: Vec<f64> = seg.trigger_times.windows(2).map(|w| w[1] - w[0]).collect();
+    let periods: Vec<f64> = seg.periods.clone();
+    // One warning per event, the first ten of each kind (all times are in the QA output).
+    const LISTED: usize = 10;
+    for m in seg.missing_pulses.iter().take(LISTED) {
+        warnings.push(format!(
+            "missing index pulse at t = {:.6} s (a gap of {:.0} pulse periods): the \
+             revolution(s) it spans are not averaged",
+            m.time, m.gap_periods
+        ));
+    }
+    for t in seg.extra_pulses.iter().take(LISTED) {
+        warnings.push(format!(
+            "extra index pulse at t = {t:.6} s (off the period grid): ignored"
+        ));
+    }
+    for (n, what) in [
+        (seg.missing_pulses.len(), "missing"),
+        (seg.extra_pulses.len(), "extra"),
+    ] {
+        if n > LISTED {
+            warnings.push(format!("… {} more {what} index pulses", n - LISTED));
+        }
+    }
     let (period_mean, period_relstd) = if periods.is_empty() {
         (f64::NAN, f64::NAN)
     } else {

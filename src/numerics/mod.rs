@@ -1,5 +1,6 @@
 //! Small numeric kernels shared by stages (FFT helpers, the ODE integrator, ...).
 pub mod annealing;
+pub mod bootstrap;
 pub mod buffer;
 pub mod fft2;
 pub mod nelder_mead;

@@ -8,6 +8,7 @@ use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::store::H5Out;
 use crate::error::Result;
 use crate::figures;
+use crate::numerics::bootstrap::{self, Summary};
 use crate::surface::crop::{crop, CropRect};
 use crate::surface::filter::apply_filters;
 use crate::surface::io::{read_height_map, ReadOptions};
@@ -50,7 +51,12 @@ fn default_moments() -> String {
 #[serde(deny_unknown_fields)]
 pub struct SurfaceConfig {
     /// Height map file (any supported format, detected from content).
+    #[serde(default)]
     pub file: PathBuf,
+    /// Several scans of the same surface instead of `file` (App. C.1: several scans per
+    /// surface, reported as mean ± spread).
+    #[serde(default)]
+    pub files: Option<Vec<PathBuf>>,
     /// Channel name (default: the format's height channel).
     #[serde(default)]
     pub channel: Option<String>,
@@ -65,6 +71,9 @@ pub struct SurfaceConfig {
     /// Analyse only this rectangle of the scan (e.g. a 1 × 1 µm sub-area free of artefacts).
     #[serde(default)]
     pub crop: Option<CropConfig>,
+    /// Several rectangles instead of `crop`; each is analysed in each file.
+    #[serde(default)]
+    pub crops: Option<Vec<CropConfig>>,
     /// Levelling recipe, applied in order.
     #[serde(default = "default_level")]
     pub level: Vec<String>,
@@ -132,12 +141,73 @@ pub struct SurfaceParams {
     pub file: PathBuf,
     pub read: ReadOptions,
     pub crop: Option<CropRect>,
+    /// Every (file × crop) area analysed; the first is `file` with `crop`. One area = the
+    /// single-scan behaviour, unchanged.
+    pub areas: Vec<Area>,
     pub level: Vec<LevelOp>,
     pub filter_s: Option<f64>,
     pub filter_l: Option<f64>,
     pub roughness: RoughnessOptions,
     pub periodic: bool,
     pub scale_sweep: bool,
+}
+
+/// One analysed area: a file and an optional rectangle of it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Area {
+    pub file: PathBuf,
+    pub crop: Option<CropRect>,
+}
+
+fn crop_rect(
+    key: &str,
+    c: CropConfig,
+) -> std::result::Result<CropRect, crate::core::config::KeyError> {
+    if c.x0.0 < 0.0 || c.y0.0 < 0.0 || c.width.0 <= 0.0 || c.height.0 <= 0.0 {
+        return Err(crate::core::config::KeyError::new(
+            key,
+            "x0 and y0 must be ≥ 0, width and height > 0",
+        ));
+    }
+    Ok(CropRect {
+        x0: c.x0.0,
+        y0: c.y0.0,
+        width: c.width.0,
+        height: c.height.0,
+    })
+}
+
+/// [`check`] for several files (`files = [..]`, already resolved): every file × every crop.
+pub fn check_files(
+    cfg: &SurfaceConfig,
+    files: Vec<PathBuf>,
+) -> std::result::Result<SurfaceParams, crate::core::config::KeyError> {
+    let Some(first) = files.first().cloned() else {
+        return Err(crate::core::config::KeyError::new(
+            "files",
+            "the list is empty: give at least one height map",
+        ));
+    };
+    let mut p = check(cfg, first)?;
+    let crops: Vec<Option<CropRect>> = {
+        let mut seen = Vec::new();
+        for a in &p.areas {
+            if !seen.contains(&a.crop) {
+                seen.push(a.crop);
+            }
+        }
+        seen
+    };
+    p.areas = files
+        .iter()
+        .flat_map(|f| {
+            crops.iter().map(|c| Area {
+                file: f.clone(),
+                crop: *c,
+            })
+        })
+        .collect();
+    Ok(p)
 }
 
 /// Check a `[surface]` table (or `hdi surface`'s options) key by key.
@@ -212,21 +282,38 @@ pub fn check(
             format!("{} is out of range 4..=4096", cfg.histogram_bins),
         );
     }
-    let crop = match cfg.crop {
-        Some(c) if c.x0.0 < 0.0 || c.y0.0 < 0.0 || c.width.0 <= 0.0 || c.height.0 <= 0.0 => {
-            return bad("crop", "x0 and y0 must be ≥ 0, width and height > 0".into())
+    let crops: Vec<Option<CropRect>> = match (cfg.crop, &cfg.crops) {
+        (Some(_), Some(_)) => {
+            return bad(
+                "crops",
+                "give either `crop` (one rectangle) or `crops` (a list), not both".into(),
+            )
         }
-        Some(c) => Some(CropRect {
-            x0: c.x0.0,
-            y0: c.y0.0,
-            width: c.width.0,
-            height: c.height.0,
-        }),
-        None => None,
+        (_, Some(list)) if list.is_empty() => {
+            return bad(
+                "crops",
+                "the list is empty: give at least one rectangle".into(),
+            )
+        }
+        (_, Some(list)) => list
+            .iter()
+            .map(|c| crop_rect("crops", *c).map(Some))
+            .collect::<std::result::Result<_, _>>()?,
+        (Some(c), None) => vec![Some(crop_rect("crop", c)?)],
+        (None, None) => vec![None],
     };
+    let crop = crops[0];
+    let areas = crops
+        .iter()
+        .map(|c| Area {
+            file: file.clone(),
+            crop: *c,
+        })
+        .collect();
     Ok(SurfaceParams {
         file,
         crop,
+        areas,
         read: ReadOptions {
             channel: cfg.channel.clone(),
             size_x: cfg.size_x.map(|l| l.0),
@@ -251,6 +338,50 @@ pub fn check(
 impl SurfaceParams {
     /// Canonical parameters for the cache key (the file enters by content, not by path).
     pub fn canonical(&self) -> Value {
+        let mut v = self.canonical_one();
+        if self.areas.len() > 1 {
+            // Files enter the key by content (`inputs`); here their order and the crops.
+            let files = self.distinct_files();
+            let areas: Vec<Value> = self
+                .areas
+                .iter()
+                .map(|a| {
+                    json!({
+                        "file_index": files.iter().position(|f| *f == a.file),
+                        "crop_m": a.crop.map(|c| [c.x0, c.y0, c.width, c.height]),
+                    })
+                })
+                .collect();
+            if let Value::Object(m) = &mut v {
+                m.insert("areas".into(), Value::Array(areas));
+            }
+        }
+        v
+    }
+
+    /// The files of the areas, each once, in order.
+    pub fn distinct_files(&self) -> Vec<PathBuf> {
+        let mut files: Vec<PathBuf> = Vec::new();
+        for a in &self.areas {
+            if !files.contains(&a.file) {
+                files.push(a.file.clone());
+            }
+        }
+        files
+    }
+
+    /// The parameters of area `k` alone.
+    pub fn area(&self, k: usize) -> SurfaceParams {
+        let a = &self.areas[k];
+        SurfaceParams {
+            file: a.file.clone(),
+            crop: a.crop,
+            areas: vec![a.clone()],
+            ..self.clone()
+        }
+    }
+
+    fn canonical_one(&self) -> Value {
         json!({
             "channel": self.read.channel,
             "size_x_m": self.read.size_x,
@@ -436,6 +567,17 @@ pub fn write_outputs(
 ) -> Result<()> {
     let out = H5Out::create(h5_path)?;
     out.root_attributes("surface", cache_key, &p.canonical(), inputs, "surface")?;
+    write_h5_body(&out, a)?;
+    out.finish()?;
+
+    if let Some(dir) = plot_dir {
+        write_figures(a, dir)?;
+    }
+    Ok(())
+}
+
+/// Everything in `surface.h5` below the root attributes, for one analysed map.
+fn write_h5_body(out: &H5Out, a: &SurfaceAnalysis) -> Result<()> {
     let entry = out.group("surface", Some("NXentry"))?;
     let default = if a.filtered.is_some() {
         "filtered"
@@ -443,11 +585,11 @@ pub fn write_outputs(
         "levelled"
     };
     out.attr_str(&entry, "default", default)?;
-    write_maps(&out, &entry, a)?;
-    write_summits(&out, &a.report)?;
-    write_parameters(&out, &a.report, a.final_map())?;
+    write_maps(out, &entry, a)?;
+    write_summits(out, &a.report)?;
+    write_parameters(out, &a.report, a.final_map())?;
     if !a.sweep.is_empty() {
-        write_sweeps(&out, &a.sweep)?;
+        write_sweeps(out, &a.sweep)?;
     }
     let fm = a.final_map();
     let history: Vec<Value> = fm
@@ -457,11 +599,6 @@ pub fn write_outputs(
         .collect();
     out.write_string(&entry, "history", &Value::Array(history).to_string())?;
     out.write_string(&entry, "warnings", &a.report.warnings.join("\n"))?;
-    out.finish()?;
-
-    if let Some(dir) = plot_dir {
-        write_figures(a, dir)?;
-    }
     Ok(())
 }
 
@@ -749,8 +886,26 @@ impl FromConfig for SurfaceStage {
         name: &str,
         cfg: &SurfaceConfig,
     ) -> std::result::Result<Self, ConfigError> {
-        let path = file.input_file("surface", name, "file", &cfg.file, "height map")?;
-        let params = check(cfg, path).map_err(|e| e.locate(file, "surface", name))?;
+        let params = match &cfg.files {
+            Some(_) if !cfg.file.as_os_str().is_empty() => {
+                return Err(crate::core::config::KeyError::new(
+                    "files",
+                    "give either `file` (one scan) or `files` (several), not both",
+                )
+                .locate(file, "surface", name))
+            }
+            Some(list) => {
+                let paths = list
+                    .iter()
+                    .map(|f| file.input_file("surface", name, "files", f, "height map"))
+                    .collect::<std::result::Result<Vec<_>, _>>()?;
+                check_files(cfg, paths).map_err(|e| e.locate(file, "surface", name))?
+            }
+            None => {
+                let path = file.input_file("surface", name, "file", &cfg.file, "height map")?;
+                check(cfg, path).map_err(|e| e.locate(file, "surface", name))?
+            }
+        };
         Ok(Self {
             name: name.to_string(),
             params,
@@ -766,9 +921,24 @@ impl StageKind for SurfaceStage {
         self.params.canonical()
     }
     fn inputs(&self) -> Vec<(String, PathBuf)> {
-        vec![("file".into(), self.params.file.clone())]
+        self.params
+            .distinct_files()
+            .into_iter()
+            .enumerate()
+            .map(|(k, f)| {
+                let key = if k == 0 {
+                    "file".to_string()
+                } else {
+                    format!("file_{k}")
+                };
+                (key, f)
+            })
+            .collect()
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+        if self.params.areas.len() > 1 {
+            return run_areas(&self.params, ctx);
+        }
         ctx.progress.set_message("reading and levelling");
         let a = analyse(&self.params)?;
         ctx.progress.set_message("writing HDF5 and plots");
@@ -798,5 +968,241 @@ impl StageKind for SurfaceStage {
             result,
             summary_row: Some(summary_row(&a, &self.params)),
         })
+    }
+}
+
+/// The per-area quantities summarised over areas: name, unit, SI → table-unit factor, and
+/// the value of one report.
+type Quantity = (&'static str, &'static str, f64, fn(&RoughnessReport) -> f64);
+const AREA_QUANTITIES: [Quantity; 6] = [
+    ("sigma", "m", 1e9, |r| r.sigma),
+    ("R", "m", 1e6, |r| r.r),
+    ("eta", "1/m^2", 1e-12, |r| r.eta),
+    ("beta", "1", 1.0, |r| r.beta),
+    ("m2", "1", 1.0, |r| r.m2),
+    ("m4", "1/m^2", 1.0, |r| r.m4),
+];
+
+/// Mean, sample std and 95 % percentile-bootstrap interval of each quantity over the areas
+/// (`numerics::bootstrap`, 2000 resamples, fixed seed; docs/surfaces.md).
+pub fn area_summaries(reports: &[&RoughnessReport]) -> Vec<(&'static str, &'static str, Summary)> {
+    AREA_QUANTITIES
+        .iter()
+        .map(|(name, unit, _, get)| {
+            let x: Vec<f64> = reports.iter().map(|r| get(r)).collect();
+            (*name, *unit, bootstrap::summarise(&x))
+        })
+        .collect()
+}
+
+fn summary_json(s: &Summary) -> Value {
+    let f = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
+    json!({"mean": f(s.mean), "std": f(s.std), "ci95": [f(s.ci_low), f(s.ci_high)], "n": s.n})
+}
+
+/// Several (file × crop) areas: each analysed as a single scan; `surface.h5` holds the first
+/// area's maps as today plus `/surface/areas` (per-area values, mean, std, bootstrap CI);
+/// `areas.{csv,parquet}` one row per area; `areas.png`; the interface gets the means.
+fn run_areas(p: &SurfaceParams, ctx: &StageContext) -> Result<StageOutput> {
+    let n = p.areas.len();
+    let mut analyses = Vec::with_capacity(n);
+    for k in 0..n {
+        ctx.progress
+            .set_message(format!("reading and levelling area {}/{n}", k + 1));
+        analyses.push(analyse(&p.area(k))?);
+    }
+    let reports: Vec<&RoughnessReport> = analyses.iter().map(|a| &a.report).collect();
+    let summaries = area_summaries(&reports);
+    ctx.progress.set_message("writing HDF5, tables and plots");
+    let first = p.area(0);
+    let inputs = serde_json::to_value(&ctx.fingerprint.inputs).unwrap_or(Value::Null);
+    let out = H5Out::create(&ctx.out_dir.join("surface.h5"))?;
+    out.root_attributes("surface", ctx.key, &p.canonical(), &inputs, "surface")?;
+    write_h5_body(&out, &analyses[0])?;
+    let g = out.group("surface/areas", None)?;
+    for (k, (name, unit, _, get)) in AREA_QUANTITIES.iter().enumerate() {
+        let v: Vec<f64> = reports.iter().map(|r| get(r)).collect();
+        out.write_1d(&g, name, &v, unit, &format!("{name} of each area"))?;
+        let s = &summaries[k].2;
+        for (suffix, val, what) in [
+            ("mean", s.mean, "mean over areas"),
+            ("std", s.std, "sample standard deviation over areas"),
+            (
+                "ci95_low",
+                s.ci_low,
+                "95 % percentile-bootstrap interval of the mean, low",
+            ),
+            (
+                "ci95_high",
+                s.ci_high,
+                "95 % percentile-bootstrap interval of the mean, high",
+            ),
+        ] {
+            out.write_scalar(&g, &format!("{name}_{suffix}"), val, unit, what)?;
+        }
+    }
+    out.write_count(&g, "n_areas", n as u64, "areas analysed")?;
+    out.write_count(
+        &g,
+        "bootstrap_resamples",
+        bootstrap::RESAMPLES as u64,
+        "percentile-bootstrap resamples",
+    )?;
+    out.finish()?;
+    write_figures(&analyses[0], ctx.out_dir)?;
+
+    let rows: Vec<Map<String, Value>> = analyses
+        .iter()
+        .enumerate()
+        .map(|(k, a)| {
+            let mut row = Map::new();
+            row.insert("area".into(), json!(k as i64));
+            row.extend(summary_row(a, &p.area(k)));
+            row
+        })
+        .collect();
+    crate::core::store::write_table(&rows, &ctx.out_dir.join("areas"))?;
+    write_areas_plot(&ctx.out_dir.join("areas.png"), &reports, &summaries)?;
+
+    let mut result = report_json(&analyses[0], &first);
+    let mean = |name: &str| {
+        summaries
+            .iter()
+            .find(|s| s.0 == name)
+            .map(|s| s.2.mean)
+            .unwrap_or(f64::NAN)
+    };
+    let mut row = summary_row(&analyses[0], &first);
+    row.insert("n_areas".into(), json!(n as i64));
+    for (name, _, scale, _) in AREA_QUANTITIES.iter().take(4) {
+        let s = &summaries.iter().find(|s| s.0 == *name).map(|s| s.2);
+        if let Some(s) = s {
+            let col = match *name {
+                "sigma" => "sigma_nm",
+                "R" => "R_um",
+                "eta" => "eta_per_um2",
+                _ => "beta",
+            };
+            row.insert(format!("{col}_mean"), json!(s.mean * scale));
+            row.insert(format!("{col}_std"), json!(s.std * scale));
+            row.insert(format!("{col}_ci95_low"), json!(s.ci_low * scale));
+            row.insert(format!("{col}_ci95_high"), json!(s.ci_high * scale));
+        }
+    }
+    if let Value::Object(m) = &mut result {
+        // The interface combines the means over areas; the spread travels beside them.
+        let stats = SummitStats {
+            sigma: mean("sigma"),
+            r: mean("R"),
+            eta: mean("eta"),
+            m2: Some(mean("m2")),
+            m4: Some(mean("m4")),
+        };
+        m.insert("stats".into(), stats.to_json());
+        let per: Map<String, Value> = summaries
+            .iter()
+            .map(|(name, _, s)| (name.to_string(), summary_json(s)))
+            .collect();
+        m.insert(
+            "areas".into(),
+            json!({
+                "n": n,
+                "summary": per,
+                "bootstrap": {"resamples": bootstrap::RESAMPLES, "level": 0.95,
+                              "seed": bootstrap::SEED},
+                "table": "areas.csv",
+            }),
+        );
+    }
+    Ok(StageOutput {
+        result,
+        summary_row: Some(row),
+    })
+}
+
+/// Per-area σ, R, η, β relative to their mean over areas, with ± one std and the 95 %
+/// bootstrap interval of the mean.
+fn write_areas_plot(
+    path: &Path,
+    reports: &[&RoughnessReport],
+    summaries: &[(&'static str, &'static str, Summary)],
+) -> Result<()> {
+    let names = ["σ", "R", "η", "β"];
+    let rel = |k: usize, v: f64| v / summaries[k].2.mean - 1.0;
+    let mut series: Vec<(String, Vec<f64>)> = reports
+        .iter()
+        .enumerate()
+        .map(|(a, r)| {
+            (
+                format!("area {a}"),
+                (0..4).map(|k| rel(k, (AREA_QUANTITIES[k].3)(r))).collect(),
+            )
+        })
+        .collect();
+    series.push((
+        "95 % CI of the mean, low".into(),
+        (0..4).map(|k| rel(k, summaries[k].2.ci_low)).collect(),
+    ));
+    series.push((
+        "95 % CI of the mean, high".into(),
+        (0..4).map(|k| rel(k, summaries[k].2.ci_high)).collect(),
+    ));
+    // The shaded band: ± the largest relative std of the four.
+    let band = (0..4)
+        .map(|k| (summaries[k].2.std / summaries[k].2.mean).abs())
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let refs: Vec<(&str, Vec<f64>)> = series
+        .iter()
+        .map(|(l, v)| (l.as_str(), v.clone()))
+        .collect();
+    figures::category_dots_png(
+        path,
+        "areas: value / mean − 1 (band: ± largest relative std)",
+        "relative to the mean over areas",
+        &names.iter().map(|s| s.to_string()).collect::<Vec<_>>(),
+        &refs,
+        band,
+    )?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cfg(text: &str) -> SurfaceConfig {
+        toml::from_str(text).unwrap()
+    }
+
+    #[test]
+    fn crops_and_files_make_every_area_and_one_area_keeps_the_old_key() {
+        let one = cfg("file = \"a.gwy\"\ncrop = { x0 = 0, y0 = 0, width = 1e-6, height = 1e-6 }");
+        let p = check(&one, "a.gwy".into()).unwrap();
+        assert_eq!(p.areas.len(), 1);
+        // No `areas` entry: the cache key and the HDF5 parameters of a single scan are as before.
+        assert!(p.canonical().get("areas").is_none());
+        assert_eq!(p.canonical(), p.canonical_one());
+
+        let two = cfg(
+            "crops = [{ x0 = 0, y0 = 0, width = 1e-6, height = 1e-6 },\n\
+             { x0 = 1e-6, y0 = 0, width = 1e-6, height = 1e-6 }]",
+        );
+        let p = check_files(&two, vec!["a.gwy".into(), "b.gwy".into(), "c.gwy".into()]).unwrap();
+        assert_eq!(p.areas.len(), 6);
+        assert_eq!(p.areas[3].file, PathBuf::from("b.gwy"));
+        assert_eq!(p.areas[3].crop.unwrap().x0, 1e-6);
+        assert_eq!(p.distinct_files().len(), 3);
+        assert_eq!(p.canonical()["areas"].as_array().unwrap().len(), 6);
+        assert_eq!(p.area(5).areas.len(), 1);
+        assert_eq!(p.area(5).file, PathBuf::from("c.gwy"));
+
+        let both = cfg("crop = { x0 = 0, y0 = 0, width = 1e-6, height = 1e-6 }\n\
+             crops = [{ x0 = 0, y0 = 0, width = 1e-6, height = 1e-6 }]");
+        let e = check(&both, "a".into()).unwrap_err();
+        assert_eq!(e.key, "crops");
+        let empty = cfg("crops = []");
+        assert!(check(&empty, "a".into()).is_err());
+        assert!(check_files(&empty, vec![]).is_err());
     }
 }

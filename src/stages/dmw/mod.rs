@@ -11,6 +11,7 @@ use crate::dmw::chain::{
     process, Butterworth, ChainOrder, ChainParams, DmwResult, FilterMode, Padlen,
 };
 use crate::dmw::io::{read_ldv, ReadOptions};
+use crate::dmw::triggers::Polarity;
 use crate::dmw::{LdvRecord, VelocityUnit};
 use crate::error::Result;
 use crate::figures;
@@ -56,6 +57,12 @@ fn default_detrend() -> String {
 fn default_true() -> bool {
     true
 }
+fn default_polarity() -> String {
+    "auto".into()
+}
+fn default_ppr() -> usize {
+    1
+}
 fn default_peaks() -> usize {
     8
 }
@@ -96,6 +103,13 @@ pub struct DmwConfig {
     /// Trigger threshold in the index channel's unit (default: mid-level of its range).
     #[serde(default)]
     pub trigger_level: Option<f64>,
+    /// "auto" (the pulse is the rarer state), "rising" (active-high) or "falling"
+    /// (active-low).
+    #[serde(default = "default_polarity")]
+    pub trigger_polarity: String,
+    /// Index pulses per revolution (evenly spaced).
+    #[serde(default = "default_ppr")]
+    pub pulses_per_revolution: usize,
     /// Length of the averaged segment after each trigger.
     #[serde(default = "default_segment")]
     pub segment: TimeSpan,
@@ -148,6 +162,8 @@ impl DmwConfig {
             time_column: None,
             velocity_unit: None,
             trigger_level: None,
+            trigger_polarity: default_polarity(),
+            pulses_per_revolution: default_ppr(),
             segment: default_segment(),
             max_revolutions: None,
             averaging: default_averaging(),
@@ -212,6 +228,19 @@ pub fn check(
         return bad(
             "max_revolutions",
             "0 is out of range: average at least 1 revolution".into(),
+        );
+    }
+    let trigger_polarity: Polarity = match cfg.trigger_polarity.parse() {
+        Ok(p) => p,
+        Err(e) => return bad("trigger_polarity", e),
+    };
+    if !(1..=360).contains(&cfg.pulses_per_revolution) {
+        return bad(
+            "pulses_per_revolution",
+            format!(
+                "{} is out of range: must be 1…360",
+                cfg.pulses_per_revolution
+            ),
         );
     }
     let averaging: AverageMode = match cfg.averaging.parse() {
@@ -315,6 +344,8 @@ pub fn check(
             sensitivity: cfg.sensitivity.0,
             rpm: cfg.rpm,
             trigger_level: cfg.trigger_level,
+            trigger_polarity,
+            pulses_per_revolution: cfg.pulses_per_revolution,
             segment: cfg.segment.0,
             max_revolutions: cfg.max_revolutions,
             averaging,
@@ -355,6 +386,8 @@ impl DmwParams {
             "sensitivity_m_s_per_V": c.sensitivity,
             "rpm": c.rpm,
             "trigger_level": c.trigger_level,
+            "trigger_polarity": c.trigger_polarity.to_string(),
+            "pulses_per_revolution": c.pulses_per_revolution,
             "segment_s": c.segment,
             "max_revolutions": c.max_revolutions,
             "averaging": c.averaging.to_string(),
@@ -417,6 +450,12 @@ pub fn report_json(rec: &LdvRecord, r: &DmwResult, p: &DmwParams) -> Value {
         "n_avg": q.n_avg,
         "n_dropped": q.n_dropped,
         "trigger_level": finite(q.trigger_level),
+        "trigger_polarity": q.trigger_polarity,
+        "duty_cycle": finite(q.duty_cycle),
+        "n_debounced": q.n_debounced,
+        "missing_pulses": q.missing_pulses.iter().map(|m| m.time).collect::<Vec<_>>(),
+        "extra_pulses": q.extra_pulses,
+        "n_dropped_missing_pulse": q.n_gap_dropped,
         "period_mean": finite(q.period_mean),
         "period_relstd": finite(q.period_relstd),
         "rpm_measured": finite(60.0 / q.period_mean),
@@ -453,6 +492,8 @@ pub fn summary_row(rec: &LdvRecord, r: &DmwResult, p: &DmwParams) -> Map<String,
     put("file", json!(p.file.display().to_string()));
     put("format", json!(rec.format));
     put("n_avg", json!(q.n_avg as i64));
+    put("n_missing_pulses", json!(q.missing_pulses.len() as i64));
+    put("n_extra_pulses", json!(q.extra_pulses.len() as i64));
     put("period_mean_ms", json!(q.period_mean * 1e3));
     put("period_relstd", json!(q.period_relstd));
     put("noise_floor_um_s", json!(q.noise_floor * 1e6));
@@ -638,6 +679,37 @@ fn write_qa(out: &H5Out, r: &DmwResult) -> Result<()> {
     let g = out.group("dmw/qa", None)?;
     out.write_count(&g, "n_avg", q.n_avg as u64, "revolutions averaged")?;
     out.write_count(&g, "n_triggers", q.n_triggers as u64, "triggers found")?;
+    out.write_count(
+        &g,
+        "n_debounced",
+        q.n_debounced as u64,
+        "index edges dropped as contact bounce",
+    )?;
+    out.write_count(
+        &g,
+        "n_dropped_missing_pulse",
+        q.n_gap_dropped as u64,
+        "revolutions not averaged because an index pulse is missing",
+    )?;
+    let missing: Vec<f64> = q.missing_pulses.iter().map(|m| m.time).collect();
+    for (name, times, what) in [
+        (
+            "missing_pulse_time",
+            &missing,
+            "expected times of index pulses the channel did not show",
+        ),
+        (
+            "extra_pulse_time",
+            &q.extra_pulses,
+            "index pulses off the period grid (ignored)",
+        ),
+    ] {
+        // Written only when there are events (no empty datasets).
+        if !times.is_empty() {
+            out.write_1d(&g, name, times, "s", what)?;
+        }
+    }
+    out.write_string(&g, "trigger_polarity", q.trigger_polarity)?;
     for (name, v, u, ln) in [
         ("period_mean", q.period_mean, "s", "mean revolution period"),
         (
@@ -853,5 +925,77 @@ impl StageKind for DmwStage {
             result,
             summary_row: Some(summary_row(&rec, &res, &self.params)),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn data(name: &str) -> PathBuf {
+        PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/dmw/")).join(name)
+    }
+
+    /// The reference DMW std of `tests/data/dmw/reference.json` (numpy/scipy chain over whole
+    /// revolutions at the known pulse times, tests/data/README.md).
+    fn reference_std() -> f64 {
+        let text = std::fs::read_to_string(data("reference.json")).unwrap();
+        let v: Value = serde_json::from_str(&text).unwrap();
+        v["dmw_std_m"].as_f64().unwrap()
+    }
+
+    fn run(name: &str) -> (LdvRecord, DmwResult) {
+        let mut cfg = DmwConfig::for_file(data(name));
+        cfg.sensitivity = Sensitivity(0.025);
+        let p = check(&cfg, data(name)).unwrap();
+        analyse(&p).unwrap()
+    }
+
+    #[test]
+    fn narrow_index_pulse_gives_the_scipy_whole_revolution_dmw_std() {
+        // 10 µs pulse at 5 425 rpm (duty cycle 0.09 %), only `sensitivity` set.
+        let (_, r) = run("narrow_pulse.h5");
+        let want = reference_std();
+        assert_eq!(r.qa.trigger_polarity, "rising");
+        assert_eq!(r.qa.n_avg, 8);
+        assert!(r.qa.missing_pulses.is_empty() && r.qa.extra_pulses.is_empty());
+        assert!(
+            (r.qa.period_mean * 1e6 - 11060.0).abs() < 1e-6,
+            "{}",
+            r.qa.period_mean
+        );
+        let rel = r.stats.std / want - 1.0;
+        eprintln!("DMW std {} m vs scipy {want} m: {rel:+.2e}", r.stats.std);
+        assert!(rel.abs() < 0.03, "{} vs {want} ({rel})", r.stats.std);
+    }
+
+    #[test]
+    fn inverted_bouncing_index_pulse_gives_the_same_dmw_std() {
+        let (_, r) = run("inverted_bounce.h5");
+        let want = reference_std();
+        assert_eq!(r.qa.trigger_polarity, "falling");
+        assert_eq!(r.qa.n_avg, 8);
+        // Each of the 9 pulses bounces on both edges.
+        assert_eq!(r.qa.n_debounced, 18);
+        assert!(r.qa.missing_pulses.is_empty() && r.qa.extra_pulses.is_empty());
+        let rel = r.stats.std / want - 1.0;
+        eprintln!("DMW std {} m vs scipy {want} m: {rel:+.2e}", r.stats.std);
+        assert!(rel.abs() < 0.03, "{} vs {want} ({rel})", r.stats.std);
+    }
+
+    #[test]
+    fn trigger_keys_are_checked() {
+        let mut cfg = DmwConfig::for_file(data("narrow_pulse.h5"));
+        cfg.trigger_polarity = "up".into();
+        let e = check(&cfg, data("x")).unwrap_err();
+        assert!(e.to_string().contains("trigger_polarity"), "{e}");
+        cfg.trigger_polarity = "falling".into();
+        cfg.pulses_per_revolution = 0;
+        let e = check(&cfg, data("x")).unwrap_err();
+        assert!(e.to_string().contains("pulses_per_revolution"), "{e}");
+        cfg.pulses_per_revolution = 2;
+        let p = check(&cfg, data("x")).unwrap();
+        assert_eq!(p.chain.trigger_polarity, Polarity::Falling);
+        assert_eq!(p.chain.pulses_per_revolution, 2);
     }
 }
