@@ -6,6 +6,7 @@
 //! as the instrument software displays it; heights and lengths in metres.
 
 pub mod combine;
+pub mod bulge;
 pub mod crop;
 pub mod filter;
 pub mod io;
