@@ -612,6 +612,7 @@ pub fn synth_scan(spec: &ScanSpec) -> HeightMap {
 
 impl ScanSpec {
     /// The scan of the shipped set (docs/bulge.md): 50 µm × 80 µm at dx = 0.5 µm, dy = 1 µm,
+    /// the trailing edge midway between two columns (so the sampled edge is unambiguous),
     /// the optimised bulge geometry (a = 4.86 µm, w = 50 µm, x_TFC = 6.35 µm,
     /// src/slider/params.rs) of the given height, a 6 nm pull-up decaying over 0.4 µm before
     /// the edge, a 150 nm drop beyond it, a tilt of a few nm over the scan and 0.2 nm noise.
@@ -621,7 +622,7 @@ impl ScanSpec {
             ny: 80,
             dx: 0.5e-6,
             dy: 1.0e-6,
-            x_te: 40.0e-6,
+            x_te: 40.25e-6,
             height,
             a: 4.86e-6,
             w: 50e-6,
