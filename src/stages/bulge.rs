@@ -291,7 +291,7 @@ pub fn write_figures(a: &BulgeAnalysis, dir: &Path) -> Result<()> {
         let lev = &f.levelled;
         let shown = ndarray::Array2::from_shape_fn(lev.z.dim(), |(j, i)| {
             if lev.is_valid(j, i) {
-                lev.z[[j, i]] * 1e9
+                lev.z[[j, i]]
             } else {
                 f64::NAN
             }
@@ -305,7 +305,7 @@ pub fn write_figures(a: &BulgeAnalysis, dir: &Path) -> Result<()> {
             shown.view(),
             lev.dx,
             lev.dy,
-            &format!("Levelled profilometer scan, {label} (nm)"),
+            &format!("Levelled profilometer scan, {label}"),
         )?;
         let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
         for off in [-6e-6, 0.0, 6e-6] {
@@ -315,14 +315,14 @@ pub fn write_figures(a: &BulgeAnalysis, dir: &Path) -> Result<()> {
                 continue;
             }
             let j = j as usize;
+            // Only the analysed pixels (the masked trailing edge is not drawn).
             let data: Vec<(f64, f64)> = (0..lev.nx())
-                .map(|i| {
-                    let z = if lev.is_valid(j, i) { lev.z[[j, i]] } else { f64::NAN };
-                    (i as f64 * lev.dx * 1e6, z * 1e9)
-                })
+                .filter(|&i| lev.is_valid(j, i))
+                .map(|i| (i as f64 * lev.dx * 1e6, lev.z[[j, i]] * 1e9))
                 .collect();
             let yj = j as f64 * lev.dy;
             let model: Vec<(f64, f64)> = (0..lev.nx())
+                .filter(|&i| lev.is_valid(j, i))
                 .map(|i| {
                     let x = i as f64 * lev.dx;
                     let u = (x - f.xc) / f.a;
@@ -435,13 +435,14 @@ impl StageKind for BulgeStage {
         let a = analyse(&self.params)?;
         write_outputs(&a, &self.params(), ctx.key, ctx.out_dir)?;
         write_figures(&a, ctx.out_dir)?;
+        let r = |v: f64| crate::core::store::round_significant(v, 6);
         let row = json!({
             "scans": a.scans.len(),
-            "a_tfc_um": a.tfc.a_tfc_m * 1e6,
-            "w_tfc_um": a.tfc.w_tfc_m * 1e6,
-            "x_tfc_um": a.tfc.x_tfc_m.map(|x| x * 1e6),
-            "efficiency_nm_per_mW": a.tfc.efficiency_m_per_w.map(|e| e * 1e6),
-            "intercept_nm": a.tfc.intercept_m.map(|h| h * 1e9),
+            "a_tfc_um": r(a.tfc.a_tfc_m * 1e6),
+            "w_tfc_um": r(a.tfc.w_tfc_m * 1e6),
+            "x_tfc_um": a.tfc.x_tfc_m.map(|x| r(x * 1e6)),
+            "efficiency_nm_per_mW": a.tfc.efficiency_m_per_w.map(|e| r(e * 1e6)),
+            "intercept_nm": a.tfc.intercept_m.map(|h| r(h * 1e9)),
         });
         Ok(StageOutput {
             result: report_json(&a),
