@@ -18,8 +18,8 @@ fn synth(dir: &Path) -> (Vec<PathBuf>, Value) {
         .filter(|p| p.extension().is_some_and(|e| e == "gsf"))
         .collect();
     files.sort();
-    let truth = serde_json::from_str(&std::fs::read_to_string(dir.join("truth.json")).unwrap())
-        .unwrap();
+    let truth =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("truth.json")).unwrap()).unwrap();
     (files, truth)
 }
 
@@ -36,7 +36,8 @@ fn bulge_json(files: &[PathBuf], extra: &[&str]) -> Value {
 }
 
 fn f(v: &Value, k: &str) -> f64 {
-    v[k].as_f64().unwrap_or_else(|| panic!("{k} missing in {v}"))
+    v[k].as_f64()
+        .unwrap_or_else(|| panic!("{k} missing in {v}"))
 }
 
 fn check_against_truth(j: &Value, truth: &Value) {
@@ -47,8 +48,14 @@ fn check_against_truth(j: &Value, truth: &Value) {
         assert_eq!(s["file"], t["file"]);
         assert_eq!(f(s, "heater_power_mW"), f(t, "heater_power_mW"));
         // Acceptance of docs/bulge.md: a, w within 5 %, x within 0.5 µm, height within 0.3 nm.
-        assert!((f(s, "a_tfc_m") / f(t, "a_tfc_m") - 1.0).abs() < 0.05, "{s}");
-        assert!((f(s, "w_tfc_m") / f(t, "w_tfc_m") - 1.0).abs() < 0.05, "{s}");
+        assert!(
+            (f(s, "a_tfc_m") / f(t, "a_tfc_m") - 1.0).abs() < 0.05,
+            "{s}"
+        );
+        assert!(
+            (f(s, "w_tfc_m") / f(t, "w_tfc_m") - 1.0).abs() < 0.05,
+            "{s}"
+        );
         assert!((f(s, "x_tfc_m") - f(t, "x_tfc_m")).abs() < 0.5e-6, "{s}");
         assert!((f(s, "height_m") - f(t, "height_m")).abs() < 0.3e-9, "{s}");
         // The residual is the generator's white noise (nothing systematic left).
@@ -58,7 +65,10 @@ fn check_against_truth(j: &Value, truth: &Value) {
         }
     }
     let e = f(j, "efficiency_m_per_W");
-    assert!((e / f(truth, "efficiency_m_per_W") - 1.0).abs() < 0.05, "{e}");
+    assert!(
+        (e / f(truth, "efficiency_m_per_W") - 1.0).abs() < 0.05,
+        "{e}"
+    );
     assert!((f(j, "intercept_m") - f(truth, "intercept_m")).abs() < 0.3e-9);
     assert!(f(j, "efficiency_se_m_per_W") >= 0.0);
 }
@@ -74,7 +84,9 @@ fn bulge_recovers_the_synthetic_scans() {
     // …or given explicitly (here deliberately doubled: the efficiency halves).
     let j2 = bulge_json(
         &files,
-        &["--power", "0 mW", "--power", "60 mW", "--power", "0.12 W", "--power", "180 mW"],
+        &[
+            "--power", "0 mW", "--power", "60 mW", "--power", "0.12 W", "--power", "180 mW",
+        ],
     );
     let e1 = f(&j, "efficiency_m_per_W");
     let e2 = f(&j2, "efficiency_m_per_W");
@@ -89,10 +101,19 @@ fn bulge_recovers_the_synthetic_scans() {
 fn shipped_scans_are_what_the_generator_writes() {
     let dir = tempfile::tempdir().unwrap();
     synth(dir.path());
-    for name in ["tfc_00mW.gsf", "tfc_30mW.gsf", "tfc_60mW.gsf", "tfc_90mW.gsf", "truth.json"] {
+    for name in [
+        "tfc_00mW.gsf",
+        "tfc_30mW.gsf",
+        "tfc_60mW.gsf",
+        "tfc_90mW.gsf",
+        "truth.json",
+    ] {
         let shipped = std::fs::read(repo_root().join("raw/bulge").join(name)).unwrap();
         let fresh = std::fs::read(dir.path().join(name)).unwrap();
-        assert!(shipped == fresh, "raw/bulge/{name} differs from `hdi synth profilometer`");
+        assert!(
+            shipped == fresh,
+            "raw/bulge/{name} differs from `hdi synth profilometer`"
+        );
     }
 }
 
@@ -142,12 +163,20 @@ powers = ["0 mW", "30 mW", "60 mW", "90 mW"]
         .map(|e| e.unwrap().path())
         .find(|p| p.join("result.json").is_file())
         .expect("a bulge store entry");
-    for out in ["bulge.h5", "scans.csv", "scans.parquet", "height_vs_power.png"] {
-        assert!(entry.join(out).is_file(), "{out} missing in {}", entry.display());
+    for out in [
+        "bulge.h5",
+        "scans.csv",
+        "scans.parquet",
+        "height_vs_power.png",
+    ] {
+        assert!(
+            entry.join(out).is_file(),
+            "{out} missing in {}",
+            entry.display()
+        );
     }
     let result: Value =
-        serde_json::from_str(&std::fs::read_to_string(entry.join("result.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(entry.join("result.json")).unwrap()).unwrap();
     check_against_truth(&result, &truth);
     let tfc = &result["tfc"];
     assert!((f(tfc, "a_tfc_m") / 4.86e-6 - 1.0).abs() < 0.05);
@@ -155,4 +184,73 @@ powers = ["0 mW", "30 mW", "60 mW", "90 mW"]
     let csv = std::fs::read_to_string(entry.join("scans.csv")).unwrap();
     assert!(csv.lines().next().unwrap().contains("heater_power_mW"));
     assert_eq!(csv.lines().count(), 5);
+}
+
+#[test]
+fn simulate_sweep_in_heater_power_from_a_fitted_bulge() {
+    let dir = tempfile::tempdir().unwrap();
+    synth(&dir.path().join("raw"));
+    // The shipped [bulge.tfc] and [simulate.power_sweep] tables, on a short coarse sweep.
+    let shipped = std::fs::read_to_string(repo_root().join("pipeline.toml")).unwrap();
+    let table = |head: &str| -> String {
+        let start = shipped
+            .find(head)
+            .unwrap_or_else(|| panic!("{head} in pipeline.toml"));
+        let rest = &shipped[start..];
+        let end = rest[1..].find("\n[").map_or(rest.len(), |e| e + 1);
+        rest[..end].to_string()
+    };
+    let text = format!(
+        "[project]\nname = \"t\"\n\n{}\n[contact.improved]\nparameter_set = \"improved_2dof\"\n\n{}",
+        table("[bulge.tfc]").replace("raw/bulge/", "raw/"),
+        table("[simulate.power_sweep]")
+            .replace("dmw = \"disk_md\"", "dmw = \"none\"")
+            .replace("power_step = \"2 mW\"", "power_step = \"16 mW\"\nduration = \"0.5 ms\"\nsteady_start = \"0.2 ms\""),
+    );
+    std::fs::write(dir.path().join("pipeline.toml"), &text).unwrap();
+    let o = hdi()
+        .current_dir(dir.path())
+        .args(["run", "-j", "1"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}\n{text}", stderr(&o));
+    let csv = std::fs::read_to_string(dir.path().join("processed/power_sweep/sweep.csv")).unwrap();
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |n: &str| head.iter().position(|h| *h == n).unwrap();
+    let (ia, ip) = (col("actuation_nm"), col("heater_power_mW"));
+    let rows: Vec<(f64, f64)> = lines
+        .map(|l| {
+            let v: Vec<&str> = l.split(',').collect();
+            (v[ia].parse().unwrap(), v[ip].parse().unwrap())
+        })
+        .collect();
+    assert_eq!(
+        rows.iter().map(|r| r.1).collect::<Vec<_>>(),
+        [0.0, 16.0, 32.0, 48.0]
+    );
+    // actuation = efficiency × power with the fitted efficiency ≈ 0.3 nm/mW (within 5 %).
+    for (a, p) in &rows[1..] {
+        assert!((a / p / 0.3 - 1.0).abs() < 0.05, "{a} nm at {p} mW");
+    }
+    let result: Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("processed/power_sweep/result.json")).unwrap(),
+    )
+    .unwrap();
+    let sweep = &result["sweep"];
+    let eff = f(sweep, "efficiency_m_per_W");
+    if let Some(td) = sweep["touchdown_m"].as_f64() {
+        assert!((f(sweep, "touchdown_power_W") - td / eff).abs() < 1e-12);
+    }
+    let table = std::fs::read_to_string(dir.path().join("processed/tables/simulates.csv")).unwrap();
+    assert!(table.lines().next().unwrap().contains("touchdown_power_mW"));
+    // A power sweep without a fitted bulge is a clean configuration error.
+    let bad = text.replace("geometry = { bulge = \"tfc\" }", "geometry = \"optimised\"");
+    std::fs::write(dir.path().join("pipeline.toml"), bad).unwrap();
+    let o = hdi()
+        .current_dir(dir.path())
+        .args(["run", "-j", "1"])
+        .output()
+        .unwrap();
+    assert_clean_failure(&o, "bulge");
 }

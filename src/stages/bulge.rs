@@ -115,9 +115,9 @@ pub struct BulgeAnalysis {
 fn weighted_mean(values: &[(f64, f64)]) -> f64 {
     let ok = values.iter().all(|(_, se)| se.is_finite() && *se > 0.0);
     if ok {
-        let (s, w) = values
-            .iter()
-            .fold((0.0, 0.0), |(s, w), (v, se)| (s + v / (se * se), w + 1.0 / (se * se)));
+        let (s, w) = values.iter().fold((0.0, 0.0), |(s, w), (v, se)| {
+            (s + v / (se * se), w + 1.0 / (se * se))
+        });
         s / w
     } else {
         values.iter().map(|(v, _)| v).sum::<f64>() / values.len() as f64
@@ -242,11 +242,41 @@ pub fn write_outputs(a: &BulgeAnalysis, params: &Value, key: &str, dir: &Path) -
         "heater power (NaN: unknown)",
     )?;
     out.write_1d(&g, "height", &col(&|s| s.fit.height), "m", "bulge height")?;
-    out.write_1d(&g, "height_se", &col(&|s| s.fit.height_se), "m", "standard error of the height")?;
-    out.write_1d(&g, "a_tfc", &col(&|s| s.fit.a), "m", "half-length along the slider")?;
-    out.write_1d(&g, "a_tfc_se", &col(&|s| s.fit.a_se), "m", "standard error of a")?;
-    out.write_1d(&g, "w_tfc", &col(&|s| s.fit.w), "m", "full width across the slider")?;
-    out.write_1d(&g, "w_tfc_se", &col(&|s| s.fit.w_se), "m", "standard error of w")?;
+    out.write_1d(
+        &g,
+        "height_se",
+        &col(&|s| s.fit.height_se),
+        "m",
+        "standard error of the height",
+    )?;
+    out.write_1d(
+        &g,
+        "a_tfc",
+        &col(&|s| s.fit.a),
+        "m",
+        "half-length along the slider",
+    )?;
+    out.write_1d(
+        &g,
+        "a_tfc_se",
+        &col(&|s| s.fit.a_se),
+        "m",
+        "standard error of a",
+    )?;
+    out.write_1d(
+        &g,
+        "w_tfc",
+        &col(&|s| s.fit.w),
+        "m",
+        "full width across the slider",
+    )?;
+    out.write_1d(
+        &g,
+        "w_tfc_se",
+        &col(&|s| s.fit.w_se),
+        "m",
+        "standard error of w",
+    )?;
     out.write_1d(
         &g,
         "x_tfc",
@@ -254,7 +284,13 @@ pub fn write_outputs(a: &BulgeAnalysis, params: &Value, key: &str, dir: &Path) -
         "m",
         "centre distance from the trailing edge",
     )?;
-    out.write_1d(&g, "x_tfc_se", &col(&|s| s.fit.xc_se), "m", "standard error of x_TFC")?;
+    out.write_1d(
+        &g,
+        "x_tfc_se",
+        &col(&|s| s.fit.xc_se),
+        "m",
+        "standard error of x_TFC",
+    )?;
     out.write_1d(
         &g,
         "residual_rms",
@@ -263,15 +299,39 @@ pub fn write_outputs(a: &BulgeAnalysis, params: &Value, key: &str, dir: &Path) -
         "RMS of the fit residuals",
     )?;
     if let Some(e) = a.efficiency {
-        out.write_scalar(&g, "efficiency", e.efficiency, "m/W", "bulge height per heater power")?;
-        out.write_scalar(&g, "efficiency_se", e.efficiency_se, "m/W", "standard error")?;
-        out.write_scalar(&g, "intercept", e.intercept, "m", "bulge height at zero power")?;
+        out.write_scalar(
+            &g,
+            "efficiency",
+            e.efficiency,
+            "m/W",
+            "bulge height per heater power",
+        )?;
+        out.write_scalar(
+            &g,
+            "efficiency_se",
+            e.efficiency_se,
+            "m/W",
+            "standard error",
+        )?;
+        out.write_scalar(
+            &g,
+            "intercept",
+            e.intercept,
+            "m",
+            "bulge height at zero power",
+        )?;
         out.write_scalar(&g, "intercept_se", e.intercept_se, "m", "standard error")?;
     }
     for (k, s) in a.scans.iter().enumerate() {
         let sg = out.group(&format!("bulge/scan_{k}"), Some("NXdata"))?;
         out.write_string(&sg, "file", &files[k])?;
-        out.write_array(&sg, "levelled", s.fit.levelled.z.view(), "m", "levelled height")?;
+        out.write_array(
+            &sg,
+            "levelled",
+            s.fit.levelled.z.view(),
+            "m",
+            "levelled height",
+        )?;
         out.write_scalar(&sg, "dx", s.fit.levelled.dx, "m", "pixel spacing along x")?;
         out.write_scalar(&sg, "dy", s.fit.levelled.dy, "m", "pixel spacing along y")?;
     }
@@ -334,8 +394,10 @@ pub fn write_figures(a: &BulgeAnalysis, dir: &Path) -> Result<()> {
             series.push((format!("scan y = {:+.0} µm", off * 1e6), data));
             series.push((format!("fit y = {:+.0} µm", off * 1e6), model));
         }
-        let refs: Vec<(&str, Vec<(f64, f64)>)> =
-            series.iter().map(|(n, v)| (n.as_str(), v.clone())).collect();
+        let refs: Vec<(&str, Vec<(f64, f64)>)> = series
+            .iter()
+            .map(|(n, v)| (n.as_str(), v.clone()))
+            .collect();
         figures::lines_png(
             &dir.join(format!("scan_{k}_lines.png")),
             &format!("Scan lines across the bulge, {label} — Fig. C.5"),

@@ -526,10 +526,7 @@ pub fn fit_efficiency(powers: &[f64], heights: &[f64]) -> Result<EfficiencyFit> 
             .map(|(p, h)| (h - intercept - slope * p).powi(2))
             .sum();
         let s2 = sse / (nf - 2.0);
-        (
-            (s2 / sxx).sqrt(),
-            (s2 * (1.0 / nf + pm * pm / sxx)).sqrt(),
-        )
+        ((s2 / sxx).sqrt(), (s2 * (1.0 / nf + pm * pm / sxx)).sqrt())
     } else {
         (f64::NAN, f64::NAN)
     };
@@ -754,8 +751,8 @@ mod tests {
         }
         for k in 0..4 {
             let m = est[k].iter().sum::<f64>() / n as f64;
-            let sd = (est[k].iter().map(|v| (v - m).powi(2)).sum::<f64>() / (n as f64 - 1.0))
-                .sqrt();
+            let sd =
+                (est[k].iter().map(|v| (v - m).powi(2)).sum::<f64>() / (n as f64 - 1.0)).sqrt();
             let ratio = sd / ses[k];
             assert!(
                 (1.0 / 1.5..1.5).contains(&ratio),
