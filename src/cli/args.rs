@@ -202,7 +202,7 @@ pub struct BulgeArgs {
     /// A rectangle left out of levelling and fitting: x0,y0,width,height with units (x along
     /// a scan line, y down from the top row), e.g. "0um,0um,10um,5um". Repeatable.
     #[arg(long)]
-    pub exclude: Vec<surfaces::CropConfig>,
+    pub exclude: Vec<hdi::stages::bulge::RectConfig>,
     /// Mask start before the detected trailing edge (default 2 um).
     #[arg(long)]
     pub te_margin: Option<Length>,

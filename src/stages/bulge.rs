@@ -2,7 +2,6 @@
 //! geometry (a, w, x_TFC) and efficiency (m/W) for the slider stages (App. C.2; docs/bulge.md).
 //! The same analysis backs `hdi bulge FILE…`.
 
-use super::surfaces::CropConfig;
 use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::bulge::FittedBulge;
 use crate::core::config::{ConfigError, PipelineFile};
@@ -35,7 +34,7 @@ pub struct BulgeConfig {
     pub powers: Option<Vec<Power>>,
     /// Rectangles left out of levelling and fitting (x along a scan line, y down the rows).
     #[serde(default)]
-    pub exclude: Vec<CropConfig>,
+    pub exclude: Vec<RectConfig>,
     /// Detect and mask the trailing-edge drop and its pull-up.
     #[serde(default = "default_true")]
     pub auto_te: bool,
@@ -45,6 +44,36 @@ pub struct BulgeConfig {
     /// Channel for multi-channel formats.
     #[serde(default)]
     pub channel: Option<String>,
+}
+
+/// An excluded rectangle, `{ x0 = "0 um", y0 = "0 um", width = "10 um", height = "5 um" }`
+/// or on the command line `"0um,0um,10um,5um"`: x along a scan line, y down the rows, from
+/// the first pixel (the same convention as the surfaces stage's `crop`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RectConfig {
+    pub x0: Length,
+    pub y0: Length,
+    pub width: Length,
+    pub height: Length,
+}
+
+impl std::str::FromStr for RectConfig {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let parts: Vec<&str> = s.split(',').collect();
+        let [x0, y0, width, height] = parts.as_slice() else {
+            return Err(format!(
+                "`{s}`: expected x0,y0,width,height (e.g. 0um,0um,10um,5um)"
+            ));
+        };
+        Ok(Self {
+            x0: x0.parse()?,
+            y0: y0.parse()?,
+            width: width.parse()?,
+            height: height.parse()?,
+        })
+    }
 }
 
 /// Validated parameters, SI units.
@@ -86,7 +115,7 @@ pub fn resolve_powers(
 }
 
 /// Exclusion rectangles from their config form.
-pub fn rects(exclude: &[CropConfig]) -> Vec<Rect> {
+pub fn rects(exclude: &[RectConfig]) -> Vec<Rect> {
     exclude
         .iter()
         .map(|c| Rect {
