@@ -11,7 +11,7 @@ pub(super) fn cmd_bulge(a: BulgeArgs) -> Result<()> {
     let powers = bulge::resolve_powers(&a.files, (!given.is_empty()).then_some(&given[..]))
         .map_err(|m| anyhow!("--power: {m}"))?;
     let te_margin = a.te_margin.map(|l| l.0).unwrap_or(2e-6);
-    if !(te_margin >= 0.0) {
+    if te_margin.is_nan() || te_margin < 0.0 {
         return Err(anyhow!("--te-margin: {te_margin} m must be ≥ 0"));
     }
     let params = BulgeParams {

@@ -482,7 +482,7 @@ impl FromConfig for BulgeStage {
         let given: Option<Vec<f64>> = cfg.powers.as_ref().map(|p| p.iter().map(|v| v.0).collect());
         let powers = resolve_powers(&files, given.as_deref()).map_err(|m| err("powers", m))?;
         let te_margin = cfg.te_margin.map(|l| l.0).unwrap_or(2e-6);
-        if !(te_margin >= 0.0) {
+        if te_margin.is_nan() || te_margin < 0.0 {
             return Err(err("te_margin", format!("{te_margin} m must be ≥ 0")));
         }
         Ok(Self {
