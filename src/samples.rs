@@ -248,3 +248,53 @@ pub fn write_afm_samples(dir: &Path) -> Result<Vec<PathBuf>> {
     crate::core::cache::write_atomic(&meta_path, text.as_bytes()).map_err(SampleError::Io)?;
     Ok(vec![disk_path, slider_path, meta_path])
 }
+
+/// Heater powers of the shipped profilometer set (App. C.2 measured 0–90 mW).
+pub const PROFILOMETER_POWERS_MW: [f64; 4] = [0.0, 30.0, 60.0, 90.0];
+/// Bulge height without heater power (App. C.2: 2–5 nm even at 0 mW) and growth per power
+/// (App. C.2: 0.3 nm/mW) of the shipped set.
+pub const PROFILOMETER_H0: f64 = 3e-9;
+pub const PROFILOMETER_EFFICIENCY: f64 = 0.3e-9 / 1e-3;
+
+/// The synthetic profilometer scans of `raw/bulge/` (`hdi synth profilometer`, docs/bulge.md):
+/// one Gwyddion `.gsf` per heater power (dx = 0.5 µm, dy = 1 µm) and `truth.json` with the
+/// parameters a fit should recover.
+pub fn write_profilometer_samples(dir: &Path) -> Result<Vec<PathBuf>> {
+    use crate::surface::bulge::{synth_scan, ScanSpec};
+    use crate::surface::io::encode_gsf;
+    std::fs::create_dir_all(dir).map_err(|source| SampleError::Create {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let mut files = Vec::new();
+    let mut scans = Vec::new();
+    for (k, p_mw) in PROFILOMETER_POWERS_MW.into_iter().enumerate() {
+        let height = PROFILOMETER_H0 + PROFILOMETER_EFFICIENCY * p_mw * 1e-3;
+        let spec = ScanSpec::shipped(height, 2011_0100 + k as u64);
+        let map = synth_scan(&spec);
+        let name = format!("tfc_{p_mw:02.0}mW.gsf");
+        let path = dir.join(&name);
+        crate::core::cache::write_atomic(&path, &encode_gsf(&map)).map_err(SampleError::Io)?;
+        files.push(path);
+        scans.push(json!({
+            "file": name, "heater_power_mW": p_mw, "height_m": height,
+            "a_tfc_m": spec.a, "w_tfc_m": spec.w, "x_tfc_m": spec.x_tfc,
+            "x_te_m": spec.x_te, "y_c_m": spec.yc,
+            "nx": spec.nx, "ny": spec.ny, "dx_m": spec.dx, "dy_m": spec.dy,
+            "pullup_m": spec.pullup, "pullup_length_m": spec.pullup_length,
+            "te_drop_m": spec.drop, "tilt_x": spec.tilt_x, "tilt_y": spec.tilt_y,
+            "offset_m": spec.offset, "noise_rms_m": spec.noise, "seed": spec.seed,
+        }));
+    }
+    let meta = json!({
+        "generator": "hdi synth profilometer (src/samples.rs, src/surface/bulge.rs synth_scan): ellipsoidal cap z = h·√(1 − ((x−x_c)/a)² − ((y−y_c)/(w/2))²) on a tilted plane, exponential pull-up before the trailing edge, drop beyond it, white noise; slider at x < x_te",
+        "efficiency_m_per_W": PROFILOMETER_EFFICIENCY,
+        "intercept_m": PROFILOMETER_H0,
+        "scans": scans,
+    });
+    let meta_path = dir.join("truth.json");
+    let text = serde_json::to_string_pretty(&meta).map_err(SampleError::Json)?;
+    crate::core::cache::write_atomic(&meta_path, text.as_bytes()).map_err(SampleError::Io)?;
+    files.push(meta_path);
+    Ok(files)
+}

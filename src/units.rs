@@ -28,6 +28,8 @@ pub enum Dimension {
     Velocity,
     /// Dynamic viscosity, Pa·s.
     Viscosity,
+    /// Electrical (heater) power, W.
+    Power,
 }
 
 impl Dimension {
@@ -43,6 +45,7 @@ impl Dimension {
             Dimension::Area => "m^2",
             Dimension::Velocity => "m/s",
             Dimension::Viscosity => "Pa s",
+            Dimension::Power => "W",
         }
     }
 }
@@ -69,6 +72,15 @@ fn viscosity_exponent(unit: &str) -> Option<i32> {
     Some(match unit {
         "Pa s" | "Pa·s" | "Pa*s" => 0,
         "mPa s" | "mPa·s" | "mPa*s" | "cP" => -3,
+        _ => return None,
+    })
+}
+
+fn power_exponent(unit: &str) -> Option<i32> {
+    Some(match unit {
+        "W" => 0,
+        "mW" => -3,
+        "uW" | "µW" | "μW" => -6,
         _ => return None,
     })
 }
@@ -167,6 +179,7 @@ pub fn parse_quantity(text: &str, dim: Dimension) -> Result<f64, String> {
                 .map(|e| 2 * e),
             Dimension::Velocity => unit.strip_suffix("/s").and_then(length_exponent),
             Dimension::Viscosity => viscosity_exponent(unit),
+            Dimension::Power => power_exponent(unit),
         }
         .ok_or_else(|| {
             format!(
@@ -182,6 +195,7 @@ pub fn parse_quantity(text: &str, dim: Dimension) -> Result<f64, String> {
                     Dimension::Area => "area",
                     Dimension::Velocity => "speed",
                     Dimension::Viscosity => "viscosity",
+                    Dimension::Power => "power",
                 },
                 match dim {
                     Dimension::Length => "m, mm, um, nm, pm, A",
@@ -194,6 +208,7 @@ pub fn parse_quantity(text: &str, dim: Dimension) -> Result<f64, String> {
                     Dimension::Area => "m^2, mm^2, um^2",
                     Dimension::Velocity => "m/s, mm/s, um/s",
                     Dimension::Viscosity => "Pa s, mPa s",
+                    Dimension::Power => "W, mW, uW",
                 }
             )
         })?
@@ -270,6 +285,11 @@ quantity_impls!(Velocity, Dimension::Velocity);
 #[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
 pub struct Viscosity(pub f64);
 quantity_impls!(Viscosity, Dimension::Viscosity);
+
+/// A heater power in W, written as a number or e.g. `"30 mW"`.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+pub struct Power(pub f64);
+quantity_impls!(Power, Dimension::Power);
 
 fn deserialize_quantity<'de, D: Deserializer<'de>>(d: D, dim: Dimension) -> Result<f64, D::Error> {
     #[derive(Deserialize)]

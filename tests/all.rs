@@ -2,6 +2,7 @@
 mod analysis_cli;
 mod architecture;
 mod bad_input;
+mod bulge_cli;
 mod calibrate_cli;
 mod common;
 mod dmw_cli;

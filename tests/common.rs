@@ -32,6 +32,8 @@ impl Project {
         let text =
             std::fs::read_to_string(repo_root().join("pipeline.toml")).expect("read pipeline.toml");
         let text = text.replace("actuation_step = \"0.2 nm\"", "actuation_step = \"5 nm\"");
+        // …and the heater-power sweep at four powers (0, 16, 32, 48 mW).
+        let text = text.replace("power_step = \"2 mW\"", "power_step = \"16 mW\"");
         // …and a two-target, one-knob calibration of a few evaluations (the shipped one runs
         // ~2000 cases).
         let text = text.replace(

@@ -4,7 +4,7 @@
 use clap::{Args, Parser, Subcommand};
 use hdi::stages::surfaces;
 use hdi::units::{
-    Area, Frequency, Length, PerArea, Pressure, Sensitivity, TimeSpan, Velocity, Viscosity,
+    Area, Frequency, Length, PerArea, Power, Pressure, Sensitivity, TimeSpan, Velocity, Viscosity,
 };
 use std::path::PathBuf;
 
@@ -89,6 +89,9 @@ pub enum Command {
     },
     /// One height map → σ, R, η, β, summit count, levelling used.
     Surface(Box<SurfaceArgs>),
+    /// Profilometer scans of the TFC bulge → a, w, x_TFC, height (± SE) per scan and the
+    /// efficiency (height per heater power) over the scans (docs/bulge.md).
+    Bulge(Box<BulgeArgs>),
     /// One LDV record → DMW tracks and their statistics.
     Dmw(Box<DmwArgs>),
     /// ISBL contact curves (and the MTL lubricant law with --lubricant) for one interface.
@@ -113,9 +116,10 @@ pub enum Command {
     },
     /// Generate the shipped synthetic sample data (deterministic).
     Synth {
-        /// What to generate: `afm` (height maps) or `ldv` (an LDV record).
+        /// What to generate: `afm` (height maps), `ldv` (an LDV record) or `profilometer`
+        /// (TFC-bulge scans at several heater powers).
         what: String,
-        /// Output directory (default raw/afm or raw/ldv).
+        /// Output directory (default raw/afm, raw/ldv or raw/bulge).
         #[arg(long)]
         out_dir: Option<PathBuf>,
         /// ldv: file format, h5 (int16 counts, the shipped sample), csv or parquet.
@@ -180,6 +184,34 @@ pub struct SurfaceArgs {
     #[arg(long, default_value_t = 64)]
     pub histogram_bins: usize,
     /// Also write the full HDF5 output (and PNGs beside it).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `hdi bulge FILE…`: the options have the names of the `[bulge.NAME]` keys.
+#[derive(Args, Debug)]
+pub struct BulgeArgs {
+    #[arg(required = true, num_args = 1..)]
+    pub files: Vec<PathBuf>,
+    /// Heater power of each file, in order (e.g. "30 mW"); default: from the file names
+    /// (`…30mW…`).
+    #[arg(long = "power")]
+    pub powers: Vec<Power>,
+    /// A rectangle left out of levelling and fitting: x0,y0,width,height with units (x along
+    /// a scan line, y down from the top row), e.g. "0um,0um,10um,5um". Repeatable.
+    #[arg(long)]
+    pub exclude: Vec<hdi::stages::bulge::RectConfig>,
+    /// Mask start before the detected trailing edge (default 2 um).
+    #[arg(long)]
+    pub te_margin: Option<Length>,
+    /// Do not detect and mask the trailing-edge drop.
+    #[arg(long)]
+    pub no_auto_te: bool,
+    #[arg(long)]
+    pub channel: Option<String>,
+    /// Also write bulge.h5, scans.csv/.parquet and the figures into this directory.
     #[arg(long)]
     pub out: Option<PathBuf>,
     #[arg(long)]

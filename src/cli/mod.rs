@@ -4,6 +4,7 @@
 mod analyze;
 mod args;
 mod bench;
+mod bulge;
 mod contact;
 mod dmw;
 mod progress;
@@ -50,6 +51,7 @@ pub fn main() -> Result<()> {
         Command::Status { config, json } => run::cmd_status(&config, json),
         Command::Gc { config, dry_run } => run::cmd_gc(&config, dry_run),
         Command::Surface(args) => surface::cmd_surface(*args),
+        Command::Bulge(args) => bulge::cmd_bulge(*args),
         Command::Dmw(args) => dmw::cmd_dmw(*args),
         Command::Contact(args) => contact::cmd_contact(*args),
         Command::Simulate(args) => simulate::cmd_simulate(*args),

@@ -35,9 +35,11 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         contact_max_step,
         max_step,
         fixed_step,
-        geometry,
         init
     );
+    if let Some(g) = a.geometry.clone() {
+        cfg.geometry = hdi::slider::params::GeometryConfig::Named(g);
+    }
     cfg.transit_delay = !a.no_transit_delay;
     cfg.dmw_wrap = a.dmw_wrap;
     cfg.kr_stiffening_beta = a.kr_stiffening_beta;

@@ -1,4 +1,4 @@
-//! `hdi synth afm|ldv`: the shipped synthetic sample data.
+//! `hdi synth afm|ldv|profilometer`: the shipped synthetic sample data.
 
 use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
@@ -26,6 +26,15 @@ pub(super) fn cmd_synth(
                 .map(|_| ())
                 .with_context(|| format!("writing samples to {}", dir.display()))
         }
-        other => bail!("unknown synth target `{other}` (available: afm, ldv)"),
+        "profilometer" => {
+            let dir = out_dir.unwrap_or_else(|| PathBuf::from("raw/bulge"));
+            let files = hdi::samples::write_profilometer_samples(&dir)
+                .with_context(|| format!("writing samples to {}", dir.display()))?;
+            for f in files {
+                println!("{}", f.display());
+            }
+            Ok(())
+        }
+        other => bail!("unknown synth target `{other}` (available: afm, ldv, profilometer)"),
     }
 }

@@ -8,7 +8,7 @@ use crate::dynamics::air_bearing::RearStiffening;
 use crate::dynamics::metrics::{CaseParams, SteadyWindow};
 use crate::dynamics::params::{improved_2dof, initial_2dof, optimised_bulge, Model2Dof};
 use crate::dynamics::two_dof::{ContactForceForm, Integrator, SimOptions};
-use crate::units::{Length, TimeSpan};
+use crate::units::{Length, Power, TimeSpan};
 use serde::Deserialize;
 use serde_json::{json, Value};
 
@@ -60,8 +60,17 @@ fn default_fixed_step() -> TimeSpan {
 fn default_true() -> bool {
     true
 }
-fn default_geometry() -> String {
-    "dissertation".into()
+fn default_geometry() -> GeometryConfig {
+    GeometryConfig::Named("dissertation".into())
+}
+
+/// `geometry = "dissertation" | "optimised"`, or `geometry = { bulge = "NAME" }`: a, w and
+/// x_TFC from a `[bulge.NAME]` fit (docs/bulge.md).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum GeometryConfig {
+    Named(String),
+    Bulge { bulge: String },
 }
 
 /// `[simulate.NAME]` as written in `pipeline.toml` (every key is also a `hdi simulate` option).
@@ -121,7 +130,18 @@ pub struct SimulateConfig {
     /// `dissertation` (Tables 2.1: a = 3 µm, x = 8 µm) or `optimised` (§2.3: a = 4.86 µm,
     /// x = 6.35 µm).
     #[serde(default = "default_geometry")]
-    pub geometry: String,
+    pub geometry: GeometryConfig,
+    /// Heater powers instead of actuations (needs `geometry = { bulge = "NAME" }` with an
+    /// efficiency): actuation = efficiency × power (docs/bulge.md).
+    #[serde(default)]
+    pub powers: Option<Vec<Power>>,
+    /// Power range `power_start … power_stop` by `power_step` (start default 0 W).
+    #[serde(default)]
+    pub power_start: Option<Power>,
+    #[serde(default)]
+    pub power_stop: Option<Power>,
+    #[serde(default)]
+    pub power_step: Option<Power>,
     /// Full bulge width w_TFC of the optimised design (dropped in the text; default 50 µm).
     #[serde(default)]
     pub bulge_width: Option<Length>,
@@ -161,6 +181,13 @@ pub struct SimulateParams {
     pub calibration: Option<String>,
     /// The fitted knob values applied at run time (empty without calibration).
     pub calibrated_knobs: Vec<(String, f64)>,
+    /// The `[bulge.*]` instance whose fitted a, w, x_TFC replace the geometry at run time.
+    pub bulge: Option<String>,
+    /// Heater powers (W) of a power sweep: the actuations follow at run time from the bulge
+    /// efficiency.
+    pub powers: Option<Vec<f64>>,
+    /// The efficiency (m/W) the actuations were computed with (set when prepared).
+    pub efficiency: Option<f64>,
 }
 
 /// The key of a `[calibrate]` table a calibrated instance checks (the table itself is
@@ -208,7 +235,19 @@ fn check_model(cfg: &SimulateConfig) -> std::result::Result<Model2Dof, KeyError>
             )
         }
     };
-    match cfg.geometry.as_str() {
+    let named = match &cfg.geometry {
+        GeometryConfig::Named(n) => n.as_str(),
+        GeometryConfig::Bulge { .. } => {
+            if cfg.bulge_width.is_some() {
+                return bad(
+                    "bulge_width",
+                    "not used with geometry = { bulge = … } (the fit gives w)",
+                );
+            }
+            "dissertation"
+        }
+    };
+    match named {
         "dissertation" => {
             if cfg.bulge_width.is_some() {
                 return bad("bulge_width", "only used with geometry = \"optimised\"");
@@ -245,6 +284,63 @@ fn check_model(cfg: &SimulateConfig) -> std::result::Result<Model2Dof, KeyError>
         return bad("model", e.to_string());
     }
     Ok(model)
+}
+
+/// `powers`, or the `power_start … power_stop` range by `power_step` (W, sorted); `None` when
+/// the sweep is stated in actuation. Needs `geometry = { bulge = … }`.
+fn check_powers(cfg: &SimulateConfig) -> std::result::Result<Option<Vec<f64>>, KeyError> {
+    let range = cfg.power_start.is_some() || cfg.power_stop.is_some() || cfg.power_step.is_some();
+    let list: Vec<f64> = match (&cfg.powers, range) {
+        (None, false) => return Ok(None),
+        (Some(_), true) => return bad("powers", "give powers or power_start/stop/step, not both"),
+        (Some(l), false) => {
+            let mut v: Vec<f64> = l.iter().map(|p| p.0).collect();
+            v.sort_by(f64::total_cmp);
+            v.dedup();
+            v
+        }
+        (None, true) => {
+            let a = cfg.power_start.map_or(0.0, |p| p.0);
+            let (Some(b), Some(st)) = (cfg.power_stop, cfg.power_step) else {
+                return bad(
+                    "power_stop",
+                    "a power range needs power_stop and power_step",
+                );
+            };
+            let (b, st) = (b.0, st.0);
+            if !(st > 0.0 && b >= a) {
+                return bad(
+                    "power_step",
+                    format!("need power_step > 0 and power_stop ≥ power_start (got {a} … {b} by {st} W)"),
+                );
+            }
+            let n = ((b - a) / st + 1e-9).floor() as usize;
+            if n > 10_000 {
+                return bad("power_step", format!("{n} cases is too many (≤ 10 000)"));
+            }
+            // Rounded to the nanowatt so 2.5 mW steps give 7.5 mW exactly.
+            (0..=n)
+                .map(|i| ((a + i as f64 * st) * 1e9).round() / 1e9)
+                .collect()
+        }
+    };
+    if !matches!(cfg.geometry, GeometryConfig::Bulge { .. }) {
+        return bad(
+            if cfg.powers.is_some() {
+                "powers"
+            } else {
+                "power_stop"
+            },
+            "a sweep in heater power needs geometry = { bulge = \"NAME\" } (its efficiency)",
+        );
+    }
+    if cfg.actuations.is_some() {
+        return bad("actuations", "give actuations or heater powers, not both");
+    }
+    if list.is_empty() || list.iter().any(|p| !(p.is_finite() && *p >= 0.0)) {
+        return bad("powers", "need one or more powers ≥ 0");
+    }
+    Ok(Some(list))
 }
 
 /// `actuations`, or the `actuation_start … actuation_stop` range by `actuation_step`, each
@@ -393,8 +489,17 @@ impl SimulateParams {
     /// model, its actuations, then the integrator options.
     pub fn check(cfg: &SimulateConfig) -> std::result::Result<SimulateParams, KeyError> {
         let model = check_model(cfg)?;
-        let actuations = check_actuations(cfg, model.max_actuation)?;
+        let powers = check_powers(cfg)?;
+        let actuations = if powers.is_some() {
+            Vec::new()
+        } else {
+            check_actuations(cfg, model.max_actuation)?
+        };
         let options = check_options(cfg)?;
+        let (geometry, bulge) = match &cfg.geometry {
+            GeometryConfig::Named(n) => (n.clone(), None),
+            GeometryConfig::Bulge { bulge } => (format!("bulge:{bulge}"), Some(bulge.clone())),
+        };
         let dmw = (cfg.dmw != "none").then(|| cfg.dmw.clone());
         Ok(SimulateParams {
             model_name: cfg.model.clone(),
@@ -405,14 +510,17 @@ impl SimulateParams {
             options,
             steady_start: cfg.steady_start.0,
             histories: cfg.histories.iter().map(|l| l.0).collect(),
-            geometry: cfg.geometry.clone(),
+            geometry,
             calibration: cfg.calibration.clone(),
             calibrated_knobs: Vec::new(),
+            bulge,
+            powers,
+            efficiency: None,
         })
     }
     /// Canonical parameters of the whole stage instance (its cache key).
     pub fn canonical(&self) -> Value {
-        json!({
+        let mut v = json!({
             "model": self.model_name,
             "geometry": self.geometry,
             "model_parameters": format!("{:?}", self.model),
@@ -423,7 +531,13 @@ impl SimulateParams {
             "steady_start_s": self.steady_start,
             "histories_m": self.histories,
             "calibration": self.calibration,
-        })
+        });
+        // Only instances with a fitted bulge carry these keys: the others keep their keys.
+        if let (Some(b), Some(obj)) = (&self.bulge, v.as_object_mut()) {
+            obj.insert("bulge".into(), json!(b));
+            obj.insert("powers_W".into(), json!(self.powers));
+        }
+        v
     }
 
     pub fn case_params(&self, actuation: f64, contact_key: &str, dmw_key: Option<&str>) -> Value {
@@ -486,6 +600,16 @@ impl SimulateParams {
                 ));
             }
         }
+        if let Some(b) = &params.bulge {
+            if !file.has_instance("bulge", b) {
+                return Err(file.error(
+                    "simulate",
+                    name,
+                    "geometry",
+                    format!("no [bulge.{b}] in this file"),
+                ));
+            }
+        }
         if let Some(d) = &params.dmw {
             if !file.has_instance("dmw", d) && !file.has_instance("excitation", d) {
                 return Err(file.error(
@@ -504,6 +628,139 @@ impl SimulateParams {
         let mut u = vec![self.contact.clone()];
         u.extend(self.dmw.iter().cloned());
         u.extend(self.calibration.iter().cloned());
+        u.extend(self.bulge.iter().cloned());
         u
+    }
+
+    /// Apply a fitted bulge (docs/bulge.md): its a, w, x_TFC replace the geometry, and a
+    /// power sweep gets its actuations = efficiency × power. The unpowered bulge (the
+    /// intercept) does not add: the 2-DOF actuation is the height the heater adds above the
+    /// slider as it flies unpowered, whose nominal flying height already includes it.
+    pub fn apply_bulge(
+        &mut self,
+        fitted: &crate::artefacts::bulge::FittedBulge,
+        name: &str,
+    ) -> crate::error::Result<()> {
+        use crate::error::Error;
+        let missing = |what: &str| Error::UpstreamField {
+            kind: "bulge",
+            name: name.to_string(),
+            what: what.to_string(),
+        };
+        let x = fitted
+            .x_tfc_m
+            .ok_or_else(|| missing("x_TFC (no trailing edge detected)"))?;
+        let design = crate::dynamics::geometry::BulgeDesign {
+            semi_width_x: fitted.a_tfc_m,
+            full_width_y: fitted.w_tfc_m,
+            offset_from_te: x,
+        };
+        design.validate()?;
+        self.model = self.model.with_bulge(design);
+        if let Some(powers) = &self.powers {
+            let eff = fitted
+                .efficiency_m_per_w
+                .filter(|e| *e > 0.0 && e.is_finite())
+                .ok_or_else(|| missing("positive efficiency (scans at two or more powers)"))?;
+            let max = self.model.max_actuation;
+            let mut acts = Vec::with_capacity(powers.len());
+            for p in powers {
+                // Picometre-rounded, as the actuation ranges are.
+                let a = (eff * p * 1e12).round() / 1e12;
+                if !(0.0..=max).contains(&a) {
+                    return Err(missing(&format!(
+                        "actuation within the model's range at {:.1} mW ({:.2} nm > {:.2} nm)",
+                        p * 1e3,
+                        a * 1e9,
+                        max * 1e9
+                    )));
+                }
+                acts.push(a);
+            }
+            self.actuations = acts;
+            self.efficiency = Some(eff);
+        }
+        Ok(())
+    }
+
+    /// The heater power (W) of the case at `actuation` in a power sweep.
+    pub fn power_of(&self, actuation: f64) -> Option<f64> {
+        let powers = self.powers.as_ref()?;
+        let k = self.actuations.iter().position(|a| *a == actuation)?;
+        powers.get(k).copied()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params(toml_text: &str) -> SimulateParams {
+        let cfg: SimulateConfig = toml::from_str(toml_text).unwrap();
+        SimulateParams::check(&cfg).unwrap()
+    }
+
+    #[test]
+    fn named_geometries_keep_their_canonical_keys() {
+        // The keys the instance's cache key was built from before the bulge geometry existed:
+        // a named geometry must not gain any (its cached outputs stay valid).
+        let before = [
+            "model",
+            "geometry",
+            "model_parameters",
+            "contact",
+            "dmw",
+            "actuations_m",
+            "options",
+            "steady_start_s",
+            "histories_m",
+            "calibration",
+        ];
+        for g in ["dissertation", "optimised"] {
+            let p = params(&format!("contact = \"c\"\ngeometry = \"{g}\""));
+            let c = p.canonical();
+            let keys: Vec<&str> = c.as_object().unwrap().keys().map(|k| k.as_str()).collect();
+            assert_eq!(keys, before);
+            assert_eq!(c["geometry"], g);
+            assert!(p.bulge.is_none() && p.powers.is_none());
+        }
+    }
+
+    #[test]
+    fn bulge_geometry_and_power_sweep() {
+        let p = params(
+            "contact = \"c\"\ngeometry = { bulge = \"tfc\" }\npower_stop = \"30 mW\"\npower_step = \"7.5 mW\"",
+        );
+        assert_eq!(p.bulge.as_deref(), Some("tfc"));
+        assert_eq!(p.powers, Some(vec![0.0, 0.0075, 0.015, 0.0225, 0.03]));
+        assert!(p.actuations.is_empty());
+        let mut q = p.clone();
+        // A fit that found exactly the optimised design (§2.3) must give that model.
+        let opt = params("contact = \"c\"\ngeometry = \"optimised\"");
+        let b = opt.model.bulge;
+        let fitted = crate::artefacts::bulge::FittedBulge {
+            a_tfc_m: b.semi_width_x,
+            w_tfc_m: b.full_width_y,
+            x_tfc_m: Some(b.offset_from_te),
+            efficiency_m_per_w: Some(0.3e-6),
+            intercept_m: Some(3e-9),
+        };
+        q.apply_bulge(&fitted, "tfc").unwrap();
+        // 0.3 nm/mW × 7.5 mW steps = 2.25 nm steps; no intercept added.
+        assert_eq!(q.actuations, vec![0.0, 2.25e-9, 4.5e-9, 6.75e-9, 9e-9]);
+        assert_eq!(q.power_of(4.5e-9), Some(0.015));
+        assert_eq!(q.model, opt.model);
+        // Powers need a bulge; both lists at once are an error.
+        let bad = |t: &str| SimulateParams::check(&toml::from_str(t).unwrap()).is_err();
+        assert!(bad("contact = \"c\"\npowers = [\"10 mW\"]"));
+        assert!(bad(
+            "contact = \"c\"\ngeometry = { bulge = \"t\" }\npowers = [\"10 mW\"]\nactuations = [\"1 nm\"]"
+        ));
+        assert!(bad(
+            "contact = \"c\"\ngeometry = { bulge = \"t\" }\nbulge_width = \"40 um\""
+        ));
+        // A power beyond the model's actuation range is an error at run time.
+        let mut far = params("contact = \"c\"\ngeometry = { bulge = \"t\" }\npowers = [\"10 W\"]");
+        assert!(far.apply_bulge(&fitted, "t").is_err());
     }
 }

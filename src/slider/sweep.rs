@@ -56,6 +56,10 @@ impl PreparedSweep {
                 dmw_track.as_mut(),
             )?;
         }
+        if let Some(b) = &params.bulge {
+            let fitted = crate::artefacts::bulge::upstream_bulge(upstream, b)?;
+            calibrated.apply_bulge(&fitted, b)?;
+        }
         let isbl = IsblLookup::build_standard(IsblModel::new(isbl_params)?)?;
         let dmw = match (&calibrated.dmw, dmw_track) {
             (Some(d), Some(t)) => Some((t, key_of(d))),

@@ -5,6 +5,7 @@
 //! Adding a stage kind: its module (config struct, `impl FromConfig`, `impl StageKind`) and
 //! one line in [`KINDS`].
 pub mod analysis;
+pub mod bulge;
 pub mod calibrate;
 pub mod contact;
 pub mod dmw;
@@ -180,6 +181,7 @@ fn read<K: StageKind>(file: &PipelineFile) -> std::result::Result<Vec<Unbuilt>, 
 /// Every stage kind, one line each, in the order their instances are built.
 pub const KINDS: &[Registered] = &[
     kind::<surfaces::SurfaceStage>(),
+    kind::<bulge::BulgeStage>(),
     kind::<interface::InterfaceStage>(),
     kind::<contact::ContactStage>(),
     kind::<dmw::DmwStage>(),

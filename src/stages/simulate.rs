@@ -294,10 +294,24 @@ impl StageKind for SimulateStage {
         ctx.progress.set_message("sweep metrics, tables, plots");
         let sweep = sweep_analysis(p, &cases)?;
         let files = link_cases(ctx.out_dir, &cases)?;
-        let rows = case_rows(&cases, &sweep);
+        let mut rows = case_rows(&cases, &sweep);
+        // A sweep in heater power (docs/bulge.md): each row also names its power.
+        if p.efficiency.is_some() {
+            for (row, c) in rows.iter_mut().zip(&cases) {
+                let mw = p.power_of(c.actuation).map(|w| (w * 1e12).round() / 1e9);
+                row.insert("heater_power_mW".into(), json!(mw));
+            }
+        }
         crate::core::store::write_table(&rows, &ctx.out_dir.join("sweep"))?;
         plots(ctx.out_dir, p, &cases, &sweep, &self.name)?;
-        let summary = sweep_json(&cases, &sweep);
+        let mut summary = sweep_json(&cases, &sweep);
+        let touchdown_power = p
+            .efficiency
+            .and_then(|e| sweep.touchdown_actuation_m.map(|td| td / e));
+        if let (Some(e), Some(obj)) = (p.efficiency, summary.as_object_mut()) {
+            obj.insert("efficiency_m_per_W".into(), json!(e));
+            obj.insert("touchdown_power_W".into(), json!(touchdown_power));
+        }
         // Femtometre-rounded nm: 10.2, not 10.200000000000001.
         let nm = |x: f64| (x * 1e15).round() / 1e6;
         let mut row = Map::new();
@@ -320,6 +334,12 @@ impl StageKind for SimulateStage {
             ("slope_D", &sweep.slopes.d),
         ] {
             row.insert(k.into(), json!(l.as_ref().map(|l| l.slope)));
+        }
+        if p.efficiency.is_some() {
+            row.insert(
+                "touchdown_power_mW".into(),
+                json!(touchdown_power.map(|w| (w * 1e9).round() / 1e6)),
+            );
         }
         row.insert(
             "optimum_nm".into(),

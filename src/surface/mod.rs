@@ -5,6 +5,7 @@
 //! axis y (one scan line per row), column `i` = fast-scan axis x; row 0 is the top of the image
 //! as the instrument software displays it; heights and lengths in metres.
 
+pub mod bulge;
 pub mod combine;
 pub mod crop;
 pub mod filter;

@@ -1,0 +1,563 @@
+//! Bulge stage: profilometer scans of the TFC bulge at several heater powers → fitted bulge
+//! geometry (a, w, x_TFC) and efficiency (m/W) for the slider stages (App. C.2; docs/bulge.md).
+//! The same analysis backs `hdi bulge FILE…`.
+
+use super::{FromConfig, StageContext, StageKind, StageOutput};
+use crate::artefacts::bulge::FittedBulge;
+use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::store::{write_table, H5Out};
+use crate::error::Result;
+use crate::surface::bulge::{
+    fit_bulge, fit_efficiency, power_from_name, BulgeFit, BulgeOptions, EfficiencyFit, Rect,
+};
+use crate::surface::io::{read_height_map, ReadOptions};
+use crate::surface::SurfaceError;
+use crate::units::{Length, Power};
+use serde::Deserialize;
+use serde_json::{json, Map, Value};
+use std::path::{Path, PathBuf};
+
+pub const MODEL_VERSION: &str = "bulge-1";
+
+fn default_true() -> bool {
+    true
+}
+
+/// `[bulge.NAME]` as written.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BulgeConfig {
+    /// Profilometer scans (any height-map format hdi reads).
+    pub files: Vec<PathBuf>,
+    /// Heater power of each scan (e.g. "30 mW"); default: from the file names (`…30mW…`).
+    #[serde(default)]
+    pub powers: Option<Vec<Power>>,
+    /// Rectangles left out of levelling and fitting (x along a scan line, y down the rows).
+    #[serde(default)]
+    pub exclude: Vec<RectConfig>,
+    /// Detect and mask the trailing-edge drop and its pull-up.
+    #[serde(default = "default_true")]
+    pub auto_te: bool,
+    /// Mask start before the detected edge (default 2 µm).
+    #[serde(default)]
+    pub te_margin: Option<Length>,
+    /// Channel for multi-channel formats.
+    #[serde(default)]
+    pub channel: Option<String>,
+}
+
+/// An excluded rectangle, `{ x0 = "0 um", y0 = "0 um", width = "10 um", height = "5 um" }`
+/// or on the command line `"0um,0um,10um,5um"`: x along a scan line, y down the rows, from
+/// the first pixel (the same convention as the surfaces stage's `crop`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RectConfig {
+    pub x0: Length,
+    pub y0: Length,
+    pub width: Length,
+    pub height: Length,
+}
+
+impl std::str::FromStr for RectConfig {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let parts: Vec<&str> = s.split(',').collect();
+        let [x0, y0, width, height] = parts.as_slice() else {
+            return Err(format!(
+                "`{s}`: expected x0,y0,width,height (e.g. 0um,0um,10um,5um)"
+            ));
+        };
+        Ok(Self {
+            x0: x0.parse()?,
+            y0: y0.parse()?,
+            width: width.parse()?,
+            height: height.parse()?,
+        })
+    }
+}
+
+/// Validated parameters, SI units.
+#[derive(Debug, Clone)]
+pub struct BulgeParams {
+    pub files: Vec<PathBuf>,
+    /// Heater power per file, W (`None`: unknown).
+    pub powers: Vec<Option<f64>>,
+    pub options: BulgeOptions,
+    pub channel: Option<String>,
+}
+
+/// The heater power of each file: as given (one per file), else from the file names.
+pub fn resolve_powers(
+    files: &[PathBuf],
+    given: Option<&[f64]>,
+) -> std::result::Result<Vec<Option<f64>>, String> {
+    match given {
+        Some(p) if p.len() != files.len() => Err(format!(
+            "{} powers for {} files (give one per file, or none to read them from the file names)",
+            p.len(),
+            files.len()
+        )),
+        Some(p) => {
+            if let Some(bad) = p.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+                return Err(format!("power {bad} W must be ≥ 0"));
+            }
+            Ok(p.iter().map(|v| Some(*v)).collect())
+        }
+        None => Ok(files
+            .iter()
+            .map(|f| {
+                f.file_name()
+                    .and_then(|n| n.to_str())
+                    .and_then(power_from_name)
+            })
+            .collect()),
+    }
+}
+
+/// Exclusion rectangles from their config form.
+pub fn rects(exclude: &[RectConfig]) -> Vec<Rect> {
+    exclude
+        .iter()
+        .map(|c| Rect {
+            x0: c.x0.0,
+            y0: c.y0.0,
+            width: c.width.0,
+            height: c.height.0,
+        })
+        .collect()
+}
+
+/// One fitted scan.
+pub struct ScanResult {
+    pub file: PathBuf,
+    pub power: Option<f64>,
+    pub fit: BulgeFit,
+}
+
+pub struct BulgeAnalysis {
+    pub scans: Vec<ScanResult>,
+    pub efficiency: Option<EfficiencyFit>,
+    pub tfc: FittedBulge,
+}
+
+/// Inverse-variance weighted mean (plain mean if a standard error is zero or not finite).
+fn weighted_mean(values: &[(f64, f64)]) -> f64 {
+    let ok = values.iter().all(|(_, se)| se.is_finite() && *se > 0.0);
+    if ok {
+        let (s, w) = values.iter().fold((0.0, 0.0), |(s, w), (v, se)| {
+            (s + v / (se * se), w + 1.0 / (se * se))
+        });
+        s / w
+    } else {
+        values.iter().map(|(v, _)| v).sum::<f64>() / values.len() as f64
+    }
+}
+
+/// Fit every scan, then the efficiency line over the scans with a power. The geometry handed
+/// on (a, w, x_TFC) is the inverse-variance weighted mean over the scans: the shape is
+/// expected not to change with power (docs/bulge.md), and the weights favour the tall,
+/// well-determined bulges of the higher powers.
+pub fn analyse(params: &BulgeParams) -> Result<BulgeAnalysis> {
+    let opts = ReadOptions {
+        channel: params.channel.clone(),
+        ..Default::default()
+    };
+    let mut scans = Vec::new();
+    for (file, power) in params.files.iter().zip(&params.powers) {
+        let map = read_height_map(file, &opts)?;
+        let fit = fit_bulge(&map, &params.options).map_err(|e| SurfaceError::Format {
+            path: file.clone(),
+            reason: e.to_string(),
+        })?;
+        scans.push(ScanResult {
+            file: file.clone(),
+            power: *power,
+            fit,
+        });
+    }
+    let with_power: Vec<(f64, f64)> = scans
+        .iter()
+        .filter_map(|s| s.power.map(|p| (p, s.fit.height)))
+        .collect();
+    let distinct = with_power
+        .iter()
+        .any(|(p, _)| (p - with_power[0].0).abs() > 0.0);
+    let efficiency = if with_power.len() >= 2 && distinct {
+        let (p, h): (Vec<f64>, Vec<f64>) = with_power.into_iter().unzip();
+        Some(fit_efficiency(&p, &h)?)
+    } else {
+        None
+    };
+    let pick = |f: &dyn Fn(&BulgeFit) -> (f64, f64)| {
+        weighted_mean(&scans.iter().map(|s| f(&s.fit)).collect::<Vec<_>>())
+    };
+    let x_tfc = scans
+        .iter()
+        .all(|s| s.fit.x_tfc.is_some())
+        .then(|| pick(&|f| (f.x_tfc.unwrap_or(f64::NAN), f.xc_se)));
+    let tfc = FittedBulge {
+        a_tfc_m: pick(&|f| (f.a, f.a_se)),
+        w_tfc_m: pick(&|f| (f.w, f.w_se)),
+        x_tfc_m: x_tfc,
+        efficiency_m_per_w: efficiency.map(|e| e.efficiency),
+        intercept_m: efficiency.map(|e| e.intercept),
+    };
+    Ok(BulgeAnalysis {
+        scans,
+        efficiency,
+        tfc,
+    })
+}
+
+fn num(v: f64) -> Value {
+    if v.is_finite() {
+        json!(v)
+    } else {
+        Value::Null
+    }
+}
+
+/// One scan as a JSON object (the `hdi bulge --json` and `scans.csv` keys; SI units named in
+/// the keys). x_TFC's standard error is that of the centre: the edge position is taken as
+/// exact (it is known to ±dx/2).
+pub fn scan_row(s: &ScanResult) -> Map<String, Value> {
+    let f = &s.fit;
+    let v = json!({
+        "file": s.file.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+        "heater_power_mW": s.power.map(|p| p * 1e3),
+        "height_m": num(f.height), "height_se_m": num(f.height_se),
+        "a_tfc_m": num(f.a), "a_tfc_se_m": num(f.a_se),
+        "w_tfc_m": num(f.w), "w_tfc_se_m": num(f.w_se),
+        "x_tfc_m": f.x_tfc.map(num), "x_tfc_se_m": f.x_tfc.map(|_| num(f.xc_se)),
+        "x_c_m": num(f.xc), "y_c_m": num(f.yc), "y_c_se_m": num(f.yc_se),
+        "trailing_edge_x_m": f.trailing_edge.map(|t| num(t.x)),
+        "residual_rms_m": num(f.residual_rms),
+        "n_pixels": f.n_pixels,
+    });
+    v.as_object().cloned().unwrap_or_default()
+}
+
+/// The full report: scans, efficiency fit and the geometry handed on.
+pub fn report_json(a: &BulgeAnalysis) -> Value {
+    let e = a.efficiency;
+    json!({
+        "scans": a.scans.iter().map(|s| Value::Object(scan_row(s))).collect::<Vec<_>>(),
+        "efficiency_m_per_W": e.map(|e| num(e.efficiency)),
+        "efficiency_se_m_per_W": e.map(|e| num(e.efficiency_se)),
+        "intercept_m": e.map(|e| num(e.intercept)),
+        "intercept_se_m": e.map(|e| num(e.intercept_se)),
+        "tfc": a.tfc.to_json(),
+    })
+}
+
+/// `bulge.h5` (per-scan values with units as attributes, the levelled maps) and the tidy
+/// `scans.csv`/`scans.parquet` in `dir`.
+pub fn write_outputs(a: &BulgeAnalysis, params: &Value, key: &str, dir: &Path) -> Result<()> {
+    let out = H5Out::create(&dir.join("bulge.h5"))?;
+    let files: Vec<String> = a
+        .scans
+        .iter()
+        .map(|s| s.file.to_string_lossy().into_owned())
+        .collect();
+    out.root_attributes("bulge", key, params, &json!(files), "bulge")?;
+    let g = out.group("bulge", Some("NXentry"))?;
+    let col = |f: &dyn Fn(&ScanResult) -> f64| a.scans.iter().map(f).collect::<Vec<f64>>();
+    let nan = f64::NAN;
+    out.write_1d(
+        &g,
+        "heater_power",
+        &col(&|s| s.power.unwrap_or(nan)),
+        "W",
+        "heater power (NaN: unknown)",
+    )?;
+    out.write_1d(&g, "height", &col(&|s| s.fit.height), "m", "bulge height")?;
+    out.write_1d(
+        &g,
+        "height_se",
+        &col(&|s| s.fit.height_se),
+        "m",
+        "standard error of the height",
+    )?;
+    out.write_1d(
+        &g,
+        "a_tfc",
+        &col(&|s| s.fit.a),
+        "m",
+        "half-length along the slider",
+    )?;
+    out.write_1d(
+        &g,
+        "a_tfc_se",
+        &col(&|s| s.fit.a_se),
+        "m",
+        "standard error of a",
+    )?;
+    out.write_1d(
+        &g,
+        "w_tfc",
+        &col(&|s| s.fit.w),
+        "m",
+        "full width across the slider",
+    )?;
+    out.write_1d(
+        &g,
+        "w_tfc_se",
+        &col(&|s| s.fit.w_se),
+        "m",
+        "standard error of w",
+    )?;
+    out.write_1d(
+        &g,
+        "x_tfc",
+        &col(&|s| s.fit.x_tfc.unwrap_or(nan)),
+        "m",
+        "centre distance from the trailing edge",
+    )?;
+    out.write_1d(
+        &g,
+        "x_tfc_se",
+        &col(&|s| s.fit.xc_se),
+        "m",
+        "standard error of x_TFC",
+    )?;
+    out.write_1d(
+        &g,
+        "residual_rms",
+        &col(&|s| s.fit.residual_rms),
+        "m",
+        "RMS of the fit residuals",
+    )?;
+    if let Some(e) = a.efficiency {
+        out.write_scalar(
+            &g,
+            "efficiency",
+            e.efficiency,
+            "m/W",
+            "bulge height per heater power",
+        )?;
+        out.write_scalar(
+            &g,
+            "efficiency_se",
+            e.efficiency_se,
+            "m/W",
+            "standard error",
+        )?;
+        out.write_scalar(
+            &g,
+            "intercept",
+            e.intercept,
+            "m",
+            "bulge height at zero power",
+        )?;
+        out.write_scalar(&g, "intercept_se", e.intercept_se, "m", "standard error")?;
+    }
+    for (k, s) in a.scans.iter().enumerate() {
+        let sg = out.group(&format!("bulge/scan_{k}"), Some("NXdata"))?;
+        out.write_string(&sg, "file", &files[k])?;
+        out.write_array(
+            &sg,
+            "levelled",
+            s.fit.levelled.z.view(),
+            "m",
+            "levelled height",
+        )?;
+        out.write_scalar(&sg, "dx", s.fit.levelled.dx, "m", "pixel spacing along x")?;
+        out.write_scalar(&sg, "dy", s.fit.levelled.dy, "m", "pixel spacing along y")?;
+    }
+    out.finish()?;
+    let rows: Vec<Map<String, Value>> = a.scans.iter().map(scan_row).collect();
+    write_table(&rows, &dir.join("scans"))?;
+    Ok(())
+}
+
+/// Figures (docs/bulge.md): per scan the levelled map (masked pixels blank) and three scan
+/// lines through the fitted centre and ±6 µm across it with the fitted cap (Fig. C.5 style);
+/// height against heater power with the efficiency line.
+pub fn write_figures(a: &BulgeAnalysis, dir: &Path) -> Result<()> {
+    use crate::figures;
+    for (k, s) in a.scans.iter().enumerate() {
+        let f = &s.fit;
+        let lev = &f.levelled;
+        let shown = ndarray::Array2::from_shape_fn(lev.z.dim(), |(j, i)| {
+            if lev.is_valid(j, i) {
+                lev.z[[j, i]]
+            } else {
+                f64::NAN
+            }
+        });
+        let label = match s.power {
+            Some(p) => format!("{:.0} mW", p * 1e3),
+            None => s.file.display().to_string(),
+        };
+        figures::heatmap_png(
+            &dir.join(format!("scan_{k}_levelled.png")),
+            shown.view(),
+            lev.dx,
+            lev.dy,
+            &format!("Levelled profilometer scan, {label}"),
+        )?;
+        let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+        for off in [-6e-6, 0.0, 6e-6] {
+            let y = f.yc + off;
+            let j = (y / lev.dy).round();
+            if j < 0.0 || j as usize >= lev.ny() {
+                continue;
+            }
+            let j = j as usize;
+            // Only the analysed pixels (the masked trailing edge is not drawn).
+            let data: Vec<(f64, f64)> = (0..lev.nx())
+                .filter(|&i| lev.is_valid(j, i))
+                .map(|i| (i as f64 * lev.dx * 1e6, lev.z[[j, i]] * 1e9))
+                .collect();
+            let yj = j as f64 * lev.dy;
+            let model: Vec<(f64, f64)> = (0..lev.nx())
+                .filter(|&i| lev.is_valid(j, i))
+                .map(|i| {
+                    let x = i as f64 * lev.dx;
+                    let u = (x - f.xc) / f.a;
+                    let v = 2.0 * (yj - f.yc) / f.w;
+                    let z = f.offset + f.height * (1.0 - u * u - v * v).max(0.0).sqrt();
+                    (x * 1e6, z * 1e9)
+                })
+                .collect();
+            series.push((format!("scan y = {:+.0} µm", off * 1e6), data));
+            series.push((format!("fit y = {:+.0} µm", off * 1e6), model));
+        }
+        let refs: Vec<(&str, Vec<(f64, f64)>)> = series
+            .iter()
+            .map(|(n, v)| (n.as_str(), v.clone()))
+            .collect();
+        figures::lines_png(
+            &dir.join(format!("scan_{k}_lines.png")),
+            &format!("Scan lines across the bulge, {label} — Fig. C.5"),
+            "x along the slider (µm)",
+            "height (nm)",
+            &refs,
+        )?;
+    }
+    if let Some(e) = a.efficiency {
+        let pts: Vec<(f64, f64)> = a
+            .scans
+            .iter()
+            .filter_map(|s| s.power.map(|p| (p * 1e3, s.fit.height * 1e9)))
+            .collect();
+        let pmax = pts.iter().map(|p| p.0).fold(0.0, f64::max);
+        let line = vec![
+            (0.0, e.intercept * 1e9),
+            (pmax, (e.intercept + e.efficiency * pmax * 1e-3) * 1e9),
+        ];
+        let name = format!("fit: {:.3} nm/mW", e.efficiency * 1e6);
+        figures::lines_png(
+            &dir.join("height_vs_power.png"),
+            "Bulge height against heater power",
+            "heater power (mW)",
+            "bulge height (nm)",
+            &[("fitted heights", pts), (name.as_str(), line)],
+        )?;
+    }
+    Ok(())
+}
+
+pub struct BulgeStage {
+    pub params: BulgeParams,
+}
+
+impl FromConfig for BulgeStage {
+    type Config = BulgeConfig;
+
+    fn from_config(
+        file: &PipelineFile,
+        name: &str,
+        cfg: &BulgeConfig,
+    ) -> std::result::Result<Self, ConfigError> {
+        let err = |k: &str, m: String| file.error("bulge", name, k, m);
+        if cfg.files.is_empty() {
+            return Err(err("files", "needs at least one scan".into()));
+        }
+        let files = cfg
+            .files
+            .iter()
+            .map(|f| file.input_file("bulge", name, "files", f, "profilometer scan"))
+            .collect::<std::result::Result<Vec<_>, _>>()?;
+        let given: Option<Vec<f64>> = cfg.powers.as_ref().map(|p| p.iter().map(|v| v.0).collect());
+        let powers = resolve_powers(&files, given.as_deref()).map_err(|m| err("powers", m))?;
+        let te_margin = cfg.te_margin.map(|l| l.0).unwrap_or(2e-6);
+        if te_margin.is_nan() || te_margin < 0.0 {
+            return Err(err("te_margin", format!("{te_margin} m must be ≥ 0")));
+        }
+        Ok(Self {
+            params: BulgeParams {
+                files,
+                powers,
+                options: BulgeOptions {
+                    exclude: rects(&cfg.exclude),
+                    auto_te: cfg.auto_te,
+                    te_margin,
+                },
+                channel: cfg.channel.clone(),
+            },
+        })
+    }
+}
+
+impl StageKind for BulgeStage {
+    const KIND: &'static str = "bulge";
+    const MODEL_VERSION: &'static str = MODEL_VERSION;
+
+    fn params(&self) -> Value {
+        let p = &self.params;
+        json!({
+            "powers_W": p.powers,
+            "exclude_m": p.options.exclude.iter().map(|r| [r.x0, r.y0, r.width, r.height]).collect::<Vec<_>>(),
+            "auto_te": p.options.auto_te,
+            "te_margin_m": p.options.te_margin,
+            "channel": p.channel,
+        })
+    }
+    fn inputs(&self) -> Vec<(String, PathBuf)> {
+        self.params
+            .files
+            .iter()
+            .enumerate()
+            .map(|(k, f)| (format!("files[{k}]"), f.clone()))
+            .collect()
+    }
+    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+        let a = analyse(&self.params)?;
+        write_outputs(&a, &self.params(), ctx.key, ctx.out_dir)?;
+        write_figures(&a, ctx.out_dir)?;
+        let r = |v: f64| crate::core::store::round_significant(v, 6);
+        let row = json!({
+            "scans": a.scans.len(),
+            "a_tfc_um": r(a.tfc.a_tfc_m * 1e6),
+            "w_tfc_um": r(a.tfc.w_tfc_m * 1e6),
+            "x_tfc_um": a.tfc.x_tfc_m.map(|x| r(x * 1e6)),
+            "efficiency_nm_per_mW": a.tfc.efficiency_m_per_w.map(|e| r(e * 1e6)),
+            "intercept_nm": a.tfc.intercept_m.map(|h| r(h * 1e9)),
+        });
+        Ok(StageOutput {
+            result: report_json(&a),
+            summary_row: row.as_object().cloned(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn powers_from_names_or_given() {
+        let files = vec![PathBuf::from("a/tfc_30mW.gsf"), PathBuf::from("b.gsf")];
+        assert_eq!(
+            resolve_powers(&files, None).unwrap(),
+            vec![Some(0.03), None]
+        );
+        assert_eq!(
+            resolve_powers(&files, Some(&[0.0, 0.09])).unwrap(),
+            vec![Some(0.0), Some(0.09)]
+        );
+        assert!(resolve_powers(&files, Some(&[0.0])).is_err());
+        assert!(resolve_powers(&files, Some(&[0.0, -1.0])).is_err());
+    }
+}
