@@ -141,6 +141,13 @@ pub enum Command {
         config: PathBuf,
         #[arg(long, default_value_t = 1024)]
         size: usize,
+        /// Instead: time every binary height-map and LDV reader on the files under these
+        /// directories (MB/s, peak memory), e.g. `--readers tests/data`.
+        #[arg(long, num_args = 1..)]
+        readers: Vec<PathBuf>,
+        /// One timed read of FILE in this process (what `--readers` runs per file).
+        #[arg(long, hide = true)]
+        read_one: Option<PathBuf>,
     },
 }
 

@@ -4,6 +4,7 @@
 mod analyze;
 mod args;
 mod bench;
+mod bench_readers;
 mod bulge;
 mod contact;
 mod dmw;
@@ -65,7 +66,16 @@ pub fn main() -> Result<()> {
             seed,
             no_index,
         } => synth::cmd_synth(&what, out_dir, &format, revolutions, seed, no_index),
-        Command::Bench { config, size } => bench::cmd_bench(&config, size),
+        Command::Bench {
+            config,
+            size,
+            readers,
+            read_one,
+        } => match (read_one, readers.is_empty()) {
+            (Some(file), _) => bench_readers::read_one(&file),
+            (None, false) => bench_readers::bench_readers(&readers),
+            (None, true) => bench::cmd_bench(&config, size),
+        },
     }
 }
 
