@@ -2,12 +2,12 @@
 //!
 //! Formats (docs/surfaces.md): Bruker NanoScope v4.3+ binary (`nanoscope`),
 //! Gwyddion native (`gwy`), Gwyddion Simple Field (`gsf`), ASCII matrix / Gwyddion ASCII export /
-//! CSV (`ascii`), XYZ on a rectangular lattice (`xyz`), Zygo MetroPro `.dat` (`metropro`) and
-//! ISO 25178-71 `.x3p` (`x3p`). Every reader returns heights and
+//! CSV (`ascii`), XYZ on a rectangular lattice (`xyz`), Zygo MetroPro `.dat` (`metropro`),
+//! Zygo `.datx` (`datx`, HDF5) and ISO 25178-71 `.x3p` (`x3p`). Every reader returns heights and
 //! lengths in metres with row 0 = top of the image as the instrument software shows it.
 //! NaN and saturated pixels come back as `valid = false` with `z = 0.0`.
 //!
-//! `ReadOptions::channel` only matters for the multi-channel formats (NanoScope, GWY, MetroPro); the
+//! `ReadOptions::channel` only matters for the multi-channel formats (NanoScope, GWY, MetroPro, datx); the
 //! single-channel formats ignore it.
 use super::{HeightMap, Result, SourceInfo, SurfaceError};
 use ndarray::Array2;
@@ -21,6 +21,7 @@ mod nanoscope;
 mod units;
 mod xyz;
 // Zygo MetroPro .dat, Zygo .datx (HDF5), ISO 25178-71 .x3p (ZIP + XML).
+mod datx;
 mod metropro;
 mod x3p;
 
@@ -49,7 +50,7 @@ pub struct ReadOptions {
 /// The formats `read_height_map` reads, for error messages.
 pub const SUPPORTED_FORMATS: &str = "Gwyddion .gwy (GWYP), Bruker NanoScope v4.3+ binary, \
      Gwyddion Simple Field .gsf, ASCII matrix/CSV, XYZ lattice, \
-     Zygo MetroPro .dat, ISO 25178-71 .x3p";
+     Zygo MetroPro .dat, Zygo .datx (HDF5), ISO 25178-71 .x3p";
 
 /// How many leading bytes `read_height_map` shows `detect_format`: enough for several lines of
 /// a wide ASCII matrix (a 256-column row is ~5 kB).
@@ -74,6 +75,10 @@ pub fn detect_format(head: &[u8]) -> Option<&'static str> {
     }
     if metropro::MAGICS.iter().any(|m| head.starts_with(m)) {
         return Some("metropro");
+    }
+    // Zygo .datx is HDF5; its reader requires the `/MetaData` dataset.
+    if head.starts_with(datx::MAGIC) {
+        return Some("datx");
     }
     // ISO 25178-71 .x3p is a ZIP archive; its reader requires `main.xml` inside.
     if crate::formats::zip::is_zip(head) {
@@ -164,6 +169,7 @@ pub fn read_height_map(path: &Path, opts: &ReadOptions) -> Result<HeightMap> {
         Some("gsf") => gsf::read(path, &bytes, opts)?,
         Some("metropro") => metropro::read(path, &bytes, opts)?,
         Some("x3p") => x3p::read(path, &bytes, opts)?,
+        Some("datx") => datx::read(path, &bytes, opts)?,
         Some("xyz") => xyz::read(path, &bytes, opts)?,
         Some(_) => ascii::read(path, &bytes, opts)?,
         None => {
@@ -312,6 +318,8 @@ mod tests {
         assert_eq!(detect_format(b"\x88\x1b\x03\x6f\x00\x01"), Some("metropro"));
         assert_eq!(detect_format(b"\x88\x1b\x03\x71\x00\x03"), Some("metropro"));
         assert_eq!(detect_format(b"PK\x03\x04\x14\x00"), Some("x3p"));
+        assert_eq!(detect_format(b"\x89HDF\r\n\x1a\n\x00\x00"), Some("datx"));
+        assert_eq!(detect_format(b"\x89HDF\r\n"), None);
         assert_eq!(detect_format(b"\x88\x1b\x03\x72\x00\x03"), None);
         assert_eq!(detect_format(b""), None);
         assert_eq!(detect_format(b"\x7fELF\x02\x01\x01\0\0"), None);
