@@ -118,6 +118,11 @@ fn has_string_fields(td: &TypeDescriptor, names: &[&str]) -> bool {
     let TypeDescriptor::Compound(c) = td else {
         return false;
     };
+    // A corrupt datatype message can place a member outside its compound; libhdf5 would then
+    // copy out of bounds during conversion.
+    if c.fields.iter().any(|f| f.offset.saturating_add(f.ty.size()) > c.size) {
+        return false;
+    }
     names.iter().all(|n| {
         c.fields.iter().any(|f| {
             f.name == *n
@@ -666,39 +671,10 @@ mod tests {
             let msg = read_bytes("t.datx", &bytes[..cut]).unwrap_err().to_string();
             assert!(msg.contains("t.datx") && !msg.contains('\n'), "{cut}: {msg}");
         }
+        // Flipped bytes in the datatype messages once made libhdf5 copy out of bounds and
+        // left uninitialised strings behind (missing compound members): both files, no crash.
         assert!(fuzz_reader("f.datx", &bytes) > 0);
-    }
-}
-#[cfg(test)]
-mod tmp_fuzz_debug {
-    use super::super::testutil::Lcg;
-    use super::super::{read_height_map, ReadOptions};
-    #[test]
-    #[ignore]
-    fn dump() {
-        let src = std::env::var("DATX_SRC").unwrap();
-        let valid = std::fs::read(&src).unwrap();
-        let out = std::path::PathBuf::from("/tmp/datxfuzz");
-        std::fs::create_dir_all(&out).unwrap();
-        let mut rng = Lcg(0x5EED_1234);
-        for k in 0..40 {
-            let cut = if k < 20 { rng.below(valid.len().min(600)) } else { rng.below(valid.len()) };
-            std::fs::write(out.join(format!("t{k:03}.datx")), &valid[..cut]).unwrap();
-        }
-        for k in 0..200 {
-            let mut m = valid.clone();
-            let at = if rng.below(4) < 3 { rng.below(valid.len().min(1024)) } else { rng.below(valid.len()) };
-            let mask = 1u8 << rng.below(8);
-            m[at] ^= mask;
-            if rng.below(3) == 0 { m[at] = 0xFF; }
-            std::fs::write(out.join(format!("m{k:03}_{at}.datx")), &m).unwrap();
-        }
-    }
-    #[test]
-    #[ignore]
-    fn one() {
-        let p = std::env::var("DATX_ONE").unwrap();
-        let r = read_height_map(std::path::Path::new(&p), &ReadOptions::default());
-        eprintln!("RESULT {:?}", r.map(|m| m.nx()));
+        let fixed = std::fs::read(sample("datx_fixed.datx")).unwrap();
+        assert!(fuzz_reader("g.datx", &fixed) > 0);
     }
 }
