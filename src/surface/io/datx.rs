@@ -16,7 +16,7 @@
 //! Strings may be variable-length or fixed-length (ASCII or UTF-8) and `Parameters` a
 //! variable-length or fixed-size float64 array: compound fields are read by name (HDF5
 //! converts a compound to a subset of its fields), trying each string encoding in turn.
-use super::{find_channel, format_error, unsupported, units, RawMap, ReadOptions};
+use super::{find_channel, format_error, units, unsupported, RawMap, ReadOptions};
 use crate::surface::Result;
 use hdf5::types::{
     FixedAscii, FixedUnicode, TypeDescriptor, VarLenArray, VarLenAscii, VarLenUnicode,
@@ -120,7 +120,10 @@ fn has_string_fields(td: &TypeDescriptor, names: &[&str]) -> bool {
     };
     // A corrupt datatype message can place a member outside its compound; libhdf5 would then
     // copy out of bounds during conversion.
-    if c.fields.iter().any(|f| f.offset.saturating_add(f.ty.size()) > c.size) {
+    if c.fields
+        .iter()
+        .any(|f| f.offset.saturating_add(f.ty.size()) > c.size)
+    {
         return false;
     }
     names.iter().all(|n| {
@@ -210,7 +213,9 @@ fn converter(ds: &hdf5::Dataset, name: &str) -> std::result::Result<Converter, S
         return Err(bad(&format!("{} elements, expected 1", a.size())));
     }
     let fields = match a.dtype().and_then(|t| t.to_descriptor()) {
-        Ok(td @ TypeDescriptor::Compound(_)) if !has_string_fields(&td, &["Category", "BaseUnit"]) => {
+        Ok(td @ TypeDescriptor::Compound(_))
+            if !has_string_fields(&td, &["Category", "BaseUnit"]) =>
+        {
             return Err(bad("no `Category` and `BaseUnit` string fields"))
         }
         Ok(TypeDescriptor::Compound(c)) => c.fields,
@@ -292,7 +297,10 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
         read_inner(path, bytes.len(), opts)
     })) {
         Ok(r) => r,
-        Err(_) => Err(format_error(path, "the .datx (HDF5) reader failed on this file")),
+        Err(_) => Err(format_error(
+            path,
+            "the .datx (HDF5) reader failed on this file",
+        )),
     }
 }
 
@@ -404,7 +412,9 @@ fn read_inner(path: &Path, file_len: usize, opts: &ReadOptions) -> Result<RawMap
             Some(d) => Err(at(format!(
                 "`{name}` pixel spacing Parameters[1] = {d} m is not a positive length"
             ))),
-            None => Err(at(format!("`{name}` Parameters has no element [1] (spacing)"))),
+            None => Err(at(format!(
+                "`{name}` Parameters has no element [1] (spacing)"
+            ))),
         }
     };
     let dx = lateral("X Converter")?;
@@ -560,10 +570,7 @@ mod tests {
     use crate::surface::{HeightMap, SurfaceError};
     use std::path::PathBuf;
 
-    const DIR: &str = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/surfaces/readers_b"
-    );
+    const DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/surfaces/readers_b");
 
     fn sample(name: &str) -> PathBuf {
         PathBuf::from(DIR).join(name)
@@ -605,7 +612,11 @@ mod tests {
             let f = |k: &str| want[k].as_f64().unwrap();
             assert_eq!(map.source.format, "datx");
             assert_eq!(map.channel, "height");
-            assert_eq!((map.nx() as f64, map.ny() as f64), (f("nx"), f("ny")), "{name}");
+            assert_eq!(
+                (map.nx() as f64, map.ny() as f64),
+                (f("nx"), f("ny")),
+                "{name}"
+            );
             assert!(close(map.dx, f("dx"), 1e-15), "{name} dx {}", map.dx);
             assert!(close(map.dy, f("dy"), 1e-15), "{name} dy {}", map.dy);
             let (ny, nx) = map.z.dim();
@@ -618,7 +629,11 @@ mod tests {
             }
             let (mean, std, invalid) = valid_stats(&map);
             assert_eq!(invalid as f64, f("n_invalid"), "{name}");
-            assert!(close(std, f("std"), 1e-12), "{name} σ {std} vs {}", f("std"));
+            assert!(
+                close(std, f("std"), 1e-12),
+                "{name} σ {std} vs {}",
+                f("std")
+            );
             assert!((mean - f("mean")).abs() <= 1e-12 * f("std"), "{name} mean");
             let h = &map.source.header;
             assert_eq!(h["system_serial_number"], want["serial"].as_str().unwrap());
@@ -633,20 +648,32 @@ mod tests {
         let want: serde_json::Value = serde_json::from_str(&text).unwrap();
         let want = &want["datx_vlen.datx"];
         let map = read_with("datx_vlen.datx", Some("intensity")).unwrap();
-        assert_eq!((map.nx(), map.ny(), map.channel.as_str()), (40, 30, "intensity"));
+        assert_eq!(
+            (map.nx(), map.ny(), map.channel.as_str()),
+            (40, 30, "intensity")
+        );
         assert!(close(map.dx, 0.8e-6, 1e-15) && close(map.dy, 1.2e-6, 1e-15));
         let (mean, _, invalid) = valid_stats(&map);
-        assert_eq!(invalid as f64, want["intensity_n_invalid"].as_f64().unwrap());
+        assert_eq!(
+            invalid as f64,
+            want["intensity_n_invalid"].as_f64().unwrap()
+        );
         assert!(close(mean, want["intensity_mean"].as_f64().unwrap(), 1e-12));
         // "surface" is the height channel's other name.
         let map = read_with("datx_vlen.datx", Some("Surface")).unwrap();
         assert_eq!(map.channel, "height");
         // The fixed-string file has no intensity dataset.
-        for (name, req) in [("datx_fixed.datx", "intensity"), ("datx_vlen.datx", "phase")] {
+        for (name, req) in [
+            ("datx_fixed.datx", "intensity"),
+            ("datx_vlen.datx", "phase"),
+        ] {
             let err = read_with(name, Some(req)).unwrap_err();
             assert!(matches!(err, SurfaceError::Unsupported { .. }), "{err}");
             let msg = err.to_string();
-            assert!(msg.contains(name) && msg.contains("channels: height"), "{msg}");
+            assert!(
+                msg.contains(name) && msg.contains("channels: height"),
+                "{msg}"
+            );
         }
     }
 
@@ -655,7 +682,10 @@ mod tests {
         for (name, needle) in [
             ("bad_no_metadata.datx", "HDF5 but not Zygo .datx"),
             ("bad_path.datx", "names no dataset"),
-            ("bad_category.datx", "`X Converter` has category `HeightCat`"),
+            (
+                "bad_category.datx",
+                "`X Converter` has category `HeightCat`",
+            ),
             ("bad_units.datx", "conflicting height units"),
         ] {
             let msg = read_with(name, None).unwrap_err().to_string();
@@ -669,7 +699,10 @@ mod tests {
         let bytes = std::fs::read(sample("datx_vlen.datx")).unwrap();
         for cut in [8, 100, 2000, bytes.len() / 2, bytes.len() - 1] {
             let msg = read_bytes("t.datx", &bytes[..cut]).unwrap_err().to_string();
-            assert!(msg.contains("t.datx") && !msg.contains('\n'), "{cut}: {msg}");
+            assert!(
+                msg.contains("t.datx") && !msg.contains('\n'),
+                "{cut}: {msg}"
+            );
         }
         // Flipped bytes in the datatype messages once made libhdf5 copy out of bounds and
         // left uninitialised strings behind (missing compound members): both files, no crash.
