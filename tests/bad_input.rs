@@ -222,7 +222,7 @@ fn corrupt_ibw_sur_sdf_files_fail_cleanly() {
 }
 
 /// Truncated and garbled Zygo MetroPro `.dat` and ISO 25178-71 `.x3p` files (the real samples
-/// in `tests/data/surfaces/`): one error line naming the file, no panic.
+/// in `tests/data/surfaces/`) and Zygo `.datx` files: one error line naming the file, no panic.
 #[test]
 fn truncated_and_garbled_metropro_and_x3p_files_fail_cleanly() {
     let dir = tempfile::tempdir().unwrap();
@@ -254,6 +254,18 @@ fn truncated_and_garbled_metropro_and_x3p_files_fail_cleanly() {
         ("bad_no_main.x3p", "no main.xml"),
         ("bad_md5.x3p", "MD5"),
         ("bad_huge_size.x3p", "too large"),
+    ] {
+        run(name, &std::fs::read(readers_b.join(name)).unwrap(), needle);
+    }
+    // Zygo .datx (HDF5) written by h5py: truncated, and valid HDF5 with wrong content.
+    let datx = std::fs::read(readers_b.join("datx_vlen.datx")).unwrap();
+    for cut in [100, datx.len() / 2] {
+        run(&format!("cut{cut}.datx"), &datx[..cut], "HDF5");
+    }
+    for (name, needle) in [
+        ("bad_no_metadata.datx", "HDF5 but not Zygo .datx"),
+        ("bad_path.datx", "names no dataset"),
+        ("bad_category.datx", "expected `LateralCat`"),
     ] {
         run(name, &std::fs::read(readers_b.join(name)).unwrap(), needle);
     }

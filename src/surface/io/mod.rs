@@ -1,15 +1,15 @@
 //! Height-map readers (detect by magic bytes, never by extension) and writers.
 //!
-//! Formats (docs/surfaces.md): Bruker NanoScope v4.3+ binary (`nanoscope`),
-//! Gwyddion native (`gwy`), Gwyddion Simple Field (`gsf`), Asylum Research / Igor binary wave
-//! (`ibw`), Digital Surf (`sur`), Surface Data File ISO 25178-71 (`sdf`), Zygo MetroPro `.dat`
-//! (`metropro`), ISO 25178-71 `.x3p` (`x3p`), ASCII matrix / Gwyddion ASCII export / CSV
-//! (`ascii`) and XYZ on a rectangular lattice (`xyz`). Every reader returns heights and
-//! lengths in metres with row 0 = top of the image as the instrument software shows it.
-//! NaN and saturated pixels come back as `valid = false` with `z = 0.0`.
+//! Formats (docs/surfaces.md): Bruker NanoScope v4.3+ binary (`nanoscope`), Gwyddion native
+//! (`gwy`), Gwyddion Simple Field (`gsf`), Asylum Research / Igor binary wave (`ibw`), Digital Surf
+//! (`sur`), Surface Data File ISO 25178-71 (`sdf`), Zygo MetroPro `.dat` (`metropro`), Zygo `.datx`
+//! (`datx`, HDF5), ISO 25178-71 `.x3p` (`x3p`), ASCII matrix / Gwyddion ASCII export / CSV
+//! (`ascii`) and XYZ on a rectangular lattice (`xyz`). Every reader returns heights and lengths in
+//! metres with row 0 = top of the image as the instrument software shows it. NaN and saturated
+//! pixels come back as `valid = false` with `z = 0.0`.
 //!
-//! `ReadOptions::channel` only matters for the multi-channel formats (NanoScope, GWY, IBW
-//! layers, SUR objects, MetroPro); the single-channel formats ignore it.
+//! `ReadOptions::channel` only matters for the multi-channel formats (NanoScope, GWY, IBW layers,
+//! SUR objects, MetroPro, datx); the single-channel formats ignore it.
 use super::{HeightMap, Result, SourceInfo, SurfaceError};
 use ndarray::Array2;
 use std::collections::BTreeMap;
@@ -26,6 +26,7 @@ mod sur;
 mod units;
 mod xyz;
 // Zygo MetroPro .dat, Zygo .datx (HDF5), ISO 25178-71 .x3p (ZIP + XML).
+mod datx;
 mod metropro;
 mod x3p;
 
@@ -54,7 +55,7 @@ pub struct ReadOptions {
 /// The formats `read_height_map` reads, for error messages.
 pub const SUPPORTED_FORMATS: &str = "Gwyddion .gwy (GWYP), Bruker NanoScope v4.3+ binary, \
      Gwyddion Simple Field .gsf, Asylum/Igor .ibw (v5), Digital Surf .sur, \
-     Surface Data File .sdf (ASCII/binary), Zygo MetroPro .dat, ISO 25178-71 .x3p, \
+     Surface Data File .sdf (ASCII/binary), Zygo MetroPro .dat, Zygo .datx (HDF5), ISO 25178-71 .x3p, \
      ASCII matrix/CSV, XYZ lattice";
 
 /// How many leading bytes `read_height_map` shows `detect_format`: enough for several lines of
@@ -88,6 +89,10 @@ pub fn detect_format(head: &[u8]) -> Option<&'static str> {
     }
     if metropro::MAGICS.iter().any(|m| head.starts_with(m)) {
         return Some("metropro");
+    }
+    // Zygo .datx is HDF5; its reader requires the `/MetaData` dataset.
+    if head.starts_with(datx::MAGIC) {
+        return Some("datx");
     }
     // ISO 25178-71 .x3p is a ZIP archive; its reader requires `main.xml` inside.
     if crate::formats::zip::is_zip(head) {
@@ -185,6 +190,7 @@ pub fn read_height_map(path: &Path, opts: &ReadOptions) -> Result<HeightMap> {
         Some("sdf") => sdf::read(path, &bytes)?,
         Some("metropro") => metropro::read(path, &bytes, opts)?,
         Some("x3p") => x3p::read(path, &bytes, opts)?,
+        Some("datx") => datx::read(path, &bytes, opts)?,
         Some("xyz") => xyz::read(path, &bytes, opts)?,
         Some(_) => ascii::read(path, &bytes, opts)?,
         None => {
@@ -346,6 +352,8 @@ mod tests {
         assert_eq!(detect_format(b"\x88\x1b\x03\x6f\x00\x01"), Some("metropro"));
         assert_eq!(detect_format(b"\x88\x1b\x03\x71\x00\x03"), Some("metropro"));
         assert_eq!(detect_format(b"PK\x03\x04\x14\x00"), Some("x3p"));
+        assert_eq!(detect_format(b"\x89HDF\r\n\x1a\n\x00\x00"), Some("datx"));
+        assert_eq!(detect_format(b"\x89HDF\r\n"), None);
         assert_eq!(detect_format(b"\x88\x1b\x03\x72\x00\x03"), None);
         assert_eq!(detect_format(b""), None);
         assert_eq!(detect_format(b"\x7fELF\x02\x01\x01\0\0"), None);
