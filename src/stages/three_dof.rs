@@ -643,11 +643,21 @@ impl StageKind for ThreeDofStage {
             }
         }
         Ok(StageOutput {
-            result: json!({
-                "cases": rows,
-                "case_keys": done.iter().map(|(_, e)| e.key.clone()).collect::<Vec<_>>(),
-                "table": "cases.parquet",
-            }),
+            result: {
+                let mut r = json!({
+                    "cases": rows,
+                    "case_keys": done.iter().map(|(_, e)| e.key.clone()).collect::<Vec<_>>(),
+                    "table": "cases.parquet",
+                });
+                // The bulge the cases ran with, when it came from a fit (docs/bulge.md).
+                if let (Some(d), Some(obj)) = (p.fitted, r.as_object_mut()) {
+                    obj.insert(
+                        "fitted_bulge".into(),
+                        json!({"a_tfc_m": d.semi_width_x, "w_tfc_m": d.full_width_y, "x_tfc_m": d.offset_from_te}),
+                    );
+                }
+                r
+            },
             summary_row: Some(row),
         })
     }
