@@ -313,11 +313,15 @@ fn three_dof_runs_on_the_fitted_bulge() {
 #[test]
 fn doe_compares_the_fitted_bulge_with_the_optimum() {
     let (dir, tfc) = run_with_fitted_bulge(
-        "[contact.improved]\nparameter_set = \"improved_2dof\"\n\n[simulate.base]\ncontact = \"improved\"\nduration = \"0.5 ms\"\nsteady_start = \"0.2 ms\"\n\n[doe.d]\nsimulate = \"base\"\ngeometry = { bulge = \"tfc\" }\nactuations = [\"9 nm\"]\nsa_objective = \"surrogate\"\nsa_max_evaluations = 200\nsensitivity_steps = 1\ncompare_step = \"5 nm\"\n",
+        "[contact.improved]\nparameter_set = \"improved_2dof\"\n\n[simulate.base]\ncontact = \"improved\"\nactuations = [\"5 nm\"]\nduration = \"0.5 ms\"\nsteady_start = \"0.2 ms\"\n\n[doe.d]\nsimulate = \"base\"\ngeometry = { bulge = \"tfc\" }\nactuations = [\"9 nm\", \"12 nm\"]\nsa_actuation = \"10 nm\"\nsa_objective = \"surrogate\"\nsa_max_evaluations = 200\nsensitivity_steps = 1\ncompare_step = \"4 nm\"\n",
     );
     let r = result_of(dir.path(), "d");
     let init = &r["initial_design_m"];
-    for (k, t) in [("a_tfc", "a_tfc_m"), ("w_tfc", "w_tfc_m"), ("x_tfc", "x_tfc_m")] {
+    for (k, t) in [
+        ("a_tfc", "a_tfc_m"),
+        ("w_tfc", "w_tfc_m"),
+        ("x_tfc", "x_tfc_m"),
+    ] {
         assert_eq!(init[k], tfc[t], "{k}: {init} vs {tfc}");
     }
     assert!(r["comparison"].is_array(), "{r}");

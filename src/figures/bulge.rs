@@ -49,10 +49,7 @@ impl Cap {
         (0..=n)
             .map(|k| {
                 let t = std::f64::consts::TAU * k as f64 / n as f64;
-                (
-                    self.xc + self.a * t.cos(),
-                    self.yc + 0.5 * self.w * t.sin(),
-                )
+                (self.xc + self.a * t.cos(), self.yc + 0.5 * self.w * t.sin())
             })
             .collect()
     }
@@ -168,7 +165,9 @@ pub fn levelled_map_png(
             draw_polyline(chart, r, BLACK.stroke_width(2))?;
         }
         if let Some(t) = te {
-            chart.draw_series(dashed_line(t)).map_err(|e| e.to_string())?;
+            chart
+                .draw_series(dashed_line(t))
+                .map_err(|e| e.to_string())?;
         }
         Ok(())
     })
@@ -190,13 +189,7 @@ pub fn scan_lines_png(path: &Path, lines: &[ScanLine], title: &str) -> Result<()
         .iter()
         .map(|(n, v)| (n.as_str(), v.clone()))
         .collect();
-    lines_png(
-        path,
-        title,
-        "x along the slider (µm)",
-        "height (nm)",
-        &refs,
-    )
+    lines_png(path, title, "x along the slider (µm)", "height (nm)", &refs)
 }
 
 /// Bulge height against heater power (W, m) with the efficiency line from zero power; the

@@ -1550,9 +1550,19 @@ mod tests {
         // Without a geometry the canonical parameters are the ones keyed before it existed.
         let keys: Vec<String> = p.canonical().as_object().unwrap().keys().cloned().collect();
         let before = vec![
-            "base", "levels_m", "actuations_m", "fixed", "optimise", "sa_actuation_m",
-            "sa_start_m", "sa_objective", "sa", "sensitivity_step_m", "sensitivity_steps",
-            "compare", "compare_actuations_m",
+            "base",
+            "levels_m",
+            "actuations_m",
+            "fixed",
+            "optimise",
+            "sa_actuation_m",
+            "sa_start_m",
+            "sa_objective",
+            "sa",
+            "sensitivity_step_m",
+            "sensitivity_steps",
+            "compare",
+            "compare_actuations_m",
         ];
         assert_eq!(keys, before);
         assert!(p.bulge.is_none());
