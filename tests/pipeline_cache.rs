@@ -100,7 +100,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let o = p.run(&["run"]);
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("nothing to do: all 34 stage instances fresh"),
+        stderr(&o).contains("nothing to do: all 36 stage instances fresh"),
         "{}",
         stderr(&o)
     );
