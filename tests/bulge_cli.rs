@@ -254,3 +254,75 @@ fn simulate_sweep_in_heater_power_from_a_fitted_bulge() {
         .unwrap();
     assert_clean_failure(&o, "bulge");
 }
+
+/// Run `text` as the pipeline in a fresh project with the synthetic scans under `raw/`, and
+/// return the project directory and the fitted `tfc` of `[bulge.tfc]`.
+fn run_with_fitted_bulge(text: &str) -> (tempfile::TempDir, Value) {
+    let dir = tempfile::tempdir().unwrap();
+    synth(&dir.path().join("raw"));
+    let text = format!(
+        "[project]\nname = \"t\"\n\n[bulge.tfc]\nfiles = [\"raw/tfc_00mW.gsf\", \"raw/tfc_30mW.gsf\", \"raw/tfc_60mW.gsf\", \"raw/tfc_90mW.gsf\"]\n\n{text}"
+    );
+    std::fs::write(dir.path().join("pipeline.toml"), &text).unwrap();
+    let o = hdi()
+        .current_dir(dir.path())
+        .args(["run", "-j", "1"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}\n{text}", stderr(&o));
+    let bulge: Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("processed/tfc/result.json")).unwrap(),
+    )
+    .unwrap();
+    let tfc = bulge["tfc"].clone();
+    // The fit recovers the generator's design (truth.json: §2.3's optimised bulge).
+    assert!((f(&tfc, "a_tfc_m") / 4.86e-6 - 1.0).abs() < 0.01, "{tfc}");
+    (dir, tfc)
+}
+
+fn result_of(dir: &Path, name: &str) -> Value {
+    serde_json::from_str(
+        &std::fs::read_to_string(dir.join("processed").join(name).join("result.json")).unwrap(),
+    )
+    .unwrap()
+}
+
+#[test]
+fn three_dof_runs_on_the_fitted_bulge() {
+    let (dir, tfc) = run_with_fitted_bulge(
+        "[contact.slider3]\nparameter_set = \"three_dof\"\n\n[three_dof.fit]\ncontact = \"slider3\"\nactuation = \"12 nm\"\ninterfaces = [\"isbl\"]\nduration = \"0.3 ms\"\nsteady_start = \"0.1 ms\"\ngeometry = { bulge = \"tfc\" }\n",
+    );
+    let r = result_of(dir.path(), "fit");
+    let used = &r["fitted_bulge"];
+    for k in ["a_tfc_m", "w_tfc_m", "x_tfc_m"] {
+        assert_eq!(used[k], tfc[k], "{k}: {used} vs {tfc}");
+    }
+    assert_eq!(r["cases"].as_array().map(|c| c.len()), Some(1), "{r}");
+    // A geometry naming no bulge instance is a clean configuration error.
+    let p = dir.path().join("pipeline.toml");
+    let text = std::fs::read_to_string(&p).unwrap();
+    std::fs::write(&p, text.replace("bulge = \"tfc\" }", "bulge = \"nope\" }")).unwrap();
+    let o = hdi()
+        .current_dir(dir.path())
+        .args(["run", "-j", "1"])
+        .output()
+        .unwrap();
+    assert_clean_failure(&o, "nope");
+}
+
+#[test]
+fn doe_compares_the_fitted_bulge_with_the_optimum() {
+    let (dir, tfc) = run_with_fitted_bulge(
+        "[contact.improved]\nparameter_set = \"improved_2dof\"\n\n[simulate.base]\ncontact = \"improved\"\nactuations = [\"5 nm\"]\nduration = \"0.5 ms\"\nsteady_start = \"0.2 ms\"\n\n[doe.d]\nsimulate = \"base\"\ngeometry = { bulge = \"tfc\" }\nactuations = [\"9 nm\", \"12 nm\"]\nsa_actuation = \"10 nm\"\nsa_objective = \"surrogate\"\nsa_max_evaluations = 200\nsensitivity_steps = 1\ncompare_step = \"4 nm\"\n",
+    );
+    let r = result_of(dir.path(), "d");
+    let init = &r["initial_design_m"];
+    for (k, t) in [
+        ("a_tfc", "a_tfc_m"),
+        ("w_tfc", "w_tfc_m"),
+        ("x_tfc", "x_tfc_m"),
+    ] {
+        assert_eq!(init[k], tfc[t], "{k}: {init} vs {tfc}");
+    }
+    assert!(r["comparison"].is_array(), "{r}");
+}

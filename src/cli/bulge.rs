@@ -28,7 +28,7 @@ pub(super) fn cmd_bulge(a: BulgeArgs) -> Result<()> {
     if let Some(dir) = &a.out {
         std::fs::create_dir_all(dir)?;
         bulge::write_outputs(&analysis, &serde_json::json!({}), "", dir)?;
-        bulge::write_figures(&analysis, dir)?;
+        bulge::write_figures(&analysis, &params.options, dir)?;
     }
     if a.json {
         println!("{}", bulge::report_json(&analysis));

@@ -5,7 +5,7 @@
 
 use super::kit::{
     draw_legend, finite_min_max, font, line_key, log_padded, padded_abs, perr, render_png,
-    sci_tick_label, title_font, Legend, Result, BASIC_PALETTE,
+    sci_tick_label, title_font, Chart, DrawResult, Legend, Result, BASIC_PALETTE,
 };
 use ndarray::ArrayView2;
 use plotters::prelude::*;
@@ -14,6 +14,19 @@ use std::path::Path;
 
 /// Height map as a viridis heat map with a colour bar; axes in µm, colour in nm.
 pub fn heatmap_png(path: &Path, z: ArrayView2<f64>, dx: f64, dy: f64, title: &str) -> Result<()> {
+    heatmap_overlay_png(path, z, dx, dy, title, |_| Ok(()))
+}
+
+/// [`heatmap_png`] with `overlay` drawn on top, in the map's plot coordinates (µm; row 0 at
+/// the top, so a row's plot y is the map height minus its y).
+pub(crate) fn heatmap_overlay_png(
+    path: &Path,
+    z: ArrayView2<f64>,
+    dx: f64,
+    dy: f64,
+    title: &str,
+    overlay: impl FnOnce(&mut Chart) -> DrawResult<()>,
+) -> Result<()> {
     let (ny, nx) = z.dim();
     if nx == 0 || ny == 0 {
         return Err(perr(path, "empty map"));
@@ -62,6 +75,7 @@ pub fn heatmap_png(path: &Path, z: ArrayView2<f64>, dx: f64, dy: f64, title: &st
                 )
             }))
             .map_err(|e| e.to_string())?;
+        overlay(&mut chart)?;
         let lo_nm = lo * 1e9;
         let hi_nm = (lo + span) * 1e9;
         let mut cb = ChartBuilder::on(&bar)

@@ -7,6 +7,8 @@
 //!   temp-file rendering, and [`marching_squares`] for contours.
 //! - [`basic`]: heat map, histogram, lines on linear, log–log and semi-log axes, stacked
 //!   panels, category dots (surface, DMW, contact, excitation, calibration stages).
+//! - [`bulge`]: the TFC-bulge fit (levelled map with the fitted outline, Fig. C.5 scan lines,
+//!   height vs heater power).
 //! - [`sweep`]: actuation sweeps and time histories (Figs 2.13–2.22).
 //! - [`analysis`]: scalogram, Poincaré return map, phase portrait, amplitude spectrum.
 //! - [`doe`]: response-surface contour panels, residual diagnostics, annealing history
@@ -21,6 +23,7 @@ mod kit;
 
 pub mod analysis;
 pub mod basic;
+pub mod bulge;
 pub mod doe;
 pub mod sweep;
 

@@ -5,9 +5,11 @@
 
 use crate::contact::mtl::LubricantCase;
 use crate::core::config::KeyError;
+use crate::dynamics::geometry::BulgeDesign;
 use crate::dynamics::three_dof::air_bearing::{PushbackCurve, SpringLaw};
 use crate::dynamics::three_dof::case::{Init3Dof, Model3Dof, Options3Dof, TrackAssignment};
 use crate::dynamics::three_dof::inputs::{ActuationProfile, ShockPulse};
+use crate::slider::params::GeometryConfig;
 use crate::units::{Length, TimeSpan};
 use serde::Deserialize;
 use serde_json::{json, Value};
@@ -115,6 +117,10 @@ pub struct ThreeDofConfig {
     pub transit_delay: bool,
     #[serde(default)]
     pub dmw_wrap: bool,
+    /// `"dissertation"` (Table 4.3, default) or `{ bulge = "NAME" }`: a_TFC, w_TFC and x_TFC
+    /// from a `[bulge.NAME]` fit (docs/bulge.md); b_TFC stays 5 nm.
+    #[serde(default)]
+    pub geometry: Option<GeometryConfig>,
 }
 
 /// One case of an instance: the interface law and its lubricant.
@@ -155,6 +161,11 @@ pub struct ThreeDofParams {
     pub steady_start: f64,
     pub spring_law: SpringLaw,
     pub pushback: String,
+    /// The `[bulge.*]` instance whose fitted a, w, x_TFC replace Table 4.3's at run time.
+    pub bulge: Option<String>,
+    /// That fit, once read from the upstream result (not part of the key: the bulge
+    /// instance's key is).
+    pub fitted: Option<BulgeDesign>,
 }
 
 /// A failed `[three_dof]` check at `key`.
@@ -342,6 +353,17 @@ impl ThreeDofParams {
         let (profile, shock) = check_actuation(cfg)?;
         let cases = check_cases(cfg)?;
         let (options, spring_law) = check_options(cfg, shock.as_ref())?;
+        let bulge = match &cfg.geometry {
+            None => None,
+            Some(GeometryConfig::Named(n)) if n == "dissertation" => None,
+            Some(GeometryConfig::Named(n)) => {
+                return bad(
+                    "geometry",
+                    format!("unknown geometry `{n}` (dissertation, or {{ bulge = \"NAME\" }})"),
+                )
+            }
+            Some(GeometryConfig::Bulge { bulge }) => Some(bulge.clone()),
+        };
         Ok(ThreeDofParams {
             contact: cfg.contact.clone(),
             dmw,
@@ -353,12 +375,14 @@ impl ThreeDofParams {
             steady_start: cfg.steady_start.0,
             spring_law,
             pushback: cfg.pushback_curve.clone(),
+            bulge,
+            fitted: None,
         })
     }
     /// Canonical parameters (part of the instance key).
     pub fn canonical(&self) -> Value {
         let o = &self.options;
-        json!({
+        let mut v = json!({
             "contact": self.contact,
             "dmw": self.dmw,
             "scenario": self.scenario,
@@ -374,7 +398,12 @@ impl ThreeDofParams {
             "init": format!("{:?}", o.init),
             "ab_spring_law": format!("{:?}", self.spring_law),
             "pushback_curve": self.pushback,
-        })
+        });
+        // Only instances with a fitted bulge carry the key: the others keep theirs.
+        if let (Some(b), Some(obj)) = (&self.bulge, v.as_object_mut()) {
+            obj.insert("bulge".into(), json!(b));
+        }
+        v
     }
 
     /// The dissertation's 3-DOF model with this instance's spring law and push-back curve.
@@ -384,6 +413,61 @@ impl ThreeDofParams {
         if self.pushback == "flattened" {
             m.pushback = PushbackCurve::flattened();
         }
+        // A fitted bulge replaces a_TFC, w_TFC, x_TFC in the geometry and the air bearing's
+        // copies (the stiffening point and read element sit at the TFC centre, Table 4.3).
+        if let Some(d) = self.fitted {
+            m.geometry.bulge = d;
+            m.air_bearing.tfc_offset_from_te = d.offset_from_te;
+            m.air_bearing.bulge_semi_width_x = d.semi_width_x;
+        }
         m
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params(toml_text: &str) -> ThreeDofParams {
+        let cfg: ThreeDofConfig = toml::from_str(toml_text).unwrap();
+        ThreeDofParams::check(&cfg).unwrap()
+    }
+
+    #[test]
+    fn dissertation_geometry_keeps_its_canonical_parameters() {
+        // The canonical parameters an instance was keyed by before `geometry` existed: with no
+        // geometry or "dissertation" they must be exactly these (cached outputs stay valid).
+        let before = json!({
+            "contact": "c", "dmw": null, "scenario": "constant",
+            "profile_s_m": [[0.0, 12e-9]], "shock": null, "cases": ["isbl"],
+            "duration_s": 0.5e-3, "output_step_s": 1e-6, "steady_start_s": 0.2e-3,
+            "transit_delay": true, "dmw_wrap": false,
+            "tracks": "Three", "init": "Static",
+            "ab_spring_law": "Integrated", "pushback_curve": "linear",
+        });
+        let base = "contact = \"c\"\nactuation = \"12 nm\"\ninterfaces = [\"isbl\"]\nduration = \"0.5 ms\"\nsteady_start = \"0.2 ms\"\noutput_step = \"1 us\"";
+        let plain = params(base);
+        let named = params(&format!("{base}\ngeometry = \"dissertation\""));
+        let keys = |v: &Value| -> Vec<String> { v.as_object().unwrap().keys().cloned().collect() };
+        assert_eq!(keys(&plain.canonical()), keys(&before));
+        assert_eq!(plain.canonical(), named.canonical());
+        assert_eq!(plain.model(), Model3Dof::dissertation());
+        // The fitted bulge: its instance joins the key, and its a, w, x replace Table 4.3's.
+        let mut fitted = params(&format!("{base}\ngeometry = {{ bulge = \"tfc\" }}"));
+        assert_eq!(fitted.canonical()["bulge"], "tfc");
+        let d = BulgeDesign {
+            semi_width_x: 4.86e-6,
+            full_width_y: 50e-6,
+            offset_from_te: 6.35e-6,
+        };
+        fitted.fitted = Some(d);
+        let m = fitted.model();
+        assert_eq!(m.geometry.bulge, d);
+        assert_eq!(m.air_bearing.tfc_offset_from_te, 6.35e-6);
+        assert_eq!(m.air_bearing.bulge_semi_width_x, 4.86e-6);
+        assert_eq!(m.geometry.bulge_height, 5e-9);
+        let cfg: ThreeDofConfig =
+            toml::from_str(&format!("{base}\ngeometry = \"optimised\"")).unwrap();
+        assert_eq!(ThreeDofParams::check(&cfg).unwrap_err().key, "geometry");
     }
 }

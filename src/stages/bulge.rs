@@ -370,11 +370,12 @@ pub fn write_outputs(a: &BulgeAnalysis, params: &Value, key: &str, dir: &Path) -
     Ok(())
 }
 
-/// Figures (docs/bulge.md): per scan the levelled map (masked pixels blank) and three scan
-/// lines through the fitted centre and ±6 µm across it with the fitted cap (Fig. C.5 style);
-/// height against heater power with the efficiency line.
-pub fn write_figures(a: &BulgeAnalysis, dir: &Path) -> Result<()> {
-    use crate::figures;
+/// Figures (docs/bulge.md, `figures::bulge`): per scan the levelled map (masked pixels blank)
+/// with the fitted outline and the regions left out, and three scan lines through the fitted
+/// centre and ±6 µm across it with the fitted cap (Fig. C.5 style); height against heater
+/// power with the efficiency line.
+pub fn write_figures(a: &BulgeAnalysis, options: &BulgeOptions, dir: &Path) -> Result<()> {
+    use crate::figures::bulge as fig;
     for (k, s) in a.scans.iter().enumerate() {
         let f = &s.fit;
         let lev = &f.levelled;
@@ -389,70 +390,32 @@ pub fn write_figures(a: &BulgeAnalysis, dir: &Path) -> Result<()> {
             Some(p) => format!("{:.0} mW", p * 1e3),
             None => s.file.display().to_string(),
         };
-        figures::heatmap_png(
+        fig::levelled_map_png(
             &dir.join(format!("scan_{k}_levelled.png")),
+            f,
             shown.view(),
-            lev.dx,
-            lev.dy,
+            &options.exclude,
+            options.te_margin,
             &format!("Levelled profilometer scan, {label}"),
         )?;
-        let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
-        for off in [-6e-6, 0.0, 6e-6] {
-            let y = f.yc + off;
-            let j = (y / lev.dy).round();
-            if j < 0.0 || j as usize >= lev.ny() {
-                continue;
-            }
-            let j = j as usize;
-            // Only the analysed pixels (the masked trailing edge is not drawn).
-            let data: Vec<(f64, f64)> = (0..lev.nx())
-                .filter(|&i| lev.is_valid(j, i))
-                .map(|i| (i as f64 * lev.dx * 1e6, lev.z[[j, i]] * 1e9))
-                .collect();
-            let yj = j as f64 * lev.dy;
-            let model: Vec<(f64, f64)> = (0..lev.nx())
-                .filter(|&i| lev.is_valid(j, i))
-                .map(|i| {
-                    let x = i as f64 * lev.dx;
-                    let u = (x - f.xc) / f.a;
-                    let v = 2.0 * (yj - f.yc) / f.w;
-                    let z = f.offset + f.height * (1.0 - u * u - v * v).max(0.0).sqrt();
-                    (x * 1e6, z * 1e9)
-                })
-                .collect();
-            series.push((format!("scan y = {:+.0} µm", off * 1e6), data));
-            series.push((format!("fit y = {:+.0} µm", off * 1e6), model));
-        }
-        let refs: Vec<(&str, Vec<(f64, f64)>)> = series
-            .iter()
-            .map(|(n, v)| (n.as_str(), v.clone()))
-            .collect();
-        figures::lines_png(
+        let lines = fig::scan_lines(shown.view(), lev.dx, lev.dy, &fig::Cap::from(f));
+        fig::scan_lines_png(
             &dir.join(format!("scan_{k}_lines.png")),
+            &lines,
             &format!("Scan lines across the bulge, {label} — Fig. C.5"),
-            "x along the slider (µm)",
-            "height (nm)",
-            &refs,
         )?;
     }
     if let Some(e) = a.efficiency {
         let pts: Vec<(f64, f64)> = a
             .scans
             .iter()
-            .filter_map(|s| s.power.map(|p| (p * 1e3, s.fit.height * 1e9)))
+            .filter_map(|s| s.power.map(|p| (p, s.fit.height)))
             .collect();
-        let pmax = pts.iter().map(|p| p.0).fold(0.0, f64::max);
-        let line = vec![
-            (0.0, e.intercept * 1e9),
-            (pmax, (e.intercept + e.efficiency * pmax * 1e-3) * 1e9),
-        ];
-        let name = format!("fit: {:.3} nm/mW", e.efficiency * 1e6);
-        figures::lines_png(
+        fig::height_vs_power_png(
             &dir.join("height_vs_power.png"),
-            "Bulge height against heater power",
-            "heater power (mW)",
-            "bulge height (nm)",
-            &[("fitted heights", pts), (name.as_str(), line)],
+            &pts,
+            e.efficiency,
+            e.intercept,
         )?;
     }
     Ok(())
@@ -525,7 +488,7 @@ impl StageKind for BulgeStage {
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         let a = analyse(&self.params)?;
         write_outputs(&a, &self.params(), ctx.key, ctx.out_dir)?;
-        write_figures(&a, ctx.out_dir)?;
+        write_figures(&a, &self.params.options, ctx.out_dir)?;
         let r = |v: f64| crate::core::store::round_significant(v, 6);
         let row = json!({
             "scans": a.scans.len(),

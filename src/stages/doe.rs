@@ -146,6 +146,11 @@ pub struct DoeConfig {
     pub compare: bool,
     #[serde(default = "default_compare_step")]
     pub compare_step: Length,
+    /// `{ bulge = "NAME" }`: the `[bulge.NAME]` fit is the measured design — Table 2.8's
+    /// "initial" design compared with the optimum (docs/doe.md). Default: the base
+    /// `[simulate]` instance's geometry.
+    #[serde(default)]
+    pub geometry: Option<crate::slider::params::GeometryConfig>,
 }
 
 /// Where the annealing's ξ comes from.
@@ -174,11 +179,14 @@ pub struct DoeParams {
     pub sensitivity_steps: u16,
     pub compare: bool,
     pub compare_actuations: Vec<f64>,
+    /// The `[bulge.*]` instance whose fit replaces the base's bulge at run time (this
+    /// instance's `geometry`, else the base's own).
+    pub bulge: Option<String>,
 }
 
 impl DoeParams {
     fn canonical(&self) -> Value {
-        json!({
+        let mut v = json!({
             "base": self.base.canonical(),
             "levels_m": self.levels,
             "actuations_m": self.actuations,
@@ -192,7 +200,15 @@ impl DoeParams {
             "sensitivity_steps": self.sensitivity_steps,
             "compare": self.compare,
             "compare_actuations_m": self.compare_actuations,
-        })
+        });
+        // Only a bulge of the DOE's own adds a key (the base's is in `base` already): the
+        // other instances keep their keys.
+        if let (Some(b), Some(obj)) = (&self.bulge, v.as_object_mut()) {
+            if self.base.bulge.as_ref() != Some(b) {
+                obj.insert("bulge".into(), json!(b));
+            }
+        }
+        v
     }
 
     /// The 27 designs `[a, w, x]` [m] of the 3³ factorial, in `full_factorial` order.
@@ -223,6 +239,18 @@ pub fn check(
     base: SimulateParams,
     base_name: &str,
 ) -> std::result::Result<DoeParams, crate::core::config::KeyError> {
+    let bulge = match &cfg.geometry {
+        None => base.bulge.clone(),
+        Some(crate::slider::params::GeometryConfig::Bulge { bulge }) => Some(bulge.clone()),
+        Some(crate::slider::params::GeometryConfig::Named(n)) => {
+            return bad(
+                "geometry",
+                format!(
+                    "`{n}`: only {{ bulge = \"NAME\" }} (a named geometry comes from the [simulate] base)"
+                ),
+            )
+        }
+    };
     let levels = [cfg.a_tfc, cfg.w_tfc, cfg.x_tfc].map(|l| l.map(|v| v.0));
     for (f, l) in levels.iter().enumerate() {
         if !(l.iter().all(|v| v.is_finite() && *v > 0.0) && l[0] < l[1] && l[1] < l[2]) {
@@ -371,6 +399,7 @@ pub fn check(
         sensitivity_steps: cfg.sensitivity_steps,
         compare: cfg.compare,
         compare_actuations,
+        bulge,
     })
 }
 
@@ -910,6 +939,11 @@ impl FromConfig for DoeStage {
         let err = |k: &str, m: String| file.error("doe", name, k, m);
         let base = uncalibrated_base(file, "doe", name, &cfg.simulate)?;
         let params = check(cfg, base, &cfg.simulate).map_err(|e| err(&e.key, e.message))?;
+        if let Some(b) = &params.bulge {
+            if !file.has_instance("bulge", b) {
+                return Err(err("geometry", format!("no [bulge.{b}] in this file")));
+            }
+        }
         Ok(DoeStage {
             name: name.to_string(),
             params,
@@ -925,11 +959,25 @@ impl StageKind for DoeStage {
         self.params.canonical()
     }
     fn upstream(&self) -> Vec<String> {
-        // The base is uncalibrated: its contact and DMW instances.
-        self.params.base.upstream()
+        // The base is uncalibrated: its contact and DMW instances (and its bulge).
+        let mut u = self.params.base.upstream();
+        if let Some(b) = &self.params.bulge {
+            if !u.contains(b) {
+                u.push(b.clone());
+            }
+        }
+        u
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
-        let p = &self.params;
+        let mut p = self.params.clone();
+        // A fitted bulge (docs/doe.md): the measured design replaces the base's bulge, so it
+        // is Table 2.8's initial design; the factorial levels stay as configured.
+        if let Some(b) = &p.bulge {
+            let fitted = crate::artefacts::bulge::upstream_bulge(&ctx.upstream, b)?;
+            p.base.powers = None;
+            p.base.apply_bulge(&fitted, b)?;
+        }
+        let p = &p;
         let inputs = prepare_inputs(p, ctx)?;
         let runner = inputs.runner(p, ctx.store);
         let design = run_design(p, ctx, &runner)?;
@@ -1339,6 +1387,13 @@ fn assemble_output(
         "fits": surfaces.fits.iter().map(fit_summary).collect::<Vec<_>>(),
         "tables": ["design", "coefficients", "anova", "predictive_equations"],
     });
+    if p.bulge.is_some() {
+        // The fitted (measured) bulge: Table 2.8's initial design.
+        let b = p.base.model.bulge;
+        result["initial_design_m"] = json!({
+            "a_tfc": b.semi_width_x, "w_tfc": b.full_width_y, "x_tfc": b.offset_from_te,
+        });
+    }
     let mut row = Map::new();
     row.insert("simulate".into(), json!(p.base_name));
     row.insert("cases".into(), json!(total));
@@ -1485,5 +1540,47 @@ mod tests {
             .all(|(a, b)| (a - b).abs() < 1e-12));
         // §2.3.2's rule: a_TFC held at 5 and 15 nm, x_TFC at 9 and 12 nm.
         assert_eq!(p.fixed, vec![0, 2, 2, 0]);
+    }
+
+    #[test]
+    fn bulge_geometry_keys_and_checks() {
+        let base = || SimulateParams::check(&toml::from_str("contact = \"c\"").unwrap()).unwrap();
+        let plain: DoeConfig = toml::from_str("simulate = \"s\"").unwrap();
+        let p = check(&plain, base(), "s").unwrap();
+        // Without a geometry the canonical parameters are the ones keyed before it existed.
+        let keys: Vec<String> = p.canonical().as_object().unwrap().keys().cloned().collect();
+        let before = vec![
+            "base",
+            "levels_m",
+            "actuations_m",
+            "fixed",
+            "optimise",
+            "sa_actuation_m",
+            "sa_start_m",
+            "sa_objective",
+            "sa",
+            "sensitivity_step_m",
+            "sensitivity_steps",
+            "compare",
+            "compare_actuations_m",
+        ];
+        assert_eq!(keys, before);
+        assert!(p.bulge.is_none());
+        let fitted: DoeConfig =
+            toml::from_str("simulate = \"s\"\ngeometry = { bulge = \"tfc\" }").unwrap();
+        let q = check(&fitted, base(), "s").unwrap();
+        assert_eq!(q.bulge.as_deref(), Some("tfc"));
+        assert_eq!(q.canonical()["bulge"], "tfc");
+        // A base that already has the fitted bulge keys it through `base` alone.
+        let fitted_base = SimulateParams::check(
+            &toml::from_str("contact = \"c\"\ngeometry = { bulge = \"tfc\" }").unwrap(),
+        )
+        .unwrap();
+        let r = check(&plain, fitted_base, "s").unwrap();
+        assert_eq!(r.bulge.as_deref(), Some("tfc"));
+        assert!(r.canonical().get("bulge").is_none());
+        let named: DoeConfig =
+            toml::from_str("simulate = \"s\"\ngeometry = \"optimised\"").unwrap();
+        assert_eq!(check(&named, base(), "s").unwrap_err().key, "geometry");
     }
 }

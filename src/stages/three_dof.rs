@@ -61,6 +61,16 @@ impl FromConfig for ThreeDofStage {
                 ));
             }
         }
+        if let Some(b) = &params.bulge {
+            if !file.has_instance("bulge", b) {
+                return Err(file.error(
+                    "three_dof",
+                    name,
+                    "geometry",
+                    format!("no [bulge.{b}] in this file"),
+                ));
+            }
+        }
         Ok(Self {
             name: name.to_string(),
             params,
@@ -495,6 +505,33 @@ fn variable_actuation_pngs(
     Ok(())
 }
 
+/// The parameters with the upstream bulge fit in place (docs/bulge.md): a_TFC, w_TFC and
+/// x_TFC from `[bulge.NAME]`'s `tfc`, checked against the 3-DOF slider (read and write
+/// elements on the bulge, bulge inside the slider).
+fn fitted_params(
+    p: &ThreeDofParams,
+    upstream: &std::collections::BTreeMap<String, Value>,
+) -> Result<ThreeDofParams> {
+    let mut p = p.clone();
+    if let Some(b) = &p.bulge {
+        let fitted = crate::artefacts::bulge::upstream_bulge(upstream, b)?;
+        let x = fitted.x_tfc_m.ok_or_else(|| Error::UpstreamField {
+            kind: "bulge",
+            name: b.clone(),
+            what: "x_TFC (no trailing edge detected)".into(),
+        })?;
+        p.fitted = Some(crate::dynamics::geometry::BulgeDesign {
+            semi_width_x: fitted.a_tfc_m,
+            full_width_y: fitted.w_tfc_m,
+            offset_from_te: x,
+        });
+        let m = p.model();
+        m.geometry.validate()?;
+        m.air_bearing.validate()?;
+    }
+    Ok(p)
+}
+
 impl StageKind for ThreeDofStage {
     const KIND: &'static str = "three_dof";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
@@ -505,11 +542,12 @@ impl StageKind for ThreeDofStage {
     fn upstream(&self) -> Vec<String> {
         let mut u = vec![self.params.contact.clone()];
         u.extend(self.params.dmw.iter().cloned());
+        u.extend(self.params.bulge.iter().cloned());
         u
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         use rayon::prelude::*;
-        let p = &self.params;
+        let p = &fitted_params(&self.params, &ctx.upstream)?;
         let isbl_params = upstream_isbl_params(&ctx.upstream, &p.contact)?;
         let tracks = match &p.dmw {
             Some(d) => Some(read_dmw_tracks(&dmw_tracks::upstream_file(
@@ -538,11 +576,16 @@ impl StageKind for ThreeDofStage {
         let base = p.canonical();
         let contact_key = key_of(&p.contact);
         let dmw_key = p.dmw.as_deref().map(key_of);
+        let bulge_key = p.bulge.as_deref().map(key_of);
         let outcomes: Vec<Result<(CaseInterface, cases::CaseEntry)>> = p
             .cases
             .par_iter()
             .map(|&which| {
-                let params = json!({"instance": base, "case": which.label(), "contact_key": contact_key, "dmw_key": dmw_key});
+                let mut params = json!({"instance": base, "case": which.label(), "contact_key": contact_key, "dmw_key": dmw_key});
+                // A fitted bulge keys the case by its instance's key (other cases keep theirs).
+                if let (Some(k), Some(obj)) = (&bulge_key, params.as_object_mut()) {
+                    obj.insert("bulge_key".into(), json!(k));
+                }
                 let isbl = match which {
                     CaseInterface::Isbl => &isbl_solid,
                     CaseInterface::Mtl(_) => isbl_mtl.as_ref().unwrap_or(&isbl_solid),
@@ -600,11 +643,21 @@ impl StageKind for ThreeDofStage {
             }
         }
         Ok(StageOutput {
-            result: json!({
-                "cases": rows,
-                "case_keys": done.iter().map(|(_, e)| e.key.clone()).collect::<Vec<_>>(),
-                "table": "cases.parquet",
-            }),
+            result: {
+                let mut r = json!({
+                    "cases": rows,
+                    "case_keys": done.iter().map(|(_, e)| e.key.clone()).collect::<Vec<_>>(),
+                    "table": "cases.parquet",
+                });
+                // The bulge the cases ran with, when it came from a fit (docs/bulge.md).
+                if let (Some(d), Some(obj)) = (p.fitted, r.as_object_mut()) {
+                    obj.insert(
+                        "fitted_bulge".into(),
+                        json!({"a_tfc_m": d.semi_width_x, "w_tfc_m": d.full_width_y, "x_tfc_m": d.offset_from_te}),
+                    );
+                }
+                r
+            },
             summary_row: Some(row),
         })
     }
