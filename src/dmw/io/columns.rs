@@ -357,14 +357,7 @@ pub(super) fn read(path: &Path, table: Table, opts: &ReadOptions) -> Result<LdvR
     }
     let layout = flat_layout(path, &table.meta)?;
     let n = vcol.len();
-    let picked: Vec<usize> = [
-        Some(chosen.velocity),
-        chosen.index,
-        chosen.time.map(|t| t.0),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
+    let picked = chosen.used();
     for &k in &picked {
         let len = table.columns[k].len();
         if len != n {
@@ -384,11 +377,7 @@ pub(super) fn read(path: &Path, table: Table, opts: &ReadOptions) -> Result<LdvR
     let mut from = 0;
     while from < n {
         let k = CHUNK.min(n - from);
-        let cols = [
-            Some(chosen.velocity),
-            chosen.index,
-            chosen.time.map(|t| t.0),
-        ];
+        let cols = chosen.slots();
         for (slot, c) in cols.iter().enumerate() {
             if let Some(c) = c {
                 let (v, m) = &mut bufs[slot];

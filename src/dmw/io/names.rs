@@ -176,6 +176,18 @@ pub(super) struct Chosen {
     pub time: Option<(usize, TimeKind)>,
 }
 
+impl Chosen {
+    /// The velocity, index and time columns, in that order (`None` for an absent one).
+    pub fn slots(&self) -> [Option<usize>; 3] {
+        [Some(self.velocity), self.index, self.time.map(|t| t.0)]
+    }
+
+    /// The indices of the columns used.
+    pub fn used(&self) -> Vec<usize> {
+        self.slots().into_iter().flatten().collect()
+    }
+}
+
 fn find(names: &[String], wanted: &str) -> Option<usize> {
     let wanted = clean(wanted).to_lowercase();
     names.iter().position(|n| clean(n).to_lowercase() == wanted)

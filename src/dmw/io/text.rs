@@ -165,14 +165,7 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
 
     let c = |k: usize| format!("c{k}");
     let mut schema = Schema::default();
-    let used: Vec<usize> = [
-        Some(chosen.velocity),
-        chosen.index,
-        chosen.time.map(|t| t.0),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
+    let used = chosen.used();
     for k in 0..sn.names.len() {
         let dtype = if used.contains(&k) {
             DataType::Float64

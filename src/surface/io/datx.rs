@@ -584,20 +584,6 @@ mod tests {
         read_height_map(&sample(name), &opts)
     }
 
-    /// Mean and population σ of the valid pixels, and the number of invalid ones.
-    fn valid_stats(map: &HeightMap) -> (f64, f64, usize) {
-        let vals: Vec<f64> = map
-            .z
-            .indexed_iter()
-            .filter(|(ij, _)| map.valid.as_ref().is_none_or(|v| v[*ij]))
-            .map(|(_, &z)| z)
-            .collect();
-        let n = vals.len() as f64;
-        let mean = vals.iter().sum::<f64>() / n;
-        let var = vals.iter().map(|z| (z - mean).powi(2)).sum::<f64>() / n;
-        (mean, var.sqrt(), map.z.len() - vals.len())
-    }
-
     #[test]
     fn h5py_written_files_match_numpy() {
         // Files and numbers from tests/data/surfaces/readers_b/make_datx.py (h5py + numpy):

@@ -385,7 +385,7 @@ mod tests {
     use std::path::PathBuf;
 
     fn sample(name: &str) -> PathBuf {
-        PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/surfaces")).join(name)
+        surface_sample(name)
     }
 
     fn with_channel(channel: &str) -> ReadOptions {

@@ -287,7 +287,7 @@ mod tests {
     use std::path::PathBuf;
 
     fn sample(name: &str) -> PathBuf {
-        PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/surfaces")).join(name)
+        surface_sample(name)
     }
 
     /// SurfaceTopography's `test_sdf_ascii_metadata`: 7 × 4 points, 7 µm × 4 µm.

@@ -281,7 +281,7 @@ mod tests {
     use std::path::PathBuf;
 
     fn sample(name: &str) -> PathBuf {
-        PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/surfaces")).join(name)
+        surface_sample(name)
     }
 
     /// SurfaceTopography's `test_sur3_metadata`: 512 × 512, 0.151319552 m square, unit m,

@@ -133,3 +133,23 @@ pub fn assert_same_map(
         );
     }
 }
+
+/// A file of `tests/data/surfaces/` (the reader samples and their fixtures).
+pub fn surface_sample(name: &str) -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/surfaces")).join(name)
+}
+
+/// Mean and population standard deviation of the valid pixels (numpy's `mean`/`std` of the
+/// reference scripts), and the number of invalid ones.
+pub fn valid_stats(map: &HeightMap) -> (f64, f64, usize) {
+    let vals: Vec<f64> = map
+        .z
+        .indexed_iter()
+        .filter(|(ij, _)| map.valid.as_ref().is_none_or(|v| v[*ij]))
+        .map(|(_, &z)| z)
+        .collect();
+    let n = vals.len() as f64;
+    let mean = vals.iter().sum::<f64>() / n;
+    let var = vals.iter().map(|z| (z - mean).powi(2)).sum::<f64>() / n;
+    (mean, var.sqrt(), map.z.len() - vals.len())
+}

@@ -356,28 +356,12 @@ mod tests {
     use crate::surface::HeightMap;
     use std::path::PathBuf;
 
-    const DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/surfaces");
-
     fn sample(name: &str) -> PathBuf {
-        PathBuf::from(DIR).join(name)
+        surface_sample(name)
     }
 
     fn read(path: &std::path::Path) -> crate::surface::Result<HeightMap> {
         read_height_map(path, &ReadOptions::default())
-    }
-
-    /// Mean and population standard deviation of the valid pixels.
-    pub(crate) fn valid_stats(map: &HeightMap) -> (f64, f64, usize) {
-        let vals: Vec<f64> = map
-            .z
-            .indexed_iter()
-            .filter(|(ij, _)| map.valid.as_ref().is_none_or(|v| v[*ij]))
-            .map(|(_, &z)| z)
-            .collect();
-        let n = vals.len() as f64;
-        let mean = vals.iter().sum::<f64>() / n;
-        let var = vals.iter().map(|z| (z - mean).powi(2)).sum::<f64>() / n;
-        (mean, var.sqrt(), map.z.len() - vals.len())
     }
 
     #[test]
