@@ -211,12 +211,14 @@ pub fn height_vs_power_png(
         efficiency * 1e6,
         intercept * 1e9
     );
-    lines_png(
+    // Lines with markers, the fitted heights drawn last so the efficiency line cannot hide them.
+    super::sweep::metric_sweep_png(
         path,
         "Bulge height against heater power",
         "heater power (mW)",
         "bulge height (nm)",
-        &[("fitted heights", pts), (name.as_str(), line)],
+        &[(name.as_str(), line), ("fitted heights", pts)],
+        &[],
     )
 }
 

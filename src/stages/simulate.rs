@@ -102,12 +102,18 @@ fn sweep_figures(
     title: &str,
 ) -> Result<()> {
     use crate::figures::{clearance_sweep_png, metric_sweep_png, RegimeBand, SweepSeries};
+    // A sweep stated in heater power is drawn against the power (docs/bulge.md):
+    // P = actuation / efficiency; otherwise against the actuation in nm.
+    let (per_m, axis, short, long) = match p.efficiency {
+        Some(e) => (1e3 / e, "heater power (mW)", "heater power", "heater power"),
+        None => (1e9, "TFC actuation (nm)", "actuation", "TFC actuation"),
+    };
     let nm_of = |v: &Value| v.as_f64().unwrap_or(f64::NAN) * 1e9;
     let clearance: Vec<(f64, f64, f64)> = cases
         .iter()
         .map(|c| {
             (
-                c.actuation * 1e9,
+                c.actuation * per_m,
                 nm_of(&c.metrics["clearance_m"]["mean"]),
                 nm_of(&c.metrics["clearance_m"]["std"]),
             )
@@ -117,16 +123,16 @@ fn sweep_figures(
     let bands: Vec<RegimeBand> = bands
         .iter()
         .map(|(x0, x1, r)| RegimeBand {
-            x0: *x0,
-            x1: *x1,
+            x0: x0 * (per_m / 1e9),
+            x1: x1 * (per_m / 1e9),
             label: regime_name(*r),
         })
         .collect();
     let t0 = 0.5 * p.model.interface.lubricant_thickness * 1e9;
     clearance_sweep_png(
         &dir.join("clearance_sweep.png"),
-        &format!("Steady clearance vs TFC actuation — {title}"),
-        "TFC actuation (nm)",
+        &format!("Steady clearance vs {long} — {title}"),
+        axis,
         "clearance (nm)",
         &[SweepSeries {
             label: "mean ± 1 std",
@@ -137,17 +143,17 @@ fn sweep_figures(
     )?;
     let mut marks: Vec<(f64, &str)> = Vec::new();
     if let Some(td) = s.touchdown_actuation_m {
-        marks.push((td * 1e9, "touchdown"));
+        marks.push((td * per_m, "touchdown"));
     }
     if let Some(cp) = &s.slopes.critical_point {
-        marks.push((cp.actuation_m * 1e9, "critical point"));
+        marks.push((cp.actuation_m * per_m, "critical point"));
     }
     let series = |key: &str| -> Vec<(f64, f64)> {
         cases
             .iter()
             .map(|c| {
                 (
-                    c.actuation * 1e9,
+                    c.actuation * per_m,
                     c.metrics[key].as_f64().unwrap_or(f64::NAN),
                 )
             })
@@ -155,8 +161,8 @@ fn sweep_figures(
     };
     metric_sweep_png(
         &dir.join("vibration_sweep.png"),
-        &format!("FHM (flying) / BV (contact) vs actuation — {title}"),
-        "TFC actuation (nm)",
+        &format!("FHM (flying) / BV (contact) vs {short} — {title}"),
+        axis,
         "FHM / BV (%)",
         &[
             (
@@ -172,8 +178,8 @@ fn sweep_figures(
     )?;
     metric_sweep_png(
         &dir.join("solid_contact_sweep.png"),
-        &format!("Time in solid contact vs actuation — {title}"),
-        "TFC actuation (nm)",
+        &format!("Time in solid contact vs {short} — {title}"),
+        axis,
         "solid contact (% of the steady window)",
         &[("solid contact", series("percent_solid_contact"))],
         &marks,
