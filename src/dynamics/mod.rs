@@ -24,6 +24,7 @@ pub mod geometry;
 pub mod metrics;
 pub mod params;
 pub mod three_dof;
+pub mod touchdown;
 pub mod two_dof;
 
 #[cfg(test)]
