@@ -39,7 +39,9 @@ impl TouchdownSearch {
 
     /// The scan grid, `start..=stop` by `step` (the end included to 1e-9 of a step).
     pub fn grid(&self) -> Vec<f64> {
-        if !(self.step > 0.0) || !(self.stop >= self.start) {
+        // NaN steps or ends fail these comparisons too, so they give an empty grid.
+        let ordered = self.step > 0.0 && self.stop >= self.start;
+        if !ordered {
             return Vec::new();
         }
         let n = ((self.stop - self.start) / self.step + 1e-9).floor() as usize;
@@ -181,7 +183,10 @@ mod tests {
             let td = 9.7345 * NM;
             let r = find_touchdown(&s, &[], step_at(td)).unwrap();
             let (a, lo) = (r.actuation.unwrap(), r.last_flying.unwrap());
-            assert!(a >= td && a - td <= s.resolution + 1e-18, "batch {batch}: {a}");
+            assert!(
+                a >= td && a - td <= s.resolution + 1e-18,
+                "batch {batch}: {a}"
+            );
             assert!(lo < td && a - lo <= s.resolution + 1e-18);
         }
     }
