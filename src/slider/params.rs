@@ -152,6 +152,10 @@ pub struct SimulateConfig {
     /// static equilibrium at the case's actuation, recommended for sweeps).
     #[serde(default = "default_init")]
     pub init: String,
+    /// With `init = "static"`: `both` (default), `up` or `down` — the continuation branches
+    /// the sweep tracks (docs/conventions.md). Not allowed with `init = "nominal"`.
+    #[serde(default)]
+    pub branches: Option<String>,
     /// A `[calibrate.*]` instance whose fitted knobs (DMW scale, β, Δγ, ε, ζ_c, …) replace
     /// the spec defaults of this instance.
     #[serde(default)]
@@ -188,6 +192,9 @@ pub struct SimulateParams {
     pub powers: Option<Vec<f64>>,
     /// The efficiency (m/W) the actuations were computed with (set when prepared).
     pub efficiency: Option<f64>,
+    /// Branch-tracking (continuation) sweeps of `init = "static"`; empty with `init =
+    /// "nominal"` (one sweep from the nominal state).
+    pub branches: Vec<crate::slider::sweep::Branch>,
 }
 
 /// The key of a `[calibrate]` table a calibrated instance checks (the table itself is
@@ -454,6 +461,7 @@ fn check_options(cfg: &SimulateConfig) -> std::result::Result<SimOptions, KeyErr
         transit_delay: cfg.transit_delay,
         wrap_dmw: cfg.dmw_wrap,
         initial_state: [z0, 0.0, 0.0, 0.0],
+        static_start: None,
     };
     if !(cfg.duration.0 > 0.0 && cfg.duration.0 <= 0.1) {
         return bad(
@@ -496,6 +504,9 @@ impl SimulateParams {
             check_actuations(cfg, model.max_actuation)?
         };
         let options = check_options(cfg)?;
+        let branches =
+            crate::slider::sweep::Branch::parse(cfg.branches.as_deref(), options.static_init)
+                .map_err(|m| KeyError::new("branches", m))?;
         let (geometry, bulge) = match &cfg.geometry {
             GeometryConfig::Named(n) => (n.clone(), None),
             GeometryConfig::Bulge { bulge } => (format!("bulge:{bulge}"), Some(bulge.clone())),
@@ -516,6 +527,7 @@ impl SimulateParams {
             bulge,
             powers,
             efficiency: None,
+            branches,
         })
     }
     /// Canonical parameters of the whole stage instance (its cache key).
@@ -532,6 +544,9 @@ impl SimulateParams {
             "histories_m": self.histories,
             "calibration": self.calibration,
         });
+        if let (false, Some(obj)) = (self.branches.is_empty(), v.as_object_mut()) {
+            obj.insert("branches".into(), json!(format!("{:?}", self.branches)));
+        }
         // Only instances with a fitted bulge carry these keys: the others keep their keys.
         if let (Some(b), Some(obj)) = (&self.bulge, v.as_object_mut()) {
             obj.insert("bulge".into(), json!(b));
