@@ -156,6 +156,10 @@ pub struct SimulateConfig {
     /// the sweep tracks (docs/conventions.md). Not allowed with `init = "nominal"`.
     #[serde(default)]
     pub branches: Option<String>,
+    /// Refine the sweep's touchdown to 0.02 nm by running the extra cases (default true;
+    /// docs/conventions.md). `false` reports the grid touchdown only (quick test sweeps).
+    #[serde(default = "default_true")]
+    pub refine_touchdown: bool,
     /// A `[calibrate.*]` instance whose fitted knobs (DMW scale, β, Δγ, ε, ζ_c, …) replace
     /// the spec defaults of this instance.
     #[serde(default)]
@@ -195,6 +199,8 @@ pub struct SimulateParams {
     /// Branch-tracking (continuation) sweeps of `init = "static"`; empty with `init =
     /// "nominal"` (one sweep from the nominal state).
     pub branches: Vec<crate::slider::sweep::Branch>,
+    /// Refine the touchdown to 0.02 nm (the convention) with extra cases.
+    pub refine_touchdown: bool,
 }
 
 /// The key of a `[calibrate]` table a calibrated instance checks (the table itself is
@@ -528,6 +534,7 @@ impl SimulateParams {
             powers,
             efficiency: None,
             branches,
+            refine_touchdown: cfg.refine_touchdown,
         })
     }
     /// Canonical parameters of the whole stage instance (its cache key).
@@ -546,6 +553,9 @@ impl SimulateParams {
         });
         if let (false, Some(obj)) = (self.branches.is_empty(), v.as_object_mut()) {
             obj.insert("branches".into(), json!(format!("{:?}", self.branches)));
+        }
+        if let (false, Some(obj)) = (self.refine_touchdown, v.as_object_mut()) {
+            obj.insert("refine_touchdown".into(), json!(false));
         }
         // Only instances with a fitted bulge carry these keys: the others keep their keys.
         if let (Some(b), Some(obj)) = (&self.bulge, v.as_object_mut()) {

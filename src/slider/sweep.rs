@@ -180,7 +180,13 @@ pub fn continuation_starts(
         roots[i] = q;
         prev = Some(q);
     }
-    Ok(roots)
+    // The start enters the case's cache key: quantised (0.1 pm in heave, 0.1 nrad in pitch,
+    // far below Newton's basin) so a root recomputed in an extended sweep keys the same case
+    // again; the case's own Newton solve from it lands on the same equilibrium.
+    Ok(roots
+        .into_iter()
+        .map(|[z, t]| [(z * 1e13).round() / 1e13, (t * 1e10).round() / 1e10])
+        .collect())
 }
 
 /// `p` whose cases start Newton at `start` (a continuation start; `None`: as configured).
@@ -381,6 +387,12 @@ pub fn convention_touchdown(
         start: first,
         stop: last,
         step: if step.is_finite() { step } else { 1.0 },
+        // Without refinement the bracket stays the grid's: no extra cases.
+        resolution: if p.refine_touchdown {
+            TouchdownSearch::convention(last, step, 3).resolution
+        } else {
+            f64::INFINITY
+        },
         ..TouchdownSearch::convention(last, step, 3)
     };
     let start_near = |a: f64| -> Option<[f64; 2]> {

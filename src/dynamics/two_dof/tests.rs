@@ -344,7 +344,12 @@ fn up_branch_continuation_matches_the_nominal_start_where_the_equilibrium_is_uni
             ..SimOptions::default()
         };
         let case = TwoDofCase::new(&improved_2dof(), 8.5 * nm, &isbl, None, o).unwrap();
-        case.run().unwrap().metrics(&params).unwrap().clearance_m.mean
+        case.run()
+            .unwrap()
+            .metrics(&params)
+            .unwrap()
+            .clearance_m
+            .mean
     };
     let branch = run(true, roots.last().copied());
     let nominal = run(false, None);
@@ -364,7 +369,8 @@ fn continuation_branches_across_the_fold() {
         let mut prev: Option<[f64; 2]> = None;
         let mut c = vec![0.0; grid.len()];
         for i in order {
-            let case = TwoDofCase::new(&improved_2dof(), grid[i], &isbl, None, short(1e-4)).unwrap();
+            let case =
+                TwoDofCase::new(&improved_2dof(), grid[i], &isbl, None, short(1e-4)).unwrap();
             let q = match prev {
                 None => case.static_equilibrium().unwrap(),
                 Some(q0) => case.static_equilibrium_near(q0).unwrap(),
@@ -377,8 +383,17 @@ fn continuation_branches_across_the_fold() {
     let up = sweep((0..grid.len()).collect());
     let down = sweep((0..grid.len()).rev().collect());
     for (i, (u, d)) in up.iter().zip(&down).enumerate() {
-        println!("{:.1} nm: up {:.4} nm, down {:.4} nm", grid[i] / nm, u / nm, d / nm);
-        assert!(*d <= u + 1e-12, "{:.1} nm: down {d} above up {u}", grid[i] / nm);
+        println!(
+            "{:.1} nm: up {:.4} nm, down {:.4} nm",
+            grid[i] / nm,
+            u / nm,
+            d / nm
+        );
+        assert!(
+            *d <= u + 1e-12,
+            "{:.1} nm: down {d} above up {u}",
+            grid[i] / nm
+        );
     }
     // Both ends agree (one equilibrium far from the fold).
     assert!((up[0] - down[0]).abs() < 1e-13);
