@@ -383,16 +383,26 @@ pub fn convention_touchdown(
     };
     // A fixed batch (not the thread count): the refinement points, and so the result, must
     // not depend on the machine. Three cases per round: 0.2 nm → 0.05 → 0.0125 nm.
+    if !p.refine_touchdown || !step.is_finite() {
+        // Without refinement (or with one case) the bracket stays the grid's: no extra cases.
+        let k = known.iter().position(|k| k.1);
+        return Ok((
+            crate::dynamics::touchdown::Touchdown {
+                actuation: k.map(|k| known[k].0),
+                last_flying: match k {
+                    Some(0) => None,
+                    Some(k) => Some(known[k - 1].0),
+                    None => known.last().map(|k| k.0),
+                },
+                cases_run: 0,
+            },
+            Vec::new(),
+        ));
+    }
     let search = TouchdownSearch {
         start: first,
         stop: last,
-        step: if step.is_finite() { step } else { 1.0 },
-        // Without refinement the bracket stays the grid's: no extra cases.
-        resolution: if p.refine_touchdown {
-            TouchdownSearch::convention(last, step, 3).resolution
-        } else {
-            f64::INFINITY
-        },
+        step,
         ..TouchdownSearch::convention(last, step, 3)
     };
     let start_near = |a: f64| -> Option<[f64; 2]> {

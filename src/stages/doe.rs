@@ -735,18 +735,13 @@ fn refined_touchdown(
         .map(|w| w[1].actuation - w[0].actuation)
         .filter(|d| *d > 0.0)
         .fold(f64::INFINITY, f64::min);
-    if !step.is_finite() {
-        return Ok(known.first().and_then(|k| k.1.then_some(k.0)));
+    if !step.is_finite() || !runner.base.refine_touchdown {
+        // One case, or no refinement asked: the grid's first touching case.
+        return Ok(known.iter().find(|k| k.1).map(|k| k.0));
     }
-    let conv = TouchdownSearch::convention(last.actuation, step, 3);
     let search = TouchdownSearch {
         start: first.actuation,
-        resolution: if runner.base.refine_touchdown {
-            conv.resolution
-        } else {
-            f64::INFINITY
-        },
-        ..conv
+        ..TouchdownSearch::convention(last.actuation, step, 3)
     };
     let td = find_touchdown(&search, &known, |acts: &[f64]| -> Result<Vec<bool>> {
         let runs: Vec<Result<DesignCase>> =
