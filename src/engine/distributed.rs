@@ -171,11 +171,9 @@ pub fn stale_cases(file: &PipelineFile, config: &Path, store: &Store) -> Result<
         for (design, a, start) in points {
             let params = match (design, start) {
                 (None, None) => sweep.case_params(a),
-                (None, Some(s)) => with_start(&sweep.params, Some(s)).case_params(
-                    a,
-                    &sweep.contact_key,
-                    dmw_key,
-                ),
+                (None, Some(s)) => {
+                    with_start(&sweep.params, Some(s)).case_params(a, &sweep.contact_key, dmw_key)
+                }
                 (Some(d), _) => {
                     design_params(&sweep.params, &d, a)?.case_params(a, &sweep.contact_key, dmw_key)
                 }
