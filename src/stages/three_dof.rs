@@ -27,7 +27,7 @@ use std::path::Path;
 /// The `[three_dof.NAME]` table (checked by `ThreeDofParams`).
 pub use crate::slider::three_dof_params::ThreeDofConfig;
 
-pub const MODEL_VERSION: &str = "three-dof-2";
+pub const MODEL_VERSION: &str = "three-dof-3";
 
 pub struct ThreeDofStage {
     pub name: String,
