@@ -205,7 +205,8 @@ fn simulate_sweep_in_heater_power_from_a_fitted_bulge() {
         table("[bulge.tfc]").replace("raw/bulge/", "raw/"),
         table("[simulate.power_sweep]")
             .replace("dmw = \"disk_md\"", "dmw = \"none\"")
-            .replace("power_step = \"2 mW\"", "power_step = \"16 mW\"\nduration = \"0.5 ms\"\nsteady_start = \"0.2 ms\""),
+            // One branch, grid touchdown: the rows are the four powers (docs/conventions.md).
+            .replace("power_step = \"2 mW\"", "power_step = \"16 mW\"\nduration = \"0.5 ms\"\nsteady_start = \"0.2 ms\"\nbranches = \"up\"\nrefine_touchdown = false"),
     );
     std::fs::write(dir.path().join("pipeline.toml"), &text).unwrap();
     let o = hdi()

@@ -77,8 +77,20 @@ fn pipeline_sweep_caches_each_case() {
         serde_json::from_slice(&r).unwrap()
     };
     let first = read(&p);
-    assert_eq!(first["cases"].as_array().unwrap().len(), 4);
+    // init = "static": an up and a down branch of 4 cases each (docs/conventions.md).
+    assert_eq!(first["cases"].as_array().unwrap().len(), 8);
     assert_eq!(first["cases_cached"], 0);
+    let branches: Vec<&str> = first["cases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["branch"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        branches,
+        ["up", "up", "up", "up", "down", "down", "down", "down"]
+    );
+    assert!(first["hysteresis"]["tolerance_m"].as_f64().unwrap() > 0.0);
     for f in [
         "sweep.parquet",
         "sweep.csv",
@@ -86,6 +98,7 @@ fn pipeline_sweep_caches_each_case() {
         "vibration_sweep.png",
         "solid_contact_sweep.png",
         "cases/h_010.00nm.h5",
+        "cases/down/h_010.00nm.h5",
     ] {
         assert!(p.processed().join("improved_sweep").join(f).exists(), "{f}");
     }
@@ -98,14 +111,16 @@ fn pipeline_sweep_caches_each_case() {
     let o = p.run(&["run", "--only", "improved_sweep"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let second = read(&p);
-    assert_eq!(second["cases"].as_array().unwrap().len(), 3);
-    assert_eq!(second["cases_cached"], 2, "{second}");
+    assert_eq!(second["cases"].as_array().unwrap().len(), 6);
+    // 5 and 10 nm of both branches: each branch reaches them along the same path (up from
+    // below, down from deep contact), so their continuation starts and case keys are the same.
+    assert_eq!(second["cases_cached"], 4, "{second}");
     // gc keeps the cases the current sweep lists.
     let o = p.run(&["gc"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let o = p.run(&["run", "--only", "improved_sweep", "--force"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert_eq!(read(&p)["cases_cached"], 3);
+    assert_eq!(read(&p)["cases_cached"], 6);
 }
 
 #[test]
@@ -128,6 +143,16 @@ fn bad_simulate_keys_name_the_key_and_line() {
             "init = \"static\"\nintegrater = \"dopri5\"",
             "integrater",
         ),
+        (
+            "init = \"static\"",
+            "init = \"static\"\nbranches = \"sideways\"",
+            "simulate.improved_sweep.branches",
+        ),
+        (
+            "init = \"static\"",
+            "init = \"nominal\"\nbranches = \"up\"",
+            "simulate.improved_sweep.branches",
+        ),
     ] {
         let text = p.config();
         assert!(text.contains(from), "{from}");
@@ -138,4 +163,55 @@ fn bad_simulate_keys_name_the_key_and_line() {
         p.set_config(&text);
     }
     assert_eq!(snapshot(&p.processed()), before);
+}
+
+/// Touchdown by the convention (docs/conventions.md): the sweep's grid is the scan, the first
+/// crossing is refined to 0.02 nm with extra cases, each of which is recorded; the refined
+/// bracket must be consistent with those cases (the touching end touches, the flying end
+/// flies) and lie inside the grid bracket.
+#[test]
+fn sweep_touchdown_is_refined_to_the_convention() {
+    let p = Project::shipped();
+    let text = p.config().replacen(
+        "actuation_start = \"0 nm\"\nactuation_stop = \"15 nm\"\nactuation_step = \"5 nm\"\nrefine_touchdown = false",
+        "actuation_start = \"9 nm\"\nactuation_stop = \"11 nm\"\nactuation_step = \"0.5 nm\"\nbranches = \"up\"",
+        1,
+    );
+    assert!(text.contains("branches = \"up\""));
+    p.set_config(&text);
+    let o = p.run(&["run", "--only", "improved_sweep"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(p.processed().join("improved_sweep").join("result.json")).unwrap(),
+    )
+    .unwrap();
+    let td = &r["sweep"]["touchdown_convention"];
+    let grid_td = r["sweep"]["touchdown_m"]
+        .as_f64()
+        .expect("the sweep touches");
+    let (a, lo) = (
+        td["actuation_m"].as_f64().unwrap(),
+        td["last_flying_m"].as_f64().unwrap(),
+    );
+    assert!(a - lo <= 0.02e-9 * (1.0 + 1e-9) && a > lo, "{td}");
+    assert!(
+        a <= grid_td + 1e-15 && a > grid_td - 0.5e-9 - 1e-15,
+        "{a} vs grid {grid_td}"
+    );
+    let extra = td["extra_cases"].as_array().unwrap();
+    assert!(!extra.is_empty() && extra.len() <= 9, "{extra:?}");
+    let touches_at = |x: f64| -> Option<bool> {
+        extra
+            .iter()
+            .find(|c| (c["actuation_m"].as_f64().unwrap() - x).abs() < 1e-15)
+            .map(|c| c["solid_contact_percent"].as_f64().unwrap() > 0.0)
+    };
+    // Both ends are extra cases unless an end is a grid point.
+    if let Some(t) = touches_at(a) {
+        assert!(t, "{a}");
+    }
+    if let Some(t) = touches_at(lo) {
+        assert!(!t, "{lo}");
+    }
+    assert_eq!(r["sweep"]["branch"], "up");
 }

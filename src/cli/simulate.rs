@@ -103,7 +103,27 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     let rows = case_rows(&cases, &sweep);
     if a.out.is_some() {
         hdi::core::store::write_table(&rows, &root.join("sweep"))?;
-        plots(&root, &params, &cases, &sweep, &a.model)?;
+        // One sweep (the ad hoc command does not track branches; the pipeline's
+        // `[simulate]` does, docs/conventions.md), its grid touchdown.
+        let run = hdi::stages::simulate::BranchRun {
+            branch: None,
+            cases: cases
+                .iter()
+                .map(|c| hdi::slider::sweep::CaseOutcome {
+                    actuation: c.actuation,
+                    metrics: c.metrics.clone(),
+                    entry: c.entry.clone(),
+                })
+                .collect(),
+            touchdown: hdi::dynamics::touchdown::Touchdown {
+                actuation: sweep.touchdown_actuation_m,
+                last_flying: None,
+                cases_run: 0,
+            },
+            sweep: sweep_analysis(&params, &cases)?,
+            extra: Vec::new(),
+        };
+        plots(&root, &params, std::slice::from_ref(&run), &a.model)?;
     }
     if temporary {
         let _ = std::fs::remove_dir_all(&root);

@@ -73,6 +73,10 @@ pub struct SimOptions {
     /// (DMW frozen at t = 0, interfacial forces on) instead of the nominal state. Shortens the
     /// transient and avoids the violent start of a deep initial interference.
     pub static_init: bool,
+    /// With `static_init`: the `(z, ϑ)` Newton starts from (e.g. the neighbouring actuation's
+    /// equilibrium, for branch-tracking sweeps; docs/conventions.md). `None`: the nominal
+    /// state, then heave offsets on either side of it.
+    pub static_start: Option<[f64; 2]>,
 }
 
 impl Default for SimOptions {
@@ -86,6 +90,7 @@ impl Default for SimOptions {
             wrap_dmw: false,
             initial_state: [0.0; 4],
             static_init: false,
+            static_start: None,
         }
     }
 }
@@ -96,6 +101,9 @@ impl SimOptions {
         let o = self;
         if let Some(v) = o.initial_state.iter().find(|v| !v.is_finite()) {
             return Err(parameter("initial state", *v, "must be finite"));
+        }
+        if let Some(v) = o.static_start.iter().flatten().find(|v| !v.is_finite()) {
+            return Err(parameter("static start", *v, "must be finite"));
         }
         if !(o.duration.is_finite() && o.duration > 0.0 && o.duration <= 1.0) {
             return Err(parameter(
@@ -588,6 +596,23 @@ impl<'a> TwoDofCase<'a> {
         Err(first_error.expect("at least one start"))
     }
 
+    /// Static equilibrium by continuation from `start` (a neighbouring equilibrium): Newton
+    /// from `start` itself, then from heave offsets around it. The root nearest in the
+    /// Newton sense to `start` is kept, so a sweep stepping along the actuation stays on
+    /// its branch until the branch ends at a fold (docs/conventions.md).
+    pub fn static_equilibrium_near(&self, start: [f64; 2]) -> Result<[f64; 2], DynamicsError> {
+        let mut first_error = None;
+        for dz in [0.0, -0.25, 0.25, -0.5, 0.5, -1.0, 1.0, -2.0, 2.0, -4.0, 4.0] {
+            match self.static_equilibrium_from([start[0] + dz * 1e-9, start[1]]) {
+                Ok(q) => return Ok(q),
+                Err(e) => {
+                    first_error.get_or_insert(e);
+                }
+            }
+        }
+        Err(first_error.expect("at least one start"))
+    }
+
     fn static_equilibrium_from(&self, start: [f64; 2]) -> Result<[f64; 2], DynamicsError> {
         let fail = |why: &str| {
             DynamicsError::Numerical(format!(
@@ -721,7 +746,10 @@ impl<'a> TwoDofCase<'a> {
         let atol = [1e-14, 1e-11, 1e-14 * w, 1e-11 * w];
         let mut start = o.initial_state;
         if o.static_init {
-            let q = self.static_equilibrium()?;
+            let q = match o.static_start {
+                Some(q0) => self.static_equilibrium_near(q0)?,
+                None => self.static_equilibrium()?,
+            };
             start[0] += q[0];
             start[1] += q[1];
         }

@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::slider::case::{simulate_case, MODEL_VERSION};
 use crate::slider::doe_design::{design_cases, design_params};
 use crate::slider::params::{SimulateConfig, SimulateParams};
-use crate::slider::sweep::PreparedSweep;
+use crate::slider::sweep::{continuation_starts, with_start, PreparedSweep};
 use crate::stages::doe::{DoeConfig, DoeStage};
 use crate::stages::FromConfig;
 use serde_json::{json, Value};
@@ -138,24 +138,49 @@ pub fn stale_cases(file: &PipelineFile, config: &Path, store: &Store) -> Result<
     for (kind, name) in stale_instances(file, &planned) {
         let sweep = prepared(file, store, &planned, kind, &name)?;
         let dmw_key = sweep.dmw.as_ref().map(|d| d.1.as_str());
-        let points: Vec<(Option<[f64; 3]>, f64)> = if kind == SIMULATE_CASE {
-            sweep.params.actuations.iter().map(|&a| (None, a)).collect()
+        // A branch-tracking sweep's cases start at their continuation equilibria
+        // (docs/conventions.md): solved here, sequentially, as the stage does; the start is
+        // part of each case's key and of its recipe.
+        type Point = (Option<[f64; 3]>, f64, Option<[f64; 2]>);
+        let points: Vec<Point> = if kind == SIMULATE_CASE && !sweep.params.branches.is_empty() {
+            let mut grid = sweep.params.actuations.clone();
+            grid.sort_by(|a, b| a.total_cmp(b));
+            grid.dedup();
+            let mut v = Vec::new();
+            for &b in &sweep.params.branches {
+                let track = sweep.dmw.as_ref().map(|d| &d.0);
+                let starts = continuation_starts(&sweep.params, &grid, &sweep.isbl, track, b)?;
+                v.extend(grid.iter().zip(starts).map(|(&a, s)| (None, a, Some(s))));
+            }
+            v
+        } else if kind == SIMULATE_CASE {
+            sweep
+                .params
+                .actuations
+                .iter()
+                .map(|&a| (None, a, None))
+                .collect()
         } else {
             let doe = doe_stage(file, &name)?;
             design_cases(&doe.params.levels, &doe.params.actuations)
                 .into_iter()
-                .map(|(d, a)| (Some(d), a))
+                .map(|(d, a)| (Some(d), a, None))
                 .collect()
         };
-        for (design, a) in points {
-            let params = match design {
-                None => sweep.case_params(a),
-                Some(d) => {
+        let mut listed = std::collections::HashSet::new();
+        for (design, a, start) in points {
+            let params = match (design, start) {
+                (None, None) => sweep.case_params(a),
+                (None, Some(s)) => {
+                    with_start(&sweep.params, Some(s)).case_params(a, &sweep.contact_key, dmw_key)
+                }
+                (Some(d), _) => {
                     design_params(&sweep.params, &d, a)?.case_params(a, &sweep.contact_key, dmw_key)
                 }
             };
             let key = case_fingerprint(MODEL_VERSION, &params).key();
-            if !missing(&key) {
+            // Branches sharing an equilibrium share the case: list it once.
+            if !missing(&key) || !listed.insert(key) {
                 continue;
             }
             let recipe = json!({
@@ -163,6 +188,7 @@ pub fn stale_cases(file: &PipelineFile, config: &Path, store: &Store) -> Result<
                 "instance": name,
                 "actuation_m": a,
                 "design_m": design,
+                "static_start": start,
             });
             specs.push(CaseSpec::new(kind, MODEL_VERSION, params, recipe));
         }
@@ -232,7 +258,19 @@ impl SweepWorker {
                 }
             }
         };
+        let start = serde_json::from_value::<Option<[f64; 2]>>(recipe["static_start"].clone())
+            .map_err(|_| Error::RecipeField {
+                kind: self.kind,
+                field: "static_start".into(),
+            })?;
         match serde_json::from_value::<Option<[f64; 3]>>(recipe["design_m"].clone()) {
+            Ok(None) if start.is_some() => simulate_case(
+                &with_start(&sweep.params, start),
+                actuation,
+                &sweep.isbl,
+                sweep.dmw.as_ref().map(|d| &d.0),
+                dir,
+            ),
             Ok(None) => sweep.compute_case(actuation, dir),
             Ok(Some(design)) => {
                 let p = design_params(&sweep.params, &design, actuation)?;

@@ -15,7 +15,7 @@ use std::path::Path;
 
 /// Bump when the numbers a case produces change (it keys every 2-DOF case and is the
 /// simulate stage's model version).
-pub const MODEL_VERSION: &str = "simulate-2";
+pub const MODEL_VERSION: &str = "simulate-3";
 
 /// A case's time histories inside its case-cache entry.
 pub const CASE_FILE: &str = "case.h5";
@@ -77,10 +77,15 @@ pub fn case_json(
         "friction_N": c.map(|c| stats_json(&c.friction_n)),
         "real_area_m2": c.map(|c| stats_json(&c.real_area_m2)),
         "adhesion_N": c.and_then(|c| c.adhesion_n.as_ref().map(stats_json)),
-        "friction_coefficient": c.and_then(|c| c.friction_coefficient.as_ref().map(|s| s.mean)),
+        // Headline ratio of means, mean of the instantaneous ratio beside it
+        // (docs/conventions.md); `_ratio_of_means` is kept as an alias of the headline.
+        "friction_coefficient": c.and_then(|c| opt(c.friction_coefficient_ratio_of_means)),
         "friction_coefficient_ratio_of_means": c.and_then(|c| opt(c.friction_coefficient_ratio_of_means)),
-        "mean_pressure_Pa": c.and_then(|c| c.mean_pressure_pa.as_ref().map(|s| s.mean)),
-        "shear_traction_Pa": c.and_then(|c| c.shear_traction_pa.as_ref().map(|s| s.mean)),
+        "friction_coefficient_mean_inst": c.and_then(|c| c.friction_coefficient.as_ref().map(|s| s.mean)),
+        "mean_pressure_Pa": c.and_then(|c| opt(c.mean_pressure_pa_ratio_of_means)),
+        "mean_pressure_Pa_mean_inst": c.and_then(|c| c.mean_pressure_pa.as_ref().map(|s| s.mean)),
+        "shear_traction_Pa": c.and_then(|c| opt(c.shear_traction_pa_ratio_of_means)),
+        "shear_traction_Pa_mean_inst": c.and_then(|c| c.shear_traction_pa.as_ref().map(|s| s.mean)),
         "clipped_samples": h.clipped_samples,
         "steps": h.stats.accepted_steps,
         "rejected_steps": h.stats.rejected_steps,

@@ -152,6 +152,14 @@ pub struct SimulateConfig {
     /// static equilibrium at the case's actuation, recommended for sweeps).
     #[serde(default = "default_init")]
     pub init: String,
+    /// With `init = "static"`: `both` (default), `up` or `down` — the continuation branches
+    /// the sweep tracks (docs/conventions.md). Not allowed with `init = "nominal"`.
+    #[serde(default)]
+    pub branches: Option<String>,
+    /// Refine the sweep's touchdown to 0.02 nm by running the extra cases (default true;
+    /// docs/conventions.md). `false` reports the grid touchdown only (quick test sweeps).
+    #[serde(default = "default_true")]
+    pub refine_touchdown: bool,
     /// A `[calibrate.*]` instance whose fitted knobs (DMW scale, β, Δγ, ε, ζ_c, …) replace
     /// the spec defaults of this instance.
     #[serde(default)]
@@ -188,6 +196,11 @@ pub struct SimulateParams {
     pub powers: Option<Vec<f64>>,
     /// The efficiency (m/W) the actuations were computed with (set when prepared).
     pub efficiency: Option<f64>,
+    /// Branch-tracking (continuation) sweeps of `init = "static"`; empty with `init =
+    /// "nominal"` (one sweep from the nominal state).
+    pub branches: Vec<crate::slider::sweep::Branch>,
+    /// Refine the touchdown to 0.02 nm (the convention) with extra cases.
+    pub refine_touchdown: bool,
 }
 
 /// The key of a `[calibrate]` table a calibrated instance checks (the table itself is
@@ -454,6 +467,7 @@ fn check_options(cfg: &SimulateConfig) -> std::result::Result<SimOptions, KeyErr
         transit_delay: cfg.transit_delay,
         wrap_dmw: cfg.dmw_wrap,
         initial_state: [z0, 0.0, 0.0, 0.0],
+        static_start: None,
     };
     if !(cfg.duration.0 > 0.0 && cfg.duration.0 <= 0.1) {
         return bad(
@@ -496,6 +510,9 @@ impl SimulateParams {
             check_actuations(cfg, model.max_actuation)?
         };
         let options = check_options(cfg)?;
+        let branches =
+            crate::slider::sweep::Branch::parse(cfg.branches.as_deref(), options.static_init)
+                .map_err(|m| KeyError::new("branches", m))?;
         let (geometry, bulge) = match &cfg.geometry {
             GeometryConfig::Named(n) => (n.clone(), None),
             GeometryConfig::Bulge { bulge } => (format!("bulge:{bulge}"), Some(bulge.clone())),
@@ -516,6 +533,8 @@ impl SimulateParams {
             bulge,
             powers,
             efficiency: None,
+            branches,
+            refine_touchdown: cfg.refine_touchdown,
         })
     }
     /// Canonical parameters of the whole stage instance (its cache key).
@@ -532,6 +551,12 @@ impl SimulateParams {
             "histories_m": self.histories,
             "calibration": self.calibration,
         });
+        if let (false, Some(obj)) = (self.branches.is_empty(), v.as_object_mut()) {
+            obj.insert("branches".into(), json!(format!("{:?}", self.branches)));
+        }
+        if let (false, Some(obj)) = (self.refine_touchdown, v.as_object_mut()) {
+            obj.insert("refine_touchdown".into(), json!(false));
+        }
         // Only instances with a fitted bulge carry these keys: the others keep their keys.
         if let (Some(b), Some(obj)) = (&self.bulge, v.as_object_mut()) {
             obj.insert("bulge".into(), json!(b));

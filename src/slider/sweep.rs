@@ -111,6 +111,91 @@ pub fn cached_case(
     })
 }
 
+/// A continuation branch of a static-start sweep (docs/conventions.md): `Up` steps the
+/// static equilibrium along increasing actuation from the nominal state at the lowest one,
+/// `Down` along decreasing actuation from the highest; near the adhesion fold, where there
+/// are several equilibria, the two can differ (hysteresis).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Branch {
+    Up,
+    Down,
+}
+
+impl Branch {
+    pub fn name(self) -> &'static str {
+        match self {
+            Branch::Up => "up",
+            Branch::Down => "down",
+        }
+    }
+
+    /// The `branches` key: `both` (default with static init), `up`, `down`; with the nominal
+    /// start (`static_init` false) there are no branches and the key is an error.
+    pub fn parse(
+        value: Option<&str>,
+        static_init: bool,
+    ) -> std::result::Result<Vec<Branch>, String> {
+        match (value, static_init) {
+            (None, false) => Ok(Vec::new()),
+            (Some(_), false) => Err("only with init = \"static\" (continuation sweeps); \
+                                     init = \"nominal\" is one sweep"
+                .into()),
+            (None | Some("both"), true) => Ok(vec![Branch::Up, Branch::Down]),
+            (Some("up"), true) => Ok(vec![Branch::Up]),
+            (Some("down"), true) => Ok(vec![Branch::Down]),
+            (Some(o), true) => Err(format!("unknown `{o}` (both, up, down)")),
+        }
+    }
+}
+
+/// The static equilibria `(z, ϑ)` of `p`'s cases at `actuations` (ascending) along `branch`,
+/// solved one after the other by continuation: each Newton solve starts from the previous
+/// actuation's root (the first from the nominal state). Cheap next to the dynamic cases,
+/// which then run in parallel from these starts.
+pub fn continuation_starts(
+    p: &SimulateParams,
+    actuations: &[f64],
+    isbl: &IsblLookup,
+    dmw: Option<&DmwTrack>,
+    branch: Branch,
+) -> Result<Vec<[f64; 2]>> {
+    use crate::dynamics::two_dof::{DmwInput, TwoDofCase};
+    let mut order: Vec<usize> = (0..actuations.len()).collect();
+    if branch == Branch::Down {
+        order.reverse();
+    }
+    let mut roots = vec![[0.0; 2]; actuations.len()];
+    let mut prev: Option<[f64; 2]> = None;
+    for i in order {
+        let input = dmw.map(|t| DmwInput {
+            displacement: &t.displacement,
+            velocity: &t.velocity,
+            sample_rate: t.sample_rate,
+        });
+        let case = TwoDofCase::new(&p.model, actuations[i], isbl, input, p.options)?;
+        let q = match prev {
+            None => case.static_equilibrium()?,
+            Some(q0) => case.static_equilibrium_near(q0)?,
+        };
+        roots[i] = q;
+        prev = Some(q);
+    }
+    // The start enters the case's cache key: quantised (0.1 pm in heave, 0.1 nrad in pitch,
+    // far below Newton's basin) so a root recomputed in an extended sweep keys the same case
+    // again; the case's own Newton solve from it lands on the same equilibrium.
+    Ok(roots
+        .into_iter()
+        .map(|[z, t]| [(z * 1e13).round() / 1e13, (t * 1e10).round() / 1e10])
+        .collect())
+}
+
+/// `p` whose cases start Newton at `start` (a continuation start; `None`: as configured).
+pub fn with_start(p: &SimulateParams, start: Option<[f64; 2]>) -> SimulateParams {
+    let mut q = p.clone();
+    q.options.static_start = start;
+    q
+}
+
 /// Where a sweep's cases are computed.
 pub enum CaseSink<'a> {
     /// One content-addressed store entry per case (`core::cases`), so a rerun or an extended
@@ -135,17 +220,42 @@ pub fn run_cases(
     dmw: Option<&DmwTrack>,
     progress: &dyn Progress,
 ) -> Result<Vec<CaseOutcome>> {
+    let jobs: Vec<(f64, Option<[f64; 2]>)> = p.actuations.iter().map(|&a| (a, None)).collect();
+    let mut done = run_jobs(p, sink, isbl, dmw, progress, &jobs, "")?;
+    done.sort_by(|a, b| a.actuation.total_cmp(&b.actuation));
+    Ok(done)
+}
+
+/// Run the cases `jobs` (actuation, Newton start) in parallel, in the order given; `tag`
+/// names the cases' directories apart under [`CaseSink::Directory`] (`h_008.60nm{tag}`).
+/// The first failed case (in `jobs` order) is the error.
+pub fn run_jobs(
+    p: &SimulateParams,
+    sink: &CaseSink,
+    isbl: &IsblLookup,
+    dmw: Option<&DmwTrack>,
+    progress: &dyn Progress,
+    jobs: &[(f64, Option<[f64; 2]>)],
+    tag: &str,
+) -> Result<Vec<CaseOutcome>> {
     use rayon::prelude::*;
     use std::sync::atomic::{AtomicUsize, Ordering};
-    let total = p.actuations.len();
+    let total = jobs.len();
     let finished = AtomicUsize::new(0);
     progress.set_length(total as u64);
     progress.set_message(format!("0/{total} cases"));
-    let outcomes: Vec<Result<CaseOutcome>> = p
-        .actuations
+    let outcomes: Vec<Result<CaseOutcome>> = jobs
         .par_iter()
-        .map(|&a| {
-            let entry = run_case(p, sink, a, isbl, dmw).map_err(|e| Error::Case {
+        .map(|&(a, start)| {
+            let pa;
+            let p = match start {
+                Some(_) => {
+                    pa = with_start(p, start);
+                    &pa
+                }
+                None => p,
+            };
+            let entry = run_case(p, sink, a, isbl, dmw, tag).map_err(|e| Error::Case {
                 actuation: a,
                 source: Box::new(e),
             });
@@ -164,7 +274,6 @@ pub fn run_cases(
     for o in outcomes {
         done.push(o?);
     }
-    done.sort_by(|a, b| a.actuation.total_cmp(&b.actuation));
     Ok(done)
 }
 
@@ -175,6 +284,7 @@ fn run_case(
     actuation: f64,
     isbl: &IsblLookup,
     dmw: Option<&DmwTrack>,
+    tag: &str,
 ) -> Result<CaseEntry> {
     match sink {
         CaseSink::Store {
@@ -188,7 +298,7 @@ fn run_case(
             })
         }
         CaseSink::Directory(root) => {
-            let dir = root.join(format!("h_{:06.2}nm", actuation * 1e9));
+            let dir = root.join(format!("h_{:06.2}nm{tag}", actuation * 1e9));
             std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
             let result = simulate_case(p, actuation, isbl, dmw, &dir)?;
             Ok(CaseEntry {
@@ -203,18 +313,119 @@ fn run_case(
 
 /// Hard-link (or copy) each case's HDF5 into `out/cases/`.
 pub fn link_cases(out: &Path, outcomes: &[CaseOutcome]) -> Result<Vec<String>> {
-    let dir = out.join(cases::DIR);
+    link_cases_tagged(out, outcomes, None)
+}
+
+/// [`link_cases`] with the names of a second branch set apart: `cases/down/h_008.60nm.h5`
+/// (`None`: `cases/h_008.60nm.h5`, the first branch or the only sweep).
+pub fn link_cases_tagged(
+    out: &Path,
+    outcomes: &[CaseOutcome],
+    sub: Option<&str>,
+) -> Result<Vec<String>> {
+    let mut dir = out.join(cases::DIR);
+    if let Some(s) = sub {
+        dir = dir.join(s);
+    }
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     let mut names = Vec::new();
     for c in outcomes {
         let name = cases::sweep_case_name(c.actuation);
         let (from, to) = (c.entry.dir.join(CASE_FILE), dir.join(&name));
+        if to.exists() {
+            std::fs::remove_file(&to).map_err(|e| Error::io(&to, e))?;
+        }
         if std::fs::hard_link(&from, &to).is_err() {
             std::fs::copy(&from, &to).map_err(|e| Error::io(&to, e))?;
         }
-        names.push(cases::sweep_case_file(c.actuation));
+        names.push(match sub {
+            Some(s) => format!("{}/{s}/{name}", cases::DIR),
+            None => cases::sweep_case_file(c.actuation),
+        });
     }
     Ok(names)
+}
+
+/// Touchdown by the convention (`dynamics::touchdown`, docs/conventions.md) of one branch:
+/// the first case whose steady window reaches c < 0, scanned upward over the sweep's own
+/// grid (`cases`, sorted; run already) and refined to 0.02 nm by running the extra cases,
+/// each started from the equilibrium of its neighbour on the branch (`starts`, aligned with
+/// `cases`; `None` for the nominal start). Returns the result and the extra cases.
+pub fn convention_touchdown(
+    p: &SimulateParams,
+    sink: &CaseSink,
+    isbl: &IsblLookup,
+    dmw: Option<&DmwTrack>,
+    cases: &[CaseOutcome],
+    starts: Option<(&[[f64; 2]], Branch)>,
+) -> Result<(crate::dynamics::touchdown::Touchdown, Vec<CaseOutcome>)> {
+    use crate::dynamics::touchdown::{find_touchdown, TouchdownSearch};
+    let grid: Vec<f64> = cases.iter().map(|c| c.actuation).collect();
+    let touches =
+        |c: &CaseOutcome| c.metrics["percent_solid_contact"].as_f64().unwrap_or(0.0) > 0.0;
+    let known: Vec<(f64, bool)> = cases.iter().map(|c| (c.actuation, touches(c))).collect();
+    // The scan grid is the sweep's own: from its first actuation (0 nm in the shipped
+    // sweeps) by its smallest spacing, so a uniform sweep needs no extra scan cases.
+    let step = grid
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    let (Some(&first), Some(&last)) = (grid.first(), grid.last()) else {
+        return Ok((
+            crate::dynamics::touchdown::Touchdown {
+                actuation: None,
+                last_flying: None,
+                cases_run: 0,
+            },
+            Vec::new(),
+        ));
+    };
+    // A fixed batch (not the thread count): the refinement points, and so the result, must
+    // not depend on the machine. Three cases per round: 0.2 nm → 0.05 → 0.0125 nm.
+    if !p.refine_touchdown || !step.is_finite() {
+        // Without refinement (or with one case) the bracket stays the grid's: no extra cases.
+        let k = known.iter().position(|k| k.1);
+        return Ok((
+            crate::dynamics::touchdown::Touchdown {
+                actuation: k.map(|k| known[k].0),
+                last_flying: match k {
+                    Some(0) => None,
+                    Some(k) => Some(known[k - 1].0),
+                    None => known.last().map(|k| k.0),
+                },
+                cases_run: 0,
+            },
+            Vec::new(),
+        ));
+    }
+    let search = TouchdownSearch {
+        start: first,
+        stop: last,
+        step,
+        ..TouchdownSearch::convention(last, step, 3)
+    };
+    let start_near = |a: f64| -> Option<[f64; 2]> {
+        let (roots, branch) = starts?;
+        let i = match branch {
+            // Up: the largest grid actuation below; down: the smallest above.
+            Branch::Up => grid.iter().rposition(|&g| g <= a).unwrap_or(0),
+            Branch::Down => grid.iter().position(|&g| g >= a).unwrap_or(grid.len() - 1),
+        };
+        roots.get(i).copied()
+    };
+    let silent = crate::core::progress::NoProgress;
+    let mut extra: Vec<CaseOutcome> = Vec::new();
+    let td = find_touchdown(&search, &known, |acts: &[f64]| -> Result<Vec<bool>> {
+        let jobs: Vec<(f64, Option<[f64; 2]>)> = acts.iter().map(|&a| (a, start_near(a))).collect();
+        let tag = starts.map_or("", |(_, b)| if b == Branch::Down { "_down" } else { "_up" });
+        let done = run_jobs(p, sink, isbl, dmw, &silent, &jobs, tag)?;
+        let t = done.iter().map(touches).collect();
+        extra.extend(done);
+        Ok(t)
+    })?;
+    extra.sort_by(|a, b| a.actuation.total_cmp(&b.actuation));
+    Ok((td, extra))
 }
 
 /// The sweep-level analysis of finished cases (sorted by actuation).
@@ -302,17 +513,31 @@ pub fn case_rows(cases: &[CaseOutcome], sweep: &SweepMetrics) -> Vec<Map<String,
                 "real_area_mean_um2".into(),
                 json!(f(&m["real_area_m2"]["mean"], 1e12)),
             );
+            // Headline ratio of means, `_mean_inst` the mean of the instantaneous ratio over
+            // the samples with F_c > 1 µN (docs/conventions.md).
             r.insert(
                 "friction_coefficient".into(),
                 m["friction_coefficient"].clone(),
+            );
+            r.insert(
+                "friction_coefficient_mean_inst".into(),
+                m["friction_coefficient_mean_inst"].clone(),
             );
             r.insert(
                 "mean_pressure_GPa".into(),
                 json!(f(&m["mean_pressure_Pa"], 1e-9)),
             );
             r.insert(
+                "mean_pressure_GPa_mean_inst".into(),
+                json!(f(&m["mean_pressure_Pa_mean_inst"], 1e-9)),
+            );
+            r.insert(
                 "shear_traction_GPa".into(),
                 json!(f(&m["shear_traction_Pa"], 1e-9)),
+            );
+            r.insert(
+                "shear_traction_GPa_mean_inst".into(),
+                json!(f(&m["shear_traction_Pa_mean_inst"], 1e-9)),
             );
             r.insert(
                 "nominal_area_um2".into(),
@@ -324,4 +549,131 @@ pub fn case_rows(cases: &[CaseOutcome], sweep: &SweepMetrics) -> Vec<Map<String,
             r
         })
         .collect()
+}
+
+/// Branches whose steady mean clearances differ by more than this (0.05 nm, a quarter of the
+/// 0.2 nm actuation step, well above run-to-run integration noise) count as hysteresis.
+pub const HYSTERESIS_TOLERANCE_M: f64 = 0.05e-9;
+
+/// `(actuation, steady mean clearance)` of each case (m).
+pub fn clearance_curve(cases: &[CaseOutcome]) -> Vec<(f64, f64)> {
+    cases
+        .iter()
+        .map(|c| {
+            (
+                c.actuation,
+                c.metrics["clearance_m"]["mean"]
+                    .as_f64()
+                    .unwrap_or(f64::NAN),
+            )
+        })
+        .collect()
+}
+
+/// Where two branches differ.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hysteresis {
+    pub tolerance_m: f64,
+    /// Lowest and highest actuation at which the branches differ by more than the tolerance
+    /// (`None` when they never do).
+    pub from_m: Option<f64>,
+    pub to_m: Option<f64>,
+    /// Largest |c̄_up − c̄_down| over the shared actuations, and where.
+    pub max_difference_m: f64,
+    pub max_at_m: Option<f64>,
+    /// Every shared actuation beyond the tolerance.
+    pub actuations_m: Vec<f64>,
+}
+
+/// Compare two branches' `(actuation, clearance)` curves at their shared actuations (matched
+/// to 1e-15 m); non-finite clearances are skipped.
+pub fn hysteresis(up: &[(f64, f64)], down: &[(f64, f64)], tolerance_m: f64) -> Hysteresis {
+    let mut h = Hysteresis {
+        tolerance_m,
+        from_m: None,
+        to_m: None,
+        max_difference_m: 0.0,
+        max_at_m: None,
+        actuations_m: Vec::new(),
+    };
+    let mut pairs: Vec<(f64, f64)> = up
+        .iter()
+        .filter_map(|&(a, cu)| {
+            let (_, cd) = down.iter().find(|(b, _)| (a - b).abs() <= 1e-15)?;
+            let d = (cu - cd).abs();
+            d.is_finite().then_some((a, d))
+        })
+        .collect();
+    pairs.sort_by(|x, y| x.0.total_cmp(&y.0));
+    for (a, d) in pairs {
+        if d > h.max_difference_m {
+            h.max_difference_m = d;
+            h.max_at_m = Some(a);
+        }
+        if d > tolerance_m {
+            h.from_m.get_or_insert(a);
+            h.to_m = Some(a);
+            h.actuations_m.push(a);
+        }
+    }
+    h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const NM: f64 = 1e-9;
+
+    #[test]
+    fn hysteresis_reports_the_interval_and_the_largest_gap() {
+        // Branches agree except 9.2–9.6 nm, where the down branch sits 1 nm lower (the
+        // contact branch surviving below the fold), and a sub-tolerance wobble at 10 nm.
+        let grid: Vec<f64> = (40..=55).map(|i| i as f64 * 0.2 * NM).collect();
+        let up: Vec<(f64, f64)> = grid.iter().map(|&a| (a, 12.0 * NM - a)).collect();
+        let down: Vec<(f64, f64)> = grid
+            .iter()
+            .map(|&a| {
+                let gap = if (9.1 * NM..9.7 * NM).contains(&a) {
+                    1.0 * NM + (a - 9.2 * NM)
+                } else if (a - 10.0 * NM).abs() < 1e-12 {
+                    0.04 * NM
+                } else {
+                    0.0
+                };
+                (a, 12.0 * NM - a - gap)
+            })
+            .collect();
+        let h = hysteresis(&up, &down, HYSTERESIS_TOLERANCE_M);
+        assert!((h.from_m.unwrap() - 9.2 * NM).abs() < 1e-15);
+        assert!((h.to_m.unwrap() - 9.6 * NM).abs() < 1e-15);
+        assert_eq!(h.actuations_m.len(), 3);
+        assert!((h.max_difference_m - 1.4 * NM).abs() < 1e-15);
+        assert!((h.max_at_m.unwrap() - 9.6 * NM).abs() < 1e-15);
+        // Identical branches: no interval.
+        let same = hysteresis(&up, &up, HYSTERESIS_TOLERANCE_M);
+        assert_eq!(
+            (same.from_m, same.to_m, same.max_difference_m),
+            (None, None, 0.0)
+        );
+    }
+
+    #[test]
+    fn branches_key() {
+        assert_eq!(
+            Branch::parse(None, true).unwrap(),
+            vec![Branch::Up, Branch::Down]
+        );
+        assert_eq!(
+            Branch::parse(Some("down"), true).unwrap(),
+            vec![Branch::Down]
+        );
+        assert_eq!(Branch::parse(None, false).unwrap(), vec![]);
+        assert!(Branch::parse(Some("both"), false).is_err());
+        let e = Branch::parse(Some("sideways"), true).unwrap_err();
+        assert!(
+            e.contains("sideways") && e.contains("both, up, down"),
+            "{e}"
+        );
+    }
 }

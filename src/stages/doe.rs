@@ -713,12 +713,54 @@ fn model_selection(lf: &LevelFit) -> (Option<f64>, Option<f64>, u32) {
     (Some(f), Some(p), if p < 0.05 { 5 } else { 4 })
 }
 
-/// One condition of Table 2.8 for a design.
+/// Touchdown of a design's Table 2.8 sweep by the convention (docs/conventions.md,
+/// `dynamics::touchdown`): the sweep's grid is the scan, the first crossing refined to 0.02 nm
+/// with extra cached cases (not with `refine_touchdown = false` on the base sweep).
+fn refined_touchdown(
+    runner: &CaseRunner,
+    design: [f64; 3],
+    cases: &[CaseOutcome],
+) -> Result<Option<f64>> {
+    use crate::dynamics::touchdown::{find_touchdown, TouchdownSearch};
+    let touches = |m: &Value| m["percent_solid_contact"].as_f64().unwrap_or(0.0) > 0.0;
+    let known: Vec<(f64, bool)> = cases
+        .iter()
+        .map(|c| (c.actuation, touches(&c.metrics)))
+        .collect();
+    let (Some(first), Some(last)) = (cases.first(), cases.last()) else {
+        return Ok(None);
+    };
+    let step = cases
+        .windows(2)
+        .map(|w| w[1].actuation - w[0].actuation)
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    if !step.is_finite() || !runner.base.refine_touchdown {
+        // One case, or no refinement asked: the grid's first touching case.
+        return Ok(known.iter().find(|k| k.1).map(|k| k.0));
+    }
+    let search = TouchdownSearch {
+        start: first.actuation,
+        ..TouchdownSearch::convention(last.actuation, step, 3)
+    };
+    let td = find_touchdown(&search, &known, |acts: &[f64]| -> Result<Vec<bool>> {
+        let runs: Vec<Result<DesignCase>> =
+            acts.par_iter().map(|&a| runner.run(design, a)).collect();
+        runs.into_iter()
+            .map(|r| r.map(|c| touches(&c.entry.result)))
+            .collect()
+    })?;
+    Ok(td.actuation)
+}
+
+/// One condition of Table 2.8 for a design; `touchdown_refined` (the convention's) goes into
+/// the touchdown row beside the grid case it describes.
 fn comparison_rows(
     label: &str,
     design: &[f64; 3],
     sp: &SimulateParams,
     cases: &[CaseOutcome],
+    touchdown_refined: Option<f64>,
 ) -> Result<Vec<Map<String, Value>>> {
     let sweep = sweep_analysis(sp, cases)?;
     let nearest = |h: f64| {
@@ -753,6 +795,13 @@ fn comparison_rows(
         row.insert("w_um".into(), table_value(design[1] / UM));
         row.insert("x_um".into(), table_value(design[2] / UM));
         row.insert("condition".into(), json!(condition));
+        row.insert(
+            "touchdown_refined_nm".into(),
+            match (condition, touchdown_refined) {
+                ("touchdown", Some(t)) => table_value(t / NM),
+                _ => Value::Null,
+            },
+        );
         let m = idx.map(|i| (&cases[i].metrics, cases[i].actuation));
         let get = |k: &str| m.and_then(|(m, _)| m[k].as_f64());
         row.insert(
@@ -1356,7 +1405,8 @@ fn compare_designs(
                 entry: c.entry.clone(),
             })
             .collect();
-        rows.extend(comparison_rows(label, &design, &sp, &outcomes)?);
+        let td = refined_touchdown(runner, design, &outcomes)?;
+        rows.extend(comparison_rows(label, &design, &sp, &outcomes, td)?);
         sweeps.push(DesignSweep { label, outcomes });
     }
     crate::core::store::write_table(&rows, &ctx.out_dir.join("comparison"))?;

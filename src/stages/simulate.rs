@@ -6,12 +6,14 @@
 use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::dynamics::metrics::{Regime, SweepMetrics};
+use crate::dynamics::touchdown::Touchdown;
 use crate::error::Result;
 use crate::slider::case::{read_case_history, CASE_FILE, MODEL_VERSION};
 use crate::slider::params::SimulateParams;
 use crate::slider::sweep::{
-    case_rows, link_cases, regime_name, run_cases, sweep_analysis, CaseOutcome, CaseSink,
-    PreparedSweep,
+    case_rows, clearance_curve, continuation_starts, convention_touchdown, hysteresis,
+    link_cases_tagged, regime_name, run_jobs, sweep_analysis, Branch, CaseOutcome, CaseSink,
+    Hysteresis, PreparedSweep, HYSTERESIS_TOLERANCE_M,
 };
 use serde_json::{json, Map, Value};
 use std::path::Path;
@@ -44,6 +46,66 @@ fn sweep_json(cases: &[CaseOutcome], s: &SweepMetrics) -> Value {
     })
 }
 
+/// One branch of a sweep (or the only sweep, `branch` `None`, with the nominal start): its
+/// grid cases, their sweep metrics, touchdown by the convention and the extra cases it ran.
+pub struct BranchRun {
+    pub branch: Option<Branch>,
+    pub cases: Vec<CaseOutcome>,
+    pub sweep: SweepMetrics,
+    pub touchdown: Touchdown,
+    pub extra: Vec<CaseOutcome>,
+}
+
+/// `up`, `down`, or `nominal` for a one-sweep (nominal-start) instance.
+fn branch_name(b: Option<Branch>) -> &'static str {
+    b.map_or("nominal", Branch::name)
+}
+
+/// The convention's touchdown of one branch (docs/conventions.md) with the cases it added.
+fn touchdown_json(r: &BranchRun) -> Value {
+    json!({
+        "actuation_m": r.touchdown.actuation,
+        "last_flying_m": r.touchdown.last_flying,
+        "resolution_m": crate::dynamics::touchdown::TouchdownSearch::convention(1.0, 1.0, 1).resolution,
+        "grid_touchdown_m": r.sweep.touchdown_actuation_m,
+        "extra_cases": r.extra.iter().map(|c| json!({
+            "actuation_m": c.actuation,
+            "solid_contact_percent": c.metrics["percent_solid_contact"],
+            "clearance_mean_m": c.metrics["clearance_m"]["mean"],
+            "case_key": c.entry.key,
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// Where the up and down branches' steady clearances differ, and whether their touchdowns
+/// and critical points coincide.
+fn hysteresis_json(h: &Hysteresis, runs: &[BranchRun]) -> Value {
+    let cp = |r: &BranchRun| {
+        r.sweep
+            .slopes
+            .critical_point
+            .as_ref()
+            .map(|c| c.actuation_m)
+    };
+    let (u, d) = (&runs[0], &runs[1]);
+    let res = crate::dynamics::touchdown::TouchdownSearch::convention(1.0, 1.0, 1).resolution;
+    let same = |a: Option<f64>, b: Option<f64>, tol: f64| match (a, b) {
+        (Some(a), Some(b)) => (a - b).abs() <= tol,
+        (None, None) => true,
+        _ => false,
+    };
+    json!({
+        "tolerance_m": h.tolerance_m,
+        "from_m": h.from_m,
+        "to_m": h.to_m,
+        "max_difference_m": h.max_difference_m,
+        "max_difference_at_m": h.max_at_m,
+        "differing_actuations_m": h.actuations_m,
+        "touchdown_coincides": same(u.touchdown.actuation, d.touchdown.actuation, res * (1.0 + 1e-9)),
+        "critical_point_coincides": same(cp(u), cp(d), 1e-12),
+    })
+}
+
 /// Contiguous runs of the same regime as (x0, x1, regime) bands, x in nm, edges halfway
 /// between neighbouring cases.
 fn regime_bands(cases: &[CaseOutcome], s: &SweepMetrics) -> Vec<(f64, f64, Regime)> {
@@ -69,16 +131,12 @@ fn regime_bands(cases: &[CaseOutcome], s: &SweepMetrics) -> Vec<(f64, f64, Regim
     bands
 }
 
-/// Figs 2.16/2.18 (clearance ± std with regimes), 2.19 (FHM/BV), 2.22 (% solid contact) and
-/// time histories at the chosen actuations (Figs 2.13–2.14, 2.17).
-pub fn plots(
-    dir: &Path,
-    p: &SimulateParams,
-    cases: &[CaseOutcome],
-    s: &SweepMetrics,
-    title: &str,
-) -> Result<()> {
-    sweep_figures(dir, p, cases, s, title)?;
+/// Figs 2.16/2.18 (clearance ± std with regimes, every branch), 2.19 (FHM/BV), 2.22 (% solid
+/// contact) and time histories at the chosen actuations (Figs 2.13–2.14, 2.17) of the first
+/// branch.
+pub fn plots(dir: &Path, p: &SimulateParams, runs: &[BranchRun], title: &str) -> Result<()> {
+    sweep_figures(dir, p, runs, title)?;
+    let cases = &runs[0].cases;
     for &want in &p.histories {
         let Some(c) = cases.iter().min_by(|a, b| {
             (a.actuation - want)
@@ -94,13 +152,8 @@ pub fn plots(
 
 /// Figs 2.16/2.18 (clearance ± std with regimes), 2.19 (FHM/BV) and 2.22 (% solid contact)
 /// against the actuation.
-fn sweep_figures(
-    dir: &Path,
-    p: &SimulateParams,
-    cases: &[CaseOutcome],
-    s: &SweepMetrics,
-    title: &str,
-) -> Result<()> {
+fn sweep_figures(dir: &Path, p: &SimulateParams, runs: &[BranchRun], title: &str) -> Result<()> {
+    let (cases, s) = (&runs[0].cases, &runs[0].sweep);
     use crate::figures::{clearance_sweep_png, metric_sweep_png, RegimeBand, SweepSeries};
     // A sweep stated in heater power is drawn against the power (docs/bulge.md):
     // P = actuation / efficiency; otherwise against the actuation in nm.
@@ -109,14 +162,45 @@ fn sweep_figures(
         None => (1e9, "TFC actuation (nm)", "actuation", "TFC actuation"),
     };
     let nm_of = |v: &Value| v.as_f64().unwrap_or(f64::NAN) * 1e9;
-    let clearance: Vec<(f64, f64, f64)> = cases
+    let clearance = |cases: &[CaseOutcome]| -> Vec<(f64, f64, f64)> {
+        cases
+            .iter()
+            .map(|c| {
+                (
+                    c.actuation * per_m,
+                    nm_of(&c.metrics["clearance_m"]["mean"]),
+                    nm_of(&c.metrics["clearance_m"]["std"]),
+                )
+            })
+            .collect()
+    };
+    // Each branch labelled with its touchdown (the convention's, refined) and critical point.
+    let fmt = |x: Option<f64>| x.map_or("none".to_string(), |v| format!("{:.2}", v * per_m));
+    let labels: Vec<String> = runs
         .iter()
-        .map(|c| {
-            (
-                c.actuation * per_m,
-                nm_of(&c.metrics["clearance_m"]["mean"]),
-                nm_of(&c.metrics["clearance_m"]["std"]),
+        .map(|r| {
+            let name = match r.branch {
+                None => "mean ± 1 std".to_string(),
+                Some(b) => format!("{} branch, mean ± 1 std", b.name()),
+            };
+            format!(
+                "{name}; TD {}, CP {}",
+                fmt(r.touchdown.actuation),
+                fmt(r
+                    .sweep
+                    .slopes
+                    .critical_point
+                    .as_ref()
+                    .map(|c| c.actuation_m))
             )
+        })
+        .collect();
+    let series: Vec<SweepSeries> = runs
+        .iter()
+        .zip(&labels)
+        .map(|(r, l)| SweepSeries {
+            label: l,
+            points: clearance(&r.cases),
         })
         .collect();
     let bands = regime_bands(cases, s);
@@ -134,15 +218,12 @@ fn sweep_figures(
         &format!("Steady clearance vs {long} — {title}"),
         axis,
         "clearance (nm)",
-        &[SweepSeries {
-            label: "mean ± 1 std",
-            points: clearance,
-        }],
+        &series,
         &bands,
         &[(0.0, "solid contact"), (t0, "T0"), (2.0 * t0, "2T0")],
     )?;
     let mut marks: Vec<(f64, &str)> = Vec::new();
-    if let Some(td) = s.touchdown_actuation_m {
+    if let Some(td) = runs[0].touchdown.actuation {
         marks.push((td * per_m, "touchdown"));
     }
     if let Some(cp) = &s.slopes.critical_point {
@@ -289,34 +370,108 @@ impl StageKind for SimulateStage {
         let p = &prepared.params;
         let isbl = &prepared.isbl;
         let dmw = prepared.dmw.as_ref();
-        ctx.progress
-            .set_message(format!("{} cases", p.actuations.len()));
+        let track = dmw.map(|(t, _)| t);
         let sink = CaseSink::Store {
             store: ctx.store,
             contact_key: &prepared.contact_key,
             dmw_key: dmw.map(|(_, k)| k.as_str()),
         };
-        let cases = run_cases(p, &sink, isbl, dmw.map(|(t, _)| t), ctx.progress)?;
-        ctx.progress.set_message("sweep metrics, tables, plots");
-        let sweep = sweep_analysis(p, &cases)?;
-        let files = link_cases(ctx.out_dir, &cases)?;
-        let mut rows = case_rows(&cases, &sweep);
-        // A sweep in heater power (docs/bulge.md): each row also names its power.
-        if p.efficiency.is_some() {
-            for (row, c) in rows.iter_mut().zip(&cases) {
-                let mw = p.power_of(c.actuation).map(|w| (w * 1e12).round() / 1e9);
-                row.insert("heater_power_mW".into(), json!(mw));
+        let mut grid = p.actuations.clone();
+        grid.sort_by(|a, b| a.total_cmp(b));
+        grid.dedup();
+        // Static init: each branch's equilibria by continuation, one after the other (cheap);
+        // then every dynamic case of every branch in one parallel batch (docs/conventions.md).
+        let branches: Vec<Option<Branch>> = if p.branches.is_empty() {
+            vec![None]
+        } else {
+            p.branches.iter().map(|b| Some(*b)).collect()
+        };
+        ctx.progress
+            .set_message("static equilibria by continuation");
+        let mut starts: Vec<Option<Vec<[f64; 2]>>> = Vec::new();
+        for b in &branches {
+            starts.push(match b {
+                Some(b) => Some(continuation_starts(p, &grid, isbl, track, *b)?),
+                None => None,
+            });
+        }
+        let jobs: Vec<(f64, Option<[f64; 2]>)> = starts
+            .iter()
+            .flat_map(|s| {
+                grid.iter()
+                    .enumerate()
+                    .map(move |(i, &a)| (a, s.as_ref().map(|s| s[i])))
+            })
+            .collect();
+        ctx.progress.set_message(format!("{} cases", jobs.len()));
+        let all = run_jobs(p, &sink, isbl, track, ctx.progress, &jobs, "")?;
+        ctx.progress
+            .set_message("touchdown refinement, sweep metrics, tables, plots");
+        let case_keys: Vec<String> = all.iter().map(|c| c.entry.key.clone()).collect();
+        let cached = all.iter().filter(|c| c.entry.cached).count();
+        let mut all = all.into_iter();
+        let mut runs: Vec<BranchRun> = Vec::new();
+        for (branch, start) in branches.iter().zip(&starts) {
+            let cases: Vec<CaseOutcome> = all.by_ref().take(grid.len()).collect();
+            let sweep = sweep_analysis(p, &cases)?;
+            let (touchdown, extra) =
+                convention_touchdown(p, &sink, isbl, track, &cases, start.as_deref().zip(*branch))?;
+            runs.push(BranchRun {
+                branch: *branch,
+                cases,
+                sweep,
+                touchdown,
+                extra,
+            });
+        }
+        let mut files: Vec<Vec<String>> = Vec::new();
+        for (k, r) in runs.iter().enumerate() {
+            let sub = (k > 0).then(|| branch_name(r.branch));
+            files.push(link_cases_tagged(ctx.out_dir, &r.cases, sub)?);
+        }
+        let mut rows = Vec::new();
+        for r in &runs {
+            let mut branch_rows = case_rows(&r.cases, &r.sweep);
+            for (row, c) in branch_rows.iter_mut().zip(&r.cases) {
+                row.insert("branch".into(), json!(branch_name(r.branch)));
+                // A sweep in heater power (docs/bulge.md): each row also names its power.
+                if p.efficiency.is_some() {
+                    let mw = p.power_of(c.actuation).map(|w| (w * 1e12).round() / 1e9);
+                    row.insert("heater_power_mW".into(), json!(mw));
+                }
             }
+            rows.extend(branch_rows);
         }
         crate::core::store::write_table(&rows, &ctx.out_dir.join("sweep"))?;
-        plots(ctx.out_dir, p, &cases, &sweep, &self.name)?;
-        let mut summary = sweep_json(&cases, &sweep);
+        let hysteresis = match (runs.first(), runs.get(1)) {
+            (Some(u), Some(d)) => Some(hysteresis(
+                &clearance_curve(&u.cases),
+                &clearance_curve(&d.cases),
+                HYSTERESIS_TOLERANCE_M,
+            )),
+            _ => None,
+        };
+        plots(ctx.out_dir, p, &runs, &self.name)?;
+        let first = &runs[0];
+        let (cases, sweep) = (&first.cases, &first.sweep);
+        let mut summary = sweep_json(cases, sweep);
+        let branch_json = |r: &BranchRun| {
+            let mut v = sweep_json(&r.cases, &r.sweep);
+            if let Some(o) = v.as_object_mut() {
+                o.insert("touchdown_convention".into(), touchdown_json(r));
+            }
+            v
+        };
         let touchdown_power = p
             .efficiency
             .and_then(|e| sweep.touchdown_actuation_m.map(|td| td / e));
-        if let (Some(e), Some(obj)) = (p.efficiency, summary.as_object_mut()) {
-            obj.insert("efficiency_m_per_W".into(), json!(e));
-            obj.insert("touchdown_power_W".into(), json!(touchdown_power));
+        if let Some(obj) = summary.as_object_mut() {
+            obj.insert("branch".into(), json!(branch_name(first.branch)));
+            obj.insert("touchdown_convention".into(), touchdown_json(first));
+            if let Some(e) = p.efficiency {
+                obj.insert("efficiency_m_per_W".into(), json!(e));
+                obj.insert("touchdown_power_W".into(), json!(touchdown_power));
+            }
         }
         // Femtometre-rounded nm: 10.2, not 10.200000000000001.
         let nm = |x: f64| (x * 1e15).round() / 1e6;
@@ -324,14 +479,32 @@ impl StageKind for SimulateStage {
         row.insert("model".into(), json!(p.model_name));
         row.insert("geometry".into(), json!(p.geometry));
         row.insert("calibration".into(), json!(p.calibration));
-        row.insert("cases".into(), json!(cases.len()));
-        row.insert(
-            "touchdown_nm".into(),
-            json!(sweep.touchdown_actuation_m.map(nm)),
-        );
-        if let Some(cp) = &sweep.slopes.critical_point {
-            row.insert("critical_point_nm".into(), json!(cp.actuation_m * 1e9));
-            row.insert("critical_clearance_nm".into(), json!(cp.clearance_m * 1e9));
+        row.insert("cases".into(), json!(jobs.len()));
+        for r in &runs {
+            // The first branch keeps the plain names; a second one adds its name.
+            let sfx = if std::ptr::eq(r, first) {
+                String::new()
+            } else {
+                format!("_{}", branch_name(r.branch))
+            };
+            row.insert(
+                format!("touchdown{sfx}_nm"),
+                json!(r.sweep.touchdown_actuation_m.map(nm)),
+            );
+            row.insert(
+                format!("touchdown_refined{sfx}_nm"),
+                json!(r.touchdown.actuation.map(nm)),
+            );
+            if let Some(cp) = &r.sweep.slopes.critical_point {
+                row.insert(
+                    format!("critical_point{sfx}_nm"),
+                    json!(cp.actuation_m * 1e9),
+                );
+                row.insert(
+                    format!("critical_clearance{sfx}_nm"),
+                    json!(cp.clearance_m * 1e9),
+                );
+            }
         }
         for (k, l) in [
             ("slope_A", &sweep.slopes.a),
@@ -351,19 +524,39 @@ impl StageKind for SimulateStage {
             "optimum_nm".into(),
             json!(sweep.optimum_index.map(|i| nm(cases[i].actuation))),
         );
-        let cached = cases.iter().filter(|c| c.entry.cached).count();
+        if let Some(h) = &hysteresis {
+            row.insert("hysteresis_from_nm".into(), json!(h.from_m.map(nm)));
+            row.insert("hysteresis_to_nm".into(), json!(h.to_m.map(nm)));
+            row.insert(
+                "hysteresis_max_nm".into(),
+                json!((h.max_difference_m * 1e15).round() / 1e6),
+            );
+        }
+        let mut result = json!({
+            "sweep": summary,
+            "cases": runs.iter().zip(&files).flat_map(|(r, f)| r.cases.iter().zip(f).map(|(c, f)| json!({
+                "actuation_m": c.actuation, "branch": branch_name(r.branch), "h5": f, "metrics": c.metrics,
+            }))).collect::<Vec<_>>(),
+            "case_keys": case_keys,
+            "cases_cached": cached,
+            "calibration": p.calibration,
+            "calibrated_knobs": p.calibrated_knobs.iter().map(|(k, v)| json!({"knob": k, "value": v})).collect::<Vec<_>>(),
+            "table": "sweep.parquet",
+        });
+        if let Some(obj) = result.as_object_mut() {
+            if runs.iter().any(|r| r.branch.is_some()) {
+                let mut b = Map::new();
+                for r in &runs {
+                    b.insert(branch_name(r.branch).into(), branch_json(r));
+                }
+                obj.insert("branches".into(), Value::Object(b));
+            }
+            if let Some(h) = &hysteresis {
+                obj.insert("hysteresis".into(), hysteresis_json(h, &runs));
+            }
+        }
         Ok(StageOutput {
-            result: json!({
-                "sweep": summary,
-                "cases": cases.iter().zip(&files).map(|(c, f)| json!({
-                    "actuation_m": c.actuation, "h5": f, "metrics": c.metrics,
-                })).collect::<Vec<_>>(),
-                "case_keys": cases.iter().map(|c| c.entry.key.clone()).collect::<Vec<_>>(),
-                "cases_cached": cached,
-                "calibration": p.calibration,
-                "calibrated_knobs": p.calibrated_knobs.iter().map(|(k, v)| json!({"knob": k, "value": v})).collect::<Vec<_>>(),
-                "table": "sweep.parquet",
-            }),
+            result,
             summary_row: Some(row),
         })
     }

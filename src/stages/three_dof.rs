@@ -27,7 +27,7 @@ use std::path::Path;
 /// The `[three_dof.NAME]` table (checked by `ThreeDofParams`).
 pub use crate::slider::three_dof_params::ThreeDofConfig;
 
-pub const MODEL_VERSION: &str = "three-dof-2";
+pub const MODEL_VERSION: &str = "three-dof-3";
 
 pub struct ThreeDofStage {
     pub name: String,
@@ -232,19 +232,55 @@ fn case_metrics(
             json!(min.is_finite().then(|| nm(min))),
         );
     }
-    // Contact severity over the steady window, ratio of means where the solid carries load
-    // (docs/dynamics-metrics.md: μ = Q/F_c, P_m = F_c/A_r, τ = Q/A_r; F_c > 1 µN).
-    let loaded: Vec<usize> = (i0..h.len())
-        .filter(|&k| h.contact_force[k] > 1e-6)
-        .collect();
-    if !loaded.is_empty() {
-        let sum = |x: &[f64]| loaded.iter().map(|&k| x[k]).sum::<f64>();
-        let (fc, q, ar) = (sum(&h.contact_force), sum(&h.friction), sum(&h.real_area));
-        m.insert("friction_coefficient".into(), json!(q / fc));
-        if ar > 0.0 {
-            m.insert("mean_pressure_GPa".into(), json!(fc / ar * 1e-9));
-            m.insert("shear_traction_GPa".into(), json!(q / ar * 1e-9));
-        }
+    // Contact severity over the steady window, one definition for every area
+    // (docs/conventions.md): headline ratio of means μ = Q̄/F̄_c, P_m = F̄_c/Ā_r, τ = Q̄/Ā_r,
+    // the mean of the instantaneous ratio (samples with F_c > 1 µN) beside it.
+    let severity = crate::dynamics::metrics::contact_severity(
+        &crate::dynamics::metrics::ContactSeries {
+            contact_force_n: &h.contact_force[i0..],
+            friction_n: &h.friction[i0..],
+            real_area_m2: &h.real_area[i0..],
+            adhesion_n: None,
+        },
+        crate::dynamics::metrics::FORCE_THRESHOLD_N,
+    );
+    if let Ok(c) = severity {
+        let put = |m: &mut Map<String, Value>, k: &str, v: Option<f64>| {
+            if let Some(v) = v.filter(|v| v.is_finite()) {
+                m.insert(k.into(), json!(v));
+            }
+        };
+        let gpa = |v: Option<f64>| v.map(|x| x * 1e-9);
+        put(
+            &mut m,
+            "friction_coefficient",
+            c.friction_coefficient_ratio_of_means,
+        );
+        put(
+            &mut m,
+            "friction_coefficient_mean_inst",
+            c.friction_coefficient.map(|s| s.mean),
+        );
+        put(
+            &mut m,
+            "mean_pressure_GPa",
+            gpa(c.mean_pressure_pa_ratio_of_means),
+        );
+        put(
+            &mut m,
+            "mean_pressure_GPa_mean_inst",
+            gpa(c.mean_pressure_pa.map(|s| s.mean)),
+        );
+        put(
+            &mut m,
+            "shear_traction_GPa",
+            gpa(c.shear_traction_pa_ratio_of_means),
+        );
+        put(
+            &mut m,
+            "shear_traction_GPa_mean_inst",
+            gpa(c.shear_traction_pa.map(|s| s.mean)),
+        );
     }
     // Table 4.4 windows of a variable profile.
     if !p.profile.is_constant() {
