@@ -1,7 +1,7 @@
 //! `hdi validate` rows of the ISBL contact model (docs/contact.md): computed now with the
 //! same model the contact stage and the dynamics use.
 
-use super::{Row, Tolerance};
+use super::{Class, Row, Tolerance};
 use crate::contact::isbl::{IsblModel, IsblParams};
 
 /// A row with borrowed text, built by name (the MTL rows use it too).
@@ -18,33 +18,48 @@ pub(super) struct R<'a> {
 }
 
 impl R<'_> {
+    /// The typed row: `source` is "TABLE #TAG [REFERENCE]"; the id is `isbl-TAG` (the
+    /// ISBL table's row tag; the area makes repeats unique), the reference the bracketed part
+    /// with "seed" read as the dissertation. Reproducible rows are class G (closed forms and
+    /// an independent implementation), the others class D (the seed's number depends on
+    /// inputs or readings the text does not give; the note says which).
     pub(super) fn row(self) -> Row {
-        Row {
-            source: self.source.into(),
-            quantity: self.quantity.into(),
-            unit: self.unit.into(),
-            target: self.target,
-            ours: self.ours,
-            tolerance: self.tolerance,
-            reproducible: self.reproducible,
-            variant: self.variant.into(),
-            note: self.note.into(),
-        }
+        let tag = self
+            .source
+            .split_once('#')
+            .map(|(_, t)| {
+                t.split(|c: char| c.is_whitespace() || c == '/')
+                    .next()
+                    .unwrap_or("")
+                    .to_string()
+            })
+            .filter(|t| !t.is_empty());
+        let reference = self
+            .source
+            .split_once('[')
+            .map(|(_, r)| r.trim_end_matches(']').to_string())
+            .unwrap_or_else(|| "independent reference table (docs/contact.md)".into())
+            .replace("seed", "dissertation")
+            .replace("derived", "derived in closed form");
+        Row::new(
+            &tag.map_or(String::new(), |t| format!("isbl-{t}")),
+            if self.reproducible { Class::G } else { Class::D },
+            self.quantity,
+            self.unit,
+            self.target,
+            self.ours,
+            self.tolerance,
+        )
+        .reference(&reference)
+        .variant(self.variant)
+        .note(self.note)
     }
 }
 
 fn failed(quantity: &str, why: String) -> Row {
-    Row {
-        source: "contact-isbl §9".into(),
-        quantity: quantity.into(),
-        unit: "-".into(),
-        target: f64::NAN,
-        ours: f64::NAN,
-        tolerance: Tolerance::Absolute(0.0),
-        reproducible: true,
-        variant: "-".into(),
-        note: why,
-    }
+    Row::new("", Class::G, quantity, "-", f64::NAN, f64::NAN, Tolerance::Absolute(0.0))
+        .variant("-")
+        .note(&why)
 }
 
 const VARIANT: &str = "ISBL, summit_offset none (d = h), junction-shear friction";
@@ -79,7 +94,7 @@ pub fn rows() -> Vec<Row> {
         _ => {
             return vec![failed(
                 "ISBL parameter sets",
-                "a §10 set did not validate".into(),
+                "a parameter set did not validate".into(),
             )]
         }
     };
@@ -89,6 +104,7 @@ pub fn rows() -> Vec<Row> {
     rows.extend(static_contact_force_rows(&sets));
     rows.extend(sphere_rows());
     rows.extend(reference_table_rows(&sets));
+    super::assign_ids("isbl", &mut rows);
     rows
 }
 
@@ -168,9 +184,15 @@ fn initial_curve_rows(initial: &IsblModel) -> Vec<Row> {
             tolerance: Tolerance::Relative(0.01),
             reproducible: true,
             variant: VARIANT,
-            note: "the figure's A_n is not stated; 62–68 μm² (Ch. 2 areas) give 6.8–7.5 μN",
+            note: "",
         }
-        .row(),
+        .row()
+        .class(Class::C)
+        .note(
+            "consistency check, not a reproduction: the figure's A_n is not stated and 66.6 μm² \
+             is the area back-solved from 7.30 μN with this P(3); 62–68 μm² (Ch. 2 areas) give \
+             6.8–7.5 μN",
+        ),
         R {
             source: "contact-isbl §9 #1b [seed Ch. 2.2]",
             quantity: "P(3)/P(2.5): \"7.30 μN is about 3 % of P at h* = 2.5\"",

@@ -1,8 +1,7 @@
 //! `hdi validate` area `mtl`: the molecularly-thin-lubricant model of dissertation chapter 3
 //! (docs/contact.md), computed now with the lubricant model the contact stage uses.
 
-use super::contact::R;
-use super::{Row, Tolerance};
+use super::{Class, Row, Tolerance};
 use crate::contact::mtl::extrapolation::{self, FwmExperiment, HighShearFit};
 use crate::contact::mtl::rough::{NoSolid, RoughMtl};
 use crate::contact::mtl::sphere_on_flat::{
@@ -11,7 +10,9 @@ use crate::contact::mtl::sphere_on_flat::{
 
 const VARIANT: &str = "MTL, FWM extrapolation (Fukuzawa Z03 fibre), Table 3.2 film";
 
-/// One §6 row with the area's source and variant.
+/// One row of the MTL table (docs/contact.md): the id is `mtl-V<n>` from the quantity's
+/// leading row tag; reproducible rows are class G (closed forms of Chapter 3), the others
+/// class D with the reason in the note.
 fn row(
     quantity: &str,
     unit: &str,
@@ -21,18 +22,23 @@ fn row(
     reproducible: bool,
     note: &str,
 ) -> Row {
-    R {
-        source: "contact-mtl §6",
+    let id = quantity
+        .split_whitespace()
+        .next()
+        .filter(|t| t.starts_with('V'))
+        .map_or(String::new(), |t| format!("mtl-{t}"));
+    Row::new(
+        &id,
+        if reproducible { Class::G } else { Class::D },
         quantity,
         unit,
         target,
         ours,
         tolerance,
-        reproducible,
-        variant: VARIANT,
-        note,
-    }
-    .row()
+    )
+    .reference("dissertation Ch. 3 (MTL model), Table 3.2")
+    .variant(VARIANT)
+    .note(note)
 }
 
 /// A model value, or NaN when the model refuses the inputs (the row then fails).
@@ -59,6 +65,7 @@ pub fn rows() -> Vec<Row> {
     rows.extend(rough_film_rows(&mtl));
     rows.extend(slip_rows(&mtl));
     rows.extend(fig_3_8_rows());
+    super::assign_ids("mtl", &mut rows);
     rows
 }
 
