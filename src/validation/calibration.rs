@@ -108,7 +108,7 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
                     key,
                 })
                 .note(&format!(
-                    "spec defaults {before}; residual/tolerance {:+.2}{}",
+                    "default inputs {before}; residual/tolerance {:+.2}{}",
                     o.normalised_residual,
                     if t.weight == 0.0 {
                         " (reported, not fitted)"

@@ -20,8 +20,8 @@ pub(super) struct R<'a> {
 impl R<'_> {
     /// The typed row: `source` is "TABLE #TAG [REFERENCE]"; the id is `isbl-TAG` (the
     /// ISBL table's row tag; the area makes repeats unique), the reference the bracketed part
-    /// with "seed" read as the dissertation. Reproducible rows are class G (closed forms and
-    /// an independent implementation), the others class D (the seed's number depends on
+    /// with "dissertation" read as the dissertation. Reproducible rows are class G (closed forms and
+    /// an independent implementation), the others class D (the dissertation's number depends on
     /// inputs or readings the text does not give; the note says which).
     pub(super) fn row(self) -> Row {
         let tag = self
@@ -125,7 +125,7 @@ fn derived_rows(initial: &IsblModel) -> Vec<Row> {
         }
         .row(),
         R {
-            source: "contact-isbl §9 #3 [seed Ch. 2.1]",
+            source: "contact-isbl §9 #3 [dissertation Ch. 2.1]",
             quantity: "plasticity index ψ, Ch. 2 interface",
             unit: "1",
             target: 0.52,
@@ -164,7 +164,7 @@ fn initial_curve_rows(initial: &IsblModel) -> Vec<Row> {
     };
     vec![
         R {
-            source: "contact-isbl §9 #1a [seed Ch. 2.2, Fig. 2.11]",
+            source: "contact-isbl §9 #1a [dissertation Ch. 2.2, Fig. 2.11]",
             quantity: "P(h* = 3) per unit nominal area, initial set",
             unit: "Pa",
             target: 1.097e5,
@@ -176,7 +176,7 @@ fn initial_curve_rows(initial: &IsblModel) -> Vec<Row> {
         }
         .row(),
         R {
-            source: "contact-isbl §9 #1a [seed: 7.30 μN]",
+            source: "contact-isbl §9 #1a [dissertation: 7.30 μN]",
             quantity: "P(h* = 3) on A_n = 66.6 μm², initial set",
             unit: "μN",
             target: 7.30,
@@ -194,7 +194,7 @@ fn initial_curve_rows(initial: &IsblModel) -> Vec<Row> {
              6.8–7.5 μN",
         ),
         R {
-            source: "contact-isbl §9 #1b [seed Ch. 2.2]",
+            source: "contact-isbl §9 #1b [dissertation Ch. 2.2]",
             quantity: "P(3)/P(2.5): \"7.30 μN is about 3 % of P at h* = 2.5\"",
             unit: "1",
             target: 0.03,
@@ -203,11 +203,11 @@ fn initial_curve_rows(initial: &IsblModel) -> Vec<Row> {
             reproducible: false,
             variant: VARIANT,
             note: "not reproducible: a Gaussian of σ gives 0.18; 3 % is reached at h* = 1.90 \
-                   (likely a misread axis in the seed)",
+                   (likely a misread axis in the dissertation)",
         }
         .row(),
         R {
-            source: "contact-isbl §9 #1c [seed: adhesion negligible for h* ≥ 6]",
+            source: "contact-isbl §9 #1c [dissertation: adhesion negligible for h* ≥ 6]",
             quantity: "F_s(6)/F_s(0), initial set (σ = 0.87 nm)",
             unit: "1",
             target: 0.008,
@@ -225,7 +225,7 @@ fn initial_curve_rows(initial: &IsblModel) -> Vec<Row> {
 fn adhesion_12nm_row(improved: &IsblModel) -> Row {
     match improved.at(1.16e-9) {
         Ok(p) => R {
-            source: "contact-isbl §9 #2c [seed Ch. 2.2.2]",
+            source: "contact-isbl §9 #2c [dissertation Ch. 2.2.2]",
             quantity: "adhesion at 12 nm actuation (h = 1.16 nm, A_n = 55 μm²)",
             unit: "mN",
             target: 0.98,
@@ -267,9 +267,9 @@ fn static_contact_force_rows(sets: &Sets) -> Vec<Row> {
             real_area_target: 0.36,
             mu_reproducible: false,
             note_mu:
-                "−14 %: the seed's μ lies inside the model's μ(h) range (1.65 at the mean clearance)",
+                "−14 %: the dissertation's μ lies inside the model's μ(h) range (1.65 at the mean clearance)",
             note_real_area:
-                "the seed's dynamic F_c (a linearised spring) is not P(h) at the mean separation",
+                "the dissertation's dynamic F_c (a linearised spring) is not P(h) at the mean separation",
         },
         ForcePoint {
             label: "11 nm, initial set (A_n = 62 μm², F_c ≈ 1 mN)",
@@ -291,7 +291,7 @@ fn static_contact_force_rows(sets: &Sets) -> Vec<Row> {
             Ok(p) => {
                 rows.push(
                     R {
-                        source: "contact-isbl §9 #2a/#2d [seed Ch. 2]",
+                        source: "contact-isbl §9 #2a/#2d [dissertation Ch. 2]",
                         quantity: &format!("μ = Q/P at P·A_n = F_c, {label}"),
                         unit: "1",
                         target: pt.mu_target,
@@ -305,7 +305,7 @@ fn static_contact_force_rows(sets: &Sets) -> Vec<Row> {
                 );
                 rows.push(
                     R {
-                        source: "contact-isbl §9 #2b/#2d [seed Ch. 2]",
+                        source: "contact-isbl §9 #2b/#2d [dissertation Ch. 2]",
                         quantity: &format!("real area at P·A_n = F_c, {label}"),
                         unit: "μm²",
                         target: pt.real_area_target,
@@ -350,7 +350,7 @@ fn sphere_rows() -> Vec<Row> {
         Err(e) => return vec![failed("Ch. 3.1 sphere", e.to_string())],
     };
     let mut rows = vec![R {
-        source: "contact-isbl §5 [seed Ch. 3.1]",
+        source: "contact-isbl §5 [dissertation Ch. 3.1]",
         quantity: "reduced modulus E*, DLC sphere on DLC",
         unit: "GPa",
         target: 95.5,
@@ -381,7 +381,7 @@ fn sphere_rows() -> Vec<Row> {
             Ok(a) => {
                 rows.push(
                     R {
-                        source: "contact-isbl §9 #4 [seed Ch. 3.1]",
+                        source: "contact-isbl §9 #4 [dissertation Ch. 3.1]",
                         quantity: &format!("sphere load at ω = {} nm", omega * 1e9),
                         unit: "μN",
                         target: pt.load_target,
@@ -392,15 +392,15 @@ fn sphere_rows() -> Vec<Row> {
                         note: if pt.load_reproducible {
                             ""
                         } else {
-                            "Hertz gives 1.29 μN; the seed's 1.5 μN is 14 % above \
-                             (likely rounding in the seed)"
+                            "Hertz gives 1.29 μN; the dissertation's 1.5 μN is 14 % above \
+                             (likely rounding in the dissertation)"
                         },
                     }
                     .row(),
                 );
                 rows.push(
                     R {
-                        source: "contact-isbl §9 #4 [seed Ch. 3.1]",
+                        source: "contact-isbl §9 #4 [dissertation Ch. 3.1]",
                         quantity: &format!("sphere static friction at ω = {} nm", omega * 1e9),
                         unit: "μN",
                         target: pt.friction_target,

@@ -236,11 +236,11 @@ mod tests {
         for r in &rows {
             assert!(
                 r.pass(),
-                "{} {}: target {} ours {} ({})",
-                r.source,
+                "{} {}: target {} value {} ({})",
+                r.id,
                 r.quantity,
                 r.target,
-                r.ours,
+                r.value,
                 r.note
             );
         }

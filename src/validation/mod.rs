@@ -654,6 +654,20 @@ mod tests {
         assert!(gate([&good], &[]).is_empty());
     }
 
+    /// Static registry check (the full run takes ~20 s in release, too slow for a debug test;
+    /// docs/validation.md records its per-class counts): every target `dyn-1` … `dyn-38` has a
+    /// row builder in the 2-DOF or 3-DOF area, by id or as `dyn-N.sub`.
+    #[test]
+    fn every_target_has_a_row_builder() {
+        let src = [include_str!("dynamics.rs"), include_str!("three_dof.rs")].concat();
+        for id in target_ids() {
+            assert!(
+                src.contains(&format!("\"{id}\"")) || src.contains(&format!("\"{id}.")),
+                "no row for {id}"
+            );
+        }
+    }
+
     #[test]
     fn ids_and_counts() {
         let mut rows = vec![

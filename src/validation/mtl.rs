@@ -150,7 +150,7 @@ fn solid_sphere_rows() -> Vec<Row> {
             crate::contact::mtl::hertz_normal_force(e_star, probe_radius, omega) * 1e6,
             Tolerance::Relative(0.2),
             true,
-            "partial: P only; the seed's Q_solid,min (120 / 1120 µN) comes from an unidentified \
+            "partial: P only; the dissertation's Q_solid,min (120 / 1120 µN) comes from an unidentified \
              model [72] and is not compared",
         ));
     }
@@ -262,7 +262,7 @@ fn rough_film_rows(mtl: &RoughMtl) -> Vec<Row> {
             Tolerance::Relative(0.05),
             false,
             "not reproduced: 3.81 mN at 3σ+2κ, 7.61 mN at 3σ (integral of the stiffness); the \
-             seed's 5.54 mN matches neither reading (contact-mtl.md §6)",
+             dissertation's 5.54 mN matches neither reading",
         ),
     ]
 }
@@ -326,7 +326,7 @@ fn slip_rows(mtl: &RoughMtl) -> Vec<Row> {
             ratio_orders(h),
             Tolerance::Absolute(0.5),
             true,
-            "target is the seed's \"4–5 orders of magnitude\"",
+            "target is the dissertation's \"4–5 orders of magnitude\"",
         ));
     }
     rows
@@ -359,7 +359,7 @@ fn fig_3_8_rows() -> Vec<Row> {
                 .unwrap_or(f64::NAN),
             Tolerance::Relative(1e-4),
             true,
-            "seed: \"about two orders above P0\" (ours 51× P0)",
+            "dissertation: \"about two orders above P0\" (ours 51× P0)",
         ),
         row(
             "V21 partially submerged shear force (3.30) / Couette (3.31), Fig. 3.8 sphere",
@@ -368,7 +368,7 @@ fn fig_3_8_rows() -> Vec<Row> {
             partial_over_couette,
             Tolerance::Relative(0.5),
             false,
-            "contradicted: the seed says \"two orders of magnitude\"; (3.30) integrates (3.29) \
+            "contradicted: the dissertation says \"two orders of magnitude\"; (3.30) integrates (3.29) \
              exactly (quadrature 1e-9) and gives 0.405 (→ 0.400 for t ≪ R); pinned in \
              contact::mtl::tests",
         ),
