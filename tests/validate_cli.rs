@@ -28,7 +28,10 @@ fn contact_rows_are_typed_and_the_circular_one_is_a_consistency_check() {
         for r in j["areas"][area].as_array().unwrap() {
             n += 1;
             let id = r["id"].as_str().unwrap();
-            assert!(!id.is_empty() && ids.insert(id.to_string()), "duplicate or empty id {r}");
+            assert!(
+                !id.is_empty() && ids.insert(id.to_string()),
+                "duplicate or empty id {r}"
+            );
             let class = r["class"].as_str().unwrap();
             assert!(["G", "K", "D", "Q", "C"].contains(&class), "{r}");
             assert_eq!(r["origin"]["kind"], "computed", "{r}");
@@ -56,7 +59,7 @@ fn contact_rows_are_typed_and_the_circular_one_is_a_consistency_check() {
         .find(|r| r["quantity"].as_str().unwrap().contains("66.6"))
         .unwrap();
     assert_eq!(circular["class"], "C");
-    assert_eq!(ids.contains("mtl-V13"), true);
+    assert!(ids.contains("mtl-V13"));
     // Per-class counts add up to the rows.
     let per_class: u64 = j["classes"]
         .as_object()

@@ -25,9 +25,8 @@ fn parse_classes(class: &[String]) -> Result<Vec<Class>> {
         .iter()
         .filter(|c| !c.trim().is_empty())
         .map(|c| {
-            Class::parse(c).with_context(|| {
-                format!("--class: unknown class `{c}` (available: G, K, D, Q, C)")
-            })
+            Class::parse(c)
+                .with_context(|| format!("--class: unknown class `{c}` (available: G, K, D, Q, C)"))
         })
         .collect()
 }
@@ -72,7 +71,11 @@ fn print_table(areas: &[(&'static str, Vec<&Row>)]) {
                 format!(
                     "{}{}",
                     fmt_number(c.value),
-                    if r.calibrated_pass() == Some(true) { "✓" } else { "" }
+                    if r.calibrated_pass() == Some(true) {
+                        "✓"
+                    } else {
+                        ""
+                    }
                 )
             });
             let mut tail = vec![r.origin.short()];

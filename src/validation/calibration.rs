@@ -54,7 +54,9 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
                     Tolerance::Absolute(1.0),
                 )
                 .variant("not run")
-                .note(&format!("no current result: run `hdi run --only {name}` first")),
+                .note(&format!(
+                    "no current result: run `hdi run --only {name}` first"
+                )),
             );
             continue;
         }

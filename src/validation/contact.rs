@@ -43,7 +43,11 @@ impl R<'_> {
             .replace("derived", "derived in closed form");
         Row::new(
             &tag.map_or(String::new(), |t| format!("isbl-{t}")),
-            if self.reproducible { Class::G } else { Class::D },
+            if self.reproducible {
+                Class::G
+            } else {
+                Class::D
+            },
             self.quantity,
             self.unit,
             self.target,
@@ -57,9 +61,17 @@ impl R<'_> {
 }
 
 fn failed(quantity: &str, why: String) -> Row {
-    Row::new("", Class::G, quantity, "-", f64::NAN, f64::NAN, Tolerance::Absolute(0.0))
-        .variant("-")
-        .note(&why)
+    Row::new(
+        "",
+        Class::G,
+        quantity,
+        "-",
+        f64::NAN,
+        f64::NAN,
+        Tolerance::Absolute(0.0),
+    )
+    .variant("-")
+    .note(&why)
 }
 
 const VARIANT: &str = "ISBL, summit_offset none (d = h), junction-shear friction";

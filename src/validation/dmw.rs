@@ -124,7 +124,16 @@ pub fn rows() -> Vec<Row> {
 }
 
 fn failed(quantity: &str, why: &str) -> Row {
-    Row::check("-", quantity, "-", f64::NAN, f64::NAN, Tolerance::Absolute(0.0), "-", why)
+    Row::check(
+        "-",
+        quantity,
+        "-",
+        f64::NAN,
+        f64::NAN,
+        Tolerance::Absolute(0.0),
+        "-",
+        why,
+    )
 }
 
 /// Max |error| of Hermite interpolation of sin(2πft) with exact derivative, sampled at fs.

@@ -54,14 +54,26 @@ fn geometry_rows() -> Vec<Row> {
     let improved = improved_2dof();
     let variant = "closed-form lowest point and section at θ0";
     let g = |id: &str, q: &str, unit: &str, target: f64, value: f64, tol: f64, r: &str| {
-        Row::new(id, Class::G, q, unit, target, value, Tolerance::Relative(tol))
-            .reference(r)
-            .variant(variant)
-            .inputs("geometry only")
+        Row::new(
+            id,
+            Class::G,
+            q,
+            unit,
+            target,
+            value,
+            Tolerance::Relative(tol),
+        )
+        .reference(r)
+        .variant(variant)
+        .inputs("geometry only")
     };
-    for (k, (h, area, radius)) in [(5.0, 124.0, 1506.0), (10.0, 68.0, 827.0), (15.0, 47.0, 567.0)]
-        .into_iter()
-        .enumerate()
+    for (k, (h, area, radius)) in [
+        (5.0, 124.0, 1506.0),
+        (10.0, 68.0, 827.0),
+        (15.0, 47.0, 567.0),
+    ]
+    .into_iter()
+    .enumerate()
     {
         let s = initial.nominal_contact_area(h * NM);
         let sub = ["5nm", "10nm", "15nm"][k];
@@ -345,7 +357,9 @@ impl Sweep {
     fn optimum(&self) -> Option<&Pt> {
         let points: Vec<SweepPoint> = self.pts.iter().map(sweep_point).collect();
         let cp = self.slopes.as_ref().and_then(|s| s.critical_point);
-        let td = self.touchdown.and_then(|h| self.pts.iter().position(|p| p.h >= h - 1e-15));
+        let td = self
+            .touchdown
+            .and_then(|h| self.pts.iter().position(|p| p.h >= h - 1e-15));
         optimum_operating_point(&points, cp.as_ref(), td)
             .ok()
             .flatten()
@@ -429,7 +443,10 @@ fn run_sweep(
             .par_iter()
             .map(|&h| run_case(model, isbl, h, dmw, static_init))
             .collect();
-        let touches = pts.iter().map(|p| p.is_some_and(|p| p.solid > 0.0)).collect();
+        let touches = pts
+            .iter()
+            .map(|p| p.is_some_and(|p| p.solid > 0.0))
+            .collect();
         if let Ok(mut d) = done.lock() {
             d.extend(pts.into_iter().flatten());
         }
@@ -467,7 +484,13 @@ fn cached_sweep(cache: &Cache, name: &str) -> Option<Sweep> {
         .as_array()
         .map(|k| {
             k.iter()
-                .map(|k| format!("{} = {:.4e}", k["knob"].as_str().unwrap_or("?"), k["value"].as_f64().unwrap_or(f64::NAN)))
+                .map(|k| {
+                    format!(
+                        "{} = {:.4e}",
+                        k["knob"].as_str().unwrap_or("?"),
+                        k["value"].as_f64().unwrap_or(f64::NAN)
+                    )
+                })
                 .collect::<Vec<_>>()
                 .join(", ")
         })
@@ -522,7 +545,8 @@ fn target_row(t: Target, sweep: &Sweep, calibrated: Option<&Sweep>, variant: &st
     .note(t.note)
 }
 
-const D_NOTE: &str = "class D: depends on dropped inputs (DMW spectrum, AB damping, rear stiffening \
+const D_NOTE: &str =
+    "class D: depends on dropped inputs (DMW spectrum, AB damping, rear stiffening \
                       β, Δγ, ε, ζ_c)";
 
 /// Improved model, dissertation geometry (S2, targets #16–#25).
@@ -617,7 +641,10 @@ fn initial_rows(s: &Sweep) -> Vec<Row> {
         Row::ordering(
             "dyn-10",
             "initial model: BV peaks above 20 % between touchdown and 11 nm",
-            Ordering::new(Relation::Ascending, &[("published floor", 20.0), ("hdi peak BV", peak)]),
+            Ordering::new(
+                Relation::Ascending,
+                &[("published floor", 20.0), ("hdi peak BV", peak)],
+            ),
         )
         .reference(r)
         .variant(variant)
@@ -695,9 +722,18 @@ fn nearest(p: &[(f64, f64)], f: f64) -> Option<(f64, f64)> {
         .min_by(|a, b| (a.0 - f).abs().total_cmp(&(b.0 - f).abs()))
 }
 
-fn not_run(id: &str, class: Class, quantity: &str, unit: &str, target: f64, tol: Tolerance, instance: &str) -> Row {
-    Row::new(id, class, quantity, unit, target, f64::NAN, tol)
-        .note(&format!("needs the pipeline's `{instance}` result: run `hdi run` first"))
+fn not_run(
+    id: &str,
+    class: Class,
+    quantity: &str,
+    unit: &str,
+    target: f64,
+    tol: Tolerance,
+    instance: &str,
+) -> Row {
+    Row::new(id, class, quantity, unit, target, f64::NAN, tol).note(&format!(
+        "needs the pipeline's `{instance}` result: run `hdi run` first"
+    ))
 }
 
 fn app_b_rows(cache: Option<&Cache>) -> Vec<Row> {
@@ -711,14 +747,30 @@ fn app_b_rows(cache: Option<&Cache>) -> Vec<Row> {
             let p = peaks(&a);
             let top = p.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1));
             rows.push(
-                Row::new("dyn-36", Class::K, "strongest line of the flying response to the DMW record", "kHz", 10.7, top.map_or(f64::NAN, |t| t.0 / 1e3), tol)
-                    .reference(r)
-                    .variant("improved 2-DOF, 5 nm, wavelet spectrum of the heave (0.5–2 ms)")
-                    .inputs("shipped DMW record (track 1), static start, no calibration")
-                    .origin(a.origin.clone()),
+                Row::new(
+                    "dyn-36",
+                    Class::K,
+                    "strongest line of the flying response to the DMW record",
+                    "kHz",
+                    10.7,
+                    top.map_or(f64::NAN, |t| t.0 / 1e3),
+                    tol,
+                )
+                .reference(r)
+                .variant("improved 2-DOF, 5 nm, wavelet spectrum of the heave (0.5–2 ms)")
+                .inputs("shipped DMW record (track 1), static start, no calibration")
+                .origin(a.origin.clone()),
             );
         }
-        None => rows.push(not_run("dyn-36", Class::K, "strongest line of the flying response to the DMW record", "kHz", 10.7, tol, "analysis.dmw_response")),
+        None => rows.push(not_run(
+            "dyn-36",
+            Class::K,
+            "strongest line of the flying response to the DMW record",
+            "kHz",
+            10.7,
+            tol,
+            "analysis.dmw_response",
+        )),
     }
     match (get("still_response"), get("dmw_response")) {
         (Some(still), Some(flight)) => {
@@ -727,22 +779,40 @@ fn app_b_rows(cache: Option<&Cache>) -> Vec<Row> {
             let normal = nearest(&response, 275e3);
             let pitch_in_response = nearest(&response, 110e3);
             rows.push(
-                Row::new("dyn-36.pitch", Class::K, "1st pitch mode in the free decay", "kHz", 110.0, pitch.map_or(f64::NAN, |v| v.0 / 1e3), tol)
-                    .reference(r)
-                    .variant("improved 2-DOF, 5 nm, free decay after a 1 nm heave kick, wavelet spectrum")
-                    .inputs("no DMW (zero excitation), kicked start, no calibration")
-                    .origin(still.origin.clone()),
+                Row::new(
+                    "dyn-36.pitch",
+                    Class::K,
+                    "1st pitch mode in the free decay",
+                    "kHz",
+                    110.0,
+                    pitch.map_or(f64::NAN, |v| v.0 / 1e3),
+                    tol,
+                )
+                .reference(r)
+                .variant(
+                    "improved 2-DOF, 5 nm, free decay after a 1 nm heave kick, wavelet spectrum",
+                )
+                .inputs("no DMW (zero excitation), kicked start, no calibration")
+                .origin(still.origin.clone()),
             );
             rows.push(
-                Row::new("dyn-36.normal", Class::K, "normal mode in the flying response to the DMW record", "kHz", 275.0, normal.map_or(f64::NAN, |v| v.0 / 1e3), tol)
-                    .reference(r)
-                    .variant("improved 2-DOF, 5 nm, wavelet spectrum of the heave (0.5–2 ms)")
-                    .inputs("shipped DMW record (track 1), static start, no calibration")
-                    .origin(flight.origin.clone())
-                    .note(
-                        "the 2-DOF model has no roll mode (100 kHz: dyn-33.roll); the AB springs are \
+                Row::new(
+                    "dyn-36.normal",
+                    Class::K,
+                    "normal mode in the flying response to the DMW record",
+                    "kHz",
+                    275.0,
+                    normal.map_or(f64::NAN, |v| v.0 / 1e3),
+                    tol,
+                )
+                .reference(r)
+                .variant("improved 2-DOF, 5 nm, wavelet spectrum of the heave (0.5–2 ms)")
+                .inputs("shipped DMW record (track 1), static start, no calibration")
+                .origin(flight.origin.clone())
+                .note(
+                    "the 2-DOF model has no roll mode (100 kHz: dyn-33.roll); the AB springs are \
                          inverted from 110/300 kHz (assumed inputs)",
-                    ),
+                ),
             );
             rows.push(
                 Row::ordering(
@@ -752,7 +822,10 @@ fn app_b_rows(cache: Option<&Cache>) -> Vec<Row> {
                         Relation::Ascending,
                         &[
                             ("normal-mode peak", normal.map_or(f64::NAN, |v| v.1)),
-                            ("1st pitch peak", pitch_in_response.map_or(f64::NAN, |v| v.1)),
+                            (
+                                "1st pitch peak",
+                                pitch_in_response.map_or(f64::NAN, |v| v.1),
+                            ),
                         ],
                     ),
                 )
@@ -767,10 +840,28 @@ fn app_b_rows(cache: Option<&Cache>) -> Vec<Row> {
                 )),
             );
         }
-        _ => rows.push(not_run("dyn-36.pitch", Class::K, "1st pitch mode in the free decay", "kHz", 110.0, tol, "analysis.still_response and analysis.dmw_response")),
+        _ => rows.push(not_run(
+            "dyn-36.pitch",
+            Class::K,
+            "1st pitch mode in the free decay",
+            "kHz",
+            110.0,
+            tol,
+            "analysis.still_response and analysis.dmw_response",
+        )),
     }
     // #37: periodic response to a sinusoid, fixed point without excitation.
-    let class_of = |name: &str| get(name).map(|a| (a.result["summary"]["class"].as_str().unwrap_or("").to_string(), a.origin));
+    let class_of = |name: &str| {
+        get(name).map(|a| {
+            (
+                a.result["summary"]["class"]
+                    .as_str()
+                    .unwrap_or("")
+                    .to_string(),
+                a.origin,
+            )
+        })
+    };
     match (class_of("sine_response"), class_of("still_response")) {
         (Some((sine, o)), Some((still, _))) => rows.push(
             Row::ordering(
@@ -806,7 +897,16 @@ fn chirp_rows() -> Vec<Row> {
     let (t_sweep, f0, f1, amp) = (1.923e-3, 40e3, 500e3, 0.5e-9);
     let mut rows = Vec::new();
     let Ok(x) = quadratic_chirp(t_sweep, 4e6, f0, f1, amp) else {
-        return vec![Row::new("dyn-38", Class::K, "chirp", "ms", 0.75, f64::NAN, Tolerance::Relative(0.01)).note("the chirp could not be built")];
+        return vec![Row::new(
+            "dyn-38",
+            Class::K,
+            "chirp",
+            "ms",
+            0.75,
+            f64::NAN,
+            Tolerance::Relative(0.01),
+        )
+        .note("the chirp could not be built")];
     };
     // The crossing time of frequency f by bisection on the chirp's instantaneous frequency.
     let crossing = |f: f64| {
@@ -821,40 +921,84 @@ fn chirp_rows() -> Vec<Row> {
         }
         0.5 * (lo + hi) * 1e3
     };
-    for (id, f, t) in [("dyn-38", 110e3, 0.75), ("dyn-38.90kHz", 90e3, 0.634), ("dyn-38.120kHz", 120e3, 0.802), ("dyn-38.240kHz", 240e3, 1.268)] {
+    for (id, f, t) in [
+        ("dyn-38", 110e3, 0.75),
+        ("dyn-38.90kHz", 90e3, 0.634),
+        ("dyn-38.120kHz", 120e3, 0.802),
+        ("dyn-38.240kHz", 240e3, 1.268),
+    ] {
         rows.push(
-            Row::new(id, Class::K, &format!("chirp 40 → 500 kHz over 1.923 ms crosses {} kHz at", f / 1e3), "ms", t, crossing(f), Tolerance::Relative(0.01))
-                .reference(r)
-                .variant("quadratic chirp f(t) = f0 + (f1 − f0)(t/T)²")
-                .inputs("excitation only"),
+            Row::new(
+                id,
+                Class::K,
+                &format!(
+                    "chirp 40 → 500 kHz over 1.923 ms crosses {} kHz at",
+                    f / 1e3
+                ),
+                "ms",
+                t,
+                crossing(f),
+                Tolerance::Relative(0.01),
+            )
+            .reference(r)
+            .variant("quadratic chirp f(t) = f0 + (f1 − f0)(t/T)²")
+            .inputs("excitation only"),
         );
     }
     // The response: the deepest clearance dip should come when the chirp crosses the 1st
     // pitch mode (the dissertation's contact at ≈ 0.75 ms).
     let dip = (|| {
-        let isbl = IsblModel::new(IsblParams::improved_2dof()).and_then(IsblLookup::build_standard).ok()?;
+        let isbl = IsblModel::new(IsblParams::improved_2dof())
+            .and_then(IsblLookup::build_standard)
+            .ok()?;
         let model = improved_2dof();
-        let input = DmwInput { displacement: &x.displacement, velocity: &x.velocity, sample_rate: x.fs };
+        let input = DmwInput {
+            displacement: &x.displacement,
+            velocity: &x.velocity,
+            sample_rate: x.fs,
+        };
         // The record ends at T; the run stops 0.05 ms earlier (the DMW under the LE is the
         // bulge's delayed by the transit).
-        let options = SimOptions { duration: t_sweep - 0.05e-3, static_init: true, ..SimOptions::default() };
-        let h = TwoDofCase::new(&model, 5.0 * NM, &isbl, Some(input), options).ok()?.run().ok()?;
+        let options = SimOptions {
+            duration: t_sweep - 0.05e-3,
+            static_init: true,
+            ..SimOptions::default()
+        };
+        let h = TwoDofCase::new(&model, 5.0 * NM, &isbl, Some(input), options)
+            .ok()?
+            .run()
+            .ok()?;
         let mean = h.clearance.iter().sum::<f64>() / h.clearance.len() as f64;
         // Skip the first 0.2 ms (start transient).
         let k0 = (0.2e-3 / h.dt) as usize;
-        let k = (k0..h.clearance.len()).min_by(|&a, &b| h.clearance[a].total_cmp(&h.clearance[b]))?;
+        let k =
+            (k0..h.clearance.len()).min_by(|&a, &b| h.clearance[a].total_cmp(&h.clearance[b]))?;
         Some((k as f64 * h.dt * 1e3, (mean - h.clearance[k]) / NM))
     })();
     rows.push(
         Row::ordering(
             "dyn-38.response",
             "the deepest clearance dip comes within 0.15 ms of the 110 kHz crossing (0.75 ms)",
-            Ordering::new(Relation::Ascending, &[("|t_dip − 0.75 ms|", dip.map_or(f64::NAN, |d| (d.0 - 0.75).abs())), ("0.15 ms", 0.15)]),
+            Ordering::new(
+                Relation::Ascending,
+                &[
+                    (
+                        "|t_dip − 0.75 ms|",
+                        dip.map_or(f64::NAN, |d| (d.0 - 0.75).abs()),
+                    ),
+                    ("0.15 ms", 0.15),
+                ],
+            ),
         )
         .reference(r)
         .variant("improved 2-DOF, 5 nm, chirp amplitude 0.5 nm")
         .inputs("chirp excitation, static start, no calibration")
-        .note(&dip.map_or("the case failed".into(), |d| format!("dip at {:.3} ms, {:.2} nm below the mean clearance", d.0, d.1))),
+        .note(&dip.map_or("the case failed".into(), |d| {
+            format!(
+                "dip at {:.3} ms, {:.2} nm below the mean clearance",
+                d.0, d.1
+            )
+        })),
     );
     rows
 }
@@ -888,34 +1032,85 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
         Ok(x) => x,
         Err(e) => {
             rows.push(
-                Row::new("dyn-16", Class::D, "simulation inputs (interfaces, synthetic DMW)", "-", f64::NAN, f64::NAN, Tolerance::Absolute(0.0))
-                    .note(&format!("could not be built: {e}")),
+                Row::new(
+                    "dyn-16",
+                    Class::D,
+                    "simulation inputs (interfaces, synthetic DMW)",
+                    "-",
+                    f64::NAN,
+                    f64::NAN,
+                    Tolerance::Absolute(0.0),
+                )
+                .note(&format!("could not be built: {e}")),
             );
             return rows;
         }
     };
-    let synth = "synthetic DMW σ 1 nm seed 1 (docs/conventions.md), no calibration (default inputs)";
+    let synth =
+        "synthetic DMW σ 1 nm seed 1 (docs/conventions.md), no calibration (default inputs)";
     let improved_model = improved_2dof();
-    let optimised_model = crate::dynamics::params::optimised_bulge(50e-6).map(|b| improved_2dof().with_bulge(b));
-    let initial_grid: Vec<f64> = [4.0, 5.0, 6.0, 7.0].into_iter().chain((0..=15).map(|i| 8.0 + 0.2 * i as f64)).collect();
+    let optimised_model =
+        crate::dynamics::params::optimised_bulge(50e-6).map(|b| improved_2dof().with_bulge(b));
+    let initial_grid: Vec<f64> = [4.0, 5.0, 6.0, 7.0]
+        .into_iter()
+        .chain((0..=15).map(|i| 8.0 + 0.2 * i as f64))
+        .collect();
     let mut optimised_grid: Vec<f64> = (4..=16).map(|i| i as f64 * 0.5).collect();
     optimised_grid.extend((1..=12).map(|i| 8.0 + 0.2 * i as f64));
     optimised_grid.extend([12.0, 13.0]);
     let ((s_improved, s_initial), s_optimised) = rayon::join(
         || {
             rayon::join(
-                || run_sweep(&improved_model, &improved, &track, false, &improved_grid(), &[0.2], &format!("{synth}, nominal start")),
-                || run_sweep(&initial_2dof(), &initial, &track, true, &initial_grid, &[], &format!("{synth}, static start")),
+                || {
+                    run_sweep(
+                        &improved_model,
+                        &improved,
+                        &track,
+                        false,
+                        &improved_grid(),
+                        &[0.2],
+                        &format!("{synth}, nominal start"),
+                    )
+                },
+                || {
+                    run_sweep(
+                        &initial_2dof(),
+                        &initial,
+                        &track,
+                        true,
+                        &initial_grid,
+                        &[],
+                        &format!("{synth}, static start"),
+                    )
+                },
             )
         },
         || {
-            optimised_model.as_ref().ok().map(|m| run_sweep(m, &improved, &track, true, &optimised_grid, &[], &format!("{synth}, static start")))
+            optimised_model.as_ref().ok().map(|m| {
+                run_sweep(
+                    m,
+                    &improved,
+                    &track,
+                    true,
+                    &optimised_grid,
+                    &[],
+                    &format!("{synth}, static start"),
+                )
+            })
         },
     );
-    let cal_improved = cache.as_ref().and_then(|c| cached_sweep(c, "improved_calibrated"));
-    let cal_optimised = cache.as_ref().and_then(|c| cached_sweep(c, "optimised_calibrated"));
+    let cal_improved = cache
+        .as_ref()
+        .and_then(|c| cached_sweep(c, "improved_calibrated"));
+    let cal_optimised = cache
+        .as_ref()
+        .and_then(|c| cached_sweep(c, "optimised_calibrated"));
     let mut fhm86 = f64::NAN;
-    rows.extend(improved_rows(&s_improved, cal_improved.as_ref(), &mut fhm86));
+    rows.extend(improved_rows(
+        &s_improved,
+        cal_improved.as_ref(),
+        &mut fhm86,
+    ));
     rows.extend(initial_rows(&s_initial));
     if let Some(s) = s_optimised {
         rows.extend(optimised_rows(&s, cal_optimised.as_ref(), fhm86));

@@ -76,7 +76,9 @@ impl Tolerance {
             return false;
         }
         match *self {
-            Tolerance::Relative(t) => target.is_finite() && (value - target).abs() <= t * target.abs(),
+            Tolerance::Relative(t) => {
+                target.is_finite() && (value - target).abs() <= t * target.abs()
+            }
             Tolerance::Absolute(t) => target.is_finite() && (value - target).abs() <= t,
             Tolerance::Range { lo, hi } => value >= lo && value <= hi,
         }
@@ -337,7 +339,15 @@ impl Row {
     pub fn ordering(id: &str, quantity: &str, ordering: Ordering) -> Row {
         Row {
             ordering: Some(ordering),
-            ..Row::new(id, Class::Q, quantity, "1", f64::NAN, f64::NAN, Tolerance::Absolute(0.0))
+            ..Row::new(
+                id,
+                Class::Q,
+                quantity,
+                "1",
+                f64::NAN,
+                f64::NAN,
+                Tolerance::Absolute(0.0),
+            )
         }
     }
 
@@ -549,7 +559,10 @@ pub fn target_ids() -> Vec<String> {
 
 /// Whether `id` answers target `base` (`dyn-16` is answered by `dyn-16` and `dyn-16.solid`).
 pub fn answers(id: &str, base: &str) -> bool {
-    id == base || id.strip_prefix(base).is_some_and(|rest| rest.starts_with('.'))
+    id == base
+        || id
+            .strip_prefix(base)
+            .is_some_and(|rest| rest.starts_with('.'))
 }
 
 /// The rows that fail the command: a failing row of a gating class. `selected` is the
@@ -595,7 +608,10 @@ mod tests {
         assert!(!row(1.0, f64::NAN, Tolerance::Absolute(1.0)).pass());
         let r = Tolerance::Range { lo: 1.0, hi: 1.6 };
         assert!(row(1.2, 1.6, r).pass() && !row(1.2, 1.61, r).pass() && !row(1.2, 0.99, r).pass());
-        let above = Tolerance::Range { lo: 20.0, hi: f64::INFINITY };
+        let above = Tolerance::Range {
+            lo: 20.0,
+            hi: f64::INFINITY,
+        };
         assert!(row(f64::NAN, 1e6, above).pass() && !row(f64::NAN, 19.9, above).pass());
     }
 
@@ -605,7 +621,12 @@ mod tests {
         let table = |v: [f64; 4]| {
             Ordering::new(
                 Relation::Ascending,
-                &[("case 2", v[2]), ("case 0", v[0]), ("case 1", v[1]), ("case 3", v[3])],
+                &[
+                    ("case 2", v[2]),
+                    ("case 0", v[0]),
+                    ("case 1", v[1]),
+                    ("case 3", v[3]),
+                ],
             )
         };
         assert!(table([5.7, 19.4, 1.7, 23.6]).holds());
@@ -616,14 +637,32 @@ mod tests {
         // "cases 1 and 3 ≫ cases 0 and 2" with a factor 3: 623.9, 900 vs 61.7, 61.8.
         let dom = |v: [f64; 4]| {
             Ordering::new(
-                Relation::Dominates { split: 2, factor: 3.0 },
-                &[("case 1", v[1]), ("case 3", v[3]), ("case 0", v[0]), ("case 2", v[2])],
+                Relation::Dominates {
+                    split: 2,
+                    factor: 3.0,
+                },
+                &[
+                    ("case 1", v[1]),
+                    ("case 3", v[3]),
+                    ("case 0", v[0]),
+                    ("case 2", v[2]),
+                ],
             )
         };
         assert!(dom([61.7, 623.9, 61.8, 900.0]).holds());
         assert!(!dom([7.5, 8.6, 6.7, 6.2]).holds());
-        assert!(!Ordering::new(Relation::Dominates { split: 0, factor: 1.0 }, &[("a", 1.0)]).holds());
-        let close = Ordering::new(Relation::Close { tol: 0.1 }, &[("isbl", 7.79), ("mtl", 7.85)]);
+        assert!(!Ordering::new(
+            Relation::Dominates {
+                split: 0,
+                factor: 1.0
+            },
+            &[("a", 1.0)]
+        )
+        .holds());
+        let close = Ordering::new(
+            Relation::Close { tol: 0.1 },
+            &[("isbl", 7.79), ("mtl", 7.85)],
+        );
         assert!(close.holds());
         assert!(!Ordering::new(Relation::Close { tol: 0.05 }, &[("a", 7.79), ("b", 7.85)]).holds());
         assert!(Ordering::new(Relation::AllTrue, &[("a", 1.0), ("b", 1.0)]).holds());
@@ -642,13 +681,20 @@ mod tests {
         };
         let good = row(1.0, 1.0, Tolerance::Absolute(0.1));
         // A failing G row fails the gate (with or without --class)…
-        assert_eq!(gate([&bad(Class::G), &good], &[Class::G, Class::K]).len(), 1);
+        assert_eq!(
+            gate([&bad(Class::G), &good], &[Class::G, Class::K]).len(),
+            1
+        );
         assert_eq!(gate([&bad(Class::K)], &[]).len(), 1);
         assert_eq!(gate([&bad(Class::C)], &[]).len(), 1);
         // …a failing D row never does…
         assert!(gate([&bad(Class::D)], &[Class::D]).is_empty());
         // …and a failing Q row only when Q is selected.
-        let q = Row::ordering("q-1", "q", Ordering::new(Relation::Ascending, &[("a", 2.0), ("b", 1.0)]));
+        let q = Row::ordering(
+            "q-1",
+            "q",
+            Ordering::new(Relation::Ascending, &[("a", 2.0), ("b", 1.0)]),
+        );
         assert!(gate([&q], &[]).is_empty());
         assert_eq!(gate([&q], &[Class::Q]).len(), 1);
         assert!(gate([&good], &[]).is_empty());
@@ -681,7 +727,10 @@ mod tests {
         assign_ids("dmw", &mut rows);
         assert_eq!(rows[0].id, "dmw-1");
         assert_eq!(rows[2].id, "isbl-2a.2");
-        assert_eq!(class_counts(&rows), vec![(Class::G, 2, 2), (Class::D, 1, 0)]);
+        assert_eq!(
+            class_counts(&rows),
+            vec![(Class::G, 2, 2), (Class::D, 1, 0)]
+        );
         assert!(answers("dyn-16.solid", "dyn-16") && answers("dyn-16", "dyn-16"));
         assert!(!answers("dyn-160", "dyn-16") && !answers("dyn-1", "dyn-16"));
         assert_eq!(Class::parse(" k"), Some(Class::K));

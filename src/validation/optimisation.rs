@@ -34,7 +34,9 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
                     Tolerance::Absolute(0.5),
                 )
                 .variant("not run")
-                .note(&format!("no current result: run `hdi run --only {name}` first")),
+                .note(&format!(
+                    "no current result: run `hdi run --only {name}` first"
+                )),
             );
             continue;
         };
@@ -67,7 +69,10 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
                 )
                 .reference("dissertation §2.3.2")
                 .variant(&variant)
-                .inputs(&format!("the DOE's base sweep `{}` (shipped DMW record), no calibration", cfg.simulate))
+                .inputs(&format!(
+                    "the DOE's base sweep `{}` (shipped DMW record), no calibration",
+                    cfg.simulate
+                ))
                 .origin(Origin::Cache {
                     instance: format!("doe.{name}"),
                     key: entry.key.clone(),

@@ -3,7 +3,6 @@
 
 use super::pipeline::Cache;
 use super::{Class, Ordering, Origin, Relation, Row, Tolerance};
-use std::path::Path;
 use crate::contact::isbl::{IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
 use crate::contact::mtl::LubricantCase;
@@ -14,6 +13,7 @@ use crate::dynamics::three_dof::inputs::ActuationProfile;
 use crate::dynamics::three_dof::interface::{FeatureInterface, InterfaceLaw};
 use crate::dynamics::two_dof::ContactForceForm;
 use crate::dynamics::{NM, UM};
+use std::path::Path;
 
 /// Fig. 4.8 truncation example through the 3-DOF feature API (class G, ours 187.9 µm²).
 fn truncation_row(model: &Model3Dof) -> Row {
@@ -64,7 +64,13 @@ fn modal_rows(model: &Model3Dof) -> Vec<Row> {
     .zip(modes)
     .map(|(&(name, target), f)| {
         Row::new(
-            &format!("ab3-{}", name.split_whitespace().next().unwrap_or(name).replace('/', "")),
+            &format!(
+                "ab3-{}",
+                name.split_whitespace()
+                    .next()
+                    .unwrap_or(name)
+                    .replace('/', "")
+            ),
             Class::C,
             &format!("3-DOF AB {name} mode at PT = 11 nm"),
             "kHz",
@@ -326,7 +332,11 @@ fn table_4_4_case_rows(values: &[CaseBv], variant: &str) -> Vec<Row> {
                     &format!(
                         "{}: {} BV",
                         p.name,
-                        if what == "jtc" { "jump-to-contact" } else { "steady-contact" }
+                        if what == "jtc" {
+                            "jump-to-contact"
+                        } else {
+                            "steady-contact"
+                        }
                     ),
                     "%",
                     target,
@@ -363,7 +373,10 @@ fn table_4_4_case_rows(values: &[CaseBv], variant: &str) -> Vec<Row> {
             "dyn-35.jtc_order",
             "Table 4.4 jump-to-contact BV of cases 1, 3 ≫ cases 0, 2 (≥ 3×)",
             Ordering::new(
-                Relation::Dominates { split: 2, factor: 3.0 },
+                Relation::Dominates {
+                    split: 2,
+                    factor: 3.0,
+                },
                 &[
                     ("case 1", v(1).jump_to_contact),
                     ("case 3", v(3).jump_to_contact),
@@ -378,7 +391,12 @@ fn table_4_4_case_rows(values: &[CaseBv], variant: &str) -> Vec<Row> {
         .note("published 623.9 and 900 % against 61.7 and 61.8 % (a factor 10)"),
     );
     let flying: Vec<(String, f64)> = (0..4)
-        .map(|k| (format!("case {k} in 4–10 %"), f64::from((4.0..=10.0).contains(&v(k).flying))))
+        .map(|k| {
+            (
+                format!("case {k} in 4–10 %"),
+                f64::from((4.0..=10.0).contains(&v(k).flying)),
+            )
+        })
         .collect();
     rows.push(
         Row::ordering(
@@ -437,8 +455,9 @@ fn features(c: Option<&serde_json::Value>) -> Vec<String> {
 }
 
 fn needs(id: &str, quantity: &str, instance: &str) -> Row {
-    Row::ordering(id, quantity, Ordering::new(Relation::AllTrue, &[]))
-        .note(&format!("needs the pipeline's `{instance}` result: run `hdi run` first"))
+    Row::ordering(id, quantity, Ordering::new(Relation::AllTrue, &[])).note(&format!(
+        "needs the pipeline's `{instance}` result: run `hdi run` first"
+    ))
 }
 
 /// The rows read from the 3-DOF stages of the pipeline (targets #30 contact set, #31–#34):
@@ -461,7 +480,10 @@ fn cached_rows(cache: Option<&Cache>) -> Vec<Row> {
                         Relation::AllTrue,
                         &[
                             ("the bulge touches", flag(f.iter().any(|x| x == "Bulge"))),
-                            ("no other feature touches", flag(f.iter().all(|x| x == "Bulge"))),
+                            (
+                                "no other feature touches",
+                                flag(f.iter().all(|x| x == "Bulge")),
+                            ),
                         ],
                     ),
                 )
@@ -481,7 +503,10 @@ fn cached_rows(cache: Option<&Cache>) -> Vec<Row> {
                     "S3 12 nm: MTL and ISBL give the same steady pole-tip FH (within 0.2 nm)",
                     Ordering::new(
                         Relation::Close { tol: 0.2 },
-                        &[("ISBL PT", num(isbl, "pole_tip_mean_nm")), ("MTL PT", num(mtl, "pole_tip_mean_nm"))],
+                        &[
+                            ("ISBL PT", num(isbl, "pole_tip_mean_nm")),
+                            ("MTL PT", num(mtl, "pole_tip_mean_nm")),
+                        ],
                     ),
                 )
                 .reference("dissertation §4.2 (S3)")
@@ -505,7 +530,11 @@ fn cached_rows(cache: Option<&Cache>) -> Vec<Row> {
                 .note("without contact at 12 nm (dyn-30.contact) the interface law cannot act: both cases are the same flight"),
             );
         }
-        None => rows.push(needs("dyn-31", "S3 12 nm: ISBL vs MTL", "three_dof.constant_12nm")),
+        None => rows.push(needs(
+            "dyn-31",
+            "S3 12 nm: ISBL vs MTL",
+            "three_dof.constant_12nm",
+        )),
     }
     // S4: operational shock.
     match cached_cases(cache, "shock") {
@@ -518,7 +547,13 @@ fn cached_rows(cache: Option<&Cache>) -> Vec<Row> {
                 Row::ordering(
                     "dyn-32",
                     "S4 shock: the pads and the bulge touch",
-                    Ordering::new(Relation::AllTrue, &[("a pad touches", flag(has("Pad"))), ("the bulge touches", flag(has("Bulge")))]),
+                    Ordering::new(
+                        Relation::AllTrue,
+                        &[
+                            ("a pad touches", flag(has("Pad"))),
+                            ("the bulge touches", flag(has("Bulge"))),
+                        ],
+                    ),
                 )
                 .reference("dissertation §4.2 (S4, Fig. 4.12)")
                 .variant("3-DOF, ISBL, 0.25 µN·s over 5 µs at 0.6 ms, 5 nm actuation")
@@ -546,9 +581,17 @@ fn cached_rows(cache: Option<&Cache>) -> Vec<Row> {
         Some(a) => {
             let peaks: Vec<f64> = a.result["summary"]["peaks"]
                 .as_array()
-                .map(|p| p.iter().filter_map(|p| p["frequency_Hz"].as_f64()).collect())
+                .map(|p| {
+                    p.iter()
+                        .filter_map(|p| p["frequency_Hz"].as_f64())
+                        .collect()
+                })
                 .unwrap_or_default();
-            let listed = peaks.iter().map(|f| format!("{:.1}", f / 1e3)).collect::<Vec<_>>().join(", ");
+            let listed = peaks
+                .iter()
+                .map(|f| format!("{:.1}", f / 1e3))
+                .collect::<Vec<_>>()
+                .join(", ");
             let near = |f: f64| {
                 peaks
                     .iter()
@@ -571,7 +614,11 @@ fn cached_rows(cache: Option<&Cache>) -> Vec<Row> {
                 );
             }
         }
-        None => rows.push(needs("dyn-33", "S4 shock wavelet modes", "analysis.shock_response")),
+        None => rows.push(needs(
+            "dyn-33",
+            "S4 shock wavelet modes",
+            "analysis.shock_response",
+        )),
     }
     // S5: variable actuation, ISBL vs MTL.
     match cached_cases(cache, "lubricant_cases") {
@@ -589,7 +636,10 @@ fn cached_rows(cache: Option<&Cache>) -> Vec<Row> {
                         Relation::AllTrue,
                         &[
                             ("the bulge touches", flag(f.iter().any(|x| x == "Bulge"))),
-                            ("no other feature touches", flag(f.iter().all(|x| x == "Bulge"))),
+                            (
+                                "no other feature touches",
+                                flag(f.iter().all(|x| x == "Bulge")),
+                            ),
                         ],
                     ),
                 )
@@ -604,7 +654,13 @@ fn cached_rows(cache: Option<&Cache>) -> Vec<Row> {
                     "S5: the jump to contact vibrates more than steady contact (ISBL)",
                     Ordering::new(
                         Relation::Ascending,
-                        &[("steady-contact BV", num(isbl, "steady_contact_bv_percent")), ("jump-to-contact BV", num(isbl, "jump_to_contact_bv_percent"))],
+                        &[
+                            ("steady-contact BV", num(isbl, "steady_contact_bv_percent")),
+                            (
+                                "jump-to-contact BV",
+                                num(isbl, "jump_to_contact_bv_percent"),
+                            ),
+                        ],
                     ),
                 )
                 .reference(r)
@@ -617,10 +673,21 @@ fn cached_rows(cache: Option<&Cache>) -> Vec<Row> {
                     "dyn-34.isbl_vs_mtl",
                     "S5: ISBL vibrates more than MTL (jump-to-contact and steady BV)",
                     Ordering::new(
-                        Relation::Dominates { split: 2, factor: 1.0 },
+                        Relation::Dominates {
+                            split: 2,
+                            factor: 1.0,
+                        },
                         &[
-                            ("ISBL JTC BV / MTL JTC BV", num(isbl, "jump_to_contact_bv_percent") / num(mtl, "jump_to_contact_bv_percent")),
-                            ("ISBL steady BV / MTL steady BV", num(isbl, "steady_contact_bv_percent") / num(mtl, "steady_contact_bv_percent")),
+                            (
+                                "ISBL JTC BV / MTL JTC BV",
+                                num(isbl, "jump_to_contact_bv_percent")
+                                    / num(mtl, "jump_to_contact_bv_percent"),
+                            ),
+                            (
+                                "ISBL steady BV / MTL steady BV",
+                                num(isbl, "steady_contact_bv_percent")
+                                    / num(mtl, "steady_contact_bv_percent"),
+                            ),
                             ("1", 1.0),
                         ],
                     ),
@@ -648,7 +715,10 @@ fn cached_rows(cache: Option<&Cache>) -> Vec<Row> {
                 Row::ordering(
                     "dyn-34.mu",
                     "S5: μ > 1 in steady contact (ISBL)",
-                    Ordering::new(Relation::Ascending, &[("1", 1.0), ("μ", num(isbl, "friction_coefficient"))]),
+                    Ordering::new(
+                        Relation::Ascending,
+                        &[("1", 1.0), ("μ", num(isbl, "friction_coefficient"))],
+                    ),
                 )
                 .reference(r)
                 .variant(v)
@@ -656,7 +726,11 @@ fn cached_rows(cache: Option<&Cache>) -> Vec<Row> {
                 .origin(origin),
             );
         }
-        None => rows.push(needs("dyn-34", "S5 variable actuation", "three_dof.lubricant_cases")),
+        None => rows.push(needs(
+            "dyn-34",
+            "S5 variable actuation",
+            "three_dof.lubricant_cases",
+        )),
     }
     rows
 }
