@@ -13,3 +13,4 @@ mod slurm_cli;
 mod standalone;
 mod surface_cli;
 mod three_dof_cli;
+mod validate_cli;

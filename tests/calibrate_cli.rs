@@ -55,7 +55,7 @@ fn calibration_fits_within_bounds_and_feeds_the_calibrated_sweeps() {
     let rows = j["areas"]["calibration"].as_array().unwrap();
     assert_eq!(rows.len(), 2, "{rows:?}");
     assert!(rows[0]["variant"].as_str().unwrap().contains("dmw_scale"));
-    let fhm = rows[1]["ours"].as_f64().unwrap();
+    let fhm = rows[1]["value"].as_f64().unwrap();
     let stored = r["calibrated"]["targets"][1]["value"].as_f64().unwrap();
     assert!(
         (fhm - stored).abs() < 1e-9 * stored.abs().max(1.0),

@@ -258,7 +258,7 @@ fn validate_reports_every_dmw_row_as_passing() {
     assert!(rows.len() >= 20);
     for r in rows {
         assert_eq!(r["pass"], true, "{r}");
-        assert!(r["variant"].is_string() && r["source"].is_string());
+        assert!(r["variant"].is_string() && r["reference"].is_string() && r["class"] == "G");
     }
     let o = hdi()
         .args(["validate", "--only", "nonsense"])

@@ -101,14 +101,18 @@ pub enum Command {
     /// Spectrum, wavelet transform, Poincaré section and phase space of one series of an
     /// HDF5 file (a slider case, a DMW or excitation track, …): dominant frequencies and class.
     Analyze(Box<AnalyzeArgs>),
-    /// Every reproducible number of the specs: target, hdi's value, tolerance, pass. Exit 1 if
-    /// a reproducible target fails.
+    /// The published targets hdi is checked against, one typed row each (class G, K, D, Q or
+    /// C): target, hdi's value, tolerance, pass (docs/validation.md). Exit 1 if a G, K or C row
+    /// fails (or a Q row, when `--class` names Q); D rows never fail the command.
     Validate {
         #[arg(long)]
         json: bool,
         /// Only these areas (e.g. dmw).
         #[arg(long, num_args = 1..)]
         only: Vec<String>,
+        /// Only rows of these classes, comma-separated (e.g. `G,K`): the gate then checks them.
+        #[arg(long, value_delimiter = ',')]
+        class: Vec<String>,
         /// Pipeline whose finished `[calibrate.*]` fits are re-evaluated (area `calibration`;
         /// skipped when the file does not exist).
         #[arg(long, default_value = "pipeline.toml")]

@@ -57,7 +57,12 @@ pub fn main() -> Result<()> {
         Command::Contact(args) => contact::cmd_contact(*args),
         Command::Simulate(args) => simulate::cmd_simulate(*args),
         Command::Analyze(args) => analyze::cmd_analyze(*args),
-        Command::Validate { json, only, config } => validate::cmd_validate(json, &only, &config),
+        Command::Validate {
+            json,
+            only,
+            class,
+            config,
+        } => validate::cmd_validate(json, &only, &class, &config),
         Command::Synth {
             what,
             out_dir,

@@ -1,20 +1,112 @@
-//! `hdi validate`: every reproducible number of the specs against hdi's value.
+//! `hdi validate`: the published targets, one typed row each (docs/validation.md). Rows are
+//! computed now by the library, or read from the pipeline's cache where the `origin` column
+//! says so (calibrated values, the DOE optimum, the 3-DOF stage outputs, the spectra).
 
 use anyhow::{bail, Context, Result};
+use hdi::validation::{class_counts, gate, Class, Row};
 use serde_json::{json, Value};
 use std::path::Path;
 
-/// Six significant digits, scientific for very small or large magnitudes.
+/// Six significant digits, scientific for very small or large magnitudes; `–` for none.
 fn fmt_number(x: f64) -> String {
     let a = x.abs();
-    if x != 0.0 && !(1e-3..1e7).contains(&a) {
+    if !x.is_finite() {
+        "–".into()
+    } else if x != 0.0 && !(1e-3..1e7).contains(&a) {
         format!("{x:.5e}")
     } else {
         format!("{x:.6}")
     }
 }
 
-pub(super) fn cmd_validate(as_json: bool, only: &[String], config: &Path) -> Result<()> {
+/// The `--class` list, parsed.
+fn parse_classes(class: &[String]) -> Result<Vec<Class>> {
+    class
+        .iter()
+        .filter(|c| !c.trim().is_empty())
+        .map(|c| {
+            Class::parse(c)
+                .with_context(|| format!("--class: unknown class `{c}` (available: G, K, D, Q, C)"))
+        })
+        .collect()
+}
+
+/// `G 12/12, K 9/9, D 3/40, …` (passes/rows per class).
+fn summary(rows: &[&Row]) -> String {
+    class_counts(rows.iter().copied())
+        .iter()
+        .map(|(c, n, p)| format!("{} {p}/{n}", c.label()))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn print_table(areas: &[(&'static str, Vec<&Row>)]) {
+    for (area, rows) in areas {
+        println!("── {area} ──");
+        println!(
+            "{:<7} {:<22} {:<2} {:<62} {:>12} {:>12} {:>12} {:>10}  origin / variant / note",
+            "", "id", "cl", "quantity", "target", "hdi", "calibrated", "tolerance"
+        );
+        for r in rows {
+            let status = match (r.pass(), r.class) {
+                (true, _) => "pass",
+                (false, Class::D) => "differs",
+                (false, Class::Q) => "no",
+                (false, _) => "FAIL",
+            };
+            let unit = if r.unit == "1" || r.unit.is_empty() {
+                String::new()
+            } else {
+                format!(" {}", r.unit)
+            };
+            let (target, value, tol) = match &r.ordering {
+                Some(o) => (String::new(), String::new(), o.describe()),
+                None => (
+                    fmt_number(r.target),
+                    fmt_number(r.value),
+                    r.tolerance.short(),
+                ),
+            };
+            let cal = r.calibrated.as_ref().map_or(String::new(), |c| {
+                format!(
+                    "{}{}",
+                    fmt_number(c.value),
+                    if r.calibrated_pass() == Some(true) {
+                        "✓"
+                    } else {
+                        ""
+                    }
+                )
+            });
+            let mut tail = vec![r.origin.short()];
+            if !r.variant.is_empty() {
+                tail.push(r.variant.clone());
+            }
+            if !r.note.is_empty() {
+                tail.push(r.note.clone());
+            }
+            println!(
+                "{:<7} {:<22} {:<2} {:<62} {:>12} {:>12} {:>12} {:>10}  {}",
+                status,
+                r.id,
+                r.class.label(),
+                format!("{}{}", r.quantity, unit),
+                target,
+                value,
+                cal,
+                tol,
+                tail.join(" — ")
+            );
+        }
+    }
+}
+
+pub(super) fn cmd_validate(
+    as_json: bool,
+    only: &[String],
+    class: &[String],
+    config: &Path,
+) -> Result<()> {
     let known: Vec<&str> = hdi::validation::AREAS.iter().map(|a| a.name).collect();
     for o in only {
         if !known.contains(&o.as_str()) {
@@ -24,8 +116,9 @@ pub(super) fn cmd_validate(as_json: bool, only: &[String], config: &Path) -> Res
             );
         }
     }
+    let classes = parse_classes(class)?;
     let wants = |a: &str| only.is_empty() || only.iter().any(|o| o == a);
-    let mut areas: Vec<(&'static str, Vec<hdi::validation::Row>)> = Vec::new();
+    let mut computed: Vec<(&'static str, Vec<Row>)> = Vec::new();
     for area in hdi::validation::AREAS.iter().filter(|a| wants(a.name)) {
         // The fits of the pipeline in the working directory, when there is one (or when asked).
         if area.needs_pipeline() && !config.exists() && only.is_empty() {
@@ -34,10 +127,21 @@ pub(super) fn cmd_validate(as_json: bool, only: &[String], config: &Path) -> Res
         let rows = area
             .rows(config)
             .with_context(|| format!("{} rows from {}", area.name, config.display()))?;
-        areas.push((area.name, rows));
+        computed.push((area.name, rows));
     }
-    let failed = hdi::validation::failures(&areas);
-    let total: usize = areas.iter().map(|(_, r)| r.len()).sum();
+    let areas: Vec<(&'static str, Vec<&Row>)> = computed
+        .iter()
+        .map(|(a, rows)| {
+            (
+                *a,
+                rows.iter()
+                    .filter(|r| classes.is_empty() || classes.contains(&r.class))
+                    .collect(),
+            )
+        })
+        .collect();
+    let all: Vec<&Row> = areas.iter().flat_map(|(_, r)| r.iter().copied()).collect();
+    let failed = gate(all.iter().copied(), &classes);
     if as_json {
         let out: serde_json::Map<String, Value> = areas
             .iter()
@@ -48,56 +152,42 @@ pub(super) fn cmd_validate(as_json: bool, only: &[String], config: &Path) -> Res
                 )
             })
             .collect();
-        println!("{}", json!({"areas": out, "rows": total, "failed": failed}));
+        let per_class: serde_json::Map<String, Value> = class_counts(all.iter().copied())
+            .into_iter()
+            .map(|(c, n, p)| (c.label().to_string(), json!({"rows": n, "pass": p})))
+            .collect();
+        println!(
+            "{}",
+            json!({
+                "areas": out,
+                "rows": all.len(),
+                "classes": per_class,
+                "failed": failed.len(),
+                "failed_ids": failed.iter().map(|r| r.id.clone()).collect::<Vec<_>>(),
+            })
+        );
     } else {
-        for (area, rows) in &areas {
-            println!("── {area} ──");
-            println!(
-                "{:<6} {:<58} {:>12} {:>12} {:>10}  variant / note",
-                "", "quantity", "target", "hdi", "tolerance"
-            );
-            for r in rows {
-                let status = match (r.pass(), r.reproducible) {
-                    (true, _) => "pass",
-                    (false, true) => "FAIL",
-                    (false, false) => "differs",
-                };
-                // Tolerances span 1e-12 … 50 %: short forms, scientific when tiny.
-                let short = |x: f64| {
-                    if x != 0.0 && x.abs() < 1e-3 {
-                        format!("{x:.0e}")
-                    } else {
-                        format!("{}", (x * 1e4).round() / 1e4)
-                    }
-                };
-                let tol = match r.tolerance {
-                    hdi::validation::Tolerance::Relative(t) => format!("±{}%", short(t * 100.0)),
-                    hdi::validation::Tolerance::Absolute(t) => format!("±{}", short(t)),
-                };
-                let unit = if r.unit == "1" {
-                    String::new()
-                } else {
-                    format!(" {}", r.unit)
-                };
-                println!(
-                    "{:<6} {:<58} {:>12} {:>12} {:>10}  {}{}",
-                    status,
-                    format!("{}{}", r.quantity, unit),
-                    fmt_number(r.target),
-                    fmt_number(r.ours),
-                    tol,
-                    r.variant,
-                    if r.note.is_empty() {
-                        String::new()
-                    } else {
-                        format!(" — {}", r.note)
-                    }
-                );
+        print_table(&areas);
+        eprintln!(
+            "{} rows (passes/rows per class: {}); {} gated row(s) failed{}",
+            all.len(),
+            summary(&all),
+            failed.len(),
+            if failed.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    ": {}",
+                    failed
+                        .iter()
+                        .map(|r| r.id.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
             }
-        }
-        eprintln!("{} rows, {} reproducible failed", total, failed);
+        );
     }
-    if failed > 0 {
+    if !failed.is_empty() {
         std::process::exit(1);
     }
     Ok(())

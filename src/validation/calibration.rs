@@ -1,7 +1,7 @@
 //! `hdi validate` area `calibration`: the fits of the pipeline in the working directory,
 //! re-evaluated now with the current code.
 
-use super::{Row, Tolerance};
+use super::{Class, Origin, Row, Tolerance};
 use crate::artefacts::calibration::fitted_knobs;
 use crate::core::cache::Store;
 use crate::dynamics::calibration::{evaluate, Evaluation, Knob};
@@ -43,17 +43,21 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
         let current = |n: &str| planned(n).is_some_and(|p| p.state == State::Fresh);
         let upstream = stage.upstream();
         if !current(name) || !upstream.iter().all(|u| current(u)) {
-            rows.push(Row {
-                source: format!("[calibrate.{name}]"),
-                quantity: format!("calibration of {}", stage.base_name),
-                unit: "1".into(),
-                target: 0.0,
-                ours: f64::NAN,
-                tolerance: Tolerance::Absolute(1.0),
-                reproducible: false,
-                variant: "not run".into(),
-                note: format!("no current result: run `hdi run --only {name}` first"),
-            });
+            rows.push(
+                Row::new(
+                    &format!("cal-{name}"),
+                    Class::D,
+                    &format!("calibration of {}", stage.base_name),
+                    "1",
+                    f64::NAN,
+                    f64::NAN,
+                    Tolerance::Absolute(1.0),
+                )
+                .variant("not run")
+                .note(&format!(
+                    "no current result: run `hdi run --only {name}` first"
+                )),
+            );
             continue;
         }
         let entry = |n: &str| {
@@ -84,25 +88,37 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
                 .find(|d| d["id"] == t.id)
                 .and_then(|d| d["value"].as_f64())
                 .map_or("–".into(), |v| format!("{:.3}", v * t.display_scale));
-            rows.push(Row {
-                source: format!("dynamics.md §12.2 {} [calibrate.{name}]", t.source),
-                quantity: format!("{} (class D, calibrated)", t.id),
-                unit: t.unit.into(),
-                target: t.published * t.display_scale,
-                ours: o.value.map_or(f64::NAN, |v| v * t.display_scale),
-                tolerance: Tolerance::Absolute(t.tolerance * t.display_scale),
-                reproducible: false,
-                variant: format!("{}: {}", stage.base.model_name, describe_knobs(&fitted)),
-                note: format!(
-                    "spec defaults {before}; residual/tolerance {:+.2}{}",
+            let key = planned(name).map_or(String::new(), |p| p.key.clone());
+            rows.push(
+                Row::new(
+                    &format!("cal-{}", t.id),
+                    Class::D,
+                    &format!("{} (calibrated)", t.id),
+                    t.unit,
+                    t.published * t.display_scale,
+                    o.value.map_or(f64::NAN, |v| v * t.display_scale),
+                    Tolerance::Absolute(t.tolerance * t.display_scale),
+                )
+                .reference(&format!(
+                    "dissertation Ch. 2, target dyn-{}",
+                    t.source.trim_start_matches('#')
+                ))
+                .variant(&format!("{}: {}", stage.base.model_name, describe_knobs(&fitted)))
+                .inputs(&format!("the calibration's own inputs (base sweep `{}`), fitted knobs of [calibrate.{name}]", stage.base_name))
+                .origin(Origin::Recomputed {
+                    instance: format!("calibrate.{name}"),
+                    key,
+                })
+                .note(&format!(
+                    "default inputs {before}; residual/tolerance {:+.2}{}",
                     o.normalised_residual,
                     if t.weight == 0.0 {
                         " (reported, not fitted)"
                     } else {
                         ""
                     }
-                ),
-            });
+                )),
+            );
         }
     }
     Ok(rows)

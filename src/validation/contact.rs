@@ -1,7 +1,7 @@
 //! `hdi validate` rows of the ISBL contact model (docs/contact.md): computed now with the
 //! same model the contact stage and the dynamics use.
 
-use super::{Row, Tolerance};
+use super::{Class, Row, Tolerance};
 use crate::contact::isbl::{IsblModel, IsblParams};
 
 /// A row with borrowed text, built by name (the MTL rows use it too).
@@ -18,33 +18,60 @@ pub(super) struct R<'a> {
 }
 
 impl R<'_> {
+    /// The typed row: `source` is "TABLE #TAG [REFERENCE]"; the id is `isbl-TAG` (the
+    /// ISBL table's row tag; the area makes repeats unique), the reference the bracketed part
+    /// with "dissertation" read as the dissertation. Reproducible rows are class G (closed forms and
+    /// an independent implementation), the others class D (the dissertation's number depends on
+    /// inputs or readings the text does not give; the note says which).
     pub(super) fn row(self) -> Row {
-        Row {
-            source: self.source.into(),
-            quantity: self.quantity.into(),
-            unit: self.unit.into(),
-            target: self.target,
-            ours: self.ours,
-            tolerance: self.tolerance,
-            reproducible: self.reproducible,
-            variant: self.variant.into(),
-            note: self.note.into(),
-        }
+        let tag = self
+            .source
+            .split_once('#')
+            .map(|(_, t)| {
+                t.split(|c: char| c.is_whitespace() || c == '/')
+                    .next()
+                    .unwrap_or("")
+                    .to_string()
+            })
+            .filter(|t| !t.is_empty());
+        let reference = self
+            .source
+            .split_once('[')
+            .map(|(_, r)| r.trim_end_matches(']').to_string())
+            .unwrap_or_else(|| "independent reference table (docs/contact.md)".into())
+            .replace("seed", "dissertation")
+            .replace("derived", "derived in closed form");
+        Row::new(
+            &tag.map_or(String::new(), |t| format!("isbl-{t}")),
+            if self.reproducible {
+                Class::G
+            } else {
+                Class::D
+            },
+            self.quantity,
+            self.unit,
+            self.target,
+            self.ours,
+            self.tolerance,
+        )
+        .reference(&reference)
+        .variant(self.variant)
+        .note(self.note)
     }
 }
 
 fn failed(quantity: &str, why: String) -> Row {
-    Row {
-        source: "contact-isbl §9".into(),
-        quantity: quantity.into(),
-        unit: "-".into(),
-        target: f64::NAN,
-        ours: f64::NAN,
-        tolerance: Tolerance::Absolute(0.0),
-        reproducible: true,
-        variant: "-".into(),
-        note: why,
-    }
+    Row::new(
+        "",
+        Class::G,
+        quantity,
+        "-",
+        f64::NAN,
+        f64::NAN,
+        Tolerance::Absolute(0.0),
+    )
+    .variant("-")
+    .note(&why)
 }
 
 const VARIANT: &str = "ISBL, summit_offset none (d = h), junction-shear friction";
@@ -79,7 +106,7 @@ pub fn rows() -> Vec<Row> {
         _ => {
             return vec![failed(
                 "ISBL parameter sets",
-                "a §10 set did not validate".into(),
+                "a parameter set did not validate".into(),
             )]
         }
     };
@@ -89,6 +116,7 @@ pub fn rows() -> Vec<Row> {
     rows.extend(static_contact_force_rows(&sets));
     rows.extend(sphere_rows());
     rows.extend(reference_table_rows(&sets));
+    super::assign_ids("isbl", &mut rows);
     rows
 }
 
@@ -109,7 +137,7 @@ fn derived_rows(initial: &IsblModel) -> Vec<Row> {
         }
         .row(),
         R {
-            source: "contact-isbl §9 #3 [seed Ch. 2.1]",
+            source: "contact-isbl §9 #3 [dissertation Ch. 2.1]",
             quantity: "plasticity index ψ, Ch. 2 interface",
             unit: "1",
             target: 0.52,
@@ -148,7 +176,7 @@ fn initial_curve_rows(initial: &IsblModel) -> Vec<Row> {
     };
     vec![
         R {
-            source: "contact-isbl §9 #1a [seed Ch. 2.2, Fig. 2.11]",
+            source: "contact-isbl §9 #1a [dissertation Ch. 2.2, Fig. 2.11]",
             quantity: "P(h* = 3) per unit nominal area, initial set",
             unit: "Pa",
             target: 1.097e5,
@@ -160,7 +188,7 @@ fn initial_curve_rows(initial: &IsblModel) -> Vec<Row> {
         }
         .row(),
         R {
-            source: "contact-isbl §9 #1a [seed: 7.30 μN]",
+            source: "contact-isbl §9 #1a [dissertation: 7.30 μN]",
             quantity: "P(h* = 3) on A_n = 66.6 μm², initial set",
             unit: "μN",
             target: 7.30,
@@ -168,11 +196,17 @@ fn initial_curve_rows(initial: &IsblModel) -> Vec<Row> {
             tolerance: Tolerance::Relative(0.01),
             reproducible: true,
             variant: VARIANT,
-            note: "the figure's A_n is not stated; 62–68 μm² (Ch. 2 areas) give 6.8–7.5 μN",
+            note: "",
         }
-        .row(),
+        .row()
+        .class(Class::C)
+        .note(
+            "consistency check, not a reproduction: the figure's A_n is not stated and 66.6 μm² \
+             is the area back-solved from 7.30 μN with this P(3); 62–68 μm² (Ch. 2 areas) give \
+             6.8–7.5 μN",
+        ),
         R {
-            source: "contact-isbl §9 #1b [seed Ch. 2.2]",
+            source: "contact-isbl §9 #1b [dissertation Ch. 2.2]",
             quantity: "P(3)/P(2.5): \"7.30 μN is about 3 % of P at h* = 2.5\"",
             unit: "1",
             target: 0.03,
@@ -181,11 +215,11 @@ fn initial_curve_rows(initial: &IsblModel) -> Vec<Row> {
             reproducible: false,
             variant: VARIANT,
             note: "not reproducible: a Gaussian of σ gives 0.18; 3 % is reached at h* = 1.90 \
-                   (likely a misread axis in the seed)",
+                   (likely a misread axis in the dissertation)",
         }
         .row(),
         R {
-            source: "contact-isbl §9 #1c [seed: adhesion negligible for h* ≥ 6]",
+            source: "contact-isbl §9 #1c [dissertation: adhesion negligible for h* ≥ 6]",
             quantity: "F_s(6)/F_s(0), initial set (σ = 0.87 nm)",
             unit: "1",
             target: 0.008,
@@ -203,7 +237,7 @@ fn initial_curve_rows(initial: &IsblModel) -> Vec<Row> {
 fn adhesion_12nm_row(improved: &IsblModel) -> Row {
     match improved.at(1.16e-9) {
         Ok(p) => R {
-            source: "contact-isbl §9 #2c [seed Ch. 2.2.2]",
+            source: "contact-isbl §9 #2c [dissertation Ch. 2.2.2]",
             quantity: "adhesion at 12 nm actuation (h = 1.16 nm, A_n = 55 μm²)",
             unit: "mN",
             target: 0.98,
@@ -245,9 +279,9 @@ fn static_contact_force_rows(sets: &Sets) -> Vec<Row> {
             real_area_target: 0.36,
             mu_reproducible: false,
             note_mu:
-                "−14 %: the seed's μ lies inside the model's μ(h) range (1.65 at the mean clearance)",
+                "−14 %: the dissertation's μ lies inside the model's μ(h) range (1.65 at the mean clearance)",
             note_real_area:
-                "the seed's dynamic F_c (a linearised spring) is not P(h) at the mean separation",
+                "the dissertation's dynamic F_c (a linearised spring) is not P(h) at the mean separation",
         },
         ForcePoint {
             label: "11 nm, initial set (A_n = 62 μm², F_c ≈ 1 mN)",
@@ -269,7 +303,7 @@ fn static_contact_force_rows(sets: &Sets) -> Vec<Row> {
             Ok(p) => {
                 rows.push(
                     R {
-                        source: "contact-isbl §9 #2a/#2d [seed Ch. 2]",
+                        source: "contact-isbl §9 #2a/#2d [dissertation Ch. 2]",
                         quantity: &format!("μ = Q/P at P·A_n = F_c, {label}"),
                         unit: "1",
                         target: pt.mu_target,
@@ -283,7 +317,7 @@ fn static_contact_force_rows(sets: &Sets) -> Vec<Row> {
                 );
                 rows.push(
                     R {
-                        source: "contact-isbl §9 #2b/#2d [seed Ch. 2]",
+                        source: "contact-isbl §9 #2b/#2d [dissertation Ch. 2]",
                         quantity: &format!("real area at P·A_n = F_c, {label}"),
                         unit: "μm²",
                         target: pt.real_area_target,
@@ -328,7 +362,7 @@ fn sphere_rows() -> Vec<Row> {
         Err(e) => return vec![failed("Ch. 3.1 sphere", e.to_string())],
     };
     let mut rows = vec![R {
-        source: "contact-isbl §5 [seed Ch. 3.1]",
+        source: "contact-isbl §5 [dissertation Ch. 3.1]",
         quantity: "reduced modulus E*, DLC sphere on DLC",
         unit: "GPa",
         target: 95.5,
@@ -359,7 +393,7 @@ fn sphere_rows() -> Vec<Row> {
             Ok(a) => {
                 rows.push(
                     R {
-                        source: "contact-isbl §9 #4 [seed Ch. 3.1]",
+                        source: "contact-isbl §9 #4 [dissertation Ch. 3.1]",
                         quantity: &format!("sphere load at ω = {} nm", omega * 1e9),
                         unit: "μN",
                         target: pt.load_target,
@@ -370,15 +404,15 @@ fn sphere_rows() -> Vec<Row> {
                         note: if pt.load_reproducible {
                             ""
                         } else {
-                            "Hertz gives 1.29 μN; the seed's 1.5 μN is 14 % above \
-                             (likely rounding in the seed)"
+                            "Hertz gives 1.29 μN; the dissertation's 1.5 μN is 14 % above \
+                             (likely rounding in the dissertation)"
                         },
                     }
                     .row(),
                 );
                 rows.push(
                     R {
-                        source: "contact-isbl §9 #4 [seed Ch. 3.1]",
+                        source: "contact-isbl §9 #4 [dissertation Ch. 3.1]",
                         quantity: &format!("sphere static friction at ω = {} nm", omega * 1e9),
                         unit: "μN",
                         target: pt.friction_target,

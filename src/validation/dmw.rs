@@ -14,8 +14,8 @@ pub fn rows() -> Vec<Row> {
     let fs = 4e6;
     let mut rows = Vec::new();
     let rpm = 5425.0;
-    rows.push(Row::reproducible(
-        "signals §1 [derived from seed: 5 425 rpm]",
+    rows.push(Row::check(
+        "derived from the dissertation's 5 425 rpm",
         "revolution period",
         "ms",
         11.0599,
@@ -24,8 +24,8 @@ pub fn rows() -> Vec<Row> {
         "-",
         "",
     ));
-    rows.push(Row::reproducible(
-        "signals §1 [derived]",
+    rows.push(Row::check(
+        "derived in closed form",
         "samples per revolution at 4 MS/s",
         "1",
         44_239.6,
@@ -43,8 +43,8 @@ pub fn rows() -> Vec<Row> {
                 (10e3, -6.021, 0.0005),
                 (20e3, -0.0338, 0.00005),
             ] {
-                rows.push(Row::reproducible(
-                    "signals §3.6 [ref: scipy butter + sosfreqz]",
+                rows.push(Row::check(
+                    "independent reference: scipy butter + sosfreqz",
                     &format!("zero-phase HP response at {} kHz", f / 1e3),
                     "dB",
                     target,
@@ -54,8 +54,8 @@ pub fn rows() -> Vec<Row> {
                     "",
                 ));
             }
-            rows.push(Row::reproducible(
-                "signals §3.6 [derived]",
+            rows.push(Row::check(
+                "derived in closed form",
                 "gain of the 10.7 kHz line, zero-phase order 4",
                 "1",
                 0.632,
@@ -64,8 +64,8 @@ pub fn rows() -> Vec<Row> {
                 "zero_phase",
                 "",
             ));
-            rows.push(Row::reproducible(
-                "signals §3.6 [derived]",
+            rows.push(Row::check(
+                "derived in closed form",
                 "gain of the 10.7 kHz line, single-pass order 4",
                 "1",
                 0.795,
@@ -75,12 +75,12 @@ pub fn rows() -> Vec<Row> {
                 "",
             ));
         }
-        Err(e) => rows.push(failed("signals §3.6", "Butterworth design", &e.to_string())),
+        Err(e) => rows.push(failed("Butterworth design", &e.to_string())),
     }
     for (order, target) in [(2usize, 0.753), (1, 0.731)] {
         if let Ok(sos) = butterworth_sos(order, 10e3, fs, FilterKind::HighPass) {
-            rows.push(Row::reproducible(
-                "signals §3.6 [derived]",
+            rows.push(Row::check(
+                "derived in closed form",
                 &format!("gain of the 10.7 kHz line, single-pass order {order}"),
                 "1",
                 target,
@@ -92,8 +92,8 @@ pub fn rows() -> Vec<Row> {
         }
     }
     for (f, target) in [(10.7e3, 0.99998), (275e3, 0.98440), (500e3, 0.94806)] {
-        rows.push(Row::reproducible(
-            "signals §3.5 [ref]",
+        rows.push(Row::check(
+            "independent reference (docs/dmw.md)",
             &format!("trapezoid gain at {} kHz", f / 1e3),
             "1",
             target,
@@ -104,8 +104,8 @@ pub fn rows() -> Vec<Row> {
         ));
     }
     for (f, target) in [(10.7e3, 2.1e-10), (275e3, 9.0e-5), (500e3, 9.1e-4)] {
-        rows.push(Row::reproducible(
-            "signals §3.7 [ref]",
+        rows.push(Row::check(
+            "independent reference (docs/dmw.md)",
             &format!(
                 "cubic Hermite max error, unit tone at {} kHz, h = 0.25 µs",
                 f / 1e3
@@ -119,21 +119,21 @@ pub fn rows() -> Vec<Row> {
         ));
     }
     rows.extend(synthetic_chain_rows());
+    super::assign_ids("dmw", &mut rows);
     rows
 }
 
-fn failed(source: &str, quantity: &str, why: &str) -> Row {
-    Row {
-        source: source.into(),
-        quantity: quantity.into(),
-        unit: "-".into(),
-        target: f64::NAN,
-        ours: f64::NAN,
-        tolerance: Tolerance::Absolute(0.0),
-        reproducible: true,
-        variant: "-".into(),
-        note: why.into(),
-    }
+fn failed(quantity: &str, why: &str) -> Row {
+    Row::check(
+        "-",
+        quantity,
+        "-",
+        f64::NAN,
+        f64::NAN,
+        Tolerance::Absolute(0.0),
+        "-",
+        why,
+    )
 }
 
 /// Max |error| of Hermite interpolation of sin(2πft) with exact derivative, sampled at fs.
@@ -172,7 +172,7 @@ fn synthetic_chain_rows() -> Vec<Row> {
         let r = match process(&rec, &p) {
             Ok(r) => r,
             Err(e) => {
-                rows.push(failed("signals §3.3", "synthetic chain", &e.to_string()));
+                rows.push(failed("synthetic chain", &e.to_string()));
                 continue;
             }
         };
@@ -200,8 +200,8 @@ fn synthetic_chain_rows() -> Vec<Row> {
             }
             c.hypot(s)
         };
-        rows.push(Row::reproducible(
-            "signals §3.3 [ref]",
+        rows.push(Row::check(
+            "independent reference (docs/dmw.md)",
             &format!("synthetic chain relative RMS error ({mode})"),
             "1",
             err_target,
@@ -210,8 +210,8 @@ fn synthetic_chain_rows() -> Vec<Row> {
             &format!("{mode} averaging, filter_then_integrate"),
             note,
         ));
-        rows.push(Row::reproducible(
-            "signals §3.3 [ref]",
+        rows.push(Row::check(
+            "independent reference (docs/dmw.md)",
             &format!("275 kHz line recovered / true ({mode})"),
             "1",
             hf_target,
@@ -221,8 +221,8 @@ fn synthetic_chain_rows() -> Vec<Row> {
             note,
         ));
         if mode == AverageMode::Angular {
-            rows.push(Row::reproducible(
-                "signals §3.3 [ref]",
+            rows.push(Row::check(
+                "independent reference (docs/dmw.md)",
                 "synthetic DMW std",
                 "nm",
                 0.7323,
@@ -245,11 +245,11 @@ mod tests {
         for r in &rows {
             assert!(
                 r.pass(),
-                "{} {}: target {} ours {} ({})",
-                r.source,
+                "{} {}: target {} value {} ({})",
+                r.id,
                 r.quantity,
                 r.target,
-                r.ours,
+                r.value,
                 r.note
             );
         }

@@ -1,99 +1,463 @@
-//! `hdi validate`: every reproducible number of the specs and the dissertation, computed by
-//! hdi's own code now (nothing here is a stored result), against its target and tolerance.
-//!
-//! Each physics area contributes rows; a row says which model variant produced the number,
-//! whether the target is reproducible (class of the spec's validation tables) and, when it is
-//! not, why hdi's number differs.
+//! `hdi validate`: the published numbers hdi can be checked against, one typed row each
+//! (docs/validation.md). Every row carries an `id`, a class ([`Class`]: G, K, D, Q, or C for a
+//! consistency check), its target and tolerance (or, for Q rows, the ordering it asserts), hdi's
+//! value, the model variant and inputs that produced it, and its [`Origin`]: computed now by
+//! the library, or read from the pipeline's cache (a stage instance and its cache key) — the
+//! calibrated values of class-D rows, the DOE optimum and the 3-DOF stage outputs come from the
+//! cache when the pipeline has run.
 //!
 //! The harness sits above the physics it exercises: one file per area ([`AREAS`]), each calling
-//! the physics modules (and, for `calibration` and `optimisation`, the pipeline's current
-//! results); no physics module imports this one.
+//! the physics modules (and, for the pipeline areas, the pipeline's current results); no
+//! physics module imports this one.
 
 use crate::error::{Error, Result};
 use serde_json::{json, Value};
 use std::path::Path;
 
-/// How close `ours` must be to `target`.
+/// What kind of target a row checks (dissertation Chapter 2–4 numbers; docs/validation.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Class {
+    /// Geometry or closed form: only the dissertation's rounding can differ. Must pass.
+    G,
+    /// Kinematic results insensitive to the inputs the dissertation dropped. Must pass.
+    K,
+    /// Depends on dropped inputs (adhesion parameters, damping, DMW spectrum, stiffening):
+    /// reported before and after calibration, never fails the command.
+    D,
+    /// Qualitative: an ordering or trend, carried as data ([`Ordering`]).
+    Q,
+    /// Consistency check: hdi's own inputs re-derived (e.g. a value back-solved from a target
+    /// and checked against the same target). Not a reproduction; must hold.
+    C,
+}
+
+impl Class {
+    pub const ALL: [Class; 5] = [Class::G, Class::K, Class::D, Class::Q, Class::C];
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Class::G => "G",
+            Class::K => "K",
+            Class::D => "D",
+            Class::Q => "Q",
+            Class::C => "C",
+        }
+    }
+
+    /// `G`, `k`, … (case-insensitive).
+    pub fn parse(s: &str) -> Option<Class> {
+        Class::ALL
+            .into_iter()
+            .find(|c| c.label().eq_ignore_ascii_case(s.trim()))
+    }
+
+    /// Whether a failing row of this class fails the command when its class is selected only
+    /// implicitly (no `--class`): G, K and C. Q rows gate only when `--class` names Q; D rows
+    /// never gate.
+    pub fn gates_by_default(self) -> bool {
+        matches!(self, Class::G | Class::K | Class::C)
+    }
+}
+
+/// How close `value` must be to `target`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Tolerance {
-    /// |ours − target| ≤ tol·|target|.
+    /// |value − target| ≤ tol·|target|.
     Relative(f64),
-    /// |ours − target| ≤ tol.
+    /// |value − target| ≤ tol.
     Absolute(f64),
+    /// lo ≤ value ≤ hi (the target is the published value, shown for reference).
+    Range { lo: f64, hi: f64 },
+}
+
+impl Tolerance {
+    pub fn holds(&self, target: f64, value: f64) -> bool {
+        if !value.is_finite() {
+            return false;
+        }
+        match *self {
+            Tolerance::Relative(t) => {
+                target.is_finite() && (value - target).abs() <= t * target.abs()
+            }
+            Tolerance::Absolute(t) => target.is_finite() && (value - target).abs() <= t,
+            Tolerance::Range { lo, hi } => value >= lo && value <= hi,
+        }
+    }
+
+    pub fn to_json(&self) -> Value {
+        match *self {
+            Tolerance::Relative(t) => json!({"kind": "relative", "value": t}),
+            Tolerance::Absolute(t) => json!({"kind": "absolute", "value": t}),
+            Tolerance::Range { lo, hi } => json!({
+                "kind": "range",
+                "lo": if lo.is_finite() { json!(lo) } else { Value::Null },
+                "hi": if hi.is_finite() { json!(hi) } else { Value::Null },
+            }),
+        }
+    }
+
+    /// Short text form: `±1%`, `±0.2`, `[1, 1.6]`, `≥ 20`.
+    pub fn short(&self) -> String {
+        let s = |x: f64| {
+            if x != 0.0 && x.abs() < 1e-3 {
+                format!("{x:.0e}")
+            } else {
+                format!("{}", (x * 1e4).round() / 1e4)
+            }
+        };
+        match *self {
+            Tolerance::Relative(t) => format!("±{}%", s(t * 100.0)),
+            Tolerance::Absolute(t) => format!("±{}", s(t)),
+            Tolerance::Range { lo, hi } if !hi.is_finite() => format!("≥ {}", s(lo)),
+            Tolerance::Range { lo, hi } if !lo.is_finite() => format!("≤ {}", s(hi)),
+            Tolerance::Range { lo, hi } => format!("[{}, {}]", s(lo), s(hi)),
+        }
+    }
+}
+
+/// The relation a Q row asserts between its listed values.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Relation {
+    /// Strictly increasing in the listed order (`a < b < c`).
+    Ascending,
+    /// Every one of the first `split` values is at least `factor` times every other one
+    /// ("cases 1 and 3 ≫ cases 0 and 2").
+    Dominates { split: usize, factor: f64 },
+    /// All values within `tol` of each other (max − min ≤ tol).
+    Close { tol: f64 },
+    /// Every value is a true fact (1 = true, 0 = false).
+    AllTrue,
+}
+
+/// The ordering of a Q row: labelled values and the relation between them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Ordering {
+    pub items: Vec<(String, f64)>,
+    pub relation: Relation,
+}
+
+impl Ordering {
+    pub fn new(relation: Relation, items: &[(&str, f64)]) -> Ordering {
+        Ordering {
+            items: items.iter().map(|(l, v)| (l.to_string(), *v)).collect(),
+            relation,
+        }
+    }
+
+    /// Whether the relation holds (false with fewer than two values, except `AllTrue`, or any
+    /// non-finite value).
+    pub fn holds(&self) -> bool {
+        let v: Vec<f64> = self.items.iter().map(|(_, v)| *v).collect();
+        if v.is_empty() || v.iter().any(|x| !x.is_finite()) {
+            return false;
+        }
+        match self.relation {
+            Relation::Ascending => v.len() >= 2 && v.windows(2).all(|w| w[0] < w[1]),
+            Relation::Dominates { split, factor } => {
+                if split == 0 || split >= v.len() {
+                    return false;
+                }
+                let low = v[..split].iter().cloned().fold(f64::INFINITY, f64::min);
+                let high = v[split..].iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+                low >= factor * high
+            }
+            Relation::Close { tol } => {
+                let lo = v.iter().cloned().fold(f64::INFINITY, f64::min);
+                let hi = v.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+                v.len() >= 2 && hi - lo <= tol
+            }
+            Relation::AllTrue => v.iter().all(|x| *x != 0.0),
+        }
+    }
+
+    /// `case 2 1.59 < case 0 1.77 < …`
+    pub fn describe(&self) -> String {
+        let item = |(l, v): &(String, f64)| format!("{l} {}", sig(*v));
+        match self.relation {
+            Relation::Ascending => self.items.iter().map(item).collect::<Vec<_>>().join(" < "),
+            Relation::Dominates { split, factor } => format!(
+                "{} ≥ {factor}× {}",
+                self.items[..split.min(self.items.len())]
+                    .iter()
+                    .map(item)
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                self.items[split.min(self.items.len())..]
+                    .iter()
+                    .map(item)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            Relation::Close { tol } => format!(
+                "within {tol}: {}",
+                self.items.iter().map(item).collect::<Vec<_>>().join(", ")
+            ),
+            Relation::AllTrue => self
+                .items
+                .iter()
+                .map(|(l, v)| format!("{l}: {}", if *v != 0.0 { "yes" } else { "no" }))
+                .collect::<Vec<_>>()
+                .join("; "),
+        }
+    }
+
+    pub fn to_json(&self) -> Value {
+        let relation = match self.relation {
+            Relation::Ascending => json!({"kind": "ascending"}),
+            Relation::Dominates { split, factor } => {
+                json!({"kind": "dominates", "split": split, "factor": factor})
+            }
+            Relation::Close { tol } => json!({"kind": "close", "tol": tol}),
+            Relation::AllTrue => json!({"kind": "all_true"}),
+        };
+        json!({
+            "relation": relation,
+            "items": self.items.iter().map(|(l, v)| json!({
+                "label": l,
+                "value": if v.is_finite() { json!(v) } else { Value::Null },
+            })).collect::<Vec<_>>(),
+            "holds": self.holds(),
+        })
+    }
+}
+
+/// Four significant digits for the text forms.
+fn sig(x: f64) -> String {
+    if !x.is_finite() {
+        return "–".into();
+    }
+    let a = x.abs();
+    if x != 0.0 && !(1e-3..1e6).contains(&a) {
+        format!("{x:.3e}")
+    } else {
+        let digits = (3 - a.log10().floor().max(-3.0) as i32).clamp(0, 6) as usize;
+        format!("{x:.digits$}")
+    }
+}
+
+/// Where a row's number comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Origin {
+    /// Computed now by the library.
+    Computed,
+    /// Read from the pipeline's cache: the stage instance (`kind.name`) and its cache key.
+    Cache { instance: String, key: String },
+    /// Computed now from values read from the cache (e.g. a fit's knobs).
+    Recomputed { instance: String, key: String },
+}
+
+impl Origin {
+    pub fn to_json(&self) -> Value {
+        match self {
+            Origin::Computed => json!({"kind": "computed"}),
+            Origin::Cache { instance, key } => {
+                json!({"kind": "cache", "instance": instance, "key": key})
+            }
+            Origin::Recomputed { instance, key } => {
+                json!({"kind": "recomputed", "instance": instance, "key": key})
+            }
+        }
+    }
+
+    pub fn short(&self) -> String {
+        match self {
+            Origin::Computed => "computed".into(),
+            Origin::Cache { instance, .. } => format!("cache {instance}"),
+            Origin::Recomputed { instance, .. } => format!("recomputed from {instance}"),
+        }
+    }
+}
+
+/// The calibrated value of a class-D row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Calibrated {
+    pub value: f64,
+    /// The calibration (`[calibrate.NAME]`) whose knobs produced it, and the inputs.
+    pub inputs: String,
+    pub origin: Origin,
 }
 
 /// One validation target.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Row {
-    /// Where the target comes from (spec file and section or table row).
-    pub source: String,
+    /// Stable identifier: `dyn-16` (target #16 of the Chapter 2–4 table, sub-quantities
+    /// `dyn-16.solid`), `isbl-…`, `mtl-V13`, `dmw-…`, `cal-…`, `doe-…`.
+    pub id: String,
+    pub class: Class,
+    /// Where the published number is (dissertation section, table, figure), or which
+    /// independent reference it is.
+    pub reference: String,
     pub quantity: String,
     pub unit: String,
     pub target: f64,
-    pub ours: f64,
+    /// hdi's value (class D: with the spec-default, uncalibrated inputs).
+    pub value: f64,
     pub tolerance: Tolerance,
-    /// Reproducible targets must pass; others are reported with the reason in `note`.
-    pub reproducible: bool,
-    /// Which model variant produced `ours` (e.g. "zero_phase order 4").
+    /// Q rows: the ordering asserted (pass = it holds).
+    pub ordering: Option<Ordering>,
+    /// D rows: the value after calibration, when the pipeline's calibration has run.
+    pub calibrated: Option<Calibrated>,
+    /// Which model variant / switches produced the value.
     pub variant: String,
+    /// Which DMW, start state and calibration.
+    pub inputs: String,
+    pub origin: Origin,
     pub note: String,
 }
 
 impl Row {
-    /// A reproducible row (the usual case); set `reproducible: false` with struct update for
-    /// the others.
-    #[allow(clippy::too_many_arguments)] // a table row: positional reads like the table
-    pub fn reproducible(
-        source: &str,
+    /// A row with a numeric target; reference, variant, inputs and note are set with the
+    /// builder methods.
+    pub fn new(
+        id: &str,
+        class: Class,
         quantity: &str,
         unit: &str,
         target: f64,
-        ours: f64,
+        value: f64,
+        tolerance: Tolerance,
+    ) -> Row {
+        Row {
+            id: id.into(),
+            class,
+            reference: String::new(),
+            quantity: quantity.into(),
+            unit: unit.into(),
+            target,
+            value,
+            tolerance,
+            ordering: None,
+            calibrated: None,
+            variant: String::new(),
+            inputs: String::new(),
+            origin: Origin::Computed,
+            note: String::new(),
+        }
+    }
+
+    /// A class-Q row asserting `ordering`.
+    pub fn ordering(id: &str, quantity: &str, ordering: Ordering) -> Row {
+        Row {
+            ordering: Some(ordering),
+            ..Row::new(
+                id,
+                Class::Q,
+                quantity,
+                "1",
+                f64::NAN,
+                f64::NAN,
+                Tolerance::Absolute(0.0),
+            )
+        }
+    }
+
+    /// A closed-form / reference check (class G) without an id yet: the area assigns one
+    /// ([`assign_ids`]).
+    #[allow(clippy::too_many_arguments)] // a table row: positional reads like the table
+    pub fn check(
+        reference: &str,
+        quantity: &str,
+        unit: &str,
+        target: f64,
+        value: f64,
         tolerance: Tolerance,
         variant: &str,
         note: &str,
     ) -> Row {
-        Row {
-            source: source.into(),
-            quantity: quantity.into(),
-            unit: unit.into(),
-            target,
-            ours,
-            tolerance,
-            reproducible: true,
-            variant: variant.into(),
-            note: note.into(),
+        Row::new("", Class::G, quantity, unit, target, value, tolerance)
+            .reference(reference)
+            .variant(variant)
+            .note(note)
+    }
+
+    pub fn reference(mut self, s: &str) -> Row {
+        self.reference = s.into();
+        self
+    }
+    pub fn variant(mut self, s: &str) -> Row {
+        self.variant = s.into();
+        self
+    }
+    pub fn inputs(mut self, s: &str) -> Row {
+        self.inputs = s.into();
+        self
+    }
+    pub fn note(mut self, s: &str) -> Row {
+        self.note = s.into();
+        self
+    }
+    pub fn origin(mut self, o: Origin) -> Row {
+        self.origin = o;
+        self
+    }
+    pub fn class(mut self, c: Class) -> Row {
+        self.class = c;
+        self
+    }
+    pub fn calibrated(mut self, c: Option<Calibrated>) -> Row {
+        self.calibrated = c;
+        self
+    }
+
+    /// Q rows: the ordering holds; others: the value is within the tolerance of the target.
+    pub fn pass(&self) -> bool {
+        match &self.ordering {
+            Some(o) => o.holds(),
+            None => self.tolerance.holds(self.target, self.value),
         }
     }
 
-    pub fn pass(&self) -> bool {
-        if !(self.ours.is_finite() && self.target.is_finite()) {
-            return false;
-        }
-        let d = (self.ours - self.target).abs();
-        match self.tolerance {
-            Tolerance::Relative(t) => d <= t * self.target.abs(),
-            Tolerance::Absolute(t) => d <= t,
-        }
+    /// The calibrated value within the tolerance (D rows), `None` without one.
+    pub fn calibrated_pass(&self) -> Option<bool> {
+        self.calibrated
+            .as_ref()
+            .map(|c| self.tolerance.holds(self.target, c.value))
     }
 
     pub fn to_json(&self) -> Value {
-        let (kind, tol) = match self.tolerance {
-            Tolerance::Relative(t) => ("relative", t),
-            Tolerance::Absolute(t) => ("absolute", t),
-        };
+        let num = |x: f64| if x.is_finite() { json!(x) } else { Value::Null };
         json!({
-            "source": self.source,
+            "id": self.id,
+            "class": self.class.label(),
+            "reference": self.reference,
             "quantity": self.quantity,
             "unit": self.unit,
-            "target": self.target,
-            "ours": if self.ours.is_finite() { json!(self.ours) } else { Value::Null },
-            "tolerance": {"kind": kind, "value": tol},
-            "reproducible": self.reproducible,
+            "target": num(self.target),
+            "value": num(self.value),
+            "tolerance": self.tolerance.to_json(),
+            "ordering": self.ordering.as_ref().map(Ordering::to_json),
             "pass": self.pass(),
+            "calibrated": self.calibrated.as_ref().map(|c| json!({
+                "value": num(c.value),
+                "pass": self.tolerance.holds(self.target, c.value),
+                "inputs": c.inputs,
+                "origin": c.origin.to_json(),
+            })),
             "variant": self.variant,
+            "inputs": self.inputs,
+            "origin": self.origin.to_json(),
             "note": self.note,
         })
+    }
+}
+
+/// Give every row without an id `prefix-1`, `prefix-2`, … in order, and make ids unique
+/// within `rows` by suffixing repeats (`isbl-2a`, `isbl-2a.2`).
+pub fn assign_ids(prefix: &str, rows: &mut [Row]) {
+    let mut k = 0;
+    for r in rows.iter_mut() {
+        if r.id.is_empty() {
+            k += 1;
+            r.id = format!("{prefix}-{k}");
+        }
+    }
+    let mut seen: std::collections::HashMap<String, usize> = Default::default();
+    for r in rows.iter_mut() {
+        let n = seen.entry(r.id.clone()).or_insert(0);
+        *n += 1;
+        if *n > 1 {
+            r.id = format!("{}.{}", r.id, n);
+        }
     }
 }
 
@@ -103,6 +467,7 @@ pub mod dmw;
 pub mod dynamics;
 pub mod mtl;
 pub mod optimisation;
+pub mod pipeline;
 pub mod three_dof;
 
 /// Where an area's rows come from.
@@ -110,6 +475,9 @@ pub mod three_dof;
 pub enum Source {
     /// Computed from the code alone.
     Code(fn() -> Vec<Row>),
+    /// Computed from the code, with values read from the pipeline in `pipeline.toml` where it
+    /// has run (calibrated values, 3-DOF stage outputs); the computed rows do not need it.
+    CodeAndCache(fn(Option<&Path>) -> Vec<Row>),
     /// Read from the current results of the pipeline in `pipeline.toml` (re-evaluated now).
     Pipeline(fn(&Path) -> Result<Vec<Row>>),
 }
@@ -129,6 +497,13 @@ impl Area {
         }
     }
 
+    const fn mixed(name: &'static str, rows: fn(Option<&Path>) -> Vec<Row>) -> Area {
+        Area {
+            name,
+            source: Source::CodeAndCache(rows),
+        }
+    }
+
     const fn pipeline(name: &'static str, rows: fn(&Path) -> Result<Vec<Row>>) -> Area {
         Area {
             name,
@@ -145,6 +520,7 @@ impl Area {
     pub fn rows(&self, config: &Path) -> Result<Vec<Row>> {
         match self.source {
             Source::Code(rows) => Ok(rows()),
+            Source::CodeAndCache(rows) => Ok(rows(config.exists().then_some(config))),
             Source::Pipeline(rows) => rows(config),
         }
     }
@@ -156,8 +532,8 @@ pub const AREAS: &[Area] = &[
     Area::code("dmw", dmw::rows),
     Area::code("contact", contact::rows),
     Area::code("mtl", mtl::rows),
-    Area::code("dynamics", dynamics::rows),
-    Area::code("three_dof", three_dof::rows),
+    Area::mixed("dynamics", dynamics::rows),
+    Area::mixed("three_dof", three_dof::rows),
     Area::pipeline("calibration", calibration::rows),
     Area::pipeline("optimisation", optimisation::rows),
 ];
@@ -175,31 +551,53 @@ pub fn rows(name: &str, config: &Path) -> Result<Vec<Row>> {
     }
 }
 
-/// Rows whose target is reproducible but which fail.
-pub fn failures(areas: &[(&'static str, Vec<Row>)]) -> usize {
-    areas
-        .iter()
-        .flat_map(|(_, rows)| rows)
-        .filter(|r| r.reproducible && !r.pass())
-        .count()
+/// The ids of the 38 targets of the Chapter 2–4 table (dissertation §2.1–§2.3, §4, App. B)
+/// that area `dynamics` and `three_dof` answer: `dyn-1` … `dyn-38`.
+pub fn target_ids() -> Vec<String> {
+    (1..=38).map(|n| format!("dyn-{n}")).collect()
+}
+
+/// Whether `id` answers target `base` (`dyn-16` is answered by `dyn-16` and `dyn-16.solid`).
+pub fn answers(id: &str, base: &str) -> bool {
+    id == base
+        || id
+            .strip_prefix(base)
+            .is_some_and(|rest| rest.starts_with('.'))
+}
+
+/// The rows that fail the command: a failing row of a gating class. `selected` is the
+/// `--class` list (empty: none given). G, K and C always gate; Q gates only when `selected`
+/// names it; D never gates.
+pub fn gate<'a>(rows: impl IntoIterator<Item = &'a Row>, selected: &[Class]) -> Vec<&'a Row> {
+    rows.into_iter()
+        .filter(|r| match r.class {
+            Class::D => false,
+            Class::Q => selected.contains(&Class::Q),
+            c => c.gates_by_default(),
+        })
+        .filter(|r| !r.pass())
+        .collect()
+}
+
+/// Rows and passes per class, in [`Class::ALL`] order (classes without rows left out).
+pub fn class_counts<'a>(rows: impl IntoIterator<Item = &'a Row>) -> Vec<(Class, usize, usize)> {
+    let rows: Vec<&Row> = rows.into_iter().collect();
+    Class::ALL
+        .into_iter()
+        .map(|c| {
+            let of: Vec<&&Row> = rows.iter().filter(|r| r.class == c).collect();
+            (c, of.len(), of.iter().filter(|r| r.pass()).count())
+        })
+        .filter(|(_, n, _)| *n > 0)
+        .collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn row(target: f64, ours: f64, tol: Tolerance) -> Row {
-        Row {
-            source: "s".into(),
-            quantity: "q".into(),
-            unit: "1".into(),
-            target,
-            ours,
-            tolerance: tol,
-            reproducible: true,
-            variant: "v".into(),
-            note: String::new(),
-        }
+    fn row(target: f64, value: f64, tol: Tolerance) -> Row {
+        Row::new("x-1", Class::G, "q", "1", target, value, tol)
     }
 
     #[test]
@@ -208,5 +606,135 @@ mod tests {
         assert!(!row(1.0, 1.011, Tolerance::Relative(0.01)).pass());
         assert!(row(-2.0, -2.05, Tolerance::Absolute(0.1)).pass());
         assert!(!row(1.0, f64::NAN, Tolerance::Absolute(1.0)).pass());
+        let r = Tolerance::Range { lo: 1.0, hi: 1.6 };
+        assert!(row(1.2, 1.6, r).pass() && !row(1.2, 1.61, r).pass() && !row(1.2, 0.99, r).pass());
+        let above = Tolerance::Range {
+            lo: 20.0,
+            hi: f64::INFINITY,
+        };
+        assert!(row(f64::NAN, 1e6, above).pass() && !row(f64::NAN, 19.9, above).pass());
+    }
+
+    #[test]
+    fn orderings() {
+        // Table 4.4's steady-contact order 2 < 0 < 1 < 3 with the published BVs holds…
+        let table = |v: [f64; 4]| {
+            Ordering::new(
+                Relation::Ascending,
+                &[
+                    ("case 2", v[2]),
+                    ("case 0", v[0]),
+                    ("case 1", v[1]),
+                    ("case 3", v[3]),
+                ],
+            )
+        };
+        assert!(table([5.7, 19.4, 1.7, 23.6]).holds());
+        // …and fails when one pair is swapped, or on a tie, or on a missing value.
+        assert!(!table([5.7, 19.4, 6.0, 23.6]).holds());
+        assert!(!table([5.7, 23.6, 1.7, 23.6]).holds());
+        assert!(!table([5.7, f64::NAN, 1.7, 23.6]).holds());
+        // "cases 1 and 3 ≫ cases 0 and 2" with a factor 3: 623.9, 900 vs 61.7, 61.8.
+        let dom = |v: [f64; 4]| {
+            Ordering::new(
+                Relation::Dominates {
+                    split: 2,
+                    factor: 3.0,
+                },
+                &[
+                    ("case 1", v[1]),
+                    ("case 3", v[3]),
+                    ("case 0", v[0]),
+                    ("case 2", v[2]),
+                ],
+            )
+        };
+        assert!(dom([61.7, 623.9, 61.8, 900.0]).holds());
+        assert!(!dom([7.5, 8.6, 6.7, 6.2]).holds());
+        assert!(!Ordering::new(
+            Relation::Dominates {
+                split: 0,
+                factor: 1.0
+            },
+            &[("a", 1.0)]
+        )
+        .holds());
+        let close = Ordering::new(
+            Relation::Close { tol: 0.1 },
+            &[("isbl", 7.79), ("mtl", 7.85)],
+        );
+        assert!(close.holds());
+        assert!(!Ordering::new(Relation::Close { tol: 0.05 }, &[("a", 7.79), ("b", 7.85)]).holds());
+        assert!(Ordering::new(Relation::AllTrue, &[("a", 1.0), ("b", 1.0)]).holds());
+        assert!(!Ordering::new(Relation::AllTrue, &[("a", 1.0), ("b", 0.0)]).holds());
+        // A Q row passes exactly when its ordering holds.
+        assert!(!Row::ordering("dyn-35", "q", table([5.7, 19.4, 6.0, 23.6])).pass());
+        assert!(Row::ordering("dyn-35", "q", table([5.7, 19.4, 1.7, 23.6])).pass());
+    }
+
+    #[test]
+    fn the_gate_fails_on_g_k_c_and_selected_q_only() {
+        let bad = |c: Class| {
+            let mut r = row(1.0, 2.0, Tolerance::Absolute(0.1)).class(c);
+            r.id = format!("bad-{}", c.label());
+            r
+        };
+        let good = row(1.0, 1.0, Tolerance::Absolute(0.1));
+        // A failing G row fails the gate (with or without --class)…
+        assert_eq!(
+            gate([&bad(Class::G), &good], &[Class::G, Class::K]).len(),
+            1
+        );
+        assert_eq!(gate([&bad(Class::K)], &[]).len(), 1);
+        assert_eq!(gate([&bad(Class::C)], &[]).len(), 1);
+        // …a failing D row never does…
+        assert!(gate([&bad(Class::D)], &[Class::D]).is_empty());
+        // …and a failing Q row only when Q is selected.
+        let q = Row::ordering(
+            "q-1",
+            "q",
+            Ordering::new(Relation::Ascending, &[("a", 2.0), ("b", 1.0)]),
+        );
+        assert!(gate([&q], &[]).is_empty());
+        assert_eq!(gate([&q], &[Class::Q]).len(), 1);
+        assert!(gate([&good], &[]).is_empty());
+    }
+
+    /// Static registry check (the full run takes ~20 s in release, too slow for a debug test;
+    /// docs/validation.md records its per-class counts): every target `dyn-1` … `dyn-38` has a
+    /// row builder in the 2-DOF or 3-DOF area, by id or as `dyn-N.sub`.
+    #[test]
+    fn every_target_has_a_row_builder() {
+        let src = [include_str!("dynamics.rs"), include_str!("three_dof.rs")].concat();
+        for id in target_ids() {
+            assert!(
+                src.contains(&format!("\"{id}\"")) || src.contains(&format!("\"{id}.")),
+                "no row for {id}"
+            );
+        }
+    }
+
+    #[test]
+    fn ids_and_counts() {
+        let mut rows = vec![
+            row(1.0, 1.0, Tolerance::Absolute(0.1)),
+            row(1.0, 3.0, Tolerance::Absolute(0.1)).class(Class::D),
+            row(1.0, 1.0, Tolerance::Absolute(0.1)),
+        ];
+        rows[0].id = String::new();
+        rows[1].id = "isbl-2a".into();
+        rows[2].id = "isbl-2a".into();
+        assign_ids("dmw", &mut rows);
+        assert_eq!(rows[0].id, "dmw-1");
+        assert_eq!(rows[2].id, "isbl-2a.2");
+        assert_eq!(
+            class_counts(&rows),
+            vec![(Class::G, 2, 2), (Class::D, 1, 0)]
+        );
+        assert!(answers("dyn-16.solid", "dyn-16") && answers("dyn-16", "dyn-16"));
+        assert!(!answers("dyn-160", "dyn-16") && !answers("dyn-1", "dyn-16"));
+        assert_eq!(Class::parse(" k"), Some(Class::K));
+        assert_eq!(Class::parse("X"), None);
+        assert_eq!(target_ids().len(), 38);
     }
 }

@@ -1,8 +1,7 @@
 //! `hdi validate` area `mtl`: the molecularly-thin-lubricant model of dissertation chapter 3
 //! (docs/contact.md), computed now with the lubricant model the contact stage uses.
 
-use super::contact::R;
-use super::{Row, Tolerance};
+use super::{Class, Row, Tolerance};
 use crate::contact::mtl::extrapolation::{self, FwmExperiment, HighShearFit};
 use crate::contact::mtl::rough::{NoSolid, RoughMtl};
 use crate::contact::mtl::sphere_on_flat::{
@@ -11,7 +10,9 @@ use crate::contact::mtl::sphere_on_flat::{
 
 const VARIANT: &str = "MTL, FWM extrapolation (Fukuzawa Z03 fibre), Table 3.2 film";
 
-/// One §6 row with the area's source and variant.
+/// One row of the MTL table (docs/contact.md): the id is `mtl-V<n>` from the quantity's
+/// leading row tag; reproducible rows are class G (closed forms of Chapter 3), the others
+/// class D with the reason in the note.
 fn row(
     quantity: &str,
     unit: &str,
@@ -21,18 +22,23 @@ fn row(
     reproducible: bool,
     note: &str,
 ) -> Row {
-    R {
-        source: "contact-mtl §6",
+    let id = quantity
+        .split_whitespace()
+        .next()
+        .filter(|t| t.starts_with('V'))
+        .map_or(String::new(), |t| format!("mtl-{t}"));
+    Row::new(
+        &id,
+        if reproducible { Class::G } else { Class::D },
         quantity,
         unit,
         target,
         ours,
         tolerance,
-        reproducible,
-        variant: VARIANT,
-        note,
-    }
-    .row()
+    )
+    .reference("dissertation Ch. 3 (MTL model), Table 3.2")
+    .variant(VARIANT)
+    .note(note)
 }
 
 /// A model value, or NaN when the model refuses the inputs (the row then fails).
@@ -59,6 +65,7 @@ pub fn rows() -> Vec<Row> {
     rows.extend(rough_film_rows(&mtl));
     rows.extend(slip_rows(&mtl));
     rows.extend(fig_3_8_rows());
+    super::assign_ids("mtl", &mut rows);
     rows
 }
 
@@ -143,7 +150,7 @@ fn solid_sphere_rows() -> Vec<Row> {
             crate::contact::mtl::hertz_normal_force(e_star, probe_radius, omega) * 1e6,
             Tolerance::Relative(0.2),
             true,
-            "partial: P only; the seed's Q_solid,min (120 / 1120 µN) comes from an unidentified \
+            "partial: P only; the dissertation's Q_solid,min (120 / 1120 µN) comes from an unidentified \
              model [72] and is not compared",
         ));
     }
@@ -255,7 +262,7 @@ fn rough_film_rows(mtl: &RoughMtl) -> Vec<Row> {
             Tolerance::Relative(0.05),
             false,
             "not reproduced: 3.81 mN at 3σ+2κ, 7.61 mN at 3σ (integral of the stiffness); the \
-             seed's 5.54 mN matches neither reading (contact-mtl.md §6)",
+             dissertation's 5.54 mN matches neither reading",
         ),
     ]
 }
@@ -319,7 +326,7 @@ fn slip_rows(mtl: &RoughMtl) -> Vec<Row> {
             ratio_orders(h),
             Tolerance::Absolute(0.5),
             true,
-            "target is the seed's \"4–5 orders of magnitude\"",
+            "target is the dissertation's \"4–5 orders of magnitude\"",
         ));
     }
     rows
@@ -352,7 +359,7 @@ fn fig_3_8_rows() -> Vec<Row> {
                 .unwrap_or(f64::NAN),
             Tolerance::Relative(1e-4),
             true,
-            "seed: \"about two orders above P0\" (ours 51× P0)",
+            "dissertation: \"about two orders above P0\" (ours 51× P0)",
         ),
         row(
             "V21 partially submerged shear force (3.30) / Couette (3.31), Fig. 3.8 sphere",
@@ -361,7 +368,7 @@ fn fig_3_8_rows() -> Vec<Row> {
             partial_over_couette,
             Tolerance::Relative(0.5),
             false,
-            "contradicted: the seed says \"two orders of magnitude\"; (3.30) integrates (3.29) \
+            "contradicted: the dissertation says \"two orders of magnitude\"; (3.30) integrates (3.29) \
              exactly (quadrature 1e-9) and gives 0.405 (→ 0.400 for t ≪ R); pinned in \
              contact::mtl::tests",
         ),

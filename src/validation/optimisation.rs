@@ -1,7 +1,7 @@
 //! `hdi validate` area `optimisation`: the DOE optima of the pipeline in the working directory
 //! beside the dissertation's (§2.3.2).
 
-use super::{Row, Tolerance};
+use super::{Class, Origin, Row, Tolerance};
 use crate::core::cache::Store;
 use crate::dynamics::UM;
 use crate::engine::{plan, read_result, State};
@@ -23,23 +23,27 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
         }
         let planned = plan.planned.iter().find(|p| &p.name == name);
         let Some(entry) = planned.filter(|p| p.state == State::Fresh) else {
-            rows.push(Row {
-                source: format!("[doe.{name}]"),
-                quantity: "optimised a_TFC".into(),
-                unit: "um".into(),
-                target: 4.86,
-                ours: f64::NAN,
-                tolerance: Tolerance::Absolute(0.5),
-                reproducible: false,
-                variant: "not run".into(),
-                note: format!("no current result: run `hdi run --only {name}` first"),
-            });
+            rows.push(
+                Row::new(
+                    &format!("doe-{name}"),
+                    Class::D,
+                    "optimised a_TFC",
+                    "um",
+                    4.86,
+                    f64::NAN,
+                    Tolerance::Absolute(0.5),
+                )
+                .variant("not run")
+                .note(&format!(
+                    "no current result: run `hdi run --only {name}` first"
+                )),
+            );
             continue;
         };
         let result = read_result(&store.entry_dir(&entry.kind, &entry.key))?;
         let o = &result["optimum"];
         let variant = format!(
-            "ξ = (c̄/FH_nom)(V/100) [assumed, §9]; SA on the {} objective, {} evaluations ({}), seed {}",
+            "ξ = (c̄/FH_nom)(V/100) [assumed]; SA on the {} objective, {} evaluations ({}), seed {}",
             o["objective"].as_str().unwrap_or("?").to_lowercase(),
             o["evaluations"],
             o["stop"].as_str().unwrap_or("?"),
@@ -53,17 +57,28 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
             o["most_sensitive"].as_str().unwrap_or("?")
         );
         for (q, key, target) in [("a_TFC", "a_m", 4.86), ("x_TFC", "x_m", 6.35)] {
-            rows.push(Row {
-                source: format!("dynamics.md §9 / seed §2.3.2 [doe.{name}]"),
-                quantity: format!("optimised {q}"),
-                unit: "um".into(),
-                target,
-                ours: o[key].as_f64().unwrap_or(f64::NAN) / UM,
-                tolerance: Tolerance::Absolute(0.5),
-                reproducible: false,
-                variant: variant.clone(),
-                note: note.clone(),
-            });
+            rows.push(
+                Row::new(
+                    &format!("doe-{name}.{q}"),
+                    Class::D,
+                    &format!("optimised {q}"),
+                    "um",
+                    target,
+                    o[key].as_f64().unwrap_or(f64::NAN) / UM,
+                    Tolerance::Absolute(0.5),
+                )
+                .reference("dissertation §2.3.2")
+                .variant(&variant)
+                .inputs(&format!(
+                    "the DOE's base sweep `{}` (shipped DMW record), no calibration",
+                    cfg.simulate
+                ))
+                .origin(Origin::Cache {
+                    instance: format!("doe.{name}"),
+                    key: entry.key.clone(),
+                })
+                .note(&note),
+            );
         }
     }
     Ok(rows)
