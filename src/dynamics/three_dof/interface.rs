@@ -52,10 +52,11 @@ impl FeatureForces {
     }
 }
 
-/// The ISBL table times an area, borrowed (the MTL law's solid for one feature).
-struct AreaIsbl<'a> {
-    lookup: &'a IsblLookup,
-    area: f64,
+/// The ISBL table times an area, borrowed (the MTL law's solid for one feature, or for the
+/// 2-DOF bulge with `lubricant = mtl`).
+pub(crate) struct AreaIsbl<'a> {
+    pub(crate) lookup: &'a IsblLookup,
+    pub(crate) area: f64,
 }
 
 impl SolidContact for AreaIsbl<'_> {
@@ -170,6 +171,9 @@ impl<'a> FeatureInterface<'a> {
                     area * at.stiffness * (threshold - spacing)
                 }
                 ContactForceForm::StaticCurve => area * at.pressure,
+                ContactForceForm::IntegratedStiffness => {
+                    area * (at.pressure - self.isbl.at(threshold).map_err(numerical)?.pressure)
+                }
             };
             let force = elastic - self.contact_damping(area) * spacing_rate;
             if force > 0.0 {
