@@ -5,6 +5,7 @@
 //! ```text
 //! cargo run --release --example model_form -- [contact_force=interference_tangent|static_curve|integrated_stiffness]
 //!     [lubricant=none|mtl] [summit_offset=none|mccool] [surface_energy=constant|variable]
+//!     [dmw_seed=1]
 //! ```
 //!
 //! Every case starts from its static equilibrium (`init = "static"`) and sees the validation's
@@ -137,6 +138,7 @@ fn main() {
     };
     let mut ip = IsblParams::improved_2dof();
     let mut label = Vec::new();
+    let mut seed = 1;
     for arg in std::env::args().skip(1) {
         let (k, v) = arg.split_once('=').expect("key=value");
         label.push(arg.clone());
@@ -156,13 +158,14 @@ fn main() {
             ("summit_offset", "mccool") => ip.summit_offset = SummitOffset::McCool,
             ("surface_energy", "constant") => {}
             ("surface_energy", "variable") => ip.surface_energy = SurfaceEnergy::seed_variable(),
+            ("dmw_seed", s) => seed = s.parse().expect("dmw_seed=N"),
             _ => panic!("unknown {arg}"),
         }
     }
     println!("variant: {}", label.join(" "));
     let isbl = IsblLookup::build_standard(IsblModel::new(ip).expect("ISBL")).expect("table");
     let model = improved_2dof();
-    let dmw = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1).expect("DMW");
+    let dmw = synthetic_dmw(2.2e-3, 4e6, 1e-9, seed).expect("DMW");
 
     println!("structural misses (no DMW, static init):");
     let none = |h: f64| run(&model, &isbl, options, h * NM, None);

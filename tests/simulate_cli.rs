@@ -128,6 +128,11 @@ fn bad_simulate_keys_name_the_key_and_line() {
             "init = \"static\"\nintegrater = \"dopri5\"",
             "integrater",
         ),
+        (
+            "init = \"static\"",
+            "init = \"static\"\nlubricant = \"grease\"",
+            "simulate.improved_sweep.lubricant",
+        ),
     ] {
         let text = p.config();
         assert!(text.contains(from), "{from}");

@@ -882,3 +882,6 @@ pub(crate) fn integration_error(e: OdeError<DynamicsError>) -> DynamicsError {
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod model_form_tests;

@@ -785,4 +785,32 @@ mod tests {
         let mut far = params("contact = \"c\"\ngeometry = { bulge = \"t\" }\npowers = [\"10 W\"]");
         assert!(far.apply_bulge(&fitted, "t").is_err());
     }
+
+    #[test]
+    fn model_form_switches_parse_and_refuse_unknown_values() {
+        let base = "contact = \"c\"\n";
+        let p = params(&format!(
+            "{base}lubricant = \"mtl\"\ncontact_force = \"integrated_stiffness\""
+        ));
+        assert_eq!(p.options.lubricant, LubricantForce::Mtl);
+        assert_eq!(
+            p.options.contact_force,
+            ContactForceForm::IntegratedStiffness
+        );
+        assert_eq!(params(base).options.lubricant, LubricantForce::None);
+        let err = |text: &str| {
+            let cfg: SimulateConfig = toml::from_str(text).unwrap();
+            SimulateParams::check(&cfg).unwrap_err()
+        };
+        let e = err(&format!("{base}lubricant = \"grease\""));
+        assert_eq!(e.key, "lubricant");
+        assert!(e.message.contains("grease") && e.message.contains("mtl"));
+        let e = err(&format!(
+            "{base}model = \"initial_2dof\"\nlubricant = \"mtl\""
+        ));
+        assert_eq!(e.key, "lubricant");
+        let e = err(&format!("{base}contact_force = \"secant\""));
+        assert_eq!(e.key, "contact_force");
+        assert!(e.message.contains("integrated_stiffness"));
+    }
 }
