@@ -504,4 +504,22 @@ mod tests {
             toml::from_str(&format!("{base}\ngeometry = \"optimised\"")).unwrap();
         assert_eq!(ThreeDofParams::check(&cfg).unwrap_err().key, "geometry");
     }
+
+    #[test]
+    fn contact_force_reading_parses_and_keys_only_when_not_the_default() {
+        let base = "contact = \"c\"\nscenario = \"shock\"\nduration = \"1.5 ms\"";
+        let plain = params(base);
+        assert_eq!(plain.contact_force, ContactForceForm::InterferenceTangent);
+        // The default leaves the instance key as it was (cached outputs stay valid).
+        assert!(plain.canonical().get("contact_force").is_none());
+        let soft = params(&format!("{base}\ncontact_force = \"integrated_stiffness\""));
+        assert_eq!(soft.contact_force, ContactForceForm::IntegratedStiffness);
+        assert_eq!(soft.canonical()["contact_force"], "IntegratedStiffness");
+        assert_ne!(soft.canonical(), plain.canonical());
+        let cfg: ThreeDofConfig =
+            toml::from_str(&format!("{base}\ncontact_force = \"hertz\"")).unwrap();
+        let e = ThreeDofParams::check(&cfg).unwrap_err();
+        assert_eq!(e.key, "contact_force");
+        assert!(e.message.contains("hertz") && e.message.contains("static_curve"));
+    }
 }
