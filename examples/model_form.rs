@@ -5,7 +5,7 @@
 //! ```text
 //! cargo run --release --example model_form -- [contact_force=interference_tangent|static_curve|integrated_stiffness]
 //!     [lubricant=none|mtl] [summit_offset=none|mccool] [surface_energy=constant|variable]
-//!     [dmw_seed=1]
+//!     [dmw_seed=1] [model=initial_2dof]
 //! ```
 //!
 //! Every case starts from its static equilibrium (`init = "static"`) and sees the validation's
@@ -16,7 +16,7 @@ use hdi::contact::isbl::{IsblModel, IsblParams, SummitOffset, SurfaceEnergy};
 use hdi::contact::lookup::IsblLookup;
 use hdi::dmw::excitation_tracks::{synthetic_dmw, Excitation};
 use hdi::dynamics::metrics::{slopes, CaseParams, SlopeParams, SweepPoint};
-use hdi::dynamics::params::{improved_2dof, optimised_bulge, Model2Dof};
+use hdi::dynamics::params::{improved_2dof, initial_2dof, optimised_bulge, Model2Dof};
 use hdi::dynamics::touchdown::{find_touchdown, TouchdownSearch};
 use hdi::dynamics::two_dof::{ContactForceForm, DmwInput, LubricantForce, SimOptions, TwoDofCase};
 use rayon::prelude::*;
@@ -139,6 +139,7 @@ fn main() {
     let mut ip = IsblParams::improved_2dof();
     let mut label = Vec::new();
     let mut seed = 1;
+    let mut initial = false;
     for arg in std::env::args().skip(1) {
         let (k, v) = arg.split_once('=').expect("key=value");
         label.push(arg.clone());
@@ -159,10 +160,38 @@ fn main() {
             ("surface_energy", "constant") => {}
             ("surface_energy", "variable") => ip.surface_energy = SurfaceEnergy::seed_variable(),
             ("dmw_seed", s) => seed = s.parse().expect("dmw_seed=N"),
+            ("model", "initial_2dof") => initial = true,
             _ => panic!("unknown {arg}"),
         }
     }
     println!("variant: {}", label.join(" "));
+    if initial {
+        // §12.2 #9: the initial model's mean FHM at 4–7 nm (its own interface, 1.2σ criterion).
+        let mut ip0 = IsblParams::initial_2dof();
+        ip0.summit_offset = ip.summit_offset;
+        ip0.surface_energy = match ip.surface_energy {
+            SurfaceEnergy::Variable { .. } => ip.surface_energy,
+            SurfaceEnergy::Constant { .. } => ip0.surface_energy,
+        };
+        let isbl0 = IsblLookup::build_standard(IsblModel::new(ip0).expect("ISBL")).expect("table");
+        let dmw = synthetic_dmw(2.2e-3, 4e6, 1e-9, seed).expect("DMW");
+        let model = initial_2dof();
+        let mut sum = 0.0;
+        for h in [4.0, 5.0, 6.0, 7.0] {
+            let m = run(&model, &isbl0, options, h * NM, Some(&dmw)).expect("case");
+            println!(
+                "  initial model {h} nm: c̄ {:.3} nm, FHM {:.2} %",
+                m.clearance / NM,
+                m.vibration
+            );
+            sum += m.vibration;
+        }
+        println!(
+            "  initial model mean FHM 4–7 nm: {:.2} % (published 12.5)",
+            sum / 4.0
+        );
+        return;
+    }
     let isbl = IsblLookup::build_standard(IsblModel::new(ip).expect("ISBL")).expect("table");
     let model = improved_2dof();
     let dmw = synthetic_dmw(2.2e-3, 4e6, 1e-9, seed).expect("DMW");
