@@ -153,6 +153,11 @@ fn bad_simulate_keys_name_the_key_and_line() {
             "init = \"nominal\"\nbranches = \"up\"",
             "simulate.improved_sweep.branches",
         ),
+        (
+            "init = \"static\"",
+            "init = \"static\"\nlubricant = \"grease\"",
+            "simulate.improved_sweep.lubricant",
+        ),
     ] {
         let text = p.config();
         assert!(text.contains(from), "{from}");

@@ -415,9 +415,13 @@ pub struct SimulateArgs {
     pub steady_start: Option<TimeSpan>,
     #[arg(long)]
     pub output_step: Option<TimeSpan>,
-    /// interference_tangent (default) or static_curve.
+    /// interference_tangent (default), static_curve or integrated_stiffness
+    /// (docs/model-form.md).
     #[arg(long)]
     pub contact_force: Option<String>,
+    /// Lubricant force: none (default) or mtl (Chapter 3's law; docs/model-form.md).
+    #[arg(long)]
+    pub lubricant: Option<String>,
     /// dopri5 (default) or rk5_fixed.
     #[arg(long)]
     pub integrator: Option<String>,

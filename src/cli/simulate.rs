@@ -30,6 +30,7 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         steady_start,
         output_step,
         contact_force,
+        lubricant,
         integrator,
         rtol,
         contact_max_step,

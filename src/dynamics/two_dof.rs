@@ -11,8 +11,10 @@ use super::air_bearing::{AirBearing2Dof, DmwAtSprings, HeavePitchState, AB_LOSS_
 use super::geometry::{ContactCriterion, Slider2DofGeometry};
 use super::metrics::{case_metrics, CaseMetrics, CaseParams, CaseSeries, ContactSeries};
 use super::params::{Model2Dof, ModelVariant};
+use super::three_dof::interface::AreaIsbl;
 use super::DynamicsError;
 use crate::contact::lookup::IsblLookup;
+use crate::contact::mtl::{FwmExperiment, LubricantCase, MtlInterface, RoughFilm, RoughMtl};
 use crate::numerics::ode::{integrate_capped, OdeError, OdeOptions, OdeStats, Sampling};
 use crate::signal::resample::HermiteTrack;
 use nalgebra::{Matrix2, Vector2};
@@ -25,6 +27,22 @@ pub enum ContactForceForm {
     InterferenceTangent,
     /// `F_c = A_n P(s) − c_c ṡ`.
     StaticCurve,
+    /// `F_c = A_n [P(s) − P(s_c)] − c_c ṡ = A_n ∫_s^{s_c} k_c(h) dh − c_c ṡ`: the force the
+    /// tangent stiffness of eq. 2.16 builds up over the interference, zero at the contact
+    /// threshold and continuous there (docs/model-form.md).
+    IntegratedStiffness,
+}
+
+/// The lubricant layer's force on the bulge (switch `lubricant`; docs/model-form.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LubricantForce {
+    /// Chapter 2's assumption: the lubricant is displaced and offers no resistance (§2.2.1).
+    #[default]
+    None,
+    /// Chapter 3's rough-surface MTL law (eqs. 3.55–3.60, reference lubricant of Table 4.4
+    /// case 0) acting while the bulge spacing is inside the film, `s < 3σ + t`, on the ISBL
+    /// solid scaled by the nominal area, as the 3-DOF's `contact_model = "mtl"` does (§4.1).
+    Mtl,
 }
 
 /// Time integration (docs/integrator.md).
@@ -61,6 +79,8 @@ pub struct SimOptions {
     /// Output sampling step [s] (0.25 µs = the DMW rate).
     pub output_step: f64,
     pub contact_force: ContactForceForm,
+    /// Lubricant bearing and shear force (default none, Chapter 2).
+    pub lubricant: LubricantForce,
     pub integrator: Integrator,
     /// The DMW under a point is the bulge's delayed by its distance along x over U (§6).
     pub transit_delay: bool,
@@ -85,6 +105,7 @@ impl Default for SimOptions {
             duration: 2e-3,
             output_step: 0.25e-6,
             contact_force: ContactForceForm::InterferenceTangent,
+            lubricant: LubricantForce::None,
             integrator: Integrator::recommended(),
             transit_delay: true,
             wrap_dmw: false,
@@ -179,7 +200,9 @@ pub struct InterfaceState {
     pub clearance: f64,
     /// Dynamic contact force `F_c ≥ 0` [N].
     pub contact_force: f64,
-    /// Friction `Q ≥ 0` [N] (acts along −X).
+    /// Lubricant bearing force `P_lub ≥ 0` [N] (0 unless `lubricant = mtl`).
+    pub lubricant_force: f64,
+    /// Friction `Q ≥ 0` [N], solid + lubricant (acts along −X).
     pub friction: f64,
     /// Adhesion `F_s ≥ 0` [N] (pulls the slider down).
     pub adhesion: f64,
@@ -218,6 +241,8 @@ pub struct CaseHistory {
     /// Flying height as the dissertation reports it (`s − T0` improved, `h = s` initial).
     pub flying_height: Vec<f64>,
     pub contact_force: Vec<f64>,
+    /// Lubricant bearing force (0 unless `lubricant = mtl`).
+    pub lubricant_force: Vec<f64>,
     pub friction: Vec<f64>,
     pub adhesion: Vec<f64>,
     pub real_area: Vec<f64>,
@@ -275,6 +300,10 @@ pub struct TwoDofCase<'a> {
     bonded_lubricant: f64,
     contact_threshold: f64,
     contact_damping: f64,
+    /// `A_n P(s_c)` [N]: the offset of the integrated-stiffness reading.
+    threshold_force: f64,
+    /// The MTL law on the area-scaled ISBL solid (`lubricant = mtl`).
+    lubricant: Option<MtlInterface<AreaIsbl<'a>>>,
     /// DMW time shift of the LE, TE (and the bulge, 0) and the record offset of t = 0 [s].
     delay_front: f64,
     delay_rear: f64,
@@ -334,6 +363,31 @@ impl<'a> TwoDofCase<'a> {
         let k_ref = reference.stiffness * nominal_area;
         let contact_damping =
             2.0 * model.interface.contact_damping_ratio * (k_ref * model.slider.mass).sqrt();
+        let threshold_force = nominal_area
+            * isbl
+                .at(contact_threshold)
+                .map_err(|e| DynamicsError::Numerical(e.to_string()))?
+                .pressure;
+        let lubricant = match o.lubricant {
+            LubricantForce::None => None,
+            LubricantForce::Mtl => {
+                if !matches!(criterion, ContactCriterion::ThreeSigma) {
+                    return Err(DynamicsError::Numerical(
+                        "lubricant = mtl needs the improved model's 3σ contact criterion (the \
+                         MTL law puts solid contact at 3σ, §3.2)"
+                            .into(),
+                    ));
+                }
+                Some(
+                    reference_mtl(sigma, ip.lubricant_thickness, model.disk_speed)?.with_solid(
+                        AreaIsbl {
+                            lookup: isbl,
+                            area: nominal_area,
+                        },
+                    ),
+                )
+            }
+        };
 
         let speed = model.disk_speed;
         let bulge_x = geometry.bulge_centre().x;
@@ -390,6 +444,8 @@ impl<'a> TwoDofCase<'a> {
             bonded_lubricant: model.interface.bonded_lubricant(),
             contact_threshold,
             contact_damping,
+            threshold_force,
+            lubricant,
             delay_front,
             delay_rear,
             bulge_x,
@@ -473,6 +529,9 @@ impl<'a> TwoDofCase<'a> {
                     area * at_spacing.stiffness * (self.contact_threshold - spacing)
                 }
                 ContactForceForm::StaticCurve => area * at_spacing.pressure,
+                ContactForceForm::IntegratedStiffness => {
+                    area * at_spacing.pressure - self.threshold_force
+                }
             };
             contact_force = elastic - self.contact_damping * spacing_rate;
             if contact_force < 0.0 {
@@ -489,11 +548,20 @@ impl<'a> TwoDofCase<'a> {
                 real_area = area * at.real_area_fraction;
             }
         }
+        let mut lubricant_force = 0.0;
+        if let Some(mtl) = &self.lubricant {
+            if spacing < mtl.model().lubricant_surface() {
+                let lub = mtl.lubricant(spacing);
+                lubricant_force = lub.normal.max(0.0);
+                friction += lub.friction.max(0.0);
+            }
+        }
         Ok(InterfaceState {
             spacing,
             spacing_rate,
             clearance,
             contact_force,
+            lubricant_force,
             friction,
             adhesion,
             real_area,
@@ -533,11 +601,10 @@ impl<'a> TwoDofCase<'a> {
             }
             Err(e) => return Err(e),
         };
-        // f_c = [F_c; r_x F_c + r_z Q], f_s = [−F_s; −r_x F_s] (eqs. 2.14–2.15, §1.1).
-        let f_interface = Vector2::new(
-            i.contact_force - i.adhesion,
-            i.lever_x * (i.contact_force - i.adhesion) + i.lever_z * i.friction,
-        );
+        // f_c = [F_c; r_x F_c + r_z Q], f_s = [−F_s; −r_x F_s] (eqs. 2.14–2.15, §1.1); the
+        // lubricant bearing force acts at the POC like F_c (§4.1).
+        let normal = i.contact_force + i.lubricant_force - i.adhesion;
+        let f_interface = Vector2::new(normal, i.lever_x * normal + i.lever_z * i.friction);
         let q = Vector2::new(y[0], y[1]);
         let q_rate = Vector2::new(y[2], y[3]);
         let acc =
@@ -703,6 +770,7 @@ impl<'a> TwoDofCase<'a> {
             &mut h.clearance,
             &mut h.flying_height,
             &mut h.contact_force,
+            &mut h.lubricant_force,
             &mut h.friction,
             &mut h.adhesion,
             &mut h.real_area,
@@ -728,6 +796,7 @@ impl<'a> TwoDofCase<'a> {
                 h.clearance.push(i.clearance);
                 h.flying_height.push(self.flying_height(i.spacing));
                 h.contact_force.push(i.contact_force);
+                h.lubricant_force.push(i.lubricant_force);
                 h.friction.push(i.friction);
                 h.adhesion.push(i.adhesion);
                 h.real_area.push(i.real_area);
@@ -807,6 +876,18 @@ impl<'a> TwoDofCase<'a> {
     }
 }
 
+/// The reference lubricant (Table 4.4 case 0: the FWM fit at μ0 = 0.31 Pa·s, κ = 0.3 nm) on a
+/// film of the interface's σ and t at the disk speed, as the 3-DOF builds it (§4.1).
+pub fn reference_mtl(sigma: f64, thickness: f64, speed: f64) -> Result<RoughMtl, DynamicsError> {
+    let case = LubricantCase::Reference;
+    let numerical = |e: crate::contact::ContactError| DynamicsError::Numerical(e.to_string());
+    let film = RoughFilm::new(sigma, case.kappa(), thickness, speed).map_err(numerical)?;
+    let exp = FwmExperiment::fukuzawa_z03()
+        .with_limiting_viscosity(case.limiting_viscosity())
+        .map_err(numerical)?;
+    RoughMtl::from_experiment(film, &exp).map_err(numerical)
+}
+
 /// A failed integration as one clear error (shared by the 2-DOF and 3-DOF cases).
 pub(crate) fn integration_error(e: OdeError<DynamicsError>) -> DynamicsError {
     DynamicsError::Numerical(match e {
@@ -829,3 +910,6 @@ pub(crate) fn integration_error(e: OdeError<DynamicsError>) -> DynamicsError {
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod model_form_tests;

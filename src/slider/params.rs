@@ -7,7 +7,7 @@ use crate::core::config::{ConfigError, KeyError, PipelineFile};
 use crate::dynamics::air_bearing::RearStiffening;
 use crate::dynamics::metrics::{CaseParams, SteadyWindow};
 use crate::dynamics::params::{improved_2dof, initial_2dof, optimised_bulge, Model2Dof};
-use crate::dynamics::two_dof::{ContactForceForm, Integrator, SimOptions};
+use crate::dynamics::two_dof::{ContactForceForm, Integrator, LubricantForce, SimOptions};
 use crate::units::{Length, Power, TimeSpan};
 use serde::Deserialize;
 use serde_json::{json, Value};
@@ -101,9 +101,14 @@ pub struct SimulateConfig {
     pub steady_start: TimeSpan,
     #[serde(default = "default_output_step")]
     pub output_step: TimeSpan,
-    /// `interference_tangent` (default, eq. 2.16 as written) or `static_curve`.
+    /// `interference_tangent` (default, eq. 2.16 as written), `static_curve` or
+    /// `integrated_stiffness` (docs/model-form.md).
     #[serde(default = "default_contact_force")]
     pub contact_force: String,
+    /// `none` (default, Chapter 2: the lubricant offers no resistance) or `mtl` (Chapter 3's
+    /// lubricant force inside the film; improved model only; docs/model-form.md).
+    #[serde(default = "default_none")]
+    pub lubricant: String,
     /// `dopri5` (adaptive, default) or `rk5_fixed` (the dissertation's fixed small step).
     #[serde(default = "default_integrator")]
     pub integrator: String,
@@ -421,10 +426,11 @@ fn check_forms(
     let contact_force = match cfg.contact_force.as_str() {
         "interference_tangent" => ContactForceForm::InterferenceTangent,
         "static_curve" => ContactForceForm::StaticCurve,
+        "integrated_stiffness" => ContactForceForm::IntegratedStiffness,
         o => {
             return bad(
                 "contact_force",
-                format!("unknown `{o}` (interference_tangent, static_curve)"),
+                format!("unknown `{o}` (interference_tangent, static_curve, integrated_stiffness)"),
             )
         }
     };
@@ -447,10 +453,25 @@ fn check_forms(
     Ok((contact_force, integrator, static_init))
 }
 
+/// `lubricant`: the lubricant layer's force (docs/model-form.md). The MTL law puts solid
+/// contact at 3σ, so it needs the improved model's criterion.
+fn check_lubricant(cfg: &SimulateConfig) -> std::result::Result<LubricantForce, KeyError> {
+    match cfg.lubricant.as_str() {
+        "none" => Ok(LubricantForce::None),
+        "mtl" if cfg.model == "initial_2dof" => bad(
+            "lubricant",
+            "`mtl` needs model = \"improved_2dof\" (the MTL law puts solid contact at 3σ)",
+        ),
+        "mtl" => Ok(LubricantForce::Mtl),
+        o => bad("lubricant", format!("unknown `{o}` (none, mtl)")),
+    }
+}
+
 /// The integrator options: the named forms, `initial_heave`, `duration`, `steady_start`, then
 /// the remaining numbers (rtol, steps, output step), which the case checks with their ranges.
 fn check_options(cfg: &SimulateConfig) -> std::result::Result<SimOptions, KeyError> {
     let (contact_force, integrator, static_init) = check_forms(cfg)?;
+    let lubricant = check_lubricant(cfg)?;
     let z0 = cfg.initial_heave.map_or(0.0, |l| l.0);
     if !(z0.is_finite() && z0.abs() <= 5e-9) {
         return bad(
@@ -463,6 +484,7 @@ fn check_options(cfg: &SimulateConfig) -> std::result::Result<SimOptions, KeyErr
         duration: cfg.duration.0,
         output_step: cfg.output_step.0,
         contact_force,
+        lubricant,
         integrator,
         transit_delay: cfg.transit_delay,
         wrap_dmw: cfg.dmw_wrap,
@@ -787,5 +809,33 @@ mod tests {
         // A power beyond the model's actuation range is an error at run time.
         let mut far = params("contact = \"c\"\ngeometry = { bulge = \"t\" }\npowers = [\"10 W\"]");
         assert!(far.apply_bulge(&fitted, "t").is_err());
+    }
+
+    #[test]
+    fn model_form_switches_parse_and_refuse_unknown_values() {
+        let base = "contact = \"c\"\n";
+        let p = params(&format!(
+            "{base}lubricant = \"mtl\"\ncontact_force = \"integrated_stiffness\""
+        ));
+        assert_eq!(p.options.lubricant, LubricantForce::Mtl);
+        assert_eq!(
+            p.options.contact_force,
+            ContactForceForm::IntegratedStiffness
+        );
+        assert_eq!(params(base).options.lubricant, LubricantForce::None);
+        let err = |text: &str| {
+            let cfg: SimulateConfig = toml::from_str(text).unwrap();
+            SimulateParams::check(&cfg).unwrap_err()
+        };
+        let e = err(&format!("{base}lubricant = \"grease\""));
+        assert_eq!(e.key, "lubricant");
+        assert!(e.message.contains("grease") && e.message.contains("mtl"));
+        let e = err(&format!(
+            "{base}model = \"initial_2dof\"\nlubricant = \"mtl\""
+        ));
+        assert_eq!(e.key, "lubricant");
+        let e = err(&format!("{base}contact_force = \"secant\""));
+        assert_eq!(e.key, "contact_force");
+        assert!(e.message.contains("integrated_stiffness"));
     }
 }

@@ -9,6 +9,7 @@ use crate::dynamics::geometry::BulgeDesign;
 use crate::dynamics::three_dof::air_bearing::{PushbackCurve, SpringLaw};
 use crate::dynamics::three_dof::case::{Init3Dof, Model3Dof, Options3Dof, TrackAssignment};
 use crate::dynamics::three_dof::inputs::{ActuationProfile, ShockPulse};
+use crate::dynamics::two_dof::ContactForceForm;
 use crate::slider::params::GeometryConfig;
 use crate::units::{Length, TimeSpan};
 use serde::Deserialize;
@@ -62,6 +63,9 @@ fn default_tracks() -> String {
 fn default_pushback() -> String {
     default_word("linear")
 }
+fn default_contact_force() -> String {
+    default_word("interference_tangent")
+}
 
 /// `[three_dof.NAME]` as written in `pipeline.toml`.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -107,6 +111,10 @@ pub struct ThreeDofConfig {
     /// `linear` (ΔFH = 0.5·h) or `flattened` (above 12 nm, docs/dynamics-3dof-air-bearing.md).
     #[serde(default = "default_pushback")]
     pub pushback_curve: String,
+    /// Reading of eq. 2.16 on every feature: `interference_tangent` (default), `static_curve`
+    /// or `integrated_stiffness` (docs/model-form.md).
+    #[serde(default = "default_contact_force")]
+    pub contact_force: String,
     /// `static` (the push-back already in place) or `nominal`.
     #[serde(default = "default_init")]
     pub init: String,
@@ -161,6 +169,8 @@ pub struct ThreeDofParams {
     pub steady_start: f64,
     pub spring_law: SpringLaw,
     pub pushback: String,
+    /// Reading of eq. 2.16 on the features (docs/model-form.md).
+    pub contact_force: ContactForceForm,
     /// The `[bulge.*]` instance whose fitted a, w, x_TFC replace Table 4.3's at run time.
     pub bulge: Option<String>,
     /// That fit, once read from the upstream result (not part of the key: the bulge
@@ -345,6 +355,19 @@ fn check_options(
     Ok((options, spring_law))
 }
 
+/// `contact_force`: the reading of eq. 2.16 on the features.
+fn check_contact_force(cfg: &ThreeDofConfig) -> std::result::Result<ContactForceForm, KeyError> {
+    match cfg.contact_force.as_str() {
+        "interference_tangent" => Ok(ContactForceForm::InterferenceTangent),
+        "static_curve" => Ok(ContactForceForm::StaticCurve),
+        "integrated_stiffness" => Ok(ContactForceForm::IntegratedStiffness),
+        o => bad(
+            "contact_force",
+            format!("unknown `{o}` (interference_tangent, static_curve, integrated_stiffness)"),
+        ),
+    }
+}
+
 impl ThreeDofParams {
     /// Check a `[three_dof]` table key by key (no cross-references to other instances): the
     /// actuation scenario, the interface cases, then the options.
@@ -353,6 +376,7 @@ impl ThreeDofParams {
         let (profile, shock) = check_actuation(cfg)?;
         let cases = check_cases(cfg)?;
         let (options, spring_law) = check_options(cfg, shock.as_ref())?;
+        let contact_force = check_contact_force(cfg)?;
         let bulge = match &cfg.geometry {
             None => None,
             Some(GeometryConfig::Named(n)) if n == "dissertation" => None,
@@ -375,6 +399,7 @@ impl ThreeDofParams {
             steady_start: cfg.steady_start.0,
             spring_law,
             pushback: cfg.pushback_curve.clone(),
+            contact_force,
             bulge,
             fitted: None,
         })
@@ -402,6 +427,15 @@ impl ThreeDofParams {
         // Only instances with a fitted bulge carry the key: the others keep theirs.
         if let (Some(b), Some(obj)) = (&self.bulge, v.as_object_mut()) {
             obj.insert("bulge".into(), json!(b));
+        }
+        // Likewise a non-default contact-force reading.
+        if let (ContactForceForm::StaticCurve | ContactForceForm::IntegratedStiffness, Some(obj)) =
+            (self.contact_force, v.as_object_mut())
+        {
+            obj.insert(
+                "contact_force".into(),
+                json!(format!("{:?}", self.contact_force)),
+            );
         }
         v
     }
@@ -469,5 +503,23 @@ mod tests {
         let cfg: ThreeDofConfig =
             toml::from_str(&format!("{base}\ngeometry = \"optimised\"")).unwrap();
         assert_eq!(ThreeDofParams::check(&cfg).unwrap_err().key, "geometry");
+    }
+
+    #[test]
+    fn contact_force_reading_parses_and_keys_only_when_not_the_default() {
+        let base = "contact = \"c\"\nscenario = \"shock\"\nduration = \"1.5 ms\"";
+        let plain = params(base);
+        assert_eq!(plain.contact_force, ContactForceForm::InterferenceTangent);
+        // The default leaves the instance key as it was (cached outputs stay valid).
+        assert!(plain.canonical().get("contact_force").is_none());
+        let soft = params(&format!("{base}\ncontact_force = \"integrated_stiffness\""));
+        assert_eq!(soft.contact_force, ContactForceForm::IntegratedStiffness);
+        assert_eq!(soft.canonical()["contact_force"], "IntegratedStiffness");
+        assert_ne!(soft.canonical(), plain.canonical());
+        let cfg: ThreeDofConfig =
+            toml::from_str(&format!("{base}\ncontact_force = \"hertz\"")).unwrap();
+        let e = ThreeDofParams::check(&cfg).unwrap_err();
+        assert_eq!(e.key, "contact_force");
+        assert!(e.message.contains("hertz") && e.message.contains("static_curve"));
     }
 }

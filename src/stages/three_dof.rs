@@ -18,7 +18,7 @@ use crate::core::store::H5Out;
 use crate::dynamics::three_dof::case::{History3Dof, ThreeDofCase};
 use crate::dynamics::three_dof::inputs::ActuationProfile;
 use crate::dynamics::three_dof::interface::{FeatureInterface, InterfaceLaw};
-use crate::dynamics::two_dof::{ContactForceForm, DmwInput};
+use crate::dynamics::two_dof::DmwInput;
 use crate::error::{Error, Result};
 use crate::slider::three_dof_params::{CaseInterface, ThreeDofParams};
 use serde_json::{json, Map, Value};
@@ -107,7 +107,7 @@ fn run_case(
     let interface = FeatureInterface::new(
         isbl,
         law,
-        ContactForceForm::InterferenceTangent,
+        p.contact_force,
         0.05,
         model.air_bearing.slider.mass,
     )?;

@@ -52,10 +52,11 @@ impl FeatureForces {
     }
 }
 
-/// The ISBL table times an area, borrowed (the MTL law's solid for one feature).
-struct AreaIsbl<'a> {
-    lookup: &'a IsblLookup,
-    area: f64,
+/// The ISBL table times an area, borrowed (the MTL law's solid for one feature, or for the
+/// 2-DOF bulge with `lubricant = mtl`).
+pub(crate) struct AreaIsbl<'a> {
+    pub(crate) lookup: &'a IsblLookup,
+    pub(crate) area: f64,
 }
 
 impl SolidContact for AreaIsbl<'_> {
@@ -170,6 +171,9 @@ impl<'a> FeatureInterface<'a> {
                     area * at.stiffness * (threshold - spacing)
                 }
                 ContactForceForm::StaticCurve => area * at.pressure,
+                ContactForceForm::IntegratedStiffness => {
+                    area * (at.pressure - self.isbl.at(threshold).map_err(numerical)?.pressure)
+                }
             };
             let force = elastic - self.contact_damping(area) * spacing_rate;
             if force > 0.0 {
@@ -316,5 +320,45 @@ mod tests {
             1e-6
         )
         .is_err());
+    }
+
+    #[test]
+    fn integrated_stiffness_feature_force_is_the_quadrature_of_k_c() {
+        // F_c = A_n ∫_s^{3σ} k_c(h) dh (docs/model-form.md), by Simpson's rule on the table's
+        // stiffness column (its own GW integral), against the switch's A_n [P(s) − P(3σ)].
+        let isbl = lookup(false);
+        let fi = FeatureInterface::new(
+            &isbl,
+            InterfaceLaw::Isbl,
+            ContactForceForm::IntegratedStiffness,
+            0.05,
+            1.098e-6,
+        )
+        .unwrap();
+        let (a, threshold) = (55e-12, 3.0 * fi.sigma());
+        for s in [1.3e-9, 0.9e-9] {
+            let n = 400;
+            let dh = (threshold - s) / n as f64;
+            let integral: f64 = (0..=n)
+                .map(|j| {
+                    let w = match j {
+                        0 => 1.0,
+                        j if j == n => 1.0,
+                        j if j % 2 == 1 => 4.0,
+                        _ => 2.0,
+                    };
+                    w * isbl.at(s + j as f64 * dh).unwrap().stiffness
+                })
+                .sum::<f64>()
+                * dh
+                / 3.0;
+            let f = fi.forces(s, 0.0, a).unwrap();
+            assert!(
+                (f.contact_force / (a * integral) - 1.0).abs() < 2e-3,
+                "s = {s}: {} vs {}",
+                f.contact_force,
+                a * integral
+            );
+        }
     }
 }
