@@ -1150,6 +1150,31 @@ mod tests {
         );
         // The points lie on an ellipse around (12, 12): its centre is empty.
         assert!(!img.any_near(l.pixel((12.0, 12.0)), 6, bluish));
+        // A short map, sparse enough to tell (xₙ, xₙ₊₁) from (xₙ₊₁, xₙ): the dots are at
+        // the former, not at the mirror images (the ellipse itself is symmetric).
+        let short = quasi_periodic_return_map(12);
+        let p1 = dir.path().join("short.png");
+        let (img, l) = drawn(&p1, || poincare_png(&p1, "short", &short, "nm", ""));
+        let l = l[0];
+        let far_from_all = |q: (i32, i32)| {
+            short.iter().all(|&pt| {
+                let d = l.pixel(pt);
+                (d.0 - q.0).abs().max((d.1 - q.1).abs()) > 10
+            })
+        };
+        let mut mirrors = 0;
+        for &(a, b) in &short {
+            assert!(img.any_near(l.pixel((a, b)), 1, bluish), "({a}, {b})");
+            let q = l.pixel((b, a));
+            if far_from_all(q) {
+                assert!(
+                    !img.any_near(q, 2, bluish),
+                    "a dot at the mirror of ({a}, {b})"
+                );
+                mirrors += 1;
+            }
+        }
+        assert!(mirrors >= 6, "{mirrors}");
         // One point (a fixed point), no annotation, no unit: a dot in the middle.
         let p1 = dir.path().join("fixed.png");
         let (img, l) = drawn(&p1, || {
