@@ -664,6 +664,7 @@ pub(crate) fn overlaps(a: PixelRect, b: PixelRect) -> bool {
 // ---------------------------------------------------------------------------------------------
 // Layout: where a chart puts its data, so that tests can map data to image pixels
 
+#[cfg(test)]
 /// One axis of a drawn chart: its data range and the image pixel of each end.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct AxisMap {
@@ -674,6 +675,7 @@ pub(crate) struct AxisMap {
     pub(crate) log: bool,
 }
 
+#[cfg(test)]
 impl AxisMap {
     /// The image pixel coordinate of the data value `v` (fractional; beyond the ends for
     /// values off the axis).
@@ -687,6 +689,7 @@ impl AxisMap {
     }
 }
 
+#[cfg(test)]
 /// A chart's plot area in image pixels and the mapping of its two axes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct ChartLayout {
@@ -696,6 +699,7 @@ pub(crate) struct ChartLayout {
     pub(crate) y: AxisMap,
 }
 
+#[cfg(test)]
 impl ChartLayout {
     /// The image pixel of the data point `(x, y)`, rounded.
     pub(crate) fn pixel(&self, (x, y): (f64, f64)) -> (i32, i32) {
