@@ -7,9 +7,9 @@
 
 use super::kit::{
     boxed_text, decimate_log_minmax, draw_legend, finite_min_max, fmt_sig3, font, lin_tick_label,
-    line_key, log_key_points, log_padded, log_tick_label, measure_text, overlaps, padded, perr,
-    render_png, title_font, usable, with_unit, Area, DrawResult, Legend, PixelRect, Result,
-    TRACE_BLUE,
+    line_key, log_key_points, log_padded, log_tick_label, measure_text, note_layout, overlaps,
+    padded, perr, render_png, title_font, usable, with_unit, Area, DrawResult, Legend, PixelRect,
+    Result, TRACE_BLUE,
 };
 use plotters::coord::combinators::BindKeyPoints;
 use plotters::prelude::*;
@@ -315,6 +315,7 @@ fn draw_scalogram_chart(
         .y_label_area_size(65)
         .build_cartesian_2d(x0..x1, (y0..y1).log_scale().with_key_points(y_ticks))
         .map_err(|e| e.to_string())?;
+    note_layout(&chart, x0..x1, y0..y1, (false, true));
     chart
         .configure_mesh()
         .disable_mesh()
@@ -475,6 +476,7 @@ pub fn poincare_png(
             .y_label_area_size(75)
             .build_cartesian_2d(lo..hi, lo..hi)
             .map_err(|e| e.to_string())?;
+        note_layout(&chart, lo..hi, lo..hi, (false, false));
         chart
             .configure_mesh()
             .light_line_style(BLACK.mix(0.04))
@@ -593,6 +595,7 @@ pub fn phase_portrait_png(
             .y_label_area_size(75)
             .build_cartesian_2d(xr.0..xr.1, vr.0..vr.1)
             .map_err(|e| e.to_string())?;
+        note_layout(&chart, xr.0..xr.1, vr.0..vr.1, (false, false));
         chart
             .configure_mesh()
             .light_line_style(BLACK.mix(0.04))
@@ -785,6 +788,7 @@ fn draw_spectrum(root: &Area, title: &str, unit: &str, plot: &SpectrumPlot) -> D
             (y_axis.0..y_axis.1).log_scale().with_key_points(y_ticks),
         )
         .map_err(|e| e.to_string())?;
+    note_layout(&chart, x_axis.0..x_axis.1, y_axis.0..y_axis.1, (true, true));
     chart
         .configure_mesh()
         .bold_line_style(BLACK.mix(0.07))
@@ -858,7 +862,34 @@ fn label_peaks(area: &Area, mut by_x: Vec<(i32, i32, f64)>) -> DrawResult<()> {
 mod tests {
     use super::*;
 
-    use crate::figures::kit::assert_png;
+    use crate::figures::kit::testing::{drawn, near, over_white, viridis_value, Image, WHITE_PX};
+    use crate::figures::kit::ChartLayout;
+
+    /// The ridge's (and the peak circles') red.
+    fn red(p: [u8; 3]) -> bool {
+        near(p, RED, 60)
+    }
+
+    /// The analysis trace blue, drawn opaque or translucent over white.
+    fn bluish(p: [u8; 3]) -> bool {
+        let [r, g, b] = p.map(i32::from);
+        b > r + 50 && b > g + 25
+    }
+
+    /// The middle of the rows of column `x` inside the plot whose colour is the highest on
+    /// the viridis scale.
+    fn brightest_row(img: &Image, l: &ChartLayout, x: i32) -> f64 {
+        let rows: Vec<(i32, f64)> = (l.plot.1 + 1..l.plot.3 - 1)
+            .filter_map(|y| Some((y, viridis_value(img.at(x, y).unwrap(), 3)?)))
+            .collect();
+        let top = rows.iter().map(|r| r.1).fold(f64::MIN, f64::max);
+        let at_top: Vec<i32> = rows
+            .iter()
+            .filter(|r| r.1 >= top - 1e-9)
+            .map(|r| r.0)
+            .collect();
+        at_top.iter().sum::<i32>() as f64 / at_top.len() as f64
+    }
 
     /// A hand-made scalogram of a log chirp 20 → 300 kHz: times, frequencies, |W|, coi, ridge.
     type Chirp = (Vec<f64>, Vec<f64>, Vec<f32>, Vec<f64>, Vec<f64>);
@@ -887,16 +918,48 @@ mod tests {
     }
 
     #[test]
-    fn scalogram_of_chirp_writes_png() {
+    fn scalogram_of_chirp_shows_the_chirp_where_it_is() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("scalogram.png");
         let (t, f, m, coi, ridge) = chirp(2000, 40);
-        scalogram_png(&p, "chirp", &t, &f, &m, &coi, Some(&ridge), "nm").unwrap();
-        assert_png(&p);
-        // No cone, no ridge, no unit.
+        let (img, l) = drawn(&p, || {
+            scalogram_png(&p, "chirp", &t, &f, &m, &coi, Some(&ridge), "nm")
+        });
+        assert_eq!(l.len(), 1);
+        let l = l[0];
+        // Axes: time in ms over the record, frequency in kHz over the cells' edges.
+        assert!(
+            (l.x.lo - 0.0).abs() < 1e-12 && (l.x.hi - 2.0).abs() < 1e-9,
+            "{l:?}"
+        );
+        assert!(l.y.log && l.y.lo < 5.0 && l.y.hi > 500.0, "{l:?}");
+        // The red ridge runs along the chirp's instantaneous frequency.
+        for n in (100..1900).step_by(150) {
+            let at = l.pixel((t[n] * 1e3, ridge[n] * 1e-3));
+            assert!(
+                img.any_near(at, 2, red),
+                "no ridge at {at:?}, t = {} s",
+                t[n]
+            );
+        }
+        // No cone, no ridge, no unit: the brightest cell of every column is the chirp's.
         let p2 = dir.path().join("bare.png");
-        scalogram_png(&p2, "bare", &t, &f, &m, &[], None, "").unwrap();
-        assert_png(&p2);
+        let (img, l) = drawn(&p2, || {
+            scalogram_png(&p2, "bare", &t, &f, &m, &[], None, "")
+        });
+        let l = l[0];
+        assert_eq!(img.count(l.plot, red), 0, "a ridge without a ridge");
+        // One cell is a factor 100^(1/39) in frequency.
+        let cell = l.y.pixel(10.0) - l.y.pixel(10.0 * 100f64.powf(1.0 / 39.0));
+        for n in (50..2000).step_by(97) {
+            let (x, y) = l.pixel((t[n] * 1e3, ridge[n] * 1e-3));
+            let bright = brightest_row(&img, &l, x);
+            assert!(
+                (bright - f64::from(y)).abs() <= 0.5 * cell + 2.0,
+                "t = {} s: brightest row {bright}, chirp at {y} (cell {cell} px)",
+                t[n]
+            );
+        }
     }
 
     #[test]
@@ -921,34 +984,83 @@ mod tests {
             .collect();
         let ridge = vec![f64::NAN; nt];
         let p = dir.path().join("clamped.png");
-        scalogram_png(&p, "clamped", &t, &f, &m_rev, &coi, Some(&ridge), "nm").unwrap();
-        assert_png(&p);
+        let (img, l) = drawn(&p, || {
+            scalogram_png(&p, "clamped", &t, &f, &m_rev, &coi, Some(&ridge), "nm")
+        });
+        // An all-NaN ridge draws nothing.
+        assert_eq!(img.count(l[0].plot, red), 0);
+        // Increasing frequencies with the same cone: the same picture, pixel for pixel.
+        f.reverse();
+        let p2 = dir.path().join("increasing.png");
+        let (same, _) = drawn(&p2, || {
+            scalogram_png(&p2, "clamped", &t, &f, &m, &coi, Some(&ridge), "nm")
+        });
+        assert_eq!(img.differing_pixels(&same), 0);
     }
 
     #[test]
     fn scalogram_skips_non_finite_cells_and_handles_one_frequency() {
         let dir = tempfile::tempdir().unwrap();
-        let (t, f, mut m, coi, _) = chirp(300, 10);
+        // Few enough cells (60 × 10) that each is many pixels.
+        let (t, f, mut m, coi, _) = chirp(60, 10);
         for k in (0..m.len()).step_by(7) {
             m[k] = if k % 2 == 0 { f32::NAN } else { f32::INFINITY };
         }
         let p = dir.path().join("holes.png");
-        scalogram_png(&p, "holes", &t, &f, &m, &coi, None, "nm").unwrap();
-        assert_png(&p);
-        // One frequency, constant magnitude.
+        let (img, l) = drawn(&p, || {
+            scalogram_png(&p, "holes", &t, &f, &m, &coi, None, "nm")
+        });
+        let l = l[0];
+        let nt = t.len();
+        let step = f[1] / f[0];
+        let (mut holes, mut cells) = (0, 0);
+        for (j, &fj) in f.iter().enumerate() {
+            for n in 0..nt - 1 {
+                let (x, y) = l.pixel(((t[n] + 0.5e-6) * 1e3, fj * 1e-3));
+                // Away from the cone's line and the cell's edges.
+                let cone = l.y.pixel((coi[n] * 1e-3).clamp(l.y.lo, l.y.hi));
+                let edge = l.y.pixel(fj * 1e-3 * step.sqrt());
+                if (f64::from(y) - cone).abs() < 6.0 || (f64::from(y) - edge).abs() < 3.0 {
+                    continue;
+                }
+                let px = img.at(x, y).unwrap();
+                if (j * nt + n) % 7 == 0 {
+                    assert_eq!(px, WHITE_PX, "non-finite cell ({j}, {n}) drawn");
+                    holes += 1;
+                } else {
+                    assert_ne!(px, WHITE_PX, "cell ({j}, {n}) missing");
+                    cells += 1;
+                }
+            }
+        }
+        assert!(
+            holes > 40 && cells > 300,
+            "{holes} holes, {cells} cells checked"
+        );
+        // One frequency, constant magnitude: the lowest viridis colour everywhere, dimmed
+        // (the cone lies above this low frequency at every time).
         let p1 = dir.path().join("one.png");
-        scalogram_png(
-            &p1,
-            "one",
-            &t,
-            &f[..1],
-            &vec![1.0; t.len()],
-            &coi,
-            None,
-            "nm",
-        )
-        .unwrap();
-        assert_png(&p1);
+        let (img, l) = drawn(&p1, || {
+            scalogram_png(
+                &p1,
+                "one",
+                &t,
+                &f[..1],
+                &vec![1.0; t.len()],
+                &coi,
+                None,
+                "nm",
+            )
+        });
+        let l = l[0];
+        let low = ViridisRGB::get_color_normalized(0.0, 0.0, 1.0);
+        let dimmed = over_white(low, 0.55);
+        let area = (l.plot.2 - l.plot.0) * (l.plot.3 - l.plot.1);
+        let n = img.count(l.plot, |p| near(p, dimmed, 3));
+        assert!(
+            n as f64 > 0.8 * area as f64,
+            "{n} of {area} pixels {dimmed:?}"
+        );
     }
 
     #[test]
@@ -956,8 +1068,16 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("large.png");
         let (t, f, m, coi, ridge) = chirp(8000, 67);
-        scalogram_png(&p, "8000 × 67", &t, &f, &m, &coi, Some(&ridge), "nm").unwrap();
-        assert_png(&p);
+        let (img, l) = drawn(&p, || {
+            scalogram_png(&p, "8000 × 67", &t, &f, &m, &coi, Some(&ridge), "nm")
+        });
+        // Decimated to 800 columns (each the maximum of its block): the ridge still sits on
+        // the chirp, and the heat map is brightest there.
+        let l = l[0];
+        for n in (400..7600).step_by(600) {
+            let at = l.pixel((t[n] * 1e3, ridge[n] * 1e-3));
+            assert!(img.any_near(at, 2, red), "no ridge at {at:?}");
+        }
     }
 
     #[test]
@@ -1006,12 +1126,69 @@ mod tests {
         let mut map = quasi_periodic_return_map(300);
         map.push((f64::NAN, 1.0));
         map.push((1.0, f64::INFINITY));
-        poincare_png(&p, "return map", &map, "nm", "quasi-periodic").unwrap();
-        assert_png(&p);
-        // One point (a fixed point), no annotation, no unit.
+        let (img, l) = drawn(&p, || {
+            poincare_png(&p, "return map", &map, "nm", "quasi-periodic")
+        });
+        let l = l[0];
+        // Equal axes padded around 12 ± 0.8.
+        assert_eq!((l.x.lo, l.x.hi), (l.y.lo, l.y.hi));
+        assert!(l.x.lo < 11.2 && l.x.hi > 12.8, "{l:?}");
+        // Every finite point is a blue dot (a few may sit under the annotation's box).
+        let finite: Vec<(f64, f64)> = map
+            .iter()
+            .copied()
+            .filter(|p| p.0.is_finite() && p.1.is_finite())
+            .collect();
+        let dots = finite
+            .iter()
+            .filter(|&&pt| img.any_near(l.pixel(pt), 1, bluish))
+            .count();
+        assert!(
+            dots as f64 >= 0.9 * finite.len() as f64,
+            "{dots} of {}",
+            finite.len()
+        );
+        // The points lie on an ellipse around (12, 12): its centre is empty.
+        assert!(!img.any_near(l.pixel((12.0, 12.0)), 6, bluish));
+        // A short map, sparse enough to tell (xₙ, xₙ₊₁) from (xₙ₊₁, xₙ): the dots are at
+        // the former, not at the mirror images (the ellipse itself is symmetric).
+        let short = quasi_periodic_return_map(12);
+        let p1 = dir.path().join("short.png");
+        let (img, l) = drawn(&p1, || poincare_png(&p1, "short", &short, "nm", ""));
+        let l = l[0];
+        let far_from_all = |q: (i32, i32)| {
+            short.iter().all(|&pt| {
+                let d = l.pixel(pt);
+                (d.0 - q.0).abs().max((d.1 - q.1).abs()) > 10
+            })
+        };
+        let mut mirrors = 0;
+        for &(a, b) in &short {
+            assert!(img.any_near(l.pixel((a, b)), 1, bluish), "({a}, {b})");
+            let q = l.pixel((b, a));
+            if far_from_all(q) {
+                assert!(
+                    !img.any_near(q, 2, bluish),
+                    "a dot at the mirror of ({a}, {b})"
+                );
+                mirrors += 1;
+            }
+        }
+        assert!(mirrors >= 6, "{mirrors}");
+        // One point (a fixed point), no annotation, no unit: a dot in the middle.
         let p1 = dir.path().join("fixed.png");
-        poincare_png(&p1, "fixed point", &[(3.0, 3.0)], "", "").unwrap();
-        assert_png(&p1);
+        let (img, l) = drawn(&p1, || {
+            poincare_png(&p1, "fixed point", &[(3.0, 3.0)], "", "")
+        });
+        let l = l[0];
+        let (cx, cy) = l.pixel((3.0, 3.0));
+        assert_eq!(
+            (cx, cy),
+            ((l.plot.0 + l.plot.2) / 2, (l.plot.1 + l.plot.3) / 2),
+            "{l:?}"
+        );
+        assert!(img.any_near((cx, cy), 1, bluish));
+        assert!(!img.any_near((cx + 25, cy - 25), 5, bluish));
     }
 
     #[test]
@@ -1055,12 +1232,42 @@ mod tests {
         let p = dir.path().join("phase.png");
         let (mut x, v) = quasi_periodic_trajectory(20_000);
         x[100] = f64::NAN;
-        phase_portrait_png(&p, "phase portrait", &x, &v, "nm", "µm/s").unwrap();
-        assert_png(&p);
-        // Two points on a constant velocity.
+        let (img, l) = drawn(&p, || {
+            phase_portrait_png(&p, "phase portrait", &x, &v, "nm", "µm/s")
+        });
+        let l = l[0];
+        let green = |p: [u8; 3]| near(p, RGBColor(0, 158, 115), 40);
+        let end_red = |p: [u8; 3]| near(p, RGBColor(213, 30, 0), 40);
+        assert!(
+            img.any_near(l.pixel((x[0], v[0])), 1, green),
+            "start marker"
+        );
+        let last = x.len() - 1;
+        assert!(
+            img.any_near(l.pixel((x[last], v[last])), 1, end_red),
+            "end marker"
+        );
+        // The line passes through the trajectory's samples.
+        let samples: Vec<usize> = (150..x.len()).step_by(97).collect();
+        let on_line = samples
+            .iter()
+            .filter(|&&k| img.any_near(l.pixel((x[k], v[k])), 1, bluish))
+            .count();
+        assert!(
+            on_line as f64 >= 0.95 * samples.len() as f64,
+            "{on_line} of {}",
+            samples.len()
+        );
+        // Two points on a constant velocity: start and end at their places, a line between.
         let p2 = dir.path().join("two.png");
-        phase_portrait_png(&p2, "two", &[0.0, 1.0], &[2.0, 2.0], "", "").unwrap();
-        assert_png(&p2);
+        let (img, l) = drawn(&p2, || {
+            phase_portrait_png(&p2, "two", &[0.0, 1.0], &[2.0, 2.0], "", "")
+        });
+        let l = l[0];
+        assert!(img.any_near(l.pixel((0.0, 2.0)), 1, green));
+        assert!(img.any_near(l.pixel((1.0, 2.0)), 1, end_red));
+        assert!(img.any_near(l.pixel((0.5, 2.0)), 1, bluish));
+        assert!(!img.any_near(l.pixel((0.5, 2.04)), 2, bluish));
     }
 
     #[test]
@@ -1108,16 +1315,72 @@ mod tests {
         a[10] = f64::NAN;
         a[11] = -1.0;
         let p = dir.path().join("spectrum.png");
-        spectrum_png(&p, "spectrum", &f, &a, &peaks, "nm", None).unwrap();
-        assert_png(&p);
+        let (img, l) = drawn(&p, || {
+            spectrum_png(&p, "spectrum", &f, &a, &peaks, "nm", None)
+        });
+        assert_circled_exactly(&img, &l[0], &peaks, &a, &f);
         let p2 = dir.path().join("range.png");
-        spectrum_png(&p2, "range", &f, &a, &peaks, "nm", Some((20e3, 200e3))).unwrap();
-        assert_png(&p2);
-        // Long spectrum (envelope decimation), no peaks, range starting at 0.
-        let (f, a, _) = synthetic_spectrum(200_000, 2.5);
+        let (img, l) = drawn(&p2, || {
+            spectrum_png(&p2, "range", &f, &a, &peaks, "nm", Some((20e3, 200e3)))
+        });
+        assert_eq!((l[0].x.lo, l[0].x.hi), (20.0, 200.0));
+        // The 230 kHz peak is out of range.
+        assert_circled_exactly(&img, &l[0], &peaks[..4], &a, &f);
+        // Long spectrum (envelope decimation), no peaks, range starting at 0: no circle, and
+        // the envelope still reaches every line's top.
+        let (f, a, lines) = synthetic_spectrum(200_000, 2.5);
         let p3 = dir.path().join("long.png");
-        spectrum_png(&p3, "long", &f, &a, &[], "", Some((0.0, 400e3))).unwrap();
-        assert_png(&p3);
+        let (img, l) = drawn(&p3, || {
+            spectrum_png(&p3, "long", &f, &a, &[], "", Some((0.0, 400e3)))
+        });
+        let l = l[0];
+        assert_eq!(img.count((0, 0, img.width, img.height), red), 0);
+        for &(f0, _) in &lines {
+            let k = (f0 / 2.5).round() as usize;
+            let at = l.pixel((f[k] * 1e-3, a[k]));
+            assert!(
+                img.any_near(at, 2, |p| near(p, TRACE_BLUE, 30)),
+                "trace misses the {f0} Hz line's top at {at:?}"
+            );
+        }
+    }
+
+    /// The red circles are exactly the `peaks`' (at their frequency and amplitude), and the
+    /// trace reaches each peak's top, where the spectrum `(f, a)` has it.
+    fn assert_circled_exactly(
+        img: &Image,
+        l: &ChartLayout,
+        peaks: &[(f64, f64)],
+        a: &[f64],
+        f: &[f64],
+    ) {
+        let centres: Vec<(i32, i32)> = peaks
+            .iter()
+            .map(|&(f0, a0)| l.pixel((f0 * 1e-3, a0)))
+            .collect();
+        for (&(f0, _), &(x, y)) in peaks.iter().zip(&centres) {
+            // A ring of radius 5: red around the centre, not on it.
+            let ring = img.count((x - 7, y - 7, x + 8, y + 8), red);
+            assert!(ring >= 12, "{f0} Hz at ({x}, {y}): {ring} red pixels");
+            let k = f.iter().position(|&fk| fk >= f0).unwrap();
+            let top = l.pixel((f[k] * 1e-3, a[k]));
+            assert!(
+                img.any_near(top, 2, |p| near(p, TRACE_BLUE, 30)),
+                "trace misses the {f0} Hz peak at {top:?}"
+            );
+        }
+        let mut stray = 0;
+        for y in l.plot.1..l.plot.3 {
+            for x in l.plot.0..l.plot.2 {
+                let by_a_peak = centres
+                    .iter()
+                    .any(|&(cx, cy)| (x - cx).abs() <= 8 && (y - cy).abs() <= 8);
+                if !by_a_peak && red(img.at(x, y).unwrap()) {
+                    stray += 1;
+                }
+            }
+        }
+        assert_eq!(stray, 0, "red pixels away from the peaks");
     }
 
     #[test]

@@ -12,7 +12,7 @@
 use super::kit::contour::{bilinear, contour_levels, locate, marching_squares, refine};
 use super::kit::{
     dashed_line, decimate_minmax, draw_legend, draw_no_data, draw_polyline, finite_runs, fmt_sig3,
-    font, lin_tick_label, line_key, log_padded, perr, polyline_elements, render_png,
+    font, lin_tick_label, line_key, log_padded, note_layout, perr, polyline_elements, render_png,
     sci_tick_label, text_style, title_font, usable, Area, Chart, DrawResult, Extent, Legend,
     Result, MARKER_RED, PALETTE,
 };
@@ -181,14 +181,16 @@ fn contour_chart<'a, 'b: 'a>(
     xr: Range<f64>,
     yr: Range<f64>,
 ) -> DrawResult<Chart<'a, 'b>> {
-    ChartBuilder::on(area)
+    let chart = ChartBuilder::on(area)
         .caption(panel.title, font(16))
         .margin(8)
         .margin_right(16)
         .x_label_area_size(42)
         .y_label_area_size(58)
-        .build_cartesian_2d(xr, yr)
-        .map_err(|e| e.to_string())
+        .build_cartesian_2d(xr.clone(), yr.clone())
+        .map_err(|e| e.to_string())?;
+    note_layout(&chart, xr, yr, (false, false));
+    Ok(chart)
 }
 
 /// Axes and tick labels without grid lines (they would clutter the colour map).
@@ -462,6 +464,7 @@ fn linear_chart<'a, 'b: 'a>(
         .y_label_area_size(62)
         .build_cartesian_2d(xr.clone(), yr.clone())
         .map_err(|e| e.to_string())?;
+    note_layout(&chart, xr.clone(), yr.clone(), (false, false));
     let (xs, ys) = (xr.end - xr.start, yr.end - yr.start);
     chart
         .configure_mesh()
@@ -647,8 +650,9 @@ fn draw_temperature(
         .margin_right(18)
         .x_label_area_size(45)
         .y_label_area_size(62)
-        .build_cartesian_2d(xr.clone(), yr.log_scale())
+        .build_cartesian_2d(xr.clone(), yr.clone().log_scale())
         .map_err(|e| e.to_string())?;
+    note_layout(&chart, xr.clone(), yr, (false, true));
     let xs = xr.end - xr.start;
     chart
         .configure_mesh()
@@ -725,8 +729,42 @@ pub fn annealing_png(
 mod tests {
     use super::*;
 
-    use crate::figures::kit::assert_png;
     use crate::figures::kit::contour::tests::{grid, surface};
+    use crate::figures::kit::testing::{
+        drawn, near, over_white, tinted, viridis_value, Image, WHITE_PX,
+    };
+    use crate::figures::kit::ChartLayout;
+
+    /// The fill's colours follow the values: on the one shared scale, wherever `z` is higher
+    /// by more than a band, the fill is higher on the viridis map — across panels too.
+    /// `samples` are `(layout, (x, y), z)`; pixels on iso-lines (not viridis) are skipped.
+    fn assert_fill_follows(img: &Image, samples: &[(ChartLayout, (f64, f64), f64)], band: f64) {
+        let seen: Vec<(f64, f64)> = samples
+            .iter()
+            .filter_map(|(l, at, z)| {
+                let p = img.at(l.pixel(*at).0, l.pixel(*at).1).unwrap();
+                Some((*z, viridis_value(p, 3)?))
+            })
+            .collect();
+        assert!(
+            seen.len() * 10 >= samples.len() * 8,
+            "{} of {}",
+            seen.len(),
+            samples.len()
+        );
+        for &(za, la) in &seen {
+            for &(zb, lb) in &seen {
+                if za > zb + band {
+                    assert!(la > lb, "z {za} (viridis {la}) vs z {zb} ({lb})");
+                }
+            }
+        }
+    }
+
+    /// The degree to which pixels near `at` are of colour `c` (any within `r` px).
+    fn has(img: &Image, l: &ChartLayout, at: (f64, f64), r: i32, c: RGBColor) -> bool {
+        img.any_near(l.pixel(at), r, |p| near(p, c, 30))
+    }
 
     fn saddle_panels(n: usize) -> Vec<ContourPanel<'static>> {
         let x = grid(-1.0, 1.0, n);
@@ -758,8 +796,41 @@ mod tests {
     fn contour_panels_normal_and_degenerate() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("saddle.png");
-        contour_panels_png(&p, "ξ over the design space", "ξ", &saddle_panels(41)).unwrap();
-        assert_png(&p);
+        let panels = saddle_panels(41);
+        let (img, l) = drawn(&p, || {
+            contour_panels_png(&p, "ξ over the design space", "ξ", &panels)
+        });
+        assert_eq!(l.len(), 3);
+        let mut samples = Vec::new();
+        for (k, layout) in l.iter().enumerate() {
+            let shift = 0.3 * (k as f64 - 1.0);
+            for i in 0..9 {
+                for j in 0..9 {
+                    let (a, b) = (-0.84 + 0.21 * i as f64, -0.84 + 0.21 * j as f64);
+                    samples.push((*layout, (a, b), a * a - b * b + shift));
+                }
+            }
+            // The design point in the middle is a black dot.
+            assert!(has(&img, layout, (0.0, 0.0), 1, BLACK), "panel {k}");
+            // The bold zero iso-line: x² − y² = −shift.
+            let zero = (0.49 - shift).sqrt();
+            assert!(
+                has(&img, layout, (zero, 0.7), 2, BLACK),
+                "panel {k}: zero line"
+            );
+            assert!(
+                !has(&img, layout, (zero, 0.3), 2, BLACK),
+                "panel {k}: zero line"
+            );
+            // The optimum's red star only where the panel has one.
+            assert_eq!(
+                has(&img, layout, (0.0, 0.8), 3, MARKER_RED),
+                k == 1,
+                "panel {k}: optimum"
+            );
+        }
+        // Values span −1.3…1.3 on about ten levels.
+        assert_fill_follows(&img, &samples, 0.35);
 
         let nan = f64::NAN;
         let base = |z: Array2<f64>| ContourPanel {
@@ -801,16 +872,51 @@ mod tests {
         ];
         for (name, panels) in &cases {
             let p = dir.path().join(format!("contour-{name}.png"));
-            contour_panels_png(&p, name, "ξ", panels).unwrap();
-            assert_png(&p);
+            let (img, l) = drawn(&p, || contour_panels_png(&p, name, "ξ", panels));
+            assert_eq!(l.len(), panels.len().max(1), "{name}");
+            let colour_at = |k: usize, at: (f64, f64)| {
+                let (x, y) = l[k].pixel(at);
+                img.at(x, y).unwrap()
+            };
+            match *name {
+                // Cells with a NaN corner stay white, the others are filled.
+                "holed" => {
+                    assert_eq!(colour_at(0, (0.6, 0.3)), WHITE_PX);
+                    assert_ne!(colour_at(0, (0.1, 0.9)), WHITE_PX);
+                }
+                // One band: one colour everywhere.
+                "constant" => {
+                    let c = colour_at(0, (0.2, 0.2));
+                    assert_ne!(c, WHITE_PX);
+                    for at in [(0.8, 0.2), (0.2, 0.8), (0.7, 0.7)] {
+                        assert_eq!(colour_at(0, at), c, "{at:?}");
+                    }
+                }
+                "all-nan" => {
+                    for k in 0..2 {
+                        assert_eq!(colour_at(k, (0.2, 0.8)), WHITE_PX);
+                    }
+                }
+                "some-nan-panels" => {
+                    assert_eq!(colour_at(0, (0.2, 0.8)), WHITE_PX);
+                    assert_ne!(colour_at(1, (0.1, 0.9)), WHITE_PX);
+                    // The single node (0.5, 3) fills its small padded extent.
+                    assert_ne!(colour_at(2, (0.5, 3.0)), WHITE_PX);
+                }
+                _ => {}
+            }
         }
-        // Seven panels: three rows.
+        // Seven panels: three rows of up to three.
         let mut many = saddle_panels(5);
         many.extend(saddle_panels(3));
         many.push(saddle_panels(2).remove(0));
         let p = dir.path().join("contour-many.png");
-        contour_panels_png(&p, "many", "ξ", &many).unwrap();
-        assert_png(&p);
+        let (_, l) = drawn(&p, || contour_panels_png(&p, "many", "ξ", &many));
+        assert_eq!(l.len(), 7);
+        let row_of = |k: usize| l[k].plot.1;
+        assert!(row_of(0) == row_of(2) && row_of(2) < row_of(3));
+        assert!(row_of(3) == row_of(5) && row_of(5) < row_of(6));
+        assert!(l[0].plot.0 < l[1].plot.0 && l[1].plot.0 < l[2].plot.0);
     }
 
     #[test]
@@ -842,8 +948,25 @@ mod tests {
             })
             .collect();
         let p = dir.path().join("residuals.png");
-        residual_panels_png(&p, "residuals of the ξ model", &fr, &nq).unwrap();
-        assert_png(&p);
+        let (img, l) = drawn(&p, || {
+            residual_panels_png(&p, "residuals of the ξ model", &fr, &nq)
+        });
+        assert_eq!(l.len(), 2);
+        // Residuals symmetric about zero; the probability plot on equal axes.
+        assert!((l[0].y.lo + l[0].y.hi).abs() < 1e-12, "{:?}", l[0].y);
+        assert_eq!((l[1].x.lo, l[1].x.hi), (l[1].y.lo, l[1].y.hi));
+        let dot = over_white(PALETTE[0], 0.85);
+        for &pt in &fr {
+            assert!(has(&img, &l[0], pt, 1, dot), "residual {pt:?}");
+        }
+        for &pt in &nq {
+            assert!(has(&img, &l[1], pt, 1, dot), "quantile {pt:?}");
+        }
+        // The reference line y = x (orange) on the right, none on the left.
+        for q in [-1.5, 0.3, 1.7] {
+            assert!(has(&img, &l[1], (q, q), 1, PALETTE[1]), "y = x at {q}");
+        }
+        assert_eq!(img.count(l[0].plot, |p| near(p, PALETTE[1], 30)), 0);
         let nan = f64::NAN;
         type Xy = Vec<(f64, f64)>;
         let cases: [(&str, Xy, Xy); 3] = [
@@ -853,8 +976,17 @@ mod tests {
         ];
         for (name, a, b) in &cases {
             let p = dir.path().join(format!("residuals-{name}.png"));
-            residual_panels_png(&p, name, a, b).unwrap();
-            assert_png(&p);
+            let (img, l) = drawn(&p, || residual_panels_png(&p, name, a, b));
+            let dots =
+                |k: usize| img.count(l[k].plot, |p| near(p, over_white(PALETTE[0], 0.85), 30));
+            if *name == "constant" {
+                // Four dots on one another: nearly opaque.
+                assert!(has(&img, &l[0], (2.0, 0.0), 1, PALETTE[0]));
+                assert!(has(&img, &l[1], (0.0, 0.0), 1, PALETTE[0]));
+            } else {
+                // Nothing finite: no dot.
+                assert_eq!((dots(0), dots(1)), (0, 0), "{name}");
+            }
         }
     }
 
@@ -878,18 +1010,24 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let (its, temps) = annealing_history(1200);
         let p = dir.path().join("annealing.png");
-        annealing_png(&p, "simulated annealing", &its, None).unwrap();
-        assert_png(&p);
+        let (img, l) = drawn(&p, || annealing_png(&p, "simulated annealing", &its, None));
+        assert_eq!(l.len(), 1);
+        assert_follows(&img, &l[0], &its, None);
         let p = dir.path().join("annealing-t.png");
-        annealing_png(&p, "simulated annealing", &its, Some(&temps)).unwrap();
-        assert_png(&p);
-        // Long history: decimated, still fast.
+        let (img, l) = drawn(&p, || {
+            annealing_png(&p, "simulated annealing", &its, Some(&temps))
+        });
+        assert_eq!(l.len(), 2);
+        assert_follows(&img, &l[0], &its, None);
+        assert_follows(&img, &l[1], &its, Some(&temps));
+        // Long history: decimated, still fast, still on the data.
         let (its, temps) = annealing_history(50_000);
         let p = dir.path().join("annealing-long.png");
         let start = std::time::Instant::now();
-        annealing_png(&p, "long", &its, Some(&temps)).unwrap();
-        assert_png(&p);
+        let (img, l) = drawn(&p, || annealing_png(&p, "long", &its, Some(&temps)));
         assert!(start.elapsed().as_secs_f64() < 20.0);
+        assert_follows(&img, &l[0], &its, None);
+        assert_follows(&img, &l[1], &its, Some(&temps));
 
         let nan = f64::NAN;
         type History = Vec<(f64, f64, f64)>;
@@ -917,12 +1055,56 @@ mod tests {
                 let p = dir
                     .path()
                     .join(format!("annealing-{name}-{}.png", temperature.is_some()));
-                annealing_png(&p, name, its, temperature).unwrap();
-                assert_png(&p);
+                let (img, l) = drawn(&p, || annealing_png(&p, name, its, temperature));
+                assert_eq!(l.len(), 1 + temperature.is_some() as usize, "{name}");
+                if *name != "gappy" {
+                    continue;
+                }
+                // The best J line is drawn through its finite points…
+                let line = |k: usize, at: (f64, f64), c: RGBColor| {
+                    img.any_near(l[k].pixel(at), 1, |p| tinted(p, c, 0.35))
+                };
+                assert!(line(0, (1.5, 2.0), PALETTE[1]));
+                assert!(line(0, (3.5, 1.0), PALETTE[1]));
+                // …the current J's gap (iteration 2) is not bridged, its last run is drawn.
+                assert!(line(0, (3.5, 2.0), PALETTE[0]));
+                assert!(!line(0, (2.0, 1.5), PALETTE[0]));
+                if temperature.is_some() {
+                    // Temperature 1 → 0.5 drawn (log axis), the NaN at 3 breaks the line.
+                    assert!(line(1, (1.5, 0.5f64.sqrt()), PALETTE[2]));
+                    assert!(!line(1, (3.0, 0.125f64.sqrt()), PALETTE[2]));
+                }
             }
         }
         let p = dir.path().join("annealing-bad.png");
         assert!(annealing_png(&p, "t", &[(1.0, 1.0, 1.0)], Some(&[1.0, 2.0])).is_err());
+    }
+
+    /// The best J line (or, with `temperature`, the temperature line) passes through the
+    /// history's values.
+    fn assert_follows(
+        img: &Image,
+        l: &ChartLayout,
+        its: &[(f64, f64, f64)],
+        temperature: Option<&[f64]>,
+    ) {
+        let step = (its.len() / 97).max(1);
+        let picks: Vec<usize> = (step / 2..its.len()).step_by(step).collect();
+        let on = picks
+            .iter()
+            .filter(|&&k| {
+                let (at, c) = match temperature {
+                    None => ((its[k].0, its[k].2), PALETTE[1]),
+                    Some(t) => ((its[k].0, t[k]), PALETTE[2]),
+                };
+                img.any_near(l.pixel(at), 1, |p| tinted(p, c, 0.35))
+            })
+            .count();
+        assert!(
+            on * 100 >= picks.len() * 95,
+            "{on} of {} on the line",
+            picks.len()
+        );
     }
 
     /// Renders the examples to /tmp/plots_doe_examples for a visual check:

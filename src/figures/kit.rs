@@ -661,18 +661,253 @@ pub(crate) fn overlaps(a: PixelRect, b: PixelRect) -> bool {
     a.0 < b.2 && b.0 < a.2 && a.1 < b.3 && b.1 < a.3
 }
 
-/// Test helper: `path` holds a real PNG (signature, more than a header's worth of bytes).
+// ---------------------------------------------------------------------------------------------
+// Layout: where a chart puts its data, so that tests can map data to image pixels
+
 #[cfg(test)]
-pub(crate) fn assert_png(path: &Path) {
-    const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, b'\n'];
-    let bytes = std::fs::read(path).expect("plot written");
-    assert!(
-        bytes.len() > 1000,
-        "{}: {} bytes",
-        path.display(),
-        bytes.len()
-    );
-    assert_eq!(bytes[..8], PNG_SIGNATURE, "{}", path.display());
+/// One axis of a drawn chart: its data range and the image pixel of each end.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct AxisMap {
+    pub(crate) lo: f64,
+    pub(crate) hi: f64,
+    pub(crate) px_lo: f64,
+    pub(crate) px_hi: f64,
+    pub(crate) log: bool,
+}
+
+#[cfg(test)]
+impl AxisMap {
+    /// The image pixel coordinate of the data value `v` (fractional; beyond the ends for
+    /// values off the axis).
+    pub(crate) fn pixel(&self, v: f64) -> f64 {
+        let f = if self.log {
+            (v.ln() - self.lo.ln()) / (self.hi.ln() - self.lo.ln())
+        } else {
+            (v - self.lo) / (self.hi - self.lo)
+        };
+        self.px_lo + f * (self.px_hi - self.px_lo)
+    }
+}
+
+#[cfg(test)]
+/// A chart's plot area in image pixels and the mapping of its two axes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ChartLayout {
+    /// `(left, top, right, bottom)`, right and bottom exclusive.
+    pub(crate) plot: PixelRect,
+    pub(crate) x: AxisMap,
+    pub(crate) y: AxisMap,
+}
+
+#[cfg(test)]
+impl ChartLayout {
+    /// The image pixel of the data point `(x, y)`, rounded.
+    pub(crate) fn pixel(&self, (x, y): (f64, f64)) -> (i32, i32) {
+        (
+            self.x.pixel(x).round() as i32,
+            self.y.pixel(y).round() as i32,
+        )
+    }
+}
+
+#[cfg(test)]
+thread_local! {
+    static LAYOUTS: std::cell::RefCell<Vec<ChartLayout>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Records where `chart` draws — its plot area and the pixels of the ends of its axes `x` and
+/// `y` (`log` per axis) — for the tests of this thread to read with [`take_layouts`]. Costs
+/// nothing outside tests.
+pub(crate) fn note_layout<DB: DrawingBackend, CT: CoordTranslate<From = (f64, f64)>>(
+    chart: &ChartContext<DB, CT>,
+    x: Range<f64>,
+    y: Range<f64>,
+    log: (bool, bool),
+) {
+    #[cfg(test)]
+    {
+        let (xs, ys) = chart.plotting_area().get_pixel_range();
+        let a = chart.as_coord_spec().translate(&(x.start, y.start));
+        let b = chart.as_coord_spec().translate(&(x.end, y.end));
+        let layout = ChartLayout {
+            plot: (xs.start, ys.start, xs.end, ys.end),
+            x: AxisMap {
+                lo: x.start,
+                hi: x.end,
+                px_lo: a.0 as f64,
+                px_hi: b.0 as f64,
+                log: log.0,
+            },
+            y: AxisMap {
+                lo: y.start,
+                hi: y.end,
+                px_lo: a.1 as f64,
+                px_hi: b.1 as f64,
+                log: log.1,
+            },
+        };
+        LAYOUTS.with(|l| l.borrow_mut().push(layout));
+    }
+    #[cfg(not(test))]
+    let _ = (chart, x, y, log);
+}
+
+/// The layouts noted on this thread since the last call, in drawing order.
+#[cfg(test)]
+pub(crate) fn take_layouts() -> Vec<ChartLayout> {
+    LAYOUTS.with(|l| std::mem::take(&mut *l.borrow_mut()))
+}
+
+/// Test helpers: decode a written figure and ask what colour its pixels have.
+#[cfg(test)]
+pub(crate) mod testing {
+    use super::{take_layouts, ChartLayout, PixelRect, Result};
+    use plotters::style::RGBColor;
+    use std::path::Path;
+
+    /// A decoded PNG, 8-bit RGB.
+    pub(crate) struct Image {
+        pub(crate) width: i32,
+        pub(crate) height: i32,
+        rgb: Vec<[u8; 3]>,
+    }
+
+    /// Decodes the figure at `path` (the `png` crate: an independent decoder of what
+    /// plotters encoded).
+    pub(crate) fn read_png(path: &Path) -> Image {
+        let file = std::fs::File::open(path).expect("figure written");
+        let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+            .read_info()
+            .expect("a PNG");
+        let mut buf = vec![0; reader.output_buffer_size()];
+        let info = reader.next_frame(&mut buf).expect("PNG data");
+        assert_eq!(info.bit_depth, png::BitDepth::Eight, "{}", path.display());
+        let channels = match info.color_type {
+            png::ColorType::Rgb => 3,
+            png::ColorType::Rgba => 4,
+            other => panic!("{}: colour type {other:?}", path.display()),
+        };
+        let rgb = buf[..info.buffer_size()]
+            .chunks_exact(channels)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        Image {
+            width: info.width as i32,
+            height: info.height as i32,
+            rgb,
+        }
+    }
+
+    /// Draws a figure with `draw` and returns its image and the layouts of its charts.
+    pub(crate) fn drawn(
+        path: &Path,
+        draw: impl FnOnce() -> Result<()>,
+    ) -> (Image, Vec<ChartLayout>) {
+        take_layouts();
+        draw().expect("figure drawn");
+        // To look at what a test drew: HDI_KEEP_FIGURES=<dir>.
+        if let Some(dir) = std::env::var_os("HDI_KEEP_FIGURES") {
+            let name = path.file_name().expect("a file name");
+            std::fs::copy(path, Path::new(&dir).join(name)).expect("figure kept");
+        }
+        (read_png(path), take_layouts())
+    }
+
+    /// Where on the viridis scale (0…1) the colour `p` lies, if it is a viridis colour
+    /// (within `tol` per channel of plotters' map).
+    pub(crate) fn viridis_value(p: [u8; 3], tol: u8) -> Option<f64> {
+        use plotters::style::colors::colormaps::ViridisRGB;
+        let dist = |c: RGBColor| {
+            (0..3)
+                .map(|i| [c.0, c.1, c.2][i].abs_diff(p[i]))
+                .max()
+                .unwrap_or(0)
+        };
+        (0..=1000)
+            .map(|k| {
+                let t = k as f64 / 1000.0;
+                (t, dist(ViridisRGB::get_color_normalized(t, 0.0, 1.0)))
+            })
+            .min_by_key(|&(_, d)| d)
+            .filter(|&(_, d)| d <= tol)
+            .map(|(t, _)| t)
+    }
+
+    /// `colour` drawn with opacity `alpha` over white, as the bitmap backend blends it.
+    pub(crate) fn over_white(colour: RGBColor, alpha: f64) -> RGBColor {
+        let mix = |c: u8| (f64::from(c) * alpha + 255.0 * (1.0 - alpha)).round() as u8;
+        RGBColor(mix(colour.0), mix(colour.1), mix(colour.2))
+    }
+
+    /// Every channel within `tol` of `colour`.
+    pub(crate) fn near(p: [u8; 3], colour: RGBColor, tol: u8) -> bool {
+        p[0].abs_diff(colour.0) <= tol
+            && p[1].abs_diff(colour.1) <= tol
+            && p[2].abs_diff(colour.2) <= tol
+    }
+
+    /// `colour` over white with some opacity of at least `min_alpha` (lines drawn at an angle
+    /// are blended into the background along their edges).
+    pub(crate) fn tinted(p: [u8; 3], colour: RGBColor, min_alpha: f64) -> bool {
+        let c = [colour.0, colour.1, colour.2].map(f64::from);
+        let q = p.map(f64::from);
+        let k = (0..3).min_by(|&a, &b| c[a].total_cmp(&c[b])).unwrap_or(0);
+        if c[k] >= 250.0 {
+            return false;
+        }
+        let alpha = (255.0 - q[k]) / (255.0 - c[k]);
+        alpha >= min_alpha
+            && alpha <= 1.05
+            && (0..3).all(|i| (alpha * c[i] + (1.0 - alpha) * 255.0 - q[i]).abs() <= 25.0)
+    }
+
+    pub(crate) const WHITE_PX: [u8; 3] = [255, 255, 255];
+
+    impl Image {
+        /// The pixel at `(x, y)`, `None` outside the image.
+        pub(crate) fn at(&self, x: i32, y: i32) -> Option<[u8; 3]> {
+            (x >= 0 && y >= 0 && x < self.width && y < self.height)
+                .then(|| self.rgb[(y * self.width + x) as usize])
+        }
+
+        /// How many pixels of `rect` (right, bottom exclusive) satisfy `pred`.
+        pub(crate) fn count(&self, rect: PixelRect, pred: impl Fn([u8; 3]) -> bool) -> usize {
+            let mut n = 0;
+            for y in rect.1.max(0)..rect.3.min(self.height) {
+                for x in rect.0.max(0)..rect.2.min(self.width) {
+                    if pred(self.rgb[(y * self.width + x) as usize]) {
+                        n += 1;
+                    }
+                }
+            }
+            n
+        }
+
+        /// Whether a pixel within `radius` (a square) of `(x, y)` satisfies `pred`.
+        pub(crate) fn any_near(
+            &self,
+            (x, y): (i32, i32),
+            radius: i32,
+            pred: impl Fn([u8; 3]) -> bool,
+        ) -> bool {
+            self.count(
+                (x - radius, y - radius, x + radius + 1, y + radius + 1),
+                pred,
+            ) > 0
+        }
+
+        /// How many pixels differ from `other`'s (every pixel when the sizes differ).
+        pub(crate) fn differing_pixels(&self, other: &Image) -> usize {
+            if (self.width, self.height) != (other.width, other.height) {
+                return self.rgb.len().max(other.rgb.len());
+            }
+            self.rgb
+                .iter()
+                .zip(&other.rgb)
+                .filter(|(a, b)| a != b)
+                .count()
+        }
+    }
 }
 
 #[cfg(test)]

@@ -203,6 +203,7 @@ pub fn clearance_sweep_png(
             .y_label_area_size(65)
             .build_cartesian_2d(xr.clone(), yr.clone())
             .map_err(|e| e.to_string())?;
+        super::kit::note_layout(&chart, xr.clone(), yr.clone(), (false, false));
         // Bands first, under the mesh lines and the data.
         draw_bands(&mut chart, bands, Some(13))?;
         chart
@@ -307,6 +308,7 @@ pub fn metric_sweep_png(
             .y_label_area_size(65)
             .build_cartesian_2d(xr.clone(), yr.clone())
             .map_err(|e| e.to_string())?;
+        super::kit::note_layout(&chart, xr.clone(), yr.clone(), (false, false));
         chart
             .configure_mesh()
             .x_desc(x_desc)
@@ -423,6 +425,7 @@ pub fn time_histories_banded_png(
                 .y_label_area_size(75)
                 .build_cartesian_2d(xr.clone(), yr.clone())
                 .map_err(|e| e.to_string())?;
+            super::kit::note_layout(&chart, xr.clone(), yr.clone(), (false, false));
             draw_bands(&mut chart, bands, (k == 0).then_some(12))?;
             let mut mesh = chart.configure_mesh();
             mesh.y_desc(panel.y_desc)
@@ -469,7 +472,29 @@ pub fn time_histories_banded_png(
 mod tests {
     use super::*;
 
-    use crate::figures::kit::assert_png;
+    use crate::figures::kit::testing::{drawn, near, tinted, Image};
+    use crate::figures::kit::ChartLayout;
+
+    fn has(img: &Image, l: &ChartLayout, at: (f64, f64), r: i32, c: RGBColor) -> bool {
+        img.any_near(l.pixel(at), r, |p| near(p, c, 30))
+    }
+
+    /// How many of `pts` have colour `c` drawn within 2 px (blended along a steep line's
+    /// edges, at least half opaque).
+    fn drawn_at(img: &Image, l: &ChartLayout, pts: &[(f64, f64)], c: RGBColor) -> usize {
+        pts.iter()
+            .filter(|&&p| img.any_near(l.pixel(p), 2, |px| tinted(px, c, 0.5)))
+            .count()
+    }
+
+    /// The dashed reference lines' grey (also over a band), or black.
+    fn dark(p: [u8; 3]) -> bool {
+        p.iter().all(|&c| c < 140)
+    }
+
+    fn colour_count(img: &Image, l: &ChartLayout, c: RGBColor) -> usize {
+        img.count(l.plot, |p| near(p, c, 30))
+    }
 
     fn regimes() -> Vec<RegimeBand<'static>> {
         vec![
@@ -524,17 +549,45 @@ mod tests {
         ];
         let hlines = [(0.0, "c = 0"), (t0, "T0"), (2.0 * t0, "2T0")];
         let p = dir.path().join("clearance.png");
-        clearance_sweep_png(
-            &p,
-            "clearance vs actuation",
-            "h_TFC (nm)",
-            "clearance (nm)",
-            &series,
-            &regimes(),
-            &hlines,
-        )
-        .unwrap();
-        assert_png(&p);
+        let (img, l) = drawn(&p, || {
+            clearance_sweep_png(
+                &p,
+                "clearance vs actuation",
+                "h_TFC (nm)",
+                "clearance (nm)",
+                &series,
+                &regimes(),
+                &hlines,
+            )
+        });
+        let l = l[0];
+        // Every mean is on its series' line (the legend may hide a few).
+        for (k, s) in series.iter().enumerate() {
+            let pts: Vec<(f64, f64)> = s.points.iter().map(|p| (p.0, p.1)).collect();
+            let on = drawn_at(&img, &l, &pts, PALETTE[k]);
+            assert!(
+                on * 10 >= pts.len() * 9,
+                "{}: {on} of {}",
+                s.label,
+                pts.len()
+            );
+        }
+        // The clearance line crosses the zero line where the data say (2.4 nm at 8.6 nm,
+        // falling 0.4 nm per nm: 14.6 nm), and not before.
+        assert!(has(&img, &l, (14.6, 0.0), 1, PALETTE[0]));
+        let (x0, y0) = l.pixel((14.0, 0.0));
+        assert!(!img.any_near((x0, y0), 1, |p| near(p, PALETTE[0], 30)));
+        // The dashed references at T0 and 2T0, clear of the data at 2–4 nm.
+        for y in [t0, 2.0 * t0] {
+            let (xa, ya) = l.pixel((2.0, y));
+            let (xb, _) = l.pixel((4.0, y));
+            let dashes = img.count((xa, ya - 1, xb, ya + 2), dark);
+            assert!(dashes > 10, "T line at {y}: {dashes}");
+        }
+        // The regime bands shade their x intervals (above the data, below the labels).
+        for (k, x) in [4.1, 9.25, 10.65, 13.1].into_iter().enumerate() {
+            assert!(has(&img, &l, (x, 7.3), 0, BAND_FILLS[k]), "band {k} at {x}");
+        }
 
         let nan = f64::NAN;
         let degenerate: [(&str, Vec<SweepSeries>); 4] = [
@@ -570,8 +623,16 @@ mod tests {
                 let p = dir
                     .path()
                     .join(format!("clearance-{name}-{}.png", bands.len()));
-                clearance_sweep_png(&p, name, "x", "y", s, &bands, &lines).unwrap();
-                assert_png(&p);
+                let (img, l) = drawn(&p, || {
+                    clearance_sweep_png(&p, name, "x", "y", s, &bands, &lines)
+                });
+                let l = l[0];
+                if *name == "constant" {
+                    // One usable point: a marker, where it is.
+                    assert!(has(&img, &l, (3.0, 1e-9), 1, PALETTE[0]));
+                } else {
+                    assert_eq!(colour_count(&img, &l, PALETTE[0]), 0, "{name}");
+                }
             }
         }
         // Bands and lines that are themselves degenerate.
@@ -593,17 +654,22 @@ mod tests {
                 label: "outside",
             },
         ];
-        clearance_sweep_png(
-            &p,
-            "t",
-            "x",
-            "y",
-            &series,
-            &bad,
-            &[(nan, "nan"), (1e308, "huge")],
-        )
-        .unwrap();
-        assert_png(&p);
+        let (img, l) = drawn(&p, || {
+            clearance_sweep_png(
+                &p,
+                "t",
+                "x",
+                "y",
+                &series,
+                &bad,
+                &[(nan, "nan"), (1e308, "huge")],
+            )
+        });
+        // The bad bands and lines leave the data where it was.
+        let l = l[0];
+        let pts: Vec<(f64, f64)> = series[0].points.iter().map(|p| (p.0, p.1)).collect();
+        assert!(drawn_at(&img, &l, &pts, PALETTE[0]) * 10 >= pts.len() * 9);
+        assert!(l.y.hi < 100.0, "{:?}", l.y);
     }
 
     #[test]
@@ -627,16 +693,32 @@ mod tests {
             .map(|&(h, _)| (h, (h - 9.7).max(0.0) * 12.0))
             .collect();
         let p = dir.path().join("metric.png");
-        metric_sweep_png(
-            &p,
-            "FHM/BV vs actuation",
-            "h_TFC (nm)",
-            "FHM / BV (%)",
-            &[("FHM/BV", fhm), ("% solid contact", solid)],
-            &[(9.7, "touchdown"), (8.5, "critical point"), (9.8, "close")],
-        )
-        .unwrap();
-        assert_png(&p);
+        let series = [("FHM/BV", fhm), ("% solid contact", solid)];
+        let (img, l) = drawn(&p, || {
+            metric_sweep_png(
+                &p,
+                "FHM/BV vs actuation",
+                "h_TFC (nm)",
+                "FHM / BV (%)",
+                &series,
+                &[(9.7, "touchdown"), (8.5, "critical point"), (9.8, "close")],
+            )
+        });
+        let l = l[0];
+        for (k, (label, pts)) in series.iter().enumerate() {
+            let on = drawn_at(&img, &l, pts, PALETTE[k]);
+            assert!(on * 10 >= pts.len() * 9, "{label}: {on} of {}", pts.len());
+        }
+        // The touchdown mark's dashed line stands at 9.7 nm, the critical point's at 8.5 nm.
+        for x in [8.5, 9.7] {
+            let (px, _) = l.pixel((x, 0.0));
+            let (_, mid) = l.pixel((x, 120.0));
+            let dashes = img.count((px - 1, mid - 60, px + 2, mid + 60), dark);
+            assert!(dashes > 30, "mark at {x}: {dashes}");
+        }
+        let (px, _) = l.pixel((7.0, 0.0));
+        let (_, mid) = l.pixel((7.0, 120.0));
+        assert_eq!(img.count((px - 1, mid - 60, px + 2, mid + 60), dark), 0);
 
         let nan = f64::NAN;
         type Named = Vec<(&'static str, Vec<(f64, f64)>)>;
@@ -657,8 +739,17 @@ mod tests {
                 let p = dir
                     .path()
                     .join(format!("metric-{name}-{}.png", marks.len()));
-                metric_sweep_png(&p, name, "x", "y", s, &marks).unwrap();
-                assert_png(&p);
+                let (img, l) = drawn(&p, || metric_sweep_png(&p, name, "x", "y", s, &marks));
+                let l = l[0];
+                if *name == "constant" {
+                    assert!(has(&img, &l, (1.0, 0.0), 1, PALETTE[0]));
+                } else {
+                    assert_eq!(colour_count(&img, &l, PALETTE[0]), 0, "{name}");
+                }
+                // The x range takes in the usable mark.
+                if !marks.is_empty() {
+                    assert!(l.x.lo < 4.0 && 4.0 < l.x.hi, "{name}: {:?}", l.x);
+                }
             }
         }
     }
@@ -692,10 +783,24 @@ mod tests {
         ];
         let p = dir.path().join("histories.png");
         let start = std::time::Instant::now();
-        time_histories_png(&p, "time histories", &panels).unwrap();
-        assert_png(&p);
+        let (img, l) = drawn(&p, || time_histories_png(&p, "time histories", &panels));
         // Generous: the point is that 8000-point series do not draw point by point.
         assert!(start.elapsed().as_secs_f64() < 20.0);
+        // Stacked panels on one time axis, each series on its data (decimated or not).
+        assert_eq!(l.len(), 3);
+        for (panel, layout) in panels.iter().zip(&l) {
+            assert_eq!((layout.x.lo, layout.x.hi), (l[0].x.lo, l[0].x.hi));
+            for (k, (label, pts)) in panel.series.iter().enumerate() {
+                let picks: Vec<(f64, f64)> = pts.iter().step_by(83).copied().collect();
+                let on = drawn_at(&img, layout, &picks, PALETTE[k]);
+                assert!(
+                    on * 10 >= picks.len() * 9,
+                    "{label}: {on} of {}",
+                    picks.len()
+                );
+            }
+        }
+        assert!(l[0].plot.3 <= l[1].plot.1 && l[1].plot.3 <= l[2].plot.1);
 
         let nan = f64::NAN;
         let cases: Vec<(&str, Vec<Panel>)> = vec![
@@ -736,8 +841,16 @@ mod tests {
         ];
         for (name, panels) in &cases {
             let p = dir.path().join(format!("hist-{name}.png"));
-            time_histories_png(&p, name, panels).unwrap();
-            assert_png(&p);
+            let (img, l) = drawn(&p, || time_histories_png(&p, name, panels));
+            assert_eq!(l.len(), panels.len().max(1), "{name}");
+            if *name == "constant" {
+                // 5 nm-ish constant over 2 ms: a flat line at its value.
+                assert!(has(&img, &l[0], (1.0, 5e-9), 1, PALETTE[0]));
+            } else {
+                for layout in &l {
+                    assert_eq!(colour_count(&img, layout, PALETTE[0]), 0, "{name}");
+                }
+            }
         }
     }
 
@@ -796,7 +909,26 @@ mod tests {
             },
         ];
         let p = dir.path().join("banded.png");
-        time_histories_banded_png(&p, "banded", &panels, &bands).unwrap();
-        assert_png(&p);
+        let (img, l) = drawn(&p, || {
+            time_histories_banded_png(&p, "banded", &panels, &bands)
+        });
+        // μ drawn while loaded, a gap (band colour) elsewhere: not bridged across 0–0.6 ms.
+        let mu = &l[1];
+        assert!(has(&img, mu, (1.0, 1.2), 1, PALETTE[0]));
+        assert!(!has(&img, mu, (0.3, 1.2), 2, PALETTE[0]));
+        // The bands behind both panels; the NaN one skipped (its index keeps its colour).
+        for layout in &l {
+            let (_, y) = layout.pixel((0.0, layout.y.lo));
+            let row = y - 3;
+            let at = |t: f64| img.at(layout.pixel((t, 0.0)).0, row).unwrap();
+            // (A light grid line may cross: 15 levels of tolerance.)
+            assert!(near(at(0.23), BAND_FILLS[0], 15), "{:?}", at(0.23));
+            assert!(near(at(0.53), BAND_FILLS[1], 15), "{:?}", at(0.53));
+            assert!(
+                near(at(1.87), RGBColor(255, 255, 255), 15),
+                "{:?}",
+                at(1.87)
+            );
+        }
     }
 }

@@ -1106,9 +1106,15 @@ mod tests {
         // 0.0203584·√α with its α = 2.856386) is 0.03440748, which rounds to 0.034407 — the
         // printed digit is one unit high, most likely double rounding (0.03440748 → 0.0344075 →
         // 0.034408). Same definitions as every other column (which all round correctly), so we
-        // accept one unit of the last printed digit (1.5e-5 relative) and pin our value.
+        // accept one unit of the last printed digit (1.5e-5 relative), and check the full
+        // value against σ·R·η of Nayak's relations (η = m4/(6π√3·m2), R = 0.375√(π/m4);
+        // docs/surfaces.md) evaluated on the independent numpy σ, m2 and m4.
         assert!((rep.nayak.beta - 0.034408).abs() <= 1e-6);
-        assert_rel("beta (pinned)", rep.nayak.beta, 0.034407484596, 1e-9);
+        let want = numpy_reference();
+        let (sigma, m2, m4) = (want("sigma_m"), want("m2_fd"), want("m4_fd"));
+        let eta = m4 / (6.0 * std::f64::consts::PI * 3f64.sqrt() * m2);
+        let r = 0.375 * (std::f64::consts::PI / m4).sqrt();
+        assert_rel("beta = σRη (numpy)", rep.nayak.beta, sigma * r * eta, 1e-12);
         assert_rel(
             "beta = C·√α",
             rep.nayak.beta,
@@ -1171,40 +1177,58 @@ mod tests {
         }
     }
 
+    /// The canonical surface's numbers from numpy (`tests/data/surfaces/
+    /// make_canonical_roughness_reference.py`), by key.
+    fn numpy_reference() -> impl Fn(&str) -> f64 {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/data/surfaces/canonical_roughness_numpy.json"
+        ))
+        .expect("reference file");
+        let reference: serde_json::Value = serde_json::from_str(&text).unwrap();
+        move |key: &str| reference[key].as_f64().unwrap_or_else(|| panic!("{key}"))
+    }
+
+    /// Full precision against an independent numpy implementation of the same definitions
+    /// (`tests/data/surfaces/make_canonical_roughness_reference.py`): periodic finite
+    /// differences, the FFT moments and the 9-point summits with their 4-direction curvature
+    /// agree to rounding (summation order: ~1e-15 relative; 1e-12 allowed).
     #[test]
-    fn canonical_full_precision_regression() {
-        // Our own full-precision values (all round to the §2.6 table), pinned against drift.
+    fn canonical_full_precision_reference() {
+        let want = numpy_reference();
         let map = canonical_map();
         let nine = roughness(&map, &RoughnessOptions::default()).unwrap();
-        assert_rel("m2", nine.m2, 1.2647792287945677e-3, 1e-9);
-        assert_rel("m4", nine.m4, 1.827706185388635e13, 1e-9);
-        assert_rel("R9", nine.r, 158.12206144130673e-9, 1e-9);
+        assert_eq!(nine.n_summits as f64, want("n_summits_9"));
+        let rel = 1e-12;
+        assert_rel("m2", nine.m2, want("m2_fd"), rel);
+        assert_rel("m4", nine.m4, want("m4_fd"), rel);
+        assert_rel("R9", nine.r, want("r9_inverse_mean_curvature_m"), rel);
         assert_rel(
             "R9 mean(1/k)",
             nine.r_mean_of_inverse,
-            180.18437222559388e-9,
-            1e-9,
+            want("r9_mean_of_inverse_m"),
+            rel,
         );
         assert_rel(
             "R9 median(1/k)",
             nine.r_median_of_inverse,
-            163.0831571327121e-9,
-            1e-9,
+            want("r9_median_of_inverse_m"),
+            rel,
         );
-        assert_rel("sigma_s9", nine.sigma_s, 0.3814184702117963e-9, 1e-9);
+        assert_rel("sigma_s9", nine.sigma_s, want("sigma_s9_m"), rel);
         assert_rel(
             "mean summit height",
             nine.mean_summit_height,
-            0.678041479461501e-9,
-            1e-9,
+            want("mean_summit_height_9_m"),
+            rel,
         );
         let spectral = roughness(
             &map,
             &opts(MomentsMethod::Spectral, SummitScheme::NinePoint, false),
         )
         .unwrap();
-        assert_rel("m2 spectral", spectral.m2, 1.289211375990992e-3, 1e-9);
-        assert_rel("m4 spectral", spectral.m4, 1.945749017741714e13, 1e-9);
+        assert_rel("m2 spectral", spectral.m2, want("m2_spectral"), rel);
+        assert_rel("m4 spectral", spectral.m4, want("m4_spectral"), rel);
     }
 
     #[test]
