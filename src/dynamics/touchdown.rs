@@ -181,10 +181,7 @@ mod tests {
             let td = 9.7345 * NM;
             let r = find_touchdown(&s, &[], step_at(td)).unwrap();
             let (a, lo) = (r.actuation.unwrap(), r.last_flying.unwrap());
-            assert!(
-                a >= td && a - td <= s.resolution + 1e-18,
-                "batch {batch}: {a}"
-            );
+            assert!(a >= td && a - td <= s.resolution + 1e-18, "batch {batch}: {a}");
             assert!(lo < td && a - lo <= s.resolution + 1e-18);
         }
     }
