@@ -4,15 +4,18 @@
 //! * **Knobs** ([`Knob`]) — DMW amplitude (the record's standard deviation was dropped),
 //!   rear-spring stiffening β, work of adhesion Δγ, LJ spacing ε, contact damping ζ_c, the
 //!   initial model's truncation `n` (S1c) and, as a what-if only, the summit density η (seeded
-//!   124 µm⁻² for the improved model, so it is not in the default set). Each has physical bounds
-//!   and is searched in `[0, 1]` (logarithmic for the scale-like ones).
-//! * **Targets** ([`Target`]) — published numbers with the spec's tolerance; the objective is
-//!   `Σ ((ours − published)/tolerance)²`, so a residual of 1 means "at the edge of the band".
+//!   124 µm⁻² for the improved model, so it is not in the default set). Each box is the model's
+//!   accepted range where it has one, and is searched in `[0, 1]`.
+//! * **Targets** ([`Target`]) — published numbers with the spec's tolerance, in two sets: the
+//!   fitted set (the objective `Σ weight·((ours − published)/tolerance)²`, so a residual of 1
+//!   means "at the edge of the band") and the held-out set, evaluated before and after the fit
+//!   on the base sweep's grid and never inside it.
 //! * **Evaluation** — one objective value is a handful of 2-DOF cases at the target actuations
-//!   (parallel) plus a touchdown search: the smallest actuation whose steady window reaches
-//!   solid contact (min clearance < 0), bracketed by trisection to `touchdown_resolution`.
+//!   (parallel) plus the touchdown of [`find_touchdown`] (scan from 0 nm, first crossing
+//!   refined to 0.02 nm; docs/conventions.md).
 //! * **Search** — Nelder–Mead in the unit box from the spec defaults
-//!   ([`crate::numerics::nelder_mead`]): deterministic, so the same inputs give the same fit.
+//!   ([`crate::numerics::nelder_mead`]) to its tolerance or budget, which the result says:
+//!   deterministic, so the same inputs give the same fit.
 
 use super::air_bearing::RearStiffening;
 use super::geometry::ContactCriterion;
