@@ -131,7 +131,10 @@ fn calibrated_numbers_match_an_independent_sweep_and_the_counts_match_the_table(
         .find(|t| t["target"] == "full_contact_onset")
         .unwrap();
     if let Ok(v) = onset["spec_defaults"].parse::<f64>() {
-        assert!([0.0, 5.0, 10.0, 15.0].iter().any(|g| (g - v).abs() < 1e-9), "{v}");
+        assert!(
+            [0.0, 5.0, 10.0, 15.0].iter().any(|g| (g - v).abs() < 1e-9),
+            "{v}"
+        );
     }
     let solid = table
         .iter()
