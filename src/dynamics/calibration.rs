@@ -1819,4 +1819,51 @@ mod tests {
         assert_eq!(ha.outcomes[1].value, None);
         assert!(!ha.outcomes[1].within_tolerance());
     }
+
+    /// The held-out sweep quantities on a hand-made curve (T0 = 0.75 nm: flying above 1.5 nm,
+    /// mobile to 0.75, bonded to 0, solid below), each derived by hand.
+    #[test]
+    fn sweep_quantities_on_a_hand_made_curve() {
+        let c = [3.0, 2.5, 1.2, 0.9, 0.5, 0.2, -0.3];
+        let vib = [5.0, 7.0, 9.0, 8.0, 6.0, 4.0, 3.0];
+        let points: Vec<SweepPoint> = (0..c.len())
+            .map(|i| SweepPoint {
+                actuation_m: (8.0 + 0.5 * i as f64) * NM,
+                mean_clearance_m: c[i] * NM,
+                // The 10.5 nm case touches by vibration although its mean is 0.2 nm.
+                any_solid_contact: c[i] < 0.25,
+                vibration_percent: vib[i],
+            })
+            .collect();
+        let m = sweep_metrics(&points, &SlopeParams::new(0.75 * NM), 11.0 * NM).unwrap();
+        let v = |q| sweep_value(q, &points, &m, &[]);
+        let close = |a: Option<f64>, b: f64| (a.unwrap() - b).abs() < 1e-12 * b.abs().max(1e-9);
+        assert!(close(
+            v(Quantity::RegimeBoundary {
+                below: Regime::Flying
+            }),
+            8.75 * NM
+        ));
+        assert!(close(
+            v(Quantity::RegimeBoundary {
+                below: Regime::MobileLubricantContact
+            }),
+            9.75 * NM
+        ));
+        assert!(close(
+            v(Quantity::RegimeBoundary {
+                below: Regime::BondedLubricantContact
+            }),
+            10.75 * NM
+        ));
+        assert!(close(v(Quantity::LubricantContactOnset), 9.0 * NM));
+        assert!(close(v(Quantity::FlyingFhmMax), 7.0));
+        assert!(close(v(Quantity::TouchdownClearance), 0.2 * NM));
+        assert!(close(v(Quantity::TouchdownVibration), 4.0));
+        // Lubricant-contact points 9.0–10.5 nm: c = 1.2, 0.9, 0.5, 0.2 → least-squares slope
+        // Σ(x−x̄)(y−ȳ)/Σ(x−x̄)² = −1.5/1.25 = −0.68 (x̄ = 9.75, ȳ = 0.7).
+        assert!(close(v(Quantity::Slope(SlopeName::C)), -0.68));
+        // Needs the cases' contact metrics: none given here.
+        assert_eq!(v(Quantity::FullContactOnset), None);
+    }
 }

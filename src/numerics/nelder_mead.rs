@@ -242,6 +242,13 @@ mod tests {
         )
         .unwrap();
         assert!(r.converged);
+        assert_eq!(r.stop, StopReason::Tolerance);
+        assert!(
+            r.f_spread <= 1e-12 && r.x_spread <= 1e-6,
+            "{} {}",
+            r.f_spread,
+            r.x_spread
+        );
         for (a, b) in r.x.iter().zip(target) {
             assert!((a - b).abs() < 1e-4, "{:?}", r.x);
         }
@@ -300,6 +307,7 @@ mod tests {
         )
         .unwrap();
         assert!(!capped.converged);
+        assert_eq!(capped.stop, StopReason::Budget);
         assert!(capped.evaluations.len() <= 6);
     }
 
