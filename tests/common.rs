@@ -42,11 +42,11 @@ impl Project {
             "power_step = \"2 mW\"",
             "power_step = \"16 mW\"\nrefine_touchdown = false",
         );
-        // …and a two-target, one-knob calibration of a few evaluations (the shipped one runs
-        // ~2000 cases).
+        // …and a two-target, one-knob calibration of a few evaluations judged on three
+        // held-out targets of the sweep grid (the shipped one runs ~7000 cases).
         let text = text.replace(
-            "max_evaluations = 120",
-            "max_evaluations = 3\nknobs = [\"dmw_scale\"]\ntargets = [\"clearance_8.5nm\", \"fhm_8.5nm\"]",
+            "\nmax_evaluations = 400",
+            "\nmax_evaluations = 3\nknobs = [\"dmw_scale\"]\ntargets = [\"clearance_8.5nm\", \"fhm_8.5nm\"]\nheld_out = [\"regime_solid_start\", \"full_contact_onset\", \"touchdown_clearance\"]",
         );
         // …and a DOE with a short annealing and coarse Table 2.8 sweeps (the design's 108
         // cases stay: they are what the stage is about).

@@ -46,6 +46,52 @@ pub struct NelderMeadResult {
     pub evaluations: Vec<Evaluation>,
     /// Whether the tolerances stopped the run (otherwise the evaluation budget did).
     pub converged: bool,
+    /// What ended the run.
+    pub stop: StopReason,
+    /// Objective spread (worst − best vertex) of the final simplex.
+    pub f_spread: f64,
+    /// Edge of the smallest axis-aligned cube holding the final simplex (unit-box units).
+    pub x_spread: f64,
+}
+
+/// Why the search stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StopReason {
+    /// Both tolerances met: `f_spread ≤ f_tolerance` and `x_spread ≤ x_tolerance`.
+    Tolerance,
+    /// The evaluation budget ran out first.
+    Budget,
+}
+
+impl StopReason {
+    pub fn name(self) -> &'static str {
+        match self {
+            StopReason::Tolerance => "tolerance",
+            StopReason::Budget => "budget",
+        }
+    }
+}
+
+/// `(worst − best, largest coordinate range)` of a simplex.
+fn spreads(simplex: &[(Vec<f64>, f64)]) -> (f64, f64) {
+    let d = simplex.first().map_or(0, |v| v.0.len());
+    let (best, worst) = simplex
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |a, v| {
+            (a.0.min(v.1), a.1.max(v.1))
+        });
+    let x = (0..d)
+        .map(|k| {
+            let (lo, hi) = simplex
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |a, v| {
+                    (a.0.min(v.0[k]), a.1.max(v.0[k]))
+                });
+            hi - lo
+        })
+        .fold(0.0, f64::max);
+    let f = if worst == best { 0.0 } else { worst - best };
+    (f, x)
 }
 
 fn project(x: &mut [f64]) {
@@ -91,18 +137,8 @@ pub fn minimize_unit_box<E>(
     let mut converged = false;
     while evaluations.len() < opts.max_evaluations {
         simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-        let (best, worst) = (simplex[0].1, simplex[d].1);
-        let spread = (0..d)
-            .map(|k| {
-                let (lo, hi) = simplex
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |a, v| {
-                        (a.0.min(v.0[k]), a.1.max(v.0[k]))
-                    });
-                hi - lo
-            })
-            .fold(0.0, f64::max);
-        if (worst - best).abs() <= opts.f_tolerance && spread <= opts.x_tolerance {
+        let (f_spread, spread) = spreads(&simplex);
+        if f_spread <= opts.f_tolerance && spread <= opts.x_tolerance {
             converged = true;
             break;
         }
@@ -161,12 +197,22 @@ pub fn minimize_unit_box<E>(
         }
     }
     simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let (f_spread, x_spread) = spreads(&simplex);
+    // The budget can run out exactly as the last step meets the tolerances.
+    converged |= f_spread <= opts.f_tolerance && x_spread <= opts.x_tolerance;
     let (x, f) = simplex.swap_remove(0);
     Ok(NelderMeadResult {
         x,
         f,
         evaluations,
         converged,
+        stop: if converged {
+            StopReason::Tolerance
+        } else {
+            StopReason::Budget
+        },
+        f_spread,
+        x_spread,
     })
 }
 
@@ -196,6 +242,13 @@ mod tests {
         )
         .unwrap();
         assert!(r.converged);
+        assert_eq!(r.stop, StopReason::Tolerance);
+        assert!(
+            r.f_spread <= 1e-12 && r.x_spread <= 1e-6,
+            "{} {}",
+            r.f_spread,
+            r.x_spread
+        );
         for (a, b) in r.x.iter().zip(target) {
             assert!((a - b).abs() < 1e-4, "{:?}", r.x);
         }
@@ -254,6 +307,7 @@ mod tests {
         )
         .unwrap();
         assert!(!capped.converged);
+        assert_eq!(capped.stop, StopReason::Budget);
         assert!(capped.evaluations.len() <= 6);
     }
 

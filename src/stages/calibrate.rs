@@ -8,8 +8,8 @@ use crate::artefacts::calibration::fitted_json;
 use crate::contact::isbl::IsblParams;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::dynamics::calibration::{
-    calibrate, default_knobs, targets_for, CalibrationResult, CalibrationSettings, Evaluation,
-    Knob, KnobRange,
+    apply_knobs, calibrate, default_knobs, held_out_for, in_band, targets_for, CalibrationResult,
+    CalibrationSettings, Evaluation, Knob, KnobRange, TargetOutcome, DEFAULT_MAX_EVALUATIONS,
 };
 use crate::error::Result;
 use crate::slider::calibration::{base_inputs, base_of};
@@ -19,10 +19,10 @@ use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
 
-pub const MODEL_VERSION: &str = "calibrate-1";
+pub const MODEL_VERSION: &str = "calibrate-2";
 
 fn default_evaluations() -> usize {
-    120
+    DEFAULT_MAX_EVALUATIONS
 }
 
 /// `[calibrate.NAME]` as written.
@@ -35,9 +35,13 @@ pub struct CalibrateConfig {
     /// Knobs to fit (default: the model's set, see `docs/calibration.md`).
     #[serde(default)]
     pub knobs: Option<Vec<String>>,
-    /// Target ids to fit (default: the model's class-D catalogue).
+    /// Target ids to fit (default: the model's fitted set, docs/calibration.md).
     #[serde(default)]
     pub targets: Option<Vec<String>>,
+    /// Held-out target ids, judged before and after the fit on the base instance's sweep grid
+    /// and never seen by it (default: the model's whole held-out set; `[]` for none).
+    #[serde(default)]
+    pub held_out: Option<Vec<String>>,
     /// Search range per knob in SI units, e.g. `bounds = { lj_spacing = [0.2e-9, 0.8e-9] }`.
     #[serde(default)]
     pub bounds: BTreeMap<String, [f64; 2]>,
@@ -48,9 +52,12 @@ pub struct CalibrateConfig {
     /// Objective evaluations of the Nelder–Mead search.
     #[serde(default = "default_evaluations")]
     pub max_evaluations: usize,
-    /// Width of the touchdown bracket.
+    /// Width of the touchdown bracket (0.02 nm, the convention).
     #[serde(default)]
     pub touchdown_resolution: Option<Length>,
+    /// Scan step of the fitted set's touchdown search from 0 nm (0.5 nm).
+    #[serde(default)]
+    pub touchdown_step: Option<Length>,
 }
 
 /// Validated settings.
@@ -76,7 +83,7 @@ impl FromConfig for CalibrateStage {
                 "simulate",
                 format!(
                     "[simulate.{}] uses geometry = \"{}\"; the targets are the dissertation \
-                     geometry's (the optimised design's are included as `optimised_*` targets)",
+                     geometry's (the optimised design's are held out as `optimised_*` targets)",
                     cfg.simulate, base.geometry
                 ),
             ));
@@ -122,6 +129,17 @@ impl FromConfig for CalibrateStage {
             let mut r = KnobRange::new(*k);
             if let Some([lo, hi]) = cfg.bounds.get(k.name()) {
                 (r.lo, r.hi) = (*lo, *hi);
+                // A box wider than the model accepts would hand the fit points the model
+                // rejects: refuse it here, naming the model's limit.
+                for v in [*lo, *hi] {
+                    let (mut m, mut i) = (base.model, isbl_probe);
+                    apply_knobs(&[(*k, v)], &mut m, &mut i).map_err(|e| {
+                        err(
+                            "bounds",
+                            format!("{} = {v:e} is outside the model's range: {e}", k.name()),
+                        )
+                    })?;
+                }
             }
             ranges.push(r);
         }
@@ -160,11 +178,38 @@ impl FromConfig for CalibrateStage {
                 })
                 .collect::<std::result::Result<_, _>>()?,
         };
+        let held_catalogue = held_out_for(variant);
+        let held_out: Vec<_> = match &cfg.held_out {
+            None => held_catalogue,
+            Some(ids) => ids
+                .iter()
+                .map(|id| {
+                    held_catalogue
+                        .iter()
+                        .find(|t| t.id == id)
+                        .cloned()
+                        .ok_or_else(|| {
+                            err(
+                                "held_out",
+                                format!(
+                                    "unknown held-out target `{id}` for {} (known: {})",
+                                    base.model_name,
+                                    held_catalogue
+                                        .iter()
+                                        .map(|t| t.id)
+                                        .collect::<Vec<_>>()
+                                        .join(", ")
+                                ),
+                            )
+                        })
+                })
+                .collect::<std::result::Result<_, _>>()?,
+        };
         for (id, w) in &cfg.weights {
             let Some(t) = targets.iter_mut().find(|t| t.id == id) else {
                 return Err(err(
                     "weights",
-                    format!("`{id}` is not one of the calibration's targets"),
+                    format!("`{id}` is not one of the calibration's fitted targets"),
                 ));
             };
             if !(w.is_finite() && *w >= 0.0) {
@@ -182,6 +227,9 @@ impl FromConfig for CalibrateStage {
             ));
         }
         let mut settings = CalibrationSettings::new(ranges, targets);
+        settings.held_out = held_out;
+        settings.sweep_grid = base.actuations.clone();
+        settings.sweep_grid.sort_by(f64::total_cmp);
         settings.search.max_evaluations = cfg.max_evaluations;
         if let Some(r) = cfg.touchdown_resolution {
             if !(r.0 > 0.0 && r.0 <= 1e-9) {
@@ -190,7 +238,19 @@ impl FromConfig for CalibrateStage {
                     format!("{} m is out of range: 0 < r ≤ 1 nm", r.0),
                 ));
             }
-            settings.touchdown_resolution = r.0;
+            settings.touchdown.resolution = r.0;
+        }
+        if let Some(s) = cfg.touchdown_step {
+            if !(s.0 >= settings.touchdown.resolution && s.0 <= 5e-9) {
+                return Err(err(
+                    "touchdown_step",
+                    format!(
+                        "{} m is out of range: touchdown_resolution ≤ step ≤ 5 nm",
+                        s.0
+                    ),
+                ));
+            }
+            settings.touchdown.step = s.0;
         }
         for r in &settings.knobs {
             r.check().map_err(|e| err("bounds", e.to_string()))?;
@@ -205,12 +265,17 @@ impl FromConfig for CalibrateStage {
 }
 
 fn evaluation_json(e: &Evaluation) -> Value {
+    let (inside, total) = in_band(e);
     json!({
         "objective": e.objective,
         "cases": e.cases,
+        "in_band": inside,
+        "targets_total": total,
         "knobs": e.knobs.iter().map(|(k, v)| json!({"knob": k.name(), "value": v})).collect::<Vec<_>>(),
         "targets": e.outcomes.iter().map(|o| json!({
             "id": o.target.id,
+            "set": o.target.set.name(),
+            "class": o.target.class,
             "value": o.value,
             "published": o.target.published,
             "tolerance": o.target.tolerance,
@@ -238,16 +303,36 @@ pub fn describe_knobs(values: &[(Knob, f64)]) -> String {
         .join(", ")
 }
 
+/// One row per target of both sets: published, tolerance, value before (spec defaults) and
+/// after (fitted knobs), in band before and after.
 fn table_rows(r: &CalibrationResult) -> Vec<Map<String, Value>> {
-    r.best
-        .outcomes
-        .iter()
-        .zip(&r.initial.outcomes)
-        .map(|(b, i)| {
+    let pairs = |before: &Evaluation, after: &Evaluation| -> Vec<(TargetOutcome, TargetOutcome)> {
+        before
+            .outcomes
+            .iter()
+            .cloned()
+            .zip(after.outcomes.iter().cloned())
+            .collect()
+    };
+    let mut all = pairs(&r.initial, &r.best);
+    if let (Some(b), Some(a)) = (&r.held_out_initial, &r.held_out_best) {
+        all.extend(pairs(b, a));
+    }
+    all.iter()
+        .map(|(i, b)| {
             let t = &b.target;
             let s = |v: Option<f64>| json!(v.map(|v| v * t.display_scale));
             let mut m = Map::new();
             m.insert("target".into(), json!(t.id));
+            m.insert("set".into(), json!(t.set.name()));
+            m.insert("class".into(), json!(t.class));
+            m.insert(
+                "geometry".into(),
+                json!(match t.geometry {
+                    crate::dynamics::calibration::TargetGeometry::Base => "dissertation",
+                    crate::dynamics::calibration::TargetGeometry::Optimised => "optimised",
+                }),
+            );
             m.insert(
                 "spec_row".into(),
                 json!(format!("dynamics.md §12.2 {}", t.source)),
@@ -260,6 +345,8 @@ fn table_rows(r: &CalibrationResult) -> Vec<Map<String, Value>> {
             m.insert("calibrated".into(), s(b.value));
             m.insert("residual_defaults".into(), json!(i.normalised_residual));
             m.insert("residual_calibrated".into(), json!(b.normalised_residual));
+            m.insert("in_band_defaults".into(), json!(i.within_tolerance()));
+            m.insert("in_band_calibrated".into(), json!(b.within_tolerance()));
             m.insert("within_tolerance".into(), json!(b.within_tolerance()));
             m
         })
@@ -281,10 +368,11 @@ fn knob_rows(stage: &CalibrateStage, r: &CalibrationResult) -> Vec<Map<String, V
             m.insert("fitted".into(), json!(v));
             m.insert(
                 "at_bound".into(),
-                json!(
-                    (*v - range.lo).abs() <= 1e-6 * (range.hi - range.lo)
-                        || (*v - range.hi).abs() <= 1e-6 * (range.hi - range.lo)
-                ),
+                json!(r
+                    .at_bound
+                    .iter()
+                    .find(|(kb, _)| kb == k)
+                    .map(|(_, b)| b.name())),
             );
             m
         })
@@ -344,23 +432,34 @@ impl StageKind for CalibrateStage {
             &[],
         )?;
         residuals_png(&ctx.out_dir.join("residuals.png"), &self.base_name, &result)?;
-        let within = result
-            .best
-            .outcomes
-            .iter()
-            .filter(|o| o.within_tolerance())
-            .count();
+        let counts = InBandCounts::of(&result);
+        let log = summary_text(self, &result, &counts);
+        let log_path = ctx.out_dir.join("calibration.log");
+        std::fs::write(&log_path, &log).map_err(|e| crate::error::Error::io(&log_path, e))?;
+        ctx.progress
+            .set_message(log.lines().next().unwrap_or_default());
         let mut row = Map::new();
         row.insert("base".into(), json!(self.base_name));
         row.insert("objective_defaults".into(), json!(result.initial.objective));
         row.insert("objective_calibrated".into(), json!(result.best.objective));
         row.insert("targets".into(), json!(result.best.outcomes.len()));
-        row.insert("within_tolerance".into(), json!(within));
+        row.insert("within_tolerance".into(), json!(counts.fitted.1));
+        row.insert("fitted_in_band_defaults".into(), json!(counts.fitted.0));
+        row.insert("fitted_in_band_calibrated".into(), json!(counts.fitted.1));
+        row.insert("held_out_targets".into(), json!(counts.held_out_total));
+        row.insert("held_out_in_band_defaults".into(), json!(counts.held_out.0));
+        row.insert(
+            "held_out_in_band_calibrated".into(),
+            json!(counts.held_out.1),
+        );
+        row.insert("converged".into(), json!(result.converged));
         row.insert("evaluations".into(), json!(result.evaluations));
         row.insert("cases".into(), json!(result.cases));
         for (k, v) in &result.best.knobs {
             row.insert(k.name().into(), json!(v));
         }
+        let search = &self.settings.search;
+        let td = &self.settings.touchdown;
         Ok(StageOutput {
             result: json!({
                 "base": self.base_name,
@@ -369,7 +468,32 @@ impl StageKind for CalibrateStage {
                 "fitted_description": describe_knobs(&result.best.knobs),
                 "defaults": evaluation_json(&result.initial),
                 "calibrated": evaluation_json(&result.best),
+                "held_out": {
+                    "defaults": result.held_out_initial.as_ref().map(evaluation_json),
+                    "calibrated": result.held_out_best.as_ref().map(evaluation_json),
+                    "sweep_grid_nm": self.settings.sweep_grid.iter().map(|a| a * 1e9).collect::<Vec<_>>(),
+                },
+                "in_band": {
+                    "fitted": {"targets": counts.fitted_total, "defaults": counts.fitted.0, "calibrated": counts.fitted.1},
+                    "held_out": {"targets": counts.held_out_total, "defaults": counts.held_out.0, "calibrated": counts.held_out.1},
+                },
                 "converged": result.converged,
+                "convergence": {
+                    "converged": result.converged,
+                    "reason": result.stop.name(),
+                    "f_tolerance": search.f_tolerance,
+                    "x_tolerance": search.x_tolerance,
+                    "final_f_spread": result.final_f_spread,
+                    "final_x_spread": result.final_x_spread,
+                    "max_evaluations": search.max_evaluations,
+                },
+                "at_bound": result.at_bound.iter().map(|(k, b)| json!({
+                    "knob": k.name(), "bound": b.name(),
+                })).collect::<Vec<_>>(),
+                "touchdown_search": {
+                    "start_nm": td.start * 1e9, "stop_nm": td.stop * 1e9, "step_nm": td.step * 1e9,
+                    "resolution_nm": td.resolution * 1e9, "batch": td.batch,
+                },
                 "evaluations": result.evaluations,
                 "cases": result.cases,
                 "failures": result.failures.iter().map(|(k, e)| json!({
@@ -377,10 +501,99 @@ impl StageKind for CalibrateStage {
                 })).collect::<Vec<_>>(),
                 "history": result.history.iter().map(|(i, f, b)| json!([i, f, b])).collect::<Vec<_>>(),
                 "table": "calibration.parquet",
+                "log": "calibration.log",
             }),
             summary_row: Some(row),
         })
     }
+}
+
+/// In-band counts `(spec defaults, calibrated)` of the fitted and the held-out sets.
+struct InBandCounts {
+    fitted: (usize, usize),
+    fitted_total: usize,
+    held_out: (usize, usize),
+    held_out_total: usize,
+}
+
+impl InBandCounts {
+    fn of(r: &CalibrationResult) -> Self {
+        let (f0, ft) = in_band(&r.initial);
+        let (f1, _) = in_band(&r.best);
+        let (h0, ht) = r.held_out_initial.as_ref().map_or((0, 0), in_band);
+        let (h1, _) = r.held_out_best.as_ref().map_or((0, 0), in_band);
+        InBandCounts {
+            fitted: (f0, f1),
+            fitted_total: ft,
+            held_out: (h0, h1),
+            held_out_total: ht,
+        }
+    }
+}
+
+/// The stage's log: counts, convergence, knobs (with bounds reached), every target.
+fn summary_text(stage: &CalibrateStage, r: &CalibrationResult, c: &InBandCounts) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{}: fitted set {}/{} → {}/{} in band, held-out set {}/{} → {}/{}; objective {:.3} → {:.3}; {} after {} evaluations ({} cases)",
+        stage.name,
+        c.fitted.0,
+        c.fitted_total,
+        c.fitted.1,
+        c.fitted_total,
+        c.held_out.0,
+        c.held_out_total,
+        c.held_out.1,
+        c.held_out_total,
+        r.initial.objective,
+        r.best.objective,
+        if r.converged {
+            "converged (simplex tolerance)"
+        } else {
+            "NOT converged (evaluation budget)"
+        },
+        r.evaluations,
+        r.cases
+    );
+    let _ = writeln!(
+        s,
+        "simplex: f spread {:.3e} (tolerance {:.1e}), unit-box edge {:.3e} (tolerance {:.1e})",
+        r.final_f_spread,
+        stage.settings.search.f_tolerance,
+        r.final_x_spread,
+        stage.settings.search.x_tolerance
+    );
+    let _ = writeln!(s, "knobs: {}", describe_knobs(&r.best.knobs));
+    for (k, b) in &r.at_bound {
+        let _ = writeln!(s, "knob {} ended on its {} bound", k.name(), b.name());
+    }
+    let _ = writeln!(
+        s,
+        "set\ttarget\tpublished\ttolerance\tdefaults\tcalibrated\tin band before/after"
+    );
+    for row in table_rows(r) {
+        let f = |k: &str| {
+            row[k]
+                .as_f64()
+                .map_or("–".to_string(), |v| format!("{v:.4}"))
+        };
+        let _ = writeln!(
+            s,
+            "{}\t{}\t{} {}\t±{}\t{}\t{}\t{}/{}",
+            row["set"].as_str().unwrap_or_default(),
+            row["target"].as_str().unwrap_or_default(),
+            f("published"),
+            row["unit"].as_str().unwrap_or_default(),
+            f("tolerance"),
+            f("spec_defaults"),
+            f("calibrated"),
+            row["in_band_defaults"],
+            row["in_band_calibrated"],
+        );
+    }
+    s
 }
 
 /// Normalised residual per target, spec defaults against calibrated, with the ±1 band.
