@@ -1270,15 +1270,16 @@ fn evaluate_targets(
             Quantity::Adhesion { actuation } => contact(actuation)
                 .and_then(|c| c.adhesion_n.as_ref())
                 .map(|s| s.mean),
-            Quantity::FrictionCoefficient { actuation } => contact(actuation)
-                .and_then(|c| c.friction_coefficient.as_ref())
-                .map(|s| s.mean),
-            Quantity::MeanPressure { actuation } => contact(actuation)
-                .and_then(|c| c.mean_pressure_pa.as_ref())
-                .map(|s| s.mean),
-            Quantity::ShearTraction { actuation } => contact(actuation)
-                .and_then(|c| c.shear_traction_pa.as_ref())
-                .map(|s| s.mean),
+            // μ, P_m and τ as ratios of means over the steady window (docs/conventions.md).
+            Quantity::FrictionCoefficient { actuation } => {
+                contact(actuation).and_then(|c| c.friction_coefficient_ratio_of_means)
+            }
+            Quantity::MeanPressure { actuation } => {
+                contact(actuation).and_then(|c| c.mean_pressure_pa_ratio_of_means)
+            }
+            Quantity::ShearTraction { actuation } => {
+                contact(actuation).and_then(|c| c.shear_traction_pa_ratio_of_means)
+            }
             Quantity::RealArea { actuation } => contact(actuation).map(|c| c.real_area_m2.mean),
             q => sweep
                 .as_ref()
@@ -1349,13 +1350,7 @@ fn sweep_value(
         Quantity::TouchdownVibration => m.touchdown_index.map(|i| points[i].vibration_percent),
         Quantity::MaxShearTraction => cases
             .iter()
-            .filter_map(|c| {
-                c.contact
-                    .as_ref()?
-                    .shear_traction_pa
-                    .as_ref()
-                    .map(|s| s.mean)
-            })
+            .filter_map(|c| c.contact.as_ref()?.shear_traction_pa_ratio_of_means)
             .reduce(f64::max),
         _ => None,
     }

@@ -437,7 +437,8 @@ fn run_sweep(
         .map(|d| d.iter().map(|p| (p.h, p.solid > 0.0)).collect())
         .unwrap_or_default();
     let stop = grid.iter().cloned().fold(0.0, f64::max) * NM;
-    let search = TouchdownSearch::convention(stop, 0.5 * NM, rayon::current_num_threads().max(2));
+    // A fixed batch, so the refinement's cases (and the result) do not depend on the machine.
+    let search = TouchdownSearch::convention(stop, 0.5 * NM, 3);
     let td = find_touchdown(&search, &known, |hs: &[f64]| {
         let pts: Vec<Option<Pt>> = hs
             .par_iter()
@@ -1073,10 +1074,10 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
                         &improved_model,
                         &improved,
                         &track,
-                        false,
+                        true,
                         &improved_grid(),
                         &[0.2],
-                        &format!("{synth}, nominal start"),
+                        &format!("{synth}, static start"),
                     )
                 },
                 || {
