@@ -147,7 +147,7 @@ pub fn write_ldv_sample(
     let truth_std = (d.iter().map(|x| (x - m).powi(2)).sum::<f64>() / d.len() as f64).sqrt();
     let info = json!({
         "file": path.file_name().map(|n| n.to_string_lossy().to_string()),
-        "generator": "hdi synth ldv (src/dmw/synthetic_ldv.rs); model of signals-and-surfaces.md §3.3",
+        "generator": "hdi synth ldv (src/dmw/synthetic_ldv.rs); model in docs/dmw.md",
         "parameters": spec.to_json(),
         "index_channel": with_index,
         "velocity_lsb_V": if format.starts_with("h5") && format != "h5-f64" { json!(SHIPPED_LDV_LSB) } else { json!(null) },

@@ -1547,23 +1547,7 @@ mod tests {
     /// the static equilibrium alone.
     #[test]
     fn touchdown_search_matches_the_static_crossing_without_dmw() {
-        let base = CalibrationBase {
-            model: improved_2dof(),
-            isbl: IsblParams::improved_2dof(),
-            dmw: None,
-            options: SimOptions {
-                duration: 0.4e-3,
-                static_init: true,
-                ..Default::default()
-            },
-            case_params: CaseParams {
-                window: super::super::metrics::SteadyWindow {
-                    start_s: 0.2e-3,
-                    end_s: 0.4e-3,
-                },
-                ..CaseParams::improved_2dof()
-            },
-        };
+        let base = short_base(None);
         let mut settings = CalibrationSettings {
             ..CalibrationSettings::new(
                 vec![],

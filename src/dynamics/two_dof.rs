@@ -856,7 +856,7 @@ impl<'a> TwoDofCase<'a> {
         if let Some((t, fh)) = ab_lost {
             return Err(DynamicsError::Numerical(format!(
                 "air bearing lost at t = {:.4} ms: the TE flying height reached {:.2} nm (> {:.0} \
-                 nm, dynamics.md §3.2); the linear AB model does not hold there",
+                 nm, docs/simulation.md); the linear AB model does not hold there",
                 t * 1e3,
                 fh * 1e9,
                 AB_LOSS_FLYING_HEIGHT * 1e9

@@ -335,7 +335,8 @@ fn table_rows(r: &CalibrationResult) -> Vec<Map<String, Value>> {
             );
             m.insert(
                 "spec_row".into(),
-                json!(format!("dynamics.md §12.2 {}", t.source)),
+                // The id of `hdi validate` (docs/validation.md), e.g. dyn-16.
+                json!(format!("dyn-{}", t.source.trim_start_matches('#'))),
             );
             m.insert("unit".into(), json!(t.unit));
             m.insert("published".into(), json!(t.published * t.display_scale));

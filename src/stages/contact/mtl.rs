@@ -369,7 +369,7 @@ impl MtlAnalysis {
         let a = out.group("contact/mtl/landmarks", None)?;
         for (k, v) in self.landmarks() {
             if let Some(x) = v.as_f64() {
-                out.write_scalar(&a, &k, x, "see name", "contact-mtl.md §4.5 landmark")?;
+                out.write_scalar(&a, &k, x, "see name", "MTL landmark (docs/contact.md)")?;
             }
         }
         Ok(())
