@@ -50,7 +50,6 @@ fn calibrated_numbers_match_an_independent_sweep_and_the_counts_match_the_table(
     assert_eq!(fitted.len(), 1);
     assert_eq!(fitted[0]["knob"], "dmw_scale");
     let scale = fitted[0]["value"].as_f64().unwrap();
-    assert!((0.0..=4.0).contains(&scale), "{scale}");
     // Three evaluations cannot meet the simplex tolerance: the result must say so.
     assert_eq!(r["converged"], false);
     assert_eq!(r["convergence"]["reason"], "budget");
