@@ -40,8 +40,10 @@ def main():
     d = json.load(open(sys.argv[1]))
     rows = [r for a in d["areas"].values() for r in a]
     dyn = sorted((r for r in rows if r["id"].startswith("dyn-")), key=key)
-    print("| id | class | quantity | published | tolerance | hdi | calibrated | pass | origin |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print(
+        "| id | class | quantity | published | tolerance | hdi | record | calibrated | pass | origin |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in dyn:
         o = r["ordering"]
         if o:
@@ -49,14 +51,16 @@ def main():
             target, t, value = "ordering", o["relation"]["kind"], items
         else:
             target, t, value = num(r["target"]), tol(r["tolerance"]), num(r["value"])
-        c = r["calibrated"]
-        cal = "–" if not c else num(c["value"]) + (" ✓" if c["pass"] else "")
+        def alt(c):
+            return "–" if not c else num(c["value"]) + (" ✓" if c["pass"] else "")
+
+        rec, cal = alt(r.get("uncalibrated_record")), alt(r["calibrated"])
         origin = r["origin"]["kind"]
         if origin != "computed":
             origin += " " + r["origin"]["instance"]
         unit = "" if r["unit"] in ("1", "") else f" ({r['unit']})"
         print(
-            f"| {r['id']} | {r['class']} | {r['quantity']}{unit} | {target} | {t} | {value} | {cal} "
+            f"| {r['id']} | {r['class']} | {r['quantity']}{unit} | {target} | {t} | {value} | {rec} | {cal} "
             f"| {'yes' if r['pass'] else 'no'} | {origin} |"
         )
 

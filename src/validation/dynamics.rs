@@ -475,11 +475,16 @@ fn run_sweep(
 /// A calibrated sweep of the pipeline, read from the cache.
 fn cached_sweep(cache: &Cache, name: &str) -> Option<Sweep> {
     let Stored { result, origin, .. } = cache.current(name)?;
+    // The up branch of a continuation sweep (the branches coincide at the shipped inputs;
+    // docs/conventions.md); sweeps without branches have no `branch` field.
     let pts: Vec<Pt> = result["cases"]
         .as_array()?
         .iter()
+        .filter(|c| c["branch"].as_str().is_none_or(|b| b == "up"))
         .filter_map(|c| Pt::from_json(&c["metrics"]))
         .collect();
+    // The grid touchdown: the rows at touchdown need the full metrics of a touching case, and
+    // the stage stores those for its grid cases only (its refined touchdown is in result.json).
     let td = result["sweep"]["touchdown_m"].as_f64();
     let knobs = result["calibrated_knobs"]
         .as_array()
@@ -496,10 +501,15 @@ fn cached_sweep(cache: &Cache, name: &str) -> Option<Sweep> {
                 .join(", ")
         })
         .unwrap_or_default();
-    let inputs = format!(
-        "shipped DMW record, static start, calibration [calibrate.{}] ({knobs}); the stage's own grid and touchdown",
-        result["calibration"].as_str().unwrap_or("?")
-    );
+    let inputs = match result["calibration"].as_str() {
+        Some(name) => format!(
+            "shipped DMW record, static start (up branch), calibration [calibrate.{name}] \
+             ({knobs}); the stage's own 0.2 nm grid and grid touchdown"
+        ),
+        None => "shipped DMW record, static start (up branch), no calibration; the stage's own \
+                 0.2 nm grid and grid touchdown"
+            .to_string(),
+    };
     Some(Sweep::new(pts, td, inputs, origin))
 }
 
@@ -520,15 +530,27 @@ struct Target<'a> {
     note: &'a str,
 }
 
-fn target_row(t: Target, sweep: &Sweep, calibrated: Option<&Sweep>, variant: &str) -> Row {
-    let cal = (t.class == Class::D)
-        .then_some(calibrated)
-        .flatten()
-        .map(|c| Calibrated {
-            value: (t.value)(c),
-            inputs: c.inputs.clone(),
-            origin: c.origin.clone(),
-        });
+/// The pipeline's sweeps a computed D row is also evaluated on, when the pipeline has run.
+#[derive(Clone, Copy, Default)]
+struct CachedSweeps<'a> {
+    /// Uncalibrated, on the shipped DMW record (e.g. `improved_sweep`).
+    record: Option<&'a Sweep>,
+    /// The same with the fitted knobs (e.g. `improved_calibrated`).
+    calibrated: Option<&'a Sweep>,
+}
+
+fn target_row(t: Target, sweep: &Sweep, cached: CachedSweeps, variant: &str) -> Row {
+    let on = |s: Option<&Sweep>| {
+        (t.class == Class::D)
+            .then_some(s)
+            .flatten()
+            .map(|c| Calibrated {
+                value: (t.value)(c),
+                inputs: c.inputs.clone(),
+                origin: c.origin.clone(),
+            })
+    };
+    let (record, cal) = (on(cached.record), on(cached.calibrated));
     Row::new(
         t.id,
         t.class,
@@ -542,6 +564,7 @@ fn target_row(t: Target, sweep: &Sweep, calibrated: Option<&Sweep>, variant: &st
     .variant(variant)
     .inputs(&sweep.inputs)
     .origin(sweep.origin.clone())
+    .record(record)
     .calibrated(cal)
     .note(t.note)
 }
@@ -551,7 +574,7 @@ const D_NOTE: &str =
                       β, Δγ, ε, ζ_c)";
 
 /// Improved model, dissertation geometry (S2, targets #16–#25).
-fn improved_rows(s: &Sweep, cal: Option<&Sweep>, initial_geometry_fhm86: &mut f64) -> Vec<Row> {
+fn improved_rows(s: &Sweep, cached: CachedSweeps, initial_geometry_fhm86: &mut f64) -> Vec<Row> {
     let variant = "improved 2-DOF, default inputs, eq. 2.16 interference-tangent contact force";
     let r = "dissertation §2.2.2";
     let abs = Tolerance::Absolute;
@@ -598,7 +621,7 @@ fn improved_rows(s: &Sweep, cal: Option<&Sweep>, initial_geometry_fhm86: &mut f6
     ];
     targets
         .into_iter()
-        .map(|t| target_row(t, s, cal, variant))
+        .map(|t| target_row(t, s, cached, variant))
         .collect()
 }
 
@@ -629,7 +652,7 @@ fn initial_rows(s: &Sweep) -> Vec<Row> {
     ];
     let mut rows: Vec<Row> = targets
         .into_iter()
-        .map(|t| target_row(t, s, None, variant))
+        .map(|t| target_row(t, s, CachedSweeps::default(), variant))
         .collect();
     // #10: the BV peaks above 20 % between touchdown and 11 nm.
     let peak = s
@@ -655,7 +678,7 @@ fn initial_rows(s: &Sweep) -> Vec<Row> {
 }
 
 /// Optimised design (S2o, targets #26–#29), w_TFC = 50 µm (assumed).
-fn optimised_rows(s: &Sweep, cal: Option<&Sweep>, dissertation_fhm86: f64) -> Vec<Row> {
+fn optimised_rows(s: &Sweep, cached: CachedSweeps, dissertation_fhm86: f64) -> Vec<Row> {
     let variant = "improved 2-DOF, optimised bulge a = 4.86 µm, x = 6.35 µm, w = 50 µm (assumed)";
     let r = "dissertation §2.3.2";
     let abs = Tolerance::Absolute;
@@ -679,7 +702,7 @@ fn optimised_rows(s: &Sweep, cal: Option<&Sweep>, dissertation_fhm86: f64) -> Ve
     ];
     let mut rows: Vec<Row> = targets
         .into_iter()
-        .map(|t| target_row(t, s, cal, variant))
+        .map(|t| target_row(t, s, cached, variant))
         .collect();
     rows.push(
         Row::ordering(
@@ -1107,22 +1130,99 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
             })
         },
     );
-    let cal_improved = cache
-        .as_ref()
-        .and_then(|c| cached_sweep(c, "improved_calibrated"));
-    let cal_optimised = cache
-        .as_ref()
-        .and_then(|c| cached_sweep(c, "optimised_calibrated"));
+    let sweep = |name: &str| cache.as_ref().and_then(|c| cached_sweep(c, name));
+    let (rec_improved, cal_improved) = (sweep("improved_sweep"), sweep("improved_calibrated"));
+    let (rec_optimised, cal_optimised) = (sweep("optimised_sweep"), sweep("optimised_calibrated"));
     let mut fhm86 = f64::NAN;
-    rows.extend(improved_rows(
-        &s_improved,
-        cal_improved.as_ref(),
-        &mut fhm86,
-    ));
+    let improved_cached = CachedSweeps {
+        record: rec_improved.as_ref(),
+        calibrated: cal_improved.as_ref(),
+    };
+    rows.extend(improved_rows(&s_improved, improved_cached, &mut fhm86));
     rows.extend(initial_rows(&s_initial));
     if let Some(s) = s_optimised {
-        rows.extend(optimised_rows(&s, cal_optimised.as_ref(), fhm86));
+        let optimised_cached = CachedSweeps {
+            record: rec_optimised.as_ref(),
+            calibrated: cal_optimised.as_ref(),
+        };
+        rows.extend(optimised_rows(&s, optimised_cached, fhm86));
     }
     rows.extend(app_b_rows(cache.as_ref()));
     rows
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A flying sweep whose clearance is `offset − h` (nm), from `instance`'s cache.
+    fn line(offset_nm: f64, instance: &str) -> Sweep {
+        let pts = (0..=10)
+            .map(|i| {
+                let h = 8.0 + 0.1 * i as f64;
+                Pt {
+                    h: h * NM,
+                    clearance: (offset_nm - h) * NM,
+                    fhm: 5.0,
+                    solid: 0.0,
+                    fc: 0.0,
+                    q: 0.0,
+                    ar: 0.0,
+                    adhesion: 0.0,
+                    mu_inst: f64::NAN,
+                    pm_inst: f64::NAN,
+                    tau_inst: f64::NAN,
+                }
+            })
+            .collect();
+        Sweep::new(
+            pts,
+            None,
+            instance.to_string(),
+            Origin::Cache {
+                instance: instance.to_string(),
+                key: "k".into(),
+            },
+        )
+    }
+
+    fn clearance_target<'a>(class: Class, value: &'a dyn Fn(&Sweep) -> f64) -> Target<'a> {
+        Target {
+            id: "dyn-18",
+            class,
+            quantity: "clearance at 8.5 nm",
+            unit: "nm",
+            target: 2.54,
+            tolerance: Tolerance::Absolute(0.05),
+            reference: "dissertation §2.2.2",
+            value,
+            note: "",
+        }
+    }
+
+    #[test]
+    fn d_rows_carry_the_record_and_the_calibrated_value_from_their_own_sweeps() {
+        let value = |s: &Sweep| s.at(8.5 * NM, |p| p.clearance / NM);
+        let (own, record, calibrated) = (
+            line(11.05, "own"),
+            line(11.0, "simulate.improved_sweep"),
+            line(11.3, "simulate.improved_calibrated"),
+        );
+        let cached = CachedSweeps {
+            record: Some(&record),
+            calibrated: Some(&calibrated),
+        };
+        let r = target_row(clearance_target(Class::D, &value), &own, cached, "v");
+        assert!((r.value - 2.55).abs() < 1e-9, "{}", r.value);
+        let rec = r.record.as_ref().expect("record value");
+        let cal = r.calibrated.as_ref().expect("calibrated value");
+        assert!((rec.value - 2.5).abs() < 1e-9 && rec.inputs == "simulate.improved_sweep");
+        assert!((cal.value - 2.8).abs() < 1e-9 && cal.inputs == "simulate.improved_calibrated");
+        let j = r.to_json();
+        assert_eq!(j["uncalibrated_record"]["pass"], true);
+        assert_eq!(j["calibrated"]["pass"], false);
+        // K rows do not depend on the dropped inputs: no alternative values.
+        let k = target_row(clearance_target(Class::K, &value), &own, cached, "v");
+        assert!(k.record.is_none() && k.calibrated.is_none());
+    }
 }

@@ -268,7 +268,8 @@ impl Origin {
     }
 }
 
-/// The calibrated value of a class-D row.
+/// A class-D row's value under other inputs than the row's own: after calibration, or
+/// uncalibrated on the pipeline's shipped DMW record (the inputs the calibration starts from).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Calibrated {
     pub value: f64,
@@ -297,6 +298,9 @@ pub struct Row {
     pub ordering: Option<Ordering>,
     /// D rows: the value after calibration, when the pipeline's calibration has run.
     pub calibrated: Option<Calibrated>,
+    /// D rows: the uncalibrated value on the shipped DMW record (the pipeline's uncalibrated
+    /// sweep), so that `value` → `record` → `calibrated` changes one input at a time.
+    pub record: Option<Calibrated>,
     /// Which model variant / switches produced the value.
     pub variant: String,
     /// Which DMW, start state and calibration.
@@ -328,6 +332,7 @@ impl Row {
             tolerance,
             ordering: None,
             calibrated: None,
+            record: None,
             variant: String::new(),
             inputs: String::new(),
             origin: Origin::Computed,
@@ -398,6 +403,10 @@ impl Row {
         self.calibrated = c;
         self
     }
+    pub fn record(mut self, c: Option<Calibrated>) -> Row {
+        self.record = c;
+        self
+    }
 
     /// Q rows: the ordering holds; others: the value is within the tolerance of the target.
     pub fn pass(&self) -> bool {
@@ -416,6 +425,14 @@ impl Row {
 
     pub fn to_json(&self) -> Value {
         let num = |x: f64| if x.is_finite() { json!(x) } else { Value::Null };
+        let alternative = |c: &Calibrated| {
+            json!({
+                "value": num(c.value),
+                "pass": self.tolerance.holds(self.target, c.value),
+                "inputs": c.inputs,
+                "origin": c.origin.to_json(),
+            })
+        };
         json!({
             "id": self.id,
             "class": self.class.label(),
@@ -427,12 +444,8 @@ impl Row {
             "tolerance": self.tolerance.to_json(),
             "ordering": self.ordering.as_ref().map(Ordering::to_json),
             "pass": self.pass(),
-            "calibrated": self.calibrated.as_ref().map(|c| json!({
-                "value": num(c.value),
-                "pass": self.tolerance.holds(self.target, c.value),
-                "inputs": c.inputs,
-                "origin": c.origin.to_json(),
-            })),
+            "uncalibrated_record": self.record.as_ref().map(alternative),
+            "calibrated": self.calibrated.as_ref().map(alternative),
             "variant": self.variant,
             "inputs": self.inputs,
             "origin": self.origin.to_json(),
