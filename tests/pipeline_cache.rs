@@ -255,3 +255,35 @@ fn a_leftover_temp_dir_from_a_crash_is_never_trusted_and_gc_cleans_it() {
     assert_ok(&o);
     assert!(!tmp.exists());
 }
+
+/// Identical inputs give byte-identical results whatever the thread count: no wall time and no
+/// creation timestamp inside tables, JSON, HDF5 or PNG (docs/architecture.md). Only the store
+/// manifests and the engine's bookkeeping under `.hdi/` carry times.
+#[test]
+fn two_cold_runs_with_different_thread_counts_write_identical_results() {
+    let results = |jobs: &str| {
+        let p = Project::shipped();
+        assert_ok(&p.run(&["run", "--jobs", jobs]));
+        let all = snapshot(&p.processed());
+        let kept: Vec<(String, String)> = all
+            .into_iter()
+            .filter(|(rel, _)| !rel.starts_with(".hdi/") || rel.starts_with(".hdi/store/"))
+            .filter(|(rel, _)| !rel.ends_with("manifest.json"))
+            .collect();
+        (p, kept)
+    };
+    let (_a, two) = results("2");
+    let (_b, one) = results("1");
+    assert!(two.len() > 100, "{} result files", two.len());
+    let differ: Vec<&String> = two
+        .iter()
+        .zip(&one)
+        .filter(|(x, y)| x != y)
+        .map(|(x, _)| &x.0)
+        .collect();
+    assert_eq!(two.len(), one.len());
+    assert!(
+        differ.is_empty(),
+        "differ between --jobs 2 and 1: {differ:?}"
+    );
+}

@@ -91,7 +91,8 @@ impl H5Out {
         self.attr_str(root, "cache_key", cache_key)?;
         self.attr_str(root, "parameters", &parameters.to_string())?;
         self.attr_str(root, "inputs", &inputs.to_string())?;
-        self.attr_str(root, "created", &crate::core::cache::now_iso8601())?;
+        // No creation time: identical inputs give byte-identical files; when a result was made
+        // is in its manifest.
         self.attr_str(root, "NX_class", "NXroot")?;
         self.attr_str(root, "default", default_entry)?;
         Ok(())

@@ -34,31 +34,17 @@ pub fn simulate_case(
         sample_rate: t.sample_rate,
     });
     let case = TwoDofCase::new(&p.model, actuation, isbl, input, p.options)?;
-    let started = std::time::Instant::now();
     let h = case.run()?;
-    let seconds = started.elapsed().as_secs_f64();
     let m = h.metrics(&p.case_metric_params())?;
     write_case_h5(&dir.join(CASE_FILE), &h, actuation, &m)?;
-    Ok(case_json(
-        actuation,
-        &h,
-        &m,
-        seconds,
-        case.contact_damping(),
-    ))
+    Ok(case_json(actuation, &h, &m, case.contact_damping()))
 }
 
 fn stats_json(s: &crate::dynamics::metrics::SeriesStats) -> Value {
     json!({"mean": s.mean, "std": s.std, "min": s.min, "max": s.max})
 }
 
-pub fn case_json(
-    actuation: f64,
-    h: &CaseHistory,
-    m: &CaseMetrics,
-    seconds: f64,
-    c_c: f64,
-) -> Value {
+pub fn case_json(actuation: f64, h: &CaseHistory, m: &CaseMetrics, c_c: f64) -> Value {
     let c = m.contact.as_ref();
     let opt = |v: Option<f64>| v.filter(|x| x.is_finite());
     json!({
@@ -90,7 +76,8 @@ pub fn case_json(
         "steps": h.stats.accepted_steps,
         "rejected_steps": h.stats.rejected_steps,
         "rhs_evaluations": h.stats.rhs_evaluations,
-        "wall_time_s": seconds,
+        // No wall time: results are byte-identical for identical inputs; timings are in the
+        // store entry's manifest.json and the run log (docs/architecture.md).
     })
 }
 

@@ -127,9 +127,7 @@ fn run_case(
         inputs,
         p.options,
     )?;
-    let started = std::time::Instant::now();
     let h = case.run()?;
-    let seconds = started.elapsed().as_secs_f64();
     let sigma = ip.sigma;
     let metrics = case_metrics(p, &h, 3.0 * sigma, 3.0 * sigma + ip.lubricant_thickness)?;
     write_case_h5(&dir.join("case.h5"), &h)?;
@@ -140,7 +138,6 @@ fn run_case(
     }
     let mut m = metrics;
     m.insert("case".into(), json!(which.label()));
-    m.insert("wall_time_s".into(), json!(seconds));
     m.insert("steps".into(), json!(h.stats.accepted_steps));
     Ok(Value::Object(m))
 }
