@@ -177,3 +177,42 @@ pub fn csv_rows(path: &std::path::Path) -> Vec<std::collections::BTreeMap<String
         })
         .collect()
 }
+
+/// Check a command's `--json` output against its documented schema `docs/schemas/<name>.json`
+/// with the Python `jsonschema` package (an independent validator, Draft 2020-12), and that the
+/// schema itself is valid. Panics with every violation and its JSON path.
+pub fn assert_matches_schema(schema_name: &str, json_text: &str) {
+    let schema = repo_root()
+        .join("docs")
+        .join("schemas")
+        .join(format!("{schema_name}.json"));
+    assert!(schema.exists(), "{} missing", schema.display());
+    let dir = tempfile::tempdir().unwrap();
+    let doc = dir.path().join("output.json");
+    std::fs::write(&doc, json_text).unwrap();
+    let script = r#"
+import json, sys
+from jsonschema import Draft202012Validator
+schema = json.load(open(sys.argv[1]))
+Draft202012Validator.check_schema(schema)
+doc = json.load(open(sys.argv[2]))
+errors = sorted(Draft202012Validator(schema).iter_errors(doc), key=lambda e: list(e.absolute_path))
+for e in errors[:20]:
+    print("/".join(str(p) for p in e.absolute_path) or "(root)", ":", e.message[:300])
+sys.exit(1 if errors else 0)
+"#;
+    let out = Command::new(python())
+        .arg("-c")
+        .arg(script)
+        .arg(&schema)
+        .arg(&doc)
+        .output()
+        .expect("running python");
+    assert!(
+        out.status.success(),
+        "output does not match {}:\n{}{}",
+        schema.display(),
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
