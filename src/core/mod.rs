@@ -1,6 +1,7 @@
 //! The services every stage uses: pipeline-file parsing, the content-addressed cache and the
-//! per-case cache, HDF5 and table writers, progress observers, the Slurm executor. It names no
+//! per-case cache, HDF5 and table writers (and the polars → arrow-rs bridge they use), progress observers, the Slurm executor. It names no
 //! stage and no physics: the engine and the stages sit above it.
+pub mod arrow_bridge;
 pub mod cache;
 pub mod cases;
 pub mod config;

@@ -1,8 +1,9 @@
 //! Output writers: HDF5 files following docs/hdf5.md (units and long_name on
 //! every numeric dataset, NXdata groups, shuffle+gzip for large data, no plugins), and tidy
-//! tables through polars (Parquet + CSV). polars lives here and in the LDV readers
+//! tables through polars (Parquet + CSV) and arrow-rs (Arrow IPC, through
+//! `core::arrow_bridge`). polars lives here, in the bridge and in the LDV readers
 //! (`dmw::io::{text, parquet}`) only: its Rust API churns between minor versions, so an
-//! upgrade touches those files.
+//! upgrade touches those files. docs/tables.md says which table format is for what.
 
 use hdf5::types::VarLenUnicode;
 use serde_json::Value;
@@ -267,9 +268,11 @@ pub fn round_significant(x: f64, digits: i32) -> f64 {
     (x * scale).round() / scale
 }
 
-/// Write rows (JSON objects with the same keys) as `<stem>.parquet` and `<stem>.csv`.
-/// Integers become Int64 columns, other numbers Float64, strings Utf8, booleans Boolean; a
-/// missing key or JSON null is a null. (An all-null column is Float64.)
+/// Write rows (JSON objects with the same keys) as `<stem>.parquet`, `<stem>.csv` and
+/// `<stem>.arrow` (Arrow IPC file = Feather v2, uncompressed so that readers can memory-map
+/// it; every field with a unit suffix carries `unit` metadata, [`unit_of_column`]).
+/// Integers become Int64 columns, other numbers Float64, strings Utf8 (LargeUtf8 in Arrow),
+/// booleans Boolean; a missing key or JSON null is a null. (An all-null column is Float64.)
 pub fn write_table(rows: &[serde_json::Map<String, Value>], stem: &Path) -> Result<()> {
     use polars::prelude::*;
     let mut names: Vec<String> = Vec::new();
@@ -327,8 +330,106 @@ pub fn write_table(rows: &[serde_json::Map<String, Value>], stem: &Path) -> Resu
             .include_header(true)
             .finish(&mut df)
             .map_err(|e| e.to_string())
-    })
+    })?;
+    let arrow = stem.with_extension("arrow");
+    let batch = super::arrow_bridge::to_record_batch(&df)
+        .map_err(|e| OutputError::output(&arrow, e))?;
+    write_via_temp(&arrow, |f| write_arrow_ipc(f, &batch))
 }
+
+/// One record batch as an Arrow IPC file, unit metadata added. Deterministic: the only
+/// metadata maps (arrow-rs keeps them in `HashMap`s) have a single key, the schema and footer
+/// have none, and the writer zero-fills its padding.
+fn write_arrow_ipc(
+    f: &mut std::fs::File,
+    batch: &arrow_array::RecordBatch,
+) -> std::result::Result<(), String> {
+    use arrow_schema::{Field, Schema};
+    use std::collections::HashMap;
+    use std::sync::Arc;
+    let fields: Vec<Field> = batch
+        .schema_ref()
+        .fields()
+        .iter()
+        .map(|field| {
+            let meta: HashMap<String, String> = unit_of_column(field.name())
+                .map(|u| HashMap::from([("unit".to_string(), u.to_string())]))
+                .unwrap_or_default();
+            field.as_ref().clone().with_metadata(meta)
+        })
+        .collect();
+    let schema = Arc::new(Schema::new(fields));
+    let batch = batch
+        .clone()
+        .with_schema(schema.clone())
+        .map_err(|e| e.to_string())?;
+    // Default options: format V5, 64-byte alignment, no compression (memory-mappable).
+    let mut w = arrow_ipc::writer::FileWriter::try_new(std::io::BufWriter::new(f), &schema)
+        .map_err(|e| e.to_string())?;
+    w.write(&batch).map_err(|e| e.to_string())?;
+    w.finish().map_err(|e| e.to_string())?;
+    let mut out = w.into_inner().map_err(|e| e.to_string())?;
+    std::io::Write::flush(&mut out).map_err(|e| e.to_string())
+}
+
+/// The unit a column name's suffix states (docs/tables.md, "Units"), as written into the
+/// Arrow field metadata `unit`: the longest matching suffix of `_`-separated tokens in
+/// [`UNIT_SUFFIXES`] wins (`k_P_max_N_per_m` → `N/m`, not `m`). A name whose suffix is not
+/// in the table (`Sku`, `slope_A`, `case`) has no unit: dimensionless, coded or text.
+pub fn unit_of_column(name: &str) -> Option<&'static str> {
+    UNIT_SUFFIXES
+        .iter()
+        .filter(|(suffix, _)| {
+            name.len() > suffix.len() + 1
+                && name.ends_with(suffix)
+                && name.as_bytes()[name.len() - suffix.len() - 1] == b'_'
+        })
+        .max_by_key(|(suffix, _)| suffix.len())
+        .map(|&(_, unit)| unit)
+}
+
+/// Column-name suffix → unit, for the suffixes hdi's tables use (ASCII `u` for micro, as
+/// UDUNITS parses it).
+pub const UNIT_SUFFIXES: &[(&str, &str)] = &[
+    // length
+    ("m", "m"),
+    ("mm", "mm"),
+    ("um", "um"),
+    ("nm", "nm"),
+    // area, density
+    ("um2", "um^2"),
+    ("per_um2", "1/um^2"),
+    // time
+    ("s", "s"),
+    ("ms", "ms"),
+    ("us", "us"),
+    // frequency
+    ("Hz", "Hz"),
+    ("kHz", "kHz"),
+    ("MHz", "MHz"),
+    // force
+    ("N", "N"),
+    ("mN", "mN"),
+    ("uN", "uN"),
+    // pressure, modulus
+    ("Pa", "Pa"),
+    ("MPa", "MPa"),
+    ("GPa", "GPa"),
+    // power
+    ("W", "W"),
+    ("mW", "mW"),
+    // angle
+    ("rad", "rad"),
+    ("urad", "urad"),
+    // stiffness, velocity, efficiency
+    ("N_per_m", "N/m"),
+    ("mm_s", "mm/s"),
+    ("um_s", "um/s"),
+    ("nm_per_mW", "nm/mW"),
+    // fractions
+    ("percent", "%"),
+    ("pct", "%"),
+];
 
 fn write_via_temp(
     path: &Path,
@@ -345,4 +446,121 @@ fn write_via_temp(
         return Err(OutputError::output(path, e));
     }
     std::fs::rename(&tmp, path).map_err(|e| OutputError::io(path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    #[test]
+    fn unit_suffixes_of_the_pipeline_columns() {
+        // Column names as the shipped pipeline writes them (processed/tables and stage tables).
+        for (name, unit) in [
+            ("clearance_nm", Some("nm")),
+            ("a_tfc_m", Some("m")),
+            ("R_um", Some("um")),
+            ("nominal_area_um2", Some("um^2")),
+            ("eta_per_um2", Some("1/um^2")),
+            ("nayak_eta_per_um2", Some("1/um^2")),
+            ("wall_time_s", Some("s")),
+            ("duration_ms", Some("ms")),
+            ("dominant_frequency_kHz", Some("kHz")),
+            ("sample_rate_MHz", Some("MHz")),
+            ("peak_contact_force_mN", Some("mN")),
+            ("Q_lub_transition_end_uN", Some("uN")),
+            ("P_at_3sigma_Pa", Some("Pa")),
+            ("E_star_GPa", Some("GPa")),
+            ("heater_power_mW", Some("mW")),
+            ("roll_std_urad", Some("urad")),
+            ("k_P_max_N_per_m", Some("N/m")),
+            ("velocity_std_mm_s", Some("mm/s")),
+            ("noise_floor_um_s", Some("um/s")),
+            ("efficiency_nm_per_mW", Some("nm/mW")),
+            ("bulge_vibration_percent", Some("%")),
+            ("masked_pct", Some("%")),
+            // No unit suffix: dimensionless, coded, counts, text.
+            ("Sku", None),
+            ("slope_A", None),
+            ("a_tfc_coded", None),
+            ("n_samples", None),
+            ("period_relstd", None),
+            ("case", None),
+            ("t", None),
+            // A bare unit is a name, not a suffix.
+            ("nm", None),
+            ("_nm", None),
+        ] {
+            assert_eq!(unit_of_column(name), unit, "{name}");
+        }
+    }
+
+    fn read_ipc(path: &Path) -> (arrow_schema::SchemaRef, Vec<arrow_array::RecordBatch>) {
+        let f = std::fs::File::open(path).expect("open");
+        let r = arrow_ipc::reader::FileReader::try_new(f, None).expect("Arrow IPC file");
+        let schema = r.schema();
+        let batches = r.collect::<std::result::Result<Vec<_>, _>>().expect("batches");
+        (schema, batches)
+    }
+
+    #[test]
+    fn write_table_writes_an_arrow_ipc_file_with_units_that_arrow_ipc_reads_back() {
+        use arrow_array::{Array, BooleanArray, Float64Array, Int64Array, LargeStringArray};
+        let rows: Vec<serde_json::Map<String, Value>> = [
+            json!({"case": "a", "n_steps": 3, "clearance_nm": 1.25, "k_N_per_m": 2e5, "ok": true}),
+            json!({"case": "b", "n_steps": null, "clearance_nm": -0.5, "ok": false}),
+            json!({"case": null, "n_steps": 7, "clearance_nm": 1e-300, "k_N_per_m": 3, "ok": null}),
+        ]
+        .into_iter()
+        .map(|v| v.as_object().cloned().expect("object"))
+        .collect();
+        let dir = tempfile::tempdir().expect("tempdir");
+        let stem = dir.path().join("t");
+        write_table(&rows, &stem).expect("write");
+        let arrow = stem.with_extension("arrow");
+        let (schema, batches) = read_ipc(&arrow);
+        assert_eq!(batches.len(), 1);
+        let b = &batches[0];
+        assert_eq!(b.num_rows(), 3);
+        let names: Vec<&str> = schema.fields().iter().map(|f| f.name().as_str()).collect();
+        assert_eq!(names, ["case", "n_steps", "clearance_nm", "k_N_per_m", "ok"]);
+        let unit = |i: usize| schema.field(i).metadata().get("unit").cloned();
+        assert_eq!(
+            (0..5).map(unit).collect::<Vec<_>>(),
+            [None, None, Some("nm".into()), Some("N/m".into()), None]
+        );
+        let case = b.column(0).as_any().downcast_ref::<LargeStringArray>().expect("str");
+        assert_eq!(case.iter().collect::<Vec<_>>(), [Some("a"), Some("b"), None]);
+        let n = b.column(1).as_any().downcast_ref::<Int64Array>().expect("i64");
+        assert_eq!(n.iter().collect::<Vec<_>>(), [Some(3), None, Some(7)]);
+        let c = b.column(2).as_any().downcast_ref::<Float64Array>().expect("f64");
+        assert_eq!(c.iter().collect::<Vec<_>>(), [Some(1.25), Some(-0.5), Some(1e-300)]);
+        // 2e5 and 3 mixed: a Float64 column; the missing key is a null.
+        let k = b.column(3).as_any().downcast_ref::<Float64Array>().expect("f64");
+        assert_eq!(k.iter().collect::<Vec<_>>(), [Some(2e5), None, Some(3.0)]);
+        let ok = b.column(4).as_any().downcast_ref::<BooleanArray>().expect("bool");
+        assert_eq!(ok.iter().collect::<Vec<_>>(), [Some(true), Some(false), None]);
+        assert_eq!(ok.null_count(), 1);
+
+        // Byte-identical on a rewrite (determinism), and no temp file left behind.
+        let first = std::fs::read(&arrow).expect("read");
+        write_table(&rows, &stem).expect("rewrite");
+        assert_eq!(first, std::fs::read(&arrow).expect("read"));
+        let mut names: Vec<String> = std::fs::read_dir(dir.path())
+            .expect("dir")
+            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["t.arrow", "t.csv", "t.parquet"]);
+    }
+
+    #[test]
+    fn an_empty_table_is_a_valid_arrow_file() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let stem = dir.path().join("e");
+        write_table(&[], &stem).expect("write");
+        let (schema, batches) = read_ipc(&stem.with_extension("arrow"));
+        assert_eq!(schema.fields().len(), 0);
+        assert_eq!(batches.iter().map(|b| b.num_rows()).sum::<usize>(), 0);
+    }
 }
