@@ -1,6 +1,7 @@
 //! One integration-test binary (one link step on 2 cores), one module per concern.
 mod analysis_cli;
 mod architecture;
+mod arrow_tables;
 mod bad_input;
 mod bulge_cli;
 mod calibrate_cli;

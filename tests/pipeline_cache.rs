@@ -36,6 +36,8 @@ fn default_pipeline_writes_hdf5_tables_and_plots_readable_by_others() {
         "disk_md/spectrum.png",
         "tables/dmw.parquet",
         "tables/dmw.csv",
+        "tables/surfaces.arrow",
+        "tables/dmw.arrow",
     ] {
         assert!(proc.join(f).is_file(), "missing {f}");
     }

@@ -5,7 +5,7 @@
 //! ```text
 //! processed/
 //!   <name> -> .hdi/store/<kind>/<key>     human-friendly symlink per stage instance
-//!   tables/<kind>.parquet|csv             tidy summary tables
+//!   tables/<kind>.parquet|csv|arrow       tidy summary tables (docs/tables.md)
 //!   .hdi/store/<kind>/<key>/              one entry: outputs + manifest.json (written last)
 //!   .hdi/refs/<name>.json                 fingerprint of the last run of that name (for `status`)
 //!   .hdi/tmp/                             work dirs; renamed into the store on success

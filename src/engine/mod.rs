@@ -653,8 +653,9 @@ pub fn write_summary_tables(
     for (kind, rows) in summary_rows(store, &report.current) {
         let stem = tables_dir.join(crate::stages::summary_table_name(&kind));
         if (ran > 0 && failed == 0)
-            || !stem.with_extension("parquet").exists()
-            || !stem.with_extension("csv").exists()
+            || ["parquet", "csv", "arrow"]
+                .iter()
+                .any(|ext| !stem.with_extension(ext).exists())
         {
             crate::core::store::write_table(&rows, &stem)?;
         }

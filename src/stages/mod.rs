@@ -250,7 +250,7 @@ pub fn build(file: &PipelineFile) -> std::result::Result<Vec<Box<dyn Stage>>, Co
     Ok(stages)
 }
 
-/// The tidy summary table of a stage kind (`processed/tables/<name>.{parquet,csv}`):
+/// The tidy summary table of a stage kind (`processed/tables/<name>.{parquet,csv,arrow}`):
 /// `surfaces`, `interfaces`, `dmw` (a mass noun), `analyses`.
 pub fn summary_table_name(kind: &str) -> String {
     match kind {
