@@ -18,10 +18,10 @@
 //!    `release`) behind, so polars' `Drop` on the husk is a no-op and the release callback runs
 //!    exactly once, from arrow-rs.
 //! 3. Strings. polars keeps strings as `Utf8View` (its newest compat level). They are exported
-//!    at `CompatLevel::oldest()`, which converts them (one copy) to `LargeUtf8` — the type
-//!    polars also writes into Parquet, and one that every Arrow reader (pyarrow, R arrow,
-//!    Arrow.jl, DuckDB) supports, whereas view types are recent. Numeric and boolean columns
-//!    are unaffected by the compat level.
+//!    at `CompatLevel::oldest()`, which converts them (one copy) to `LargeUtf8`: every Arrow
+//!    reader (pyarrow, R arrow, Arrow.jl, DuckDB) supports it, whereas view types (which
+//!    polars records in its Parquet schema) are recent. Numeric and boolean columns are
+//!    unaffected by the compat level.
 //! 4. Chunks. Each column is rechunked to one contiguous array first (a no-op for the
 //!    freshly built tables `core::store::write_table` passes), so a table is one record batch.
 //! 5. Types. hdi's tables hold Int64, Float64, Boolean and String columns with nulls;
@@ -86,7 +86,9 @@ pub fn to_record_batch(df: &DataFrame) -> Result<RecordBatch, BridgeError> {
                 FFI_ArrowSchema::from_raw(
                     (&mut c_schema as *mut polars_arrow::ffi::ArrowSchema).cast(),
                 ),
-                FFI_ArrowArray::from_raw((&mut c_array as *mut polars_arrow::ffi::ArrowArray).cast()),
+                FFI_ArrowArray::from_raw(
+                    (&mut c_array as *mut polars_arrow::ffi::ArrowArray).cast(),
+                ),
             )
         };
         let import_err = |e: arrow_schema::ArrowError| BridgeError::Import {
@@ -124,7 +126,12 @@ mod tests {
             Column::new("ok".into(), [Some(true), Some(false), None, Some(true)]),
             Column::new(
                 "name".into(),
-                [Some("a"), None, Some(""), Some("µm — a longer string than 12 bytes")],
+                [
+                    Some("a"),
+                    None,
+                    Some(""),
+                    Some("µm — a longer string than 12 bytes"),
+                ],
             ),
         ];
         DataFrame::new(4, cols).expect("frame")
@@ -135,16 +142,35 @@ mod tests {
         let df = frame();
         let b = to_record_batch(&df).expect("bridge");
         assert_eq!(b.num_rows(), 4);
-        let names: Vec<&str> = b.schema_ref().fields().iter().map(|f| f.name().as_str()).collect();
+        let names: Vec<&str> = b
+            .schema_ref()
+            .fields()
+            .iter()
+            .map(|f| f.name().as_str())
+            .collect();
         assert_eq!(names, ["n", "x_nm", "ok", "name"]);
-        let types: Vec<&DataType> = b.schema_ref().fields().iter().map(|f| f.data_type()).collect();
+        let types: Vec<&DataType> = b
+            .schema_ref()
+            .fields()
+            .iter()
+            .map(|f| f.data_type())
+            .collect();
         assert_eq!(
             types,
-            [&DataType::Int64, &DataType::Float64, &DataType::Boolean, &DataType::LargeUtf8]
+            [
+                &DataType::Int64,
+                &DataType::Float64,
+                &DataType::Boolean,
+                &DataType::LargeUtf8
+            ]
         );
 
         // Each arrow-rs value against the polars value of the same cell.
-        let n = b.column(0).as_any().downcast_ref::<Int64Array>().expect("i64");
+        let n = b
+            .column(0)
+            .as_any()
+            .downcast_ref::<Int64Array>()
+            .expect("i64");
         let pn = df.column("n").expect("n").i64().expect("i64");
         for i in 0..4 {
             assert_eq!(n.is_null(i), pn.get(i).is_none());
@@ -152,7 +178,11 @@ mod tests {
                 assert_eq!(n.value(i), v);
             }
         }
-        let x = b.column(1).as_any().downcast_ref::<Float64Array>().expect("f64");
+        let x = b
+            .column(1)
+            .as_any()
+            .downcast_ref::<Float64Array>()
+            .expect("f64");
         let px = df.column("x_nm").expect("x").f64().expect("f64");
         for i in 0..4 {
             assert_eq!(x.is_null(i), px.get(i).is_none());
@@ -160,7 +190,11 @@ mod tests {
                 assert_eq!(x.value(i).to_bits(), v.to_bits());
             }
         }
-        let ok = b.column(2).as_any().downcast_ref::<BooleanArray>().expect("bool");
+        let ok = b
+            .column(2)
+            .as_any()
+            .downcast_ref::<BooleanArray>()
+            .expect("bool");
         let pok = df.column("ok").expect("ok").bool().expect("bool");
         for i in 0..4 {
             assert_eq!(ok.is_null(i), pok.get(i).is_none());
@@ -168,7 +202,11 @@ mod tests {
                 assert_eq!(ok.value(i), v);
             }
         }
-        let s = b.column(3).as_any().downcast_ref::<LargeStringArray>().expect("utf8");
+        let s = b
+            .column(3)
+            .as_any()
+            .downcast_ref::<LargeStringArray>()
+            .expect("utf8");
         let ps = df.column("name").expect("name").str().expect("str");
         for i in 0..4 {
             assert_eq!(s.is_null(i), ps.get(i).is_none());
@@ -176,7 +214,10 @@ mod tests {
                 assert_eq!(s.value(i), v);
             }
         }
-        assert_eq!(n.null_count() + x.null_count() + ok.null_count() + s.null_count(), 4);
+        assert_eq!(
+            n.null_count() + x.null_count() + ok.null_count() + s.null_count(),
+            4
+        );
     }
 
     #[test]
@@ -184,10 +225,15 @@ mod tests {
         // Two chunks, then a slice with a non-byte-aligned offset: the bridge rechunks and
         // the C export carries the offset.
         let mut a = Series::new("b".into(), [true, false, true, true, false]);
-        a.append(&Series::new("b".into(), [false, true, true])).expect("append");
+        a.append(&Series::new("b".into(), [false, true, true]))
+            .expect("append");
         let df = DataFrame::new(8, vec![a.into()]).expect("df").slice(3, 4);
         let b = to_record_batch(&df).expect("bridge");
-        let got = b.column(0).as_any().downcast_ref::<BooleanArray>().expect("bool");
+        let got = b
+            .column(0)
+            .as_any()
+            .downcast_ref::<BooleanArray>()
+            .expect("bool");
         let pb = df.column("b").expect("b").bool().expect("b");
         let want: Vec<Option<bool>> = (0..pb.len()).map(|i| pb.get(i)).collect();
         assert_eq!(got.iter().collect::<Vec<_>>(), want);

@@ -332,8 +332,8 @@ pub fn write_table(rows: &[serde_json::Map<String, Value>], stem: &Path) -> Resu
             .map_err(|e| e.to_string())
     })?;
     let arrow = stem.with_extension("arrow");
-    let batch = super::arrow_bridge::to_record_batch(&df)
-        .map_err(|e| OutputError::output(&arrow, e))?;
+    let batch =
+        super::arrow_bridge::to_record_batch(&df).map_err(|e| OutputError::output(&arrow, e))?;
     write_via_temp(&arrow, |f| write_arrow_ipc(f, &batch))
 }
 
@@ -499,7 +499,9 @@ mod tests {
         let f = std::fs::File::open(path).expect("open");
         let r = arrow_ipc::reader::FileReader::try_new(f, None).expect("Arrow IPC file");
         let schema = r.schema();
-        let batches = r.collect::<std::result::Result<Vec<_>, _>>().expect("batches");
+        let batches = r
+            .collect::<std::result::Result<Vec<_>, _>>()
+            .expect("batches");
         (schema, batches)
     }
 
@@ -523,23 +525,55 @@ mod tests {
         let b = &batches[0];
         assert_eq!(b.num_rows(), 3);
         let names: Vec<&str> = schema.fields().iter().map(|f| f.name().as_str()).collect();
-        assert_eq!(names, ["case", "n_steps", "clearance_nm", "k_N_per_m", "ok"]);
+        assert_eq!(
+            names,
+            ["case", "n_steps", "clearance_nm", "k_N_per_m", "ok"]
+        );
         let unit = |i: usize| schema.field(i).metadata().get("unit").cloned();
         assert_eq!(
             (0..5).map(unit).collect::<Vec<_>>(),
             [None, None, Some("nm".into()), Some("N/m".into()), None]
         );
-        let case = b.column(0).as_any().downcast_ref::<LargeStringArray>().expect("str");
-        assert_eq!(case.iter().collect::<Vec<_>>(), [Some("a"), Some("b"), None]);
-        let n = b.column(1).as_any().downcast_ref::<Int64Array>().expect("i64");
+        let case = b
+            .column(0)
+            .as_any()
+            .downcast_ref::<LargeStringArray>()
+            .expect("str");
+        assert_eq!(
+            case.iter().collect::<Vec<_>>(),
+            [Some("a"), Some("b"), None]
+        );
+        let n = b
+            .column(1)
+            .as_any()
+            .downcast_ref::<Int64Array>()
+            .expect("i64");
         assert_eq!(n.iter().collect::<Vec<_>>(), [Some(3), None, Some(7)]);
-        let c = b.column(2).as_any().downcast_ref::<Float64Array>().expect("f64");
-        assert_eq!(c.iter().collect::<Vec<_>>(), [Some(1.25), Some(-0.5), Some(1e-300)]);
+        let c = b
+            .column(2)
+            .as_any()
+            .downcast_ref::<Float64Array>()
+            .expect("f64");
+        assert_eq!(
+            c.iter().collect::<Vec<_>>(),
+            [Some(1.25), Some(-0.5), Some(1e-300)]
+        );
         // 2e5 and 3 mixed: a Float64 column; the missing key is a null.
-        let k = b.column(3).as_any().downcast_ref::<Float64Array>().expect("f64");
+        let k = b
+            .column(3)
+            .as_any()
+            .downcast_ref::<Float64Array>()
+            .expect("f64");
         assert_eq!(k.iter().collect::<Vec<_>>(), [Some(2e5), None, Some(3.0)]);
-        let ok = b.column(4).as_any().downcast_ref::<BooleanArray>().expect("bool");
-        assert_eq!(ok.iter().collect::<Vec<_>>(), [Some(true), Some(false), None]);
+        let ok = b
+            .column(4)
+            .as_any()
+            .downcast_ref::<BooleanArray>()
+            .expect("bool");
+        assert_eq!(
+            ok.iter().collect::<Vec<_>>(),
+            [Some(true), Some(false), None]
+        );
         assert_eq!(ok.null_count(), 1);
 
         // Byte-identical on a rewrite (determinism), and no temp file left behind.
