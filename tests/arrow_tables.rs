@@ -8,7 +8,7 @@ use crate::common::*;
 /// The suffix → unit table below is the one docs/tables.md documents, written out
 /// independently of `core::store::UNIT_SUFFIXES`.
 const CHECK: &str = r#"
-import os, sys, math, pyarrow as pa, pyarrow.ipc as ipc, pyarrow.parquet as pq
+import os, sys, math, json, pyarrow as pa, pyarrow.ipc as ipc, pyarrow.parquet as pq
 
 UNITS = {"m": "m", "mm": "mm", "um": "um", "nm": "nm", "um2": "um^2", "per_um2": "1/um^2",
          "s": "s", "ms": "ms", "us": "us", "Hz": "Hz", "kHz": "kHz", "MHz": "MHz",
@@ -44,12 +44,18 @@ units_checked = 0
 for path in sorted(files):
     rel = os.path.relpath(path, root)
     parquet = pq.read_table(path[:-len(".arrow")] + ".parquet")
-    # Memory-mapped and zero-copy: an uncompressed IPC file allocates nothing on read.
-    before = pa.total_allocated_bytes()
+    # Memory-mapped and zero-copy: every (non-empty) buffer of every column lies inside the
+    # map, i.e. pyarrow decompressed and copied nothing.
     with pa.memory_map(path) as src:
+        whole = src.read_buffer()
+        lo, hi = whole.address, whole.address + whole.size
         reader = ipc.open_file(src)
         arrow = reader.read_all()
-        assert pa.total_allocated_bytes() == before, (rel, "read allocated: not zero-copy")
+        for name, col in zip(arrow.column_names, arrow.columns):
+            for chunk in col.chunks:
+                for buf in chunk.buffers():
+                    if buf is not None and buf.size > 0:
+                        assert lo <= buf.address and buf.address + buf.size <= hi, (rel, name, "copied: not zero-copy")
         assert reader.num_record_batches <= 1, rel
         assert arrow.num_rows == parquet.num_rows, (rel, arrow.num_rows, parquet.num_rows)
         assert arrow.column_names == parquet.column_names, (rel, arrow.column_names, parquet.column_names)
@@ -70,6 +76,12 @@ for path in sorted(files):
                 assert meta.get("unit") == want, (rel, name, meta, want)
                 units_checked += 1
         assert set(arrow.schema.metadata or {}) == set(), (rel, arrow.schema.metadata)
+        # The Parquet file's one `units` key: the same units, in column order.
+        want_units = {n: expected_unit(n) for n in arrow.column_names if expected_unit(n)}
+        pmeta = pq.read_metadata(path[:-len(".arrow")] + ".parquet").metadata or {}
+        got_units = json.loads(pmeta[b"units"]) if b"units" in pmeta else {}
+        assert got_units == want_units, (rel, got_units, want_units)
+        assert list(got_units) == list(want_units), rel
     print(rel, arrow.num_rows, "rows", arrow.num_columns, "columns")
 print("FILES", len(files), "TABLES", n_tables, "UNITS", units_checked)
 "#;

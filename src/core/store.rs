@@ -270,7 +270,8 @@ pub fn round_significant(x: f64, digits: i32) -> f64 {
 
 /// Write rows (JSON objects with the same keys) as `<stem>.parquet`, `<stem>.csv` and
 /// `<stem>.arrow` (Arrow IPC file = Feather v2, uncompressed so that readers can memory-map
-/// it; every field with a unit suffix carries `unit` metadata, [`unit_of_column`]).
+/// it; every field with a unit suffix carries `unit` metadata, [`unit_of_column`]; the
+/// Parquet file has them all in its file-level key `units`).
 /// Integers become Int64 columns, other numbers Float64, strings Utf8 (LargeUtf8 in Arrow),
 /// booleans Boolean; a missing key or JSON null is a null. (An all-null column is Float64.)
 pub fn write_table(rows: &[serde_json::Map<String, Value>], stem: &Path) -> Result<()> {
@@ -316,10 +317,21 @@ pub fn write_table(rows: &[serde_json::Map<String, Value>], stem: &Path) -> Resu
     }
     let mut df = DataFrame::new(rows.len(), columns).map_err(|e| OutputError::output(stem, e))?;
 
+    // Parquet has no per-column metadata of its own: the units go into one file-level key,
+    // `units` = {"column": "unit", …} in column order (docs/tables.md). One key in a Vec:
+    // deterministic.
+    let units: serde_json::Map<String, Value> = names
+        .iter()
+        .filter_map(|n| unit_of_column(n).map(|u| (n.clone(), Value::from(u))))
+        .collect();
+    let units_kv = (!units.is_empty()).then(|| {
+        KeyValueMetadata::from_static(vec![("units".into(), Value::Object(units).to_string())])
+    });
     let parquet = stem.with_extension("parquet");
     write_via_temp(&parquet, |f| {
         ParquetWriter::new(f)
             .with_compression(ParquetCompression::Zstd(None))
+            .with_key_value_metadata(units_kv)
             .finish(&mut df)
             .map(|_| ())
             .map_err(|e| e.to_string())
