@@ -259,12 +259,18 @@ fn choose(
                 })?
         }
         None => {
-            let candidates: Vec<usize> = (0..columns.len())
-                .filter(|&k| columns[k].values.is_ok() && time_role(&columns[k].name).is_none())
+            // Prefer the one numeric data column; a lone non-numeric one is reported as such.
+            let data: Vec<usize> = (0..columns.len())
+                .filter(|&k| time_role(&columns[k].name).is_none())
                 .collect();
-            match candidates.as_slice() {
-                [one] => *one,
-                [] => {
+            let numeric: Vec<usize> = data
+                .iter()
+                .copied()
+                .filter(|&k| columns[k].values.is_ok())
+                .collect();
+            match (numeric.as_slice(), data.as_slice()) {
+                ([one], _) | ([], [one]) => *one,
+                ([], _) => {
                     return Err(record_err(
                         path,
                         format!("no numeric data column besides time (columns: {list})"),
@@ -389,9 +395,9 @@ pub fn check_values(path: &Path, name: &str, v: &[f64]) -> Result<(), DmwError> 
         return Err(record_err(
             path,
             format!(
-                "`{name}`: {} at sample {i} (row {} of the data); the series must be finite",
-                if v[i].is_nan() { "NaN or an empty cell" } else { "an infinite value" },
-                i + 1
+                "`{name}`: non-finite value {} at sample {i} (an empty cell reads NaN); the \
+                 series must be finite",
+                v[i]
             ),
         ));
     }
