@@ -356,5 +356,8 @@ fn analyze_bad_series_files_name_the_file_and_column() {
         }
     }
     // The same good file with the rate it has: fine.
-    assert_ok(&analyze(&ok, &["--sample-rate", "1 MHz", "--f-min", "10 kHz"]));
+    assert_ok(&analyze(
+        &ok,
+        &["--sample-rate", "1 MHz", "--f-min", "10 kHz", "--f-max", "200 kHz"],
+    ));
 }
