@@ -278,6 +278,12 @@ with h5py.File(os.path.join(d, "two_tone.h5"), "w") as f:
         .unwrap();
     assert_ok(&o);
     let text = stdout(&o);
-    assert!(text.contains("displacement_m") && text.contains("time column `time_s`"), "{text}");
-    assert!(text.contains("periodic") && text.contains("0.500000 ms"), "{text}");
+    assert!(
+        text.contains("displacement_m") && text.contains("time column `time_s`"),
+        "{text}"
+    );
+    assert!(
+        text.contains("periodic") && text.contains("0.500000 ms"),
+        "{text}"
+    );
 }

@@ -304,10 +304,11 @@ fn analyze_bad_series_files_name_the_file_and_column() {
         std::fs::write(&p, text).unwrap();
         p
     };
-    let rows = |n: usize, f: &dyn Fn(usize) -> String| -> String {
-        (0..n).map(|i| f(i) + "\n").collect()
-    };
-    let good = rows(64, &|i| format!("{},{}", i as f64 * 1e-6, (i as f64 * 0.3).sin()));
+    let rows =
+        |n: usize, f: &dyn Fn(usize) -> String| -> String { (0..n).map(|i| f(i) + "\n").collect() };
+    let good = rows(64, &|i| {
+        format!("{},{}", i as f64 * 1e-6, (i as f64 * 0.3).sin())
+    });
     let two = write(
         "two.csv",
         &format!(
@@ -315,17 +316,17 @@ fn analyze_bad_series_files_name_the_file_and_column() {
             rows(64, &|i| format!("{},{},{}", i as f64 * 1e-6, i % 3, i % 5))
         ),
     );
-    let words = write(
-        "words.csv",
-        &format!("time_s,x_m\n{good}0.001,abc\n"),
-    );
+    let words = write("words.csv", &format!("time_s,x_m\n{good}0.001,abc\n"));
     let mut nan_rows: Vec<String> = good.lines().map(str::to_string).collect();
     nan_rows[20] = format!("{},", 20.0 * 1e-6);
     let nan = write("nan.csv", &format!("time_s,x_m\n{}\n", nan_rows.join("\n")));
     let short = write("short.csv", "time_s,x_m\n0,1\n1e-6,2\n2e-6,3\n");
     let mut uneven_rows: Vec<String> = good.lines().map(str::to_string).collect();
     uneven_rows[30] = format!("{},0.5", 30.5e-6);
-    let uneven = write("uneven.csv", &format!("time_s,x_m\n{}\n", uneven_rows.join("\n")));
+    let uneven = write(
+        "uneven.csv",
+        &format!("time_s,x_m\n{}\n", uneven_rows.join("\n")),
+    );
     let ok = write("ok.csv", &format!("time_s,x_m\n{good}"));
     let untimed = write(
         "untimed.csv",
@@ -337,14 +338,42 @@ fn analyze_bad_series_files_name_the_file_and_column() {
         hdi().arg("analyze").arg(p).args(args).output().unwrap()
     };
     for (path, args, needles) in [
-        (&ok, &["--column", "nope"][..], &["ok.csv", "no column `nope`", "x_m"][..]),
-        (&two, &[][..], &["two.csv", "several data columns", "a_m, b_m"][..]),
-        (&words, &[][..], &["words.csv", "`x_m` is not numeric", "abc", "line 66"][..]),
-        (&nan, &[][..], &["nan.csv", "`x_m`", "non-finite value NaN at sample 20"][..]),
+        (
+            &ok,
+            &["--column", "nope"][..],
+            &["ok.csv", "no column `nope`", "x_m"][..],
+        ),
+        (
+            &two,
+            &[][..],
+            &["two.csv", "several data columns", "a_m, b_m"][..],
+        ),
+        (
+            &words,
+            &[][..],
+            &["words.csv", "`x_m` is not numeric", "abc", "line 66"][..],
+        ),
+        (
+            &nan,
+            &[][..],
+            &["nan.csv", "`x_m`", "non-finite value NaN at sample 20"][..],
+        ),
         (&short, &[][..], &["short.csv", "`x_m`", "too few"][..]),
-        (&uneven, &[][..], &["uneven.csv", "`time_s`", "not uniformly sampled"][..]),
-        (&ok, &["--sample-rate", "2 MHz"][..], &["ok.csv", "--sample-rate says"][..]),
-        (&untimed, &[][..], &["untimed.csv", "no time column and no sample rate"][..]),
+        (
+            &uneven,
+            &[][..],
+            &["uneven.csv", "`time_s`", "not uniformly sampled"][..],
+        ),
+        (
+            &ok,
+            &["--sample-rate", "2 MHz"][..],
+            &["ok.csv", "--sample-rate says"][..],
+        ),
+        (
+            &untimed,
+            &[][..],
+            &["untimed.csv", "no time column and no sample rate"][..],
+        ),
         (&parquet, &[][..], &["cut.parquet"][..]),
         (&arrow, &[][..], &["cut.arrow"][..]),
     ] {
@@ -358,6 +387,13 @@ fn analyze_bad_series_files_name_the_file_and_column() {
     // The same good file with the rate it has: fine.
     assert_ok(&analyze(
         &ok,
-        &["--sample-rate", "1 MHz", "--f-min", "10 kHz", "--f-max", "200 kHz"],
+        &[
+            "--sample-rate",
+            "1 MHz",
+            "--f-min",
+            "10 kHz",
+            "--f-max",
+            "200 kHz",
+        ],
     ));
 }

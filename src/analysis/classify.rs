@@ -727,7 +727,9 @@ mod signal_tests {
 
     /// Uniform noise in [−1, 1) from a 64-bit LCG (Knuth's MMIX constants): reproducible.
     fn noise(n: usize, seed: u64) -> Vec<f64> {
-        let mut s = seed.wrapping_mul(2862933555777941757).wrapping_add(3037000493);
+        let mut s = seed
+            .wrapping_mul(2862933555777941757)
+            .wrapping_add(3037000493);
         (0..n)
             .map(|_| {
                 s = s
@@ -744,7 +746,10 @@ mod signal_tests {
         (0..n)
             .map(|i| {
                 let t = i as f64 / fs;
-                parts.iter().map(|(f, a, p)| a * (TAU * f * t + p).sin()).sum()
+                parts
+                    .iter()
+                    .map(|(f, a, p)| a * (TAU * f * t + p).sin())
+                    .sum()
             })
             .collect()
     }
@@ -803,7 +808,10 @@ mod signal_tests {
             add_noise(&mut x, 0.05, 7);
             let c = run(&x, fs);
             let d = &c.diagnostics;
-            assert!(matches!(c.class, Class::Periodic { .. }), "{parts:?}: {d:?}");
+            assert!(
+                matches!(c.class, Class::Periodic { .. }),
+                "{parts:?}: {d:?}"
+            );
             let p = d.period_s.unwrap();
             assert!((p - period).abs() < 1e-4 * period, "{parts:?}: {p}");
         }
@@ -817,7 +825,11 @@ mod signal_tests {
             .map(|k| (20e3 * k, 1.0 / k, 0.0))
             .collect();
         let c = run(&tones(4e6, 2e-3, &parts), 4e6);
-        assert!(matches!(c.class, Class::Periodic { .. }), "{:?}", c.diagnostics);
+        assert!(
+            matches!(c.class, Class::Periodic { .. }),
+            "{:?}",
+            c.diagnostics
+        );
         assert!((c.diagnostics.period_s.unwrap() - 50e-6).abs() < 1e-5 * 50e-6);
     }
 
@@ -827,7 +839,12 @@ mod signal_tests {
         let fs = 4e6;
         let x = tones(fs, 4e-3, &[(30e3, 1.0, 0.0), (10e3, 0.4, 0.3)]);
         let c = run(&x, fs);
-        assert_eq!(c.class, Class::Periodic { period: 3 }, "{:?}", c.diagnostics);
+        assert_eq!(
+            c.class,
+            Class::Periodic { period: 3 },
+            "{:?}",
+            c.diagnostics
+        );
         assert!((c.diagnostics.period_s.unwrap() - 1e-4).abs() < 1e-5 * 1e-4);
     }
 

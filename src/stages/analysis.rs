@@ -360,7 +360,11 @@ pub fn read_series(
     };
     if let Some((fs, from)) = &stated {
         if !(fs.is_finite() && *fs > 0.0) {
-            return Err(h5err(path, from, format!("sample rate {fs} Hz must be > 0")));
+            return Err(h5err(
+                path,
+                from,
+                format!("sample rate {fs} Hz must be > 0"),
+            ));
         }
     }
     let time = TIME_NAMES
@@ -392,8 +396,8 @@ pub fn read_series(
                     format!("attribute `sampling_rate` of `{tname}`"),
                 ),
                 _ => {
-                    let (fs, t0) =
-                        rate_from_time(path, &tname, &t).map_err(|e| Error::Stage(e.to_string()))?;
+                    let (fs, t0) = rate_from_time(path, &tname, &t)
+                        .map_err(|e| Error::Stage(e.to_string()))?;
                     (fs, t0, format!("time dataset `{tname}`"))
                 }
             };

@@ -184,8 +184,8 @@ pub fn read_table_series(path: &Path, req: &SeriesRequest) -> Result<TableSeries
         }
         LdvFormat::Npy => {
             let mmap = npy::map_file(path)?;
-            let header = crate::formats::npy::parse(&mmap, mmap.len())
-                .map_err(|e| read_err(path, e))?;
+            let header =
+                crate::formats::npy::parse(&mmap, mmap.len()).map_err(|e| read_err(path, e))?;
             let structured = matches!(header.dtype, crate::formats::npy::Dtype::Structured { .. });
             let table = npy::npy_table(path, &mmap)?;
             let k = table.columns.len();
@@ -208,15 +208,13 @@ pub fn read_table_series(path: &Path, req: &SeriesRequest) -> Result<TableSeries
             }
             (cols, Meta::default(), "npy")
         }
-        other => {
-            return Err(read_err(
-                path,
-                format!(
-                    "{} is not read by `hdi analyze`: use CSV/TSV, Parquet, Arrow IPC, .npy or HDF5",
-                    other.name()
-                ),
-            ))
-        }
+        other => return Err(read_err(
+            path,
+            format!(
+                "{} is not read by `hdi analyze`: use CSV/TSV, Parquet, Arrow IPC, .npy or HDF5",
+                other.name()
+            ),
+        )),
     };
     choose(path, columns, &meta, fmt, req)
 }
@@ -254,9 +252,7 @@ fn choose(
                         .iter()
                         .position(|c| names::clean(&c.name).eq_ignore_ascii_case(w))
                 })
-                .ok_or_else(|| {
-                    record_err(path, format!("no column `{want}` (columns: {list})"))
-                })?
+                .ok_or_else(|| record_err(path, format!("no column `{want}` (columns: {list})")))?
         }
         None => {
             // Prefer the one numeric data column; a lone non-numeric one is reported as such.
@@ -279,9 +275,7 @@ fn choose(
                 _ => {
                     return Err(record_err(
                         path,
-                        format!(
-                            "several data columns; choose one with --column (columns: {list})"
-                        ),
+                        format!("several data columns; choose one with --column (columns: {list})"),
                     ))
                 }
             }
@@ -373,7 +367,10 @@ fn meta_rate(path: &Path, meta: &Meta) -> Result<Option<(f64, String)>, DmwError
             .and_then(|x| x.parse().ok())
             .ok_or_else(|| record_err(path, format!("metadata `dt = {v}` is not a number (s)")))?;
         if !(dt.is_finite() && dt > 0.0) {
-            return Err(record_err(path, format!("metadata `dt = {v}` must be > 0 s")));
+            return Err(record_err(
+                path,
+                format!("metadata `dt = {v}` must be > 0 s"),
+            ));
         }
         return Ok(Some((1.0 / dt, "metadata `dt`".into())));
     }
@@ -408,7 +405,10 @@ pub fn check_values(path: &Path, name: &str, v: &[f64]) -> Result<(), DmwError> 
 /// [`UNIFORM_RTOL`] of the mean step; the error names the worst step and where it is.
 pub fn rate_from_time(path: &Path, name: &str, t: &[f64]) -> Result<(f64, f64), DmwError> {
     if t.len() < 2 {
-        return Err(record_err(path, format!("time `{name}`: fewer than 2 values")));
+        return Err(record_err(
+            path,
+            format!("time `{name}`: fewer than 2 values"),
+        ));
     }
     if let Some(i) = t.iter().position(|x| !x.is_finite()) {
         return Err(record_err(
@@ -418,10 +418,14 @@ pub fn rate_from_time(path: &Path, name: &str, t: &[f64]) -> Result<(f64, f64), 
     }
     let n = t.len();
     let mean = (t[n - 1] - t[0]) / (n - 1) as f64;
-    if !(mean > 0.0) {
+    if mean.is_nan() || mean <= 0.0 {
         return Err(record_err(
             path,
-            format!("time `{name}` does not increase ({} … {} s)", t[0], t[n - 1]),
+            format!(
+                "time `{name}` does not increase ({} … {} s)",
+                t[0],
+                t[n - 1]
+            ),
         ));
     }
     let (worst, at) = t
@@ -451,7 +455,10 @@ pub fn rate_from_time(path: &Path, name: &str, t: &[f64]) -> Result<(f64, f64), 
 fn read_text(path: &Path) -> Result<(Vec<RawColumn>, Meta), DmwError> {
     let text = std::fs::read_to_string(path).map_err(|e| read_err(path, e))?;
     let mut meta = Meta::default();
-    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
     let (header_line, header) = loop {
         let Some((i, l)) = lines.next() else {
             return Err(record_err(path, "no header line"));
@@ -596,6 +603,9 @@ mod tests {
         let mut bad = t.clone();
         bad[40] += 1e-7; // 5 % of a step
         let e = rate_from_time(p, "time_s", &bad).unwrap_err().to_string();
-        assert!(e.contains("x.csv") && e.contains("sample 39") && e.contains("not uniformly"), "{e}");
+        assert!(
+            e.contains("x.csv") && e.contains("sample 39") && e.contains("not uniformly"),
+            "{e}"
+        );
     }
 }
