@@ -23,6 +23,8 @@ use std::path::Path;
 pub const RATE_RTOL: f64 = 1e-6;
 /// Largest deviation of one time step from the mean step, relative to the mean step.
 pub const UNIFORM_RTOL: f64 = 1e-3;
+/// The formats, for messages.
+const SERIES_FORMATS: &str = "use CSV/TSV, Parquet, Arrow IPC, .npy or HDF5";
 /// Fewest samples a series may have.
 pub const MIN_SAMPLES: usize = 16;
 
@@ -208,13 +210,13 @@ pub fn read_table_series(path: &Path, req: &SeriesRequest) -> Result<TableSeries
             }
             (cols, Meta::default(), "npy")
         }
-        other => return Err(read_err(
-            path,
-            format!(
-                "{} is not read by `hdi analyze`: use CSV/TSV, Parquet, Arrow IPC, .npy or HDF5",
+        other => {
+            let msg = format!(
+                "{} is not read by `hdi analyze`; {SERIES_FORMATS}",
                 other.name()
-            ),
-        )),
+            );
+            return Err(read_err(path, msg));
+        }
     };
     choose(path, columns, &meta, fmt, req)
 }
