@@ -176,7 +176,8 @@ fn bad_analysis_and_excitation_keys_name_the_key() {
 /// Issue 19's acceptance: the 12 kHz + 110 kHz two-tone (1.0 nm and 0.3 nm; 110/12 = 55/6,
 /// period 0.5 ms) written by independent writers — Python's csv module, pyarrow (Arrow IPC
 /// file, Feather v2 with LZ4, Parquet), numpy (.npy, structured and plain) and h5py (a `time`
-/// dataset with no attribute, the series in nm) — is read by `hdi analyze` with both lines
+/// dataset with no attribute, the series in nm; and a dimension scale in ms, the series in µm)
+/// — is read by `hdi analyze` with both lines
 /// within 1 % in amplitude, classified periodic with the 0.5 ms period, and its `--json`
 /// validates against docs/schemas/analyze.json.
 #[test]
@@ -210,6 +211,13 @@ with h5py.File(os.path.join(d, "two_tone.h5"), "w") as f:
     g = f.create_group("measurement")
     g.create_dataset("time", data=t)
     g.create_dataset("displacement", data=x * 1e9).attrs["units"] = "nm"
+with h5py.File(os.path.join(d, "two_tone_scale.h5"), "w") as f:
+    s = f.create_dataset("seconds", data=t * 1e3)
+    s.attrs["units"] = "ms"
+    s.make_scale("time")
+    x_ds = f.create_dataset("heave", data=x * 1e6)
+    x_ds.attrs["unit"] = np.bytes_("um")
+    x_ds.dims[0].attach_scale(s)
 "#;
     let o = std::process::Command::new(python())
         .arg("-c")
@@ -233,6 +241,8 @@ with h5py.File(os.path.join(d, "two_tone.h5"), "w") as f:
             1.0,
         ),
         ("two_tone.h5", &[], "amplitude_nm", 1.0),
+        // The time axis as a dimension scale in ms, the unit a fixed-length string.
+        ("two_tone_scale.h5", &[], "amplitude_nm", 1.0),
     ];
     for (file, args, key, per_nm) in cases {
         let o = hdi()

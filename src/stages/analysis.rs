@@ -159,16 +159,9 @@ fn h5err(path: &Path, what: &str, e: impl std::fmt::Display) -> Error {
     Error::Stage(format!("{}: {what}: {e}", path.display()))
 }
 
-/// A string attribute (`units`, `unit`), fixed or variable length.
-fn attr_string(ds: &hdf5::Location, name: &str) -> Option<String> {
-    let a = ds.attr(name).ok()?;
-    a.read_scalar::<hdf5::types::VarLenUnicode>()
-        .map(|s| s.to_string())
-        .or_else(|_| {
-            a.read_scalar::<hdf5::types::VarLenAscii>()
-                .map(|s| s.to_string())
-        })
-        .ok()
+/// A string attribute (`units`, `unit`, `CLASS`) in any encoding.
+fn attr_string(loc: &hdf5::Location, name: &str) -> Option<String> {
+    crate::dmw::io::series::hdf5_attr_string(loc, name)
 }
 
 fn read_units(ds: &hdf5::Dataset) -> String {
@@ -177,9 +170,9 @@ fn read_units(ds: &hdf5::Dataset) -> String {
         .unwrap_or_else(|| "1".into())
 }
 
-/// A numeric scalar attribute, if present and readable as a number.
+/// A numeric attribute, if present and readable as a number.
 fn attr_f64(loc: &hdf5::Location, name: &str) -> Option<f64> {
-    loc.attr(name).ok()?.read_scalar::<f64>().ok()
+    crate::dmw::io::series::hdf5_attr_number(loc, name)
 }
 
 /// Attributes that state a sample rate (Hz), or `dt` (s).
@@ -301,7 +294,13 @@ pub fn read_series(
                     .iter()
                     .filter(|d| {
                         let leaf = d.rsplit('/').next().unwrap_or(d).to_lowercase();
-                        !TIME_NAMES.contains(&leaf.as_str()) && leaf != "edge_transient"
+                        let scale = file
+                            .dataset(d)
+                            .ok()
+                            .and_then(|ds| attr_string(&ds, "CLASS"));
+                        !TIME_NAMES.contains(&leaf.as_str())
+                            && leaf != "edge_transient"
+                            && scale.as_deref() != Some("DIMENSION_SCALE")
                     })
                     .collect();
                 match data.as_slice() {
@@ -367,9 +366,30 @@ pub fn read_series(
             ));
         }
     }
+    // A time axis beside the series: by name, else the one dimension scale (h5py
+    // `make_scale`: attribute CLASS = "DIMENSION_SCALE") of the series' length in its group.
     let time = TIME_NAMES
         .iter()
-        .find_map(|n| file.dataset(&sibling(n)).ok().map(|d| (sibling(n), d)));
+        .find_map(|n| file.dataset(&sibling(n)).ok().map(|d| (sibling(n), d)))
+        .or_else(|| {
+            let g = file.group(group_name).ok()?;
+            let scales: Vec<(String, hdf5::Dataset)> = g
+                .member_names()
+                .unwrap_or_default()
+                .into_iter()
+                .filter_map(|n| g.dataset(&n).ok().map(|d| (sibling(&n), d)))
+                .filter(|(n, d)| {
+                    *n != dataset
+                        && d.ndim() == 1
+                        && d.size() == x.len()
+                        && attr_string(d, "CLASS").as_deref() == Some("DIMENSION_SCALE")
+                })
+                .collect();
+            match <[_; 1]>::try_from(scales) {
+                Ok([one]) => Some(one),
+                Err(_) => None,
+            }
+        });
     let (fs, t0, rate_source) = match time {
         Some((tname, time)) => {
             let t: Vec<f64> = time.read_raw().map_err(|e| h5err(path, &tname, e))?;
@@ -419,8 +439,9 @@ pub fn read_series(
             Some((fs, from)) => (fs, 0.0, from),
             None => {
                 return Err(Error::Stage(format!(
-                    "{}: `{dataset}` has no time axis (no `{}` dataset beside it and no \
-                     sampling_rate/sample_rate/fs/dt attribute); pass --sample-rate",
+                    "{}: `{dataset}` has no time axis (no `{}` dataset or dimension scale \
+                     beside it and no sampling_rate/sample_rate/fs/dt attribute); pass \
+                     --sample-rate",
                     path.display(),
                     sibling("time")
                 )))

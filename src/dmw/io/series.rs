@@ -37,6 +37,17 @@ pub struct SeriesRequest {
     pub sample_rate: Option<f64>,
 }
 
+/// A string attribute of an HDF5 object in any encoding h5py and other writers use (the LDV
+/// reader's rule), for the analysis stage's HDF5 series.
+pub fn hdf5_attr_string(loc: &hdf5::Location, name: &str) -> Option<String> {
+    super::h5::attr_string(loc, name)
+}
+
+/// A numeric HDF5 attribute, scalar or one-element array.
+pub fn hdf5_attr_number(loc: &hdf5::Location, name: &str) -> Option<f64> {
+    super::h5::attr_number(loc, name)
+}
+
 /// A series in SI units with its time axis.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TableSeries {
