@@ -418,7 +418,13 @@ pub fn read_series(
                 _ => {
                     let (fs, t0) = rate_from_time(path, &tname, &t)
                         .map_err(|e| Error::Stage(e.to_string()))?;
-                    (fs, t0, format!("time dataset `{tname}`"))
+                    let kind = if attr_string(&time, "CLASS").as_deref() == Some("DIMENSION_SCALE")
+                    {
+                        "dimension scale"
+                    } else {
+                        "time dataset"
+                    };
+                    (fs, t0, format!("{kind} `{tname}`"))
                 }
             };
             if let Some((s, sfrom)) = &stated {
