@@ -319,17 +319,13 @@ fn choose(
         Some(fs) => Some((fs, "--sample-rate".to_string())),
         None => meta_rate(path, meta)?,
     };
-    let time = match time_idx {
-        Some(t) if t != k => {
-            let Ok(tv) = &columns[t].values else {
-                unreachable!("time_idx only points at numeric columns")
-            };
-            let scale = time_role(&columns[t].name).flatten().unwrap_or(1.0);
-            let secs: Vec<f64> = tv.iter().map(|v| v * scale).collect();
-            Some((columns[t].name.clone(), secs))
-        }
-        _ => None,
-    };
+    // time_idx points at a numeric column only.
+    let time = time_idx.filter(|&t| t != k).and_then(|t| {
+        let tv = columns[t].values.as_ref().ok()?;
+        let scale = time_role(&columns[t].name).flatten().unwrap_or(1.0);
+        let secs: Vec<f64> = tv.iter().map(|v| v * scale).collect();
+        Some((columns[t].name.clone(), secs))
+    });
     let (sample_rate, t0, rate_source) = match (time, stated) {
         (Some((name, t)), stated) => {
             let (fs, t0) = rate_from_time(path, &name, &t)?;
