@@ -32,7 +32,11 @@ fn a_sine_driven_slider_answers_at_the_sine_and_is_periodic() {
     let a = s["peaks"][0]["amplitude_nm"].as_f64().unwrap();
     assert!((f - 10.7e3).abs() < 0.01 * 10.7e3, "{f}");
     assert!(a > 0.3 && a < 1.414, "{a}");
-    assert_eq!(s["class"], "periodic (period 1)", "{s}");
+    assert_eq!(s["class"], "periodic", "{s}");
+    assert_eq!(s["period_sections"], 1, "{s}");
+    let period = s["period_s"].as_f64().unwrap();
+    assert!((period * 10.7e3 - 1.0).abs() < 0.01, "{period}");
+    assert_matches_schema("analysis-result", &serde_json::to_string(&r).unwrap());
     let ridge = s["ridge_median_Hz"].as_f64().unwrap();
     assert!((ridge - 10.7e3).abs() < 0.05 * 10.7e3, "{ridge}");
 
@@ -50,8 +54,12 @@ fn a_sine_driven_slider_answers_at_the_sine_and_is_periodic() {
             .output()
             .unwrap(),
     );
-    assert_eq!(j["peaks"][0]["frequency_Hz"], s["peaks"][0]["frequency_Hz"]);
-    assert_eq!(j["class"], s["class"]);
+    assert_eq!(
+        j["summary"]["peaks"][0]["frequency_Hz"],
+        s["peaks"][0]["frequency_Hz"]
+    );
+    assert_eq!(j["summary"]["class"], s["class"]);
+    assert_eq!(j["input"]["series"], "case/history/heave");
 
     // 10.7 kHz is far below the AB modes: the bulge tracks the disk, so the clearance barely
     // moves — 0.049 nm, 3 % of the 1.414 nm disk motion (the quasi-static (10.7/110)² ≈ 1 %
@@ -65,7 +73,7 @@ fn a_sine_driven_slider_answers_at_the_sine_and_is_periodic() {
             .output()
             .unwrap(),
     );
-    let line = c["peaks"]
+    let line = c["summary"]["peaks"]
         .as_array()
         .unwrap()
         .iter()
@@ -126,8 +134,9 @@ fn analyze_errors_are_clear() {
     assert_clean_failure(&missing, "nowhere.h5: no such file");
     let o = run(&["--dataset", "g/ok", "--json"]);
     let j = json_of(&o);
-    let f = j["peaks"][0]["frequency_Hz"].as_f64().unwrap();
+    let f = j["summary"]["peaks"][0]["frequency_Hz"].as_f64().unwrap();
     assert!((f - 1e4).abs() < 200.0, "{f}");
+    assert_matches_schema("analyze", &stdout(&o));
 }
 
 #[test]
@@ -162,4 +171,129 @@ fn bad_analysis_and_excitation_keys_name_the_key() {
         let o = p.run(&["run"]);
         assert_clean_failure(&o, needle);
     }
+}
+
+/// Issue 19's acceptance: the 12 kHz + 110 kHz two-tone (1.0 nm and 0.3 nm; 110/12 = 55/6,
+/// period 0.5 ms) written by independent writers — Python's csv module, pyarrow (Arrow IPC
+/// file, Feather v2 with LZ4, Parquet), numpy (.npy, structured and plain) and h5py (a `time`
+/// dataset with no attribute, the series in nm; and a dimension scale in ms, the series in µm)
+/// — is read by `hdi analyze` with both lines
+/// within 1 % in amplitude, classified periodic with the 0.5 ms period, and its `--json`
+/// validates against docs/schemas/analyze.json.
+#[test]
+fn a_two_tone_series_from_any_writer_is_periodic_with_both_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    // 2 MHz for 5 ms: both tones on bins (200 Hz), so the Hann amplitudes are exact to
+    // rounding; 10 periods of 0.5 ms.
+    let script = r#"
+import csv, sys, os
+import numpy as np, pyarrow as pa, pyarrow.feather as feather, pyarrow.parquet as pq, h5py
+d = sys.argv[1]
+fs, n = 2e6, 10000
+t = np.arange(n) / fs
+x = 1.0e-9 * np.sin(2 * np.pi * 12e3 * t + 0.3) + 0.3e-9 * np.sin(2 * np.pi * 110e3 * t + 1.1)
+with open(os.path.join(d, "two_tone.csv"), "w", newline="") as f:
+    w = csv.writer(f)
+    w.writerow(["time_s", "displacement_m"])
+    for a, b in zip(t, x):
+        w.writerow([repr(float(a)), repr(float(b))])
+table = pa.table({"time_s": t, "displacement_m": x})
+with pa.OSFile(os.path.join(d, "two_tone.arrow"), "wb") as sink:
+    with pa.ipc.new_file(sink, table.schema) as writer:
+        writer.write_table(table, max_chunksize=3000)
+feather.write_feather(table, os.path.join(d, "two_tone.feather"))
+pq.write_table(table, os.path.join(d, "two_tone.parquet"))
+rec = np.zeros(n, dtype=[("time_s", "<f8"), ("displacement_m", "<f8")])
+rec["time_s"], rec["displacement_m"] = t, x
+np.save(os.path.join(d, "two_tone_structured.npy"), rec)
+np.save(os.path.join(d, "two_tone_plain.npy"), (x * 1e9).astype("<f4"))
+with h5py.File(os.path.join(d, "two_tone.h5"), "w") as f:
+    g = f.create_group("measurement")
+    g.create_dataset("time", data=t)
+    g.create_dataset("displacement", data=x * 1e9).attrs["units"] = "nm"
+with h5py.File(os.path.join(d, "two_tone_scale.h5"), "w") as f:
+    s = f.create_dataset("seconds", data=t * 1e3)
+    s.attrs["units"] = "ms"
+    s.make_scale("time")
+    x_ds = f.create_dataset("heave", data=x * 1e6)
+    x_ds.attrs["unit"] = np.bytes_("um")
+    x_ds.dims[0].attach_scale(s)
+"#;
+    let o = std::process::Command::new(python())
+        .arg("-c")
+        .arg(script)
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // (file, extra args, amplitude key, its unit per nm)
+    let cases: &[(&str, &[&str], &str, f64)] = &[
+        ("two_tone.csv", &[], "amplitude_nm", 1.0),
+        ("two_tone.arrow", &[], "amplitude_nm", 1.0),
+        ("two_tone.feather", &[], "amplitude_nm", 1.0),
+        ("two_tone.parquet", &[], "amplitude_nm", 1.0),
+        ("two_tone_structured.npy", &[], "amplitude_nm", 1.0),
+        // No unit, no time axis: the values are nm as written; the rate is given.
+        (
+            "two_tone_plain.npy",
+            &["--sample-rate", "2 MHz"],
+            "amplitude",
+            1.0,
+        ),
+        ("two_tone.h5", &[], "amplitude_nm", 1.0),
+        // The time axis as a dimension scale in ms, the unit a fixed-length string.
+        ("two_tone_scale.h5", &[], "amplitude_nm", 1.0),
+    ];
+    for (file, args, key, per_nm) in cases {
+        let o = hdi()
+            .arg("analyze")
+            .arg(dir.path().join(file))
+            .args(*args)
+            .arg("--json")
+            .output()
+            .unwrap();
+        let text = stdout(&o);
+        let j = json_of(&o);
+        assert_matches_schema("analyze", &text);
+        let s = &j["summary"];
+        assert!(
+            (s["sample_rate_Hz"].as_f64().unwrap() - 2e6).abs() < 1e-6 * 2e6,
+            "{file}: {s}"
+        );
+        for (f, a) in [(12e3, 1.0), (110e3, 0.3)] {
+            let p = s["peaks"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|p| (p["frequency_Hz"].as_f64().unwrap() - f).abs() < 1e-3 * f)
+                .unwrap_or_else(|| panic!("{file}: no line at {f} Hz: {s}"));
+            let got = p[*key].as_f64().unwrap() / per_nm;
+            assert!((got - a).abs() < 0.01 * a, "{file}: {f} Hz reads {got} nm");
+        }
+        assert_eq!(s["class"], "periodic", "{file}: {s}");
+        let period = s["period_s"].as_f64().unwrap();
+        assert!((period - 0.5e-3).abs() < 1e-6 * 0.5e-3, "{file}: {period}");
+        let lines = &s["evidence"]["spectral_lines"];
+        assert!(
+            (lines["fundamental_Hz"].as_f64().unwrap() - 2e3).abs() < 0.01,
+            "{file}: {lines}"
+        );
+        assert_eq!(lines["lowest_harmonic"], 6, "{file}");
+    }
+    // The text output names the series, the rate's origin and the class.
+    let o = hdi()
+        .arg("analyze")
+        .arg(dir.path().join("two_tone.csv"))
+        .output()
+        .unwrap();
+    assert_ok(&o);
+    let text = stdout(&o);
+    assert!(
+        text.contains("displacement_m") && text.contains("time column `time_s`"),
+        "{text}"
+    );
+    assert!(
+        text.contains("periodic") && text.contains("0.500000 ms"),
+        "{text}"
+    );
 }

@@ -294,3 +294,106 @@ fn cut_foreign_ldv_records_fail_cleanly_naming_the_file() {
         }
     }
 }
+
+/// `hdi analyze` on broken series files: one error line naming the file and the column.
+#[test]
+fn analyze_bad_series_files_name_the_file_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let rows =
+        |n: usize, f: &dyn Fn(usize) -> String| -> String { (0..n).map(|i| f(i) + "\n").collect() };
+    let good = rows(64, &|i| {
+        format!("{},{}", i as f64 * 1e-6, (i as f64 * 0.3).sin())
+    });
+    let two = write(
+        "two.csv",
+        &format!(
+            "time_s,a_m,b_m\n{}",
+            rows(64, &|i| format!("{},{},{}", i as f64 * 1e-6, i % 3, i % 5))
+        ),
+    );
+    let words = write("words.csv", &format!("time_s,x_m\n{good}0.001,abc\n"));
+    let mut nan_rows: Vec<String> = good.lines().map(str::to_string).collect();
+    nan_rows[20] = format!("{},", 20.0 * 1e-6);
+    let nan = write("nan.csv", &format!("time_s,x_m\n{}\n", nan_rows.join("\n")));
+    let short = write("short.csv", "time_s,x_m\n0,1\n1e-6,2\n2e-6,3\n");
+    let mut uneven_rows: Vec<String> = good.lines().map(str::to_string).collect();
+    uneven_rows[30] = format!("{},0.5", 30.5e-6);
+    let uneven = write(
+        "uneven.csv",
+        &format!("time_s,x_m\n{}\n", uneven_rows.join("\n")),
+    );
+    let ok = write("ok.csv", &format!("time_s,x_m\n{good}"));
+    let untimed = write(
+        "untimed.csv",
+        &format!("x_m\n{}", rows(64, &|i| format!("{}", (i as f64).sin()))),
+    );
+    let parquet = write("cut.parquet", "PAR1 this is not a parquet file at all");
+    let arrow = write("cut.arrow", "ARROW1\0\0 garbage, no footer");
+    let analyze = |p: &std::path::Path, args: &[&str]| {
+        hdi().arg("analyze").arg(p).args(args).output().unwrap()
+    };
+    for (path, args, needles) in [
+        (
+            &ok,
+            &["--column", "nope"][..],
+            &["ok.csv", "no column `nope`", "x_m"][..],
+        ),
+        (
+            &two,
+            &[][..],
+            &["two.csv", "several data columns", "a_m, b_m"][..],
+        ),
+        (
+            &words,
+            &[][..],
+            &["words.csv", "`x_m` is not numeric", "abc", "line 66"][..],
+        ),
+        (
+            &nan,
+            &[][..],
+            &["nan.csv", "`x_m`", "non-finite value NaN at sample 20"][..],
+        ),
+        (&short, &[][..], &["short.csv", "`x_m`", "too few"][..]),
+        (
+            &uneven,
+            &[][..],
+            &["uneven.csv", "`time_s`", "not uniformly sampled"][..],
+        ),
+        (
+            &ok,
+            &["--sample-rate", "2 MHz"][..],
+            &["ok.csv", "--sample-rate says"][..],
+        ),
+        (
+            &untimed,
+            &[][..],
+            &["untimed.csv", "no time column and no sample rate"][..],
+        ),
+        (&parquet, &[][..], &["cut.parquet"][..]),
+        (&arrow, &[][..], &["cut.arrow"][..]),
+    ] {
+        let o = analyze(path, args);
+        assert_clean_failure(&o, needles[0]);
+        let err = stderr(&o);
+        for n in needles {
+            assert!(err.contains(n), "{}: lacks `{n}`: {err}", path.display());
+        }
+    }
+    // The same good file with the rate it has: fine.
+    assert_ok(&analyze(
+        &ok,
+        &[
+            "--sample-rate",
+            "1 MHz",
+            "--f-min",
+            "10 kHz",
+            "--f-max",
+            "200 kHz",
+        ],
+    ));
+}

@@ -3,7 +3,7 @@
 //! influence, the Poincaré section with its classification, and the decimated phase space.
 //! Pure: the stage and `hdi analyze` do the reading and writing.
 
-use super::classify::{classify, Classification, ClassifyOptions};
+use super::classify::{classify_signal, Classification, ClassifyOptions};
 use super::cwt::{cwt_morlet, ridge, CwtOptions, FrequencyGrid, Ridge, Scalogram};
 use super::poincare::{phase_space, poincare_section, PhaseSpace, PoincareSection};
 use super::series::{detrend, spectrum, time_window, Detrend};
@@ -130,7 +130,7 @@ pub fn analyze(
     let scalogram = cwt_morlet(&xw, fs, &opts.cwt)?;
     let ridge = ridge(&scalogram);
     let section = poincare_section(&xw, vw, fs)?;
-    let classification = classify(&section, &opts.classify);
+    let classification = classify_signal(&xw, fs, &section, &spectrum, &opts.classify);
     let phase_space = phase_space(&xw, vw, fs, opts.phase_space_points)?;
     Ok(AnalysisReport {
         t0_s: t0 + w.start as f64 / fs,

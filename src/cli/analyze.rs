@@ -7,7 +7,7 @@ use std::time::Instant;
 use super::args::AnalyzeArgs;
 
 pub(super) fn cmd_analyze(a: AnalyzeArgs) -> Result<()> {
-    use hdi::stages::analysis::{read_series, summary, write_outputs, AnalysisSettings};
+    use hdi::stages::analysis::{read_any_series, summary, write_outputs, AnalysisSettings};
     let settings = AnalysisSettings {
         window: match a.window.as_slice() {
             [t0, t1] => (Some(t0.0), Some(t1.0)),
@@ -25,7 +25,15 @@ pub(super) fn cmd_analyze(a: AnalyzeArgs) -> Result<()> {
     if !a.file.is_file() {
         bail!("{}: no such file", a.file.display());
     }
-    let s = read_series(&a.file, a.dataset.as_deref(), a.velocity.as_deref())?;
+    if a.column.is_some() && a.dataset.is_some() {
+        bail!("--column is for tables, --dataset for HDF5: give one");
+    }
+    let s = read_any_series(
+        &a.file,
+        a.column.as_deref().or(a.dataset.as_deref()),
+        a.velocity.as_deref(),
+        a.sample_rate.map(|f| f.0),
+    )?;
     let started = Instant::now();
     let r = hdi::analysis::report::analyze(
         &s.x,
@@ -48,13 +56,23 @@ pub(super) fn cmd_analyze(a: AnalyzeArgs) -> Result<()> {
             dir,
             "",
             &label,
-            &json!({"file": a.file.display().to_string(), "dataset": a.dataset}),
+            &json!({"file": a.file.display().to_string(), "series": s.name}),
             &r,
             &s,
         )?;
     }
     if a.json {
-        println!("{sum}");
+        let out = json!({
+            "input": {
+                "file": a.file.display().to_string(),
+                "format": s.format,
+                "series": s.name,
+                "unit": s.unit,
+                "sample_rate_source": s.rate_source,
+            },
+            "summary": sum,
+        });
+        println!("{out}");
         return Ok(());
     }
     let (du, k) = match s.unit.as_str() {
@@ -63,10 +81,14 @@ pub(super) fn cmd_analyze(a: AnalyzeArgs) -> Result<()> {
         u => (u, 1.0),
     };
     println!(
-        "{}: {} samples at {} MHz from {:.4} ms ({seconds:.2} s)",
+        "{} `{}` ({}, {}): {} samples at {} MHz ({}) from {:.4} ms ({seconds:.2} s)",
         a.file.display(),
+        s.name,
+        s.format,
+        s.unit,
         r.samples,
         r.sample_rate_hz / 1e6,
+        s.rate_source,
         r.t0_s * 1e3
     );
     println!("  {:>12} {:>14}", "peak (kHz)", format!("amplitude ({du})"));
@@ -84,6 +106,31 @@ pub(super) fn cmd_analyze(a: AnalyzeArgs) -> Result<()> {
         r.section.maxima.len(),
         r.class_label()
     );
+    if let Ok(c) = &r.classification {
+        let d = &c.diagnostics;
+        if let Some(p) = d.period_s {
+            println!("  period {:.6} ms (decided by {})", p * 1e3, d.decided_by);
+        }
+        if let Some(e) = &d.lines {
+            if let Some(f0) = e.fundamental_hz {
+                println!(
+                    "  spectral lines: fundamental {:.4} kHz, lowest line its harmonic {}",
+                    f0 / 1e3,
+                    e.lowest_harmonic.unwrap_or(0)
+                );
+            }
+            let ratios: Vec<String> = e
+                .lines
+                .iter()
+                .map(|l| format!("{:.5} ≈ {}/{}", l.ratio, l.numerator, l.denominator))
+                .collect();
+            println!(
+                "  line ratios to the lowest: {} (lines carry {:.1} % of the variance)",
+                ratios.join(", "),
+                e.line_power_fraction * 100.0
+            );
+        }
+    }
     if let Some(dir) = &a.out {
         println!("  wrote {}/analysis.h5 and 4 PNGs", dir.display());
     }

@@ -461,12 +461,20 @@ pub struct SimulateArgs {
 /// `hdi analyze`.
 #[derive(Args, Debug)]
 pub struct AnalyzeArgs {
-    /// An HDF5 file (a case `h_XXX.XXnm.h5`, a `dmw.h5`, or any file with a 1-D series and a
-    /// `time` dataset with a `sampling_rate` attribute beside it).
+    /// A series file: CSV/TSV, Parquet, Arrow IPC (Feather v2), `.npy`, or HDF5 (an hdi case
+    /// or `dmw.h5`, or any file with a 1-D dataset). The format is detected from the content.
     pub file: PathBuf,
-    /// Series to analyse (default: `case/history/heave` or `dmw/tracks/D1`).
+    /// HDF5: the dataset to analyse (default: `case/history/heave`, `dmw/tracks/D1`, or the
+    /// file's only 1-D dataset).
     #[arg(long)]
     pub dataset: Option<String>,
+    /// Tables: the column to analyse (default: the only numeric column besides time).
+    #[arg(long)]
+    pub column: Option<String>,
+    /// Sample rate, e.g. `--sample-rate "500 kHz"`, when the file has no time axis (must agree
+    /// with one if it has).
+    #[arg(long)]
+    pub sample_rate: Option<Frequency>,
     /// Its velocity (default: the file's own; `none`: central differences).
     #[arg(long)]
     pub velocity: Option<String>,

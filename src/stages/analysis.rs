@@ -18,7 +18,9 @@ use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::Path;
 
-pub const MODEL_VERSION: &str = "analysis-1";
+/// 2: periodicity from the spectral lines too (issue 19), JSON evidence instead of a debug
+/// string, any HDF5 time axis.
+pub const MODEL_VERSION: &str = "analysis-2";
 
 fn default_f_min() -> Frequency {
     Frequency(5e3)
@@ -136,7 +138,7 @@ impl AnalysisSettings {
     }
 }
 
-/// A series read from an HDF5 file.
+/// A series read from a file, in SI units.
 pub struct Series {
     pub x: Vec<f64>,
     pub v: Option<Vec<f64>>,
@@ -145,26 +147,65 @@ pub struct Series {
     pub t0: f64,
     pub unit: String,
     pub velocity_unit: String,
+    /// The column or dataset read.
+    pub name: String,
+    /// "hdf5", "csv", "parquet", "arrow-file", "arrow-stream", "npy".
+    pub format: String,
+    /// Where the sample rate came from ("time column `time_s`", "--sample-rate", …).
+    pub rate_source: String,
 }
 
 fn h5err(path: &Path, what: &str, e: impl std::fmt::Display) -> Error {
     Error::Stage(format!("{}: {what}: {e}", path.display()))
 }
 
-fn read_units(ds: &hdf5::Dataset) -> String {
-    ds.attr("units")
-        .and_then(|a| a.read_scalar::<hdf5::types::VarLenUnicode>())
-        .map(|s| s.to_string())
-        .unwrap_or_else(|_| "1".into())
+/// A string attribute (`units`, `unit`, `CLASS`) in any encoding.
+fn attr_string(loc: &hdf5::Location, name: &str) -> Option<String> {
+    crate::dmw::io::series::hdf5_attr_string(loc, name)
 }
 
-/// 1-D float datasets of a file (for the error that lists what could have been meant).
+fn read_units(ds: &hdf5::Dataset) -> String {
+    attr_string(ds, "units")
+        .or_else(|| attr_string(ds, "unit"))
+        .unwrap_or_else(|| "1".into())
+}
+
+/// A numeric attribute, if present and readable as a number.
+fn attr_f64(loc: &hdf5::Location, name: &str) -> Option<f64> {
+    crate::dmw::io::series::hdf5_attr_number(loc, name)
+}
+
+/// Attributes that state a sample rate (Hz), or `dt` (s).
+const RATE_ATTRS: &[&str] = &["sampling_rate", "sample_rate", "fs", "sampling_frequency"];
+
+/// A sample rate stated on `loc`: (Hz, "attribute `name` of `where`").
+fn stated_rate(loc: &hdf5::Location, place: &str) -> Option<(f64, String)> {
+    RATE_ATTRS
+        .iter()
+        .find_map(|a| attr_f64(loc, a).map(|f| (f, format!("attribute `{a}` of `{place}`"))))
+        .or_else(|| {
+            attr_f64(loc, "dt").map(|dt| (1.0 / dt, format!("attribute `dt` of `{place}`")))
+        })
+}
+
+/// Time-axis names beside a series (the series itself is never one of them).
+const TIME_NAMES: &[&str] = &["time", "t", "time_s"];
+
+/// 1-D numeric datasets of a file (for the error that lists what could have been meant).
 fn list_series(file: &hdf5::File) -> Vec<String> {
     fn walk(g: &hdf5::Group, prefix: &str, out: &mut Vec<String>) {
         for name in g.member_names().unwrap_or_default() {
             let path = format!("{prefix}{name}");
             if let Ok(ds) = g.dataset(&name) {
-                if ds.ndim() == 1 && ds.size() > 16 && ds.dtype().is_ok_and(|t| t.is::<f64>()) {
+                let numeric = ds.dtype().is_ok_and(|t| {
+                    matches!(
+                        t.to_descriptor(),
+                        Ok(hdf5::types::TypeDescriptor::Float(_)
+                            | hdf5::types::TypeDescriptor::Integer(_)
+                            | hdf5::types::TypeDescriptor::Unsigned(_))
+                    )
+                });
+                if ds.ndim() == 1 && numeric {
                     out.push(path);
                 }
             } else if let Ok(sub) = g.group(&name) {
@@ -183,31 +224,98 @@ pub const DEFAULT_SERIES: &[(&str, &str)] = &[
     ("dmw/tracks/D1", "dmw/tracks/V1"),
 ];
 
-/// Read `dataset` (and `velocity`) with the time axis beside it (`time` with a
-/// `sampling_rate` attribute); samples flagged in an `edge_transient` dataset beside it are
-/// dropped from both ends.
-pub fn read_series(path: &Path, dataset: Option<&str>, velocity: Option<&str>) -> Result<Series> {
+/// Read a series from any file `hdi analyze` takes: HDF5 through [`read_series`], tables
+/// (CSV/TSV, Parquet, Arrow IPC, `.npy`) through `dmw::io::series` (docs/analysis.md).
+/// `name` is the column or dataset; `velocity` applies to HDF5 only.
+pub fn read_any_series(
+    path: &Path,
+    name: Option<&str>,
+    velocity: Option<&str>,
+    sample_rate: Option<f64>,
+) -> Result<Series> {
+    use crate::dmw::io::{detect_format, series, LdvFormat};
+    let fmt = detect_format(path).map_err(|e| Error::Stage(e.to_string()))?;
+    if fmt == LdvFormat::Hdf5 {
+        return read_series(path, name, velocity, sample_rate);
+    }
+    if velocity.is_some_and(|v| v != "none") {
+        return Err(Error::Stage(format!(
+            "{}: --velocity names an HDF5 dataset; a table's velocity is computed by central \
+             differences",
+            path.display()
+        )));
+    }
+    let s = series::read_table_series(
+        path,
+        &series::SeriesRequest {
+            column: name.map(str::to_string),
+            sample_rate,
+        },
+    )
+    .map_err(|e| Error::Stage(e.to_string()))?;
+    Ok(Series {
+        velocity_unit: format!("{}/s", s.unit),
+        x: s.values,
+        v: None,
+        sample_rate: s.sample_rate,
+        t0: s.t0,
+        unit: s.unit,
+        name: s.column,
+        format: s.format.to_string(),
+        rate_source: s.rate_source,
+    })
+}
+
+/// Read `dataset` (and `velocity`) of an HDF5 file, converted to SI by its `units`/`unit`
+/// attribute. The sample rate comes from a `time` dataset beside it (its `sampling_rate`
+/// attribute, else its values, checked for uniform steps), else from `sample_rate`, else from
+/// a `sampling_rate`/`sample_rate`/`fs`/`dt` attribute of the dataset or its group; stated
+/// rates must agree with a time axis. Samples flagged in an `edge_transient` dataset beside it
+/// are dropped from both ends. Without `dataset`: hdi's default series, else the only 1-D
+/// numeric dataset that is not a time axis.
+pub fn read_series(
+    path: &Path,
+    dataset: Option<&str>,
+    velocity: Option<&str>,
+    sample_rate: Option<f64>,
+) -> Result<Series> {
+    use crate::dmw::io::series::{check_values, rate_from_time, si_unit, RATE_RTOL};
     let file = hdf5::File::open(path).map_err(|e| h5err(path, "cannot open as HDF5", e))?;
     let (dataset, velocity) = match dataset {
         Some(d) => (d.to_string(), velocity.map(str::to_string)),
-        None => {
-            let Some((d, v)) = DEFAULT_SERIES.iter().find(|(d, _)| file.dataset(d).is_ok()) else {
-                return Err(Error::Stage(format!(
-                    "{}: no default series ({}); pass a dataset, one of: {}",
-                    path.display(),
-                    DEFAULT_SERIES
-                        .iter()
-                        .map(|d| d.0)
-                        .collect::<Vec<_>>()
-                        .join(", "),
-                    list_series(&file).join(", ")
-                )));
-            };
-            (
+        None => match DEFAULT_SERIES.iter().find(|(d, _)| file.dataset(d).is_ok()) {
+            Some((d, v)) => (
                 d.to_string(),
                 velocity.map_or(Some(v.to_string()), |v| Some(v.to_string())),
-            )
-        }
+            ),
+            None => {
+                let all = list_series(&file);
+                let data: Vec<&String> = all
+                    .iter()
+                    .filter(|d| {
+                        let leaf = d.rsplit('/').next().unwrap_or(d).to_lowercase();
+                        let scale = file
+                            .dataset(d)
+                            .ok()
+                            .and_then(|ds| attr_string(&ds, "CLASS"));
+                        !TIME_NAMES.contains(&leaf.as_str())
+                            && leaf != "edge_transient"
+                            && scale.as_deref() != Some("DIMENSION_SCALE")
+                    })
+                    .collect();
+                match data.as_slice() {
+                    [one] => (one.to_string(), velocity.map(str::to_string)),
+                    _ => {
+                        return Err(Error::Stage(format!(
+                            "{}: {} 1-D datasets; choose one with --dataset ({})",
+                            path.display(),
+                            if data.is_empty() { "no" } else { "several" },
+                            all.join(", ")
+                        )))
+                    }
+                }
+            }
+        },
     };
     let velocity = velocity.filter(|v| v != "none");
     let ds = file.dataset(&dataset).map_err(|_| {
@@ -224,8 +332,14 @@ pub fn read_series(path: &Path, dataset: Option<&str>, velocity: Option<&str>) -
             format!("is {}-D, not a time series", ds.ndim()),
         ));
     }
-    let x: Vec<f64> = ds.read_raw().map_err(|e| h5err(path, &dataset, e))?;
-    let unit = read_units(&ds);
+    let raw: Vec<f64> = ds.read_raw().map_err(|e| h5err(path, &dataset, e))?;
+    check_values(path, &dataset, &raw).map_err(|e| Error::Stage(e.to_string()))?;
+    let stored_unit = read_units(&ds);
+    let (unit, factor) = match si_unit(&stored_unit) {
+        Some((u, f)) => (u.to_string(), f),
+        None => (stored_unit, 1.0),
+    };
+    let x: Vec<f64> = raw.iter().map(|v| v * factor).collect();
     let parent = dataset.rsplit_once('/').map_or("", |(p, _)| p);
     let sibling = |name: &str| {
         if parent.is_empty() {
@@ -234,25 +348,112 @@ pub fn read_series(path: &Path, dataset: Option<&str>, velocity: Option<&str>) -
             format!("{parent}/{name}")
         }
     };
-    let time = file.dataset(&sibling("time")).map_err(|_| {
-        Error::Stage(format!(
-            "{}: `{dataset}` has no time axis (a `{}` dataset with a sampling_rate attribute)",
-            path.display(),
-            sibling("time")
-        ))
-    })?;
-    let fs = time
-        .attr("sampling_rate")
-        .and_then(|a| a.read_scalar::<f64>())
-        .map_err(|e| h5err(path, "sampling_rate attribute of the time axis", e))?;
-    let t: Vec<f64> = time.read_raw().map_err(|e| h5err(path, "time", e))?;
-    if t.len() != x.len() || fs.is_nan() || fs <= 0.0 {
-        return Err(h5err(
-            path,
-            &dataset,
-            "time axis and series disagree in length or rate",
-        ));
+    let group_name = if parent.is_empty() { "/" } else { parent };
+    let stated = match sample_rate {
+        Some(fs) => Some((fs, "--sample-rate".to_string())),
+        None => stated_rate(&ds, &dataset).or_else(|| {
+            file.group(group_name)
+                .ok()
+                .and_then(|g| stated_rate(&g, group_name))
+        }),
+    };
+    if let Some((fs, from)) = &stated {
+        if !(fs.is_finite() && *fs > 0.0) {
+            return Err(h5err(
+                path,
+                from,
+                format!("sample rate {fs} Hz must be > 0"),
+            ));
+        }
     }
+    // A time axis beside the series: by name, else the one dimension scale (h5py
+    // `make_scale`: attribute CLASS = "DIMENSION_SCALE") of the series' length in its group.
+    let time = TIME_NAMES
+        .iter()
+        .find_map(|n| file.dataset(&sibling(n)).ok().map(|d| (sibling(n), d)))
+        .or_else(|| {
+            let g = file.group(group_name).ok()?;
+            let scales: Vec<(String, hdf5::Dataset)> = g
+                .member_names()
+                .unwrap_or_default()
+                .into_iter()
+                .filter_map(|n| g.dataset(&n).ok().map(|d| (sibling(&n), d)))
+                .filter(|(n, d)| {
+                    *n != dataset
+                        && d.ndim() == 1
+                        && d.size() == x.len()
+                        && attr_string(d, "CLASS").as_deref() == Some("DIMENSION_SCALE")
+                })
+                .collect();
+            match <[_; 1]>::try_from(scales) {
+                Ok([one]) => Some(one),
+                Err(_) => None,
+            }
+        });
+    let (fs, t0, rate_source) = match time {
+        Some((tname, time)) => {
+            let t: Vec<f64> = time.read_raw().map_err(|e| h5err(path, &tname, e))?;
+            if t.len() != x.len() {
+                return Err(h5err(
+                    path,
+                    &dataset,
+                    format!(
+                        "{} samples but its time axis `{tname}` has {}",
+                        x.len(),
+                        t.len()
+                    ),
+                ));
+            }
+            let scale = si_unit(&read_units(&time))
+                .filter(|(u, _)| *u == "s")
+                .map_or(1.0, |(_, f)| f);
+            let t: Vec<f64> = t.iter().map(|v| v * scale).collect();
+            // hdi's own files state the exact rate on the time axis; others are measured.
+            let (fs, t0, from) = match attr_f64(&time, "sampling_rate") {
+                Some(fs) if fs.is_finite() && fs > 0.0 => (
+                    fs,
+                    t.first().copied().unwrap_or(0.0),
+                    format!("attribute `sampling_rate` of `{tname}`"),
+                ),
+                _ => {
+                    let (fs, t0) = rate_from_time(path, &tname, &t)
+                        .map_err(|e| Error::Stage(e.to_string()))?;
+                    let kind = if attr_string(&time, "CLASS").as_deref() == Some("DIMENSION_SCALE")
+                    {
+                        "dimension scale"
+                    } else {
+                        "time dataset"
+                    };
+                    (fs, t0, format!("{kind} `{tname}`"))
+                }
+            };
+            if let Some((s, sfrom)) = &stated {
+                if ((s - fs) / fs).abs() > RATE_RTOL {
+                    return Err(h5err(
+                        path,
+                        &dataset,
+                        format!(
+                            "{from} gives {fs} Hz but {sfrom} says {s} Hz; drop one or make \
+                             them agree"
+                        ),
+                    ));
+                }
+            }
+            (fs, t0, from)
+        }
+        None => match stated {
+            Some((fs, from)) => (fs, 0.0, from),
+            None => {
+                return Err(Error::Stage(format!(
+                    "{}: `{dataset}` has no time axis (no `{}` dataset or dimension scale \
+                     beside it and no sampling_rate/sample_rate/fs/dt attribute); pass \
+                     --sample-rate",
+                    path.display(),
+                    sibling("time")
+                )))
+            }
+        },
+    };
     let (v, velocity_unit) = match &velocity {
         Some(vp) => {
             let vd = file.dataset(vp).map_err(|_| {
@@ -266,7 +467,11 @@ pub fn read_series(path: &Path, dataset: Option<&str>, velocity: Option<&str>) -
                     format!("{} samples, the series has {}", v.len(), x.len()),
                 ));
             }
-            (Some(v), read_units(&vd))
+            let stored = read_units(&vd);
+            match si_unit(&stored) {
+                Some((u, f)) => (Some(v.iter().map(|x| x * f).collect()), u.to_string()),
+                None => (Some(v), stored),
+            }
         }
         None => (None, format!("{unit}/s")),
     };
@@ -292,9 +497,12 @@ pub fn read_series(path: &Path, dataset: Option<&str>, velocity: Option<&str>) -
         x: x[a..b].to_vec(),
         v: v.map(|v| v[a..b].to_vec()),
         sample_rate: fs,
-        t0: t.first().copied().unwrap_or(0.0) + a as f64 / fs,
+        t0: t0 + a as f64 / fs,
         unit,
         velocity_unit,
+        name: dataset,
+        format: "hdf5".into(),
+        rate_source,
     })
 }
 
@@ -313,23 +521,116 @@ fn sig6(x: f64) -> f64 {
     crate::core::store::round_significant(x, 6)
 }
 
-/// The summary of a report (JSON for `--json`, `result.json` and the table row).
-pub fn summary(r: &AnalysisReport, unit: &str) -> Value {
+/// The unit as a key suffix: `amplitude_m`, `amplitude_nm`, `amplitude_m_s` (m/s); a
+/// dimensionless series ("1") has plain `amplitude`.
+pub fn amplitude_key(unit: &str) -> String {
+    let u: String = unit
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
+    match u.as_str() {
+        "1" | "" => "amplitude".into(),
+        _ => format!("amplitude_{u}"),
+    }
+}
+
+/// `{amplitude_<SI unit>: a, amplitude_<display unit>: a·k}` (one key when they coincide).
+fn amplitudes(unit: &str, a: f64) -> Map<String, Value> {
     let (du, k) = display(unit);
+    let mut m = Map::new();
+    m.insert(amplitude_key(unit), json!(a));
+    m.insert(amplitude_key(du), json!(a * k));
+    m
+}
+
+/// The class as a stable word: "fixed point", "periodic", "quasi-periodic", "irregular" or
+/// "unclassified" (the period is a separate key).
+pub fn class_name(r: &AnalysisReport) -> &'static str {
+    use crate::analysis::classify::Class;
+    match &r.classification {
+        Ok(c) => match c.class {
+            Class::FixedPoint => "fixed point",
+            Class::Periodic { .. } => "periodic",
+            Class::QuasiPeriodic => "quasi-periodic",
+            Class::Irregular => "irregular",
+        },
+        Err(_) => "unclassified",
+    }
+}
+
+/// The evidence behind the class (docs/analysis.md; `docs/schemas/analyze.json`).
+fn evidence(c: &crate::analysis::classify::Classification, unit: &str) -> Value {
+    let d = &c.diagnostics;
+    let mut section = amplitudes(unit, d.amplitude);
+    for (k, v) in [
+        ("maxima", json!(d.n_maxima)),
+        ("spread", json!(d.spread)),
+        ("final_to_initial", json!(d.final_to_initial)),
+        ("decay_ratio", json!(d.decay_ratio)),
+        ("decreasing_fraction", json!(d.decreasing_fraction)),
+        ("best_period_sections", json!(d.best_period)),
+        ("period_residual", json!(d.period_residual)),
+        ("distinct_values", json!(d.distinct_values)),
+        ("distinct_fraction", json!(d.distinct_fraction)),
+        ("ring_coverage", json!(d.coverage)),
+        ("ring_hole", json!(d.hole)),
+        ("neighbour_cosine", json!(d.neighbour_cosine)),
+    ] {
+        section.insert(k.into(), v);
+    }
+    let lines = d.lines.as_ref().map(|e| {
+        json!({
+            "line_power_fraction": e.line_power_fraction,
+            "fundamental_Hz": e.fundamental_hz,
+            "lowest_harmonic": e.lowest_harmonic,
+            "max_denominator": e.max_denominator,
+            "recurrence_residual": e.recurrence_residual,
+            "resolution_Hz": e.resolution_hz,
+            "lines": e.lines.iter().map(|l| {
+                let mut m = amplitudes(unit, l.amplitude);
+                m.insert("frequency_Hz".into(), json!(l.frequency_hz));
+                m.insert("ratio".into(), json!(l.ratio));
+                m.insert("numerator".into(), json!(l.numerator));
+                m.insert("denominator".into(), json!(l.denominator));
+                m.insert("mismatch_Hz".into(), json!(l.mismatch_hz));
+                m.insert("tolerance_Hz".into(), json!(l.tolerance_hz));
+                Value::Object(m)
+            }).collect::<Vec<_>>(),
+        })
+    });
+    json!({
+        "decided_by": d.decided_by,
+        "section": section,
+        "spectral_lines": lines,
+    })
+}
+
+/// The summary of a report (JSON for `--json`, `result.json` and the table row); keys carry
+/// their units (docs/schemas/analyze.json).
+pub fn summary(r: &AnalysisReport, unit: &str) -> Value {
+    use crate::analysis::classify::Class;
+    let c = r.classification.as_ref().ok();
+    let period_sections = c.and_then(|c| match c.class {
+        Class::Periodic { period } => Some(period),
+        _ => None,
+    });
     json!({
         "window_s": [r.t0_s, r.t0_s + r.samples as f64 / r.sample_rate_hz],
         "samples": r.samples,
         "sample_rate_Hz": r.sample_rate_hz,
         "unit": unit,
-        "peaks": r.peaks.iter().map(|p| json!({
-            "frequency_Hz": p.frequency,
-            "amplitude": p.amplitude,
-            format!("amplitude_{du}"): p.amplitude * k,
-        })).collect::<Vec<_>>(),
+        "peaks": r.peaks.iter().map(|p| {
+            let mut m = amplitudes(unit, p.amplitude);
+            m.insert("frequency_Hz".into(), json!(p.frequency));
+            Value::Object(m)
+        }).collect::<Vec<_>>(),
         "ridge_median_Hz": r.median_trusted_ridge_hz(),
-        "class": r.class_label(),
+        "class": class_name(r),
+        "period_sections": period_sections,
+        "period_s": c.and_then(|c| c.diagnostics.period_s),
+        "unclassified_reason": r.classification.as_ref().err().map(|e| e.to_string()),
         "poincare_maxima": r.section.maxima.len(),
-        "diagnostics": r.classification.as_ref().ok().map(|c| format!("{:?}", c.diagnostics)),
+        "evidence": c.map(|c| evidence(c, unit)),
     })
 }
 
@@ -688,10 +989,22 @@ impl StageKind for AnalysisStage {
     const MODEL_VERSION: &'static str = MODEL_VERSION;
 
     fn params(&self) -> Value {
+        let st = &self.settings;
         json!({
             "source": self.source,
-            "series": format!("{:?}", self.series),
-            "settings": format!("{:?}", self.settings),
+            "series": {
+                "file": self.series.file,
+                "dataset": self.series.dataset,
+                "velocity": self.series.velocity,
+            },
+            "settings": {
+                "window_s": [st.window.0, st.window.1],
+                "f_min_Hz": st.f_min,
+                "f_max_Hz": st.f_max,
+                "frequencies": st.frequencies,
+                "peaks": st.peaks,
+                "min_peak_frequency_Hz": st.min_peak_frequency,
+            },
         })
     }
     fn upstream(&self) -> Vec<String> {
@@ -714,6 +1027,7 @@ impl StageKind for AnalysisStage {
             &path,
             Some(&self.series.dataset),
             Some(self.series.velocity.as_deref().unwrap_or("none")),
+            None,
         )?;
         ctx.progress
             .set_message("spectrum, wavelet transform, Poincaré section");

@@ -729,11 +729,17 @@ fn optimised_rows(s: &Sweep, cached: CachedSweeps, dissertation_fhm86: f64) -> V
 
 /// Peaks (frequency Hz, amplitude) of a cached analysis.
 fn peaks(a: &Stored) -> Vec<(f64, f64)> {
+    // Amplitudes in the series' SI unit: `amplitude_m` for a heave (docs/schemas/analyze.json).
+    let unit = a.result["summary"]["unit"]
+        .as_str()
+        .unwrap_or("m")
+        .replace('/', "_");
+    let key = format!("amplitude_{unit}");
     a.result["summary"]["peaks"]
         .as_array()
         .map(|p| {
             p.iter()
-                .filter_map(|p| Some((p["frequency_Hz"].as_f64()?, p["amplitude"].as_f64()?)))
+                .filter_map(|p| Some((p["frequency_Hz"].as_f64()?, p[key.as_str()].as_f64()?)))
                 .collect()
         })
         .unwrap_or_default()

@@ -155,6 +155,17 @@ fn num_of(t: &DataType) -> Option<Num> {
 
 pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
     let dec = decode(path)?;
+    let table = table(path, &dec, opts)?;
+    columns::read(path, table, opts)
+}
+
+/// The numeric columns of a decoded file (borrowing its buffers), their units and the schema
+/// metadata; shared by the LDV reader and the generic series reader (`super::series`).
+pub(super) fn table<'a>(
+    path: &Path,
+    dec: &'a Decoded,
+    opts: &ReadOptions,
+) -> Result<Table<'a>, DmwError> {
     let mut meta = Meta::default();
     for (k, v) in dec.schema.metadata() {
         // pandas and Arrow store JSON blobs under their own keys.
@@ -164,14 +175,7 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         meta.set(k, v)
             .map_err(|m| record_err(path, format!("schema {m}")))?;
     }
-    // Buffers of every batch, per numeric field (kept alive while the segments borrow them).
     let fields = dec.schema.fields();
-    let mut data: Vec<Vec<arrow_array::ArrayRef>> = vec![Vec::new(); fields.len()];
-    for batch in &dec.batches {
-        for (k, col) in batch.columns().iter().enumerate().take(fields.len()) {
-            data[k].push(col.clone());
-        }
-    }
     let mut columns = Vec::new();
     let mut skipped = Vec::new();
     for (k, field) in fields.iter().enumerate() {
@@ -195,8 +199,10 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
             continue;
         };
         let mut col = Column::new(field.name().clone(), Vec::new());
-        for arr in &data[k] {
-            col.segs.push(segment(arr.as_ref(), num));
+        for batch in &dec.batches {
+            if let Some(arr) = batch.columns().get(k) {
+                col.segs.push(segment(arr.as_ref(), num));
+            }
         }
         for (key, value) in field.metadata() {
             match meta_key(key).as_str() {
@@ -212,7 +218,7 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
     if !skipped.is_empty() {
         provenance.push(("skipped_columns".to_string(), skipped.join(", ")));
     }
-    let table = Table {
+    Ok(Table {
         format: "arrow",
         columns,
         meta,
@@ -220,8 +226,7 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         what: "column",
         positional: false,
         provenance,
-    };
-    columns::read(path, table, opts)
+    })
 }
 
 /// The values (and validity) of one primitive array, borrowed from its buffers.

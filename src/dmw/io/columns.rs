@@ -228,6 +228,30 @@ impl<'a> Column<'a> {
     }
 }
 
+impl Column<'_> {
+    /// Every value of the column (scaled; missing values as NaN), after checking that its
+    /// segments lie inside the data: for readers that need a whole column (`super::series`).
+    pub(super) fn values(&self, path: &Path) -> Result<Vec<f64>, DmwError> {
+        if !self.segs.iter().all(Seg::in_bounds) {
+            return Err(record_err(
+                path,
+                format!(
+                    "column '{}' extends past the end of the data; is the file cut?",
+                    self.name
+                ),
+            ));
+        }
+        let (mut out, mut nulls) = (Vec::new(), Vec::new());
+        self.fill(0, self.len(), &mut out, &mut nulls);
+        for (v, null) in out.iter_mut().zip(&nulls) {
+            if *null {
+                *v = f64::NAN;
+            }
+        }
+        Ok(out)
+    }
+}
+
 /// A file's channels and what it says about them.
 pub(super) struct Table<'a> {
     pub format: &'static str,

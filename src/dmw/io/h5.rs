@@ -18,7 +18,7 @@ fn h5err(path: &Path, e: hdf5::Error) -> DmwError {
 }
 
 /// A string attribute in any of the encodings h5py and other writers use.
-fn attr_string(loc: &hdf5::Location, name: &str) -> Option<String> {
+pub(super) fn attr_string(loc: &hdf5::Location, name: &str) -> Option<String> {
     let a = loc.attr(name).ok()?;
     if let Ok(s) = a.read_scalar::<VarLenUnicode>() {
         return Some(s.as_str().to_string());
@@ -36,7 +36,7 @@ fn attr_string(loc: &hdf5::Location, name: &str) -> Option<String> {
 }
 
 /// A numeric attribute, scalar or a one-element array.
-fn attr_number(loc: &hdf5::Location, name: &str) -> Option<f64> {
+pub(super) fn attr_number(loc: &hdf5::Location, name: &str) -> Option<f64> {
     let a = loc.attr(name).ok()?;
     if let Ok(x) = a.read_scalar::<f64>() {
         return Some(x);

@@ -95,6 +95,7 @@ mod names;
 mod npy;
 mod parquet;
 mod scan;
+pub mod series;
 mod stream;
 #[cfg(test)]
 pub(crate) mod tests;

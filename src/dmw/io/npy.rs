@@ -131,9 +131,20 @@ fn npy_err(path: &Path, e: npy::NpyError) -> DmwError {
 
 pub(super) fn read_npy(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
     let mmap = map(path)?;
-    let h = npy::parse(&mmap, mmap.len()).map_err(|e| npy_err(path, e))?;
-    let (columns, positional) = array_columns(path, &h, &mmap)?;
-    let table = Table {
+    let table = npy_table(path, &mmap)?;
+    columns::read(path, table, opts)
+}
+
+/// The memory-mapped file (for [`npy_table`]).
+pub(super) fn map_file(path: &Path) -> Result<memmap2::Mmap, DmwError> {
+    map(path)
+}
+
+/// The channels of a `.npy` file's bytes; shared by the LDV reader and `super::series`.
+pub(super) fn npy_table<'a>(path: &Path, mmap: &'a [u8]) -> Result<Table<'a>, DmwError> {
+    let h = npy::parse(mmap, mmap.len()).map_err(|e| npy_err(path, e))?;
+    let (columns, positional) = array_columns(path, &h, mmap)?;
+    Ok(Table {
         format: "npy",
         columns,
         meta: Meta::default(),
@@ -144,8 +155,7 @@ pub(super) fn read_npy(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, Dmw
             "npy_version".into(),
             format!("{}.{}", h.version.0, h.version.1),
         )],
-    };
-    columns::read(path, table, opts)
+    })
 }
 
 /// Members are decompressed one at a time; none may exceed this (1 TiB: a cap against a lying
