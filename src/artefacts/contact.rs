@@ -123,8 +123,14 @@ impl ContactInputs {
     pub fn key_json(&self) -> Value {
         let mut v = self.to_json();
         if let Some(p) = self.params() {
-            v["summit_offset"] = Value::from(format!("{:?}", p.summit_offset));
-            v["friction_law"] = Value::from(format!("{:?}", p.friction_law));
+            v["summit_offset"] = Value::from(match p.summit_offset {
+                SummitOffset::None => "None",
+                SummitOffset::McCool => "McCool",
+            });
+            v["friction_law"] = Value::from(match p.friction_law {
+                FrictionLaw::JunctionShear => "JunctionShear",
+                FrictionLaw::SeedPowerElastic => "SeedPowerElastic",
+            });
         }
         v
     }

@@ -470,6 +470,19 @@ fn vibration_kind_label(v: &Value) -> Value {
     }
 }
 
+/// A case result's `regime` as named in the tables (`regime_name`); cases cached before
+/// docs/json.md hold the debug form (`SolidContact`, …).
+pub fn regime_label(v: &Value) -> Value {
+    let name = match v.as_str() {
+        Some("Flying") => regime_name(Regime::Flying),
+        Some("MobileLubricantContact") => regime_name(Regime::MobileLubricantContact),
+        Some("BondedLubricantContact") => regime_name(Regime::BondedLubricantContact),
+        Some("SolidContact") => regime_name(Regime::SolidContact),
+        _ => return v.clone(),
+    };
+    json!(name)
+}
+
 pub fn regime_name(r: Regime) -> &'static str {
     match r {
         Regime::Flying => "flying",
@@ -698,5 +711,21 @@ mod tests {
             e.contains("sideways") && e.contains("both, up, down"),
             "{e}"
         );
+    }
+
+    /// Case results cached before the enum names were made explicit (docs/json.md) still
+    /// give the tables' names; new results already have them.
+    #[test]
+    fn legacy_debug_enum_names_read_as_explicit_names() {
+        assert_eq!(vibration_kind_label(&json!("Fhm")), "FHM");
+        assert_eq!(vibration_kind_label(&json!("Bv")), "BV");
+        assert_eq!(vibration_kind_label(&json!("BV")), "BV");
+        assert_eq!(regime_label(&json!("SolidContact")), "solid contact");
+        assert_eq!(
+            regime_label(&json!("MobileLubricantContact")),
+            "mobile lubricant"
+        );
+        assert_eq!(regime_label(&json!("flying")), "flying");
+        assert_eq!(regime_label(&Value::Null), Value::Null);
     }
 }
