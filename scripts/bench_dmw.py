@@ -160,7 +160,7 @@ def main():
                 t_chain, (std, f0, _) = best_of(args.repeat, lambda: chain(fs, u, idx, mode))
                 t_py = t_read + t_chain
                 print(f"{os.path.basename(path):<28} {size:7.1f}MB  read + {mode:<8} chain (N={n:3d})   {t_hdi:7.3f}s {t_py:11.3f}s  {t_py / t_hdi:5.1f}×"
-                      f"   (std {j['dmw_std'] * 1e9:.4f} / {std * 1e9:.4f} nm, f0 {j['dominant_frequency'] / 1e3:.2f} / {f0 / 1e3:.2f} kHz; scipy read {t_read:.3f}s)")
+                      f"   (std {j['dmw_std_m'] * 1e9:.4f} / {std * 1e9:.4f} nm, f0 {j['dominant_frequency_Hz'] / 1e3:.2f} / {f0 / 1e3:.2f} kHz; scipy read {t_read:.3f}s)")
         print(f"samples per record: {len(u)}")
 
 

@@ -8,6 +8,7 @@ mod calibrate_cli;
 mod common;
 mod dmw_cli;
 mod doe_cli;
+mod json_schemas;
 mod pipeline_cache;
 mod simulate_cli;
 mod slurm_cli;

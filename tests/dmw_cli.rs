@@ -39,17 +39,17 @@ fn every_format_gives_the_same_tracks_in_si_units() {
         let f = synth(&sub, format, 4, &[]);
         let j = dmw_json(&f, &["--rpm", "5425"]);
         assert_eq!(j["n_avg"], 4, "{format}: {j}");
-        assert_eq!(j["sample_rate"], 4e6);
+        assert_eq!(j["sample_rate_Hz"], 4e6);
         assert_eq!(j["n_samples"], 10_000);
         assert_eq!(j["segmentation"], "index channel");
-        let std = j["dmw_std"].as_f64().unwrap();
+        let std = j["dmw_std_m"].as_f64().unwrap();
         // Metres: the synthetic disk's high-passed DMW is about 0.73 nm; 4 revolutions leave
         // more noise than 100 do.
         assert!(std > 0.5e-9 && std < 1.2e-9, "{format}: {std}");
-        let f0 = j["dominant_frequency"].as_f64().unwrap();
+        let f0 = j["dominant_frequency_Hz"].as_f64().unwrap();
         // Harmonic 118 of 90.42 Hz: 10.67 kHz.
         assert!((f0 - 10_669.0).abs() < 60.0, "{format}: {f0}");
-        let period = j["period_mean"].as_f64().unwrap();
+        let period = j["period_mean_s"].as_f64().unwrap();
         assert!((period * 5425.0 / 60.0 - 1.0).abs() < 1e-3, "{period}");
         results.push(std);
     }

@@ -36,10 +36,27 @@ pub struct ContactInputs {
     #[serde(rename = "t_m")]
     pub lubricant_thickness: f64,
     pub surface_energy: SurfaceEnergyInput,
-    /// `None` or `McCool`.
+    /// `none` or `mccool` (the `[contact] summit_offset` values; the legacy `None`/`McCool`
+    /// of results written before docs/json.md are still read).
     pub summit_offset: String,
-    /// `JunctionShear` or `SeedPowerElastic`.
+    /// `junction_shear` or `seed_power_elastic` (legacy `JunctionShear`/`SeedPowerElastic`).
     pub friction_law: String,
+}
+
+/// The `[contact] summit_offset` name of an offset.
+pub fn summit_offset_name(o: SummitOffset) -> &'static str {
+    match o {
+        SummitOffset::None => "none",
+        SummitOffset::McCool => "mccool",
+    }
+}
+
+/// The `[contact] friction_law` name of a law.
+pub fn friction_law_name(f: FrictionLaw) -> &'static str {
+    match f {
+        FrictionLaw::JunctionShear => "junction_shear",
+        FrictionLaw::SeedPowerElastic => "seed_power_elastic",
+    }
 }
 
 /// Δγ: `{"constant_N_per_m": …}` or `{"variable": {"c1_N_per_m", "c2_per_m", "c3_N_per_m"}}`.
@@ -88,8 +105,8 @@ impl From<&IsblParams> for ContactInputs {
                     variable: VariableSurfaceEnergy { c1, c2, c3 },
                 },
             },
-            summit_offset: format!("{:?}", p.summit_offset),
-            friction_law: format!("{:?}", p.friction_law),
+            summit_offset: summit_offset_name(p.summit_offset).to_string(),
+            friction_law: friction_law_name(p.friction_law).to_string(),
         }
     }
 }
@@ -98,6 +115,24 @@ impl ContactInputs {
     /// The JSON the contact stage writes (`inputs`).
     pub fn to_json(&self) -> Value {
         serde_json::to_value(self).unwrap_or(Value::Null)
+    }
+
+    /// The block as it enters the contact instance's cache key: the enum names in the form
+    /// the keys have always been computed with (`None`, `JunctionShear`, …), so that naming
+    /// them explicitly in the results (docs/json.md) recomputes nothing.
+    pub fn key_json(&self) -> Value {
+        let mut v = self.to_json();
+        if let Some(p) = self.params() {
+            v["summit_offset"] = Value::from(match p.summit_offset {
+                SummitOffset::None => "None",
+                SummitOffset::McCool => "McCool",
+            });
+            v["friction_law"] = Value::from(match p.friction_law {
+                FrictionLaw::JunctionShear => "JunctionShear",
+                FrictionLaw::SeedPowerElastic => "SeedPowerElastic",
+            });
+        }
+        v
     }
 
     /// The `inputs` block of a contact result; `None` if it is missing or malformed.
@@ -128,13 +163,13 @@ impl ContactInputs {
                 } => SurfaceEnergy::Variable { c1, c2, c3 },
             },
             summit_offset: match self.summit_offset.as_str() {
-                "None" => SummitOffset::None,
-                "McCool" => SummitOffset::McCool,
+                "none" | "None" => SummitOffset::None,
+                "mccool" | "McCool" => SummitOffset::McCool,
                 _ => return None,
             },
             friction_law: match self.friction_law.as_str() {
-                "JunctionShear" => FrictionLaw::JunctionShear,
-                "SeedPowerElastic" => FrictionLaw::SeedPowerElastic,
+                "junction_shear" | "JunctionShear" => FrictionLaw::JunctionShear,
+                "seed_power_elastic" | "SeedPowerElastic" => FrictionLaw::SeedPowerElastic,
                 _ => return None,
             },
         })
@@ -166,8 +201,9 @@ mod tests {
     use super::*;
     use serde_json::json;
 
-    /// The `inputs` block as the contact stage wrote it before the struct existed: the bytes
-    /// (and so the contact cache keys) must not change.
+    /// The `inputs` block as the contact stage wrote it before the struct existed: the cache
+    /// key form must keep these bytes (so the contact cache keys do not change), and results
+    /// written in this form must still read back.
     fn written_before(p: &IsblParams) -> Value {
         let surface_energy = match p.surface_energy {
             SurfaceEnergy::Constant { delta_gamma } => json!({"constant_N_per_m": delta_gamma}),
@@ -196,8 +232,17 @@ mod tests {
             IsblParams::mtl_table_3_2(),
             mccool,
         ] {
-            let v = ContactInputs::from(&p).to_json();
-            assert_eq!(v.to_string(), written_before(&p).to_string());
+            let inputs = ContactInputs::from(&p);
+            assert_eq!(
+                inputs.key_json().to_string(),
+                written_before(&p).to_string()
+            );
+            let old = ContactInputs::from_json(&written_before(&p)).unwrap();
+            assert_eq!(old.params().unwrap(), p);
+            // The results name the enums explicitly (docs/json.md), no Rust debug form.
+            let v = inputs.to_json();
+            assert_eq!(v["summit_offset"], summit_offset_name(p.summit_offset));
+            assert_eq!(v["friction_law"], friction_law_name(p.friction_law));
             let back = ContactInputs::from_json(&v).unwrap().params().unwrap();
             assert_eq!(back, p);
         }

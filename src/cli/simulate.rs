@@ -130,7 +130,31 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         let _ = std::fs::remove_dir_all(&root);
     }
     if a.json {
-        println!("{}", json!({"cases": rows, "wall_time_s": wall}));
+        // docs/schemas/simulate.json: one case, or a sweep with its touchdown, critical point
+        // and slopes A–D (dc̄/dh_TFC, m/m) beside the cases.
+        let mut out = json!({"cases": rows, "wall_time_s": wall});
+        if cases.len() > 1 {
+            let fit = |l: &Option<hdi::dynamics::metrics::LineFit>| {
+                l.as_ref().map(|l| {
+                    json!({
+                        "slope": finite(l.slope),
+                        "intercept_m": finite(l.intercept_m),
+                        "rms_residual_m": finite(l.rms_residual_m),
+                        "n_points": l.indices.len(),
+                    })
+                })
+            };
+            let s = &sweep.slopes;
+            out["sweep"] = json!({
+                "touchdown_actuation_m": sweep.touchdown_actuation_m.and_then(finite),
+                "critical_point": s.critical_point.as_ref().map(|c| json!({
+                    "actuation_m": finite(c.actuation_m),
+                    "clearance_m": finite(c.clearance_m),
+                })),
+                "slopes": {"A": fit(&s.a), "B": fit(&s.b), "C": fit(&s.c), "D": fit(&s.d)},
+            });
+        }
+        println!("{out}");
         return Ok(());
     }
     println!(
@@ -182,4 +206,9 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// A number JSON can hold (`null` for NaN/∞, docs/json.md).
+fn finite(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
 }

@@ -57,7 +57,7 @@ pub(super) fn cmd_surface(a: SurfaceArgs) -> Result<()> {
             analysis.final_map().dx * 1e9
         );
         println!("  levelling  {}", report["levelling"]);
-        println!("  filter     {}", report["filter"]);
+        println!("  filter     {}", surfaces::filter_text(&params));
         println!(
             "  σ          {:.4} nm   (Sa {:.4} nm, Ssk {:.3}, Sku {:.3})",
             r.sigma * 1e9,

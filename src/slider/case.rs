@@ -56,9 +56,10 @@ pub fn case_json(actuation: f64, h: &CaseHistory, m: &CaseMetrics, c_c: f64) -> 
         "hms_mean_m": m.hms_mean_m,
         "vibration_percent": m.vibration.percent,
         "vibration_extrema_percent": m.vibration_extrema.as_ref().map(|v| v.percent),
-        "vibration_kind": format!("{:?}", m.vibration_kind),
+        // Explicit names, not Rust debug forms (docs/json.md).
+        "vibration_kind": crate::slider::sweep::vibration_kind_name(m.vibration_kind),
         "percent_solid_contact": m.percent_solid_contact,
-        "regime": format!("{:?}", m.regime),
+        "regime": crate::slider::sweep::regime_name(m.regime),
         "contact_force_N": c.map(|c| stats_json(&c.contact_force_n)),
         "friction_N": c.map(|c| stats_json(&c.friction_n)),
         "real_area_m2": c.map(|c| stats_json(&c.real_area_m2)),

@@ -11,7 +11,9 @@ use crate::contact::lookup::IsblLookup;
 use crate::core::cache::Store;
 use crate::core::cases::{get_or_compute, CaseEntry};
 use crate::core::progress::Progress;
-use crate::dynamics::metrics::{sweep_metrics, Regime, SlopeParams, SweepMetrics, SweepPoint};
+use crate::dynamics::metrics::{
+    sweep_metrics, Regime, SlopeParams, SweepMetrics, SweepPoint, VibrationKind,
+};
 use crate::error::{Error, Result};
 use crate::slider::calibration::{apply_fitted, base_inputs};
 use crate::slider::case::{simulate_case, CASE_FILE, MODEL_VERSION};
@@ -450,6 +452,37 @@ pub fn sweep_analysis(p: &SimulateParams, cases: &[CaseOutcome]) -> Result<Sweep
     .map_err(Error::SweepMetrics)
 }
 
+/// `FHM` (flying-height modulation) or `BV` (bouncing vibration), the labels of eq. 2.1.
+pub fn vibration_kind_name(k: VibrationKind) -> &'static str {
+    match k {
+        VibrationKind::Fhm => "FHM",
+        VibrationKind::Bv => "BV",
+    }
+}
+
+/// A case result's `vibration_kind` as named in the tables and `--json`; cases cached before
+/// docs/json.md hold the debug form (`Fhm`, `Bv`).
+fn vibration_kind_label(v: &Value) -> Value {
+    match v.as_str() {
+        Some("Fhm") => json!("FHM"),
+        Some("Bv") => json!("BV"),
+        _ => v.clone(),
+    }
+}
+
+/// A case result's `regime` as named in the tables (`regime_name`); cases cached before
+/// docs/json.md hold the debug form (`SolidContact`, …).
+pub fn regime_label(v: &Value) -> Value {
+    let name = match v.as_str() {
+        Some("Flying") => regime_name(Regime::Flying),
+        Some("MobileLubricantContact") => regime_name(Regime::MobileLubricantContact),
+        Some("BondedLubricantContact") => regime_name(Regime::BondedLubricantContact),
+        Some("SolidContact") => regime_name(Regime::SolidContact),
+        _ => return v.clone(),
+    };
+    json!(name)
+}
+
 pub fn regime_name(r: Regime) -> &'static str {
     match r {
         Regime::Flying => "flying",
@@ -488,7 +521,10 @@ pub fn case_rows(cases: &[CaseOutcome], sweep: &SweepMetrics) -> Vec<Map<String,
                 "vibration_extrema_percent".into(),
                 m["vibration_extrema_percent"].clone(),
             );
-            r.insert("vibration_kind".into(), m["vibration_kind"].clone());
+            r.insert(
+                "vibration_kind".into(),
+                vibration_kind_label(&m["vibration_kind"]),
+            );
             r.insert(
                 "solid_contact_percent".into(),
                 m["percent_solid_contact"].clone(),
@@ -675,5 +711,21 @@ mod tests {
             e.contains("sideways") && e.contains("both, up, down"),
             "{e}"
         );
+    }
+
+    /// Case results cached before the enum names were made explicit (docs/json.md) still
+    /// give the tables' names; new results already have them.
+    #[test]
+    fn legacy_debug_enum_names_read_as_explicit_names() {
+        assert_eq!(vibration_kind_label(&json!("Fhm")), "FHM");
+        assert_eq!(vibration_kind_label(&json!("Bv")), "BV");
+        assert_eq!(vibration_kind_label(&json!("BV")), "BV");
+        assert_eq!(regime_label(&json!("SolidContact")), "solid contact");
+        assert_eq!(
+            regime_label(&json!("MobileLubricantContact")),
+            "mobile lubricant"
+        );
+        assert_eq!(regime_label(&json!("flying")), "flying");
+        assert_eq!(regime_label(&Value::Null), Value::Null);
     }
 }

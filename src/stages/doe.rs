@@ -554,7 +554,10 @@ fn design_rows(
                 .as_f64()
                 .map_or(Value::Null, table_value),
         );
-        row.insert("regime".into(), m["regime"].clone());
+        row.insert(
+            "regime".into(),
+            crate::slider::sweep::regime_label(&m["regime"]),
+        );
         row.insert("xi".into(), table_value(c.xi));
         row.insert("case_key".into(), json!(c.entry.key));
         rows.push(row);

@@ -453,7 +453,8 @@ pub fn analyse(params: &SurfaceParams) -> Result<SurfaceAnalysis> {
     })
 }
 
-fn filter_text(p: &SurfaceParams) -> String {
+/// The S/L filters in words (`none`, `S 0.02 um, L 5 um`), for the text report.
+pub fn filter_text(p: &SurfaceParams) -> String {
     match (p.filter_s, p.filter_l) {
         (None, None) => "none".into(),
         (s, l) => {
@@ -469,7 +470,8 @@ fn filter_text(p: &SurfaceParams) -> String {
     }
 }
 
-/// The `--json` object of `hdi surface` (docs/surfaces.md), SI units.
+/// The `--json` object of `hdi surface` (docs/surfaces.md, docs/schemas/surface.json), SI units
+/// named in the keys; a statistic the map does not define (no summits, a flat map) is `null`.
 pub fn report_json(a: &SurfaceAnalysis, p: &SurfaceParams) -> Value {
     let r = &a.report;
     let m = a.final_map();
@@ -491,7 +493,9 @@ pub fn report_json(a: &SurfaceAnalysis, p: &SurfaceParams) -> Value {
                   "sigma_s_m": r.nayak.sigma_s},
         "levelling": p.level.iter().map(|l| l.to_string()).collect::<Vec<_>>(),
         "crop_m": p.crop.map(|c| [c.x0, c.y0, c.width, c.height]),
-        "filter": filter_text(p),
+        // The S/L-filter cutoffs as numbers (null: that filter is off), not a text with units.
+        "filter_s_m": p.filter_s,
+        "filter_l_m": p.filter_l,
         "masked_fraction": m.masked_fraction(),
         "warnings": r.warnings,
     })

@@ -290,7 +290,7 @@ impl ContactParams {
             "interface": self.interface,
             "parameter_set": self.parameter_set,
             // With an interface, σ/R/η come from upstream (its key is in the fingerprint).
-            "inputs": params_json(&self.params),
+            "inputs": ContactInputs::from(&self.params).key_json(),
             "h_star_min": self.h_star_min,
             "h_star_max": self.h_star_max,
             "step": self.step,
@@ -388,19 +388,21 @@ pub fn report_json(a: &ContactAnalysis, c: &ContactParams) -> Value {
         "parameter_set": c.parameter_set,
         "interface": c.interface,
         "inputs": params_json(a.model.params()),
+        // Units in the key names (docs/json.md); the curves are per unit nominal area.
         "derived": {
-            "E_star": d.composite_modulus, "K": d.k_factor, "omega_c": d.critical_interference,
-            "L_c": d.critical_load, "A_c": d.critical_area, "beta": d.beta,
+            "E_star_Pa": d.composite_modulus, "K": d.k_factor,
+            "omega_c_m": d.critical_interference, "L_c_N": d.critical_load,
+            "A_c_m2": d.critical_area, "beta": d.beta,
             "psi": d.plasticity_index, "psi_KE": d.plasticity_index_ke,
-            "y_s": d.summit_offset, "sigma_s": d.summit_sigma,
+            "y_s_m": d.summit_offset, "sigma_s_m": d.summit_sigma,
         },
         "curves": a.h_star.iter().zip(&a.points).map(|(x, p)| json!({
-            "h_star": x, "h": p.separation, "P": p.contact_pressure, "k_c": p.contact_stiffness,
-            "A_r_fraction": p.real_area_fraction, "Q": p.friction_stress, "F_s": p.adhesion,
-            "n_c": p.contacts_per_area,
+            "h_star": x, "h_m": p.separation, "P_Pa": p.contact_pressure,
+            "k_c_Pa_per_m": p.contact_stiffness, "A_r_fraction": p.real_area_fraction,
+            "Q_Pa": p.friction_stress, "F_s_Pa": p.adhesion, "n_c_per_m2": p.contacts_per_area,
         })).collect::<Vec<_>>(),
         "table": {
-            "h_star_range": a.table().range(), "step": a.table().step(),
+            "h_star_range": a.table().range(), "h_star_step": a.table().step(),
             "max_rel_error": a.table_error().iter().map(|e| (e.name.clone(), json!(e.max_rel))).collect::<Map<_, _>>(),
         },
         "mtl": a.mtl.as_ref().map(|m| m.report()),

@@ -277,11 +277,12 @@ impl MtlAnalysis {
             "settings": self.settings.canonical(),
             "landmarks": self.landmarks(),
             "curves": self.h.iter().zip(&self.response).zip(&self.adhesion).map(|((h, r), fs)| json!({
-                "h": h, "h_star": h / sigma, "penetration": 3.0 * sigma - h,
-                "P_lub": r.lubricant.normal, "Q_lub": r.lubricant.friction,
-                "P_total": r.total.normal, "Q_total": r.total.friction,
-                "k_normal_total": r.total.normal_stiffness, "k_lateral_total": r.total.friction_stiffness,
-                "F_s": fs,
+                "h_m": h, "h_star": h / sigma, "penetration_m": 3.0 * sigma - h,
+                "P_lub_N": r.lubricant.normal, "Q_lub_N": r.lubricant.friction,
+                "P_total_N": r.total.normal, "Q_total_N": r.total.friction,
+                "k_normal_total_N_per_m": r.total.normal_stiffness,
+                "k_lateral_total_N_per_m": r.total.friction_stiffness,
+                "F_s_N": fs,
             })).collect::<Vec<_>>(),
         })
     }

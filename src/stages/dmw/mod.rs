@@ -425,7 +425,9 @@ pub fn analyse(p: &DmwParams) -> Result<(LdvRecord, DmwResult)> {
     Ok((rec, res))
 }
 
-/// The QA block and statistics (SI units), as printed by `hdi dmw --json`.
+/// The QA block and statistics, as printed by `hdi dmw --json` (and the stage's `result.json`):
+/// SI units named in the keys, `null` for what the record does not define (no index channel,
+/// too few revolutions), documented in `docs/json.md` and `docs/schemas/dmw.json`.
 pub fn report_json(rec: &LdvRecord, r: &DmwResult, p: &DmwParams) -> Value {
     let q = &r.qa;
     let s = &r.stats;
@@ -433,46 +435,48 @@ pub fn report_json(rec: &LdvRecord, r: &DmwResult, p: &DmwParams) -> Value {
     let peaks: Vec<Value> = s
         .peaks
         .iter()
-        .map(|pk| json!({"frequency": pk.frequency, "amplitude": pk.amplitude}))
+        .map(
+            |pk| json!({"frequency_Hz": finite(pk.frequency), "amplitude_m": finite(pk.amplitude)}),
+        )
         .collect();
     json!({
         "file": p.file.display().to_string(),
         "format": rec.format,
         "layout": q.layout,
         "segmentation": q.segmentation,
-        "sample_rate": r.sample_rate,
-        "record_sample_rate": rec.sample_rate,
+        "sample_rate_Hz": r.sample_rate,
+        "record_sample_rate_Hz": rec.sample_rate,
         "n_samples": r.tracks.d[0].len(),
-        "duration": r.tracks.d[0].len() as f64 / r.sample_rate,
+        "duration_s": r.tracks.d[0].len() as f64 / r.sample_rate,
         "velocity_unit": rec.velocity_unit.symbol(),
-        "sensitivity": p.chain.sensitivity,
+        "sensitivity_m_per_s_per_V": p.chain.sensitivity,
         "n_triggers": q.n_triggers,
         "n_avg": q.n_avg,
         "n_dropped": q.n_dropped,
-        "trigger_level": finite(q.trigger_level),
+        "trigger_level_V": finite(q.trigger_level),
         "trigger_polarity": q.trigger_polarity,
         "duty_cycle": finite(q.duty_cycle),
         "n_debounced": q.n_debounced,
-        "missing_pulses": q.missing_pulses.iter().map(|m| m.time).collect::<Vec<_>>(),
-        "extra_pulses": q.extra_pulses,
+        "missing_pulse_times_s": q.missing_pulses.iter().map(|m| finite(m.time)).collect::<Vec<_>>(),
+        "extra_pulse_times_s": q.extra_pulses.iter().map(|&t| finite(t)).collect::<Vec<_>>(),
         "n_dropped_missing_pulse": q.n_gap_dropped,
-        "period_mean": finite(q.period_mean),
+        "period_mean_s": finite(q.period_mean),
         "period_relstd": finite(q.period_relstd),
         "rpm_measured": finite(60.0 / q.period_mean),
-        "phase_wander_275kHz": q.phase_wander_275khz,
-        "noise_floor": finite(q.noise_floor),
-        "residual_std": finite(q.residual_std),
-        "velocity_offset": q.velocity_offset,
-        "drift": q.drift,
-        "integration_gain_275kHz": q.integration_gain_275khz,
+        "phase_wander_275kHz_rad": finite(q.phase_wander_275khz),
+        "noise_floor_m_per_s": finite(q.noise_floor),
+        "residual_std_m_per_s": finite(q.residual_std),
+        "velocity_offset_m_per_s": finite(q.velocity_offset),
+        "drift_m_per_s": finite(q.drift),
+        "integration_gain_275kHz": finite(q.integration_gain_275khz),
         "edge_samples": q.edge_samples,
-        "dmw_std": s.std,
-        "dmw_peak_to_peak": s.peak_to_peak,
-        "velocity_std": s.velocity_std,
-        "dominant_frequency": s.peaks.first().map(|p| p.frequency),
+        "dmw_std_m": finite(s.std),
+        "dmw_peak_to_peak_m": finite(s.peak_to_peak),
+        "velocity_std_m_per_s": finite(s.velocity_std),
+        "dominant_frequency_Hz": s.peaks.first().map(|p| finite(p.frequency)),
         "peaks": peaks,
         "tracks": {
-            "D1_std": s.std, "D2_std": s.std, "D3_std": s.std,
+            "D1_std_m": finite(s.std), "D2_std_m": finite(s.std), "D3_std_m": finite(s.std),
             "note": "D2 and D3 are time-flipped copies of D1: same std and amplitude spectrum",
         },
         "chain_order": p.chain.order.to_string(),
