@@ -8,6 +8,7 @@ mod common;
 mod dmw_cli;
 mod doe_cli;
 mod pipeline_cache;
+mod report_cli;
 mod simulate_cli;
 mod slurm_cli;
 mod standalone;

@@ -132,7 +132,13 @@ pub fn snapshot(dir: &Path) -> Vec<(String, String)> {
                 ));
             } else if ft.is_dir() {
                 walk(root, &p, out);
-            } else if !rel.ends_with("lock") && !rel.ends_with("input-hashes.json") {
+            } else if !rel.ends_with("lock")
+                && !rel.ends_with("input-hashes.json")
+                // The report and the last run's record are views of a run, not results
+                // (docs/report.md): a failed run rewrites them.
+                && !rel.starts_with("report/")
+                && rel != ".hdi/last-run.json"
+            {
                 let bytes = std::fs::read(&p).unwrap();
                 out.push((rel, blake3::hash(&bytes).to_hex().to_string()));
             }
