@@ -53,6 +53,9 @@ impl Project {
         let text = text
             .replace("sa_max_evaluations = 400", "sa_max_evaluations = 12")
             .replace("compare_step = \"0.2 nm\"", "compare_step = \"3 nm\"");
+        // …and the end-of-run HTML report without the validation table (seconds per fresh
+        // project in a debug build; tests/report_cli.rs turns it on).
+        let text = format!("{text}\n[report]\nvalidation = false\n");
         std::fs::write(dir.path().join("pipeline.toml"), text).expect("write pipeline.toml");
         Self { dir }
     }

@@ -20,7 +20,9 @@ fn project(validation: bool) -> Project {
         "name = \"study <&\\\"> 'x'\"",
     );
     assert!(text.contains("study <&"), "project name not replaced");
-    p.set_config(&format!("{text}\n[report]\nvalidation = {validation}\n"));
+    let off = "[report]\nvalidation = false\n";
+    assert!(text.contains(off), "Project::shipped() has no [report] table");
+    p.set_config(&text.replace(off, &format!("[report]\nvalidation = {validation}\n")));
     p
 }
 

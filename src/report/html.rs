@@ -135,6 +135,7 @@ table{border-collapse:collapse;margin:8px 0;font-size:13px}
 th,td{border:1px solid #d6dbe2;padding:3px 7px;text-align:left;vertical-align:top}
 th{background:#eef1f5}td.n{text-align:right;font-variant-numeric:tabular-nums}
 code,.mono{font-family:ui-monospace,'DejaVu Sans Mono',monospace;font-size:12px;word-break:break-all}
+#validation-table code,.numbers code{white-space:nowrap;word-break:normal}
 .inst{background:#fff;border:1px solid #d6dbe2;border-radius:6px;padding:12px 14px;margin:14px 0}
 .figs{display:flex;flex-wrap:wrap;gap:10px}
 figure{margin:0;max-width:370px}figure img{max-width:100%;border:1px solid #d6dbe2;background:#fff}
