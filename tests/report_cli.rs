@@ -21,7 +21,10 @@ fn project(validation: bool) -> Project {
     );
     assert!(text.contains("study <&"), "project name not replaced");
     let off = "[report]\nvalidation = false\n";
-    assert!(text.contains(off), "Project::shipped() has no [report] table");
+    assert!(
+        text.contains(off),
+        "Project::shipped() has no [report] table"
+    );
     p.set_config(&text.replace(off, &format!("[report]\nvalidation = {validation}\n")));
     p
 }
@@ -153,7 +156,9 @@ fn assert_links_resolve(dir: &Path, dom: &serde_json::Value) -> Vec<PathBuf> {
 /// Decode a PNG; returns (width, height, variance of the 8-bit samples).
 fn decode_png(p: &Path) -> (u32, u32, f64) {
     let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(p).unwrap()));
-    let mut reader = dec.read_info().unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    let mut reader = dec
+        .read_info()
+        .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
     let mut buf = vec![0; reader.output_buffer_size()];
     let info = reader
         .next_frame(&mut buf)
@@ -197,7 +202,7 @@ fn the_report_renders_in_chromium_with_every_image_and_link_resolving() {
     assert!(stdout(&o).contains("study &lt;&amp;\"&gt; 'x'"));
 
     // Every image and link resolves on disk, and every image decodes.
-    let images = assert_links_resolve(&index.parent().unwrap().to_path_buf(), &dom);
+    let images = assert_links_resolve(index.parent().unwrap(), &dom);
     assert_eq!(images.len(), n_img);
     for img in &images {
         let (w, h, _) = decode_png(img);
@@ -248,12 +253,8 @@ fn the_report_renders_in_chromium_with_every_image_and_link_resolving() {
 
     // A screenshot as a test artefact: a real, non-blank image.
     let artefacts = PathBuf::from(
-        std::env::var("CARGO_TARGET_DIR").unwrap_or_else(|_| {
-            repo_root()
-                .join("target")
-                .to_string_lossy()
-                .to_string()
-        }),
+        std::env::var("CARGO_TARGET_DIR")
+            .unwrap_or_else(|_| repo_root().join("target").to_string_lossy().to_string()),
     )
     .join("test-artefacts");
     std::fs::create_dir_all(&artefacts).unwrap();
@@ -280,7 +281,10 @@ fn run_writes_the_report_a_noop_rerun_keeps_it_and_copies_keep_their_links() {
     let text = std::fs::read_to_string(&index).unwrap();
     let mtime = std::fs::metadata(&index).unwrap().modified().unwrap();
     // What ran is in the summary; validation is off as configured.
-    assert!(text.contains("[report] validation = false"), "validation not off");
+    assert!(
+        text.contains("[report] validation = false"),
+        "validation not off"
+    );
     assert!(text.contains("data-state=\"fresh\"") && text.contains("data-state=\"missing\""));
     assert_links_resolve(&report, &parse_dom(&text));
 
@@ -290,7 +294,10 @@ fn run_writes_the_report_a_noop_rerun_keeps_it_and_copies_keep_their_links() {
     assert_ok(&o);
     assert!(stderr(&o).contains("report up to date"), "{}", stderr(&o));
     assert_eq!(std::fs::read_to_string(&index).unwrap(), text);
-    assert_eq!(std::fs::metadata(&index).unwrap().modified().unwrap(), mtime);
+    assert_eq!(
+        std::fs::metadata(&index).unwrap().modified().unwrap(),
+        mtime
+    );
 
     // A run that computes something rebuilds it.
     let o = p.run(&["run", "--only", "disk_md", "--force"]);
@@ -312,18 +319,30 @@ fn run_writes_the_report_a_noop_rerun_keeps_it_and_copies_keep_their_links() {
     let copy_real = copy.canonicalize().unwrap();
     for img in assert_links_resolve(&copied, &dom) {
         let real = img.canonicalize().unwrap();
-        assert!(real.starts_with(&copy_real), "{} leaves the copy", real.display());
+        assert!(
+            real.starts_with(&copy_real),
+            "{} leaves the copy",
+            real.display()
+        );
     }
 
     // `hdi report --out` elsewhere links back into processed/.
     let elsewhere = p.path().join("elsewhere").join("rep");
-    let o = p.run(&["report", "--out", elsewhere.to_str().unwrap(), "--no-validation"]);
+    let o = p.run(&[
+        "report",
+        "--out",
+        elsewhere.to_str().unwrap(),
+        "--no-validation",
+    ]);
     assert_ok(&o);
     let dom = parse_dom(&std::fs::read_to_string(elsewhere.join("index.html")).unwrap());
     assert!(!assert_links_resolve(&elsewhere, &dom).is_empty());
 
     // `[report] enabled = false`: no report at the end of a run.
-    p.set_config(&p.config().replace("[report]\n", "[report]\nenabled = false\n"));
+    p.set_config(
+        &p.config()
+            .replace("[report]\n", "[report]\nenabled = false\n"),
+    );
     std::fs::remove_dir_all(&report).unwrap();
     let o = p.run(&["run", "--only", "disk_md", "--force"]);
     assert_ok(&o);

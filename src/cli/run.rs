@@ -106,11 +106,8 @@ pub(super) fn cmd_run(
     }
     // The HTML report (docs/report.md); a no-op run keeps the last run's record, so its
     // report stays as it is.
-    let record = hdi::report::RunRecord::from_report(
-        &report,
-        started.elapsed().as_secs_f64(),
-        opts.jobs,
-    );
+    let record =
+        hdi::report::RunRecord::from_report(&report, started.elapsed().as_secs_f64(), opts.jobs);
     if record.changed_something() {
         if let Err(e) = record.save(&processed) {
             eprintln!("warning: {}", hdi::error::chain(&e));

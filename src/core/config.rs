@@ -160,9 +160,10 @@ impl PipelineFile {
                     })?;
             } else if name == "report" {
                 let span = value.span();
-                report = ReportConfig::deserialize(ValueDeserializer::from(value)).map_err(|e| {
-                    invalid(e.span().or(Some(span)), explain_toml_error(e.message()))
-                })?;
+                report =
+                    ReportConfig::deserialize(ValueDeserializer::from(value)).map_err(|e| {
+                        invalid(e.span().or(Some(span)), explain_toml_error(e.message()))
+                    })?;
             } else if kinds.contains(&name) {
                 let names = value.get_ref().as_table().map(|t| {
                     t.keys()
@@ -463,6 +464,20 @@ mod tests {
         assert!(msg.starts_with("pipeline.toml:3:"), "{msg}");
         assert!(msg.contains("unknown key `filter_k`"), "{msg}");
         assert!(msg.contains("did you mean `filter_l`"), "{msg}");
+    }
+
+    #[test]
+    fn the_report_table_defaults_to_on_and_names_a_misspelt_key() {
+        let f = parse("[project]\nname = \"x\"\n").unwrap();
+        assert_eq!(f.report, ReportConfig::default());
+        assert!(f.report.enabled && f.report.validation);
+        let f = parse("[report]\nvalidation = false\n").unwrap();
+        assert!(f.report.enabled && !f.report.validation);
+        let e = parse("[project]\n\n[report]\nvalidaton = false\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("pipeline.toml:4:"), "{e}");
+        assert!(e.contains("did you mean `validation`"), "{e}");
     }
 
     #[test]

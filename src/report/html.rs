@@ -202,13 +202,13 @@ fn summary(h: &mut String, p: &Page) {
     match &p.run {
         Some(r) => {
             let count = |o: &str| r.instances.iter().filter(|i| i.outcome == o).count();
-            let _ = write!(
+            let _ = writeln!(
                 h,
                 "<p>Last run that changed something: finished <b>{}</b> with hdi {} on {} \
                  thread(s) in <b>{}</b>: <span class=\"tag o-ran\">ran {}</span> \
                  <span class=\"tag o-cached\">cached {}</span> \
                  <span class=\"tag o-failed\">failed {}</span> \
-                 <span class=\"tag o-skipped\">skipped {}</span> of {} instances.</p>\n",
+                 <span class=\"tag o-skipped\">skipped {}</span> of {} instances.</p>",
                 esc(&r.finished),
                 esc(&r.hdi_version),
                 r.jobs,
@@ -269,9 +269,11 @@ fn summary(h: &mut String, p: &Page) {
             inst.files.len()
         );
     }
-    h.push_str("</table>\n<p class=\"muted\">Wall time: how long the instance's current \
+    h.push_str(
+        "</table>\n<p class=\"muted\">Wall time: how long the instance's current \
                 entry took when it was computed (from its manifest.json); cached instances \
-                took no time in the last run.</p>\n");
+                took no time in the last run.</p>\n",
+    );
     if !p.tables.is_empty() {
         h.push_str("<h3>Summary tables</h3><ul class=\"files\">\n");
         for (href, name) in &p.tables {
@@ -313,7 +315,9 @@ fn instances(h: &mut String, p: &Page) {
 
 fn instance_body(h: &mut String, inst: &Instance) {
     if !inst.numbers.is_empty() {
-        h.push_str("<table class=\"numbers\"><tr><th>quantity</th><th>value</th><th>unit</th></tr>\n");
+        h.push_str(
+            "<table class=\"numbers\"><tr><th>quantity</th><th>value</th><th>unit</th></tr>\n",
+        );
         for (k, v) in &inst.numbers {
             let n = matches!(v, Value::Number(_));
             let _ = writeln!(
@@ -398,9 +402,11 @@ fn validation(h: &mut String, p: &Page) {
             c = c.label()
         );
     }
-    h.push_str("</table>\n<table id=\"validation-table\"><tr><th>status</th><th>id</th>\
+    h.push_str(
+        "</table>\n<table id=\"validation-table\"><tr><th>status</th><th>id</th>\
                 <th>class</th><th>reference</th><th>quantity</th><th>target</th><th>value</th>\
-                <th>calibrated</th><th>tolerance</th><th>origin / note</th></tr>\n");
+                <th>calibrated</th><th>tolerance</th><th>origin / note</th></tr>\n",
+    );
     for (area, rows) in &v.areas {
         let _ = writeln!(
             h,

@@ -158,7 +158,10 @@ pub(crate) struct Instance {
 
 /// Validation, as the report shows it: per area its rows, or why they could not be computed.
 pub(crate) struct Validation {
-    pub areas: Vec<(String, std::result::Result<Vec<crate::validation::Row>, String>)>,
+    pub areas: Vec<(
+        String,
+        std::result::Result<Vec<crate::validation::Row>, String>,
+    )>,
 }
 
 /// Everything the page shows.
@@ -184,10 +187,7 @@ pub fn build(config: &Path, opts: &Options) -> Result<Built> {
     let processed = file.processed_dir();
     let store = Store::open_existing(&processed);
     let plan = engine::plan(stages, &store, &Default::default())?;
-    let out = opts
-        .out
-        .clone()
-        .unwrap_or_else(|| processed.join("report"));
+    let out = opts.out.clone().unwrap_or_else(|| processed.join("report"));
     let run = RunRecord::load(&processed);
     let config_blake3 = hash_file(config).map_err(|e| Error::io(config, e))?;
 
@@ -329,7 +329,10 @@ pub fn build(config: &Path, opts: &Options) -> Result<Built> {
         key: key.clone(),
     };
     let text = html::render(&page);
-    write_dir(&out, &[("index.html", text.as_bytes()), (KEY_FILE, key.as_bytes())])?;
+    write_dir(
+        &out,
+        &[("index.html", text.as_bytes()), (KEY_FILE, key.as_bytes())],
+    )?;
     Ok(Built::Written(out))
 }
 

@@ -72,7 +72,10 @@ fn every_string_from_names_and_values_is_escaped() {
 
 #[test]
 fn escaping_is_the_html_one() {
-    assert_eq!(esc("x<y & \"z\" 'w'>"), "x&lt;y &amp; &quot;z&quot; &#39;w&#39;&gt;");
+    assert_eq!(
+        esc("x<y & \"z\" 'w'>"),
+        "x&lt;y &amp; &quot;z&quot; &#39;w&#39;&gt;"
+    );
 }
 
 #[test]
@@ -104,7 +107,10 @@ fn relative_links_point_from_the_report_to_processed() {
     let d = tempfile::tempdir().unwrap();
     let processed = d.path().join("processed");
     std::fs::create_dir_all(&processed).unwrap();
-    assert_eq!(relative_prefix(&processed.join("report"), &processed), "../");
+    assert_eq!(
+        relative_prefix(&processed.join("report"), &processed),
+        "../"
+    );
     assert_eq!(
         relative_prefix(&d.path().join("elsewhere/deep"), &processed),
         "../../processed/"
