@@ -269,10 +269,18 @@ fn summary(h: &mut String, p: &Page) {
             inst.files.len()
         );
     }
-    h.push_str(
-        "</table>\n<p class=\"muted\">Wall time: how long the instance's current \
-                entry took when it was computed (from its manifest.json); cached instances \
-                took no time in the last run.</p>\n",
+    let total: f64 = p
+        .instances
+        .iter()
+        .filter_map(|i| i.manifest.as_ref())
+        .map(|m| m.wall_time_s)
+        .sum();
+    let _ = writeln!(
+        h,
+        "</table>\n<p class=\"muted\">Wall time: how long the instance's current entry took \
+         when it was computed (from its manifest.json; {} for all current entries together, \
+         some of them in parallel); cached instances took no time in the last run.</p>",
+        secs(total)
     );
     if !p.tables.is_empty() {
         h.push_str("<h3>Summary tables</h3><ul class=\"files\">\n");
@@ -295,6 +303,16 @@ fn instances(h: &mut String, p: &Page) {
             esc(&inst.state),
             esc(&inst.state)
         );
+        if let Some(m) = &inst.manifest {
+            let _ = writeln!(
+                h,
+                "<p class=\"muted\">entry <code>{}</code> computed {} in {} by hdi {}</p>",
+                esc(&inst.key),
+                esc(&m.created),
+                secs(m.wall_time_s),
+                esc(&m.hdi_version)
+            );
+        }
         if !inst.why.is_empty() {
             let _ = writeln!(h, "<p class=\"muted\">{}</p>", esc(&inst.why.join("; ")));
         }
