@@ -339,10 +339,10 @@ fn run_writes_the_report_a_noop_rerun_keeps_it_and_copies_keep_their_links() {
     assert!(!assert_links_resolve(&elsewhere, &dom).is_empty());
 
     // `[report] enabled = false`: no report at the end of a run.
-    p.set_config(
-        &p.config()
-            .replace("[report]\n", "[report]\nenabled = false\n"),
-    );
+    p.set_config(&p.config().replace(
+        "[report]\nvalidation = false\n",
+        "[report]\nenabled = false\nvalidation = false\n",
+    ));
     std::fs::remove_dir_all(&report).unwrap();
     let o = p.run(&["run", "--only", "disk_md", "--force"]);
     assert_ok(&o);
