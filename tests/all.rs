@@ -10,6 +10,7 @@ mod dmw_cli;
 mod doe_cli;
 mod json_schemas;
 mod pipeline_cache;
+mod report_cli;
 mod simulate_cli;
 mod slurm_cli;
 mod standalone;

@@ -11,6 +11,24 @@ use std::path::{Path, PathBuf};
 /// docs/architecture.md. `PHYSICS` stands for the five physics modules.
 const ALLOWED: &[(&str, &[&str])] = &[
     (
+        "report",
+        &[
+            "validation",
+            "engine",
+            "stages",
+            "slider",
+            "artefacts",
+            "figures",
+            "core",
+            "error",
+            PHYSICS,
+            "signal",
+            "numerics",
+            "formats",
+            "units",
+        ],
+    ),
+    (
         "validation",
         &[
             "engine",

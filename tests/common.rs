@@ -53,6 +53,9 @@ impl Project {
         let text = text
             .replace("sa_max_evaluations = 400", "sa_max_evaluations = 12")
             .replace("compare_step = \"0.2 nm\"", "compare_step = \"3 nm\"");
+        // …and the end-of-run HTML report without the validation table (seconds per fresh
+        // project in a debug build; tests/report_cli.rs turns it on).
+        let text = format!("{text}\n[report]\nvalidation = false\n");
         std::fs::write(dir.path().join("pipeline.toml"), text).expect("write pipeline.toml");
         Self { dir }
     }
@@ -132,7 +135,13 @@ pub fn snapshot(dir: &Path) -> Vec<(String, String)> {
                 ));
             } else if ft.is_dir() {
                 walk(root, &p, out);
-            } else if !rel.ends_with("lock") && !rel.ends_with("input-hashes.json") {
+            } else if !rel.ends_with("lock")
+                && !rel.ends_with("input-hashes.json")
+                // The report and the last run's record are views of a run, not results
+                // (docs/report.md): a failed run rewrites them.
+                && !rel.starts_with("report/")
+                && rel != ".hdi/last-run.json"
+            {
                 let bytes = std::fs::read(&p).unwrap();
                 out.push((rel, blake3::hash(&bytes).to_hex().to_string()));
             }

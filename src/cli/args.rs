@@ -153,6 +153,25 @@ pub enum Command {
         #[arg(long, hide = true)]
         read_one: Option<PathBuf>,
     },
+    /// Write the static HTML report of the pipeline (summary, per-instance numbers, figures
+    /// and files, the validation table, provenance, status) into processed/report/
+    /// (docs/report.md). `hdi run` writes it at its end too.
+    Report {
+        #[arg(long, default_value = "pipeline.toml")]
+        config: PathBuf,
+        /// Report directory (default: processed/report).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Leave the `hdi validate` table out (default: `[report] validation`).
+        #[arg(long, conflicts_with = "validation")]
+        no_validation: bool,
+        /// Include the `hdi validate` table even when `[report] validation = false`.
+        #[arg(long)]
+        validation: bool,
+        /// Rebuild even when the report of the same results exists.
+        #[arg(long)]
+        force: bool,
+    },
 }
 
 #[derive(Args, Debug)]

@@ -9,6 +9,7 @@ mod bulge;
 mod contact;
 mod dmw;
 mod progress;
+mod report;
 mod run;
 mod simulate;
 mod slurm;
@@ -81,6 +82,13 @@ pub fn main() -> Result<()> {
             (None, false) => bench_readers::bench_readers(&readers),
             (None, true) => bench::cmd_bench(&config, size),
         },
+        Command::Report {
+            config,
+            out,
+            no_validation,
+            validation,
+            force,
+        } => report::cmd_report(&config, out, no_validation, validation, force),
     }
 }
 

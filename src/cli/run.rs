@@ -104,6 +104,16 @@ pub(super) fn cmd_run(
             processed.display()
         );
     }
+    // The HTML report (docs/report.md); a no-op run keeps the last run's record, so its
+    // report stays as it is.
+    let record =
+        hdi::report::RunRecord::from_report(&report, started.elapsed().as_secs_f64(), opts.jobs);
+    if record.changed_something() {
+        if let Err(e) = record.save(&processed) {
+            eprintln!("warning: {}", hdi::error::chain(&e));
+        }
+    }
+    super::report::after_run(config);
     if let Some(first) = first_failure {
         if n_failed > 1 {
             bail!("{first} (and {} more failed)", n_failed - 1);

@@ -2,8 +2,9 @@
 //!
 //! Two levels, as ripgrep does for flags: serde structs with `deny_unknown_fields` (what the
 //! user wrote) → validated stage instances (SI units, ranges, files checked). The core knows
-//! only `[project]`: every other top-level table is a stage kind's, kept as written (with the
-//! source spans) until its consumer deserializes it into its own config type. Every error
+//! only `[project]` and `[report]` (the HTML report, docs/report.md): every other top-level
+//! table is a stage kind's, kept as written (with the source spans) until its consumer
+//! deserializes it into its own config type. Every error
 //! names the file, the line and the key, and for a misspelt key the nearest valid one.
 
 use serde::de::DeserializeOwned;
@@ -71,6 +72,31 @@ fn default_processed() -> PathBuf {
     PathBuf::from("processed")
 }
 
+/// `[report]`: the HTML report `hdi run` writes at its end (docs/report.md).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ReportConfig {
+    /// Write `processed/report/` at the end of `hdi run`.
+    #[serde(default = "yes")]
+    pub enabled: bool,
+    /// Include the `hdi validate` table (seconds of computation when the report is rebuilt).
+    #[serde(default = "yes")]
+    pub validation: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+impl Default for ReportConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            validation: true,
+        }
+    }
+}
+
 impl Default for ProjectConfig {
     fn default() -> Self {
         Self {
@@ -89,6 +115,7 @@ pub struct PipelineFile {
     pub dir: PathBuf,
     pub text: String,
     pub project: ProjectConfig,
+    pub report: ReportConfig,
     /// The stage kinds the file has tables for, with their instance names. A kind's tables
     /// are deserialized from `text` when asked for, so their errors carry the same spans (and
     /// lines) as a whole-file parse gives.
@@ -120,6 +147,7 @@ impl PipelineFile {
             .map_err(|e| invalid(e.span(), explain_toml_error(e.message())))?
             .into_inner();
         let mut project = ProjectConfig::default();
+        let mut report = ReportConfig::default();
         let mut sections = BTreeMap::new();
         // In key order, as one serde pass over the whole file met them.
         for (key, value) in root {
@@ -128,6 +156,12 @@ impl PipelineFile {
                 let span = value.span();
                 project =
                     ProjectConfig::deserialize(ValueDeserializer::from(value)).map_err(|e| {
+                        invalid(e.span().or(Some(span)), explain_toml_error(e.message()))
+                    })?;
+            } else if name == "report" {
+                let span = value.span();
+                report =
+                    ReportConfig::deserialize(ValueDeserializer::from(value)).map_err(|e| {
                         invalid(e.span().or(Some(span)), explain_toml_error(e.message()))
                     })?;
             } else if kinds.contains(&name) {
@@ -139,7 +173,7 @@ impl PipelineFile {
                 });
                 sections.insert(name.to_string(), names.unwrap_or_default());
             } else {
-                let mut known = vec!["project"];
+                let mut known = vec!["project", "report"];
                 known.extend_from_slice(kinds);
                 return Err(invalid(Some(key.span()), unknown_key(name, &known)));
             }
@@ -159,6 +193,7 @@ impl PipelineFile {
             dir,
             text,
             project,
+            report,
             sections,
         })
     }
@@ -432,6 +467,20 @@ mod tests {
     }
 
     #[test]
+    fn the_report_table_defaults_to_on_and_names_a_misspelt_key() {
+        let f = parse("[project]\nname = \"x\"\n").unwrap();
+        assert_eq!(f.report, ReportConfig::default());
+        assert!(f.report.enabled && f.report.validation);
+        let f = parse("[report]\nvalidation = false\n").unwrap();
+        assert!(f.report.enabled && !f.report.validation);
+        let e = parse("[project]\n\n[report]\nvalidaton = false\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("pipeline.toml:4:"), "{e}");
+        assert!(e.contains("did you mean `validation`"), "{e}");
+    }
+
+    #[test]
     fn unknown_stage_kind_is_rejected() {
         let text = "[surfac.disk]\nfile = \"a.gwy\"\n".to_string();
         let msg = PipelineFile::parse(Path::new("p.toml"), text, KINDS)
@@ -440,7 +489,7 @@ mod tests {
         assert!(msg.contains("did you mean `surface`"), "{msg}");
         assert_eq!(
             msg,
-            "p.toml:1: unknown key `surfac` (did you mean `surface`?); valid keys: project, \
+            "p.toml:1: unknown key `surfac` (did you mean `surface`?); valid keys: project, report, \
              surface, simulate"
         );
     }

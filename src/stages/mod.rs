@@ -204,7 +204,7 @@ pub fn load(path: &Path) -> std::result::Result<PipelineFile, ConfigError> {
 }
 
 /// Names reserved for hdi's own entries under `processed/`.
-const RESERVED: &[&str] = &["tables", ".hdi"];
+const RESERVED: &[&str] = &["tables", "report", ".hdi"];
 
 /// Every declared stage instance, validated.
 pub fn build(file: &PipelineFile) -> std::result::Result<Vec<Box<dyn Stage>>, ConfigError> {
