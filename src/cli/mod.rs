@@ -7,6 +7,7 @@ mod bench;
 mod bench_readers;
 mod bulge;
 mod contact;
+mod diff;
 mod dmw;
 mod progress;
 mod run;
@@ -23,6 +24,7 @@ use std::path::Path;
 use args::{Cli, Command};
 use hdi::core::executor::ExecutorKind;
 
+pub use diff::Differs;
 pub use run::Stale;
 
 pub fn main() -> Result<()> {
@@ -81,6 +83,7 @@ pub fn main() -> Result<()> {
             (None, false) => bench_readers::bench_readers(&readers),
             (None, true) => bench::cmd_bench(&config, size),
         },
+        Command::Diff(args) => diff::cmd_diff(*args),
     }
 }
 
