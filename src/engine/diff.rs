@@ -705,6 +705,7 @@ mod tests {
         assert!(d.identical);
         assert_eq!(d.summary.metrics_compared, 1);
         // …but a column only one side's table has is a change (null → value).
+        let i = b.instances.get_mut("s").unwrap();
         i.metrics.insert(("t.csv".into(), "z".into()), json!(3.0));
         let d = compare(&a, &b, &Options::default()).unwrap();
         assert_eq!(d.summary.metrics_changed, 1);
