@@ -40,8 +40,10 @@ fn names_with_status(v: &Value, status: &str) -> BTreeSet<String> {
 fn pipeline_files_differing_in_one_parameter_change_that_instance_and_its_consumers() {
     let p = Project::shipped();
     let cfg = p.config();
-    assert_eq!(cfg.matches("filter_s = \"16 nm\"").count(), 1);
-    let changed_cfg = cfg.replace("filter_s = \"16 nm\"", "filter_s = \"32 nm\"");
+    // The slider's S-filter is the only uncommented `filter_s` line.
+    let line = "\nfilter_s = \"16 nm\"\n";
+    assert_eq!(cfg.matches(line).count(), 1);
+    let changed_cfg = cfg.replace(line, "\nfilter_s = \"32 nm\"\n");
     std::fs::write(p.path().join("changed.toml"), changed_cfg).unwrap();
     let (o, v) = diff_json(
         p.path(),
