@@ -1,7 +1,9 @@
 //! `hdi diff A B` (docs/diff.md): instances, params and metric deltas between two pipeline
 //! files or two processed directories; exit 0 identical, 1 different, 2 error.
 
-use crate::common::{self, assert_clean_failure, assert_matches_schema, hdi, stderr, stdout, Project};
+use crate::common::{
+    self, assert_clean_failure, assert_matches_schema, hdi, stderr, stdout, Project,
+};
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
@@ -81,7 +83,10 @@ fn pipeline_files_differing_in_one_parameter_change_that_instance_and_its_consum
         .iter()
         .find(|i| i["name"] == "hdi")
         .unwrap()["why"];
-    assert!(hdi_why.to_string().contains("upstream slider changed"), "{hdi_why}");
+    assert!(
+        hdi_why.to_string().contains("upstream slider changed"),
+        "{hdi_why}"
+    );
     // Nothing ran: no metrics, and diff wrote nothing.
     assert!(v["metrics"].as_array().unwrap().is_empty());
     assert!(!p.processed().exists());
@@ -91,7 +96,11 @@ fn pipeline_files_differing_in_one_parameter_change_that_instance_and_its_consum
     assert_eq!(o.status.code(), Some(1));
     let text = stdout(&o);
     assert!(text.contains("surface.slider.filter_s_m"), "{text}");
-    assert!(text.lines().any(|l| l.starts_with("measured") && l.contains("changed")), "{text}");
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("measured") && l.contains("changed")),
+        "{text}"
+    );
 
     // A pipeline file against itself: identical.
     let o = p.run(&["diff", "pipeline.toml", "pipeline.toml"]);
@@ -191,7 +200,10 @@ fn processed_dirs_metric_deltas_match_the_tables() {
             }
         }
     }
-    assert!(n_cells > 40, "tables too small to say much: {n_cells} cells");
+    assert!(
+        n_cells > 40,
+        "tables too small to say much: {n_cells} cells"
+    );
     let got: BTreeMap<(String, String, String), &Value> = v["metrics"]
         .as_array()
         .unwrap()
@@ -229,7 +241,10 @@ fn processed_dirs_metric_deltas_match_the_tables() {
                 numeric += 1;
                 let d = m["delta"].as_f64().unwrap();
                 assert!((d - (y - x)).abs() <= 1e-12 * y.abs().max(x.abs()), "{k:?}");
-                assert!((m["old"].as_f64().unwrap() - x).abs() <= 1e-15 * x.abs(), "{k:?}");
+                assert!(
+                    (m["old"].as_f64().unwrap() - x).abs() <= 1e-15 * x.abs(),
+                    "{k:?}"
+                );
                 if x != 0.0 {
                     let r = m["rel_delta"].as_f64().unwrap();
                     assert!((r - (y - x) / x.abs()).abs() <= 1e-12 * r.abs().max(1e-300));
@@ -246,7 +261,10 @@ fn processed_dirs_metric_deltas_match_the_tables() {
 
     // --all lists the unchanged slider and its unchanged metrics too.
     let (_, all) = diff_json(p.path(), &before, &p.processed(), &["--all"]);
-    assert_eq!(names_with_status(&all, "unchanged"), ["slider".to_string()].into());
+    assert_eq!(
+        names_with_status(&all, "unchanged"),
+        ["slider".to_string()].into()
+    );
     assert!(all["metrics"]
         .as_array()
         .unwrap()
@@ -260,7 +278,11 @@ fn processed_dirs_metric_deltas_match_the_tables() {
     // A huge --rtol hides every numeric change; the instance changes remain.
     let (o, loose) = diff_json(p.path(), &before, &p.processed(), &["--rtol", "1e9"]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(loose["metrics"].as_array().unwrap().iter().all(|m| m["delta"].is_null()));
+    assert!(loose["metrics"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|m| m["delta"].is_null()));
 }
 
 #[test]
@@ -283,7 +305,11 @@ fn bad_paths_are_one_clear_error_with_exit_2() {
     assert_clean_failure(&o, "plain: not a processed directory");
     assert_eq!(o.status.code(), Some(2));
 
-    std::fs::write(dir.path().join("bad.toml"), "[project]\nname = 1\n[surfac.x]\n").unwrap();
+    std::fs::write(
+        dir.path().join("bad.toml"),
+        "[project]\nname = 1\n[surfac.x]\n",
+    )
+    .unwrap();
     let o = hdi()
         .current_dir(dir.path())
         .args(["diff", "bad.toml", "bad.toml"])

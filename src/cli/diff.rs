@@ -152,11 +152,21 @@ fn value(v: &Value) -> String {
     }
 }
 
+/// A delta to 7 significant digits: fixed-point for 1e-3 ≤ |x| < 1e6, else exponent form.
 fn number(x: f64) -> String {
-    let s = format!("{x}");
-    if s.len() > 12 {
-        format!("{x:.6e}")
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let e = x.abs().log10().floor() as i32;
+    if (-3..6).contains(&e) {
+        let decimals = (6 - e).max(0) as usize;
+        let s = format!("{x:.decimals$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
     } else {
-        s
+        format!("{x:.6e}")
     }
 }

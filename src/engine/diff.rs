@@ -458,9 +458,10 @@ pub fn compare(a: &Snapshot, b: &Snapshot, opts: &Options) -> Result<Diff, DiffE
         let (status, why) = match (old, new) {
             (None, Some(_)) => (Status::Added, Vec::new()),
             (Some(_), None) => (Status::Removed, Vec::new()),
-            (Some(o), Some(n)) if o.key != n.key => {
-                (Status::Changed, n.fingerprint.explain_changes(&o.fingerprint))
-            }
+            (Some(o), Some(n)) if o.key != n.key => (
+                Status::Changed,
+                n.fingerprint.explain_changes(&o.fingerprint),
+            ),
             _ => (Status::Unchanged, Vec::new()),
         };
         match status {
@@ -529,8 +530,8 @@ pub fn compare(a: &Snapshot, b: &Snapshot, opts: &Options) -> Result<Diff, DiffE
             }
         }
     }
-    let identical = summary.added + summary.removed + summary.changed + summary.metrics_changed
-        == 0;
+    let identical =
+        summary.added + summary.removed + summary.changed + summary.metrics_changed == 0;
     Ok(Diff {
         a: side(a),
         b: side(b),
@@ -580,7 +581,12 @@ mod tests {
     use super::*;
     use serde_json::json;
 
-    fn inst(kind: &str, params: Value, upstream: &[(&str, &str)], metrics: &[(&str, Value)]) -> Instance {
+    fn inst(
+        kind: &str,
+        params: Value,
+        upstream: &[(&str, &str)],
+        metrics: &[(&str, Value)],
+    ) -> Instance {
         let fingerprint = Fingerprint {
             kind: kind.into(),
             model_version: format!("{kind}-1"),
@@ -617,14 +623,27 @@ mod tests {
     fn identical_snapshots_are_identical_and_list_nothing() {
         let a = snap(vec![(
             "disk",
-            inst("surface", json!({"filter_s_m": 1.6e-8}), &[], &[("sigma_nm", json!(0.5))]),
+            inst(
+                "surface",
+                json!({"filter_s_m": 1.6e-8}),
+                &[],
+                &[("sigma_nm", json!(0.5))],
+            ),
         )]);
         let d = compare(&a, &a.clone(), &Options::default()).unwrap();
         assert!(d.identical);
         assert!(d.instances.is_empty() && d.params.is_empty() && d.metrics.is_empty());
         assert_eq!(d.summary.unchanged, 1);
         assert_eq!(d.summary.metrics_compared, 1);
-        let all = compare(&a, &a.clone(), &Options { rtol: 0.0, all: true }).unwrap();
+        let all = compare(
+            &a,
+            &a.clone(),
+            &Options {
+                rtol: 0.0,
+                all: true,
+            },
+        )
+        .unwrap();
         assert!(all.identical);
         assert_eq!(all.instances.len(), 1);
         assert_eq!(all.metrics.len(), 1);
@@ -641,7 +660,11 @@ mod tests {
                     "surface",
                     json!({"filter_s_m": 1.6e-8, "level": ["plane"], "inner": {"x": 1}}),
                     &[],
-                    &[("sigma_nm", json!(0.5)), ("n", json!(10)), ("format", json!("gwy"))],
+                    &[
+                        ("sigma_nm", json!(0.5)),
+                        ("n", json!(10)),
+                        ("format", json!("gwy")),
+                    ],
                 ),
             ),
             ("gone", inst("surface", json!({}), &[], &[])),
@@ -653,17 +676,29 @@ mod tests {
                     "surface",
                     json!({"filter_s_m": 3.2e-8, "level": ["plane", "mean"], "inner": {"x": 1}}),
                     &[],
-                    &[("sigma_nm", json!(0.4)), ("n", json!(10)), ("format", json!("spm"))],
+                    &[
+                        ("sigma_nm", json!(0.4)),
+                        ("n", json!(10)),
+                        ("format", json!("spm")),
+                    ],
                 ),
             ),
             ("new", inst("surface", json!({}), &[], &[])),
         ]);
         let d = compare(&a, &b, &Options::default()).unwrap();
         assert!(!d.identical);
-        let st: Vec<(&str, Status)> = d.instances.iter().map(|i| (i.name.as_str(), i.status)).collect();
+        let st: Vec<(&str, Status)> = d
+            .instances
+            .iter()
+            .map(|i| (i.name.as_str(), i.status))
+            .collect();
         assert_eq!(
             st,
-            vec![("disk", Status::Changed), ("gone", Status::Removed), ("new", Status::Added)]
+            vec![
+                ("disk", Status::Changed),
+                ("gone", Status::Removed),
+                ("new", Status::Added)
+            ]
         );
         assert!(d.instances[0].why.iter().any(|w| w.contains("filter_s_m")));
         let keys: Vec<&str> = d.params.iter().map(|p| p.key.as_str()).collect();
@@ -684,23 +719,67 @@ mod tests {
 
     #[test]
     fn rtol_hides_small_numeric_changes_only() {
-        let a = snap(vec![("s", inst("surface", json!({}), &[], &[("x", json!(1.0)), ("y", json!(1.0))]))]);
-        let b = snap(vec![("s", inst("surface", json!({}), &[], &[("x", json!(1.0 + 1e-9)), ("y", json!(1.1))]))]);
+        let a = snap(vec![(
+            "s",
+            inst(
+                "surface",
+                json!({}),
+                &[],
+                &[("x", json!(1.0)), ("y", json!(1.0))],
+            ),
+        )]);
+        let b = snap(vec![(
+            "s",
+            inst(
+                "surface",
+                json!({}),
+                &[],
+                &[("x", json!(1.0 + 1e-9)), ("y", json!(1.1))],
+            ),
+        )]);
         let exact = compare(&a, &b, &Options::default()).unwrap();
         assert_eq!(exact.summary.metrics_changed, 2);
-        let tol = compare(&a, &b, &Options { rtol: 1e-6, all: false }).unwrap();
+        let tol = compare(
+            &a,
+            &b,
+            &Options {
+                rtol: 1e-6,
+                all: false,
+            },
+        )
+        .unwrap();
         assert_eq!(tol.summary.metrics_changed, 1);
         assert_eq!(tol.metrics[0].metric, "y");
-        assert!(compare(&a, &b, &Options { rtol: -1.0, all: false }).is_err());
-        assert!(compare(&a, &b, &Options { rtol: f64::NAN, all: false }).is_err());
+        assert!(compare(
+            &a,
+            &b,
+            &Options {
+                rtol: -1.0,
+                all: false
+            }
+        )
+        .is_err());
+        assert!(compare(
+            &a,
+            &b,
+            &Options {
+                rtol: f64::NAN,
+                all: false
+            }
+        )
+        .is_err());
     }
 
     #[test]
     fn a_source_only_one_side_has_is_not_compared() {
-        let a = snap(vec![("s", inst("surface", json!({}), &[], &[("x", json!(1.0))]))]);
+        let a = snap(vec![(
+            "s",
+            inst("surface", json!({}), &[], &[("x", json!(1.0))]),
+        )]);
         let mut b = a.clone();
         let i = b.instances.get_mut("s").unwrap();
-        i.metrics.insert(("result.json".into(), "y".into()), json!(2.0));
+        i.metrics
+            .insert(("result.json".into(), "y".into()), json!(2.0));
         let d = compare(&a, &b, &Options::default()).unwrap();
         assert!(d.identical);
         assert_eq!(d.summary.metrics_compared, 1);
@@ -714,14 +793,23 @@ mod tests {
 
     #[test]
     fn integer_and_float_forms_of_one_number_are_equal() {
-        let a = snap(vec![("s", inst("surface", json!({}), &[], &[("x", json!(2))]))]);
-        let b = snap(vec![("s", inst("surface", json!({}), &[], &[("x", json!(2.0))]))]);
+        let a = snap(vec![(
+            "s",
+            inst("surface", json!({}), &[], &[("x", json!(2))]),
+        )]);
+        let b = snap(vec![(
+            "s",
+            inst("surface", json!({}), &[], &[("x", json!(2.0))]),
+        )]);
         assert!(compare(&a, &b, &Options::default()).unwrap().identical);
     }
 
     #[test]
     fn csv_cells_are_typed_and_quotes_understood() {
-        let rows = table_rows("stage,n,x_nm,ok,note\r\ndisk,3,0.25,true,\"a, \"\"b\"\"\"\nslider,,NaN,false,plain\n").unwrap();
+        let rows = table_rows(
+            "stage,n,x_nm,ok,note\r\ndisk,3,0.25,true,\"a, \"\"b\"\"\"\nslider,,NaN,false,plain\n",
+        )
+        .unwrap();
         assert_eq!(rows.len(), 2);
         assert_eq!(rows[0]["n"], json!(3));
         assert_eq!(rows[0]["x_nm"], json!(0.25));
@@ -736,7 +824,12 @@ mod tests {
     #[test]
     fn result_scalars_flatten_without_arrays() {
         let mut out = BTreeMap::new();
-        flatten("", &json!({"a": 1, "b": {"c": "x", "d": [1, 2]}}), false, &mut out);
+        flatten(
+            "",
+            &json!({"a": 1, "b": {"c": "x", "d": [1, 2]}}),
+            false,
+            &mut out,
+        );
         assert_eq!(out.keys().collect::<Vec<_>>(), vec!["a", "b.c"]);
     }
 }
