@@ -102,6 +102,38 @@ fn pipeline_files_differing_in_one_parameter_change_that_instance_and_its_consum
         "{text}"
     );
 
+    // The same pipeline beside a copy of raw/ whose slider scan differs by one byte: no
+    // parameter differs, the input hash does, and the change reaches the same consumers.
+    let other = p.path().join("other");
+    common::copy_dir(&p.path().join("raw"), &other.join("raw"));
+    std::fs::write(other.join("pipeline.toml"), &cfg).unwrap();
+    let scan = other.join("raw/afm/slider_tfc_1um.spm");
+    let mut bytes = std::fs::read(&scan).unwrap();
+    let last = bytes.len() - 1;
+    bytes[last] ^= 1;
+    std::fs::write(&scan, bytes).unwrap();
+    let (o, v) = diff_json(
+        p.path(),
+        Path::new("pipeline.toml"),
+        Path::new("other/pipeline.toml"),
+        &[],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert_eq!(names_with_status(&v, "changed"), expected);
+    assert!(
+        v["params"].as_array().unwrap().is_empty(),
+        "{}",
+        v["params"]
+    );
+    let slider_why = v["instances"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|i| i["name"] == "slider")
+        .unwrap()["why"]
+        .to_string();
+    assert!(slider_why.contains("slider_tfc_1um.spm"), "{slider_why}");
+
     // A pipeline file against itself: identical.
     let o = p.run(&["diff", "pipeline.toml", "pipeline.toml"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
