@@ -336,6 +336,13 @@ fn bad_paths_are_one_clear_error_with_exit_2() {
         .unwrap();
     assert_clean_failure(&o, "plain: not a processed directory");
     assert_eq!(o.status.code(), Some(2));
+    std::fs::write(dir.path().join("plain/pipeline.toml"), "").unwrap();
+    let o = hdi()
+        .current_dir(dir.path())
+        .args(["diff", "plain", "plain"])
+        .output()
+        .unwrap();
+    assert_clean_failure(&o, "(did you mean plain/pipeline.toml?)");
 
     std::fs::write(
         dir.path().join("bad.toml"),

@@ -17,10 +17,10 @@ pub enum DiffError {
     #[error("{}: no such file or directory", .0.display())]
     NotFound(PathBuf),
     #[error(
-        "{}: not a processed directory (no .hdi/refs/ inside; run `hdi run` first) and not a pipeline file",
-        .0.display()
+        "{}: not a processed directory (no .hdi/refs/ inside; run `hdi run` first) and not a pipeline file{}",
+        .0.display(), .1
     )]
-    NotProcessed(PathBuf),
+    NotProcessed(PathBuf, String),
     #[error("{}: {message}", path.display())]
     Unreadable { path: PathBuf, message: String },
     #[error("{}", path.display())]
@@ -78,7 +78,15 @@ pub fn load(path: &Path) -> Result<Snapshot, DiffError> {
 pub fn load_processed(dir: &Path) -> Result<Snapshot, DiffError> {
     let refs = dir.join(".hdi").join("refs");
     if !refs.is_dir() {
-        return Err(DiffError::NotProcessed(dir.to_path_buf()));
+        // A project directory given for its processed/ or its pipeline file: say which.
+        let hint = if dir.join("processed").join(".hdi").join("refs").is_dir() {
+            format!(" (did you mean {}?)", dir.join("processed").display())
+        } else if dir.join("pipeline.toml").is_file() {
+            format!(" (did you mean {}?)", dir.join("pipeline.toml").display())
+        } else {
+            String::new()
+        };
+        return Err(DiffError::NotProcessed(dir.to_path_buf(), hint));
     }
     let unreadable = |path: &Path, message: String| DiffError::Unreadable {
         path: path.to_path_buf(),
