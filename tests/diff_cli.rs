@@ -291,6 +291,46 @@ fn processed_dirs_metric_deltas_match_the_tables() {
     }
     assert!(numeric >= 3, "{expected:?}");
 
+    // Tables present only as Parquet (CSV deleted) give the same changes and deltas.
+    let (pa, pb) = (p.path().join("a_pq"), p.path().join("b_pq"));
+    cp_a(&before, &pa);
+    cp_a(&p.processed(), &pb);
+    for d in [&pa, &pb] {
+        for e in std::fs::read_dir(d.join("tables")).unwrap() {
+            let f = e.unwrap().path();
+            if f.extension().is_some_and(|x| x == "csv") {
+                std::fs::remove_file(f).unwrap();
+            }
+        }
+    }
+    let (_, pq) = diff_json(p.path(), &pa, &pb, &[]);
+    let from_parquet: BTreeMap<(String, String, String), &Value> = pq["metrics"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|m| m["source"].as_str().unwrap().ends_with(".parquet"))
+        .map(|m| {
+            (
+                (
+                    m["instance"].as_str().unwrap().to_string(),
+                    m["source"].as_str().unwrap().replace(".parquet", ".csv"),
+                    m["metric"].as_str().unwrap().to_string(),
+                ),
+                m,
+            )
+        })
+        .collect();
+    assert_eq!(
+        from_parquet.keys().collect::<Vec<_>>(),
+        got.keys().collect::<Vec<_>>()
+    );
+    for (k, m) in &from_parquet {
+        match (m["delta"].as_f64(), got[k]["delta"].as_f64()) {
+            (Some(x), Some(y)) => assert!((x - y).abs() <= 1e-12 * x.abs().max(y.abs()), "{k:?}"),
+            (x, y) => assert_eq!(x, y, "{k:?}"),
+        }
+    }
+
     // --all lists the unchanged slider and its unchanged metrics too.
     let (_, all) = diff_json(p.path(), &before, &p.processed(), &["--all"]);
     assert_eq!(

@@ -118,21 +118,34 @@ pub fn load_processed(dir: &Path) -> Result<Snapshot, DiffError> {
         );
     }
     let tables = dir.join("tables");
-    let mut csvs: Vec<PathBuf> = std::fs::read_dir(&tables)
+    // Each table's CSV; its Parquet twin only where the CSV is missing (both hold the same
+    // rows, docs/architecture.md "Tables").
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&tables)
         .into_iter()
         .flatten()
         .flatten()
         .map(|e| e.path())
-        .filter(|p| p.extension().is_some_and(|x| x == "csv"))
+        .filter(|p| match p.extension().and_then(|x| x.to_str()) {
+            Some("csv") => true,
+            Some("parquet") => !p.with_extension("csv").exists(),
+            _ => false,
+        })
         .collect();
-    csvs.sort();
-    for csv in csvs {
-        let text = std::fs::read_to_string(&csv).map_err(|e| unreadable(&csv, e.to_string()))?;
-        let source = csv
+    files.sort();
+    for table in files {
+        let source = table
             .file_name()
             .map(|n| n.to_string_lossy().to_string())
             .unwrap_or_default();
-        for row in table_rows(&text).map_err(|m| unreadable(&csv, m))? {
+        let rows = if source.ends_with(".csv") {
+            let text =
+                std::fs::read_to_string(&table).map_err(|e| unreadable(&table, e.to_string()))?;
+            table_rows(&text)
+        } else {
+            parquet_rows(&table)
+        }
+        .map_err(|m| unreadable(&table, m))?;
+        for row in rows {
             // Rows of instances without a ref (removed from the pipeline, ref gone) have no
             // fingerprint to compare: they are left out.
             let Some(Value::String(stage)) = row.get("stage") else {
@@ -269,6 +282,36 @@ pub fn table_rows(text: &str) -> Result<Vec<BTreeMap<String, Value>>, String> {
                 .zip(r.into_iter().map(|c| cell_value(&c)))
                 .collect(),
         );
+    }
+    Ok(rows)
+}
+
+/// The rows of a summary-table Parquet file, typed as [`table_rows`] types CSV cells.
+fn parquet_rows(path: &Path) -> Result<Vec<BTreeMap<String, Value>>, String> {
+    use polars::prelude::*;
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let df = ParquetReader::new(file)
+        .finish()
+        .map_err(|e| format!("not a readable Parquet file: {e}"))?;
+    let mut rows = vec![BTreeMap::new(); df.height()];
+    for col in df.columns() {
+        let name = col.name().to_string();
+        for (i, row) in rows.iter_mut().enumerate() {
+            let v = match col.get(i).map_err(|e| e.to_string())? {
+                AnyValue::Null => Value::Null,
+                AnyValue::Boolean(b) => Value::Bool(b),
+                AnyValue::Int64(x) => Value::from(x),
+                AnyValue::Int32(x) => Value::from(x),
+                AnyValue::UInt64(x) => Value::from(x),
+                AnyValue::UInt32(x) => Value::from(x),
+                AnyValue::Float64(x) if x.is_finite() => Value::from(x),
+                AnyValue::Float32(x) if x.is_finite() => Value::from(x as f64),
+                AnyValue::String(s) => Value::String(s.to_string()),
+                AnyValue::StringOwned(s) => Value::String(s.to_string()),
+                other => Value::String(other.to_string()),
+            };
+            row.insert(name.clone(), v);
+        }
     }
     Ok(rows)
 }
