@@ -6,6 +6,7 @@ mod bad_input;
 mod bulge_cli;
 mod calibrate_cli;
 mod common;
+mod diff_cli;
 mod dmw_cli;
 mod doe_cli;
 mod json_schemas;

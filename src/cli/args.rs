@@ -172,6 +172,10 @@ pub enum Command {
         #[arg(long)]
         force: bool,
     },
+    /// Compare two processed directories or two pipeline files: instances added, removed or
+    /// changed (cache key), the parameters that changed, and the metric deltas of the summary
+    /// tables and result.json (docs/diff.md). Exit 0 identical, 1 different, 2 error.
+    Diff(Box<DiffArgs>),
 }
 
 #[derive(Args, Debug)]
@@ -517,4 +521,23 @@ pub struct AnalyzeArgs {
     pub out: Option<PathBuf>,
     #[arg(long)]
     pub json: bool,
+}
+
+/// `hdi diff`.
+#[derive(Args, Debug)]
+pub struct DiffArgs {
+    /// The old side: a processed directory (with `.hdi/`) or a pipeline file.
+    pub a: PathBuf,
+    /// The new side: a processed directory or a pipeline file.
+    pub b: PathBuf,
+    /// Machine-readable output (docs/schemas/diff.json).
+    #[arg(long)]
+    pub json: bool,
+    /// Also list unchanged instances and metrics.
+    #[arg(long)]
+    pub all: bool,
+    /// Numbers within rtol·max(|old|, |new|) count as equal (default: exact; results are
+    /// byte-deterministic).
+    #[arg(long, default_value_t = 0.0)]
+    pub rtol: f64,
 }

@@ -7,6 +7,7 @@ mod bench;
 mod bench_readers;
 mod bulge;
 mod contact;
+mod diff;
 mod dmw;
 mod progress;
 mod report;
@@ -24,6 +25,7 @@ use std::path::Path;
 use args::{Cli, Command};
 use hdi::core::executor::ExecutorKind;
 
+pub use diff::Differs;
 pub use run::Stale;
 
 pub fn main() -> Result<()> {
@@ -89,6 +91,7 @@ pub fn main() -> Result<()> {
             validation,
             force,
         } => report::cmd_report(&config, out, no_validation, validation, force),
+        Command::Diff(args) => diff::cmd_diff(*args),
     }
 }
 

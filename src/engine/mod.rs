@@ -1,6 +1,7 @@
 //! The pipeline engine: the stage instances' dependency graph, plan (fresh/stale and why), run
 //! with a thread pool (reporting to a `RunObserver`), status, gc. Above the stages: it drives
 //! them through the [`Stage`] contract they define.
+pub mod diff;
 pub mod distributed;
 
 use crate::core::cache::{Fingerprint, InputRecord, Manifest, Store, UpstreamRecord, Verification};
@@ -82,6 +83,21 @@ pub fn topo_order(stages: &[Box<dyn Stage>]) -> Result<Vec<usize>> {
 /// Compute every stage's fingerprint (hashing input files through the stat accelerator) and
 /// check the store; instances named in `force` are stale even when cached.
 pub fn plan(stages: Vec<Box<dyn Stage>>, store: &Store, force: &BTreeSet<String>) -> Result<Plan> {
+    plan_inner(stages, store, force, true)
+}
+
+/// [`plan`] without saving the input-hash accelerator: writes nothing (for `hdi diff`, which
+/// only reads the directories it compares).
+pub fn plan_read_only(stages: Vec<Box<dyn Stage>>, store: &Store) -> Result<Plan> {
+    plan_inner(stages, store, &BTreeSet::new(), false)
+}
+
+fn plan_inner(
+    stages: Vec<Box<dyn Stage>>,
+    store: &Store,
+    force: &BTreeSet<String>,
+    save_accelerator: bool,
+) -> Result<Plan> {
     let order = topo_order(&stages)?;
     let mut input_cache = store.load_input_cache();
     let mut keys: BTreeMap<String, String> = BTreeMap::new();
@@ -149,7 +165,9 @@ pub fn plan(stages: Vec<Box<dyn Stage>>, store: &Store, force: &BTreeSet<String>
         });
     }
     // The accelerator is an optimisation: failing to save it only costs a rehash next time.
-    let _ = store.save_input_cache(&input_cache);
+    if save_accelerator {
+        let _ = store.save_input_cache(&input_cache);
+    }
     Ok(Plan { stages, planned })
 }
 
