@@ -372,13 +372,9 @@ sys.exit(1 if bad else 0)
         }
     }
     assert!(with_json.iter().any(|c| c == "surface"), "{with_json:?}");
-    // `analyze`'s schema is written on the parallel analyze branch (issue 19): until that
-    // branch is merged it may be absent here; everything else must have one.
-    let pending = ["analyze"];
     let missing: Vec<&String> = with_json
         .iter()
         .filter(|c| !schemas.join(format!("{c}.json")).exists())
-        .filter(|c| !pending.contains(&c.as_str()))
         .collect();
     assert!(
         missing.is_empty(),
