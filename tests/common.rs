@@ -225,3 +225,13 @@ sys.exit(1 if errors else 0)
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// `cases_cached` of the entry a `processed/<instance>` link points at: a fact of the run that
+/// made it, kept in its `manifest.json` (`run_log`), not in the results.
+pub fn cases_cached(instance_dir: &Path) -> u64 {
+    let text = std::fs::read_to_string(instance_dir.join("manifest.json")).unwrap();
+    let m: serde_json::Value = serde_json::from_str(&text).unwrap();
+    m["run_log"]["cases_cached"]
+        .as_u64()
+        .unwrap_or_else(|| panic!("no run_log.cases_cached in {}", instance_dir.display()))
+}

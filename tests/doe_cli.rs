@@ -63,7 +63,7 @@ fn doe_runs_resumes_after_a_kill_and_is_fully_cached() {
         serde_json::from_str(&std::fs::read_to_string(out.join("result.json")).unwrap()).unwrap();
     assert_eq!(result["cases"], 108);
     // Every case finished before the kill was reused (the run had not reached the annealing).
-    let cached = result["cases_cached"].as_u64().unwrap() as usize;
+    let cached = cases_cached(&out) as usize;
     assert!(
         cached >= finished.min(108),
         "{cached} cached of {finished} finished"

@@ -79,7 +79,16 @@ fn pipeline_sweep_caches_each_case() {
     let first = read(&p);
     // init = "static": an up and a down branch of 4 cases each (docs/conventions.md).
     assert_eq!(first["cases"].as_array().unwrap().len(), 8);
-    assert_eq!(first["cases_cached"], 0);
+    // Cold store: nothing cached, except that a case both branches share (same key) may be
+    // found by the second of two parallel jobs once the first stored it.
+    let shared = |r: &serde_json::Value| {
+        let keys = r["case_keys"].as_array().unwrap();
+        let unique: std::collections::BTreeSet<&str> =
+            keys.iter().map(|k| k.as_str().unwrap()).collect();
+        (keys.len() - unique.len()) as u64
+    };
+    assert!(cases_cached(&p.processed().join("improved_sweep")) <= shared(&first));
+    assert!(first.get("cases_cached").is_none(), "a run fact in the results");
     let branches: Vec<&str> = first["cases"]
         .as_array()
         .unwrap()
@@ -114,13 +123,17 @@ fn pipeline_sweep_caches_each_case() {
     assert_eq!(second["cases"].as_array().unwrap().len(), 6);
     // 5 and 10 nm of both branches: each branch reaches them along the same path (up from
     // below, down from deep contact), so their continuation starts and case keys are the same.
-    assert_eq!(second["cases_cached"], 4, "{second}");
+    let cached = cases_cached(&p.processed().join("improved_sweep"));
+    assert!(
+        (4..=4 + shared(&second)).contains(&cached),
+        "{cached} cached: {second}"
+    );
     // gc keeps the cases the current sweep lists.
     let o = p.run(&["gc"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let o = p.run(&["run", "--only", "improved_sweep", "--force"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert_eq!(read(&p)["cases_cached"], 6);
+    assert_eq!(cases_cached(&p.processed().join("improved_sweep")), 6);
 }
 
 #[test]

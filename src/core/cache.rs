@@ -155,6 +155,10 @@ pub struct Manifest {
     pub hdi_version: String,
     pub created: String,
     pub wall_time_s: f64,
+    /// Facts about the run that made the entry (e.g. `cases_cached`), which depend on the
+    /// store's state and timing and so are kept out of the results.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub run_log: BTreeMap<String, serde_json::Value>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -260,6 +264,7 @@ impl Store {
         name: &str,
         fingerprint: &Fingerprint,
         wall_time_s: f64,
+        run_log: BTreeMap<String, serde_json::Value>,
     ) -> io::Result<Manifest> {
         let key = fingerprint.key();
         let mut outputs = Vec::new();
@@ -274,6 +279,7 @@ impl Store {
             hdi_version: env!("CARGO_PKG_VERSION").to_string(),
             created: now_iso8601(),
             wall_time_s,
+            run_log,
         };
         let bytes = serde_json::to_vec_pretty(&manifest).map_err(io::Error::other)?;
         write_synced(&work_dir.join("manifest.json"), &bytes)?;

@@ -501,6 +501,7 @@ fn execute(
         upstream_dirs,
         store,
         progress,
+        run_log: Default::default(),
     };
     // A bug must not take the other stages down with it, nor leave a trusted output.
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| stage.run(&ctx)));
@@ -543,8 +544,9 @@ fn execute(
     let bytes = serde_json::to_vec_pretty(&result).map_err(|e| e.to_string())?;
     std::fs::write(work.join("result.json"), bytes).map_err(|e| e.to_string())?;
     let secs = started.elapsed().as_secs_f64();
+    let run_log = ctx.run_log.into_inner().unwrap_or_default();
     let manifest = store
-        .commit(&work, &p.name, &p.fingerprint, secs)
+        .commit(&work, &p.name, &p.fingerprint, secs, run_log)
         .map_err(|e| {
             let _ = std::fs::remove_dir_all(&work);
             format!("cannot record the output in the store: {e}")

@@ -1056,6 +1056,11 @@ impl StageKind for DoeStage {
         } else {
             None
         };
+        // A fact of this run, not a result (it depends on what the store held): manifest only.
+        ctx.log_run(
+            "cases_cached",
+            json!(design.cases.iter().filter(|c| c.entry.cached).count()),
+        );
         Ok(assemble_output(p, &design, &surfaces, optimum))
     }
 }
@@ -1436,7 +1441,6 @@ fn assemble_output(
     let mut case_keys: Vec<String> = design.cases.iter().map(|c| c.entry.key.clone()).collect();
     let mut result = json!({
         "cases": total,
-        "cases_cached": design.cases.iter().filter(|c| c.entry.cached).count(),
         "fits": surfaces.fits.iter().map(fit_summary).collect::<Vec<_>>(),
         "tables": ["design", "coefficients", "anova", "predictive_equations"],
     });

@@ -58,9 +58,20 @@ pub struct StageContext<'a> {
     pub store: &'a Store,
     /// Where the stage reports what it is doing (`ctx.progress.set_message(…)`).
     pub progress: &'a dyn crate::core::progress::Progress,
+    /// Facts about this run rather than results (how many cases came from the cache): they
+    /// depend on what the store already held and on timing, so they go to the entry's
+    /// `manifest.json` (`run_log`), never into `result.json` (docs/architecture.md).
+    pub run_log: std::sync::Mutex<BTreeMap<String, Value>>,
 }
 
 impl StageContext<'_> {
+    /// Record a run fact (see [`StageContext::run_log`]).
+    pub fn log_run(&self, key: &str, value: Value) {
+        if let Ok(mut log) = self.run_log.lock() {
+            log.insert(key.to_string(), value);
+        }
+    }
+
     /// The cache key of the consumed instance `name` (empty when it is not upstream): case
     /// keys include the keys of the entries their inputs came from.
     pub fn upstream_key(&self, name: &str) -> String {

@@ -408,7 +408,12 @@ impl StageKind for SimulateStage {
         ctx.progress
             .set_message("touchdown refinement, sweep metrics, tables, plots");
         let case_keys: Vec<String> = all.iter().map(|c| c.entry.key.clone()).collect();
-        let cached = all.iter().filter(|c| c.entry.cached).count();
+        // How many came from the store is a fact of this run, not a result (it depends on
+        // what ran before and, for cases two branches share, on timing): manifest only.
+        ctx.log_run(
+            "cases_cached",
+            json!(all.iter().filter(|c| c.entry.cached).count()),
+        );
         let mut all = all.into_iter();
         let mut runs: Vec<BranchRun> = Vec::new();
         for (branch, start) in branches.iter().zip(&starts) {
@@ -538,7 +543,6 @@ impl StageKind for SimulateStage {
                 "actuation_m": c.actuation, "branch": branch_name(r.branch), "h5": f, "metrics": c.metrics,
             }))).collect::<Vec<_>>(),
             "case_keys": case_keys,
-            "cases_cached": cached,
             "calibration": p.calibration,
             "calibrated_knobs": p.calibrated_knobs.iter().map(|(k, v)| json!({"knob": k, "value": v})).collect::<Vec<_>>(),
             "table": "sweep.parquet",
