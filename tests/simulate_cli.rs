@@ -88,7 +88,10 @@ fn pipeline_sweep_caches_each_case() {
         (keys.len() - unique.len()) as u64
     };
     assert!(cases_cached(&p.processed().join("improved_sweep")) <= shared(&first));
-    assert!(first.get("cases_cached").is_none(), "a run fact in the results");
+    assert!(
+        first.get("cases_cached").is_none(),
+        "a run fact in the results"
+    );
     let branches: Vec<&str> = first["cases"]
         .as_array()
         .unwrap()

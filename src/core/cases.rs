@@ -102,7 +102,13 @@ where
         return Err(CaseError::io(path, e).into());
     }
     store
-        .commit(&work, "case", &fp, started.elapsed().as_secs_f64(), Default::default())
+        .commit(
+            &work,
+            "case",
+            &fp,
+            started.elapsed().as_secs_f64(),
+            Default::default(),
+        )
         .map_err(|e| CaseError::io(store.entry_dir(CASE_KIND, &key), e))?;
     Ok(CaseEntry {
         dir: store.entry_dir(CASE_KIND, &key),
