@@ -48,54 +48,19 @@ fn print_table(areas: &[(&'static str, Vec<&Row>)]) {
             "", "id", "cl", "quantity", "target", "hdi", "calibrated", "tolerance"
         );
         for r in rows {
-            let status = match (r.pass(), r.class) {
-                (true, _) => "pass",
-                (false, Class::D) => "differs",
-                (false, Class::Q) => "no",
-                (false, _) => "FAIL",
-            };
-            let unit = if r.unit == "1" || r.unit.is_empty() {
-                String::new()
-            } else {
-                format!(" {}", r.unit)
-            };
-            let (target, value, tol) = match &r.ordering {
-                Some(o) => (String::new(), String::new(), o.describe()),
-                None => (
-                    fmt_number(r.target),
-                    fmt_number(r.value),
-                    r.tolerance.short(),
-                ),
-            };
-            let cal = r.calibrated.as_ref().map_or(String::new(), |c| {
-                format!(
-                    "{}{}",
-                    fmt_number(c.value),
-                    if r.calibrated_pass() == Some(true) {
-                        "✓"
-                    } else {
-                        ""
-                    }
-                )
-            });
-            let mut tail = vec![r.origin.short()];
-            if !r.variant.is_empty() {
-                tail.push(r.variant.clone());
-            }
-            if !r.note.is_empty() {
-                tail.push(r.note.clone());
-            }
+            let c = r.cells(fmt_number);
+            let unit = c.unit.map_or(String::new(), |u| format!(" {u}"));
             println!(
                 "{:<7} {:<22} {:<2} {:<62} {:>12} {:>12} {:>12} {:>10}  {}",
-                status,
+                r.verdict(),
                 r.id,
                 r.class.label(),
                 format!("{}{}", r.quantity, unit),
-                target,
-                value,
-                cal,
-                tol,
-                tail.join(" — ")
+                c.target,
+                c.value,
+                c.calibrated,
+                c.tolerance,
+                c.notes
             );
         }
     }

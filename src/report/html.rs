@@ -3,7 +3,7 @@
 //! pipeline file or a result goes through [`esc`].
 
 use super::{Instance, Page};
-use crate::validation::{class_counts, Class, Row};
+use crate::validation::{class_counts, Row};
 use serde_json::Value;
 use std::fmt::Write;
 
@@ -380,13 +380,10 @@ fn instance_body(h: &mut String, inst: &Instance) {
 }
 
 /// The row's status word, as `hdi validate` prints it: pass, differs (D), no (Q), FAIL.
-fn verdict(r: &Row) -> (&'static str, &'static str) {
-    match (r.pass(), r.class) {
-        (true, _) => ("v-pass", "pass"),
-        (false, Class::D) => ("v-differs", "differs"),
-        (false, Class::Q) => ("v-no", "no"),
-        (false, _) => ("v-fail", "FAIL"),
-    }
+/// The row's CSS class and status word (`Row::verdict`).
+fn verdict(r: &Row) -> (String, &'static str) {
+    let word = r.verdict();
+    (format!("v-{}", word.to_lowercase()), word)
 }
 
 fn validation(h: &mut String, p: &Page) {
@@ -442,33 +439,8 @@ fn validation(h: &mut String, p: &Page) {
             Ok(rows) => {
                 for r in rows {
                     let (cls, word) = verdict(r);
-                    let unit = if r.unit == "1" || r.unit.is_empty() {
-                        String::new()
-                    } else {
-                        format!(" [{}]", r.unit)
-                    };
-                    let (target, value, tol) = match &r.ordering {
-                        Some(o) => (String::new(), String::new(), o.describe()),
-                        None => (num(r.target), num(r.value), r.tolerance.short()),
-                    };
-                    let cal = r.calibrated.as_ref().map_or(String::new(), |c| {
-                        format!(
-                            "{}{}",
-                            num(c.value),
-                            if r.calibrated_pass() == Some(true) {
-                                " ✓"
-                            } else {
-                                ""
-                            }
-                        )
-                    });
-                    let mut tail = vec![r.origin.short()];
-                    if !r.variant.is_empty() {
-                        tail.push(r.variant.clone());
-                    }
-                    if !r.note.is_empty() {
-                        tail.push(r.note.clone());
-                    }
+                    let c = r.cells(num);
+                    let unit = c.unit.as_ref().map_or(String::new(), |u| format!(" [{u}]"));
                     let _ = writeln!(
                         h,
                         "<tr class=\"{cls}\" data-id=\"{id}\" data-area=\"{area}\" data-pass=\"{pass}\">\
@@ -483,11 +455,11 @@ fn validation(h: &mut String, p: &Page) {
                         reference = esc(&r.reference),
                         quantity = esc(&r.quantity),
                         unit = esc(&unit),
-                        target = esc(&target),
-                        value = esc(&value),
-                        cal = esc(&cal),
-                        tol = esc(&tol),
-                        tail = esc(&tail.join(" — ")),
+                        target = esc(&c.target),
+                        value = esc(&c.value),
+                        cal = esc(&c.calibrated),
+                        tol = esc(&c.tolerance),
+                        tail = esc(&c.notes),
                     );
                 }
             }

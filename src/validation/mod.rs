@@ -309,6 +309,21 @@ pub struct Row {
     pub note: String,
 }
 
+/// A row as the cells of a table ([`Row::cells`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RowCells {
+    /// `None` for a dimensionless quantity.
+    pub unit: Option<String>,
+    /// Empty for an ordering row (its relation is the tolerance cell).
+    pub target: String,
+    pub value: String,
+    /// The calibrated value, `✓` when within tolerance; empty without one.
+    pub calibrated: String,
+    pub tolerance: String,
+    /// Origin, variant and note, joined by ` — `.
+    pub notes: String,
+}
+
 impl Row {
     /// A row with a numeric target; reference, variant, inputs and note are set with the
     /// builder methods.
@@ -413,6 +428,49 @@ impl Row {
         match &self.ordering {
             Some(o) => o.holds(),
             None => self.tolerance.holds(self.target, self.value),
+        }
+    }
+
+    /// The row's status word: `pass`, `differs` (a class-D miss), `no` (a Q ordering that does
+    /// not hold) or `FAIL`.
+    pub fn verdict(&self) -> &'static str {
+        match (self.pass(), self.class) {
+            (true, _) => "pass",
+            (false, Class::D) => "differs",
+            (false, Class::Q) => "no",
+            (false, _) => "FAIL",
+        }
+    }
+
+    /// The row as table cells, numbers written by `num` (shared by `hdi validate`'s table and
+    /// the HTML report, so both read the same).
+    pub fn cells(&self, num: impl Fn(f64) -> String) -> RowCells {
+        let (target, value, tolerance) = match &self.ordering {
+            Some(o) => (String::new(), String::new(), o.describe()),
+            None => (num(self.target), num(self.value), self.tolerance.short()),
+        };
+        let calibrated = self.calibrated.as_ref().map_or(String::new(), |c| {
+            let mark = if self.calibrated_pass() == Some(true) {
+                " ✓"
+            } else {
+                ""
+            };
+            format!("{}{mark}", num(c.value))
+        });
+        let mut notes = vec![self.origin.short()];
+        if !self.variant.is_empty() {
+            notes.push(self.variant.clone());
+        }
+        if !self.note.is_empty() {
+            notes.push(self.note.clone());
+        }
+        RowCells {
+            unit: (self.unit != "1" && !self.unit.is_empty()).then(|| self.unit.clone()),
+            target,
+            value,
+            calibrated,
+            tolerance,
+            notes: notes.join(" — "),
         }
     }
 
