@@ -23,9 +23,10 @@ pub(crate) fn esc(s: &str) -> String {
     o
 }
 
-/// The unit a column or key name carries in its suffix (docs/conventions.md: `_nm`, `_m`,
-/// `_Hz`, `_mW`, …), written for people; `""` for none. Statistic suffixes after the unit
-/// (`sigma_nm_mean`) are looked through.
+/// The unit a column or key name carries in its suffix, written for people (`um^2` → `µm²`);
+/// `""` for none. The suffixes are the tables' own (`core::store::unit_of_column`,
+/// docs/tables.md); statistic suffixes after the unit (`sigma_nm_mean`, `…_ci95_low`) are
+/// looked through.
 pub(crate) fn unit_of(name: &str) -> String {
     const STATS: &[&str] = &["mean", "std", "low", "high", "min", "max", "median", "se"];
     let mut parts: Vec<&str> = name.split('_').collect();
@@ -35,40 +36,18 @@ pub(crate) fn unit_of(name: &str) -> String {
             parts.pop();
         }
     }
-    if parts.len() < 2 {
+    let Some(unit) = crate::core::store::unit_of_column(&parts.join("_")) else {
         return String::new();
-    }
-    // `…_nm_per_mW` → nm/mW, `eta_per_um2` → 1/µm².
-    let n = parts.len();
-    if n >= 3 && parts[n - 2] == "per" {
-        let Some(b) = pretty(parts[n - 1]) else {
-            return String::new();
-        };
-        return match (n >= 4).then(|| pretty(parts[n - 3])).flatten() {
-            Some(a) => format!("{a}/{b}"),
-            None => format!("1/{b}"),
-        };
-    }
-    pretty(parts[n - 1]).unwrap_or_default()
-}
-
-/// A unit suffix as people write it, or `None` if the suffix is not a unit.
-fn pretty(s: &str) -> Option<String> {
-    let u = match s {
-        "m" | "nm" | "mm" | "s" | "ms" | "Hz" | "kHz" | "MHz" | "W" | "mW" | "N" | "mN" | "Pa"
-        | "kPa" | "MPa" | "GPa" | "J" | "K" | "V" | "rad" | "kg" | "rpm" => s.to_string(),
-        "um" => "µm".into(),
-        "us" => "µs".into(),
-        "uN" => "µN".into(),
-        "m2" => "m²".into(),
-        "um2" => "µm²".into(),
-        "nm2" => "nm²".into(),
-        "hz" => "Hz".into(),
-        "percent" | "pct" => "%".into(),
-        "deg" => "°".into(),
-        _ => return None,
     };
-    Some(u)
+    // ASCII `u` for micro and `^2` (as UDUNITS writes them) in typographic form.
+    unit.split('/')
+        .map(|u| match u.strip_prefix('u') {
+            Some(rest) if rest.starts_with(|c: char| c.is_ascii_alphabetic()) => format!("µ{rest}"),
+            _ => u.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join("/")
+        .replace("^2", "²")
 }
 
 /// A number for people: six significant digits, scientific when very small or large.

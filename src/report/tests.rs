@@ -91,6 +91,9 @@ fn units_come_from_the_name_suffix() {
     assert_eq!(unit_of("Ssk"), "");
     assert_eq!(unit_of("n_summits"), "");
     assert_eq!(unit_of("fhm_percent"), "%");
+    // Velocities: `_mm_s` is mm/s, not seconds (the tables' suffix list decides).
+    assert_eq!(unit_of("velocity_std_mm_s"), "mm/s");
+    assert_eq!(unit_of("noise_floor_um_s"), "µm/s");
 }
 
 #[test]
