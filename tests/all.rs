@@ -3,6 +3,7 @@ mod analysis_cli;
 mod architecture;
 mod arrow_tables;
 mod bad_input;
+mod bench_cli;
 mod bulge_cli;
 mod calibrate_cli;
 mod common;

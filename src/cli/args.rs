@@ -139,12 +139,33 @@ pub enum Command {
         #[arg(long)]
         no_index: bool,
     },
-    /// Print benchmark figures (surfaces stage on a 1024² map; no-op cached rerun).
+    /// Print benchmark figures with units, repeats and statistic: surfaces stage, 2-DOF µs per
+    /// step, 76-case sweep, one 3-DOF case, CWT, Hann spectrum, roughness, no-op rerun and
+    /// (`--main-job`) the shipped pipeline cold (docs/performance.md, bench/README.md).
     Bench {
         #[arg(long, default_value = "pipeline.toml")]
         config: PathBuf,
+        /// Side of the synthetic square map (surfaces, roughness), pixels.
         #[arg(long, default_value_t = 1024)]
         size: usize,
+        /// Print one JSON document (docs/schemas/bench.json) instead of the table.
+        #[arg(long)]
+        json: bool,
+        /// Run only these groups: surfaces, two-dof, sweep, three-dof, cwt, fft, roughness,
+        /// noop, main-job (comma-separated).
+        #[arg(long, value_delimiter = ',')]
+        only: Vec<String>,
+        /// Also run CONFIG (and the raw/ beside it) cold in a temp dir and print its per-stage
+        /// wall times (takes as long as the main job).
+        #[arg(long)]
+        main_job: bool,
+        /// Time the one kernel of `--only cwt|fft|roughness` on this float `.npy` array (1-D
+        /// signal at 4 MS/s, or 2-D map over 4 µm) instead of the built-in input.
+        #[arg(long)]
+        input: Option<PathBuf>,
+        /// Timed repeats per figure after the warm-up (default 3–5 by figure).
+        #[arg(long)]
+        repeat: Option<usize>,
         /// Instead: time every binary height-map and LDV reader on the files under these
         /// directories (MB/s, peak memory), e.g. `--readers tests/data`.
         #[arg(long, num_args = 1..)]

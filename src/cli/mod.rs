@@ -77,12 +77,25 @@ pub fn main() -> Result<()> {
         Command::Bench {
             config,
             size,
+            json,
+            only,
+            main_job,
+            input,
+            repeat,
             readers,
             read_one,
         } => match (read_one, readers.is_empty()) {
             (Some(file), _) => bench_readers::read_one(&file),
             (None, false) => bench_readers::bench_readers(&readers),
-            (None, true) => bench::cmd_bench(&config, size),
+            (None, true) => bench::cmd_bench(bench::BenchOptions {
+                config,
+                size,
+                json,
+                only,
+                main_job,
+                input,
+                repeat,
+            }),
         },
         Command::Report {
             config,
