@@ -79,6 +79,11 @@ def numpy_spectrum(x):
     return a
 
 
+def say(msg):
+    """Progress on stderr: the table comes at the end, a round can take a minute."""
+    print(msg, file=sys.stderr, flush=True)
+
+
 def timed(fn):
     t = time.perf_counter()
     fn()
@@ -117,7 +122,8 @@ def main():
         if "two-dof" in only:
             best_h = {}
             best_s = {}
-            for _ in range(n):
+            for k in range(n):
+                say(f"two-dof round {k + 1}/{n}")
                 f = hdi_figures(a.hdi, ["--only", "two-dof"])
                 for h in ("8.5", "12"):
                     fig = f[f"two_dof_{h}nm_us_per_step"]
@@ -150,7 +156,8 @@ def main():
             freqs = np.geomspace(5e3, 1e6, 100)
             scales = 1.0 * FS / freqs
             bh, ba = math.inf, math.inf
-            for _ in range(n):
+            for k in range(n):
+                say(f"cwt round {k + 1}/{n}")
                 f = hdi_figures(a.hdi, ["--only", "cwt", "--input", sig6])
                 bh = min(bh, f["cwt_morlet_100_frequencies"]["value"])
                 ba = min(ba, timed(lambda: pywt.cwt(
@@ -161,7 +168,8 @@ def main():
         if "fft" in only:
             x = np.load(sig7)
             bh, ba = math.inf, math.inf
-            for _ in range(n):
+            for k in range(n):
+                say(f"fft round {k + 1}/{n}")
                 f = hdi_figures(a.hdi, ["--only", "fft", "--input", sig7])
                 bh = min(bh, f["hann_amplitude_spectrum"]["value"])
                 ba = min(ba, timed(lambda: numpy_spectrum(x)))
@@ -172,7 +180,8 @@ def main():
             script = os.path.join(HERE, "roughness_surfacetopography.py")
             bh, ba = math.inf, math.inf
             note = "SurfaceTopography (bench/roughness_surfacetopography.py)"
-            for _ in range(n):
+            for k in range(n):
+                say(f"roughness round {k + 1}/{n}")
                 f = hdi_figures(a.hdi, ["--only", "roughness", "--input", mp])
                 bh = min(bh, f["roughness_default"]["value"])
                 if not os.path.exists(script):

@@ -69,7 +69,27 @@ impl Out {
                 ("best", None) => format!("best of {}", f.repeats),
                 _ => "single run".to_string(),
             };
-            println!("{:<62} {:>10} {:<8} {stat}", f.label, fmt(f.value), f.unit);
+            // The counts behind the figure (steps, RHS evaluations, ms per case, …).
+            let counts: Vec<String> = f
+                .details
+                .iter()
+                .filter_map(|(k, v)| match v {
+                    Value::Number(x) if x.is_f64() => Some(format!("{k} {}", fmt(x.as_f64()?))),
+                    Value::Number(x) => Some(format!("{k} {x}")),
+                    _ => None,
+                })
+                .collect();
+            let counts = if counts.is_empty() {
+                String::new()
+            } else {
+                format!("; {}", counts.join(", "))
+            };
+            println!(
+                "{:<62} {:>10} {:<8} {stat}{counts}",
+                f.label,
+                fmt(f.value),
+                f.unit
+            );
         }
         self.figures.push(f);
     }
