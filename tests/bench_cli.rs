@@ -58,28 +58,57 @@ fn bench_kernels_on_given_npy_inputs_report_their_sizes() {
     write_arrays(dir.path());
     let p = |f: &str| dir.path().join(f).to_string_lossy().into_owned();
 
-    let v = bench_json(dir.path(), &["--only", "fft", "--input", &p("sig.npy"), "--repeat", "2"]);
+    let v = bench_json(
+        dir.path(),
+        &["--only", "fft", "--input", &p("sig.npy"), "--repeat", "2"],
+    );
     assert_eq!(v["input"], p("sig.npy"));
     let f = only_figure(&v);
     assert_eq!(f["group"], "fft");
     assert_eq!(f["details"]["samples"], 4096);
     assert_eq!(f["unit"], "s");
-    assert_eq!((f["statistic"].as_str(), f["repeats"].as_u64()), (Some("best"), Some(2)));
+    assert_eq!(
+        (f["statistic"].as_str(), f["repeats"].as_u64()),
+        (Some("best"), Some(2))
+    );
     // best ≤ median by definition of both.
     assert!(f["value"].as_f64().unwrap() <= f["median"].as_f64().unwrap());
 
-    let v = bench_json(dir.path(), &["--only", "cwt", "--input", &p("sig.npy"), "--repeat", "1"]);
+    let v = bench_json(
+        dir.path(),
+        &["--only", "cwt", "--input", &p("sig.npy"), "--repeat", "1"],
+    );
     let f = only_figure(&v);
     assert_eq!(f["group"], "cwt");
     assert_eq!(f["details"]["samples"], 4096);
     assert_eq!(f["details"]["frequencies"], 100);
 
-    let v = bench_json(dir.path(), &["--only", "roughness", "--input", &p("map.npy"), "--repeat", "1"]);
+    let v = bench_json(
+        dir.path(),
+        &[
+            "--only",
+            "roughness",
+            "--input",
+            &p("map.npy"),
+            "--repeat",
+            "1",
+        ],
+    );
     let f = only_figure(&v);
     assert_eq!(f["details"]["pixels"], 64 * 48);
     assert!(f["label"].as_str().unwrap().contains("64×48"), "{f}");
     // A float32 Fortran-order array keeps numpy's (rows, columns) shape.
-    let v = bench_json(dir.path(), &["--only", "roughness", "--input", &p("map_f.npy"), "--repeat", "1"]);
+    let v = bench_json(
+        dir.path(),
+        &[
+            "--only",
+            "roughness",
+            "--input",
+            &p("map_f.npy"),
+            "--repeat",
+            "1",
+        ],
+    );
     let f = only_figure(&v);
     assert!(f["label"].as_str().unwrap().contains("40×24"), "{f}");
 }
@@ -87,13 +116,20 @@ fn bench_kernels_on_given_npy_inputs_report_their_sizes() {
 #[test]
 fn bench_slider_figures_are_per_accepted_step() {
     let dir = tempfile::tempdir().unwrap();
-    let v = bench_json(dir.path(), &["--only", "two-dof,three-dof", "--repeat", "1"]);
+    let v = bench_json(
+        dir.path(),
+        &["--only", "two-dof,three-dof", "--repeat", "1"],
+    );
     assert!(v["input"].is_null());
     let figs = v["figures"].as_array().unwrap();
     let names: Vec<&str> = figs.iter().map(|f| f["name"].as_str().unwrap()).collect();
     assert_eq!(
         names,
-        ["two_dof_8.5nm_us_per_step", "two_dof_12nm_us_per_step", "three_dof_12nm_case"]
+        [
+            "two_dof_8.5nm_us_per_step",
+            "two_dof_12nm_us_per_step",
+            "three_dof_12nm_case"
+        ]
     );
     for f in &figs[..2] {
         assert_eq!(f["unit"], "µs/step");
@@ -125,7 +161,10 @@ fn bench_main_job_runs_the_pipeline_cold_and_logs_every_stage() {
     let figs = v["figures"].as_array().unwrap();
     let cold = &figs[0];
     assert_eq!(cold["name"], "main_job_cold");
-    assert_eq!((cold["statistic"].as_str(), cold["repeats"].as_u64()), (Some("single"), Some(1)));
+    assert_eq!(
+        (cold["statistic"].as_str(), cold["repeats"].as_u64()),
+        (Some("single"), Some(1))
+    );
     assert!(cold["median"].is_null());
     // Every stage instance `hdi status` lists ran once, and has its wall time.
     let st = p.run(&["status", "--json"]);
@@ -144,7 +183,10 @@ fn bench_main_job_runs_the_pipeline_cold_and_logs_every_stage() {
     assert_eq!(cold["details"]["stages_ran"], want.len());
     // No stage took longer than the whole run.
     let total = cold["value"].as_f64().unwrap();
-    assert!(walls.values().all(|t| t.as_f64().unwrap() <= total), "{cold}");
+    assert!(
+        walls.values().all(|t| t.as_f64().unwrap() <= total),
+        "{cold}"
+    );
     assert_eq!(figs.last().unwrap()["name"], "main_job_noop_rerun");
 }
 
@@ -153,16 +195,41 @@ fn bench_bad_options_and_inputs_fail_cleanly() {
     let dir = tempfile::tempdir().unwrap();
     write_arrays(dir.path());
     let p = |f: &str| dir.path().join(f).to_string_lossy().into_owned();
-    let run = |args: &[&str]| hdi().current_dir(dir.path()).arg("bench").args(args).output().unwrap();
+    let run = |args: &[&str]| {
+        hdi()
+            .current_dir(dir.path())
+            .arg("bench")
+            .args(args)
+            .output()
+            .unwrap()
+    };
     assert_clean_failure(&run(&["--only", "fft,warp"]), "unknown group `warp`");
     assert_clean_failure(
         &run(&["--only", "fft,cwt", "--input", &p("sig.npy")]),
         "exactly one of",
     );
-    assert_clean_failure(&run(&["--only", "fft", "--input", &p("nope.npy")]), "nope.npy");
-    assert_clean_failure(&run(&["--only", "fft", "--input", &p("ints.npy")]), "float64 or float32");
-    assert_clean_failure(&run(&["--only", "fft", "--input", &p("bad.npy")]), "value 7 is not finite");
-    assert_clean_failure(&run(&["--only", "fft", "--input", &p("map.npy")]), "1-D signal");
-    assert_clean_failure(&run(&["--only", "roughness", "--input", &p("sig.npy")]), "2-D map");
-    assert_clean_failure(&run(&["--only", "main-job", "--config", "absent.toml"]), "absent.toml");
+    assert_clean_failure(
+        &run(&["--only", "fft", "--input", &p("nope.npy")]),
+        "nope.npy",
+    );
+    assert_clean_failure(
+        &run(&["--only", "fft", "--input", &p("ints.npy")]),
+        "float64 or float32",
+    );
+    assert_clean_failure(
+        &run(&["--only", "fft", "--input", &p("bad.npy")]),
+        "value 7 is not finite",
+    );
+    assert_clean_failure(
+        &run(&["--only", "fft", "--input", &p("map.npy")]),
+        "1-D signal",
+    );
+    assert_clean_failure(
+        &run(&["--only", "roughness", "--input", &p("sig.npy")]),
+        "2-D map",
+    );
+    assert_clean_failure(
+        &run(&["--only", "main-job", "--config", "absent.toml"]),
+        "absent.toml",
+    );
 }
