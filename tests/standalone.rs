@@ -22,6 +22,10 @@ fn files_under(dir: &Path, out: &mut Vec<PathBuf>) {
     let entries = std::fs::read_dir(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
     for entry in entries {
         let path = entry.unwrap().path();
+        // bench/.venv (made by bench/compare.sh) is installed packages, not the project's files.
+        if path.is_dir() && path.file_name().is_some_and(|n| n == ".venv") {
+            continue;
+        }
         if path.is_dir() {
             files_under(&path, out);
         } else {
