@@ -335,14 +335,22 @@ fn read_npy_map(path: &Path, size_m: f64) -> Result<HeightMap> {
     }
     let z = ndarray::Array2::from_shape_vec((shape[0], shape[1]), values)
         .with_context(|| format!("{}: shape", path.display()))?;
-    let mut map = synthetic_map(8);
     let dx = size_m / shape[1] as f64;
-    map.z = z;
-    map.dx = dx;
-    map.dy = dx;
-    map.channel = "height".into();
-    map.source.format = "npy".into();
-    Ok(map)
+    Ok(HeightMap {
+        z,
+        dx,
+        dy: dx,
+        x0: 0.0,
+        y0: 0.0,
+        channel: "height".into(),
+        valid: None,
+        periodic: false,
+        source: hdi::surface::SourceInfo {
+            format: "npy".into(),
+            header: Default::default(),
+        },
+        history: Vec::new(),
+    })
 }
 
 /// The surfaces stage on a synthetic map written as `.gwy` (read + level + roughness + scale
