@@ -207,6 +207,12 @@ pub(super) fn cmd_bench(o: BenchOptions) -> Result<()> {
     }
     if wanted("main-job") {
         bench_main_job(&mut out, &o.config, n(4))?;
+    } else if !o.json && o.only.is_empty() {
+        // Not estimated: a figure of the main job is a measured cold run or nothing.
+        println!(
+            "main job cold: not run (add --main-job: it runs {} cold in a temp dir, minutes)",
+            o.config.display()
+        );
     }
     if o.json {
         let figures: Vec<Value> = out
