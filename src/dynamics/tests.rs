@@ -714,9 +714,7 @@ fn poc_frame_is_bit_identical_to_the_general_geometry() {
                 assert_eq!(fast.lever_arm.z.to_bits(), slow.lever_arm.z.to_bits());
                 assert_eq!(fast.body, slow.body);
                 assert_eq!(
-                    frame
-                        .spacing_rate(&fast, &tr, z_rate, pitch_rate)
-                        .to_bits(),
+                    frame.spacing_rate(&fast, &tr, z_rate, pitch_rate).to_bits(),
                     slow.spacing_rate(pitch, z_rate, pitch_rate, 0.0).to_bits()
                 );
                 let te = g.trailing_edge();
