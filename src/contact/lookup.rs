@@ -247,31 +247,12 @@ impl IsblLookup {
     /// (`P⁻¹`, monotone inversion of the table; eq. 2.16): `None` for `pressure ≤ 0`
     /// or NaN; a pressure above the table's largest is clamped to its deepest node.
     pub fn separation_for_pressure(&self, pressure: f64) -> Option<f64> {
-        self.separation_for_pressure_from(pressure, None)
-    }
-
-    /// [`IsblLookup::separation_for_pressure`] with the table cell of a previous call as the
-    /// search start (`hint`, updated in place): the same separation, bit for bit
-    /// ([`ForceTable::invert_decreasing_from`]).
-    pub fn separation_for_pressure_from(
-        &self,
-        pressure: f64,
-        hint: Option<&std::cell::Cell<usize>>,
-    ) -> Option<f64> {
         if pressure.is_nan() || pressure <= 0.0 {
             return None;
         }
         let (lo, hi) = self.table.range();
-        let x = match self
-            .table
-            .invert_decreasing_from(P, pressure, hint.map(|h| h.get()))
-        {
-            Some((x, cell)) => {
-                if let Some(h) = hint {
-                    h.set(cell);
-                }
-                x
-            }
+        let x = match self.table.invert_decreasing(P, pressure) {
+            Some(x) => x,
             None if pressure >= self.table.eval(P, lo)? => lo,
             None => hi,
         };

@@ -253,20 +253,6 @@ impl ForceTable {
     /// bisection. `None` for an unknown channel or a `y` outside the tabulated values (the
     /// caller clamps). Used for `P⁻¹` (friction from a dynamic contact force, eq. 2.16).
     pub fn invert_decreasing(&self, c: usize, y: f64) -> Option<f64> {
-        self.invert_decreasing_from(c, y, None).map(|(x, _)| x)
-    }
-
-    /// [`ForceTable::invert_decreasing`] with the cell search started at `hint` (the cell of a
-    /// previous call, returned beside the abscissa): a short walk to the same cell the binary
-    /// search finds — the largest node `i ≤ n − 2` with `value[i] ≥ y`, unique for a monotone
-    /// channel — so the result is identical bit for bit. Consecutive right-hand-side calls
-    /// invert nearby pressures (docs/performance.md).
-    pub fn invert_decreasing_from(
-        &self,
-        c: usize,
-        y: f64,
-        hint: Option<usize>,
-    ) -> Option<(f64, usize)> {
         let ch = self.channels.get(c)?;
         let target = match ch.interp {
             Interp::Log if y > 0.0 => y.ln(),
@@ -277,34 +263,17 @@ impl ForceTable {
         if !(target <= v[0] && target >= v[self.n - 1]) {
             return None;
         }
-        // Largest i ≤ n − 2 with v[i] ≥ target (v decreasing; v[0] ≥ target checked above).
-        let i = match hint {
-            Some(h) => {
-                let mut i = h.min(self.n - 2);
-                if v[i] >= target {
-                    while i + 1 <= self.n - 2 && v[i + 1] >= target {
-                        i += 1;
-                    }
-                } else {
-                    while v[i] < target {
-                        i -= 1;
-                    }
-                }
-                i
+        // Largest i with v[i] ≥ target (v decreasing).
+        let (mut lo, mut hi) = (0usize, self.n - 1);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if v[mid] >= target {
+                lo = mid;
+            } else {
+                hi = mid;
             }
-            None => {
-                let (mut lo, mut hi) = (0usize, self.n - 1);
-                while hi - lo > 1 {
-                    let mid = (lo + hi) / 2;
-                    if v[mid] >= target {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
-                }
-                lo
-            }
-        };
+        }
+        let i = lo;
         let cell = |s: f64| hermite_segment(v[i], v[i + 1], ch.slope_dx[i], ch.slope_dx[i + 1], s);
         let (mut a, mut b) = (0.0f64, 1.0f64);
         let span = v[i] - v[i + 1];
@@ -335,7 +304,7 @@ impl ForceTable {
                 break;
             }
         }
-        Some((self.x0 + (i as f64 + s) * self.dx, i))
+        Some(self.x0 + (i as f64 + s) * self.dx)
     }
 
     /// Largest node value of a channel (for relative floors).

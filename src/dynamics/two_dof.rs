@@ -550,32 +550,21 @@ impl<'a> TwoDofCase<'a> {
     /// The interface at state `y` and time `t`.
     #[cfg(test)]
     fn interface(&self, t: f64, y: &[f64; 4]) -> Result<InterfaceState, DynamicsError> {
-        self.interface_of(self.poc_kinematics(t, y)?, true, None)
+        self.interface_of(self.poc_kinematics(t, y)?, true)
     }
 
     /// The interface at state `y` and time `t` and the TE spacing (one sample's outputs).
-    fn sample(
-        &self,
-        t: f64,
-        y: &[f64; 4],
-        cell_hint: Option<&Cell<usize>>,
-    ) -> Result<(InterfaceState, f64), DynamicsError> {
+    fn sample(&self, t: f64, y: &[f64; 4]) -> Result<(InterfaceState, f64), DynamicsError> {
         let tr = self.poc_frame.pitch_terms(self.model.nominal_pitch + y[1]);
-        let i = self.interface_of(self.poc_kinematics_with(t, y, &tr)?, true, cell_hint)?;
+        let i = self.interface_of(self.poc_kinematics_with(t, y, &tr)?, true)?;
         Ok((i, self.trailing_edge_spacing(t, y, &tr)))
     }
 
     /// The interface at POC kinematics `k`. With `full = false` (the right-hand side) the
     /// real area is left at 0: the equations of motion do not use it, and skipping its
     /// lookup saves an `exp` per call; every other field is the same, bit for bit.
-    /// `cell_hint`: the `P⁻¹` table cell of the previous call (the same result, found faster).
     #[inline]
-    fn interface_of(
-        &self,
-        k: PocKinematics,
-        full: bool,
-        cell_hint: Option<&Cell<usize>>,
-    ) -> Result<InterfaceState, DynamicsError> {
+    fn interface_of(&self, k: PocKinematics, full: bool) -> Result<InterfaceState, DynamicsError> {
         let (spacing, spacing_rate) = (k.spacing, k.spacing_rate);
         let clearance = self.criterion.clearance(spacing, self.sigma);
         let area = self.nominal_area;
@@ -602,10 +591,7 @@ impl<'a> TwoDofCase<'a> {
         let (mut friction, mut real_area) = (0.0, 0.0);
         if contact_force > 0.0 {
             // Quasi-static equivalence P(h*) = F_c / A_n (eq. 2.16).
-            if let Some(h_star) = self
-                .isbl
-                .separation_for_pressure_from(contact_force / area, cell_hint)
-            {
+            if let Some(h_star) = self.isbl.separation_for_pressure(contact_force / area) {
                 let at = self.isbl.at_lazy(h_star).map_err(numerical)?;
                 friction = area * at.friction();
                 if full {
@@ -639,7 +625,7 @@ impl<'a> TwoDofCase<'a> {
 
     /// `y' = f(t, y)`.
     fn rhs(&self, t: f64, y: &[f64; 4], dy: &mut [f64; 4]) -> Result<(), DynamicsError> {
-        self.rhs_cached(t, y, dy, None, None)
+        self.rhs_cached(t, y, dy, None)
     }
 
     /// [`Self::rhs`], leaving the POC kinematics of `(t, y)` in `cache` for the step cap:
@@ -651,7 +637,6 @@ impl<'a> TwoDofCase<'a> {
         y: &[f64; 4],
         dy: &mut [f64; 4],
         cache: Option<&Cell<KinematicsCache>>,
-        cell_hint: Option<&Cell<usize>>,
     ) -> Result<(), DynamicsError> {
         let state = HeavePitchState {
             heave: y[0],
@@ -678,7 +663,7 @@ impl<'a> TwoDofCase<'a> {
                 kinematics: kinematics.as_ref().ok().copied(),
             });
         }
-        let i = match kinematics.and_then(|k| self.interface_of(k, false, cell_hint)) {
+        let i = match kinematics.and_then(|k| self.interface_of(k, false)) {
             Ok(i) => i,
             // A trial stage of a step the controller will reject can leave the geometry's
             // domain (e.g. a pitch of radians): NaN makes the integrator shrink the step.
@@ -880,9 +865,7 @@ impl<'a> TwoDofCase<'a> {
         }
         let mut sample_error: Option<DynamicsError> = None;
         let mut ab_lost: Option<(f64, f64)> = None;
-        // The P⁻¹ table cell of the last call: every call of this run starts its search there.
-        let cell_hint = Cell::new(0usize);
-        let observer = |t: f64, y: &[f64; 4]| match self.sample(t, y, Some(&cell_hint)) {
+        let observer = |t: f64, y: &[f64; 4]| match self.sample(t, y) {
             Ok((i, te_spacing)) => {
                 let te_fh = self.flying_height(te_spacing);
                 if te_fh > AB_LOSS_FLYING_HEIGHT && ab_lost.is_none() {
@@ -923,9 +906,7 @@ impl<'a> TwoDofCase<'a> {
             start[1] += q[1];
         }
         let cache = Cell::new(KinematicsCache::EMPTY);
-        let rhs = |t: f64, y: &[f64; 4], dy: &mut [f64; 4]| {
-            self.rhs_cached(t, y, dy, Some(&cache), Some(&cell_hint))
-        };
+        let rhs = |t: f64, y: &[f64; 4], dy: &mut [f64; 4]| self.rhs_cached(t, y, dy, Some(&cache));
         let sampling = Sampling::Uniform { dt: o.output_step };
         let result = match o.integrator {
             Integrator::Dopri5 {

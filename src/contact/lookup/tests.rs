@@ -285,26 +285,3 @@ fn lazy_lookup_is_bit_identical_to_the_full_lookup() {
         assert!(lookup.at_lazy(f64::NAN).is_err());
     }
 }
-
-/// `P⁻¹` with a cell hint (any start cell) returns exactly what the binary search returns.
-#[test]
-fn hinted_inversion_is_bit_identical() {
-    let lookup = isbl(IsblParams::improved_2dof());
-    let n = lookup.table().n_nodes();
-    let (lo, _) = lookup.table().range();
-    let p_max = lookup.at(lo * lookup.model().params().sigma).unwrap().pressure;
-    let hint = std::cell::Cell::new(0usize);
-    let mut p = 1e-3;
-    while p < 2.0 * p_max {
-        let plain = lookup.separation_for_pressure(p);
-        for start in [0, n / 3, n - 2, n + 5] {
-            hint.set(start);
-            let hinted = lookup.separation_for_pressure_from(p, Some(&hint));
-            assert_eq!(hinted.map(f64::to_bits), plain.map(f64::to_bits), "P = {p}");
-        }
-        // and walking from the previous call's cell
-        let walked = lookup.separation_for_pressure_from(p, Some(&hint));
-        assert_eq!(walked.map(f64::to_bits), plain.map(f64::to_bits));
-        p *= 1.07;
-    }
-}
