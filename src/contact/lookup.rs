@@ -224,6 +224,25 @@ impl IsblLookup {
         })
     }
 
+    /// [`IsblLookup::at`] evaluating only the channels asked for: inside the table each
+    /// accessor interpolates its one channel (one `exp` instead of five); outside it, the
+    /// full [`IsblForces`] of `at`. Same values, bit for bit, as the fields of `at(h)`. The
+    /// dynamics' right-hand sides need one or two channels per call (docs/performance.md).
+    #[inline]
+    pub fn at_lazy(&self, h: f64) -> Result<IsblAt<'_>, ContactError> {
+        if h.is_finite() {
+            let x = h * self.inv_sigma;
+            let (lo, hi) = self.table.range();
+            if (lo..=hi).contains(&x) {
+                return Ok(IsblAt::Table {
+                    table: &self.table,
+                    x,
+                });
+            }
+        }
+        self.at(h).map(IsblAt::Forces)
+    }
+
     /// The separation `h` [m] at which the contact pressure equals `pressure` [Pa]
     /// (`P⁻¹`, monotone inversion of the table; eq. 2.16): `None` for `pressure ≤ 0`
     /// or NaN; a pressure above the table's largest is clamped to its deepest node.
@@ -260,6 +279,62 @@ impl IsblLookup {
             lookup: Arc::clone(self),
             nominal_area,
         }
+    }
+}
+
+/// A lookup whose channels are interpolated on demand ([`IsblLookup::at_lazy`]).
+#[derive(Debug, Clone, Copy)]
+pub enum IsblAt<'a> {
+    /// Inside the table at h* = `x`.
+    Table { table: &'a ForceTable, x: f64 },
+    /// Outside the table: every channel already evaluated.
+    Forces(IsblForces),
+}
+
+impl IsblAt<'_> {
+    #[inline]
+    fn channel(&self, c: usize) -> f64 {
+        match self {
+            // In range by construction, so every channel answers.
+            IsblAt::Table { table, x } => table.eval_with_slope(c, *x).unwrap_or((0.0, 0.0)).0,
+            IsblAt::Forces(f) => match c {
+                P => f.pressure,
+                KC => f.stiffness,
+                AR => f.real_area_fraction,
+                Q => f.friction,
+                _ => f.adhesion,
+            },
+        }
+    }
+
+    /// [`IsblForces::pressure`].
+    #[inline]
+    pub fn pressure(&self) -> f64 {
+        self.channel(P)
+    }
+
+    /// [`IsblForces::stiffness`].
+    #[inline]
+    pub fn stiffness(&self) -> f64 {
+        self.channel(KC)
+    }
+
+    /// [`IsblForces::real_area_fraction`].
+    #[inline]
+    pub fn real_area_fraction(&self) -> f64 {
+        self.channel(AR)
+    }
+
+    /// [`IsblForces::friction`].
+    #[inline]
+    pub fn friction(&self) -> f64 {
+        self.channel(Q)
+    }
+
+    /// [`IsblForces::adhesion`].
+    #[inline]
+    pub fn adhesion(&self) -> f64 {
+        self.channel(FS)
     }
 }
 

@@ -572,6 +572,24 @@ impl Slider2DofGeometry {
         })
     }
 
+    /// [`Slider2DofGeometry::bulge_poc`] and [`Slider2DofGeometry::spacing_of`] at one actuation
+    /// with every state-independent term computed once, for the 2-DOF right-hand side.
+    pub fn poc_frame(&self, actuation: f64) -> Result<PocFrame> {
+        let bulge = self.bulge_at(actuation)?;
+        let (s0, c0) = self.nominal_pitch.sin_cos();
+        Ok(PocFrame {
+            semi_axes: bulge.semi_axes,
+            semi_axes_sq: bulge.semi_axes.component_mul(&bulge.semi_axes),
+            centre: bulge.centre,
+            actuation,
+            nominal_pitch: self.nominal_pitch,
+            s0,
+            c0,
+            anchor: self.anchor_point(),
+            anchor_spacing: self.anchor.solid_spacing(),
+        })
+    }
+
     /// Nominal contact area of the bulge at actuation `h_TFC`, truncation height `h_T` and pitch
     /// (§2.4). The faithful 2-DOF use evaluates it once per actuation at `θ0`.
     pub fn nominal_contact_area(
@@ -583,5 +601,111 @@ impl Slider2DofGeometry {
         require_in("pitch θ (rad)", pitch, -0.1, 0.1, "rad")?;
         self.bulge_at(actuation)?
             .section(&Attitude::pitch_only(pitch), truncation_height)
+    }
+}
+
+/// The pitch-dependent trigonometry of one state, computed once and shared by the POC, its
+/// rate and any other body point's spacing ([`PocFrame::pitch_terms`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PitchTerms {
+    pub pitch: f64,
+    sin: f64,
+    cos: f64,
+    /// `sinθ − sinθ0`, `cosθ − cosθ0` without cancellation.
+    d_sin: f64,
+    d_cos: f64,
+}
+
+/// The bulge POC of a 2-DOF slider at one actuation with the state-independent terms
+/// precomputed ([`Slider2DofGeometry::poc_frame`]): the same arithmetic, in the same order, as
+/// [`Slider2DofGeometry::bulge_poc`] and [`Slider2DofGeometry::spacing_of`] (so bit-identical
+/// results), with one `sin_cos(θ)` and one half-angle triple per state instead of nine
+/// trigonometric calls and a validated ellipsoid per call (the 2-DOF inner loop,
+/// docs/performance.md).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PocFrame {
+    semi_axes: Vector3<f64>,
+    semi_axes_sq: Vector3<f64>,
+    centre: Vector3<f64>,
+    actuation: f64,
+    nominal_pitch: f64,
+    s0: f64,
+    c0: f64,
+    anchor: Vector3<f64>,
+    anchor_spacing: f64,
+}
+
+impl PocFrame {
+    /// Trigonometry of pitch `θ`.
+    #[inline]
+    pub fn pitch_terms(&self, pitch: f64) -> PitchTerms {
+        let th0 = self.nominal_pitch;
+        let half_sum = 0.5 * (pitch + th0);
+        let half_diff_sin = (0.5 * (pitch - th0)).sin();
+        let (sin, cos) = pitch.sin_cos();
+        PitchTerms {
+            pitch,
+            sin,
+            cos,
+            d_sin: 2.0 * half_sum.cos() * half_diff_sin,
+            d_cos: -2.0 * half_sum.sin() * half_diff_sin,
+        }
+    }
+
+    /// [`Slider2DofGeometry::spacing_of`] with the pitch's trigonometry given.
+    #[inline]
+    pub fn spacing_of(&self, p: &Vector3<f64>, heave: f64, tr: &PitchTerms) -> f64 {
+        let q = &self.anchor;
+        self.anchor_spacing
+            + heave
+            + tr.d_sin * p.x
+            + self.s0 * (p.x - q.x)
+            + tr.d_cos * p.z
+            + self.c0 * (p.z - q.z)
+    }
+
+    /// [`Slider2DofGeometry::bulge_poc`] (same checks, same errors).
+    #[inline]
+    pub fn poc(&self, heave: f64, tr: &PitchTerms) -> Result<BulgePoc> {
+        require_finite("heave z (m)", heave)?;
+        require_in("pitch θ (rad)", tr.pitch, -0.1, 0.1, "rad")?;
+        // n = Rᵀe_z at zero roll: (sinθ, cosθ·0, cosθ·1).
+        let n = Vector3::new(tr.sin, tr.cos * 0.0, tr.cos);
+        let h_s = self.semi_axes.component_mul(&n).norm();
+        let body = if h_s > 0.0 {
+            self.centre - self.semi_axes_sq.component_mul(&n) / h_s
+        } else {
+            self.centre
+        };
+        let (st, ct) = (tr.sin, tr.cos);
+        let rotation = Matrix3::new(ct, -st * 0.0, -st, 0.0, 1.0, -0.0, st, ct * 0.0, ct);
+        let spacing = self.spacing_of(&self.centre, heave, tr) - h_s;
+        let spacing_per_actuation = if h_s > 0.0 {
+            -self.actuation * n.z * n.z / h_s
+        } else {
+            -1.0
+        };
+        Ok(BulgePoc {
+            body,
+            lever_arm: rotation * body,
+            solid_spacing: spacing,
+            support_distance: h_s,
+            spacing_per_actuation,
+        })
+    }
+
+    /// [`BulgePoc::spacing_rate`] at zero actuation rate with the pitch's trigonometry given.
+    #[inline]
+    pub fn spacing_rate(
+        &self,
+        poc: &BulgePoc,
+        tr: &PitchTerms,
+        heave_rate: f64,
+        pitch_rate: f64,
+    ) -> f64 {
+        let (st, ct) = (tr.sin, tr.cos);
+        heave_rate
+            + pitch_rate * (ct * poc.body.x - st * poc.body.z)
+            + poc.spacing_per_actuation * 0.0
     }
 }

@@ -685,3 +685,49 @@ fn roll_stiffness() {
     assert_rel("k_l", k_l, 2.090e-2, 1e-3);
     assert!(roll_stiffness_from_frequency(j_roll, 1.0, 5e-5).is_err());
 }
+
+/// The 2-DOF right-hand side's precomputed POC frame gives exactly (bit for bit) what the
+/// general `bulge_poc`/`spacing_of`/`spacing_rate` give, over the states a run visits and
+/// beyond (docs/performance.md: the speed-up must not move the histories).
+#[test]
+fn poc_frame_is_bit_identical_to_the_general_geometry() {
+    for model in [improved_2dof(), initial_2dof()] {
+        let g = model.geometry();
+        for actuation in [0.0, 3.3 * NM, 8.5 * NM, 12.0 * NM, 15.0 * NM] {
+            let frame = g.poc_frame(actuation).unwrap();
+            let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+            let mut uniform = || {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+            };
+            for _ in 0..2000 {
+                let heave = uniform() * 20.0 * NM;
+                let pitch = g.nominal_pitch + uniform() * 1e-4;
+                let (z_rate, pitch_rate) = (uniform() * 1e-3, uniform() * 10.0);
+                let tr = frame.pitch_terms(pitch);
+                let fast = frame.poc(heave, &tr).unwrap();
+                let slow = g.bulge_poc(heave, pitch, actuation).unwrap();
+                assert_eq!(fast.solid_spacing.to_bits(), slow.solid_spacing.to_bits());
+                assert_eq!(fast.lever_arm.x.to_bits(), slow.lever_arm.x.to_bits());
+                assert_eq!(fast.lever_arm.z.to_bits(), slow.lever_arm.z.to_bits());
+                assert_eq!(fast.body, slow.body);
+                assert_eq!(
+                    frame.spacing_rate(&fast, &tr, z_rate, pitch_rate).to_bits(),
+                    slow.spacing_rate(pitch, z_rate, pitch_rate, 0.0).to_bits()
+                );
+                let te = g.trailing_edge();
+                assert_eq!(
+                    frame.spacing_of(&te, heave, &tr).to_bits(),
+                    g.spacing_of(&te, heave, pitch).to_bits()
+                );
+            }
+            // Same domain errors as the general form.
+            let tr = frame.pitch_terms(0.2);
+            assert!(frame.poc(0.0, &tr).is_err() && g.bulge_poc(0.0, 0.2, actuation).is_err());
+            let tr = frame.pitch_terms(g.nominal_pitch);
+            assert!(frame.poc(f64::NAN, &tr).is_err());
+        }
+    }
+}

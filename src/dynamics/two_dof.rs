@@ -8,7 +8,7 @@
 //! eq. 2.16 with friction and real area from `P⁻¹`, ISBL adhesion, and the generalised forces.
 
 use super::air_bearing::{AirBearing2Dof, DmwAtSprings, HeavePitchState, AB_LOSS_FLYING_HEIGHT};
-use super::geometry::{ContactCriterion, Slider2DofGeometry};
+use super::geometry::{ContactCriterion, PitchTerms, PocFrame, Slider2DofGeometry};
 use super::metrics::{case_metrics, CaseMetrics, CaseParams, CaseSeries, ContactSeries};
 use super::params::{Model2Dof, ModelVariant};
 use super::three_dof::interface::AreaIsbl;
@@ -18,6 +18,7 @@ use crate::contact::mtl::{FwmExperiment, LubricantCase, MtlInterface, RoughFilm,
 use crate::numerics::ode::{integrate_capped, OdeError, OdeOptions, OdeStats, Sampling};
 use crate::signal::resample::HermiteTrack;
 use nalgebra::{Matrix2, Vector2};
+use std::cell::Cell;
 
 /// Reading of eq. 2.16 (§2.2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -227,6 +228,24 @@ struct PocKinematics {
     lever_z: f64,
 }
 
+/// The POC kinematics of the last right-hand-side call (`None`: outside the geometry's
+/// domain), for the step cap.
+#[derive(Debug, Clone, Copy)]
+struct KinematicsCache {
+    t: f64,
+    y: [f64; 4],
+    kinematics: Option<PocKinematics>,
+}
+
+impl KinematicsCache {
+    /// Matches no state (NaN time).
+    const EMPTY: Self = KinematicsCache {
+        t: f64::NAN,
+        y: [f64::NAN; 4],
+        kinematics: None,
+    };
+}
+
 /// Sampled time histories of one case (SI).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CaseHistory {
@@ -291,6 +310,8 @@ pub struct TwoDofCase<'a> {
     dmw_duration: f64,
     options: SimOptions,
     geometry: Slider2DofGeometry,
+    /// The bulge POC at this actuation, state-independent terms precomputed.
+    poc_frame: PocFrame,
     air_bearing: AirBearing2Dof,
     inverse_mass: Matrix2<f64>,
     damping: Matrix2<f64>,
@@ -427,6 +448,7 @@ impl<'a> TwoDofCase<'a> {
                 (Some(track), have)
             }
         };
+        let poc_frame = geometry.poc_frame(actuation)?;
         Ok(TwoDofCase {
             model,
             actuation,
@@ -435,6 +457,7 @@ impl<'a> TwoDofCase<'a> {
             dmw_duration,
             options,
             geometry,
+            poc_frame,
             air_bearing,
             inverse_mass,
             damping: m.damping,
@@ -487,9 +510,21 @@ impl<'a> TwoDofCase<'a> {
     /// Kinematics of the bulge POC at state `y` and time `t`: spacing above the local disk
     /// surface, its rate, the DMW under it and the lever arm (no forces).
     fn poc_kinematics(&self, t: f64, y: &[f64; 4]) -> Result<PocKinematics, DynamicsError> {
-        let (z, pitch_offset, z_rate, pitch_rate) = (y[0], y[1], y[2], y[3]);
-        let pitch = self.model.nominal_pitch + pitch_offset;
-        let poc = self.geometry.bulge_poc(z, pitch, self.actuation)?;
+        let pitch = self.model.nominal_pitch + y[1];
+        self.poc_kinematics_with(t, y, &self.poc_frame.pitch_terms(pitch))
+    }
+
+    /// [`Self::poc_kinematics`] with the pitch's trigonometry given.
+    #[inline]
+    fn poc_kinematics_with(
+        &self,
+        t: f64,
+        y: &[f64; 4],
+        tr: &PitchTerms,
+    ) -> Result<PocKinematics, DynamicsError> {
+        let (z, z_rate, pitch_rate) = (y[0], y[2], y[3]);
+        // Same as `geometry.bulge_poc(z, pitch, actuation)` (PocFrame's contract).
+        let poc = self.poc_frame.poc(z, tr)?;
         // The POC sits a fraction of a µm from the bulge centre (the delay reference).
         let poc_delay = if self.options.transit_delay {
             (poc.lever_arm.x - self.bulge_x) / self.model.disk_speed
@@ -499,7 +534,7 @@ impl<'a> TwoDofCase<'a> {
         let (zd, vd) = self.disk(t, poc_delay);
         Ok(PocKinematics {
             spacing: poc.solid_spacing - zd,
-            spacing_rate: poc.spacing_rate(pitch, z_rate, pitch_rate, 0.0) - vd,
+            spacing_rate: self.poc_frame.spacing_rate(&poc, tr, z_rate, pitch_rate) - vd,
             disk_displacement: zd,
             lever_x: poc.lever_arm.x,
             lever_z: poc.lever_arm.z,
@@ -507,30 +542,44 @@ impl<'a> TwoDofCase<'a> {
     }
 
     /// Spacing of the TE above the local disk surface (for the AB-loss check and output).
-    fn trailing_edge_spacing(&self, t: f64, y: &[f64; 4]) -> f64 {
-        let pitch = self.model.nominal_pitch + y[1];
+    fn trailing_edge_spacing(&self, t: f64, y: &[f64; 4], tr: &PitchTerms) -> f64 {
         let te = self.geometry.trailing_edge();
-        self.geometry.spacing_of(&te, y[0], pitch) - self.disk(t, self.delay_rear).0
+        self.poc_frame.spacing_of(&te, y[0], tr) - self.disk(t, self.delay_rear).0
     }
 
     /// The interface at state `y` and time `t`.
+    #[cfg(test)]
     fn interface(&self, t: f64, y: &[f64; 4]) -> Result<InterfaceState, DynamicsError> {
-        let k = self.poc_kinematics(t, y)?;
+        self.interface_of(self.poc_kinematics(t, y)?, true)
+    }
+
+    /// The interface at state `y` and time `t` and the TE spacing (one sample's outputs).
+    fn sample(&self, t: f64, y: &[f64; 4]) -> Result<(InterfaceState, f64), DynamicsError> {
+        let tr = self.poc_frame.pitch_terms(self.model.nominal_pitch + y[1]);
+        let i = self.interface_of(self.poc_kinematics_with(t, y, &tr)?, true)?;
+        Ok((i, self.trailing_edge_spacing(t, y, &tr)))
+    }
+
+    /// The interface at POC kinematics `k`. With `full = false` (the right-hand side) the
+    /// real area is left at 0: the equations of motion do not use it, and skipping its
+    /// lookup saves an `exp` per call; every other field is the same, bit for bit.
+    #[inline]
+    fn interface_of(&self, k: PocKinematics, full: bool) -> Result<InterfaceState, DynamicsError> {
         let (spacing, spacing_rate) = (k.spacing, k.spacing_rate);
         let clearance = self.criterion.clearance(spacing, self.sigma);
         let area = self.nominal_area;
         let numerical = |e: crate::contact::ContactError| DynamicsError::Numerical(e.to_string());
-        let at_spacing = self.isbl.at(spacing).map_err(numerical)?;
-        let adhesion = area * at_spacing.adhesion;
+        let at_spacing = self.isbl.at_lazy(spacing).map_err(numerical)?;
+        let adhesion = area * at_spacing.adhesion();
         let (mut contact_force, mut clipped) = (0.0, false);
         if clearance < 0.0 && area > 0.0 {
             let elastic = match self.options.contact_force {
                 ContactForceForm::InterferenceTangent => {
-                    area * at_spacing.stiffness * (self.contact_threshold - spacing)
+                    area * at_spacing.stiffness() * (self.contact_threshold - spacing)
                 }
-                ContactForceForm::StaticCurve => area * at_spacing.pressure,
+                ContactForceForm::StaticCurve => area * at_spacing.pressure(),
                 ContactForceForm::IntegratedStiffness => {
-                    area * at_spacing.pressure - self.threshold_force
+                    area * at_spacing.pressure() - self.threshold_force
                 }
             };
             contact_force = elastic - self.contact_damping * spacing_rate;
@@ -543,9 +592,11 @@ impl<'a> TwoDofCase<'a> {
         if contact_force > 0.0 {
             // Quasi-static equivalence P(h*) = F_c / A_n (eq. 2.16).
             if let Some(h_star) = self.isbl.separation_for_pressure(contact_force / area) {
-                let at = self.isbl.at(h_star).map_err(numerical)?;
-                friction = area * at.friction;
-                real_area = area * at.real_area_fraction;
+                let at = self.isbl.at_lazy(h_star).map_err(numerical)?;
+                friction = area * at.friction();
+                if full {
+                    real_area = area * at.real_area_fraction();
+                }
             }
         }
         let mut lubricant_force = 0.0;
@@ -574,6 +625,19 @@ impl<'a> TwoDofCase<'a> {
 
     /// `y' = f(t, y)`.
     fn rhs(&self, t: f64, y: &[f64; 4], dy: &mut [f64; 4]) -> Result<(), DynamicsError> {
+        self.rhs_cached(t, y, dy, None)
+    }
+
+    /// [`Self::rhs`], leaving the POC kinematics of `(t, y)` in `cache` for the step cap:
+    /// DP5's last stage is evaluated at the step's end state, which is where the next step
+    /// cap looks, so the cap needs no POC of its own (FSAL for the kinematics).
+    fn rhs_cached(
+        &self,
+        t: f64,
+        y: &[f64; 4],
+        dy: &mut [f64; 4],
+        cache: Option<&Cell<KinematicsCache>>,
+    ) -> Result<(), DynamicsError> {
         let state = HeavePitchState {
             heave: y[0],
             pitch_offset: y[1],
@@ -591,7 +655,15 @@ impl<'a> TwoDofCase<'a> {
         let f_a = self.air_bearing.eom_forcing(&state, &dmw, self.actuation);
         // AB loss is checked on the sampled (accepted) states in `run`: trial stages of a step
         // the controller will reject may overshoot.
-        let i = match self.interface(t, y) {
+        let kinematics = self.poc_kinematics(t, y);
+        if let Some(c) = cache {
+            c.set(KinematicsCache {
+                t,
+                y: *y,
+                kinematics: kinematics.as_ref().ok().copied(),
+            });
+        }
+        let i = match kinematics.and_then(|k| self.interface_of(k, false)) {
             Ok(i) => i,
             // A trial stage of a step the controller will reject can leave the geometry's
             // domain (e.g. a pitch of radians): NaN makes the integrator shrink the step.
@@ -621,10 +693,22 @@ impl<'a> TwoDofCase<'a> {
     /// `contact_max_step` — so a step ends close to every contact switch (onset, release, the
     /// damper clip that happens next to it) and the error control resolves it, while smooth
     /// steady contact and free flight run at the steps accuracy needs.
-    fn step_cap(&self, t: f64, y: &[f64; 4], contact_max_step: f64) -> f64 {
-        match self.poc_kinematics(t, y) {
-            Err(_) => contact_max_step,
-            Ok(k) => {
+    fn step_cap(
+        &self,
+        t: f64,
+        y: &[f64; 4],
+        contact_max_step: f64,
+        cache: &Cell<KinematicsCache>,
+    ) -> f64 {
+        let c = cache.get();
+        let kinematics = if c.t == t && c.y == *y {
+            c.kinematics
+        } else {
+            self.poc_kinematics(t, y).ok()
+        };
+        match kinematics {
+            None => contact_max_step,
+            Some(k) => {
                 let clearance = self.criterion.clearance(k.spacing, self.sigma);
                 let closing = -clearance.signum() * k.spacing_rate;
                 if clearance == 0.0 {
@@ -781,9 +865,8 @@ impl<'a> TwoDofCase<'a> {
         }
         let mut sample_error: Option<DynamicsError> = None;
         let mut ab_lost: Option<(f64, f64)> = None;
-        let observer = |t: f64, y: &[f64; 4]| match self.interface(t, y) {
-            Ok(i) => {
-                let te_spacing = self.trailing_edge_spacing(t, y);
+        let observer = |t: f64, y: &[f64; 4]| match self.sample(t, y) {
+            Ok((i, te_spacing)) => {
                 let te_fh = self.flying_height(te_spacing);
                 if te_fh > AB_LOSS_FLYING_HEIGHT && ab_lost.is_none() {
                     ab_lost = Some((t, te_fh));
@@ -822,7 +905,8 @@ impl<'a> TwoDofCase<'a> {
             start[0] += q[0];
             start[1] += q[1];
         }
-        let rhs = |t: f64, y: &[f64; 4], dy: &mut [f64; 4]| self.rhs(t, y, dy);
+        let cache = Cell::new(KinematicsCache::EMPTY);
+        let rhs = |t: f64, y: &[f64; 4], dy: &mut [f64; 4]| self.rhs_cached(t, y, dy, Some(&cache));
         let sampling = Sampling::Uniform { dt: o.output_step };
         let result = match o.integrator {
             Integrator::Dopri5 {
@@ -835,7 +919,7 @@ impl<'a> TwoDofCase<'a> {
                 opts.max_steps = 50_000_000;
                 integrate_capped(
                     rhs,
-                    |t, y| self.step_cap(t, y, contact_max_step),
+                    |t, y| self.step_cap(t, y, contact_max_step, &cache),
                     0.0,
                     start,
                     o.duration,

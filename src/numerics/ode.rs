@@ -204,6 +204,26 @@ pub struct OdeStats {
     pub samples: u64,
 }
 
+impl OdeStats {
+    /// Wall time per accepted step [µs] for a run that took `wall_seconds` (the figure of
+    /// `hdi bench` and `cargo bench --bench simulate`; docs/performance.md). NaN without steps.
+    pub fn micros_per_accepted_step(&self, wall_seconds: f64) -> f64 {
+        if self.accepted_steps == 0 {
+            return f64::NAN;
+        }
+        wall_seconds * 1e6 / self.accepted_steps as f64
+    }
+
+    /// Right-hand-side evaluations per accepted step (6 for DP5 with FSAL and no rejections,
+    /// plus the rejected steps' and the start's). NaN without steps.
+    pub fn rhs_per_accepted_step(&self) -> f64 {
+        if self.accepted_steps == 0 {
+            return f64::NAN;
+        }
+        self.rhs_evaluations as f64 / self.accepted_steps as f64
+    }
+}
+
 /// Result of a successful integration: the state at `t_end` and the counters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OdeSolution<const N: usize> {
@@ -777,6 +797,10 @@ mod tests {
         assert_eq!(sol.stats.accepted_steps, 11);
         assert_eq!(sol.stats.rejected_steps, 0);
         assert_eq!(sol.stats.rhs_evaluations, 1 + 6 * 11);
+        // FSAL: 6 new evaluations per step, plus the start's.
+        assert_eq!(sol.stats.rhs_per_accepted_step(), 67.0 / 11.0);
+        assert_eq!(sol.stats.micros_per_accepted_step(0.022), 2000.0);
+        assert!(OdeStats::default().micros_per_accepted_step(1.0).is_nan());
     }
 
     #[test]

@@ -256,3 +256,32 @@ fn mtl_total_force_monotone_for_random_lubricants() {
         }
     }
 }
+
+/// `at_lazy` answers each channel with exactly the value of the matching `at` field, inside
+/// the table, above it (far tail) and below it (direct evaluation).
+#[test]
+fn lazy_lookup_is_bit_identical_to_the_full_lookup() {
+    for params in [IsblParams::improved_2dof(), IsblParams::initial_2dof()] {
+        let lookup = isbl(params);
+        let sigma = lookup.model().params().sigma;
+        let (lo, hi) = lookup.table().range();
+        let mut x = lo - 1.0;
+        while x < hi + 3.0 {
+            for h in [x * sigma, lo * sigma, hi * sigma] {
+                let full = lookup.at(h).unwrap();
+                let lazy = lookup.at_lazy(h).unwrap();
+                for (a, b) in [
+                    (lazy.pressure(), full.pressure),
+                    (lazy.stiffness(), full.stiffness),
+                    (lazy.real_area_fraction(), full.real_area_fraction),
+                    (lazy.friction(), full.friction),
+                    (lazy.adhesion(), full.adhesion),
+                ] {
+                    assert_eq!(a.to_bits(), b.to_bits(), "h* = {x}");
+                }
+            }
+            x += 0.0137;
+        }
+        assert!(lookup.at_lazy(f64::NAN).is_err());
+    }
+}

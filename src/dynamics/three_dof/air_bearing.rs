@@ -158,6 +158,11 @@ pub struct AbStiffnessTable {
     /// `∫ k_f dPT`, `∫ k_r dPT` from the first grid point to each grid point (N).
     integral_front: Vec<f64>,
     integral_rear: Vec<f64>,
+    /// `exp` of `ln_pole_tip`, `ln_front`, `ln_rear`: the integrals' per-node factors, computed
+    /// once instead of in every right-hand-side call (the same values, bit for bit).
+    pole_tip: Vec<f64>,
+    front: Vec<f64>,
+    rear: Vec<f64>,
 }
 
 /// One row of [`AbStiffnessTable`] in linear units.
@@ -190,6 +195,9 @@ impl AbStiffnessTable {
             roll: Vec::with_capacity(n),
             integral_front: Vec::new(),
             integral_rear: Vec::new(),
+            pole_tip: Vec::new(),
+            front: Vec::new(),
+            rear: Vec::new(),
         };
         for p in &table.points {
             let springs =
@@ -214,6 +222,10 @@ impl AbStiffnessTable {
                 out.integral_rear = acc;
             }
         }
+        let exp = |v: &[f64]| v.iter().map(|x| x.exp()).collect::<Vec<f64>>();
+        out.pole_tip = exp(&out.ln_pole_tip);
+        out.front = exp(&out.ln_front);
+        out.rear = exp(&out.ln_rear);
         Ok(out)
     }
 
@@ -221,25 +233,42 @@ impl AbStiffnessTable {
     /// [`Self::stiffness_at`] gives it (log–log inside, constant outside): the antiderivative
     /// behind [`SpringLaw::Integrated`].
     pub fn stiffness_integral_at(&self, pole_tip: f64) -> (f64, f64) {
+        (
+            self.stiffness_integral_of(false, pole_tip),
+            self.stiffness_integral_of(true, pole_tip),
+        )
+    }
+
+    /// One spring's half of [`Self::stiffness_integral_at`]: `∫k_r` if `rear`, else `∫k_f`.
+    pub fn stiffness_integral_of(&self, rear: bool, pole_tip: f64) -> f64 {
         let g = &self.ln_pole_tip;
         let n = g.len();
-        let one = |ln_k: &[f64], acc: &[f64]| -> f64 {
-            let (p0, pn) = (g[0].exp(), g[n - 1].exp());
-            if pole_tip.is_nan() || pole_tip <= p0 {
-                let p = if pole_tip.is_nan() { p0 } else { pole_tip };
-                return ln_k[0].exp() * (p - p0);
-            }
-            if pole_tip >= pn {
-                return acc[n - 1] + ln_k[n - 1].exp() * (pole_tip - pn);
-            }
-            let i = g.partition_point(|&x| x <= pole_tip.ln()) - 1;
-            let i = i.min(n - 2);
-            acc[i] + segment_integral(g, ln_k, i, pole_tip)
+        let (ln_k, k, acc) = if rear {
+            (&self.ln_rear, &self.rear, &self.integral_rear)
+        } else {
+            (&self.ln_front, &self.front, &self.integral_front)
         };
-        (
-            one(&self.ln_front, &self.integral_front),
-            one(&self.ln_rear, &self.integral_rear),
-        )
+        let (p0, pn) = (self.pole_tip[0], self.pole_tip[n - 1]);
+        if pole_tip.is_nan() || pole_tip <= p0 {
+            let p = if pole_tip.is_nan() { p0 } else { pole_tip };
+            return k[0] * (p - p0);
+        }
+        if pole_tip >= pn {
+            return acc[n - 1] + k[n - 1] * (pole_tip - pn);
+        }
+        let ln_p = pole_tip.ln();
+        let i = g.partition_point(|&x| x <= ln_p) - 1;
+        let i = i.min(n - 2);
+        // `segment_integral` with the node factors read from the table.
+        let b = (ln_k[i + 1] - ln_k[i]) / (g[i + 1] - g[i]);
+        let (pi, ki) = (self.pole_tip[i], k[i]);
+        let r = (ln_p - g[i]).exp();
+        let segment = if (b + 1.0).abs() < 1e-12 {
+            ki * pi * r.ln()
+        } else {
+            ki * pi * (r.powf(b + 1.0) - 1.0) / (b + 1.0)
+        };
+        acc[i] + segment
     }
 
     /// `(k_f, k_r)` at pole-tip FH `PT` (m): `ln k` linear in `ln PT`, clamped outside the
@@ -817,14 +846,7 @@ impl ThreeDofAirBearing {
                 SpringLaw::Integrated => {
                     // ∫_ŝ^FH k(s' + δ) ds' with δ = PT − ŝ (the PT this spring would see).
                     let delta = pole_tip - s_hat;
-                    let at = |p: f64| {
-                        let (f, r) = self.table.stiffness_integral_at(p);
-                        if j == 0 {
-                            f
-                        } else {
-                            r
-                        }
-                    };
+                    let at = |p: f64| self.table.stiffness_integral_of(j != 0, p);
                     at(fh + delta) - at(pole_tip)
                 }
             };

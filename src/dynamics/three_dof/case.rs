@@ -31,6 +31,7 @@ use crate::dynamics::DynamicsError;
 use crate::numerics::ode::{integrate_capped, OdeOptions, OdeStats, Sampling};
 use crate::signal::resample::HermiteTrack;
 use nalgebra::{Matrix3, Vector3};
+use std::cell::Cell;
 
 /// The slider: geometry, air bearing and the TFC push-back curve (§11.3).
 #[derive(Debug, Clone, PartialEq)]
@@ -275,6 +276,24 @@ struct Evaluation {
     clipped: bool,
     /// Smallest time to reach a contact/lubricant boundary over the features (step cap).
     closing_time: f64,
+}
+
+/// The closing time of the last right-hand-side evaluation (`None`: outside the geometry's
+/// domain), for the step cap.
+#[derive(Debug, Clone, Copy)]
+struct ClosingCache {
+    t: f64,
+    y: [f64; 6],
+    closing_time: Option<f64>,
+}
+
+impl ClosingCache {
+    /// Matches no state (NaN time).
+    const EMPTY: Self = ClosingCache {
+        t: f64::NAN,
+        y: [f64::NAN; 6],
+        closing_time: None,
+    };
 }
 
 /// One prepared case.
@@ -567,8 +586,25 @@ impl<'a> ThreeDofCase<'a> {
         })
     }
 
-    fn rhs(&self, t: f64, y: &[f64; 6], dy: &mut [f64; 6]) -> Result<(), DynamicsError> {
-        let e = match self.evaluate(t, y) {
+    /// `y' = f(t, y)`; with a `cache`, leaves the closing time of `(t, y)` there for the step
+    /// cap (DP5's last stage is evaluated at the step's end state, where the next cap looks:
+    /// the cap then needs no evaluation of its own).
+    fn rhs(
+        &self,
+        t: f64,
+        y: &[f64; 6],
+        dy: &mut [f64; 6],
+        cache: Option<&Cell<ClosingCache>>,
+    ) -> Result<(), DynamicsError> {
+        let e = self.evaluate(t, y);
+        if let Some(c) = cache {
+            c.set(ClosingCache {
+                t,
+                y: *y,
+                closing_time: e.as_ref().ok().map(|e| e.closing_time),
+            });
+        }
+        let e = match e {
             Ok(e) => e,
             // A trial stage the controller will reject may leave the geometry's domain.
             Err(DynamicsError::Parameter { .. }) => {
@@ -650,6 +686,7 @@ impl<'a> ThreeDofCase<'a> {
         stops.dedup();
         opts = opts.with_stop_times(stops);
         let shock = self.shock;
+        let cache = Cell::new(ClosingCache::EMPTY);
         let cap = |t: f64, y: &[f64; 6]| -> f64 {
             // Inside the pulse: resolve it (≥ 100 steps over 5 µs).
             if let Some(s) = &shock {
@@ -657,14 +694,20 @@ impl<'a> ThreeDofCase<'a> {
                     return (s.duration / 100.0).max(o.contact_max_step.min(s.duration / 100.0));
                 }
             }
-            match self.evaluate(t, y) {
-                Ok(e) => (0.5 * e.closing_time).max(o.contact_max_step),
-                Err(_) => o.contact_max_step,
+            let c = cache.get();
+            let closing_time = if c.t == t && c.y == *y {
+                c.closing_time
+            } else {
+                self.evaluate(t, y).ok().map(|e| e.closing_time)
+            };
+            match closing_time {
+                Some(closing_time) => (0.5 * closing_time).max(o.contact_max_step),
+                None => o.contact_max_step,
             }
         };
         let start = self.initial_state()?;
         let result = integrate_capped(
-            |t, y: &[f64; 6], dy: &mut [f64; 6]| self.rhs(t, y, dy),
+            |t, y: &[f64; 6], dy: &mut [f64; 6]| self.rhs(t, y, dy, Some(&cache)),
             cap,
             0.0,
             start,
