@@ -14,8 +14,8 @@ use crate::surface::filter::apply_filters;
 use crate::surface::io::{read_height_map, ReadOptions};
 use crate::surface::level::{level, LevelOp};
 use crate::surface::roughness::{
-    roughness, scale_sweep_with, MomentsMethod, RadiusDefinition, RoughnessOptions, RoughnessReport,
-    SummitScheme, SweepRow,
+    roughness, scale_sweep_with, MomentsMethod, RadiusDefinition, RoughnessOptions,
+    RoughnessReport, SummitScheme, SweepRow,
 };
 use crate::surface::HeightMap;
 use crate::units::Length;

@@ -336,7 +336,10 @@ mod tests {
         gaussian_lowpass_in_place(&mut low, dx, dx, 8.0 * dx, true);
         for ((j, i), a) in low.indexed_iter() {
             let expected = t_y * y_mode(j) * (1.0 + 0.5 * t_x * x_mode(i));
-            assert!((a - expected).abs() < 1e-12, "({j}, {i}): {a} vs {expected}");
+            assert!(
+                (a - expected).abs() < 1e-12,
+                "({j}, {i}): {a} vs {expected}"
+            );
         }
     }
 

@@ -625,9 +625,11 @@ fn find_summits_of_impl<const ALL_USABLE: bool>(
         for i in i_range.clone() {
             let (l, r) = (xm[i], xp[i]);
             let k = row + i;
-            let edge_ok = ok_at(k) && ok_at(row + l) && ok_at(row + r) && ok_at(up + i) && ok_at(down + i);
-            let stencil_ok =
-                edge_ok && (!nine || (ok_at(up + l) && ok_at(up + r) && ok_at(down + l) && ok_at(down + r)));
+            let edge_ok =
+                ok_at(k) && ok_at(row + l) && ok_at(row + r) && ok_at(up + i) && ok_at(down + i);
+            let stencil_ok = edge_ok
+                && (!nine
+                    || (ok_at(up + l) && ok_at(up + r) && ok_at(down + l) && ok_at(down + r)));
             if !stencil_ok {
                 continue;
             }
@@ -927,12 +929,11 @@ pub fn roughness(map: &HeightMap, opts: &RoughnessOptions) -> Result<RoughnessRe
         ));
     }
 
-    let centred = px
-        .z
-        .iter()
-        .zip(&px.usable)
-        .filter(|(_, ok)| **ok)
-        .map(|(h, _)| h - heights.mean);
+    let centred =
+        px.z.iter()
+            .zip(&px.usable)
+            .filter(|(_, ok)| **ok)
+            .map(|(h, _)| h - heights.mean);
     let height_histogram = histogram_of(centred, opts.histogram_bins, 0.0, sigma);
     let summit_histogram = histogram(
         &summit_heights,
