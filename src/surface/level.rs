@@ -649,4 +649,35 @@ mod tests {
             Err(SurfaceError::InvalidData(_))
         ));
     }
+
+    /// `level` skips its undo snapshot on maps with every pixel valid and ≥ ROLLBACK_FREE_SIDE
+    /// pixels a side because no op can fail there: every op at the highest degree succeeds on
+    /// the smallest such map. With an invalid pixel the snapshot is back and a failing recipe
+    /// still leaves a large map untouched.
+    #[test]
+    fn undo_snapshot_is_skipped_only_where_no_op_can_fail() {
+        let n = ROLLBACK_FREE_SIDE;
+        let z = Array2::from_shape_fn((n, n), |(j, i)| noise(j * n + i) + 0.1 * i as f64);
+        let mut map = map_from(z.clone());
+        let every_op = [
+            LevelOp::RowsMedian,
+            LevelOp::RowsMedianDiff,
+            LevelOp::RowsPoly(MAX_POLY_DEGREE),
+            LevelOp::Poly(MAX_POLY_DEGREE),
+            LevelOp::Plane,
+            LevelOp::RowsMean,
+            LevelOp::Mean,
+        ];
+        level(&mut map, &every_op).unwrap();
+        assert_eq!(map.history.len(), every_op.len());
+
+        let mut valid = Array2::from_elem((n, n), false);
+        valid[[3, 0]] = true;
+        valid[[3, n - 1]] = true;
+        let mut map = map_from(z.clone());
+        map.valid = Some(valid);
+        assert!(level(&mut map, &[LevelOp::RowsMean, LevelOp::Plane]).is_err());
+        assert_eq!(map.z, z);
+        assert!(map.history.is_empty());
+    }
 }
