@@ -4,7 +4,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use hdi::surface::filter::gaussian_lowpass;
 use hdi::surface::io::{read_height_map, ReadOptions};
 use hdi::surface::level::{level, LevelOp};
-use hdi::surface::roughness::{roughness, RoughnessOptions};
+use hdi::surface::roughness::{roughness, scale_sweep_with, RoughnessOptions};
 use hdi::surface::synth::{gaussian_acf_surface, GaussianSurfaceSpec};
 
 fn surfaces(c: &mut Criterion) {
@@ -32,6 +32,11 @@ fn surfaces(c: &mut Criterion) {
     });
     g.bench_function("roughness_9pt", |b| {
         b.iter(|| roughness(&map, &RoughnessOptions::default()).unwrap())
+    });
+    // The stage's sweep: it reuses the full-resolution report, as `stages::surfaces::analyse`.
+    let full = roughness(&map, &RoughnessOptions::default()).unwrap();
+    g.bench_function("scale_sweep_reusing_full_report", |b| {
+        b.iter(|| scale_sweep_with(&map, &RoughnessOptions::default(), Some(&full)).unwrap())
     });
     g.bench_function("gaussian_filter_mirror", |b| {
         b.iter(|| gaussian_lowpass(&map.z, map.dx, map.dy, 16.0 * map.dx, false))

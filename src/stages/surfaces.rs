@@ -14,8 +14,8 @@ use crate::surface::filter::apply_filters;
 use crate::surface::io::{read_height_map, ReadOptions};
 use crate::surface::level::{level, LevelOp};
 use crate::surface::roughness::{
-    roughness, scale_sweep, MomentsMethod, RadiusDefinition, RoughnessOptions, RoughnessReport,
-    SummitScheme, SweepRow,
+    roughness, scale_sweep_with, MomentsMethod, RadiusDefinition, RoughnessOptions,
+    RoughnessReport, SummitScheme, SweepRow,
 };
 use crate::surface::HeightMap;
 use crate::units::Length;
@@ -440,7 +440,7 @@ pub fn analyse(params: &SurfaceParams) -> Result<SurfaceAnalysis> {
     let target = filtered.as_ref().unwrap_or(&levelled);
     let report = roughness(target, &params.roughness)?;
     let sweep = if params.scale_sweep {
-        scale_sweep(target, &params.roughness)?
+        scale_sweep_with(target, &params.roughness, Some(&report))?
     } else {
         Vec::new()
     };

@@ -23,6 +23,10 @@ pub enum LevelOp {
 /// Highest polynomial degree accepted by `poly(n)` and `rows:poly(n)`.
 pub const MAX_POLY_DEGREE: usize = 5;
 
+/// Maps with every pixel valid and at least this many pixels along each side cannot fail any
+/// levelling op (see [`level`]); well above the MAX_POLY_DEGREE + 1 points a fit needs.
+const ROLLBACK_FREE_SIDE: usize = 16;
+
 const VALID_OPS: &str = "\"plane\", \"poly(n)\", \"rows:mean\", \"rows:poly(n)\", \
 \"rows:median\", \"rows:median_diff\", \"mean\" (1 ≤ n ≤ 5)";
 
@@ -82,11 +86,24 @@ impl std::fmt::Display for LevelOp {
 /// as it was before the call.
 pub fn level(map: &mut HeightMap, recipe: &[LevelOp]) -> Result<()> {
     check_mask_shape(map)?;
-    let before = (map.z.clone(), map.history.len());
+    // A failed op leaves the map as it was before the recipe. That needs a snapshot of the
+    // heights (a second full copy: 512 MB for an 8192² map) only when an op can fail at all:
+    // on a map without invalid pixels, at least ROLLBACK_FREE_SIDE pixels a side, every fit of
+    // degree ≤ MAX_POLY_DEGREE is determined and no op returns an error.
+    let all_usable = map.valid.as_ref().is_none_or(|v| v.iter().all(|ok| *ok))
+        && map.z.iter().all(|v| v.is_finite());
+    let cannot_fail = all_usable
+        && map.nx() >= ROLLBACK_FREE_SIDE
+        && map.ny() >= ROLLBACK_FREE_SIDE
+        && recipe.iter().all(|op| check_degree(*op).is_ok());
+    let snapshot = (!cannot_fail).then(|| map.z.clone());
+    let history_len = map.history.len();
     for &op in recipe {
         if let Err(e) = apply_op(map, op) {
-            map.z = before.0;
-            map.history.truncate(before.1);
+            if let Some(z) = snapshot {
+                map.z = z;
+            }
+            map.history.truncate(history_len);
             return Err(e);
         }
         map.push_step("level", &[("op", op.to_string())]);
@@ -631,5 +648,36 @@ mod tests {
             level(&mut map, &[LevelOp::Mean]),
             Err(SurfaceError::InvalidData(_))
         ));
+    }
+
+    /// `level` skips its undo snapshot on maps with every pixel valid and ≥ ROLLBACK_FREE_SIDE
+    /// pixels a side because no op can fail there: every op at the highest degree succeeds on
+    /// the smallest such map. With an invalid pixel the snapshot is back and a failing recipe
+    /// still leaves a large map untouched.
+    #[test]
+    fn undo_snapshot_is_skipped_only_where_no_op_can_fail() {
+        let n = ROLLBACK_FREE_SIDE;
+        let z = Array2::from_shape_fn((n, n), |(j, i)| noise(j * n + i) + 0.1 * i as f64);
+        let mut map = map_from(z.clone());
+        let every_op = [
+            LevelOp::RowsMedian,
+            LevelOp::RowsMedianDiff,
+            LevelOp::RowsPoly(MAX_POLY_DEGREE),
+            LevelOp::Poly(MAX_POLY_DEGREE),
+            LevelOp::Plane,
+            LevelOp::RowsMean,
+            LevelOp::Mean,
+        ];
+        level(&mut map, &every_op).unwrap();
+        assert_eq!(map.history.len(), every_op.len());
+
+        let mut valid = Array2::from_elem((n, n), false);
+        valid[[3, 0]] = true;
+        valid[[3, n - 1]] = true;
+        let mut map = map_from(z.clone());
+        map.valid = Some(valid);
+        assert!(level(&mut map, &[LevelOp::RowsMean, LevelOp::Plane]).is_err());
+        assert_eq!(map.z, z);
+        assert!(map.history.is_empty());
     }
 }

@@ -189,9 +189,10 @@ impl std::str::FromStr for MomentsMethod {
 // ---------------------------------------------------------------------------------------------
 // Pixel access shared by all estimators.
 
-/// Heights as a row-major slice plus a per-pixel usable flag (valid and finite).
-struct Pixels {
-    z: Vec<f64>,
+/// Heights as a row-major slice plus a per-pixel usable flag (valid and finite). The heights
+/// are borrowed from the map when it is in standard layout (no copy: an 8192² map is 512 MB).
+struct Pixels<'a> {
+    z: std::borrow::Cow<'a, [f64]>,
     usable: Vec<bool>,
     nx: usize,
     ny: usize,
@@ -199,11 +200,14 @@ struct Pixels {
     all_usable: bool,
 }
 
-impl Pixels {
-    fn new(map: &HeightMap) -> Result<Self> {
+impl<'a> Pixels<'a> {
+    fn new(map: &'a HeightMap) -> Result<Self> {
         check_mask_shape(map)?;
         let (ny, nx) = map.z.dim();
-        let z: Vec<f64> = map.z.iter().copied().collect();
+        let z: std::borrow::Cow<'a, [f64]> = match map.z.as_slice() {
+            Some(slice) => std::borrow::Cow::Borrowed(slice),
+            None => std::borrow::Cow::Owned(map.z.iter().copied().collect()),
+        };
         let usable: Vec<bool> = match &map.valid {
             Some(v) if v.dim() == (ny, nx) => z
                 .iter()
@@ -380,8 +384,23 @@ fn derivative_statistics_of(
     dy: f64,
     periodic: bool,
 ) -> Result<DerivativeStatistics> {
+    if px.all_usable {
+        derivative_statistics_of_impl::<true>(px, dx, dy, periodic)
+    } else {
+        derivative_statistics_of_impl::<false>(px, dx, dy, periodic)
+    }
+}
+
+fn derivative_statistics_of_impl<const ALL_USABLE: bool>(
+    px: &Pixels,
+    dx: f64,
+    dy: f64,
+    periodic: bool,
+) -> Result<DerivativeStatistics> {
     let (nx, ny) = (px.nx, px.ny);
     let (z, ok) = (&px.z, &px.usable);
+    // Every pixel usable (the common case): the compiler drops the flag lookups.
+    let ok_at = |k: usize| ALL_USABLE || ok[k];
     let (xm, xp) = Pixels::neighbours(nx);
     let (ym, yp) = Pixels::neighbours(ny);
     let (inv_dx, inv_dy) = (1.0 / dx, 1.0 / dy);
@@ -397,30 +416,30 @@ fn derivative_statistics_of(
         let has_y_central = periodic || (j > 0 && j + 1 < ny);
         for i in 0..nx {
             let k = row + i;
-            if !ok[k] {
+            if !ok_at(k) {
                 continue;
             }
             let zc = z[k];
             let has_right = periodic || i + 1 < nx;
             let has_x_central = periodic || (i > 0 && i + 1 < nx);
-            if has_right && ok[row + xp[i]] {
+            if has_right && ok_at(row + xp[i]) {
                 let g = (z[row + xp[i]] - zc) * inv_dx;
                 sx += g * g;
                 nsx += 1;
             }
-            if has_down && ok[row_down + i] {
+            if has_down && ok_at(row_down + i) {
                 let g = (z[row_down + i] - zc) * inv_dy;
                 sy += g * g;
                 nsy += 1;
             }
             let mut curv_x = None;
-            if has_x_central && ok[row + xm[i]] && ok[row + xp[i]] {
+            if has_x_central && ok_at(row + xm[i]) && ok_at(row + xp[i]) {
                 let c = (z[row + xm[i]] - 2.0 * zc + z[row + xp[i]]) * inv_dx2;
                 cx += c * c;
                 ncx += 1;
                 curv_x = Some(c);
             }
-            if has_y_central && ok[row_up + i] && ok[row_down + i] {
+            if has_y_central && ok_at(row_up + i) && ok_at(row_down + i) {
                 let c = (z[row_up + i] - 2.0 * zc + z[row_down + i]) * inv_dy2;
                 cy += c * c;
                 ncy += 1;
@@ -571,8 +590,23 @@ fn find_summits_of(
     scheme: SummitScheme,
     reference: f64,
 ) -> SummitSearch {
+    if px.all_usable {
+        find_summits_of_impl::<true>(px, map, scheme, reference)
+    } else {
+        find_summits_of_impl::<false>(px, map, scheme, reference)
+    }
+}
+
+fn find_summits_of_impl<const ALL_USABLE: bool>(
+    px: &Pixels,
+    map: &HeightMap,
+    scheme: SummitScheme,
+    reference: f64,
+) -> SummitSearch {
     let (nx, ny) = (px.nx, px.ny);
     let (z, ok) = (&px.z, &px.usable);
+    // Every pixel usable (the common case): the compiler drops the flag lookups.
+    let ok_at = |k: usize| ALL_USABLE || ok[k];
     let (xm, xp) = Pixels::neighbours(nx);
     let (ym, yp) = Pixels::neighbours(ny);
     let (dx, dy) = (map.dx, map.dy);
@@ -591,9 +625,11 @@ fn find_summits_of(
         for i in i_range.clone() {
             let (l, r) = (xm[i], xp[i]);
             let k = row + i;
-            let edge_ok = ok[k] && ok[row + l] && ok[row + r] && ok[up + i] && ok[down + i];
-            let stencil_ok =
-                edge_ok && (!nine || (ok[up + l] && ok[up + r] && ok[down + l] && ok[down + r]));
+            let edge_ok =
+                ok_at(k) && ok_at(row + l) && ok_at(row + r) && ok_at(up + i) && ok_at(down + i);
+            let stencil_ok = edge_ok
+                && (!nine
+                    || (ok_at(up + l) && ok_at(up + r) && ok_at(down + l) && ok_at(down + r)));
             if !stencil_ok {
                 continue;
             }
@@ -709,7 +745,17 @@ fn gaussian_density(x: f64, mean: f64, sigma: f64) -> f64 {
 /// Histogram of `values` over their range with a Gaussian of the given mean and σ at the bin
 /// centres. Empty input gives empty vectors.
 pub fn histogram(values: &[f64], bins: usize, mean: f64, sigma: f64) -> Histogram {
-    if values.is_empty() || bins == 0 {
+    histogram_of(values.iter().copied(), bins, mean, sigma)
+}
+
+/// [`histogram`] of values produced on the fly (two passes), so the heights of a large map
+/// need no centred copy.
+fn histogram_of<I>(values: I, bins: usize, mean: f64, sigma: f64) -> Histogram
+where
+    I: Iterator<Item = f64> + Clone,
+{
+    let n_values = values.clone().count();
+    if n_values == 0 || bins == 0 {
         return Histogram {
             edges: Vec::new(),
             counts: Vec::new(),
@@ -718,8 +764,8 @@ pub fn histogram(values: &[f64], bins: usize, mean: f64, sigma: f64) -> Histogra
         };
     }
     let (mut lo, mut hi) = values
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+        .clone()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
             (l.min(v), h.max(v))
         });
     if hi <= lo {
@@ -735,11 +781,11 @@ pub fn histogram(values: &[f64], bins: usize, mean: f64, sigma: f64) -> Histogra
     let width = (hi - lo) / bins as f64;
     let edges: Vec<f64> = (0..=bins).map(|b| lo + b as f64 * width).collect();
     let mut counts = vec![0u64; bins];
-    for &v in values {
+    for v in values {
         let b = (((v - lo) / width) as usize).min(bins - 1);
         counts[b] += 1;
     }
-    let norm = 1.0 / (values.len() as f64 * width);
+    let norm = 1.0 / (n_values as f64 * width);
     let density = counts.iter().map(|&c| c as f64 * norm).collect();
     let gaussian = (0..bins)
         .map(|b| gaussian_density(lo + (b as f64 + 0.5) * width, mean, sigma))
@@ -883,13 +929,12 @@ pub fn roughness(map: &HeightMap, opts: &RoughnessOptions) -> Result<RoughnessRe
         ));
     }
 
-    let centred: Vec<f64> =
+    let centred =
         px.z.iter()
             .zip(&px.usable)
             .filter(|(_, ok)| **ok)
-            .map(|(h, _)| h - heights.mean)
-            .collect();
-    let height_histogram = histogram(&centred, opts.histogram_bins, 0.0, sigma);
+            .map(|(h, _)| h - heights.mean);
+    let height_histogram = histogram_of(centred, opts.histogram_bins, 0.0, sigma);
     let summit_histogram = histogram(
         &summit_heights,
         opts.histogram_bins,
@@ -948,15 +993,22 @@ pub const SWEEP_S_FILTER_PX: [f64; 4] = [2.0, 4.0, 8.0, 16.0];
 /// Every `k`-th pixel along both axes, spacing ×k. Stays periodic only if k divides both sides.
 pub fn subsample(map: &HeightMap, k: usize) -> HeightMap {
     let k = k.max(1);
-    let mut out = map.clone();
-    out.z = map.z.slice(s![..;k, ..;k]).to_owned();
-    out.valid = map
-        .valid
-        .as_ref()
-        .map(|v| v.slice(s![..;k, ..;k]).to_owned());
-    out.dx = map.dx * k as f64;
-    out.dy = map.dy * k as f64;
-    out.periodic = map.periodic && map.nx().is_multiple_of(k) && map.ny().is_multiple_of(k);
+    // Built field by field: cloning the whole map first would copy the full-size heights.
+    let mut out = HeightMap {
+        z: map.z.slice(s![..;k, ..;k]).to_owned(),
+        dx: map.dx * k as f64,
+        dy: map.dy * k as f64,
+        x0: map.x0,
+        y0: map.y0,
+        channel: map.channel.clone(),
+        valid: map
+            .valid
+            .as_ref()
+            .map(|v| v.slice(s![..;k, ..;k]).to_owned()),
+        periodic: map.periodic && map.nx().is_multiple_of(k) && map.ny().is_multiple_of(k),
+        source: map.source.clone(),
+        history: map.history.clone(),
+    };
     if k > 1 {
         out.push_step("subsample", &[("factor", k.to_string())]);
     }
@@ -979,24 +1031,70 @@ fn sweep_row(kind: &str, value: f64, report: &RoughnessReport) -> SweepRow {
 /// (λs = k·max(dx, dy)), all with the same options. The full-resolution row must succeed; rows
 /// that cannot be computed (map too small after sub-sampling, no curvature left) are omitted.
 pub fn scale_sweep(map: &HeightMap, opts: &RoughnessOptions) -> Result<Vec<SweepRow>> {
-    let mut rows = Vec::new();
-    for &k in &SWEEP_SUBSAMPLING {
-        let sub = subsample(map, k);
-        match roughness(&sub, opts) {
-            Ok(report) => rows.push(sweep_row("subsample", k as f64, &report)),
-            Err(SurfaceError::InvalidData(_)) if k > 1 => {}
-            Err(SurfaceError::Parameter { .. }) if k > 1 && !sub.periodic => {}
-            Err(e) => return Err(e),
-        }
+    scale_sweep_with(map, opts, None)
+}
+
+/// Maps up to this many pixels have their sweep rows computed in parallel (each row holds its
+/// own sub-sampled or filtered copy); larger ones one row at a time, to bound the memory.
+const PARALLEL_SWEEP_MAX_PIXELS: usize = 1 << 22;
+
+/// [`scale_sweep`] reusing `full`, the report of `roughness(map, opts)` when the caller already
+/// has it, for the sub-sampling-1 row (the same numbers without a second pass over the map).
+/// The rows are independent and computed in parallel on small maps; their order and values do
+/// not depend on the thread count.
+pub fn scale_sweep_with(
+    map: &HeightMap,
+    opts: &RoughnessOptions,
+    full: Option<&RoughnessReport>,
+) -> Result<Vec<SweepRow>> {
+    use rayon::prelude::*;
+    #[derive(Clone, Copy)]
+    enum Job {
+        Subsample(usize),
+        SFilter(f64),
     }
+    let jobs: Vec<Job> = SWEEP_SUBSAMPLING
+        .iter()
+        .map(|&k| Job::Subsample(k))
+        .chain(SWEEP_S_FILTER_PX.iter().map(|&k| Job::SFilter(k)))
+        .collect();
     let pixel = map.dx.max(map.dy);
-    for &k in &SWEEP_S_FILTER_PX {
-        let mut filtered = map.clone();
-        apply_filters(&mut filtered, Some(k * pixel), None)?;
-        match roughness(&filtered, opts) {
-            Ok(report) => rows.push(sweep_row("s_filter", k, &report)),
-            Err(SurfaceError::InvalidData(_)) => {}
-            Err(e) => return Err(e),
+    // Ok(None): a row that is omitted (see above).
+    let run = |job: Job| -> Result<Option<SweepRow>> {
+        match job {
+            Job::Subsample(1) if full.is_some() => {
+                Ok(full.map(|report| sweep_row("subsample", 1.0, report)))
+            }
+            Job::Subsample(k) => {
+                let sub = subsample(map, k);
+                match roughness(&sub, opts) {
+                    Ok(report) => Ok(Some(sweep_row("subsample", k as f64, &report))),
+                    Err(SurfaceError::InvalidData(_)) if k > 1 => Ok(None),
+                    Err(SurfaceError::Parameter { .. }) if k > 1 && !sub.periodic => Ok(None),
+                    Err(e) => Err(e),
+                }
+            }
+            Job::SFilter(k) => {
+                let mut filtered = map.clone();
+                apply_filters(&mut filtered, Some(k * pixel), None)?;
+                match roughness(&filtered, opts) {
+                    Ok(report) => Ok(Some(sweep_row("s_filter", k, &report))),
+                    Err(SurfaceError::InvalidData(_)) => Ok(None),
+                    Err(e) => Err(e),
+                }
+            }
+        }
+    };
+    let results: Vec<Result<Option<SweepRow>>> = if map.z.len() <= PARALLEL_SWEEP_MAX_PIXELS {
+        jobs.par_iter().map(|&job| run(job)).collect()
+    } else {
+        jobs.iter().map(|&job| run(job)).collect()
+    };
+    // The first error in row order, as a sequential sweep would report it.
+    let mut rows = Vec::new();
+    for result in results {
+        if let Some(row) = result? {
+            rows.push(row);
         }
     }
     Ok(rows)
@@ -1249,6 +1347,25 @@ mod tests {
             d.rms_gradient().powi(2) / 2.0,
             1e-14,
         );
+    }
+
+    /// The stage passes its full-resolution report to the sweep: the row it reuses must be
+    /// the row a fresh sub-sampling-1 pass gives (§2.6 values: η₉ 451 µm⁻², R₉ 158 nm), and a
+    /// sweep on one thread must equal the parallel one.
+    #[test]
+    fn sweep_reusing_the_full_report_matches_a_fresh_sweep() {
+        let map = canonical_map();
+        let opts = RoughnessOptions::default();
+        let report = roughness(&map, &opts).unwrap();
+        let reused = scale_sweep_with(&map, &opts, Some(&report)).unwrap();
+        assert_printed("reused η", reused[0].eta * UM2, "451");
+        assert_printed("reused R", reused[0].r * NM, "158");
+        let single = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| scale_sweep(&map, &opts).unwrap());
+        assert_eq!(reused, single);
     }
 
     #[test]
