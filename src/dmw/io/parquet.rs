@@ -1,5 +1,5 @@
-//! Parquet through polars: the footer gives the schema and the key-value metadata, then a
-//! streaming scan reads only the chosen columns (cast to Float64).
+//! Parquet through polars: the footer gives the schema and the key-value metadata, then the
+//! eager reader decodes only the chosen columns (cast to Float64).
 
 use super::names::{self, Meta};
 use super::scan::{self, I, T, V};
@@ -13,8 +13,8 @@ use polars::prelude::*;
 use std::path::Path;
 
 pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
-    let (schema, kv, n_rows) = no_panic(path, "the Parquet reader", || {
-        let file = std::fs::File::open(path).map_err(|e| read_err(path, e))?;
+    let file = std::fs::File::open(path).map_err(|e| read_err(path, e))?;
+    let (reader, schema, kv, n_rows) = no_panic(path, "the Parquet reader", || {
         let mut reader = ParquetReader::new(file);
         let md = reader
             .get_metadata()
@@ -25,10 +25,14 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
             .flatten()
             .filter_map(|kv| kv.value.clone().map(|v| (kv.key.clone(), v)))
             .collect();
-        let schema = LazyFrame::scan_parquet(scan::pl_path(path)?, args())
-            .and_then(|mut lf| lf.collect_schema())
-            .map_err(|e| read_err(path, format!("Parquet schema: {e}")))?;
-        Ok((schema, kv, md.num_rows))
+        let n_rows = md.num_rows;
+        let schema: Vec<(String, DataType)> = reader
+            .schema()
+            .map_err(|e| read_err(path, format!("Parquet schema: {e}")))?
+            .iter_values()
+            .map(|f| (f.name.to_string(), DataType::from_arrow_field(f)))
+            .collect();
+        Ok((reader, schema, kv, n_rows))
     })?;
     let mut meta = Meta::default();
     for (k, v) in &kv {
@@ -39,7 +43,7 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         meta.set(k, v)
             .map_err(|m| record_err(path, format!("key-value {m}")))?;
     }
-    let names: Vec<String> = schema.iter_names().map(|n| n.to_string()).collect();
+    let names: Vec<String> = schema.iter().map(|(n, _)| n.clone()).collect();
     let chosen = names::choose(&names, opts, "column").map_err(|m| record_err(path, m))?;
     let unit = velocity_unit(
         path,
@@ -50,28 +54,42 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         "column name",
     )?;
     let layout = flat_layout(path, &meta)?;
-    let mut select = Vec::new();
+    let mut select: Vec<(usize, &str)> = Vec::new();
     for (k, alias) in [
         (Some(chosen.velocity), V),
         (chosen.index, I),
         (chosen.time.map(|t| t.0), T),
     ] {
         let Some(k) = k else { continue };
-        let dtype = schema
-            .get(names[k].as_str())
-            .cloned()
-            .unwrap_or(DataType::Null);
+        let dtype = schema[k].1.clone();
         if !(dtype.is_primitive_numeric() || dtype == DataType::Boolean) {
             return Err(record_err(
                 path,
                 format!("column '{}' has type {dtype}, not a number", names[k]),
             ));
         }
-        select.push(col(names[k].as_str()).cast(DataType::Float64).alias(alias));
+        select.push((k, alias));
     }
-    let lf = LazyFrame::scan_parquet(scan::pl_path(path)?, args())
-        .map_err(|e| read_err(path, e))?
-        .select(select);
+    let mut wanted: Vec<usize> = select.iter().map(|(k, _)| *k).collect();
+    wanted.sort_unstable();
+    wanted.dedup();
+    let df = no_panic(path, "the Parquet reader", || {
+        let read = reader
+            .with_projection(Some(wanted))
+            .finish()
+            .map_err(|e| read_err(path, format!("Parquet reader: {e}")))?;
+        let columns = select
+            .iter()
+            .map(|(k, alias)| {
+                read.column(names[*k].as_str())
+                    .and_then(|c| c.cast(&DataType::Float64))
+                    .map(|c| c.with_name((*alias).into()))
+            })
+            .collect::<PolarsResult<Vec<Column>>>()
+            .map_err(|e| read_err(path, format!("Parquet reader: {e}")))?;
+        DataFrame::new(read.height(), columns)
+            .map_err(|e| read_err(path, format!("Parquet reader: {e}")))
+    })?;
     // The footer's row count sizes the channel buffers once (on huge pages, numerics::buffer).
     let stream = Stream::new(
         unit.scale,
@@ -79,7 +97,7 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         chosen.time.is_some(),
         n_rows,
     );
-    let stream = scan::run(path, lf, stream, "Parquet reader")?;
+    let stream = scan::feed(path, df, stream, "Parquet reader")?;
     let raw = Raw {
         format: "parquet",
         stream,
@@ -93,13 +111,6 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         provenance: vec![],
     };
     finish(path, raw, opts, &|row| format!("row {row}"))
-}
-
-fn args() -> ScanArgsParquet {
-    ScanArgsParquet {
-        glob: false,
-        ..Default::default()
-    }
 }
 
 pub(super) fn write(rec: &LdvRecord, path: &Path) -> Result<(), DmwError> {

@@ -1,5 +1,6 @@
 //! Delimited text (CSV, TSV, semicolon): the preamble and header are sniffed here, the data
-//! are parsed by polars' streaming CSV reader with only the needed columns projected. Cells
+//! are parsed by polars' eager (multi-threaded) CSV reader with only the needed columns
+//! projected. Cells
 //! polars cannot parse become nulls; the first one is then looked up in the file to name the
 //! line and the cell (a slow path taken only on error).
 
@@ -7,7 +8,7 @@ use super::names::{self, Meta};
 use super::scan::{self, I, T, V};
 use super::stream::{BadRun, Channel, Stream};
 use super::{
-    finish, flat_layout, meta_pairs, read_err, record_err, run_message, velocity_unit,
+    finish, flat_layout, meta_pairs, no_panic, read_err, record_err, run_message, velocity_unit,
     write_atomic, Raw, ReadOptions, F,
 };
 use crate::dmw::{DmwError, LdvRecord, VelocityUnit};
@@ -174,25 +175,40 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         };
         schema.insert(c(k).into(), dtype);
     }
-    let mut select = vec![col(c(chosen.velocity)).alias(V)];
+    let mut select = vec![(chosen.velocity, V)];
     if let Some(k) = chosen.index {
-        select.push(col(c(k)).alias(I));
+        select.push((k, I));
     }
     if let Some((k, _)) = chosen.time {
-        select.push(col(c(k)).alias(T));
+        select.push((k, T));
     }
-    let lf = LazyCsvReader::new(scan::pl_path(path)?)
-        .with_glob(false)
-        .with_has_header(true)
-        .with_skip_lines(sn.header_index)
-        .with_separator(sn.sep)
-        .with_decimal_comma(sn.decimal_comma)
-        .with_schema(Some(Arc::new(schema)))
-        .with_ignore_errors(true)
-        .with_raise_if_empty(false)
-        .finish()
-        .map_err(|e| read_err(path, e))?
-        .select(select);
+    let projection: Vec<PlSmallStr> = used.iter().map(|&k| c(k).into()).collect();
+    let df = no_panic(path, "the CSV reader", || {
+        let read = CsvReadOptions::default()
+            .with_has_header(true)
+            .with_skip_lines(sn.header_index)
+            .with_schema(Some(Arc::new(schema)))
+            .with_columns(Some(projection.into()))
+            .with_ignore_errors(true)
+            .with_raise_if_empty(false)
+            .map_parse_options(|o| {
+                o.with_separator(sn.sep)
+                    .with_decimal_comma(sn.decimal_comma)
+            })
+            .try_into_reader_with_file_path(Some(path.to_path_buf()))
+            .and_then(|r| r.finish())
+            .map_err(|e| read_err(path, format!("CSV reader: {e}")))?;
+        let columns = select
+            .iter()
+            .map(|(k, alias)| {
+                read.column(c(*k).as_str())
+                    .map(|col| col.clone().with_name((*alias).into()))
+            })
+            .collect::<PolarsResult<Vec<Column>>>()
+            .map_err(|e| read_err(path, format!("CSV reader: {e}")))?;
+        DataFrame::new(read.height(), columns)
+            .map_err(|e| read_err(path, format!("CSV reader: {e}")))
+    })?;
     // Room for the rows the file size suggests (with 25 % slack for shorter rows): the big
     // channel buffers are then allocated once, on huge pages (numerics::buffer).
     let size = std::fs::metadata(path)
@@ -208,7 +224,7 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         chosen.time.is_some(),
         rows_guess,
     );
-    let mut stream = scan::run(path, lf, stream, "CSV reader")?;
+    let mut stream = scan::feed(path, df, stream, "CSV reader")?;
 
     let (trailing_blank, last_fields) = tail(path, sn.sep)?;
     let mut provenance = vec![(
