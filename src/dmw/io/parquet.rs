@@ -9,7 +9,8 @@ use super::{
     velocity_unit, write_atomic, Raw, ReadOptions,
 };
 use crate::dmw::{DmwError, LdvRecord, VelocityUnit};
-use polars::prelude::*;
+use polars_core::prelude::*;
+use polars_io::prelude::*;
 use std::path::Path;
 
 pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {

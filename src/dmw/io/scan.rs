@@ -10,7 +10,7 @@
 use super::stream::{Col, Stream};
 use super::{no_panic, read_err};
 use crate::dmw::DmwError;
-use polars::prelude::*;
+use polars_core::prelude::*;
 use std::path::Path;
 
 /// Column names the readers rename their projections to.

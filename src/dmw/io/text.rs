@@ -12,7 +12,8 @@ use super::{
     write_atomic, Raw, ReadOptions, F,
 };
 use crate::dmw::{DmwError, LdvRecord, VelocityUnit};
-use polars::prelude::*;
+use polars_core::prelude::*;
+use polars_io::prelude::*;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Seek, SeekFrom, Write};
 use std::path::Path;
