@@ -13,9 +13,12 @@ use polars_core::prelude::*;
 use polars_io::prelude::*;
 use std::path::Path;
 
+/// Rows read per call of the eager reader (whole row groups are added until this is reached).
+const PART: usize = 1 << 22;
+
 pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
     let file = std::fs::File::open(path).map_err(|e| read_err(path, e))?;
-    let (reader, schema, kv, n_rows) = no_panic(path, "the Parquet reader", || {
+    let (md, schema, kv) = no_panic(path, "the Parquet reader", || {
         let mut reader = ParquetReader::new(file);
         let md = reader
             .get_metadata()
@@ -26,14 +29,14 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
             .flatten()
             .filter_map(|kv| kv.value.clone().map(|v| (kv.key.clone(), v)))
             .collect();
-        let n_rows = md.num_rows;
+        let md = md.clone();
         let schema: Vec<(String, DataType)> = reader
             .schema()
             .map_err(|e| read_err(path, format!("Parquet schema: {e}")))?
             .iter_values()
             .map(|f| (f.name.to_string(), DataType::from_arrow_field(f)))
             .collect();
-        Ok((reader, schema, kv, n_rows))
+        Ok((md, schema, kv))
     })?;
     let mut meta = Meta::default();
     for (k, v) in &kv {
@@ -74,9 +77,38 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
     let mut wanted: Vec<usize> = select.iter().map(|(k, _)| *k).collect();
     wanted.sort_unstable();
     wanted.dedup();
-    let df = no_panic(path, "the Parquet reader", || {
+    // The footer's row count sizes the channel buffers once (on huge pages, numerics::buffer).
+    let stream = Stream::new(
+        unit.scale,
+        chosen.index.is_some(),
+        chosen.time.is_some(),
+        md.num_rows,
+    );
+    // Whole row groups, at least PART rows at a time: only one part's columns are in memory
+    // beside the output channels (the time column is reduced, never kept).
+    let mut parts = Vec::new();
+    let (mut start, mut len) = (0, 0);
+    for rg in &md.row_groups {
+        len += rg.num_rows();
+        if len >= PART {
+            parts.push((start, len));
+            (start, len) = (start + len, 0);
+        }
+    }
+    if len > 0 || parts.is_empty() {
+        parts.push((start, len));
+    }
+    let mut parts = parts.into_iter();
+    let next = || -> Result<Option<DataFrame>, DmwError> {
+        let Some((offset, len)) = parts.next() else {
+            return Ok(None);
+        };
+        let file = std::fs::File::open(path).map_err(|e| read_err(path, e))?;
+        let mut reader = ParquetReader::new(file);
+        reader.set_metadata(md.clone());
         let read = reader
-            .with_projection(Some(wanted))
+            .with_projection(Some(wanted.clone()))
+            .with_slice(Some((offset, len)))
             .finish()
             .map_err(|e| read_err(path, format!("Parquet reader: {e}")))?;
         let columns = select
@@ -89,16 +121,10 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
             .collect::<PolarsResult<Vec<Column>>>()
             .map_err(|e| read_err(path, format!("Parquet reader: {e}")))?;
         DataFrame::new(read.height(), columns)
+            .map(Some)
             .map_err(|e| read_err(path, format!("Parquet reader: {e}")))
-    })?;
-    // The footer's row count sizes the channel buffers once (on huge pages, numerics::buffer).
-    let stream = Stream::new(
-        unit.scale,
-        chosen.index.is_some(),
-        chosen.time.is_some(),
-        n_rows,
-    );
-    let stream = scan::feed(path, df, stream, "Parquet reader")?;
+    };
+    let stream = scan::feed(path, next, stream, "Parquet reader")?;
     let raw = Raw {
         format: "parquet",
         stream,

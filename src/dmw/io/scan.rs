@@ -22,23 +22,27 @@ pub(super) const I: &str = "i";
 /// batch's copy stays in cache.
 const BATCH: usize = 1 << 16;
 
+/// Calls `next` for frames until it returns `None` or the stream has seen enough (a gap, a
+/// bad time step), and pushes each frame in batches of [`BATCH`] rows.
 pub(super) fn feed(
     path: &Path,
-    df: DataFrame,
+    mut next: impl FnMut() -> Result<Option<DataFrame>, DmwError>,
     mut stream: Stream,
     what: &str,
 ) -> Result<Stream, DmwError> {
     no_panic(path, what, || {
-        let n = df.height();
-        let mut offset = 0;
-        loop {
-            let len = BATCH.min(n - offset);
-            let batch = df.slice(offset as i64, len);
-            let stop = push_batch(&mut stream, &batch)
-                .map_err(|e| read_err(path, format!("{what}: {e}")))?;
-            offset += len;
-            if stop || len == 0 {
-                break;
+        while let Some(df) = next()? {
+            let n = df.height();
+            let mut offset = 0;
+            while offset < n {
+                let len = BATCH.min(n - offset);
+                let batch = df.slice(offset as i64, len);
+                let stop = push_batch(&mut stream, &batch)
+                    .map_err(|e| read_err(path, format!("{what}: {e}")))?;
+                if stop {
+                    return Ok(());
+                }
+                offset += len;
             }
         }
         Ok(())
