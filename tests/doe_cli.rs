@@ -211,7 +211,7 @@ fn check_surfaces_against_an_independent_fit(
     design: &[Row],
     result: &serde_json::Value,
 ) {
-    use polars::prelude::*;
+    use polars_io::prelude::*;
     let fits = independent_fits(design);
     assert_eq!(fits.len(), 4);
     let file = std::fs::File::open(out.join("coefficients.parquet")).unwrap();

@@ -33,7 +33,7 @@
 use arrow_array::ffi::{from_ffi, FFI_ArrowArray, FFI_ArrowSchema};
 use arrow_array::{make_array, RecordBatch, RecordBatchOptions};
 use arrow_schema::{Field, Schema};
-use polars::prelude::{CompatLevel, DataFrame, DataType as PlType};
+use polars_core::prelude::{CompatLevel, DataFrame, DataType as PlType};
 use std::sync::Arc;
 
 // Audit point 1: the C structs have the same size and alignment on both sides.
@@ -114,7 +114,7 @@ mod tests {
     use super::*;
     use arrow_array::{Array, BooleanArray, Float64Array, Int64Array, LargeStringArray};
     use arrow_schema::DataType;
-    use polars::prelude::{Column, NamedFrom, Series};
+    use polars_core::prelude::{Column, NamedFrom, Series};
 
     fn frame() -> DataFrame {
         let cols = vec![

@@ -275,7 +275,8 @@ pub fn round_significant(x: f64, digits: i32) -> f64 {
 /// Integers become Int64 columns, other numbers Float64, strings Utf8 (LargeUtf8 in Arrow),
 /// booleans Boolean; a missing key or JSON null is a null. (An all-null column is Float64.)
 pub fn write_table(rows: &[serde_json::Map<String, Value>], stem: &Path) -> Result<()> {
-    use polars::prelude::*;
+    use polars_core::prelude::*;
+    use polars_io::prelude::*;
     let mut names: Vec<String> = Vec::new();
     for r in rows {
         for k in r.keys() {

@@ -288,7 +288,8 @@ pub fn table_rows(text: &str) -> Result<Vec<BTreeMap<String, Value>>, String> {
 
 /// The rows of a summary-table Parquet file, typed as [`table_rows`] types CSV cells.
 fn parquet_rows(path: &Path) -> Result<Vec<BTreeMap<String, Value>>, String> {
-    use polars::prelude::*;
+    use polars_core::prelude::*;
+    use polars_io::prelude::*;
     let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
     let df = ParquetReader::new(file)
         .finish()

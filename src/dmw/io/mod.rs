@@ -77,8 +77,9 @@
 //! Arrow IPC files, `.npy`, stored `.npz` members, UFF 58b and WAV are memory-mapped and
 //! decoded in place (compressed Arrow buffers and deflated members are decompressed first;
 //! UFF ASCII is parsed into one vector per channel).
-//! Text and Parquet are scanned by polars' streaming engine with projection (only the chosen
-//! columns are parsed) and consumed batch by batch; HDF5 is read in hyperslabs of 2^20
+//! Text and Parquet are read part by part (64 MiB of text, or whole row groups of at least
+//! 2^22 rows) by polars' eager readers with projection (only the chosen columns are parsed)
+//! and consumed batch by batch; HDF5 is read in hyperslabs of 2^20
 //! samples. Only the velocity and index channels are materialised (as `Vec<f64>`); the time
 //! column is reduced on the fly (first, last, count, extreme steps).
 

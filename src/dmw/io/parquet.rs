@@ -1,5 +1,5 @@
-//! Parquet through polars: the footer gives the schema and the key-value metadata, then a
-//! streaming scan reads only the chosen columns (cast to Float64).
+//! Parquet through polars: the footer gives the schema and the key-value metadata, then the
+//! eager reader decodes only the chosen columns (cast to Float64).
 
 use super::names::{self, Meta};
 use super::scan::{self, I, T, V};
@@ -9,12 +9,16 @@ use super::{
     velocity_unit, write_atomic, Raw, ReadOptions,
 };
 use crate::dmw::{DmwError, LdvRecord, VelocityUnit};
-use polars::prelude::*;
+use polars_core::prelude::*;
+use polars_io::prelude::*;
 use std::path::Path;
 
+/// Rows read per call of the eager reader (whole row groups are added until this is reached).
+const PART: usize = 1 << 22;
+
 pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
-    let (schema, kv, n_rows) = no_panic(path, "the Parquet reader", || {
-        let file = std::fs::File::open(path).map_err(|e| read_err(path, e))?;
+    let file = std::fs::File::open(path).map_err(|e| read_err(path, e))?;
+    let (md, schema, kv) = no_panic(path, "the Parquet reader", || {
         let mut reader = ParquetReader::new(file);
         let md = reader
             .get_metadata()
@@ -25,10 +29,14 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
             .flatten()
             .filter_map(|kv| kv.value.clone().map(|v| (kv.key.clone(), v)))
             .collect();
-        let schema = LazyFrame::scan_parquet(scan::pl_path(path)?, args())
-            .and_then(|mut lf| lf.collect_schema())
-            .map_err(|e| read_err(path, format!("Parquet schema: {e}")))?;
-        Ok((schema, kv, md.num_rows))
+        let md = md.clone();
+        let schema: Vec<(String, DataType)> = reader
+            .schema()
+            .map_err(|e| read_err(path, format!("Parquet schema: {e}")))?
+            .iter_values()
+            .map(|f| (f.name.to_string(), DataType::from_arrow_field(f)))
+            .collect();
+        Ok((md, schema, kv))
     })?;
     let mut meta = Meta::default();
     for (k, v) in &kv {
@@ -39,7 +47,7 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         meta.set(k, v)
             .map_err(|m| record_err(path, format!("key-value {m}")))?;
     }
-    let names: Vec<String> = schema.iter_names().map(|n| n.to_string()).collect();
+    let names: Vec<String> = schema.iter().map(|(n, _)| n.clone()).collect();
     let chosen = names::choose(&names, opts, "column").map_err(|m| record_err(path, m))?;
     let unit = velocity_unit(
         path,
@@ -50,36 +58,73 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         "column name",
     )?;
     let layout = flat_layout(path, &meta)?;
-    let mut select = Vec::new();
+    let mut select: Vec<(usize, &str)> = Vec::new();
     for (k, alias) in [
         (Some(chosen.velocity), V),
         (chosen.index, I),
         (chosen.time.map(|t| t.0), T),
     ] {
         let Some(k) = k else { continue };
-        let dtype = schema
-            .get(names[k].as_str())
-            .cloned()
-            .unwrap_or(DataType::Null);
+        let dtype = schema[k].1.clone();
         if !(dtype.is_primitive_numeric() || dtype == DataType::Boolean) {
             return Err(record_err(
                 path,
                 format!("column '{}' has type {dtype}, not a number", names[k]),
             ));
         }
-        select.push(col(names[k].as_str()).cast(DataType::Float64).alias(alias));
+        select.push((k, alias));
     }
-    let lf = LazyFrame::scan_parquet(scan::pl_path(path)?, args())
-        .map_err(|e| read_err(path, e))?
-        .select(select);
+    let mut wanted: Vec<usize> = select.iter().map(|(k, _)| *k).collect();
+    wanted.sort_unstable();
+    wanted.dedup();
     // The footer's row count sizes the channel buffers once (on huge pages, numerics::buffer).
     let stream = Stream::new(
         unit.scale,
         chosen.index.is_some(),
         chosen.time.is_some(),
-        n_rows,
+        md.num_rows,
     );
-    let stream = scan::run(path, lf, stream, "Parquet reader")?;
+    // Whole row groups, at least PART rows at a time: only one part's columns are in memory
+    // beside the output channels (the time column is reduced, never kept).
+    let mut parts = Vec::new();
+    let (mut start, mut len) = (0, 0);
+    for rg in &md.row_groups {
+        len += rg.num_rows();
+        if len >= PART {
+            parts.push((start, len));
+            (start, len) = (start + len, 0);
+        }
+    }
+    if len > 0 || parts.is_empty() {
+        parts.push((start, len));
+    }
+    let mut parts = parts.into_iter();
+    let next = || -> Result<Option<DataFrame>, DmwError> {
+        let Some((offset, len)) = parts.next() else {
+            return Ok(None);
+        };
+        let file = std::fs::File::open(path).map_err(|e| read_err(path, e))?;
+        let mut reader = ParquetReader::new(file);
+        reader.set_metadata(md.clone());
+        let read = reader
+            .with_projection(Some(wanted.clone()))
+            .with_slice(Some((offset, len)))
+            .finish()
+            .map_err(|e| read_err(path, format!("Parquet reader: {e}")))?;
+        let columns = select
+            .iter()
+            .map(|(k, alias)| {
+                read.column(names[*k].as_str())
+                    .and_then(|c| c.cast(&DataType::Float64))
+                    .map(|c| c.with_name((*alias).into()))
+            })
+            .collect::<PolarsResult<Vec<Column>>>()
+            .map_err(|e| read_err(path, format!("Parquet reader: {e}")))?;
+        DataFrame::new(read.height(), columns)
+            .map(Some)
+            .map_err(|e| read_err(path, format!("Parquet reader: {e}")))
+    };
+    let stream = scan::feed(path, next, stream, "Parquet reader")?;
     let raw = Raw {
         format: "parquet",
         stream,
@@ -93,13 +138,6 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         provenance: vec![],
     };
     finish(path, raw, opts, &|row| format!("row {row}"))
-}
-
-fn args() -> ScanArgsParquet {
-    ScanArgsParquet {
-        glob: false,
-        ..Default::default()
-    }
 }
 
 pub(super) fn write(rec: &LdvRecord, path: &Path) -> Result<(), DmwError> {

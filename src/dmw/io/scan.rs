@@ -1,55 +1,53 @@
-//! Runs a polars lazy scan on the streaming engine and feeds its batches to a [`Stream`]:
-//! the scan parses only the projected columns and never holds the whole file, and the time
-//! column is reduced batch by batch instead of being collected.
+//! Feeds the columns an eager polars reader returned to a [`Stream`] in batches of
+//! [`BATCH`] rows: the stream's checks (gaps, time steps) then see the same batches whatever
+//! the reader, and stop at the first fault.
 //!
-//! The query must produce Float64 columns named `v` (velocity) and optionally `i` (index) and
-//! `t` (time).
+//! polars' eager readers (no `lazy`, so no streaming engine and none of the cloud/HTTP stack it
+//! pulls in, docs/performance.md "Build times") parse only the projected columns, in parallel;
+//! the frame must hold Float64 columns named `v` (velocity) and optionally `i` (index) and `t`
+//! (time).
 
 use super::stream::{Col, Stream};
 use super::{no_panic, read_err};
 use crate::dmw::DmwError;
-use polars::prelude::*;
+use polars_core::prelude::*;
 use std::path::Path;
-use std::sync::{Arc, Mutex};
 
-/// Column names the scans alias their projections to.
+/// Column names the readers rename their projections to.
 pub(super) const T: &str = "t";
 pub(super) const V: &str = "v";
 pub(super) const I: &str = "i";
 
-/// polars needs a UTF-8 path; an absolute one so that nothing is resolved differently.
-pub(super) fn pl_path(path: &Path) -> Result<PlRefPath, DmwError> {
-    let abs = std::path::absolute(path).map_err(|e| read_err(path, e))?;
-    let text = abs
-        .to_str()
-        .ok_or_else(|| read_err(path, "the path is not valid UTF-8, which polars needs"))?;
-    Ok(PlRefPath::new(text))
-}
+/// Rows per batch: large enough that the per-batch overhead vanishes, small enough that a
+/// batch's copy stays in cache.
+const BATCH: usize = 1 << 16;
 
-pub(super) fn run(
+/// Calls `next` for frames until it returns `None` or the stream has seen enough (a gap, a
+/// bad time step), and pushes each frame in batches of [`BATCH`] rows.
+pub(super) fn feed(
     path: &Path,
-    lf: LazyFrame,
-    stream: Stream,
+    mut next: impl FnMut() -> Result<Option<DataFrame>, DmwError>,
+    mut stream: Stream,
     what: &str,
 ) -> Result<Stream, DmwError> {
-    let state = Arc::new(Mutex::new(stream));
-    let shared = state.clone();
-    let callback: Arc<dyn Fn(DataFrame) -> PolarsResult<bool> + Send + Sync> =
-        Arc::new(move |df: DataFrame| {
-            let mut s = shared.lock().unwrap_or_else(|e| e.into_inner());
-            push_batch(&mut s, &df)
-        });
     no_panic(path, what, || {
-        lf.sink_batches(PlanCallback::Rust(SpecialEq::new(callback)), true, None)
-            .and_then(|lf| lf.collect_with_engine(Engine::Streaming))
-            .map(|_| ())
-            .map_err(|e| read_err(path, format!("{what}: {e}")))
+        while let Some(df) = next()? {
+            let n = df.height();
+            let mut offset = 0;
+            while offset < n {
+                let len = BATCH.min(n - offset);
+                let batch = df.slice(offset as i64, len);
+                let stop = push_batch(&mut stream, &batch)
+                    .map_err(|e| read_err(path, format!("{what}: {e}")))?;
+                if stop {
+                    return Ok(());
+                }
+                offset += len;
+            }
+        }
+        Ok(())
     })?;
-    let mut guard = state.lock().unwrap_or_else(|e| e.into_inner());
-    Ok(std::mem::replace(
-        &mut *guard,
-        Stream::new(1.0, false, false, 0),
-    ))
+    Ok(stream)
 }
 
 /// A batch column as one contiguous f64 array plus its null mask.

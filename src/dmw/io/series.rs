@@ -540,7 +540,8 @@ fn read_text(path: &Path) -> Result<(Vec<RawColumn>, Meta), DmwError> {
 /// Parquet through polars: every column, numeric ones cast to Float64 (nulls → NaN), plus the
 /// file's key-value metadata.
 fn read_parquet(path: &Path) -> Result<(Vec<RawColumn>, Meta), DmwError> {
-    use polars::prelude::*;
+    use polars_core::prelude::*;
+    use polars_io::prelude::*;
     let file = std::fs::File::open(path).map_err(|e| read_err(path, e))?;
     let mut reader = ParquetReader::new(file);
     let md = reader

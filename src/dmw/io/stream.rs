@@ -1,4 +1,4 @@
-//! The part every reader shares: channels arrive in batches (polars morsels, HDF5 hyperslabs),
+//! The part every reader shares: channels arrive in batches (parts of polars' reads, HDF5 hyperslabs),
 //! are checked and appended to the output vectors, and the time column is reduced on the fly
 //! (first, last, count, extreme steps) so it is never held in memory.
 

@@ -206,7 +206,8 @@ fn hdf5_foreign_layouts() {
 /// A Parquet file from another writer: f32 velocity, integer sample numbers, a null.
 #[test]
 fn parquet_foreign_columns() {
-    use polars::prelude::*;
+    use polars_core::prelude::*;
+    use polars_io::prelude::*;
     let dir = tempfile::tempdir().unwrap();
     let write = |name: &str, v: Vec<Option<f32>>| {
         let n = v.len();

@@ -1,7 +1,7 @@
 //! Delimited text (CSV, TSV, semicolon): the preamble and header are sniffed here, the data
-//! are parsed by polars' streaming CSV reader with only the needed columns projected. Cells
-//! polars cannot parse become nulls; the first one is then looked up in the file to name the
-//! line and the cell (a slow path taken only on error).
+//! are parsed part by part by polars' eager (multi-threaded) CSV reader with only the needed
+//! columns projected. Cells polars cannot parse become nulls; the first one is then looked up
+//! in the file to name the line and the cell (a slow path taken only on error).
 
 use super::names::{self, Meta};
 use super::scan::{self, I, T, V};
@@ -11,13 +11,18 @@ use super::{
     write_atomic, Raw, ReadOptions, F,
 };
 use crate::dmw::{DmwError, LdvRecord, VelocityUnit};
-use polars::prelude::*;
+use polars_core::prelude::*;
+use polars_io::prelude::*;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Seek, SeekFrom, Write};
 use std::path::Path;
 
 /// How far the preamble (comments + header) may reach.
 const PREAMBLE_MAX: u64 = 1 << 20;
+/// Bytes of text parsed per call of polars' eager CSV reader (cut at a line end). Tiny in the
+/// unit tests so that their records (million_row_csv, the bad-input files) cross part
+/// boundaries.
+const PART: usize = if cfg!(test) { 4 << 10 } else { 64 << 20 };
 /// Bytes read from the end of the file to check the last line.
 const TAIL_BYTES: u64 = 64 * 1024;
 
@@ -174,25 +179,72 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         };
         schema.insert(c(k).into(), dtype);
     }
-    let mut select = vec![col(c(chosen.velocity)).alias(V)];
+    let mut select = vec![(chosen.velocity, V)];
     if let Some(k) = chosen.index {
-        select.push(col(c(k)).alias(I));
+        select.push((k, I));
     }
     if let Some((k, _)) = chosen.time {
-        select.push(col(c(k)).alias(T));
+        select.push((k, T));
     }
-    let lf = LazyCsvReader::new(scan::pl_path(path)?)
-        .with_glob(false)
-        .with_has_header(true)
-        .with_skip_lines(sn.header_index)
-        .with_separator(sn.sep)
-        .with_decimal_comma(sn.decimal_comma)
-        .with_schema(Some(Arc::new(schema)))
-        .with_ignore_errors(true)
-        .with_raise_if_empty(false)
-        .finish()
-        .map_err(|e| read_err(path, e))?
-        .select(select);
+    let projection: Arc<[PlSmallStr]> = used.iter().map(|&k| c(k).into()).collect();
+    let schema = Arc::new(schema);
+    // The data are parsed in parts of about PART bytes cut at line ends, each by polars'
+    // multi-threaded eager reader: only one part's text and columns are in memory beside the
+    // output channels, and the time column is reduced, never kept.
+    let mut reader = BufReader::new(File::open(path).map_err(|e| read_err(path, e))?);
+    let mut line = Vec::new();
+    for _ in 0..=sn.header_index {
+        line.clear();
+        reader
+            .read_until(b'\n', &mut line)
+            .map_err(|e| read_err(path, e))?;
+    }
+    let mut carry = reader.buffer().to_vec();
+    let mut file = reader.into_inner();
+    let mut at_end = false;
+    let next = || -> Result<Option<DataFrame>, DmwError> {
+        let mut buf = std::mem::take(&mut carry);
+        while !at_end {
+            let got = Read::by_ref(&mut file)
+                .take(PART as u64)
+                .read_to_end(&mut buf)
+                .map_err(|e| read_err(path, e))?;
+            if got == 0 {
+                at_end = true;
+            } else if let Some(k) = buf.iter().rposition(|&b| b == b'\n') {
+                // The unfinished last line goes to the next part.
+                carry = buf.split_off(k + 1);
+                break;
+            }
+        }
+        if buf.is_empty() {
+            return Ok(None);
+        }
+        let read = CsvReadOptions::default()
+            .with_has_header(false)
+            .with_schema(Some(schema.clone()))
+            .with_columns(Some(projection.clone()))
+            .with_ignore_errors(true)
+            .with_raise_if_empty(false)
+            .map_parse_options(|o| {
+                o.with_separator(sn.sep)
+                    .with_decimal_comma(sn.decimal_comma)
+            })
+            .into_reader_with_file_handle(std::io::Cursor::new(buf))
+            .finish()
+            .map_err(|e| read_err(path, format!("CSV reader: {e}")))?;
+        let columns = select
+            .iter()
+            .map(|(k, alias)| {
+                read.column(c(*k).as_str())
+                    .map(|col| col.clone().with_name((*alias).into()))
+            })
+            .collect::<PolarsResult<Vec<Column>>>()
+            .map_err(|e| read_err(path, format!("CSV reader: {e}")))?;
+        DataFrame::new(read.height(), columns)
+            .map(Some)
+            .map_err(|e| read_err(path, format!("CSV reader: {e}")))
+    };
     // Room for the rows the file size suggests (with 25 % slack for shorter rows): the big
     // channel buffers are then allocated once, on huge pages (numerics::buffer).
     let size = std::fs::metadata(path)
@@ -208,7 +260,7 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         chosen.time.is_some(),
         rows_guess,
     );
-    let mut stream = scan::run(path, lf, stream, "CSV reader")?;
+    let mut stream = scan::feed(path, next, stream, "CSV reader")?;
 
     let (trailing_blank, last_fields) = tail(path, sn.sep)?;
     let mut provenance = vec![(
