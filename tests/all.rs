@@ -18,3 +18,4 @@ mod standalone;
 mod surface_cli;
 mod three_dof_cli;
 mod validate_cli;
+mod rfft_numpy;

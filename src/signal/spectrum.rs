@@ -6,6 +6,7 @@
 //! true amplitude and frequency wherever it falls.
 
 use super::SignalError;
+use super::rfft::RealFft;
 use rustfft::num_complex::Complex64;
 use rustfft::FftPlanner;
 
@@ -90,15 +91,6 @@ impl Default for PeakOptions {
     }
 }
 
-fn window_values(window: Window, n: usize) -> Vec<f64> {
-    match window {
-        Window::Hann => (0..n)
-            .map(|i| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / n as f64).cos())
-            .collect(),
-        Window::None => vec![1.0; n],
-    }
-}
-
 /// Amplitude spectrum of `x` sampled at `fs` after removing its mean. No zero padding.
 pub fn amplitude_spectrum(
     x: &[f64],
@@ -119,18 +111,32 @@ pub fn amplitude_spectrum(
         return Err(SignalError::NonFinite { index: i });
     }
     let mean = x.iter().sum::<f64>() / n as f64;
-    let w = window_values(window, n);
-    let window_sum: f64 = w.iter().sum();
-    let mut buf: Vec<Complex64> = x
-        .iter()
-        .zip(&w)
-        .map(|(&v, &wi)| Complex64::new((v - mean) * wi, 0.0))
-        .collect();
-    FftPlanner::<f64>::new()
-        .plan_fft_forward(n)
-        .process(&mut buf);
+    // Windowed, mean-removed series in one pass (no separate window vector), then a real-input
+    // FFT: N/2 + 1 bins from an N/2-point complex transform (signal::rfft).
+    let mut window_sum = 0.0;
+    let windowed: Vec<f64> = match window {
+        Window::Hann => {
+            x.iter()
+                .enumerate()
+                .map(|(i, &v)| {
+                    let wi = 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / n as f64).cos();
+                    window_sum += wi;
+                    (v - mean) * wi
+                })
+                .collect()
+        }
+        Window::None => {
+            window_sum = n as f64;
+            x.iter().map(|&v| v - mean).collect()
+        }
+    };
+    let rfft = RealFft::new(&mut FftPlanner::<f64>::new(), n);
+    let mut bins = vec![Complex64::default(); rfft.spectrum_len()];
+    rfft.forward(&windowed, &mut bins);
+    drop(windowed);
     let half = n / 2;
-    let magnitude: Vec<f64> = buf[..=half].iter().map(|c| c.norm()).collect();
+    let magnitude: Vec<f64> = bins.iter().map(|c| c.norm()).collect();
+    drop(bins);
     let amplitude = magnitude
         .iter()
         .enumerate()
