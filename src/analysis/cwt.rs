@@ -45,8 +45,8 @@
 //! (`1.350/t_edge` for ω0 = 6); stored per sample and clamped to Nyquist at the edges.
 
 use super::{check_rate, check_series, AnalysisError};
-use rayon::prelude::*;
 use crate::signal::rfft::RealFft;
+use rayon::prelude::*;
 use rustfft::num_complex::{Complex, Complex64};
 use rustfft::num_traits::Float;
 use rustfft::{Fft, FftNum, FftPlanner};
@@ -601,18 +601,18 @@ impl Prepared {
                 self.spectrum[(-k) as usize].conj()
             };
             let c = x * match pywt {
-                    None => Complex64::new(g, 0.0),
-                    Some(shift) => {
-                        // Cycles per sample; sinc = the difference's one-sample box.
-                        let fc = k as f64 / self.n_pad as f64;
-                        let box_ = if k == 0 {
-                            1.0
-                        } else {
-                            (PI * fc).sin() / (PI * fc)
-                        };
-                        Complex64::from_polar(g * box_, 2.0 * PI * fc * shift)
-                    }
-                };
+                None => Complex64::new(g, 0.0),
+                Some(shift) => {
+                    // Cycles per sample; sinc = the difference's one-sample box.
+                    let fc = k as f64 / self.n_pad as f64;
+                    let box_ = if k == 0 {
+                        1.0
+                    } else {
+                        (PI * fc).sin() / (PI * fc)
+                    };
+                    Complex64::from_polar(g * box_, 2.0 * PI * fc * shift)
+                }
+            };
             buf[i] = Complex::new(cast(c.re), cast(c.im));
         }
         ifft.process_with_scratch(buf, scratch);

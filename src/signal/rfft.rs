@@ -102,25 +102,39 @@ impl<T: FftNum + Float> RealFft<T> {
         output: &mut [Complex<T>],
         scratch: &mut [Complex<T>],
     ) {
+        assert_eq!(input.len(), self.n, "real FFT input length");
+        self.forward_from_fn(|i| input[i], output, scratch);
+    }
+
+    /// [`Self::forward_with_scratch`] reading sample `i` as `sample(i)`, called once per sample
+    /// in order 0…N−1: a caller that windows or detrends on the fly needs no input buffer.
+    pub fn forward_from_fn(
+        &self,
+        mut sample: impl FnMut(usize) -> T,
+        output: &mut [Complex<T>],
+        scratch: &mut [Complex<T>],
+    ) {
         let n = self.n;
-        assert_eq!(input.len(), n, "real FFT input length");
         assert_eq!(output.len(), n / 2 + 1, "real FFT output length");
         let zero = T::zero();
         if !n.is_multiple_of(2) {
             let (full, inner) = scratch.split_at_mut(n);
-            for (c, &v) in full.iter_mut().zip(input) {
-                *c = Complex::new(v, zero);
+            for (i, c) in full.iter_mut().enumerate() {
+                *c = Complex::new(sample(i), zero);
             }
             self.forward.process_with_scratch(full, inner);
             output.copy_from_slice(&full[..output.len()]);
             return;
         }
         let m = n / 2;
-        for (c, pair) in output[..m].iter_mut().zip(input.chunks_exact(2)) {
-            *c = Complex::new(pair[0], pair[1]);
+        for (i, c) in output[..m].iter_mut().enumerate() {
+            let re = sample(2 * i);
+            *c = Complex::new(re, sample(2 * i + 1));
         }
-        self.forward
-            .process_with_scratch(&mut output[..m], &mut scratch[..self.forward.get_inplace_scratch_len()]);
+        self.forward.process_with_scratch(
+            &mut output[..m],
+            &mut scratch[..self.forward.get_inplace_scratch_len()],
+        );
         let half = from_f64::<T>(0.5);
         let z0 = output[0];
         output[0] = Complex::new(z0.re + z0.im, zero);
@@ -185,8 +199,10 @@ impl<T: FftNum + Float> RealFft<T> {
             input[k] = p + iwq;
             input[j] = (p - iwq).conj();
         }
-        self.inverse
-            .process_with_scratch(&mut input[..m], &mut scratch[..self.inverse.get_inplace_scratch_len()]);
+        self.inverse.process_with_scratch(
+            &mut input[..m],
+            &mut scratch[..self.inverse.get_inplace_scratch_len()],
+        );
         for (pair, c) in output.chunks_exact_mut(2).zip(&input[..m]) {
             pair[0] = c.re;
             pair[1] = c.im;
@@ -225,7 +241,9 @@ mod tests {
     #[test]
     fn forward_matches_the_complex_fft_for_even_and_odd_lengths() {
         let mut planner = FftPlanner::<f64>::new();
-        for n in [1usize, 2, 3, 4, 5, 6, 8, 10, 15, 16, 30, 97, 128, 1000, 4096, 6000] {
+        for n in [
+            1usize, 2, 3, 4, 5, 6, 8, 10, 15, 16, 30, 97, 128, 1000, 4096, 6000,
+        ] {
             let x = series(n);
             let reference = complex_fft(&x);
             let r = RealFft::new(&mut planner, n);
@@ -233,10 +251,7 @@ mod tests {
             r.forward(&x, &mut out);
             let scale = reference.iter().map(|c| c.norm()).fold(1.0, f64::max);
             for (k, (a, b)) in out.iter().zip(&reference).enumerate() {
-                assert!(
-                    (a - b).norm() <= 1e-13 * scale,
-                    "n {n} bin {k}: {a} vs {b}"
-                );
+                assert!((a - b).norm() <= 1e-13 * scale, "n {n} bin {k}: {a} vs {b}");
             }
         }
     }

@@ -5,8 +5,8 @@
 //! bins are refined with the exact two-bin estimator for the Hann window, so a tone reads its
 //! true amplitude and frequency wherever it falls.
 
-use super::SignalError;
 use super::rfft::RealFft;
+use super::SignalError;
 use rustfft::num_complex::Complex64;
 use rustfft::FftPlanner;
 
@@ -111,31 +111,40 @@ pub fn amplitude_spectrum(
         return Err(SignalError::NonFinite { index: i });
     }
     let mean = x.iter().sum::<f64>() / n as f64;
-    // Windowed, mean-removed series in one pass (no separate window vector), then a real-input
-    // FFT: N/2 + 1 bins from an N/2-point complex transform (signal::rfft).
-    let mut window_sum = 0.0;
-    let windowed: Vec<f64> = match window {
-        Window::Hann => {
-            x.iter()
-                .enumerate()
-                .map(|(i, &v)| {
-                    let wi = 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / n as f64).cos();
-                    window_sum += wi;
-                    (v - mean) * wi
-                })
-                .collect()
-        }
-        Window::None => {
-            window_sum = n as f64;
-            x.iter().map(|&v| v - mean).collect()
-        }
-    };
+    // A real-input FFT (signal::rfft: N/2 + 1 bins from an N/2-point complex transform) that
+    // reads the windowed, mean-removed samples on the fly — no window or input copy.
     let rfft = RealFft::new(&mut FftPlanner::<f64>::new(), n);
     let mut bins = vec![Complex64::default(); rfft.spectrum_len()];
-    rfft.forward(&windowed, &mut bins);
-    drop(windowed);
+    let mut window_sum = 0.0;
+    match window {
+        Window::Hann => rfft.forward_from_fn(
+            |i| {
+                let wi = 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / n as f64).cos();
+                window_sum += wi;
+                (x[i] - mean) * wi
+            },
+            &mut bins,
+            &mut rfft.make_scratch(),
+        ),
+        Window::None => {
+            window_sum = n as f64;
+            rfft.forward_from_fn(|i| x[i] - mean, &mut bins, &mut rfft.make_scratch())
+        }
+    }
     let half = n / 2;
-    let magnitude: Vec<f64> = bins.iter().map(|c| c.norm()).collect();
+    // √(re² + im²) is vectorisable where hypot is a libm call; hypot only where the square
+    // would overflow or lose precision to underflow.
+    let magnitude: Vec<f64> = bins
+        .iter()
+        .map(|c| {
+            let sq = c.norm_sqr();
+            if sq.is_finite() && sq >= f64::MIN_POSITIVE {
+                sq.sqrt()
+            } else {
+                c.norm()
+            }
+        })
+        .collect();
     drop(bins);
     let amplitude = magnitude
         .iter()
