@@ -40,7 +40,11 @@ fn numpy_rfft(x: &[f64]) -> Vec<Complex64> {
         .write_all(text.as_bytes())
         .unwrap();
     let out = child.wait_with_output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     String::from_utf8(out.stdout)
         .unwrap()
         .lines()
@@ -55,7 +59,16 @@ fn numpy_rfft(x: &[f64]) -> Vec<Complex64> {
 fn real_fft_matches_numpy_rfft_and_inverts() {
     let mut planner = FftPlanner::<f64>::new();
     // Even (radix-2, mixed, N/2 odd), odd, prime and a large-prime-factor length.
-    for n in [2usize, 6, 64, 1000, 4097, 6002, 7919, 2 * 3 * 5 * 7 * 11 * 13] {
+    for n in [
+        2usize,
+        6,
+        64,
+        1000,
+        4097,
+        6002,
+        7919,
+        2 * 3 * 5 * 7 * 11 * 13,
+    ] {
         let x = series(n);
         let reference = numpy_rfft(&x);
         let r = RealFft::new(&mut planner, n);
