@@ -175,9 +175,9 @@ impl<T: FftNum + Float> RealFft<T> {
         if !n.is_multiple_of(2) {
             let (full, inner) = scratch.split_at_mut(n);
             full[0] = Complex::new(input[0].re, zero);
-            for k in 1..input.len() {
-                full[k] = input[k];
-                full[n - k] = input[k].conj();
+            for (k, &c) in input.iter().enumerate().skip(1) {
+                full[k] = c;
+                full[n - k] = c.conj();
             }
             self.inverse.process_with_scratch(full, inner);
             for (o, c) in output.iter_mut().zip(full.iter()) {
