@@ -20,12 +20,13 @@ fn series(n: usize) -> Vec<f64> {
         .collect()
 }
 
-/// numpy's rfft of `x` as (re, im) pairs, read back from `repr` text (17 significant digits).
+/// numpy's rfft of `x` as (re, im) pairs, read back from Python float `repr` text (round-trip
+/// exact; numpy 2 scalars would print as `np.float64(…)`).
 fn numpy_rfft(x: &[f64]) -> Vec<Complex64> {
     let script = "import sys, numpy as np\n\
         x = np.array([float(v) for v in sys.stdin.read().split()])\n\
         X = np.fft.rfft(x)\n\
-        print('\\n'.join(f'{c.real!r} {c.imag!r}' for c in X))\n";
+        print('\\n'.join(f'{float(c.real)!r} {float(c.imag)!r}' for c in X))\n";
     let mut child = Command::new(python())
         .args(["-c", script])
         .stdin(Stdio::piped())
