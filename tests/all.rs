@@ -13,6 +13,7 @@ mod doe_cli;
 mod json_schemas;
 mod pipeline_cache;
 mod report_cli;
+mod rfft_numpy;
 mod simulate_cli;
 mod slurm_cli;
 mod standalone;

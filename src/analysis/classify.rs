@@ -632,8 +632,11 @@ fn line_evidence(
     let Some(low) = peaks.first().map(|p| p.frequency) else {
         return ev;
     };
+    // A record of exactly `min_periods` periods (e.g. 3 × 0.5 ms) sits on an integer: the
+    // relative 1e-9 keeps the last bit of the refined line frequency (which depends on the FFT
+    // algorithm's rounding) from deciding the denominator.
     let q_max = (opts.max_denominator as f64)
-        .min((low * record / opts.min_periods).floor())
+        .min((low * record / opts.min_periods * (1.0 + 1e-9)).floor())
         .max(0.0) as u64;
     ev.max_denominator = q_max;
     // Each line against f0 = low/q: harmonic number, mismatch and its tolerance.

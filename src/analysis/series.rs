@@ -3,6 +3,7 @@
 //! a Welch power spectral density for noisy records.
 
 use super::{check_rate, check_series, AnalysisError};
+use crate::signal::rfft::RealFft;
 use crate::signal::spectrum::{amplitude_spectrum, AmplitudeSpectrum, Window};
 use rustfft::num_complex::Complex64;
 use rustfft::FftPlanner;
@@ -118,20 +119,23 @@ pub fn welch_psd(x: &[f64], fs: f64, segment: usize) -> Result<Psd, AnalysisErro
         .map(|i| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / segment as f64).cos())
         .collect();
     let w2: f64 = w.iter().map(|v| v * v).sum();
-    let fft = FftPlanner::<f64>::new().plan_fft_forward(segment);
+    // Real-input FFT (signal::rfft); plan, buffers and scratch reused across segments.
+    let fft = RealFft::new(&mut FftPlanner::<f64>::new(), segment);
+    let mut scratch = fft.make_scratch();
     let half = segment / 2;
     let mut acc = vec![0.0; half + 1];
-    let mut buf = vec![Complex64::default(); segment];
+    let mut seg_w = vec![0.0; segment];
+    let mut bins = vec![Complex64::default(); fft.spectrum_len()];
     let mut segments = 0;
     let mut start = 0;
     while start + segment <= x.len() {
         let seg = &x[start..start + segment];
         let mean = seg.iter().sum::<f64>() / segment as f64;
-        for ((b, v), wi) in buf.iter_mut().zip(seg).zip(&w) {
-            *b = Complex64::new((v - mean) * wi, 0.0);
+        for ((b, v), wi) in seg_w.iter_mut().zip(seg).zip(&w) {
+            *b = (v - mean) * wi;
         }
-        fft.process(&mut buf);
-        for (a, b) in acc.iter_mut().zip(&buf) {
+        fft.forward_with_scratch(&seg_w, &mut bins, &mut scratch);
+        for (a, b) in acc.iter_mut().zip(&bins) {
             *a += b.norm_sqr();
         }
         segments += 1;

@@ -703,6 +703,45 @@ fn padding_to_the_spec_length_gives_the_same_coefficients() {
     assert!(err < 5e-12 * max, "{}", err / max);
 }
 
+#[test]
+fn f32_scalogram_matches_the_f64_transform() {
+    // The magnitude scalogram inverse-transforms in f32; the complex one in f64. Budget:
+    // 1e-5 of max |W| (docs/analysis.md), for the analytic L1 and the PyWavelets normalisation,
+    // on a chirp plus noise long enough for a 2^16-point transform.
+    let n = 60_000;
+    let x: Vec<f64> = chirp(n, FS, 8e3, 900e3, 1.0)
+        .iter()
+        .zip(noise(n, 11))
+        .map(|(a, b)| a + 0.3 * b)
+        .collect();
+    for opts in [
+        CwtOptions::default(),
+        CwtOptions {
+            wavelet: "cmor1.5-1.0".parse().unwrap(),
+            normalization: Normalization::Pywt {
+                precision: Some(12),
+            },
+            ..Default::default()
+        },
+    ] {
+        let single = cwt_morlet(&x, FS, &opts).unwrap();
+        let double = cwt_morlet_complex(&x, FS, &opts).unwrap();
+        let max = double
+            .coefficients
+            .iter()
+            .map(|c| c.norm())
+            .fold(0.0, f64::max);
+        let err = single
+            .magnitude
+            .iter()
+            .zip(&double.coefficients)
+            .map(|(&a, b)| (a as f64 - b.norm()).abs())
+            .fold(0.0, f64::max);
+        eprintln!("f32 vs f64: max difference {:.1e} of max |W|", err / max);
+        assert!(err <= 1e-5 * max, "{}", err / max);
+    }
+}
+
 /// Noise band-limited to [f_lo, f_hi] by zeroing its spectrum outside the band.
 fn band_limited_noise(n: usize, f_lo: f64, f_hi: f64, seed: u64) -> Vec<f64> {
     use rustfft::num_complex::Complex64;

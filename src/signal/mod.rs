@@ -5,6 +5,7 @@
 pub mod butterworth;
 pub mod integrate;
 pub mod resample;
+pub mod rfft;
 pub mod sosfilt;
 pub mod spectrum;
 

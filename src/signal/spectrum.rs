@@ -5,6 +5,7 @@
 //! bins are refined with the exact two-bin estimator for the Hann window, so a tone reads its
 //! true amplitude and frequency wherever it falls.
 
+use super::rfft::RealFft;
 use super::SignalError;
 use rustfft::num_complex::Complex64;
 use rustfft::FftPlanner;
@@ -90,15 +91,6 @@ impl Default for PeakOptions {
     }
 }
 
-fn window_values(window: Window, n: usize) -> Vec<f64> {
-    match window {
-        Window::Hann => (0..n)
-            .map(|i| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / n as f64).cos())
-            .collect(),
-        Window::None => vec![1.0; n],
-    }
-}
-
 /// Amplitude spectrum of `x` sampled at `fs` after removing its mean. No zero padding.
 pub fn amplitude_spectrum(
     x: &[f64],
@@ -119,18 +111,41 @@ pub fn amplitude_spectrum(
         return Err(SignalError::NonFinite { index: i });
     }
     let mean = x.iter().sum::<f64>() / n as f64;
-    let w = window_values(window, n);
-    let window_sum: f64 = w.iter().sum();
-    let mut buf: Vec<Complex64> = x
-        .iter()
-        .zip(&w)
-        .map(|(&v, &wi)| Complex64::new((v - mean) * wi, 0.0))
-        .collect();
-    FftPlanner::<f64>::new()
-        .plan_fft_forward(n)
-        .process(&mut buf);
+    // A real-input FFT (signal::rfft: N/2 + 1 bins from an N/2-point complex transform) that
+    // reads the windowed, mean-removed samples on the fly — no window or input copy.
+    let rfft = RealFft::new(&mut FftPlanner::<f64>::new(), n);
+    let mut bins = vec![Complex64::default(); rfft.spectrum_len()];
+    let mut window_sum = 0.0;
+    match window {
+        Window::Hann => rfft.forward_from_fn(
+            |i| {
+                let wi = 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / n as f64).cos();
+                window_sum += wi;
+                (x[i] - mean) * wi
+            },
+            &mut bins,
+            &mut rfft.make_scratch(),
+        ),
+        Window::None => {
+            window_sum = n as f64;
+            rfft.forward_from_fn(|i| x[i] - mean, &mut bins, &mut rfft.make_scratch())
+        }
+    }
     let half = n / 2;
-    let magnitude: Vec<f64> = buf[..=half].iter().map(|c| c.norm()).collect();
+    // √(re² + im²) is vectorisable where hypot is a libm call; hypot only where the square
+    // would overflow or lose precision to underflow.
+    let magnitude: Vec<f64> = bins
+        .iter()
+        .map(|c| {
+            let sq = c.norm_sqr();
+            if sq.is_finite() && sq >= f64::MIN_POSITIVE {
+                sq.sqrt()
+            } else {
+                c.norm()
+            }
+        })
+        .collect();
+    drop(bins);
     let amplitude = magnitude
         .iter()
         .enumerate()

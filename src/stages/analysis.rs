@@ -19,8 +19,9 @@ use serde_json::{json, Map, Value};
 use std::path::Path;
 
 /// 2: periodicity from the spectral lines too (issue 19), JSON evidence instead of a debug
-/// string, any HDF5 time axis.
-pub const MODEL_VERSION: &str = "analysis-2";
+/// string, any HDF5 time axis. 3: real-input FFTs and the scalogram's inverse transforms in f32
+/// (issue 20): |W| and spectra change in their last digits.
+pub const MODEL_VERSION: &str = "analysis-3";
 
 fn default_f_min() -> Frequency {
     Frequency(5e3)
