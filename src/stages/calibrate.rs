@@ -19,7 +19,7 @@ use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
 
-pub const MODEL_VERSION: &str = "calibrate-2";
+pub const MODEL_VERSION: &str = "calibrate-3";
 
 fn default_evaluations() -> usize {
     DEFAULT_MAX_EVALUATIONS
@@ -58,6 +58,13 @@ pub struct CalibrateConfig {
     /// Scan step of the fitted set's touchdown search from 0 nm (0.5 nm).
     #[serde(default)]
     pub touchdown_step: Option<Length>,
+    /// Start point of the search per knob in SI units (default: the spec defaults), e.g. a
+    /// previous fit's optimum (docs/calibration.md, "Warm start").
+    #[serde(default)]
+    pub start: BTreeMap<String, f64>,
+    /// Edge of the start simplex in unit-box coordinates (default 0.2).
+    #[serde(default)]
+    pub initial_step: Option<f64>,
 }
 
 /// Validated settings.
@@ -255,6 +262,38 @@ impl FromConfig for CalibrateStage {
         for r in &settings.knobs {
             r.check().map_err(|e| err("bounds", e.to_string()))?;
         }
+        for (name, v) in &cfg.start {
+            let Some(r) = settings.knobs.iter().find(|r| r.knob.name() == name) else {
+                return Err(err(
+                    "start",
+                    format!("`{name}` is not one of the calibrated knobs"),
+                ));
+            };
+            if !(v.is_finite() && *v >= r.lo && *v <= r.hi) {
+                return Err(err(
+                    "start",
+                    format!("{name} = {v:e} is outside its box [{:e}, {:e}]", r.lo, r.hi),
+                ));
+            }
+            settings.start.push((r.knob, *v));
+        }
+        // The knobs' order, not the file's: the settings (and the cache key) stay canonical.
+        settings.start.sort_by_key(|(k, _)| {
+            settings
+                .knobs
+                .iter()
+                .position(|r| r.knob == *k)
+                .unwrap_or(usize::MAX)
+        });
+        if let Some(step) = cfg.initial_step {
+            if !(step > 0.0 && step <= 0.5) {
+                return Err(err(
+                    "initial_step",
+                    format!("{step} is out of range: 0 < step ≤ 0.5 (unit box)"),
+                ));
+            }
+            settings.search.initial_step = step;
+        }
         Ok(CalibrateStage {
             name: name.to_string(),
             base_name: cfg.simulate.clone(),
@@ -414,12 +453,12 @@ impl StageKind for CalibrateStage {
         let current: Vec<(f64, f64)> = result
             .history
             .iter()
-            .map(|(i, f, _)| (*i as f64 + 1.0, *f))
+            .map(|(i, f, _, _)| (*i as f64 + 1.0, *f))
             .collect();
         let best: Vec<(f64, f64)> = result
             .history
             .iter()
-            .map(|(i, _, b)| (*i as f64 + 1.0, *b))
+            .map(|(i, _, b, _)| (*i as f64 + 1.0, *b))
             .collect();
         crate::figures::semilogy_png(
             &ctx.out_dir.join("convergence.png"),
@@ -487,6 +526,8 @@ impl StageKind for CalibrateStage {
                     "final_f_spread": result.final_f_spread,
                     "final_x_spread": result.final_x_spread,
                     "max_evaluations": search.max_evaluations,
+                    "initial_step": search.initial_step,
+                    "start": fitted_json(&self.settings.start),
                 },
                 "at_bound": result.at_bound.iter().map(|(k, b)| json!({
                     "knob": k.name(), "bound": b.name(),
@@ -500,7 +541,8 @@ impl StageKind for CalibrateStage {
                 "failures": result.failures.iter().map(|(k, e)| json!({
                     "knobs": describe_knobs(k), "error": e,
                 })).collect::<Vec<_>>(),
-                "history": result.history.iter().map(|(i, f, b)| json!([i, f, b])).collect::<Vec<_>>(),
+                "history": result.history.iter().map(|(i, f, b, exact)| json!([i, f, b, exact])).collect::<Vec<_>>(),
+                "rejected_early": result.rejected,
                 "table": "calibration.parquet",
                 "log": "calibration.log",
             }),
@@ -565,6 +607,17 @@ fn summary_text(stage: &CalibrateStage, r: &CalibrationResult, c: &InBandCounts)
         stage.settings.search.f_tolerance,
         r.final_x_spread,
         stage.settings.search.x_tolerance
+    );
+    let _ = writeln!(
+        s,
+        "search: start simplex edge {} (unit box) at {}; {} trial points rejected early (touchdown search skipped)",
+        stage.settings.search.initial_step,
+        if stage.settings.start.is_empty() {
+            "the spec defaults".to_string()
+        } else {
+            describe_knobs(&stage.settings.start)
+        },
+        r.rejected
     );
     let _ = writeln!(s, "knobs: {}", describe_knobs(&r.best.knobs));
     for (k, b) in &r.at_bound {
