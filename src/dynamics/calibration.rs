@@ -901,6 +901,9 @@ pub struct CalibrationSettings {
     /// Start point of the search (SI) for the knobs listed; the others start at the spec
     /// defaults. The fitted set at the spec defaults is evaluated (and reported) either way.
     pub start: KnobValues,
+    /// Skip the touchdown search of a trial point whose other targets already decide its
+    /// Nelder–Mead comparison (same trajectory, fewer cases; off only to test that).
+    pub early_rejection: bool,
 }
 
 impl CalibrationSettings {
@@ -921,6 +924,7 @@ impl CalibrationSettings {
             // past the crossing; the refinement is 4 rounds of 4.
             touchdown: TouchdownSearch::convention(15.0 * NM, 0.5 * NM, 4),
             start: Vec::new(),
+            early_rejection: true,
         }
     }
 }
@@ -1487,7 +1491,12 @@ pub fn calibrate(
             let known = memo.iter().find(|(x, _)| x == u).map(|(_, e)| e.objective);
             let trial = match known {
                 Some(f) => Trial::Exact(f),
-                None => match evaluate_with_cutoff(base, settings, &to_values(u), cutoff) {
+                None => match evaluate_with_cutoff(
+                    base,
+                    settings,
+                    &to_values(u),
+                    cutoff.filter(|_| settings.early_rejection),
+                ) {
                     Ok(Scored::Full(e)) => {
                         cases += e.cases;
                         let f = e.objective;
@@ -1843,6 +1852,87 @@ mod tests {
                 "{k:?}: fitted {v}, generated at {want}"
             );
         }
+    }
+
+    /// Early rejection (the touchdown search skipped when the other targets already decide a
+    /// trial point's comparison) changes neither the trajectory nor the fit: the same
+    /// evaluations in the same order, the exact ones bit for bit, the rejected ones recorded
+    /// with a lower bound; and it saves cases.
+    #[test]
+    fn early_rejection_gives_the_same_fit_with_fewer_cases() {
+        let base = short_base(None);
+        let nm = |x: f64| x * NM;
+        let targets = vec![
+            // The touchdown term small, the clearance term large and moving with the knobs:
+            // many trial points are then decided by the clearance case alone.
+            t(
+                "td",
+                Quantity::Touchdown,
+                nm(10.5),
+                nm(5.0),
+                "",
+                "nm",
+                1e9,
+            ),
+            t(
+                "c",
+                Quantity::Clearance { actuation: nm(6.0) },
+                0.0,
+                nm(0.002),
+                "",
+                "nm",
+                1e9,
+            ),
+        ];
+        // The clearance's published value is the model's own at β = 2.2: a minimum inside
+        // the box.
+        let probe = CalibrationSettings::new(vec![], targets[1..].to_vec());
+        let generated = evaluate(&base, &probe, &[(Knob::KrStiffeningBeta, 2.2)]).unwrap();
+        let mut targets = targets;
+        targets[1].published = generated.outcomes[0].value.unwrap();
+        let mut settings = CalibrationSettings::new(
+            vec![
+                KnobRange::new(Knob::KrStiffeningBeta),
+                KnobRange::new(Knob::ContactDamping),
+            ],
+            targets,
+        );
+        // A coarse search keeps the debug build's cases few; the convention is the same.
+        settings.touchdown = TouchdownSearch {
+            start: 0.0,
+            stop: nm(14.0),
+            step: nm(2.0),
+            resolution: nm(0.25),
+            batch: 2,
+        };
+        settings.search.max_evaluations = 24;
+        let with = calibrate(&base, &settings, |_, _| {}).unwrap();
+        settings.early_rejection = false;
+        let without = calibrate(&base, &settings, |_, _| {}).unwrap();
+        assert_eq!(with.evaluations, without.evaluations);
+        assert_eq!(with.history.len(), without.history.len());
+        for (a, b) in with.history.iter().zip(&without.history) {
+            assert!(b.3, "no rejection without early rejection");
+            assert_eq!((a.0, a.2.to_bits()), (b.0, b.2.to_bits()));
+            if a.3 {
+                assert_eq!(a.1.to_bits(), b.1.to_bits());
+            } else {
+                assert!(a.1 <= b.1, "bound {} above the objective {}", a.1, b.1);
+            }
+        }
+        assert_eq!(with.best, without.best);
+        assert_eq!(
+            (with.final_f_spread, with.final_x_spread),
+            (without.final_f_spread, without.final_x_spread)
+        );
+        assert!(
+            with.rejected > 0,
+            "no trial point was rejected early: {:?} {:?}",
+            with.history,
+            with.failures
+        );
+        assert_eq!(without.rejected, 0);
+        assert!(with.cases < without.cases, "{} ≥ {}", with.cases, without.cases);
     }
 
     /// The held-out set never reaches the objective: moving a held-out target's published
