@@ -1865,15 +1865,7 @@ mod tests {
         let targets = vec![
             // The touchdown term small, the clearance term large and moving with the knobs:
             // many trial points are then decided by the clearance case alone.
-            t(
-                "td",
-                Quantity::Touchdown,
-                nm(10.5),
-                nm(5.0),
-                "",
-                "nm",
-                1e9,
-            ),
+            t("td", Quantity::Touchdown, nm(10.5), nm(5.0), "", "nm", 1e9),
             t(
                 "c",
                 Quantity::Clearance { actuation: nm(6.0) },
@@ -1932,7 +1924,12 @@ mod tests {
             with.failures
         );
         assert_eq!(without.rejected, 0);
-        assert!(with.cases < without.cases, "{} ≥ {}", with.cases, without.cases);
+        assert!(
+            with.cases < without.cases,
+            "{} ≥ {}",
+            with.cases,
+            without.cases
+        );
     }
 
     /// The held-out set never reaches the objective: moving a held-out target's published
