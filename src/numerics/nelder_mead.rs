@@ -171,7 +171,10 @@ pub fn minimize_unit_box_with_cutoff<E>(
                 // A bound that decides nothing breaks `f`'s contract; the search can only
                 // take it at face value.
                 Trial::AtLeast(lb) => {
-                    debug_assert!(false, "lower bound {lb} offered for cutoff {cut:?}");
+                    debug_assert!(
+                        cut.is_some_and(|c| c.rejects(lb)),
+                        "lower bound {lb} offered for cutoff {cut:?}"
+                    );
                     (lb, true)
                 }
             };
