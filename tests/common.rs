@@ -51,7 +51,11 @@ impl Project {
         // (The shipped warm start names all five knobs: the one-knob fit starts at the defaults.)
         let text: String = text
             .lines()
-            .filter(|l| !l.starts_with("start = {") && !l.starts_with("initial_step = "))
+            .filter(|l| {
+                !l.starts_with("start = {")
+                    && !l.starts_with("initial_step = ")
+                    && !l.starts_with("start_fitted_for = ")
+            })
             .map(|l| format!("{l}\n"))
             .collect();
         // …and a DOE with a short annealing and coarse Table 2.8 sweeps (the design's 108
