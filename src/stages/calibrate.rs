@@ -575,6 +575,8 @@ impl StageKind for CalibrateStage {
         if let WarmStart::Ignored(reason) = &warm {
             ctx.progress
                 .set_message(format!("warning: {}: {reason}", self.name));
+            // …and in the entry's manifest, beside result.json's `convergence.start_ignored`.
+            ctx.log_run("warm_start_ignored", json!(reason));
         }
         let budget = settings.search.max_evaluations;
         ctx.progress
