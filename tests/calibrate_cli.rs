@@ -207,6 +207,11 @@ fn bad_calibration_settings_name_the_key() {
             "kr_stiffening_beta = 5e0 is outside the model's range",
         ),
         (
+            "max_evaluations = 3\n",
+            "max_evaluations = 3\nstart = { dmw_scale = 1.5 }\nstart_fitted_for = \"fit of 2024\"\n",
+            "calibrate.improved_calibration.start_fitted_for",
+        ),
+        (
             "calibration = \"improved_calibration\"\nmodel = \"improved_2dof\"\ncontact",
             "calibration = \"nope\"\nmodel = \"improved_2dof\"\ncontact",
             "no [calibrate.nope]",
@@ -219,4 +224,102 @@ fn bad_calibration_settings_name_the_key() {
         assert_clean_failure(&o, needle);
         assert!(stderr(&o).contains("pipeline.toml"), "{}", stderr(&o));
     }
+}
+
+/// The guard on the warm start (docs/calibration.md, "Warm start"): a `start` fitted for other
+/// inputs is ignored — the run is the one without it, evaluation for evaluation — and one
+/// fitted for these inputs is where the search starts.
+#[test]
+fn a_warm_start_is_used_only_for_the_inputs_it_was_fitted_for() {
+    let p = Project::shipped();
+    let base = p.config();
+    let result = |p: &Project| {
+        let o = p.run(&["run", "--only", "improved_calibration"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        read_json(
+            &p.processed()
+                .join("improved_calibration")
+                .join("result.json"),
+        )
+    };
+    let plain = result(&p);
+    let fp = plain["convergence"]["fit_inputs"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    assert_eq!(fp.len(), 16);
+    assert_eq!(plain["convergence"]["warm_start"], "none");
+    assert_eq!(plain["fitted"][0]["knob"], "dmw_scale");
+    let f0 = plain["fitted"][0]["value"].as_f64().unwrap();
+    let with_start = |fitted_for: &str| {
+        base.replacen(
+            "max_evaluations = 3\n",
+            &format!(
+                "max_evaluations = 3\nstart = {{ dmw_scale = {f0:?} }}\ninitial_step = 1e-3\n\
+                 start_fitted_for = \"{fitted_for}\"\n"
+            ),
+            1,
+        )
+    };
+    // Fitted for other inputs: ignored, recorded, and the fit is the plain one.
+    let other = if fp.starts_with('0') { "1" } else { "0" }.repeat(16);
+    p.set_config(&with_start(&other));
+    let ignored = result(&p);
+    let c = &ignored["convergence"];
+    assert_eq!(c["warm_start"], "ignored");
+    let why = c["start_ignored"].as_str().unwrap();
+    assert!(why.contains(&fp) && why.contains(&other), "{why}");
+    assert_eq!(
+        c["fit_inputs"],
+        fp.as_str(),
+        "start keys are not fit inputs"
+    );
+    assert_eq!(c["start"], serde_json::json!([]));
+    assert_eq!(c["initial_step"], 0.2);
+    for k in ["fitted", "calibrated", "history", "evaluations", "cases"] {
+        assert_eq!(ignored[k], plain[k], "{k}");
+    }
+    let log = std::fs::read_to_string(
+        p.processed()
+            .join("improved_calibration")
+            .join("calibration.log"),
+    )
+    .unwrap();
+    assert!(log.starts_with("WARNING: start_fitted_for"), "{log}");
+    // Fitted for these inputs: the search starts there, so its first point is the plain
+    // run's optimum (same objective) rather than the spec defaults.
+    p.set_config(&with_start(&fp));
+    let matched = result(&p);
+    let c = &matched["convergence"];
+    assert_eq!(c["warm_start"], "matched");
+    assert!(c["start_ignored"].is_null());
+    assert_eq!(c["start"][0]["value"].as_f64(), Some(f0));
+    assert_eq!(c["initial_step"], 1e-3);
+    assert_eq!(matched["history"][0][1], plain["calibrated"]["objective"]);
+    assert_ne!(matched["history"][0][1], plain["history"][0][1]);
+    assert!(
+        matched["calibrated"]["objective"].as_f64() <= plain["calibrated"]["objective"].as_f64()
+    );
+    // Run to convergence: from the full fit's own optimum the search re-checks it in fewer
+    // evaluations and ends no worse (within the f tolerance).
+    p.set_config(&base.replacen("max_evaluations = 3\n", "max_evaluations = 60\n", 1));
+    let full = result(&p);
+    assert_eq!(full["converged"], true);
+    assert_eq!(full["convergence"]["fit_inputs"], fp.as_str());
+    let opt = full["fitted"][0]["value"].as_f64().unwrap();
+    p.set_config(&base.replacen(
+        "max_evaluations = 3\n",
+        &format!(
+            "max_evaluations = 60\nstart = {{ dmw_scale = {opt:?} }}\ninitial_step = 1e-3\n\
+             start_fitted_for = \"{fp}\"\n"
+        ),
+        1,
+    ));
+    let warm = result(&p);
+    assert_eq!(warm["convergence"]["warm_start"], "matched");
+    assert_eq!(warm["converged"], true);
+    let n = |r: &serde_json::Value| r["evaluations"].as_u64().unwrap();
+    assert!(n(&warm) < n(&full), "{} vs {}", n(&warm), n(&full));
+    let f = |r: &serde_json::Value| r["calibrated"]["objective"].as_f64().unwrap();
+    assert!(f(&warm) <= f(&full) + 1e-3, "{} vs {}", f(&warm), f(&full));
 }

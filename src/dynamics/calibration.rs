@@ -27,7 +27,9 @@ use super::two_dof::{DmwInput, SimOptions, TwoDofCase};
 use super::{DynamicsError, Result, NM};
 use crate::contact::isbl::{IsblModel, IsblParams, SurfaceEnergy};
 use crate::contact::lookup::IsblLookup;
-use crate::numerics::nelder_mead::{minimize_unit_box, NelderMeadOptions, StopReason};
+use crate::numerics::nelder_mead::{
+    minimize_unit_box_with_cutoff, Cutoff, NelderMeadOptions, StopReason, Trial,
+};
 use rayon::prelude::*;
 
 /// A calibration knob: a dropped input with its physical range.
@@ -896,6 +898,12 @@ pub struct CalibrationSettings {
     /// Touchdown search of the fitted set (the one convention, docs/conventions.md): scan from
     /// 0 nm on `step`, refine the first crossing to `resolution`.
     pub touchdown: TouchdownSearch,
+    /// Start point of the search (SI) for the knobs listed; the others start at the spec
+    /// defaults. The fitted set at the spec defaults is evaluated (and reported) either way.
+    pub start: KnobValues,
+    /// Skip the touchdown search of a trial point whose other targets already decide its
+    /// Nelder–Mead comparison (same trajectory, fewer cases; off only to test that).
+    pub early_rejection: bool,
 }
 
 impl CalibrationSettings {
@@ -915,6 +923,8 @@ impl CalibrationSettings {
             // cheap, the scan costs ~20 of them, and 4 keeps both cores busy with little waste
             // past the crossing; the refinement is 4 rounds of 4.
             touchdown: TouchdownSearch::convention(15.0 * NM, 0.5 * NM, 4),
+            start: Vec::new(),
+            early_rejection: true,
         }
     }
 }
@@ -962,8 +972,9 @@ pub struct CalibrationResult {
     /// Held-out set at the spec defaults and at the best point (`None` without a held-out set).
     pub held_out_initial: Option<Evaluation>,
     pub held_out_best: Option<Evaluation>,
-    /// `(evaluation index, objective, best so far)`.
-    pub history: Vec<(usize, f64, f64)>,
+    /// `(evaluation index, objective, best so far, exact)`; an early-rejected trial point
+    /// (`exact` false) records the lower bound that decided it (docs/calibration.md).
+    pub history: Vec<(usize, f64, f64, bool)>,
     /// The simplex met both tolerances (`stop` says what ended the run).
     pub converged: bool,
     pub stop: StopReason,
@@ -971,6 +982,8 @@ pub struct CalibrationResult {
     pub final_f_spread: f64,
     pub final_x_spread: f64,
     pub evaluations: usize,
+    /// Trial points rejected early (their touchdown search skipped).
+    pub rejected: usize,
     pub cases: usize,
     /// Knob values where a case failed (counted as an infeasible point), with the error.
     pub failures: Vec<(KnobValues, String)>,
@@ -1122,7 +1135,28 @@ pub fn evaluate(
     settings: &CalibrationSettings,
     values: &[(Knob, f64)],
 ) -> Result<Evaluation> {
-    evaluate_set(base, settings, &settings.targets, &[], values)
+    match evaluate_set(base, settings, &settings.targets, &[], values, None)? {
+        Scored::Full(e) => Ok(e),
+        Scored::Rejected { .. } => unreachable!("no cutoff offered"),
+    }
+}
+
+/// The fitted set at `values`, or only a lower bound of its objective when that already
+/// decides `cutoff`: the target cases run first, and the touchdown search (most of an
+/// evaluation's cases) is skipped when the other targets' terms reach the cutoff.
+fn evaluate_with_cutoff(
+    base: &CalibrationBase,
+    settings: &CalibrationSettings,
+    values: &[(Knob, f64)],
+    cutoff: Option<Cutoff>,
+) -> Result<Scored> {
+    evaluate_set(base, settings, &settings.targets, &[], values, cutoff)
+}
+
+/// An evaluation, or the lower bound of its objective that rejected it.
+enum Scored {
+    Full(Evaluation),
+    Rejected { lower_bound: f64, cases: usize },
 }
 
 /// Evaluate the held-out set at given knob values: the base instance's sweep grid on each
@@ -1132,13 +1166,23 @@ pub fn evaluate_held_out(
     settings: &CalibrationSettings,
     values: &[(Knob, f64)],
 ) -> Result<Evaluation> {
-    evaluate_set(
+    match evaluate_set(
         base,
         settings,
         &settings.held_out,
         &settings.sweep_grid,
         values,
-    )
+        None,
+    )? {
+        Scored::Full(e) => Ok(e),
+        Scored::Rejected { .. } => unreachable!("no cutoff offered"),
+    }
+}
+
+/// `(value − published)/tolerance`; a missing or non-finite number counts as 0 (no contact →
+/// no force, no μ).
+fn residual(t: &Target, value: Option<f64>) -> f64 {
+    (value.filter(|v| v.is_finite()).unwrap_or(0.0) - t.published) / t.tolerance
 }
 
 fn evaluate_set(
@@ -1147,7 +1191,8 @@ fn evaluate_set(
     all: &[Target],
     grid: &[f64],
     values: &[(Knob, f64)],
-) -> Result<Evaluation> {
+    cutoff: Option<Cutoff>,
+) -> Result<Scored> {
     let p = prepare(base, values)?;
     let mut by_id = Vec::new();
     let mut cases = 0;
@@ -1167,8 +1212,11 @@ fn evaluate_set(
                 &optimised
             }
         };
-        let (values, n) = evaluate_targets(prepared, settings, &targets, grid)?;
+        let (values, n, rejected) = evaluate_targets(prepared, settings, &targets, grid, cutoff)?;
         cases += n;
+        if let Some(lower_bound) = rejected {
+            return Ok(Scored::Rejected { lower_bound, cases });
+        }
         by_id.extend(targets.iter().map(|t| t.id).zip(values));
     }
     let outcomes = all
@@ -1180,7 +1228,7 @@ fn evaluate_set(
                 .and_then(|(_, v)| *v)
                 .filter(|v| v.is_finite());
             // No contact → no force, no μ: the residual of a missing number is that of 0.
-            let r = (value.unwrap_or(0.0) - t.published) / t.tolerance;
+            let r = residual(t, value);
             TargetOutcome {
                 target: t.clone(),
                 value,
@@ -1192,22 +1240,27 @@ fn evaluate_set(
         .iter()
         .map(|o| o.target.weight * o.normalised_residual * o.normalised_residual)
         .sum();
-    Ok(Evaluation {
+    Ok(Scored::Full(Evaluation {
         knobs: values.to_vec(),
         outcomes,
         objective,
         cases,
-    })
+    }))
 }
 
-/// The values of targets on one geometry, and how many cases that took. `grid` is the sweep of
-/// the held-out set (empty for the fitted set: then only the target actuations run).
+/// The values of targets on one geometry, how many cases that took, and — when `cutoff`
+/// rejected the point before the touchdown search — the lower bound of the objective that
+/// did (the weighted squared residuals of the other targets: every term is ≥ 0, and a
+/// rounded sum of non-negative terms never exceeds the rounded sum with more of them).
+/// `grid` is the sweep of the held-out set (empty for the fitted set: then only the target
+/// actuations run).
 fn evaluate_targets(
     p: &Prepared,
     settings: &CalibrationSettings,
     targets: &[&Target],
     grid: &[f64],
-) -> Result<(Vec<Option<f64>>, usize)> {
+    cutoff: Option<Cutoff>,
+) -> Result<(Vec<Option<f64>>, usize, Option<f64>)> {
     let needs_sweep = targets.iter().any(|t| t.quantity.needs_sweep());
     let mut actuations: Vec<f64> = targets
         .iter()
@@ -1226,23 +1279,7 @@ fn evaluate_targets(
             .position(|x| (*x - a).abs() <= 1e-6 * NM)
             .map(|i| &metrics[i])
     };
-    let touchdown = if targets.iter().any(|t| t.quantity == Quantity::Touchdown) {
-        let known: Vec<(f64, bool)> = actuations
-            .iter()
-            .zip(&metrics)
-            .map(|(a, m)| (*a, touches(m)))
-            .collect();
-        // With a sweep, its own grid is the scan (when uniform from its first point): the
-        // sweep's cases are then reused and only the refinement runs.
-        let search = uniform_scan(grid, settings.touchdown).unwrap_or(settings.touchdown);
-        let td = find_touchdown(&search, &known, |a| {
-            Ok::<_, DynamicsError>(p.cases(a)?.iter().map(touches).collect())
-        })?;
-        cases += td.cases_run;
-        td.actuation
-    } else {
-        None
-    };
+    let contact = |a: f64| at(a).and_then(|m| m.contact.as_ref());
     let sweep = if needs_sweep && actuations.len() >= 2 {
         let points: Vec<SweepPoint> = actuations
             .iter()
@@ -1256,11 +1293,11 @@ fn evaluate_targets(
     } else {
         None
     };
-    let contact = |a: f64| at(a).and_then(|m| m.contact.as_ref());
-    let values = targets
+    // Every value but the touchdown's comes from the cases above.
+    let mut values: Vec<Option<f64>> = targets
         .iter()
         .map(|t| match t.quantity {
-            Quantity::Touchdown => touchdown,
+            Quantity::Touchdown => None,
             Quantity::Clearance { actuation } => at(actuation).map(|m| m.clearance_m.mean),
             Quantity::Vibration { actuation } => at(actuation).map(|m| m.vibration.percent),
             Quantity::ContactForce { actuation } => {
@@ -1286,7 +1323,41 @@ fn evaluate_targets(
                 .and_then(|(pts, m)| sweep_value(q, pts, m, &metrics)),
         })
         .collect();
-    Ok((values, cases))
+    let needs_touchdown = targets.iter().any(|t| t.quantity == Quantity::Touchdown);
+    if let (Some(c), true) = (cutoff, needs_touchdown) {
+        let partial: f64 = targets
+            .iter()
+            .zip(&values)
+            .filter(|(t, _)| t.quantity != Quantity::Touchdown)
+            .map(|(t, v)| {
+                let r = residual(t, *v);
+                t.weight * r * r
+            })
+            .sum();
+        if c.rejects(partial) {
+            return Ok((values, cases, Some(partial)));
+        }
+    }
+    if needs_touchdown {
+        let known: Vec<(f64, bool)> = actuations
+            .iter()
+            .zip(&metrics)
+            .map(|(a, m)| (*a, touches(m)))
+            .collect();
+        // With a sweep, its own grid is the scan (when uniform from its first point): the
+        // sweep's cases are then reused and only the refinement runs.
+        let search = uniform_scan(grid, settings.touchdown).unwrap_or(settings.touchdown);
+        let td = find_touchdown(&search, &known, |a| {
+            Ok::<_, DynamicsError>(p.cases(a)?.iter().map(touches).collect())
+        })?;
+        cases += td.cases_run;
+        for (t, v) in targets.iter().zip(values.iter_mut()) {
+            if t.quantity == Quantity::Touchdown {
+                *v = td.actuation;
+            }
+        }
+    }
+    Ok((values, cases, None))
 }
 
 /// Solid contact anywhere in the steady window (the touchdown criterion).
@@ -1375,12 +1446,24 @@ pub fn calibrate(
     for k in &settings.knobs {
         k.check()?;
     }
+    if let Some((k, _)) = settings
+        .start
+        .iter()
+        .find(|(k, _)| !settings.knobs.iter().any(|r| r.knob == *k))
+    {
+        return Err(DynamicsError::Numerical(format!(
+            "start value for {}, which is not a calibrated knob",
+            k.name()
+        )));
+    }
     let start: Vec<f64> = settings
         .knobs
         .iter()
         .map(|k| {
-            k.knob
-                .base_value(&base.model, &base.isbl)
+            let given = settings.start.iter().find(|(s, _)| *s == k.knob);
+            given
+                .map(|(_, v)| Ok(*v))
+                .unwrap_or_else(|| k.knob.base_value(&base.model, &base.isbl))
                 .map(|v| k.knob.unit_coordinate(v.clamp(k.lo, k.hi), (k.lo, k.hi)))
         })
         .collect::<Result<_>>()?;
@@ -1397,29 +1480,64 @@ pub fn calibrate(
     let mut best_so_far = f64::INFINITY;
     let mut history = Vec::new();
     let mut failures = Vec::new();
-    let fit = minimize_unit_box(
-        |u| -> Result<f64> {
+    let mut rejected = 0;
+    // Exact evaluations by unit-box point: a point met again (the best one at the end, a
+    // projected trial point that coincides with a vertex) is not simulated again — the cases
+    // are deterministic, so this changes nothing but the case count.
+    let mut memo: Vec<(Vec<f64>, Evaluation)> = Vec::new();
+    let fit = minimize_unit_box_with_cutoff(
+        |u, cutoff| -> Result<Trial> {
             // A point where a case fails (e.g. no static equilibrium) is infeasible, not fatal.
-            let objective = match evaluate(base, settings, &to_values(u)) {
-                Ok(e) => {
-                    cases += e.cases;
-                    e.objective
-                }
-                Err(e) => {
-                    failures.push((to_values(u), e.to_string()));
-                    f64::INFINITY
-                }
+            let known = memo.iter().find(|(x, _)| x == u).map(|(_, e)| e.objective);
+            let trial = match known {
+                Some(f) => Trial::Exact(f),
+                None => match evaluate_with_cutoff(
+                    base,
+                    settings,
+                    &to_values(u),
+                    cutoff.filter(|_| settings.early_rejection),
+                ) {
+                    Ok(Scored::Full(e)) => {
+                        cases += e.cases;
+                        let f = e.objective;
+                        memo.push((u.to_vec(), e));
+                        Trial::Exact(f)
+                    }
+                    Ok(Scored::Rejected {
+                        lower_bound,
+                        cases: n,
+                    }) => {
+                        cases += n;
+                        rejected += 1;
+                        Trial::AtLeast(lower_bound)
+                    }
+                    Err(e) => {
+                        failures.push((to_values(u), e.to_string()));
+                        Trial::Exact(f64::INFINITY)
+                    }
+                },
             };
+            let (objective, exact) = match trial {
+                Trial::Exact(f) => (f, true),
+                Trial::AtLeast(f) => (f, false),
+            };
+            // A rejected point's bound is at least a simplex value, so never a new best.
             best_so_far = best_so_far.min(objective);
-            history.push((history.len(), objective, best_so_far));
+            history.push((history.len(), objective, best_so_far, exact));
             progress(history.len(), best_so_far);
-            Ok(objective)
+            Ok(trial)
         },
         &start,
         &settings.search,
     )?;
-    let best = evaluate(base, settings, &to_values(&fit.x))?;
-    cases += best.cases;
+    let best = match memo.iter().position(|(x, _)| *x == fit.x) {
+        Some(i) => memo.swap_remove(i).1,
+        None => {
+            let e = evaluate(base, settings, &to_values(&fit.x))?;
+            cases += e.cases;
+            e
+        }
+    };
     let (held_out_initial, held_out_best) = if settings.held_out.is_empty() {
         (None, None)
     } else {
@@ -1453,6 +1571,7 @@ pub fn calibrate(
         final_f_spread: fit.f_spread,
         final_x_spread: fit.x_spread,
         evaluations: fit.evaluations.len(),
+        rejected,
         cases,
         failures,
         at_bound,
@@ -1733,6 +1852,84 @@ mod tests {
                 "{k:?}: fitted {v}, generated at {want}"
             );
         }
+    }
+
+    /// Early rejection (the touchdown search skipped when the other targets already decide a
+    /// trial point's comparison) changes neither the trajectory nor the fit: the same
+    /// evaluations in the same order, the exact ones bit for bit, the rejected ones recorded
+    /// with a lower bound; and it saves cases.
+    #[test]
+    fn early_rejection_gives_the_same_fit_with_fewer_cases() {
+        let base = short_base(None);
+        let nm = |x: f64| x * NM;
+        let targets = vec![
+            // The touchdown term small, the clearance term large and moving with the knobs:
+            // many trial points are then decided by the clearance case alone.
+            t("td", Quantity::Touchdown, nm(10.5), nm(5.0), "", "nm", 1e9),
+            t(
+                "c",
+                Quantity::Clearance { actuation: nm(6.0) },
+                0.0,
+                nm(0.002),
+                "",
+                "nm",
+                1e9,
+            ),
+        ];
+        // The clearance's published value is the model's own at β = 2.2: a minimum inside
+        // the box.
+        let probe = CalibrationSettings::new(vec![], targets[1..].to_vec());
+        let generated = evaluate(&base, &probe, &[(Knob::KrStiffeningBeta, 2.2)]).unwrap();
+        let mut targets = targets;
+        targets[1].published = generated.outcomes[0].value.unwrap();
+        let mut settings = CalibrationSettings::new(
+            vec![
+                KnobRange::new(Knob::KrStiffeningBeta),
+                KnobRange::new(Knob::ContactDamping),
+            ],
+            targets,
+        );
+        // A coarse search keeps the debug build's cases few; the convention is the same.
+        settings.touchdown = TouchdownSearch {
+            start: 0.0,
+            stop: nm(14.0),
+            step: nm(2.0),
+            resolution: nm(0.25),
+            batch: 2,
+        };
+        settings.search.max_evaluations = 24;
+        let with = calibrate(&base, &settings, |_, _| {}).unwrap();
+        settings.early_rejection = false;
+        let without = calibrate(&base, &settings, |_, _| {}).unwrap();
+        assert_eq!(with.evaluations, without.evaluations);
+        assert_eq!(with.history.len(), without.history.len());
+        for (a, b) in with.history.iter().zip(&without.history) {
+            assert!(b.3, "no rejection without early rejection");
+            assert_eq!((a.0, a.2.to_bits()), (b.0, b.2.to_bits()));
+            if a.3 {
+                assert_eq!(a.1.to_bits(), b.1.to_bits());
+            } else {
+                assert!(a.1 <= b.1, "bound {} above the objective {}", a.1, b.1);
+            }
+        }
+        assert_eq!(with.best, without.best);
+        assert_eq!(
+            (with.final_f_spread, with.final_x_spread),
+            (without.final_f_spread, without.final_x_spread)
+        );
+        assert!(
+            with.rejected > 0,
+            "no trial point was rejected early: {:?} {:?}",
+            with.history,
+            with.failures
+        );
+        assert_eq!(without.rejected, 0);
+        assert!(
+            with.cases < without.cases,
+            "{} ≥ {}",
+            with.cases,
+            without.cases
+        );
     }
 
     /// The held-out set never reaches the objective: moving a held-out target's published

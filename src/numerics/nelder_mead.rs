@@ -35,7 +35,38 @@ impl Default for NelderMeadOptions {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Evaluation {
     pub x: Vec<f64>,
+    /// The objective value, or a lower bound of it when `exact` is false (an early-rejected
+    /// trial point, see [`minimize_unit_box_with_cutoff`]).
     pub f: f64,
+    pub exact: bool,
+}
+
+/// What the search needs to know of a trial point's value: only whether it reaches `value`
+/// (`inclusive`: `f ≥ value`; otherwise `f > value`). Once a lower bound of the objective
+/// reaches it, the objective may stop and answer [`Trial::AtLeast`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cutoff {
+    pub value: f64,
+    pub inclusive: bool,
+}
+
+impl Cutoff {
+    /// Whether a lower bound `lb` of the objective already decides the comparison.
+    pub fn rejects(&self, lb: f64) -> bool {
+        if self.inclusive {
+            lb >= self.value
+        } else {
+            lb > self.value
+        }
+    }
+}
+
+/// An objective value: exact, or (only when a [`Cutoff`] was offered and rejects it) a lower
+/// bound.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Trial {
+    Exact(f64),
+    AtLeast(f64),
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -107,21 +138,58 @@ pub fn minimize_unit_box<E>(
     x0: &[f64],
     opts: &NelderMeadOptions,
 ) -> Result<NelderMeadResult, E> {
+    minimize_unit_box_with_cutoff(|x, _| f(x).map(Trial::Exact), x0, opts)
+}
+
+/// [`minimize_unit_box`] with early rejection: each trial point whose value only matters
+/// through one comparison is offered that comparison as a [`Cutoff`], and `f` may answer a
+/// lower bound ([`Trial::AtLeast`]) as soon as the bound decides it (e.g. a sum of
+/// non-negative terms whose first terms already exceed the cutoff). The decisions, and so the
+/// simplex trajectory and the result, are those of the exact search:
+///
+/// * reflection `x_r`: cutoff `f_worst` (inclusive). `f_r ≥ f_worst` means an inside
+///   contraction whatever `f_r` is, and `f_r` is not used again;
+/// * expansion `x_e`: cutoff `f_r` (inclusive): `f_e ≥ f_r` keeps `x_r`;
+/// * outside contraction: cutoff `f_r` (exclusive): `f_c > f_r` means shrink;
+/// * inside contraction: cutoff `f_worst` (inclusive): `f_c ≥ f_worst` means shrink;
+/// * start simplex and shrink points enter the simplex unconditionally: no cutoff.
+///
+/// A rejected point never enters the simplex, so only exact values are ever compared again;
+/// its lower bound is what the evaluation log records (`exact = false`).
+pub fn minimize_unit_box_with_cutoff<E>(
+    mut f: impl FnMut(&[f64], Option<Cutoff>) -> Result<Trial, E>,
+    x0: &[f64],
+    opts: &NelderMeadOptions,
+) -> Result<NelderMeadResult, E> {
     let d = x0.len();
     let mut evaluations: Vec<Evaluation> = Vec::new();
-    let mut eval = |x: &[f64], log: &mut Vec<Evaluation>| -> Result<f64, E> {
-        let v = f(x)?;
-        let v = if v.is_finite() { v } else { f64::INFINITY };
-        log.push(Evaluation {
-            x: x.to_vec(),
-            f: v,
-        });
-        Ok(v)
-    };
+    let mut eval_cut =
+        |x: &[f64], cut: Option<Cutoff>, log: &mut Vec<Evaluation>| -> Result<f64, E> {
+            let (v, exact) = match f(x, cut)? {
+                Trial::Exact(v) => (v, true),
+                Trial::AtLeast(lb) if cut.is_some_and(|c| c.rejects(lb)) => (lb, false),
+                // A bound that decides nothing breaks `f`'s contract; the search can only
+                // take it at face value.
+                Trial::AtLeast(lb) => {
+                    debug_assert!(
+                        cut.is_some_and(|c| c.rejects(lb)),
+                        "lower bound {lb} offered for cutoff {cut:?}"
+                    );
+                    (lb, true)
+                }
+            };
+            let v = if v.is_finite() { v } else { f64::INFINITY };
+            log.push(Evaluation {
+                x: x.to_vec(),
+                f: v,
+                exact,
+            });
+            Ok(v)
+        };
     let mut start = x0.to_vec();
     project(&mut start);
     let mut simplex: Vec<(Vec<f64>, f64)> = Vec::with_capacity(d + 1);
-    let f0 = eval(&start, &mut evaluations)?;
+    let f0 = eval_cut(&start, None, &mut evaluations)?;
     simplex.push((start.clone(), f0));
     for i in 0..d {
         let mut v = start.clone();
@@ -131,7 +199,7 @@ pub fn minimize_unit_box<E>(
             v[i] - opts.initial_step
         };
         project(&mut v);
-        let fv = eval(&v, &mut evaluations)?;
+        let fv = eval_cut(&v, None, &mut evaluations)?;
         simplex.push((v, fv));
     }
     let mut converged = false;
@@ -157,10 +225,18 @@ pub fn minimize_unit_box<E>(
             p
         };
         let xr = along(-1.0);
-        let fr = eval(&xr, &mut evaluations)?;
+        let worst = Cutoff {
+            value: simplex[d].1,
+            inclusive: true,
+        };
+        let fr = eval_cut(&xr, Some(worst), &mut evaluations)?;
         if fr < simplex[0].1 {
             let xe = along(-2.0);
-            let fe = eval(&xe, &mut evaluations)?;
+            let cut = Cutoff {
+                value: fr,
+                inclusive: true,
+            };
+            let fe = eval_cut(&xe, Some(cut), &mut evaluations)?;
             simplex[d] = if fe < fr { (xe, fe) } else { (xr, fr) };
             continue;
         }
@@ -171,11 +247,15 @@ pub fn minimize_unit_box<E>(
         // Contract outside (toward the reflected point) or inside (toward the worst).
         let (xc, fc, accept) = if fr < simplex[d].1 {
             let xc = along(-0.5);
-            let fc = eval(&xc, &mut evaluations)?;
+            let cut = Cutoff {
+                value: fr,
+                inclusive: false,
+            };
+            let fc = eval_cut(&xc, Some(cut), &mut evaluations)?;
             (xc, fc, fc <= fr)
         } else {
             let xc = along(0.5);
-            let fc = eval(&xc, &mut evaluations)?;
+            let fc = eval_cut(&xc, Some(worst), &mut evaluations)?;
             (xc, fc, fc < simplex[d].1)
         };
         if accept {
@@ -192,7 +272,7 @@ pub fn minimize_unit_box<E>(
                 .map(|k| best_x[k] + 0.5 * (v.0[k] - best_x[k]))
                 .collect();
             project(&mut p);
-            let fp = eval(&p, &mut evaluations)?;
+            let fp = eval_cut(&p, None, &mut evaluations)?;
             *v = (p, fp);
         }
     }
@@ -332,5 +412,75 @@ mod tests {
             &Default::default(),
         );
         assert_eq!(e.unwrap_err(), "boom");
+    }
+
+    /// A sum of non-negative terms evaluated term by term, stopping once the partial sum
+    /// decides the offered cutoff — the calibration's early rejection in miniature.
+    fn terms(x: &[f64]) -> Vec<f64> {
+        let c = [0.31, 0.62, 0.47];
+        let mut t: Vec<f64> = x
+            .iter()
+            .zip(c)
+            .enumerate()
+            .map(|(i, (a, b))| (i as f64 + 1.0) * (a - b).powi(2))
+            .collect();
+        // A coupled, non-smooth term, like the touchdown's refined bracket.
+        t.push(((x[0] + x[1] - 0.9) * 20.0).floor().abs() * 0.01);
+        t
+    }
+
+    #[test]
+    fn early_rejection_leaves_the_trajectory_unchanged() {
+        for (x0, step) in [([0.5, 0.5, 0.5], 0.15), ([0.05, 0.9, 0.2], 0.3)] {
+            let opts = NelderMeadOptions {
+                initial_step: step,
+                f_tolerance: 1e-10,
+                x_tolerance: 1e-6,
+                max_evaluations: 600,
+            };
+            let exact = minimize_unit_box(
+                |x| -> Result<f64, Infallible> { Ok(terms(x).iter().sum()) },
+                &x0,
+                &opts,
+            )
+            .unwrap();
+            let mut terms_summed = (0, 0);
+            let cut = minimize_unit_box_with_cutoff(
+                |x, cut| -> Result<Trial, Infallible> {
+                    let t = terms(x);
+                    terms_summed.1 += t.len();
+                    let mut partial = 0.0;
+                    for (k, v) in t.iter().enumerate() {
+                        terms_summed.0 += 1;
+                        // Later terms first, as the calibration leaves its costly term last.
+                        partial += v;
+                        if k + 1 < t.len() && cut.is_some_and(|c| c.rejects(partial)) {
+                            return Ok(Trial::AtLeast(partial));
+                        }
+                    }
+                    // The exact value summed in the same order as the reference.
+                    Ok(Trial::Exact(t.iter().sum()))
+                },
+                &x0,
+                &opts,
+            )
+            .unwrap();
+            // The same points in the same order; exact values bit for bit; bounds below.
+            assert_eq!(exact.evaluations.len(), cut.evaluations.len());
+            for (a, b) in exact.evaluations.iter().zip(&cut.evaluations) {
+                assert_eq!(a.x, b.x);
+                if b.exact {
+                    assert_eq!(a.f.to_bits(), b.f.to_bits());
+                } else {
+                    assert!(b.f <= a.f, "{} > {}", b.f, a.f);
+                }
+            }
+            assert_eq!(exact.x, cut.x);
+            assert_eq!(exact.f.to_bits(), cut.f.to_bits());
+            assert_eq!(exact.stop, cut.stop);
+            let rejected = cut.evaluations.iter().filter(|e| !e.exact).count();
+            assert!(rejected > 0, "no point was rejected early");
+            assert!(terms_summed.0 < terms_summed.1);
+        }
     }
 }

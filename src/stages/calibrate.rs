@@ -19,7 +19,10 @@ use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
 
-pub const MODEL_VERSION: &str = "calibrate-2";
+pub const MODEL_VERSION: &str = "calibrate-4";
+
+/// Hex digits of the fit-inputs fingerprint written to `result.json` (64 bits of blake3).
+pub const FIT_INPUTS_DIGITS: usize = 16;
 
 fn default_evaluations() -> usize {
     DEFAULT_MAX_EVALUATIONS
@@ -58,6 +61,19 @@ pub struct CalibrateConfig {
     /// Scan step of the fitted set's touchdown search from 0 nm (0.5 nm).
     #[serde(default)]
     pub touchdown_step: Option<Length>,
+    /// Start point of the search per knob in SI units (default: the spec defaults), e.g. a
+    /// previous fit's optimum (docs/calibration.md, "Warm start").
+    #[serde(default)]
+    pub start: BTreeMap<String, f64>,
+    /// Edge of the start simplex in unit-box coordinates (default 0.2).
+    #[serde(default)]
+    pub initial_step: Option<f64>,
+    /// The fit-inputs fingerprint `start` was fitted for (`convergence.fit_inputs` of that
+    /// run's `result.json`): when the current inputs' fingerprint differs, `start` and
+    /// `initial_step` are ignored and the fit runs from the spec defaults (docs/calibration.md,
+    /// "Warm start").
+    #[serde(default)]
+    pub start_fitted_for: Option<String>,
 }
 
 /// Validated settings.
@@ -66,6 +82,101 @@ pub struct CalibrateStage {
     pub base_name: String,
     pub base: SimulateParams,
     pub settings: CalibrationSettings,
+    /// `start_fitted_for`, lower case.
+    pub start_fitted_for: Option<String>,
+}
+
+/// How the warm start of one run was decided.
+#[derive(Debug, Clone, PartialEq)]
+pub enum WarmStart {
+    /// No `start`: the spec defaults.
+    None,
+    /// `start` without `start_fitted_for`: used as written.
+    Unguarded,
+    /// `start_fitted_for` matches the current fit inputs: used.
+    Matched,
+    /// `start_fitted_for` differs: `start` and `initial_step` dropped, the reason.
+    Ignored(String),
+}
+
+impl WarmStart {
+    fn name(&self) -> &'static str {
+        match self {
+            WarmStart::None => "none",
+            WarmStart::Unguarded => "unguarded",
+            WarmStart::Matched => "matched",
+            WarmStart::Ignored(_) => "ignored",
+        }
+    }
+}
+
+impl CalibrateStage {
+    /// Fingerprint of everything the fit's trajectory and optimum depend on, hex
+    /// ([`FIT_INPUTS_DIGITS`] digits): the stage's model version and the simulate cases'
+    /// (`slider::case`), the base instance's parameters, the cache keys of its upstream
+    /// entries (contact set, DMW record: their parameters and raw-file hashes), knobs with
+    /// bounds, fitted targets with weights, the touchdown search and the Nelder–Mead
+    /// tolerances. Left out: `start`, `initial_step` and `max_evaluations` (how the search is
+    /// run, not what it fits), and the held-out set with the base's actuation grid and
+    /// history actuations, which are evaluated only before and after the fit and never seen
+    /// by it (test `held_out_targets_do_not_influence_the_fit`). Canonical JSON of ordered
+    /// values only: no paths, no map iteration order.
+    pub fn fit_inputs(&self, upstream_key: impl Fn(&str) -> String) -> String {
+        let mut s = self.settings.clone();
+        s.start.clear();
+        s.search.initial_step = 0.0;
+        s.search.max_evaluations = 0;
+        s.held_out.clear();
+        s.sweep_grid.clear();
+        let mut base = self.base.canonical();
+        if let Some(o) = base.as_object_mut() {
+            o.remove("actuations_m");
+            o.remove("histories_m");
+        }
+        let upstream: Vec<Value> = self
+            .base
+            .upstream()
+            .iter()
+            .map(|n| json!({"name": n, "key": upstream_key(n)}))
+            .collect();
+        let mut h = crate::core::hash::hash_json(&json!({
+            "fingerprint": "calibrate-fit-inputs-1",
+            "model_version": MODEL_VERSION,
+            "case_model_version": crate::slider::case::MODEL_VERSION,
+            "base_parameters": base,
+            "upstream": upstream,
+            "settings": format!("{s:?}"),
+        }));
+        h.truncate(FIT_INPUTS_DIGITS);
+        h
+    }
+
+    /// The settings the run uses given the current fit inputs' fingerprint: a guarded start
+    /// whose fingerprint differs is dropped with `initial_step` (back to the default simplex).
+    pub fn effective_settings(&self, fit_inputs: &str) -> (CalibrationSettings, WarmStart) {
+        let mut s = self.settings.clone();
+        if s.start.is_empty() {
+            return (s, WarmStart::None);
+        }
+        let Some(given) = &self.start_fitted_for else {
+            return (s, WarmStart::Unguarded);
+        };
+        // A prefix of the full hash is accepted, so either length matches (≥ 16 digits).
+        if fit_inputs.starts_with(given.as_str()) || given.starts_with(fit_inputs) {
+            return (s, WarmStart::Matched);
+        }
+        s.start.clear();
+        s.search.initial_step = CalibrationSettings::new(Vec::new(), Vec::new())
+            .search
+            .initial_step;
+        let reason = format!(
+            "start_fitted_for = {given} but the fit's inputs now have fingerprint {fit_inputs}: \
+             `start` and `initial_step` were fitted for other inputs and are ignored; the fit \
+             runs from the spec defaults (update or delete `start`, `initial_step` and \
+             `start_fitted_for`)"
+        );
+        (s, WarmStart::Ignored(reason))
+    }
 }
 
 impl FromConfig for CalibrateStage {
@@ -255,11 +366,67 @@ impl FromConfig for CalibrateStage {
         for r in &settings.knobs {
             r.check().map_err(|e| err("bounds", e.to_string()))?;
         }
+        for (name, v) in &cfg.start {
+            let Some(r) = settings.knobs.iter().find(|r| r.knob.name() == name) else {
+                return Err(err(
+                    "start",
+                    format!("`{name}` is not one of the calibrated knobs"),
+                ));
+            };
+            if !(v.is_finite() && *v >= r.lo && *v <= r.hi) {
+                return Err(err(
+                    "start",
+                    format!("{name} = {v:e} is outside its box [{:e}, {:e}]", r.lo, r.hi),
+                ));
+            }
+            settings.start.push((r.knob, *v));
+        }
+        // The knobs' order, not the file's: the settings (and the cache key) stay canonical.
+        settings.start.sort_by_key(|(k, _)| {
+            settings
+                .knobs
+                .iter()
+                .position(|r| r.knob == *k)
+                .unwrap_or(usize::MAX)
+        });
+        if let Some(step) = cfg.initial_step {
+            if !(step > 0.0 && step <= 0.5) {
+                return Err(err(
+                    "initial_step",
+                    format!("{step} is out of range: 0 < step ≤ 0.5 (unit box)"),
+                ));
+            }
+            settings.search.initial_step = step;
+        }
+        let start_fitted_for = match &cfg.start_fitted_for {
+            None => None,
+            Some(f) => {
+                let ok = (FIT_INPUTS_DIGITS..=64).contains(&f.len())
+                    && f.chars().all(|c| c.is_ascii_hexdigit());
+                if !ok {
+                    return Err(err(
+                        "start_fitted_for",
+                        format!(
+                            "\"{f}\" is not a fit-inputs fingerprint: {FIT_INPUTS_DIGITS}–64 hex \
+                             digits, as in `convergence.fit_inputs` of the calibration's result.json"
+                        ),
+                    ));
+                }
+                if cfg.start.is_empty() {
+                    return Err(err(
+                        "start_fitted_for",
+                        "guards a warm start, but there is no `start` to guard".into(),
+                    ));
+                }
+                Some(f.to_ascii_lowercase())
+            }
+        };
         Ok(CalibrateStage {
             name: name.to_string(),
             base_name: cfg.simulate.clone(),
             base,
             settings,
+            start_fitted_for,
         })
     }
 }
@@ -389,6 +556,7 @@ impl StageKind for CalibrateStage {
             "base": self.base_name,
             "base_parameters": self.base.canonical(),
             "settings": format!("{:?}", self.settings),
+            "start_fitted_for": self.start_fitted_for,
         })
     }
     fn upstream(&self) -> Vec<String> {
@@ -402,9 +570,18 @@ impl StageKind for CalibrateStage {
         for r in &self.settings.knobs {
             r.knob.base_value(&base.model, &base.isbl)?;
         }
-        let budget = self.settings.search.max_evaluations;
-        ctx.progress.set_message(format!("0/{budget} evaluations"));
-        let result = calibrate(&base, &self.settings, |n, best| {
+        let fit_inputs = self.fit_inputs(|n| ctx.upstream_key(n));
+        let (settings, warm) = self.effective_settings(&fit_inputs);
+        if let WarmStart::Ignored(reason) = &warm {
+            ctx.progress
+                .set_message(format!("warning: {}: {reason}", self.name));
+            // …and in the entry's manifest, beside result.json's `convergence.start_ignored`.
+            ctx.log_run("warm_start_ignored", json!(reason));
+        }
+        let budget = settings.search.max_evaluations;
+        ctx.progress
+            .set_message(format!("fit inputs {fit_inputs}; 0/{budget} evaluations"));
+        let result = calibrate(&base, &settings, |n, best| {
             ctx.progress
                 .set_message(format!("{n}/{budget} evaluations, objective {best:.3}"));
         })?;
@@ -414,12 +591,12 @@ impl StageKind for CalibrateStage {
         let current: Vec<(f64, f64)> = result
             .history
             .iter()
-            .map(|(i, f, _)| (*i as f64 + 1.0, *f))
+            .map(|(i, f, _, _)| (*i as f64 + 1.0, *f))
             .collect();
         let best: Vec<(f64, f64)> = result
             .history
             .iter()
-            .map(|(i, _, b)| (*i as f64 + 1.0, *b))
+            .map(|(i, _, b, _)| (*i as f64 + 1.0, *b))
             .collect();
         crate::figures::semilogy_png(
             &ctx.out_dir.join("convergence.png"),
@@ -434,7 +611,7 @@ impl StageKind for CalibrateStage {
         )?;
         residuals_png(&ctx.out_dir.join("residuals.png"), &self.base_name, &result)?;
         let counts = InBandCounts::of(&result);
-        let log = summary_text(self, &result, &counts);
+        let log = summary_text(self, &settings, &fit_inputs, &warm, &result, &counts);
         let log_path = ctx.out_dir.join("calibration.log");
         std::fs::write(&log_path, &log).map_err(|e| crate::error::Error::io(&log_path, e))?;
         ctx.progress
@@ -459,8 +636,8 @@ impl StageKind for CalibrateStage {
         for (k, v) in &result.best.knobs {
             row.insert(k.name().into(), json!(v));
         }
-        let search = &self.settings.search;
-        let td = &self.settings.touchdown;
+        let search = &settings.search;
+        let td = &settings.touchdown;
         Ok(StageOutput {
             result: json!({
                 "base": self.base_name,
@@ -487,6 +664,15 @@ impl StageKind for CalibrateStage {
                     "final_f_spread": result.final_f_spread,
                     "final_x_spread": result.final_x_spread,
                     "max_evaluations": search.max_evaluations,
+                    "initial_step": search.initial_step,
+                    "start": fitted_json(&settings.start),
+                    "fit_inputs": fit_inputs,
+                    "start_fitted_for": self.start_fitted_for,
+                    "warm_start": warm.name(),
+                    "start_ignored": match &warm {
+                        WarmStart::Ignored(reason) => Some(reason.as_str()),
+                        _ => None,
+                    },
                 },
                 "at_bound": result.at_bound.iter().map(|(k, b)| json!({
                     "knob": k.name(), "bound": b.name(),
@@ -500,7 +686,8 @@ impl StageKind for CalibrateStage {
                 "failures": result.failures.iter().map(|(k, e)| json!({
                     "knobs": describe_knobs(k), "error": e,
                 })).collect::<Vec<_>>(),
-                "history": result.history.iter().map(|(i, f, b)| json!([i, f, b])).collect::<Vec<_>>(),
+                "history": result.history.iter().map(|(i, f, b, exact)| json!([i, f, b, exact])).collect::<Vec<_>>(),
+                "rejected_early": result.rejected,
                 "table": "calibration.parquet",
                 "log": "calibration.log",
             }),
@@ -533,9 +720,19 @@ impl InBandCounts {
 }
 
 /// The stage's log: counts, convergence, knobs (with bounds reached), every target.
-fn summary_text(stage: &CalibrateStage, r: &CalibrationResult, c: &InBandCounts) -> String {
+fn summary_text(
+    stage: &CalibrateStage,
+    settings: &CalibrationSettings,
+    fit_inputs: &str,
+    warm: &WarmStart,
+    r: &CalibrationResult,
+    c: &InBandCounts,
+) -> String {
     use std::fmt::Write;
     let mut s = String::new();
+    if let WarmStart::Ignored(reason) = warm {
+        let _ = writeln!(s, "WARNING: {reason}");
+    }
     let _ = writeln!(
         s,
         "{}: fitted set {}/{} → {}/{} in band, held-out set {}/{} → {}/{}; objective {:.3} → {:.3}; {} after {} evaluations ({} cases)",
@@ -562,9 +759,32 @@ fn summary_text(stage: &CalibrateStage, r: &CalibrationResult, c: &InBandCounts)
         s,
         "simplex: f spread {:.3e} (tolerance {:.1e}), unit-box edge {:.3e} (tolerance {:.1e})",
         r.final_f_spread,
-        stage.settings.search.f_tolerance,
+        settings.search.f_tolerance,
         r.final_x_spread,
-        stage.settings.search.x_tolerance
+        settings.search.x_tolerance
+    );
+    let _ = writeln!(
+        s,
+        "fit inputs: {fit_inputs}; warm start: {}",
+        match warm {
+            WarmStart::None => "none".to_string(),
+            WarmStart::Unguarded => "used as written, unguarded (no start_fitted_for: \
+                 it is not checked against the fit's inputs)"
+                .to_string(),
+            WarmStart::Matched => "used (start_fitted_for matches)".to_string(),
+            WarmStart::Ignored(_) => "ignored (see the warning above)".to_string(),
+        }
+    );
+    let _ = writeln!(
+        s,
+        "search: start simplex edge {} (unit box) at {}; {} trial points rejected early (touchdown search skipped)",
+        settings.search.initial_step,
+        if settings.start.is_empty() {
+            "the spec defaults".to_string()
+        } else {
+            describe_knobs(&settings.start)
+        },
+        r.rejected
     );
     let _ = writeln!(s, "knobs: {}", describe_knobs(&r.best.knobs));
     for (k, b) in &r.at_bound {
@@ -629,4 +849,185 @@ fn residuals_png(path: &std::path::Path, base: &str, r: &CalibrationResult) -> R
         1.0,
     )?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    /// A two-knob calibration of a one-point base (only its parameters matter here).
+    const BASE: &str = "[simulate.s]\nmodel = \"improved_2dof\"\ncontact = \"c\"\ndmw = \"d\"\n\
+                        actuations = [\"8.5 nm\"]\n";
+    const CAL: &str =
+        "\n[calibrate.k]\nsimulate = \"s\"\nknobs = [\"dmw_scale\", \"kr_stiffening_beta\"]\n";
+    const START: &str =
+        "start = { dmw_scale = 1.5, kr_stiffening_beta = 0.4 }\ninitial_step = 1e-3\n";
+
+    fn stage_of(
+        simulate_extra: &str,
+        extra: &str,
+    ) -> std::result::Result<CalibrateStage, ConfigError> {
+        let text = format!("{BASE}{simulate_extra}{CAL}{extra}");
+        let file = PipelineFile::parse(
+            Path::new("pipeline.toml"),
+            text,
+            &crate::stages::section_names(),
+        )?;
+        let cfg = file
+            .instance::<CalibrateConfig>("calibrate", "k")?
+            .expect("[calibrate.k]");
+        CalibrateStage::from_config(&file, "k", &cfg)
+    }
+    fn stage(extra: &str) -> CalibrateStage {
+        stage_of("", extra).unwrap()
+    }
+    fn keys(n: &str) -> String {
+        format!("entry-key-of-{n}")
+    }
+
+    #[test]
+    fn the_fingerprint_ignores_how_the_search_is_run() {
+        let plain = stage("").fit_inputs(keys);
+        assert_eq!(plain.len(), FIT_INPUTS_DIGITS);
+        assert!(plain.chars().all(|c| c.is_ascii_hexdigit()), "{plain}");
+        // Deterministic: a second stage from the same text, keys in another order of calls.
+        assert_eq!(stage("").fit_inputs(keys), plain);
+        for extra in [
+            START.to_string(),
+            "max_evaluations = 17\n".into(),
+            format!("{START}start_fitted_for = \"0123456789abcdef\"\n"),
+            // The held-out set is judged before and after the fit, never inside it.
+            "held_out = []\n".into(),
+        ] {
+            assert_eq!(stage(&extra).fit_inputs(keys), plain, "{extra}");
+        }
+        // …and so does the base's actuation grid (the held-out sweeps' only).
+        let text = BASE.replace("[\"8.5 nm\"]", "[\"8.5 nm\", \"12 nm\"]");
+        let file = PipelineFile::parse(
+            Path::new("pipeline.toml"),
+            format!("{text}{CAL}"),
+            &crate::stages::section_names(),
+        )
+        .unwrap();
+        let cfg = file
+            .instance::<CalibrateConfig>("calibrate", "k")
+            .unwrap()
+            .unwrap();
+        let s = CalibrateStage::from_config(&file, "k", &cfg).unwrap();
+        assert_eq!(s.fit_inputs(keys), plain);
+    }
+
+    #[test]
+    fn the_fingerprint_changes_with_every_input_of_the_fit() {
+        let plain = stage("").fit_inputs(keys);
+        let changed = [
+            (
+                "weight",
+                stage("weights = { \"clearance_8.5nm\" = 2.0 }\n").fit_inputs(keys),
+            ),
+            (
+                "bounds",
+                stage("bounds = { dmw_scale = [0.5, 3.0] }\n").fit_inputs(keys),
+            ),
+            (
+                "targets",
+                stage("targets = [\"clearance_8.5nm\", \"fhm_8.5nm\"]\n").fit_inputs(keys),
+            ),
+            ("knobs", {
+                let t =
+                    format!("{BASE}\n[calibrate.k]\nsimulate = \"s\"\nknobs = [\"dmw_scale\"]\n");
+                let file =
+                    PipelineFile::parse(Path::new("p.toml"), t, &crate::stages::section_names())
+                        .unwrap();
+                let cfg = file
+                    .instance::<CalibrateConfig>("calibrate", "k")
+                    .unwrap()
+                    .unwrap();
+                CalibrateStage::from_config(&file, "k", &cfg)
+                    .unwrap()
+                    .fit_inputs(keys)
+            }),
+            (
+                "touchdown",
+                stage("touchdown_step = \"0.25 nm\"\n").fit_inputs(keys),
+            ),
+            (
+                "base parameter",
+                stage_of("kr_stiffening_beta = 0.5\n", "")
+                    .unwrap()
+                    .fit_inputs(keys),
+            ),
+            (
+                "base option",
+                stage_of("transit_delay = false\n", "")
+                    .unwrap()
+                    .fit_inputs(keys),
+            ),
+            // The contact set's or DMW record's entry (its parameters or raw-file hash).
+            (
+                "upstream key",
+                stage("").fit_inputs(|n| if n == "d" { "other".into() } else { keys(n) }),
+            ),
+        ];
+        for (what, f) in &changed {
+            assert_ne!(f, &plain, "{what}");
+        }
+    }
+
+    #[test]
+    fn a_guarded_start_is_used_only_for_its_own_inputs() {
+        let plain = stage("");
+        let fp = plain.fit_inputs(keys);
+        // Matching (also as a longer or upper-case spelling of the same hash).
+        for given in [fp.clone(), fp.to_ascii_uppercase()] {
+            let s = stage(&format!("{START}start_fitted_for = \"{given}\"\n"));
+            let (used, warm) = s.effective_settings(&s.fit_inputs(keys));
+            assert_eq!(warm, WarmStart::Matched);
+            assert_eq!(used.start.len(), 2);
+            assert_eq!(used.search.initial_step, 1e-3);
+        }
+        // Mismatching: the settings are exactly those of the same block without a start, so
+        // the run is the full fit from the spec defaults with the default simplex.
+        let other = if fp.starts_with('0') { "1" } else { "0" }.repeat(FIT_INPUTS_DIGITS);
+        let s = stage(&format!("{START}start_fitted_for = \"{other}\"\n"));
+        let (used, warm) = s.effective_settings(&s.fit_inputs(keys));
+        let WarmStart::Ignored(reason) = warm else {
+            panic!("{warm:?}")
+        };
+        assert!(reason.contains(&other) && reason.contains(&fp), "{reason}");
+        assert_eq!(used, plain.settings);
+        assert_eq!(used.search.initial_step, 0.2);
+        // Unguarded: used as written; no start: nothing to decide.
+        let s = stage(START);
+        let (used, warm) = s.effective_settings(&s.fit_inputs(keys));
+        assert_eq!((warm, used.start.len()), (WarmStart::Unguarded, 2));
+        assert_eq!(plain.effective_settings(&fp).1, WarmStart::None);
+        // The guard is in the cache key (it decides what runs).
+        assert_ne!(
+            stage(&format!("{START}start_fitted_for = \"{other}\"\n")).params(),
+            stage(START).params()
+        );
+    }
+
+    #[test]
+    fn a_bad_start_fitted_for_names_the_key() {
+        for (extra, says) in [
+            (
+                format!("{START}start_fitted_for = \"not-hex-at-all!!\"\n"),
+                "hex digits",
+            ),
+            (format!("{START}start_fitted_for = \"abc\"\n"), "hex digits"),
+            (
+                "start_fitted_for = \"0123456789abcdef\"\n".into(),
+                "no `start`",
+            ),
+        ] {
+            let msg = stage_of("", &extra).err().expect(&extra).to_string();
+            assert!(
+                msg.contains("start_fitted_for") && msg.contains(says),
+                "{msg}"
+            );
+        }
+    }
 }
