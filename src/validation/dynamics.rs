@@ -17,6 +17,8 @@ use super::pipeline::{self, Cache, Stored};
 use super::{Calibrated, Class, Ordering, Origin, Relation, Row, Tolerance};
 use crate::contact::isbl::{IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
+use crate::core::cache::Store;
+use crate::core::cases::{get_or_compute, CaseError};
 use crate::dmw::excitation_tracks::{quadratic_chirp, synthetic_dmw, Excitation};
 use crate::dynamics::air_bearing::heave_pitch_modes;
 use crate::dynamics::metrics::{
@@ -26,7 +28,7 @@ use crate::dynamics::params::{improved_2dof, initial_2dof, Model2Dof};
 use crate::dynamics::touchdown::{find_touchdown, TouchdownSearch};
 use crate::dynamics::two_dof::{DmwInput, SimOptions, TwoDofCase};
 use rayon::prelude::*;
-use serde_json::Value;
+use serde_json::{json, Value};
 use std::path::Path;
 use std::sync::Mutex;
 
@@ -376,18 +378,128 @@ fn sweep_point(p: &Pt) -> SweepPoint {
     }
 }
 
-/// One case, run now.
+/// The options of every computed case.
+fn case_options(static_init: bool) -> SimOptions {
+    SimOptions {
+        static_init,
+        ..SimOptions::default()
+    }
+}
+
+/// Where a computed sweep's cases are kept between runs once the pipeline has run: its
+/// content-addressed case store (`core::cases`), keyed by everything a case depends on, so
+/// `hdi validate` after `hdi run` (whose report computed them) reads them back (docs/validation.md).
+struct CaseStore<'a> {
+    store: &'a Store,
+    /// What every case of the sweep shares: model, interface, DMW content, metrics.
+    inputs: Value,
+}
+
+/// Version of the stored validation cases: the slider cases' own (the same integrator and
+/// metrics) and of the stored record's layout.
+fn case_version() -> String {
+    format!("validate-2dof-1/{}", crate::slider::case::MODEL_VERSION)
+}
+
+/// Why a stored validation case has no result.
+#[derive(Debug)]
+enum StoredCaseError {
+    /// The case did not run (its row shows no value, as without the store).
+    Failed,
+    /// The store could not take the case (e.g. a read-only project).
+    Store,
+}
+
+impl From<CaseError> for StoredCaseError {
+    fn from(_: CaseError) -> Self {
+        StoredCaseError::Store
+    }
+}
+
+impl Pt {
+    /// Every field's bits: the stored record gives back exactly the computed numbers (NaN
+    /// and infinities too, which JSON numbers cannot carry).
+    fn to_bits_json(self) -> Value {
+        json!([
+            self.h.to_bits(),
+            self.clearance.to_bits(),
+            self.fhm.to_bits(),
+            self.solid.to_bits(),
+            self.fc.to_bits(),
+            self.q.to_bits(),
+            self.ar.to_bits(),
+            self.adhesion.to_bits(),
+            self.mu_inst.to_bits(),
+            self.pm_inst.to_bits(),
+            self.tau_inst.to_bits(),
+        ])
+    }
+
+    fn from_bits_json(v: &Value) -> Option<Pt> {
+        let a = v.as_array()?;
+        if a.len() != 11 {
+            return None;
+        }
+        let f = |i: usize| a[i].as_u64().map(f64::from_bits);
+        Some(Pt {
+            h: f(0)?,
+            clearance: f(1)?,
+            fhm: f(2)?,
+            solid: f(3)?,
+            fc: f(4)?,
+            q: f(5)?,
+            ar: f(6)?,
+            adhesion: f(7)?,
+            mu_inst: f(8)?,
+            pm_inst: f(9)?,
+            tau_inst: f(10)?,
+        })
+    }
+}
+
+/// One case: from the case store when there is one and it has the case, else run now (and
+/// stored). A case that fails is not stored: it fails again next time, as without the store.
 fn run_case(
     model: &Model2Dof,
     isbl: &IsblLookup,
     h: f64,
     dmw: &Excitation,
     static_init: bool,
+    cases: Option<&CaseStore>,
 ) -> Option<Pt> {
-    let options = SimOptions {
-        static_init,
-        ..SimOptions::default()
+    let Some(cs) = cases else {
+        return simulate_case(model, isbl, h, dmw, static_init);
     };
+    let params = json!({
+        "sweep": cs.inputs,
+        "options": format!("{:?}", case_options(static_init)),
+        "actuation_m": h,
+    });
+    let mut computed = None;
+    let entry = get_or_compute(cs.store, &case_version(), &params, |_| {
+        let pt = simulate_case(model, isbl, h, dmw, static_init).ok_or(StoredCaseError::Failed)?;
+        computed = Some(pt);
+        Ok::<_, StoredCaseError>(pt.to_bits_json())
+    });
+    match entry {
+        Ok(e) => Pt::from_bits_json(&e.result)
+            .or(computed)
+            .or_else(|| simulate_case(model, isbl, h, dmw, static_init)),
+        Err(StoredCaseError::Failed) => None,
+        // The store could not take it: the value is what was computed.
+        Err(StoredCaseError::Store) => computed,
+    }
+}
+
+/// One case, run now.
+fn simulate_case(
+    model: &Model2Dof,
+    isbl: &IsblLookup,
+    h: f64,
+    dmw: &Excitation,
+    static_init: bool,
+) -> Option<Pt> {
+    let options = case_options(static_init);
     let input = DmwInput {
         displacement: &dmw.displacement,
         velocity: &dmw.velocity,
@@ -426,10 +538,11 @@ fn run_sweep(
     grid: &[f64],
     after_touchdown: &[f64],
     inputs: &str,
+    cases: Option<&CaseStore>,
 ) -> Sweep {
     let done: Mutex<Vec<Pt>> = Mutex::new(
         grid.par_iter()
-            .filter_map(|&h| run_case(model, isbl, h * NM, dmw, static_init))
+            .filter_map(|&h| run_case(model, isbl, h * NM, dmw, static_init, cases))
             .collect(),
     );
     let known: Vec<(f64, bool)> = done
@@ -442,7 +555,7 @@ fn run_sweep(
     let td = find_touchdown(&search, &known, |hs: &[f64]| {
         let pts: Vec<Option<Pt>> = hs
             .par_iter()
-            .map(|&h| run_case(model, isbl, h, dmw, static_init))
+            .map(|&h| run_case(model, isbl, h, dmw, static_init, cases))
             .collect();
         let touches = pts
             .iter()
@@ -458,7 +571,7 @@ fn run_sweep(
     if let Some(t) = td {
         let extra: Vec<Pt> = after_touchdown
             .par_iter()
-            .filter_map(|&dh| run_case(model, isbl, t + dh * NM, dmw, static_init))
+            .filter_map(|&dh| run_case(model, isbl, t + dh * NM, dmw, static_init, cases))
             .collect();
         if let Ok(mut d) = done.lock() {
             d.extend(extra);
@@ -1095,6 +1208,37 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
     let mut optimised_grid: Vec<f64> = (4..=16).map(|i| i as f64 * 0.5).collect();
     optimised_grid.extend((1..=12).map(|i| 8.0 + 0.2 * i as f64));
     optimised_grid.extend([12.0, 13.0]);
+    // The case store of a pipeline that has run (a validation before the first run creates
+    // nothing in the project).
+    let store = cache
+        .as_ref()
+        .map(|c| c.store())
+        .filter(|s| s.processed().join(".hdi").is_dir());
+    let dmw_blake3 = {
+        let mut h = blake3::Hasher::new();
+        h.update(&track.fs.to_le_bytes());
+        for x in track.displacement.iter().chain(&track.velocity) {
+            h.update(&x.to_le_bytes());
+        }
+        h.finalize().to_hex().to_string()
+    };
+    let case_store = |model: &Model2Dof, interface: IsblParams| {
+        store.map(|store| CaseStore {
+            store,
+            inputs: json!({
+                "model_parameters": format!("{model:?}"),
+                "interface": format!("{interface:?}"),
+                "dmw_blake3": dmw_blake3,
+                "case_params": format!("{:?}", CaseParams::improved_2dof()),
+            }),
+        })
+    };
+    let improved_cases = case_store(&improved_model, IsblParams::improved_2dof());
+    let initial_cases = case_store(&initial_2dof(), IsblParams::initial_2dof());
+    let optimised_cases = optimised_model
+        .as_ref()
+        .ok()
+        .and_then(|m| case_store(m, IsblParams::improved_2dof()));
     let ((s_improved, s_initial), s_optimised) = rayon::join(
         || {
             rayon::join(
@@ -1107,6 +1251,7 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
                         &improved_grid(),
                         &[0.2],
                         &format!("{synth}, static start"),
+                        improved_cases.as_ref(),
                     )
                 },
                 || {
@@ -1118,6 +1263,7 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
                         &initial_grid,
                         &[],
                         &format!("{synth}, static start"),
+                        initial_cases.as_ref(),
                     )
                 },
             )
@@ -1132,6 +1278,7 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
                     &optimised_grid,
                     &[],
                     &format!("{synth}, static start"),
+                    optimised_cases.as_ref(),
                 )
             })
         },
@@ -1230,5 +1377,41 @@ mod tests {
         // K rows do not depend on the dropped inputs: no alternative values.
         let k = target_row(clearance_target(Class::K, &value), &own, cached, "v");
         assert!(k.record.is_none() && k.calibrated.is_none());
+    }
+
+    /// A computed case stored and read back is the case computed directly, bit for bit
+    /// (NaN fields too); a case of another model is another entry, not a hit.
+    #[test]
+    fn stored_cases_read_back_bit_for_bit_and_are_keyed_by_their_inputs() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap();
+        let isbl = interface(IsblParams::improved_2dof()).unwrap();
+        let track = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1).unwrap();
+        let model = improved_2dof();
+        let bits = |p: &Pt| Pt::to_bits_json(*p);
+        // 5 nm: flying, so μ, P_m and τ are NaN (no loaded sample).
+        let direct = simulate_case(&model, &isbl, 5.0 * NM, &track, true).unwrap();
+        assert!(direct.mu_inst.is_nan());
+        let cs = |inputs: &str| CaseStore {
+            store: &store,
+            inputs: json!({ "model_parameters": inputs }),
+        };
+        let a = cs("improved");
+        let first = run_case(&model, &isbl, 5.0 * NM, &track, true, Some(&a)).unwrap();
+        let entries = store.entries().len();
+        assert_eq!(entries, 1);
+        // Under the same key a different model (which gives other numbers) reads the entry:
+        // the store answered, nothing was recomputed.
+        let other = initial_2dof();
+        let second = run_case(&other, &isbl, 5.0 * NM, &track, true, Some(&a)).unwrap();
+        assert_eq!(bits(&first), bits(&direct));
+        assert_eq!(bits(&second), bits(&direct));
+        let recomputed = simulate_case(&other, &isbl, 5.0 * NM, &track, true).unwrap();
+        assert_ne!(bits(&recomputed), bits(&direct));
+        assert_eq!(store.entries().len(), entries);
+        // Other inputs: another key, a new entry.
+        let b = cs("other");
+        run_case(&model, &isbl, 5.0 * NM, &track, true, Some(&b)).unwrap();
+        assert_eq!(store.entries().len(), entries + 1);
     }
 }

@@ -32,6 +32,11 @@ impl Cache {
         Ok(Cache { store, plan })
     }
 
+    /// The pipeline's store (its case store holds `hdi validate`'s computed 2-DOF cases).
+    pub fn store(&self) -> &Store {
+        &self.store
+    }
+
     /// The current result of the instance `name`, `None` if it has not run (or is stale).
     pub fn current(&self, name: &str) -> Option<Stored> {
         let p = self
