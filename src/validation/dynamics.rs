@@ -530,6 +530,8 @@ fn simulate_case(
 /// A sweep computed now: `grid` (nm) in parallel, then touchdown by the one convention (scan
 /// from 0 nm on a 0.5 nm grid, the sweep's own cases reused, refined to 0.02 nm), then the
 /// `extra` actuations (nm) relative to touchdown (e.g. TD + 0.2 nm).
+// The case's inputs one by one, as `run_case` takes them, plus the sweep's own.
+#[allow(clippy::too_many_arguments)]
 fn run_sweep(
     model: &Model2Dof,
     isbl: &IsblLookup,
