@@ -25,7 +25,7 @@ mod ldv;
 pub use ldv::{write_ldv, write_ldv_hdf5_counts};
 
 /// Bump when the numbers this stage produces change.
-pub const MODEL_VERSION: &str = "dmw-1";
+pub const MODEL_VERSION: &str = "dmw-2";
 
 fn default_sensitivity() -> Sensitivity {
     Sensitivity(0.025)
