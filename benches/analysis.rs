@@ -10,21 +10,13 @@ use hdi::analysis::series::spectrum;
 use hdi::signal::rfft::RealFft;
 use hdi::signal::spectrum::Window;
 use rustfft::num_complex::Complex64;
-use std::f64::consts::PI;
 use std::hint::black_box;
 
 const FS: f64 = 4e6;
 
-/// A chirp 10 kHz → 500 kHz plus a 275 kHz line: something for every scale to see.
+/// The shared benchmark signal (also `hdi bench` and `bench/compare.py`).
 fn series(n: usize) -> Vec<f64> {
-    let t_total = n as f64 / FS;
-    (0..n)
-        .map(|i| {
-            let t = i as f64 / FS;
-            (2.0 * PI * (10e3 * t + 0.5 * 490e3 / t_total * t * t)).cos()
-                + 0.3 * (2.0 * PI * 275e3 * t).sin()
-        })
-        .collect()
+    hdi::samples::chirp_with_line(n, FS)
 }
 
 fn analysis(c: &mut Criterion) {

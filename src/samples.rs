@@ -298,3 +298,18 @@ pub fn write_profilometer_samples(dir: &Path) -> Result<Vec<PathBuf>> {
     files.push(meta_path);
     Ok(files)
 }
+
+/// The benchmarks' test signal (`hdi bench`, `benches/analysis.rs`, `bench/compare.py`): a
+/// chirp 10 kHz → 500 kHz plus a 275 kHz line of amplitude 0.3, sampled at `fs`, so every CWT
+/// scale of 5 kHz–1 MHz has something to see.
+pub fn chirp_with_line(n: usize, fs: f64) -> Vec<f64> {
+    use std::f64::consts::PI;
+    let t_total = n as f64 / fs;
+    (0..n)
+        .map(|i| {
+            let t = i as f64 / fs;
+            (2.0 * PI * (10e3 * t + 0.5 * 490e3 / t_total * t * t)).cos()
+                + 0.3 * (2.0 * PI * 275e3 * t).sin()
+        })
+        .collect()
+}

@@ -257,18 +257,9 @@ fn synthetic_map(size: usize) -> HeightMap {
     map
 }
 
-/// A chirp 10 kHz → 500 kHz plus a 275 kHz line (as in benches/analysis.rs and
-/// bench/compare.py): something for every CWT scale to see.
+/// The shared benchmark signal (`hdi::samples::chirp_with_line`, also `benches/analysis.rs`).
 fn series(n: usize) -> Vec<f64> {
-    use std::f64::consts::PI;
-    let t_total = n as f64 / FS;
-    (0..n)
-        .map(|i| {
-            let t = i as f64 / FS;
-            (2.0 * PI * (10e3 * t + 0.5 * 490e3 / t_total * t * t)).cos()
-                + 0.3 * (2.0 * PI * 275e3 * t).sin()
-        })
-        .collect()
+    hdi::samples::chirp_with_line(n, FS)
 }
 
 /// A float `.npy` array (f8 or f4, either byte order, C or Fortran order): its shape and
