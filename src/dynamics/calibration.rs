@@ -1056,7 +1056,7 @@ pub fn apply_knobs(
 /// ISBL table of the 2-DOF cases (the simulate stage's grid).
 pub fn interface_table(isbl: IsblParams) -> Result<IsblLookup> {
     IsblModel::new(isbl)
-        .and_then(IsblLookup::build_standard)
+        .and_then(IsblLookup::build_standard_unverified)
         .map_err(|e| DynamicsError::Numerical(format!("interface table: {e}")))
 }
 

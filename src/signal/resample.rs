@@ -288,6 +288,8 @@ impl<'a> HermiteTrack<'a> {
     /// returns the end sample's `(D, V)` (value and measured slope of the nearest end), which
     /// keeps an ODE step that overshoots slightly well-behaved; callers that must not rely on
     /// that check the range with [`duration`](Self::duration). A NaN `t` gives NaN.
+    /// Inlined: three calls per 2-DOF right-hand side, ~10 % of a cold main job's CPU as a call.
+    #[inline]
     pub fn eval(&self, t: f64) -> (f64, f64) {
         let n = self.d.len();
         let position = (t - self.t0) * self.fs;

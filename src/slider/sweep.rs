@@ -62,7 +62,7 @@ impl PreparedSweep {
             let fitted = crate::artefacts::bulge::upstream_bulge(upstream, b)?;
             calibrated.apply_bulge(&fitted, b)?;
         }
-        let isbl = IsblLookup::build_standard(IsblModel::new(isbl_params)?)?;
+        let isbl = IsblLookup::build_standard_unverified(IsblModel::new(isbl_params)?)?;
         let dmw = match (&calibrated.dmw, dmw_track) {
             (Some(d), Some(t)) => Some((t, key_of(d))),
             _ => None,

@@ -1094,7 +1094,7 @@ impl BaseInputs {
 fn prepare_inputs(p: &DoeParams, ctx: &StageContext) -> Result<BaseInputs> {
     let (isbl_params, dmw_track) = base_inputs(&p.base, &ctx.upstream, &ctx.upstream_dirs)?;
     ctx.progress.set_message("interface table");
-    let isbl = IsblLookup::build_standard(IsblModel::new(isbl_params)?)?;
+    let isbl = IsblLookup::build_standard_unverified(IsblModel::new(isbl_params)?)?;
     Ok(BaseInputs {
         isbl,
         contact_key: ctx.upstream_key(&p.base.contact),

@@ -597,7 +597,7 @@ impl StageKind for ThreeDofStage {
             if variable {
                 ip.surface_energy = SurfaceEnergy::seed_variable();
             }
-            Ok(IsblLookup::build_standard(IsblModel::new(ip)?)?)
+            Ok(IsblLookup::build_standard_unverified(IsblModel::new(ip)?)?)
         };
         let isbl_solid = build(false)?;
         let isbl_mtl = if p.cases.iter().any(|c| matches!(c, CaseInterface::Mtl(_))) {

@@ -93,7 +93,7 @@ fn modal_rows(model: &Model3Dof) -> Vec<Row> {
 fn twelve_nm_rows(model: &Model3Dof) -> Vec<Row> {
     let run = || -> Result<(f64, f64), String> {
         let isbl = IsblModel::new(IsblParams::three_dof())
-            .and_then(IsblLookup::build_standard)
+            .and_then(IsblLookup::build_standard_unverified)
             .map_err(|e| e.to_string())?;
         let interface = FeatureInterface::new(
             &isbl,
@@ -242,7 +242,7 @@ fn run_table_4_4(model: &Model3Dof) -> Result<Vec<CaseBv>, String> {
     let mut ip = IsblParams::three_dof();
     ip.surface_energy = SurfaceEnergy::seed_variable();
     let isbl = IsblModel::new(ip)
-        .and_then(IsblLookup::build_standard)
+        .and_then(IsblLookup::build_standard_unverified)
         .map_err(|e| e.to_string())?;
     let d = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1).map_err(|e| e.to_string())?;
     let flip = |x: &[f64], sign: f64| x.iter().rev().map(|v| sign * v).collect::<Vec<_>>();

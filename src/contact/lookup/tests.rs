@@ -285,3 +285,30 @@ fn lazy_lookup_is_bit_identical_to_the_full_lookup() {
         assert!(lookup.at_lazy(f64::NAN).is_err());
     }
 }
+
+#[test]
+fn the_unverified_table_is_the_verified_one_bit_for_bit() {
+    for params in [IsblParams::improved_2dof(), IsblParams::mtl_table_3_2()] {
+        let verified = isbl(params);
+        let plain = IsblLookup::build_standard_unverified(IsblModel::new(params).unwrap()).unwrap();
+        assert!(!verified.verified_error().is_empty());
+        assert!(plain.verified_error().is_empty());
+        let sigma = params.sigma;
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        // Below, inside and above the table (h* from −6 to 25).
+        for _ in 0..2000 {
+            let h = rng.uniform(-6.0, 25.0) * sigma;
+            let (a, b) = (verified.at(h).unwrap(), plain.at(h).unwrap());
+            for (x, y) in [
+                (a.pressure, b.pressure),
+                (a.stiffness, b.stiffness),
+                (a.real_area_fraction, b.real_area_fraction),
+                (a.friction, b.friction),
+                (a.adhesion, b.adhesion),
+                (a.adhesion_gradient, b.adhesion_gradient),
+            ] {
+                assert_eq!(x.to_bits(), y.to_bits(), "h = {h:e}");
+            }
+        }
+    }
+}
