@@ -419,9 +419,9 @@ impl ThreeDofParams {
             "steady_start_s": self.steady_start,
             "transit_delay": o.transit_delay,
             "dmw_wrap": o.wrap_dmw,
-            "tracks": format!("{:?}", o.tracks),
-            "init": format!("{:?}", o.init),
-            "ab_spring_law": format!("{:?}", self.spring_law),
+            "tracks": o.tracks,
+            "init": o.init,
+            "ab_spring_law": self.spring_law,
             "pushback_curve": self.pushback,
         });
         // Only instances with a fitted bulge carry the key: the others keep theirs.
@@ -432,10 +432,7 @@ impl ThreeDofParams {
         if let (ContactForceForm::StaticCurve | ContactForceForm::IntegratedStiffness, Some(obj)) =
             (self.contact_force, v.as_object_mut())
         {
-            obj.insert(
-                "contact_force".into(),
-                json!(format!("{:?}", self.contact_force)),
-            );
+            obj.insert("contact_force".into(), json!(self.contact_force));
         }
         v
     }
@@ -514,7 +511,7 @@ mod tests {
         assert!(plain.canonical().get("contact_force").is_none());
         let soft = params(&format!("{base}\ncontact_force = \"integrated_stiffness\""));
         assert_eq!(soft.contact_force, ContactForceForm::IntegratedStiffness);
-        assert_eq!(soft.canonical()["contact_force"], "IntegratedStiffness");
+        assert_eq!(soft.canonical()["contact_force"], "integrated_stiffness");
         assert_ne!(soft.canonical(), plain.canonical());
         let cfg: ThreeDofConfig =
             toml::from_str(&format!("{base}\ncontact_force = \"hertz\"")).unwrap();
