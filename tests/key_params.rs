@@ -25,11 +25,18 @@ fn debug_looking(s: &str) -> bool {
             return true;
         }
     }
-    let camel = s.len() > 1
-        && s.as_bytes()[0].is_ascii_uppercase()
-        && s.bytes().all(|c| c.is_ascii_alphanumeric())
-        && s.bytes().any(|c| c.is_ascii_lowercase());
-    camel
+    let camel = |w: &str| {
+        w.len() > 1
+            && w.as_bytes()[0].is_ascii_uppercase()
+            && w.bytes().all(|c| c.is_ascii_alphanumeric())
+            && w.bytes().any(|c| c.is_ascii_lowercase())
+    };
+    // A bare variant, or a Debug list of them (`[Up, Down]`).
+    camel(s)
+        || (s.starts_with('[')
+            && s.split(['[', ']', ',', ' '])
+                .filter(|w| !w.is_empty())
+                .any(camel))
 }
 
 /// Every string in `v` (keys and values) that looks like `Debug` output, with its path.
