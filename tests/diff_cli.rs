@@ -415,11 +415,11 @@ fn a_changed_model_parameter_is_a_readable_dotted_key() {
     let p = Project::shipped();
     let cfg = p.config();
     // The optimised sweep's assumed bulge width (§2.3: dropped from the text, 50 µm assumed).
-    let line = "\nbulge_width = \"50 um\"\n";
+    let line = "[simulate.optimised_sweep]\nmodel = \"improved_2dof\"\ngeometry = \"optimised\"\nbulge_width = \"50 um\"\n";
     assert_eq!(cfg.matches(line).count(), 1);
     std::fs::write(
         p.path().join("wider.toml"),
-        cfg.replace(line, "\nbulge_width = \"60 um\"\n"),
+        cfg.replace(line, &line.replace("50 um", "60 um")),
     )
     .unwrap();
     let (o, v) = diff_json(
@@ -459,7 +459,7 @@ fn a_changed_model_parameter_is_a_readable_dotted_key() {
         .unwrap()["why"]
         .to_string();
     assert!(
-        why.contains("model_parameters.bulge.full_width_y: 5e-5 → 6e-5"),
+        why.contains("model_parameters.bulge.full_width_y: 0.00005 → 0.00006"),
         "{why}"
     );
 }
