@@ -109,6 +109,11 @@ CONTACT_ENUMS = {"None": "none", "McCool": "mccool", "JunctionShear": "junction_
 def h5_canon(path, t, old_side):
     import h5py, numpy as np
     out = []
+    def plain(a):
+        # Variable-length strings are objects (pointers in memory): compare their values.
+        if a.dtype == object:
+            return repr([x.decode() if isinstance(x, bytes) else x for x in a.ravel().tolist()])
+        return a.tobytes()
     def attrs(obj):
         a = {}
         for k, v in obj.attrs.items():
@@ -127,7 +132,7 @@ def h5_canon(path, t, old_side):
                 elif k == 'parameters':
                     v = json.dumps(json.loads(v))
             elif isinstance(v, np.ndarray):
-                v = (str(v.dtype), v.shape, v.tobytes())
+                v = (str(v.dtype), v.shape, plain(v))
             else:
                 v = repr(v)
             a[k] = v
@@ -137,7 +142,7 @@ def h5_canon(path, t, old_side):
         def visit(name, obj):
             if isinstance(obj, h5py.Dataset):
                 d = obj[()]
-                d = (str(obj.dtype), obj.shape, d.tobytes() if hasattr(d, 'tobytes') else repr(d))
+                d = (str(obj.dtype), obj.shape, plain(d) if isinstance(d, np.ndarray) else repr(d))
                 out.append((name, 'dataset', d, attrs(obj)))
             else:
                 out.append((name, 'group', attrs(obj)))

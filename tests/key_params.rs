@@ -141,6 +141,16 @@ fn shipped_key_params_are_plain_data() {
         sweep["options"]["contact_force"],
         json!("interference_tangent")
     );
+    // SI numbers that read back bit for bit from the key's JSON text (the slider mass is
+    // derived, ρ·l·l_w·l_t of Table 2.1, so not a short decimal).
+    let text = sweep.to_string();
+    let back: Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(&back, sweep);
+    let model = hdi::dynamics::params::improved_2dof();
+    let mass = back["model_parameters"]["slider"]["mass"].as_f64().unwrap();
+    assert_eq!(mass.to_bits(), model.slider.mass.to_bits(), "{text}");
+    let beta = &back["model_parameters"]["air_bearing"]["stiffening"]["quadratic"]["beta"];
+    assert_eq!(beta, &json!(1.0), "{text}");
 }
 
 /// The shipped calibration's warm start names the fit-inputs fingerprint it was fitted for
