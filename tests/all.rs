@@ -11,6 +11,7 @@ mod diff_cli;
 mod dmw_cli;
 mod doe_cli;
 mod json_schemas;
+mod key_params;
 mod pipeline_cache;
 mod report_cli;
 mod rfft_numpy;

@@ -406,3 +406,60 @@ fn bad_paths_are_one_clear_error_with_exit_2() {
     assert_clean_failure(&o, "--rtol must be a finite number");
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// A model parameter changed in a `[simulate]` table shows up as a readable dotted key of the
+/// model's fields (key params are plain data, docs/architecture.md), with SI numbers on both
+/// sides — not as a changed `Debug` string of the whole model.
+#[test]
+fn a_changed_model_parameter_is_a_readable_dotted_key() {
+    let p = Project::shipped();
+    let cfg = p.config();
+    // The optimised sweep's assumed bulge width (§2.3: dropped from the text, 50 µm assumed).
+    let line = "[simulate.optimised_sweep]\nmodel = \"improved_2dof\"\ngeometry = \"optimised\"\nbulge_width = \"50 um\"\n";
+    assert_eq!(cfg.matches(line).count(), 1);
+    std::fs::write(
+        p.path().join("wider.toml"),
+        cfg.replace(line, &line.replace("50 um", "60 um")),
+    )
+    .unwrap();
+    let (o, v) = diff_json(
+        p.path(),
+        Path::new("pipeline.toml"),
+        Path::new("wider.toml"),
+        &[],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let mine: Vec<&Value> = v["params"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|d| d["instance"] == "optimised_sweep")
+        .collect();
+    assert_eq!(mine.len(), 1, "{mine:?}");
+    let key = "simulate.optimised_sweep.model_parameters.bulge.full_width_y";
+    assert_eq!(mine[0]["key"], key);
+    assert!((mine[0]["old"].as_f64().unwrap() - 50e-6).abs() < 1e-18);
+    assert!((mine[0]["new"].as_f64().unwrap() - 60e-6).abs() < 1e-18);
+    // Every changed parameter (the sweep's and its consumers') is a number or a word.
+    for d in v["params"].as_array().unwrap() {
+        for side in ["old", "new"] {
+            let s = d[side].as_str().unwrap_or("");
+            assert!(!s.contains(" {") && !s.contains('('), "{d}");
+        }
+    }
+    // The text form and `hdi status`'s reason name the same dotted field.
+    let o = p.run(&["diff", "pipeline.toml", "wider.toml"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stdout(&o).contains(key), "{}", stdout(&o));
+    let why = v["instances"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|i| i["name"] == "optimised_sweep")
+        .unwrap()["why"]
+        .to_string();
+    assert!(
+        why.contains("model_parameters.bulge.full_width_y: 0.00005 → 0.00006"),
+        "{why}"
+    );
+}

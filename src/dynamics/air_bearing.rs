@@ -11,7 +11,8 @@ use nalgebra::{Matrix2, Vector2};
 use super::{require_in, require_non_negative, require_positive, DynamicsError, Result, NM};
 
 /// Which root of the modal inversion is the rear spring (`ab_root_assignment`, §3.1, §11.4).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum RootAssignment {
     /// Default: the stiffer spring at the rear (TE). Gives the textbook mode shapes and puts the
     /// stiffness that grows as the pole tip approaches the disk at the TE.
@@ -275,7 +276,8 @@ pub const STIFFENING_REFERENCE_ACTUATION: f64 = 15.0 * NM;
 pub const AB_LOSS_FLYING_HEIGHT: f64 = 15.0 * NM;
 
 /// Rear AB spring versus TFC actuation (§3.2).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum RearStiffening {
     /// Initial model: `k_r` constant (nominal FH held up to contact).
     Constant,

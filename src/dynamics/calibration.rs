@@ -33,7 +33,8 @@ use crate::numerics::nelder_mead::{
 use rayon::prelude::*;
 
 /// A calibration knob: a dropped input with its physical range.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Knob {
     /// Multiplier on the DMW track (displacement and velocity): its σ was dropped.
     DmwScale,
@@ -165,7 +166,7 @@ impl Knob {
 }
 
 /// A knob with its bounds.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct KnobRange {
     pub knob: Knob,
     pub lo: f64,
@@ -201,7 +202,8 @@ impl KnobRange {
 }
 
 /// A slope of the clearance curve `c̄(h_TFC)` (§8 of docs/dynamics-metrics.md).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum SlopeName {
     A,
     B,
@@ -210,7 +212,8 @@ pub enum SlopeName {
 }
 
 /// What a target measures.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Quantity {
     /// Smallest actuation with solid contact in the steady window (m), by
     /// [`find_touchdown`] (scan from 0 nm, first crossing refined).
@@ -280,7 +283,8 @@ impl Quantity {
 }
 
 /// The bulge a target is measured on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum TargetGeometry {
     Base,
     /// §2.3 optimised design, a = 4.86 µm, x = 6.35 µm, w = 50 µm [assumption].
@@ -289,7 +293,8 @@ pub enum TargetGeometry {
 
 /// Which set a target belongs to (docs/calibration.md): the fit's objective sees only the
 /// fitted set; the held-out set judges the fit on numbers it never saw.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum TargetSet {
     Fitted,
     HeldOut,
@@ -306,7 +311,7 @@ impl TargetSet {
 
 /// A published number and its tolerance (docs/validation.md). The objective is
 /// `Σ weight·((value − published)/tolerance)²` over the fitted set.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Target {
     /// Stable id used in `pipeline.toml` (`targets = [...]`) and tables.
     pub id: &'static str,
@@ -885,7 +890,7 @@ pub struct CalibrationBase<'a> {
 }
 
 /// Search settings.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct CalibrationSettings {
     pub knobs: Vec<KnobRange>,
     /// The fitted set: the only targets the objective sees.

@@ -90,7 +90,7 @@ pub fn generalised_force(
 }
 
 /// Design of a TFC bulge (Tables 2.1, 4.3): what the DOE and the optimisation vary.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct BulgeDesign {
     /// `a_TFC`: semi-width along x (m).
     pub semi_width_x: f64,
@@ -328,7 +328,8 @@ fn symmetric_2x2_eigen(p: f64, q: f64, r: f64) -> (f64, Vector2<f64>, f64, Vecto
 }
 
 /// Contact criterion and truncation rule of a 2-DOF model (§1.2, §2.4).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ContactCriterion {
     /// Initial model: contact when the separation `h < nσ` (`n = 1.2` from touchdown
     /// experiments); truncation at `(3 − n)σ` above the lowest point (1.8σ).

@@ -76,7 +76,7 @@ fn check_positive(name: &'static str, value: f64) -> Result<()> {
 
 /// The steady-state window `[start_s, end_s]` (both ends inclusive) [§7: 0.5–2.0 ms for the 2-DOF
 /// cases and S3].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct SteadyWindow {
     pub start_s: f64,
     pub end_s: f64,
@@ -470,7 +470,7 @@ pub fn contact_severity(s: &ContactSeries, force_threshold_n: f64) -> Result<Con
 // ------------------------------------------------------------------------------------------
 
 /// Parameters of the per-case metrics.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct CaseParams {
     pub window: SteadyWindow,
     /// Nominal FH of eq. 2.1 [m] (11 nm).
@@ -590,7 +590,8 @@ pub fn case_metrics(s: &CaseSeries, p: &CaseParams) -> Result<CaseMetrics> {
 // ------------------------------------------------------------------------------------------
 
 /// Operating regime from the steady mean clearance `c̄` (§1.2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Regime {
     /// `c̄ > 2T0`.
     Flying,

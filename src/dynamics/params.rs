@@ -13,7 +13,8 @@ use super::geometry::{AltitudeAnchor, BulgeDesign, ContactCriterion, Section, Sl
 use super::{require_in, require_non_negative, require_positive, Result, NM, UM};
 
 /// Which chapter-2 model a parameter set belongs to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ModelVariant {
     /// §2.1 (Table 2.1, 2.2): `nσ` criterion, constant rear spring, bulge-centre anchor.
     Initial,
@@ -22,7 +23,7 @@ pub enum ModelVariant {
 }
 
 /// The slider body (a rigid AlTiC block).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct SliderBody {
     /// `l` along x (m).
     pub length: f64,
@@ -61,7 +62,7 @@ impl SliderBody {
 }
 
 /// Suspension (HGA) elements.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Suspension {
     /// Preload `F` (N), toward the disk.
     pub preload: f64,
@@ -76,7 +77,7 @@ pub struct Suspension {
 }
 
 /// The AB as specified by its modes (stiffnesses follow by modal inversion).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct AirBearingDesign {
     /// 1st pitch natural frequency at the nominal FH (Hz).
     pub first_frequency_hz: f64,
@@ -93,7 +94,7 @@ pub struct AirBearingDesign {
 }
 
 /// Roughness, lubricant and contact-material parameters (combined surface).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Interface {
     /// Combined RMS roughness `σ` (m).
     pub sigma: f64,
@@ -132,7 +133,7 @@ impl Interface {
 }
 
 /// A complete 2-DOF parameter set.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Model2Dof {
     pub variant: ModelVariant,
     /// Nominal flying height `FH_nom` (m).

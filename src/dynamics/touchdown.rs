@@ -10,7 +10,7 @@
 //! DOE and validation run their own cases, in parallel, with their own start states).
 
 /// Where and how finely to look.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct TouchdownSearch {
     /// First actuation of the scan (m); the convention is 0.
     pub start: f64,

@@ -21,7 +21,8 @@ use nalgebra::{Matrix2, Vector2};
 use std::cell::Cell;
 
 /// Reading of eq. 2.16 (§2.2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ContactForceForm {
     /// `F_c = A_n k_c(s)·(s_c − s) − c_c ṡ`: the contact stiffness times the interference
     /// (faithful to the surviving tokens; default).
@@ -35,7 +36,8 @@ pub enum ContactForceForm {
 }
 
 /// The lubricant layer's force on the bulge (switch `lubricant`; docs/model-form.md).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum LubricantForce {
     /// Chapter 2's assumption: the lubricant is displaced and offers no resistance (§2.2.1).
     #[default]
@@ -47,7 +49,8 @@ pub enum LubricantForce {
 }
 
 /// Time integration (docs/integrator.md).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Integrator {
     /// Dormand–Prince 5(4), `rtol`, with the step capped at `contact_max_step` while the POC is
     /// in contact and shortened on approach so a step never jumps deep into contact.
@@ -73,7 +76,7 @@ impl Integrator {
 }
 
 /// Options of one case.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct SimOptions {
     /// Simulated time [s] (2 ms).
     pub duration: f64,

@@ -50,7 +50,7 @@ impl AnnealingError {
 }
 
 /// Schedule and stopping rules; defaults as in docs/doe.md.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct AnnealingOptions {
     /// `T0`, in objective units for the acceptance test and in coded units for the step.
     pub initial_temperature: f64,

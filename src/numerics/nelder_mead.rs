@@ -8,7 +8,7 @@
 //! the box), which makes the run deterministic for a given start.
 
 /// Stopping rules and the start simplex.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct NelderMeadOptions {
     /// Edge of the start simplex in unit-box coordinates.
     pub initial_step: f64,

@@ -15,7 +15,9 @@ use std::path::Path;
 
 /// Bump when the numbers a case produces change (it keys every 2-DOF case and is the
 /// simulate stage's model version).
-pub const MODEL_VERSION: &str = "simulate-3";
+/// simulate-4: the case and instance keys hold the model and options as plain JSON fields
+/// instead of Rust Debug strings (same numbers; docs/architecture.md).
+pub const MODEL_VERSION: &str = "simulate-4";
 
 /// A case's time histories inside its case-cache entry.
 pub const CASE_FILE: &str = "case.h5";

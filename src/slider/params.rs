@@ -564,17 +564,17 @@ impl SimulateParams {
         let mut v = json!({
             "model": self.model_name,
             "geometry": self.geometry,
-            "model_parameters": format!("{:?}", self.model),
+            "model_parameters": self.model,
             "contact": self.contact,
             "dmw": self.dmw,
             "actuations_m": self.actuations,
-            "options": format!("{:?}", self.options),
+            "options": self.options,
             "steady_start_s": self.steady_start,
             "histories_m": self.histories,
             "calibration": self.calibration,
         });
         if let (false, Some(obj)) = (self.branches.is_empty(), v.as_object_mut()) {
-            obj.insert("branches".into(), json!(format!("{:?}", self.branches)));
+            obj.insert("branches".into(), json!(self.branches));
         }
         if let (false, Some(obj)) = (self.refine_touchdown, v.as_object_mut()) {
             obj.insert("refine_touchdown".into(), json!(false));
@@ -592,9 +592,9 @@ impl SimulateParams {
         // interface enter through `calibrated_knobs`.
         json!({
             "calibrated_knobs": self.calibrated_knobs,
-            "model_parameters": format!("{:?}", self.model),
+            "model_parameters": self.model,
             "actuation_m": actuation,
-            "options": format!("{:?}", self.options),
+            "options": self.options,
             "steady_start_s": self.steady_start,
             "contact_key": contact_key,
             "dmw_key": dmw_key,

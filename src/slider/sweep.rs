@@ -117,7 +117,8 @@ pub fn cached_case(
 /// static equilibrium along increasing actuation from the nominal state at the lowest one,
 /// `Down` along decreasing actuation from the highest; near the adhesion fold, where there
 /// are several equilibria, the two can differ (hysteresis).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Branch {
     Up,
     Down,

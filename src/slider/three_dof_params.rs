@@ -419,9 +419,9 @@ impl ThreeDofParams {
             "steady_start_s": self.steady_start,
             "transit_delay": o.transit_delay,
             "dmw_wrap": o.wrap_dmw,
-            "tracks": format!("{:?}", o.tracks),
-            "init": format!("{:?}", o.init),
-            "ab_spring_law": format!("{:?}", self.spring_law),
+            "tracks": o.tracks,
+            "init": o.init,
+            "ab_spring_law": self.spring_law,
             "pushback_curve": self.pushback,
         });
         // Only instances with a fitted bulge carry the key: the others keep theirs.
@@ -432,10 +432,7 @@ impl ThreeDofParams {
         if let (ContactForceForm::StaticCurve | ContactForceForm::IntegratedStiffness, Some(obj)) =
             (self.contact_force, v.as_object_mut())
         {
-            obj.insert(
-                "contact_force".into(),
-                json!(format!("{:?}", self.contact_force)),
-            );
+            obj.insert("contact_force".into(), json!(self.contact_force));
         }
         v
     }
@@ -476,14 +473,18 @@ mod tests {
             "profile_s_m": [[0.0, 12e-9]], "shock": null, "cases": ["isbl"],
             "duration_s": 0.5e-3, "output_step_s": 1e-6, "steady_start_s": 0.2e-3,
             "transit_delay": true, "dmw_wrap": false,
-            "tracks": "Three", "init": "Static",
-            "ab_spring_law": "Integrated", "pushback_curve": "linear",
+            "tracks": "three", "init": "air_bearing_static",
+            "ab_spring_law": "integrated", "pushback_curve": "linear",
         });
         let base = "contact = \"c\"\nactuation = \"12 nm\"\ninterfaces = [\"isbl\"]\nduration = \"0.5 ms\"\nsteady_start = \"0.2 ms\"\noutput_step = \"1 us\"";
         let plain = params(base);
         let named = params(&format!("{base}\ngeometry = \"dissertation\""));
         let keys = |v: &Value| -> Vec<String> { v.as_object().unwrap().keys().cloned().collect() };
         assert_eq!(keys(&plain.canonical()), keys(&before));
+        // The enums as their snake_case names (plain data, docs/architecture.md).
+        for k in ["tracks", "init", "ab_spring_law"] {
+            assert_eq!(plain.canonical()[k], before[k], "{k}");
+        }
         assert_eq!(plain.canonical(), named.canonical());
         assert_eq!(plain.model(), Model3Dof::dissertation());
         // The fitted bulge: its instance joins the key, and its a, w, x replace Table 4.3's.
@@ -514,7 +515,7 @@ mod tests {
         assert!(plain.canonical().get("contact_force").is_none());
         let soft = params(&format!("{base}\ncontact_force = \"integrated_stiffness\""));
         assert_eq!(soft.contact_force, ContactForceForm::IntegratedStiffness);
-        assert_eq!(soft.canonical()["contact_force"], "IntegratedStiffness");
+        assert_eq!(soft.canonical()["contact_force"], "integrated_stiffness");
         assert_ne!(soft.canonical(), plain.canonical());
         let cfg: ThreeDofConfig =
             toml::from_str(&format!("{base}\ncontact_force = \"hertz\"")).unwrap();

@@ -19,7 +19,8 @@ use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
 
-pub const MODEL_VERSION: &str = "calibrate-4";
+// calibrate-5: key params as plain JSON (settings, base model), not Rust Debug strings.
+pub const MODEL_VERSION: &str = "calibrate-5";
 
 /// Hex digits of the fit-inputs fingerprint written to `result.json` (64 bits of blake3).
 pub const FIT_INPUTS_DIGITS: usize = 16;
@@ -145,7 +146,7 @@ impl CalibrateStage {
             "case_model_version": crate::slider::case::MODEL_VERSION,
             "base_parameters": base,
             "upstream": upstream,
-            "settings": format!("{s:?}"),
+            "settings": s,
         }));
         h.truncate(FIT_INPUTS_DIGITS);
         h
@@ -555,7 +556,7 @@ impl StageKind for CalibrateStage {
         json!({
             "base": self.base_name,
             "base_parameters": self.base.canonical(),
-            "settings": format!("{:?}", self.settings),
+            "settings": self.settings,
             "start_fitted_for": self.start_fitted_for,
         })
     }

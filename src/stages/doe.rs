@@ -33,7 +33,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Bump when the numbers the stage derives from its cases change (the cases themselves carry
 /// the simulate stage's model version).
-pub const MODEL_VERSION: &str = "doe-2";
+/// doe-3: annealing settings and objective as plain JSON in the key (same numbers).
+pub const MODEL_VERSION: &str = "doe-3";
 
 const UM: f64 = 1e-6;
 /// Highest actuation a DOE case may use [m] (see `check`).
@@ -154,7 +155,8 @@ pub struct DoeConfig {
 }
 
 /// Where the annealing's ξ comes from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum SaObjective {
     Simulation,
     Surrogate,
@@ -194,8 +196,8 @@ impl DoeParams {
             "optimise": self.optimise,
             "sa_actuation_m": self.sa_actuation,
             "sa_start_m": self.sa_start,
-            "sa_objective": format!("{:?}", self.sa_objective),
-            "sa": format!("{:?}", self.sa),
+            "sa_objective": self.sa_objective,
+            "sa": self.sa,
             "sensitivity_step_m": self.sensitivity_step,
             "sensitivity_steps": self.sensitivity_steps,
             "compare": self.compare,

@@ -17,7 +17,8 @@ use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::Path;
 
-pub const MODEL_VERSION: &str = "excitation-1";
+// excitation-2: the key holds the excitation as plain JSON, not a Debug string (same numbers).
+pub const MODEL_VERSION: &str = "excitation-2";
 
 fn default_duration() -> TimeSpan {
     TimeSpan(2e-3)
@@ -66,7 +67,8 @@ pub struct ExcitationConfig {
 }
 
 /// What to generate, validated.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ExcitationKind {
     Sinusoid {
         frequency: f64,
@@ -90,7 +92,7 @@ pub enum ExcitationKind {
     },
 }
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ExcitationParams {
     pub kind: ExcitationKind,
     pub duration: f64,
@@ -334,7 +336,7 @@ impl StageKind for ExcitationStage {
     const MODEL_VERSION: &'static str = MODEL_VERSION;
 
     fn params(&self) -> Value {
-        json!({ "excitation": format!("{:?}", self.params) })
+        json!({ "excitation": self.params })
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         let p = &self.params;

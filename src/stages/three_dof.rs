@@ -27,7 +27,8 @@ use std::path::Path;
 /// The `[three_dof.NAME]` table (checked by `ThreeDofParams`).
 pub use crate::slider::three_dof_params::ThreeDofConfig;
 
-pub const MODEL_VERSION: &str = "three-dof-3";
+// three-dof-4: tracks, init, spring law, contact force as plain JSON in the key (same numbers).
+pub const MODEL_VERSION: &str = "three-dof-4";
 
 pub struct ThreeDofStage {
     pub name: String,

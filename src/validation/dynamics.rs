@@ -398,7 +398,9 @@ struct CaseStore<'a> {
 /// Version of the stored validation cases: the slider cases' own (the same integrator and
 /// metrics) and of the stored record's layout.
 fn case_version() -> String {
-    format!("validate-2dof-1/{}", crate::slider::case::MODEL_VERSION)
+    // validate-2dof-2: the stored cases' keys hold the model, options and interface as plain
+    // JSON fields instead of Rust Debug strings (docs/architecture.md, "The cache, precisely").
+    format!("validate-2dof-2/{}", crate::slider::case::MODEL_VERSION)
 }
 
 /// Why a stored validation case has no result.
@@ -472,7 +474,7 @@ fn run_case(
     };
     let params = json!({
         "sweep": cs.inputs,
-        "options": format!("{:?}", case_options(static_init)),
+        "options": case_options(static_init),
         "actuation_m": h,
     });
     let mut computed = None;
@@ -1228,10 +1230,11 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
         store.map(|store| CaseStore {
             store,
             inputs: json!({
-                "model_parameters": format!("{model:?}"),
-                "interface": format!("{interface:?}"),
+                "model_parameters": model,
+                // The contact stage's key form of the ISBL parameters (SI, unit suffixes).
+                "interface": crate::artefacts::contact::ContactInputs::from(&interface),
                 "dmw_blake3": dmw_blake3,
-                "case_params": format!("{:?}", CaseParams::improved_2dof()),
+                "case_params": CaseParams::improved_2dof(),
             }),
         })
     };

@@ -323,7 +323,8 @@ pub enum NominalForce {
 
 /// How a spring force follows from its PT-dependent stiffness (switch `ab_spring_law`;
 /// docs/dynamics-3dof-air-bearing.md).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum SpringLaw {
     /// `F = F_0 + ∫_ŝ^FH_nom k(s' + PT − ŝ) ds'` (recommended default, ours): the local
     /// stiffness `−∂F/∂ŝ` is `k(PT)` itself, so every equilibrium is stable. Equals the linear

@@ -59,7 +59,8 @@ impl Model3Dof {
 }
 
 /// Which DMW track each feature rides on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum TrackAssignment {
     /// §6: bulge and centre line → D1, +y features → D2, −y features → D3.
     Three,
@@ -68,7 +69,8 @@ pub enum TrackAssignment {
 }
 
 /// Initial state (§5.4).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Init3Dof {
     /// `z = 0`, `θ = θ0`, `φ = φ0`: the push-back develops as the initial transient.
     Nominal,

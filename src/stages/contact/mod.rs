@@ -27,8 +27,10 @@ use serde_json::{json, Map, Value};
 use std::path::Path;
 use std::sync::Arc;
 
-/// Bump when the numbers this stage produces change.
-pub const MODEL_VERSION: &str = "contact-2";
+/// Bump when the numbers this stage produces change. contact-3: the key's `inputs` name the
+/// summit offset and friction law as in the results (`none`, `junction_shear`), not in their
+/// Rust Debug form (plain key params, docs/architecture.md).
+pub const MODEL_VERSION: &str = "contact-3";
 
 fn default_set() -> String {
     "improved_2dof".into()
@@ -290,7 +292,7 @@ impl ContactParams {
             "interface": self.interface,
             "parameter_set": self.parameter_set,
             // With an interface, σ/R/η come from upstream (its key is in the fingerprint).
-            "inputs": ContactInputs::from(&self.params).key_json(),
+            "inputs": ContactInputs::from(&self.params).to_json(),
             "h_star_min": self.h_star_min,
             "h_star_max": self.h_star_max,
             "step": self.step,
