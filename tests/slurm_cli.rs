@@ -152,7 +152,7 @@ fn slurm_sweep_equals_local_and_resubmits_only_failures() {
     assert_ok(&o);
     let e = stderr(&o);
     assert!(
-        e.contains("no stale [simulate] or [doe] case to submit"),
+        e.contains("no stale [simulate], [doe] or [three_dof] case to submit"),
         "{e}"
     );
     assert!(e.contains("nothing to do"), "{e}");
@@ -240,7 +240,7 @@ fn real_slurm_sweep_matches_local_and_scancel_loses_only_that_task() {
     let o = run_with(&remote, &no_bin, &["run", "--executor", "slurm"]);
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("no stale [simulate] or [doe] case to submit"),
+        stderr(&o).contains("no stale [simulate], [doe] or [three_dof] case to submit"),
         "{}",
         stderr(&o)
     );
