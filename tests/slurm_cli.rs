@@ -581,3 +581,65 @@ fn real_slurm_three_dof_cases_match_local() {
         stderr(&o)
     );
 }
+
+/// A pipeline file edited between submission and the task: the worker re-derives the case's
+/// key from the file, finds another one and refuses to compute, so nothing is filed under the
+/// manifest's key (it would be another case's results).
+#[test]
+fn a_task_refuses_cases_whose_pipeline_changed_since_submission() {
+    let p = Project::shipped();
+    let config = three_dof_config();
+    p.set_config(&config);
+    // An `sbatch` that queues and runs nothing.
+    let bin = p.path().join("bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    let sbatch = bin.join("sbatch");
+    std::fs::write(&sbatch, "#!/bin/sh\necho 77\n").unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&sbatch, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let o = run_with(
+        &p,
+        &bin,
+        &[
+            "run",
+            "--executor",
+            "slurm",
+            "--no-wait",
+            "--cases-per-task",
+            "2",
+        ],
+    );
+    assert_ok(&o);
+    assert!(
+        stderr(&o).contains("2 cases in 1 tasks submitted"),
+        "{}",
+        stderr(&o)
+    );
+    let (path, _) = only_manifest(&p.processed());
+    assert!(config.contains("actuation = \"12 nm\""));
+    p.set_config(&config.replace("actuation = \"12 nm\"", "actuation = \"11 nm\""));
+    let task = hdi()
+        .current_dir(p.path())
+        .args(["exec-cases", path.to_str().unwrap(), "--task", "0"])
+        .output()
+        .unwrap();
+    assert!(!task.status.success(), "{}", stderr(&task));
+    assert!(
+        stderr(&task).contains("2 case(s) of task 0 failed"),
+        "{}",
+        stderr(&task)
+    );
+    let outcome = std::fs::read_to_string(path.with_file_name(format!(
+        "{}.outcomes/0.json",
+        path.file_stem().unwrap().to_string_lossy()
+    )))
+    .unwrap();
+    assert!(
+        outcome.contains("the pipeline file now gives key")
+            && outcome.contains("changed since submission"),
+        "{outcome}"
+    );
+    let store = p.processed().join(".hdi/store/case");
+    let filed = std::fs::read_dir(&store).map_or(0, |d| d.count());
+    assert_eq!(filed, 0, "cases filed in {}", store.display());
+}

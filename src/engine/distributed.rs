@@ -232,7 +232,6 @@ pub fn stale_cases(
             continue;
         }
         let sweep = prepared(file, store, &planned, kind, &name)?;
-        let dmw_key = sweep.dmw.as_ref().map(|d| d.1.as_str());
         // A branch-tracking sweep's cases start at their continuation equilibria
         // (docs/conventions.md): solved here, sequentially, as the stage does; the start is
         // part of each case's key and of its recipe.
@@ -264,18 +263,10 @@ pub fn stale_cases(
         };
         let mut listed = std::collections::HashSet::new();
         for (design, a, start) in points {
-            let params = match (design, start) {
-                (None, None) => sweep.case_params(a),
-                (None, Some(s)) => {
-                    with_start(&sweep.params, Some(s)).case_params(a, &sweep.contact_key, dmw_key)
-                }
-                (Some(d), _) => {
-                    design_params(&sweep.params, &d, a)?.case_params(a, &sweep.contact_key, dmw_key)
-                }
-            };
+            let params = sweep_case_params(&sweep, design, a, start)?;
             let key = case_fingerprint(MODEL_VERSION, &params).key();
             // Branches sharing an equilibrium share the case: list it once.
-            if !missing(&key) || !listed.insert(key) {
+            if !missing(&key) || !listed.insert(key.clone()) {
                 continue;
             }
             let recipe = json!({
@@ -284,11 +275,59 @@ pub fn stale_cases(
                 "actuation_m": a,
                 "design_m": design,
                 "static_start": start,
+                // The worker re-derives the key from the pipeline file and refuses to file
+                // the case under this one if they differ (file edited since submission).
+                "key": key,
             });
             specs.push(CaseSpec::new(kind, MODEL_VERSION, params, recipe));
         }
     }
     Ok(specs)
+}
+
+/// The key parameters of one sweep or DOE case, as the stages key it.
+fn sweep_case_params(
+    sweep: &PreparedSweep,
+    design: Option<[f64; 3]>,
+    actuation: f64,
+    start: Option<[f64; 2]>,
+) -> Result<Value> {
+    let dmw_key = sweep.dmw.as_ref().map(|d| d.1.as_str());
+    Ok(match (design, start) {
+        (None, None) => sweep.case_params(actuation),
+        (None, Some(s)) => {
+            with_start(&sweep.params, Some(s)).case_params(actuation, &sweep.contact_key, dmw_key)
+        }
+        (Some(d), _) => design_params(&sweep.params, &d, actuation)?.case_params(
+            actuation,
+            &sweep.contact_key,
+            dmw_key,
+        ),
+    })
+}
+
+/// Refuse to compute a case whose key, re-derived on the node from the pipeline file, is not
+/// the manifest's: the file (or its upstream) changed since submission, and computing would
+/// file another case's results under the manifest's key.
+fn check_recipe_key(kind: &str, recipe: &Value, params: &Value, what: &str) -> Result<()> {
+    let key = case_fingerprint(
+        if kind == THREE_DOF_CASE {
+            THREE_DOF_MODEL_VERSION
+        } else {
+            MODEL_VERSION
+        },
+        params,
+    )
+    .key();
+    match recipe["key"].as_str() {
+        Some(k) if k == key => Ok(()),
+        other => Err(Error::Stage(format!(
+            "{kind} case {what}: the pipeline file now gives key {key}, the manifest has {} \
+             (the file or its upstream changed since submission; resubmit with \
+             `hdi run --executor slurm`)",
+            other.unwrap_or("none")
+        ))),
+    }
 }
 
 /// Computes `simulate` and DOE cases; prepares each sweep once per process (a task runs a
@@ -358,7 +397,13 @@ impl SweepWorker {
                 kind: self.kind,
                 field: "static_start".into(),
             })?;
-        match serde_json::from_value::<Option<[f64; 3]>>(recipe["design_m"].clone()) {
+        let design = serde_json::from_value::<Option<[f64; 3]>>(recipe["design_m"].clone());
+        if let Ok(d) = &design {
+            let params = sweep_case_params(&sweep, *d, actuation, start)?;
+            let what = format!("{instance} at {:.4} nm", actuation * 1e9);
+            check_recipe_key(self.kind, recipe, &params, &what)?;
+        }
+        match design {
             Ok(None) if start.is_some() => simulate_case(
                 &with_start(&sweep.params, start),
                 actuation,
@@ -448,14 +493,12 @@ impl ThreeDofWorker {
                      (the file changed since submission?)"
                 ))
             })?;
-        let key = case_fingerprint(THREE_DOF_MODEL_VERSION, &p.case_params(which)).key();
-        if recipe["key"].as_str() != Some(key.as_str()) {
-            return Err(Error::Stage(format!(
-                "three_dof case {instance}/{label}: {config} now gives key {key}, the manifest \
-                 has {} (the file or its upstream changed since submission; resubmit)",
-                recipe["key"].as_str().unwrap_or("none")
-            )));
-        }
+        check_recipe_key(
+            THREE_DOF_CASE,
+            recipe,
+            &p.case_params(which),
+            &format!("{instance}/{label}"),
+        )?;
         solver.compute_case(p, which, dir)
     }
 }
