@@ -616,6 +616,13 @@ fn a_task_refuses_cases_whose_pipeline_changed_since_submission() {
         stderr(&o)
     );
     let (path, _) = only_manifest(&p.processed());
+    // Submitted, not run: `hdi status` lists the cases as missing.
+    let st = run_with(&p, &bin, &["status"]);
+    assert!(
+        stdout(&st).contains("slurm: 2 of 2 submitted cases (three_dof) missing from the store"),
+        "{}",
+        stdout(&st)
+    );
     assert!(config.contains("actuation = \"12 nm\""));
     p.set_config(&config.replace("actuation = \"12 nm\"", "actuation = \"11 nm\""));
     let task = hdi()
