@@ -59,13 +59,15 @@ fn doe_stage(file: &PipelineFile, instance: &str) -> Result<DoeStage> {
     Ok(DoeStage::from_config(file, instance, &cfg)?)
 }
 
-/// Results, entry directories and keys of `consumer`'s upstream instances `names` from the
-/// store's current entries (they must be fresh: the submitting run computes them first).
+/// Results (`result.json`), entry directories and cache keys of upstream instances, by name.
 type Upstream = (
     BTreeMap<String, Value>,
     BTreeMap<String, std::path::PathBuf>,
     BTreeMap<String, String>,
 );
+
+/// The [`Upstream`] of `consumer`'s upstream instances `names` from the store's current
+/// entries (they must be fresh: the submitting run computes them first).
 fn upstream_entries(
     store: &Store,
     planned: &Plan,
