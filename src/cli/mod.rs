@@ -40,7 +40,7 @@ pub fn main() -> Result<()> {
             slurm,
         } => {
             if slurm.executor.parse::<ExecutorKind>()? == ExecutorKind::Slurm && !dry_run {
-                let submitted = slurm::run_cases_on_slurm(&config, &slurm, jobs)?;
+                let submitted = slurm::run_cases_on_slurm(&config, &only, &slurm, jobs)?;
                 if !submitted {
                     return Ok(());
                 }

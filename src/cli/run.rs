@@ -196,10 +196,27 @@ pub(super) fn cmd_status(config: &Path, as_json: bool) -> Result<()> {
             let _ = m.merge_outcomes(&path);
             let missing: std::collections::BTreeSet<String> =
                 m.still_missing(&store).into_iter().map(|s| s.key).collect();
+            let total = m.cases.len();
             m.cases.retain(|e| missing.contains(&e.spec.key));
             if m.failed().next().is_some() {
                 println!("failed cases in {}:", path.display());
                 super::slurm::report_failed_cases(&m);
+            }
+            // Submitted cases no task has stored or failed yet (queued, running, or lost
+            // with a task Slurm no longer knows): the next `hdi run --executor slurm` waits
+            // for or resubmits them.
+            let (pending, _, _) = m.counts();
+            let submitted =
+                hdi::core::executor::read_submissions(&path).is_ok_and(|s| !s.is_empty());
+            if pending > 0 && submitted {
+                let kinds: std::collections::BTreeSet<&str> =
+                    m.cases.iter().map(|e| e.spec.kind.as_str()).collect();
+                let kinds: Vec<&str> = kinds.into_iter().collect();
+                println!(
+                    "slurm: {pending} of {total} submitted cases ({}) missing from the store (queued, running or lost): {}",
+                    kinds.join(", "),
+                    path.display()
+                );
             }
         }
     }

@@ -1,5 +1,5 @@
-//! `hdi run --executor slurm`: the stale cases of the `[simulate]`/`[doe]` instances as
-//! Slurm array jobs (docs/slurm.md).
+//! `hdi run --executor slurm`: the stale cases of the `[simulate]`/`[doe]`/`[three_dof]`
+//! instances the run selects as Slurm array jobs (docs/slurm.md).
 
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
@@ -11,12 +11,13 @@ use hdi::core::cache::Store;
 use hdi::core::executor::CaseManifest;
 use hdi::engine::{self, RunOptions};
 
-/// Bring the `[simulate]` instances' upstream up to date, list their stale cases into a
-/// manifest, submit it as array jobs and wait for them. Returns `false` for `--no-wait`
+/// Bring the upstream of the case-carrying instances `only` selects (all when empty) up to
+/// date, list their stale cases into a manifest, submit it as array jobs and wait for them. Returns `false` for `--no-wait`
 /// (submitted; nothing more to do now), `true` when the local run should follow (every case
 /// is then cached).
 pub(super) fn run_cases_on_slurm(
     config: &Path,
+    only: &[String],
     args: &SlurmArgs,
     jobs: Option<usize>,
 ) -> Result<bool> {
@@ -27,7 +28,7 @@ pub(super) fn run_cases_on_slurm(
     let processed = file.processed_dir();
     let store =
         Store::open(&processed).with_context(|| format!("opening {}", processed.display()))?;
-    let upstream = distributed::case_upstream(&file, &store)?;
+    let upstream = distributed::case_upstream(&file, &store, only)?;
     if !upstream.is_empty() {
         let report = engine::run(
             hdi::stages::build(&file)?,
@@ -42,15 +43,15 @@ pub(super) fn run_cases_on_slurm(
         )?;
         if report.failed() > 0 {
             bail!(
-                "the upstream of the [simulate]/[doe] instances failed: run `hdi run` to see why"
+                "the upstream of the instances whose cases go to Slurm failed: run `hdi run` to see why"
             );
         }
     }
     let config_abs =
         std::fs::canonicalize(config).with_context(|| format!("resolving {}", config.display()))?;
-    let specs = distributed::stale_cases(&file, &config_abs, &store)?;
+    let specs = distributed::stale_cases(&file, &config_abs, &store, only)?;
     if specs.is_empty() {
-        eprintln!("slurm: no stale [simulate] or [doe] case to submit");
+        eprintln!("slurm: no stale [simulate], [doe] or [three_dof] case to submit");
         return Ok(true);
     }
     let manifest = CaseManifest::new(specs, args.cases_per_task)?;

@@ -1,21 +1,26 @@
-//! The `[simulate]` cases handed to an executor other than the local thread pool (issue 9,
-//! `docs/slurm.md`): which cases of the pipeline are stale, and the worker that computes one
-//! on a Slurm node through the same case cache (so the bytes are a local run's).
+//! The `[simulate]`, `[doe]` and `[three_dof]` cases handed to an executor other than the
+//! local thread pool (issues 9 and 21, `docs/slurm.md`): which cases of the instances a run
+//! selects are stale, and the workers that compute one on a Slurm node through the same case
+//! cache (so the bytes are a local run's).
 
 use crate::core::cache::{Store, Verification};
 use crate::core::cases::{case_fingerprint, CASE_KIND};
 use crate::core::config::PipelineFile;
 use crate::core::executor::{CaseComputer, CaseFailure, CaseRegistry, CaseSpec};
-use crate::engine::{plan, read_result, Plan, State};
+use crate::engine::{plan, read_result, selection, Plan, State};
 use crate::error::{Error, Result};
 use crate::slider::case::{simulate_case, MODEL_VERSION};
 use crate::slider::doe_design::{design_cases, design_params};
 use crate::slider::params::{SimulateConfig, SimulateParams};
 use crate::slider::sweep::{continuation_starts, with_start, PreparedSweep};
 use crate::stages::doe::{DoeConfig, DoeStage};
+use crate::stages::three_dof::{
+    PreparedThreeDof, ThreeDofConfig, ThreeDofSolver, ThreeDofStage,
+    MODEL_VERSION as THREE_DOF_MODEL_VERSION,
+};
 use crate::stages::FromConfig;
 use serde_json::{json, Value};
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
@@ -23,6 +28,8 @@ use std::sync::{Arc, Mutex};
 pub const SIMULATE_CASE: &str = "simulate";
 /// Case kind of a DOE design point (a 2-DOF case of the base sweep with another bulge).
 pub const DOE_CASE: &str = "doe";
+/// Case kind of a `[three_dof]` case (one interface of the instance's scenario).
+pub const THREE_DOF_CASE: &str = "three_dof";
 
 /// The sweep whose cases are prepared: a `[simulate]` instance's, or the base sweep of a
 /// `[doe]` instance (uncalibrated by construction).
@@ -52,31 +59,36 @@ fn doe_stage(file: &PipelineFile, instance: &str) -> Result<DoeStage> {
     Ok(DoeStage::from_config(file, instance, &cfg)?)
 }
 
-/// The prepared sweep of a `[simulate]` or `[doe]` instance from the store's current upstream
+/// Results (`result.json`), entry directories and cache keys of upstream instances, by name.
+type Upstream = (
+    BTreeMap<String, Value>,
+    BTreeMap<String, std::path::PathBuf>,
+    BTreeMap<String, String>,
+);
+
+/// The [`Upstream`] of `consumer`'s upstream instances `names` from the store's current
 /// entries (they must be fresh: the submitting run computes them first).
-fn prepared(
-    file: &PipelineFile,
+fn upstream_entries(
     store: &Store,
     planned: &Plan,
-    kind: &str,
-    instance: &str,
-) -> Result<PreparedSweep> {
-    let params = sweep_params(file, kind, instance)?;
+    consumer: &str,
+    names: &[String],
+) -> Result<Upstream> {
     let (mut results, mut dirs, mut keys) = (BTreeMap::new(), BTreeMap::new(), BTreeMap::new());
-    for u in params.upstream() {
+    for u in names {
         let p = planned
             .planned
             .iter()
-            .find(|p| p.name == u)
+            .find(|p| &p.name == u)
             .ok_or_else(|| Error::UpstreamNotReady {
                 upstream: u.clone(),
-                consumer: instance.to_string(),
+                consumer: consumer.to_string(),
                 planned: false,
             })?;
         if p.state != State::Fresh {
             return Err(Error::UpstreamNotReady {
                 upstream: u.clone(),
-                consumer: instance.to_string(),
+                consumer: consumer.to_string(),
                 planned: true,
             });
         }
@@ -85,28 +97,86 @@ fn prepared(
         dirs.insert(u.clone(), dir);
         keys.insert(u.clone(), p.key.clone());
     }
+    Ok((results, dirs, keys))
+}
+
+/// The prepared sweep of a `[simulate]` or `[doe]` instance from the store's current upstream
+/// entries.
+fn prepared(
+    file: &PipelineFile,
+    store: &Store,
+    planned: &Plan,
+    kind: &str,
+    instance: &str,
+) -> Result<PreparedSweep> {
+    let params = sweep_params(file, kind, instance)?;
+    let (results, dirs, keys) = upstream_entries(store, planned, instance, &params.upstream())?;
     PreparedSweep::prepare(&params, &results, &dirs, |n| {
         keys.get(n).cloned().unwrap_or_default()
     })
 }
 
-/// The stale `[simulate]` and `[doe]` instances, as (case kind, name).
-fn stale_instances(file: &PipelineFile, planned: &Plan) -> Vec<(&'static str, String)> {
+/// The `[three_dof.NAME]` instance, checked.
+fn three_dof_stage(file: &PipelineFile, instance: &str) -> Result<ThreeDofStage> {
+    let cfg = file
+        .instance::<ThreeDofConfig>("three_dof", instance)?
+        .ok_or_else(|| Error::MissingInstance {
+            kind: "three_dof",
+            name: instance.to_string(),
+        })?;
+    Ok(ThreeDofStage::from_config(file, instance, &cfg)?)
+}
+
+/// The upstream instances a case kind's instance consumes.
+fn instance_upstream(file: &PipelineFile, kind: &str, instance: &str) -> Result<Vec<String>> {
+    if kind == THREE_DOF_CASE {
+        use crate::stages::StageKind;
+        return Ok(three_dof_stage(file, instance)?.upstream());
+    }
+    Ok(sweep_params(file, kind, instance)?.upstream())
+}
+
+/// A `[three_dof]` instance prepared from the store's current upstream entries.
+fn prepared_three_dof(
+    file: &PipelineFile,
+    store: &Store,
+    planned: &Plan,
+    instance: &str,
+) -> Result<PreparedThreeDof> {
+    let stage = three_dof_stage(file, instance)?;
+    let upstream = instance_upstream(file, THREE_DOF_CASE, instance)?;
+    let (results, dirs, keys) = upstream_entries(store, planned, instance, &upstream)?;
+    PreparedThreeDof::prepare(&stage.params, &results, &dirs, |n| {
+        keys.get(n).cloned().unwrap_or_default()
+    })
+}
+
+/// The stale `[simulate]`, `[doe]` and `[three_dof]` instances among those `only` selects
+/// (the engine's own `--only` selection: the named instances and what they consume; all when
+/// empty), as (case kind, name).
+fn stale_instances(
+    file: &PipelineFile,
+    planned: &Plan,
+    only: &[String],
+) -> Result<Vec<(&'static str, String)>> {
+    let selected: BTreeSet<String> = selection(planned, only)?;
     let stale = |name: &str| {
-        planned
-            .planned
-            .iter()
-            .any(|p| p.name == name && p.state != State::Fresh)
+        selected.contains(name)
+            && planned
+                .planned
+                .iter()
+                .any(|p| p.name == name && p.state != State::Fresh)
     };
-    let sims = file
-        .instance_names("simulate")
-        .into_iter()
-        .map(|n| (SIMULATE_CASE, n.to_string()));
-    let does = file
-        .instance_names("doe")
-        .into_iter()
-        .map(|n| (DOE_CASE, n.to_string()));
-    sims.chain(does).filter(|(_, n)| stale(n)).collect()
+    let of = |section: &str, kind: &'static str| {
+        file.instance_names(section)
+            .into_iter()
+            .map(move |n| (kind, n.to_string()))
+    };
+    Ok(of("simulate", SIMULATE_CASE)
+        .chain(of("doe", DOE_CASE))
+        .chain(of("three_dof", THREE_DOF_CASE))
+        .filter(|(_, n)| stale(n))
+        .collect())
 }
 
 /// The pipeline planned against the store (fingerprints hash every input file: done once).
@@ -114,12 +184,12 @@ fn plan_of(file: &PipelineFile, store: &Store) -> Result<Plan> {
     plan(crate::stages::build(file)?, store, &Default::default())
 }
 
-/// The upstream instances of every stale `[simulate]` and `[doe]` instance: what must be
+/// The upstream instances of every stale case-carrying instance `only` selects: what must be
 /// current before their cases can be listed.
-pub fn case_upstream(file: &PipelineFile, store: &Store) -> Result<Vec<String>> {
+pub fn case_upstream(file: &PipelineFile, store: &Store, only: &[String]) -> Result<Vec<String>> {
     let mut names = Vec::new();
-    for (kind, name) in stale_instances(file, &plan_of(file, store)?) {
-        for u in sweep_params(file, kind, &name)?.upstream() {
+    for (kind, name) in stale_instances(file, &plan_of(file, store)?, only)? {
+        for u in instance_upstream(file, kind, &name)? {
             if !names.contains(&u) {
                 names.push(u);
             }
@@ -128,16 +198,42 @@ pub fn case_upstream(file: &PipelineFile, store: &Store) -> Result<Vec<String>> 
     Ok(names)
 }
 
-/// Every case of the stale `[simulate]` instances and the design cases of the stale `[doe]`
-/// instances without a verified store entry, with the recipe a worker needs (`config` must be
-/// the absolute path of the pipeline file). A DOE's annealing is sequential: it runs locally.
-pub fn stale_cases(file: &PipelineFile, config: &Path, store: &Store) -> Result<Vec<CaseSpec>> {
+/// Of the instances `only` selects (all when empty): every case of the stale `[simulate]` and
+/// `[three_dof]` instances and the design cases of the stale `[doe]` instances without a
+/// verified store entry, with the recipe a worker needs (`config` must be the absolute path
+/// of the pipeline file). A DOE's annealing is sequential: it runs locally.
+pub fn stale_cases(
+    file: &PipelineFile,
+    config: &Path,
+    store: &Store,
+    only: &[String],
+) -> Result<Vec<CaseSpec>> {
     let mut specs = Vec::new();
     let missing = |key: &str| !matches!(store.verify(CASE_KIND, key), Verification::Fresh(_));
     let planned = plan_of(file, store)?;
-    for (kind, name) in stale_instances(file, &planned) {
+    for (kind, name) in stale_instances(file, &planned, only)? {
+        if kind == THREE_DOF_CASE {
+            let prepared = prepared_three_dof(file, store, &planned, &name)?;
+            for &which in &prepared.params.cases {
+                let params = prepared.case_params(which);
+                let key = case_fingerprint(THREE_DOF_MODEL_VERSION, &params).key();
+                if !missing(&key) {
+                    continue;
+                }
+                // The key travels in the recipe: the worker re-derives the case's parameters
+                // from the pipeline file and refuses to file a case whose key differs (the
+                // file edited between submission and the task).
+                let recipe = json!({
+                    "config": config.display().to_string(),
+                    "instance": name,
+                    "case": which.label(),
+                    "key": key,
+                });
+                specs.push(CaseSpec::new(kind, THREE_DOF_MODEL_VERSION, params, recipe));
+            }
+            continue;
+        }
         let sweep = prepared(file, store, &planned, kind, &name)?;
-        let dmw_key = sweep.dmw.as_ref().map(|d| d.1.as_str());
         // A branch-tracking sweep's cases start at their continuation equilibria
         // (docs/conventions.md): solved here, sequentially, as the stage does; the start is
         // part of each case's key and of its recipe.
@@ -169,18 +265,10 @@ pub fn stale_cases(file: &PipelineFile, config: &Path, store: &Store) -> Result<
         };
         let mut listed = std::collections::HashSet::new();
         for (design, a, start) in points {
-            let params = match (design, start) {
-                (None, None) => sweep.case_params(a),
-                (None, Some(s)) => {
-                    with_start(&sweep.params, Some(s)).case_params(a, &sweep.contact_key, dmw_key)
-                }
-                (Some(d), _) => {
-                    design_params(&sweep.params, &d, a)?.case_params(a, &sweep.contact_key, dmw_key)
-                }
-            };
+            let params = sweep_case_params(&sweep, design, a, start)?;
             let key = case_fingerprint(MODEL_VERSION, &params).key();
             // Branches sharing an equilibrium share the case: list it once.
-            if !missing(&key) || !listed.insert(key) {
+            if !missing(&key) || !listed.insert(key.clone()) {
                 continue;
             }
             let recipe = json!({
@@ -189,11 +277,59 @@ pub fn stale_cases(file: &PipelineFile, config: &Path, store: &Store) -> Result<
                 "actuation_m": a,
                 "design_m": design,
                 "static_start": start,
+                // The worker re-derives the key from the pipeline file and refuses to file
+                // the case under this one if they differ (file edited since submission).
+                "key": key,
             });
             specs.push(CaseSpec::new(kind, MODEL_VERSION, params, recipe));
         }
     }
     Ok(specs)
+}
+
+/// The key parameters of one sweep or DOE case, as the stages key it.
+fn sweep_case_params(
+    sweep: &PreparedSweep,
+    design: Option<[f64; 3]>,
+    actuation: f64,
+    start: Option<[f64; 2]>,
+) -> Result<Value> {
+    let dmw_key = sweep.dmw.as_ref().map(|d| d.1.as_str());
+    Ok(match (design, start) {
+        (None, None) => sweep.case_params(actuation),
+        (None, Some(s)) => {
+            with_start(&sweep.params, Some(s)).case_params(actuation, &sweep.contact_key, dmw_key)
+        }
+        (Some(d), _) => design_params(&sweep.params, &d, actuation)?.case_params(
+            actuation,
+            &sweep.contact_key,
+            dmw_key,
+        ),
+    })
+}
+
+/// Refuse to compute a case whose key, re-derived on the node from the pipeline file, is not
+/// the manifest's: the file (or its upstream) changed since submission, and computing would
+/// file another case's results under the manifest's key.
+fn check_recipe_key(kind: &str, recipe: &Value, params: &Value, what: &str) -> Result<()> {
+    let key = case_fingerprint(
+        if kind == THREE_DOF_CASE {
+            THREE_DOF_MODEL_VERSION
+        } else {
+            MODEL_VERSION
+        },
+        params,
+    )
+    .key();
+    match recipe["key"].as_str() {
+        Some(k) if k == key => Ok(()),
+        other => Err(Error::Stage(format!(
+            "{kind} case {what}: the pipeline file now gives key {key}, the manifest has {} \
+             (the file or its upstream changed since submission; resubmit with \
+             `hdi run --executor slurm`)",
+            other.unwrap_or("none")
+        ))),
+    }
 }
 
 /// Computes `simulate` and DOE cases; prepares each sweep once per process (a task runs a
@@ -263,7 +399,13 @@ impl SweepWorker {
                 kind: self.kind,
                 field: "static_start".into(),
             })?;
-        match serde_json::from_value::<Option<[f64; 3]>>(recipe["design_m"].clone()) {
+        let design = serde_json::from_value::<Option<[f64; 3]>>(recipe["design_m"].clone());
+        if let Ok(d) = &design {
+            let params = sweep_case_params(&sweep, *d, actuation, start)?;
+            let what = format!("{instance} at {:.4} nm", actuation * 1e9);
+            check_recipe_key(self.kind, recipe, &params, &what)?;
+        }
+        match design {
             Ok(None) if start.is_some() => simulate_case(
                 &with_start(&sweep.params, start),
                 actuation,
@@ -290,10 +432,84 @@ impl SweepWorker {
     }
 }
 
+/// Computes `[three_dof]` cases; prepares each instance (its lookup tables and DMW tracks)
+/// once per process.
+#[derive(Default)]
+struct ThreeDofWorker {
+    #[allow(clippy::type_complexity)]
+    instances: Mutex<HashMap<(String, String), Arc<(PreparedThreeDof, ThreeDofSolver)>>>,
+}
+
+impl CaseComputer for ThreeDofWorker {
+    fn compute(
+        &self,
+        recipe: &Value,
+        store: &Store,
+        dir: &Path,
+    ) -> std::result::Result<Value, CaseFailure> {
+        Ok(self.compute_recipe(recipe, store, dir)?)
+    }
+}
+
+impl ThreeDofWorker {
+    fn compute_recipe(&self, recipe: &Value, store: &Store, dir: &Path) -> Result<Value> {
+        let field = |k: &str| {
+            recipe[k]
+                .as_str()
+                .map(str::to_string)
+                .ok_or_else(|| Error::RecipeField {
+                    kind: THREE_DOF_CASE,
+                    field: k.to_string(),
+                })
+        };
+        let (config, instance, label) = (field("config")?, field("instance")?, field("case")?);
+        let prepared = {
+            let mut instances = self
+                .instances
+                .lock()
+                .map_err(|_| Error::Stage("a worker thread panicked".into()))?;
+            let k = (config.clone(), instance.clone());
+            match instances.get(&k) {
+                Some(s) => Arc::clone(s),
+                None => {
+                    let file = crate::stages::load(Path::new(&config))?;
+                    let planned = plan_of(&file, store)?;
+                    let p = prepared_three_dof(&file, store, &planned, &instance)?;
+                    let solver = p.solver()?;
+                    let s = Arc::new((p, solver));
+                    instances.insert(k, Arc::clone(&s));
+                    s
+                }
+            }
+        };
+        let (p, solver) = (&prepared.0, &prepared.1);
+        let which = p
+            .params
+            .cases
+            .iter()
+            .copied()
+            .find(|c| c.label() == label)
+            .ok_or_else(|| {
+                Error::Stage(format!(
+                    "three_dof recipe: [three_dof.{instance}] in {config} has no case `{label}` \
+                     (the file changed since submission?)"
+                ))
+            })?;
+        check_recipe_key(
+            THREE_DOF_CASE,
+            recipe,
+            &p.case_params(which),
+            &format!("{instance}/{label}"),
+        )?;
+        solver.compute_case(p, which, dir)
+    }
+}
+
 /// The workers `hdi exec-cases` dispatches to.
 pub fn registry() -> CaseRegistry {
     let mut r = CaseRegistry::new();
     r.register(SIMULATE_CASE, SweepWorker::new(SIMULATE_CASE));
     r.register(DOE_CASE, SweepWorker::new(DOE_CASE));
+    r.register(THREE_DOF_CASE, ThreeDofWorker::default());
     r
 }

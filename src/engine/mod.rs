@@ -206,8 +206,10 @@ impl RunReport {
     }
 }
 
-/// The stages named in `only` plus everything they consume (transitively).
-fn selection(plan: &Plan, only: &[String]) -> Result<BTreeSet<String>> {
+/// The stages named in `only` plus everything they consume (transitively); all when `only`
+/// is empty. `hdi run --only` runs this set, and the Slurm executor submits the cases of
+/// this set (`engine::distributed`).
+pub fn selection(plan: &Plan, only: &[String]) -> Result<BTreeSet<String>> {
     let all: BTreeSet<String> = plan.planned.iter().map(|p| p.name.clone()).collect();
     if only.is_empty() {
         return Ok(all);

@@ -566,6 +566,110 @@ fn fitted_params(
     Ok(p)
 }
 
+/// A `[three_dof.NAME]` instance with its upstream in place (fitted bulge, contact
+/// parameters, DMW file, upstream keys): what both the stage and a Slurm worker
+/// (`engine::distributed`, docs/slurm.md) key and compute its cases from, so a case
+/// computed on a node has the key and bytes of a local run.
+pub struct PreparedThreeDof {
+    /// The instance's parameters with the upstream bulge fit in place.
+    pub params: ThreeDofParams,
+    isbl_params: crate::contact::isbl::IsblParams,
+    dmw_file: Option<std::path::PathBuf>,
+    contact_key: String,
+    dmw_key: Option<String>,
+    bulge_key: Option<String>,
+}
+
+impl PreparedThreeDof {
+    /// From the consumed instances' results, entry directories and cache keys.
+    pub fn prepare(
+        params: &ThreeDofParams,
+        upstream: &std::collections::BTreeMap<String, Value>,
+        upstream_dirs: &std::collections::BTreeMap<String, std::path::PathBuf>,
+        key_of: impl Fn(&str) -> String,
+    ) -> Result<Self> {
+        let p = fitted_params(params, upstream)?;
+        let isbl_params = upstream_isbl_params(upstream, &p.contact)?;
+        let dmw_file = match &p.dmw {
+            Some(d) => Some(dmw_tracks::upstream_file(upstream_dirs, d)?),
+            None => None,
+        };
+        Ok(Self {
+            contact_key: key_of(&p.contact),
+            dmw_key: p.dmw.as_deref().map(&key_of),
+            bulge_key: p.bulge.as_deref().map(&key_of),
+            params: p,
+            isbl_params,
+            dmw_file,
+        })
+    }
+
+    /// The case's key parameters (what `cases::get_or_compute` hashes).
+    pub fn case_params(&self, which: CaseInterface) -> Value {
+        let mut params = json!({"instance": self.params.canonical(), "case": which.label(), "contact_key": self.contact_key, "dmw_key": self.dmw_key});
+        // A fitted bulge keys the case by its instance's key (other cases keep theirs).
+        if let (Some(k), Some(obj)) = (&self.bulge_key, params.as_object_mut()) {
+            obj.insert("bulge_key".into(), json!(k));
+        }
+        params
+    }
+
+    /// The interface lookup tables and DMW tracks the cases share (built once per process).
+    pub fn solver(&self) -> Result<ThreeDofSolver> {
+        let tracks = match &self.dmw_file {
+            Some(f) => Some(read_dmw_tracks(f)?),
+            None => None,
+        };
+        // The MTL runs use the variable surface energy of Chapter 3 (contact-isbl §10).
+        let build = |variable: bool| -> Result<IsblLookup> {
+            let mut ip = self.isbl_params;
+            if variable {
+                ip.surface_energy = SurfaceEnergy::seed_variable();
+            }
+            Ok(IsblLookup::build_standard_unverified(IsblModel::new(ip)?)?)
+        };
+        let isbl_solid = build(false)?;
+        let isbl_mtl = if self
+            .params
+            .cases
+            .iter()
+            .any(|c| matches!(c, CaseInterface::Mtl(_)))
+        {
+            Some(build(true)?)
+        } else {
+            None
+        };
+        Ok(ThreeDofSolver {
+            isbl_solid,
+            isbl_mtl,
+            tracks,
+        })
+    }
+}
+
+/// What the cases of one prepared instance share: see [`PreparedThreeDof::solver`].
+pub struct ThreeDofSolver {
+    isbl_solid: IsblLookup,
+    isbl_mtl: Option<IsblLookup>,
+    tracks: Option<[DmwTrack; 3]>,
+}
+
+impl ThreeDofSolver {
+    /// Simulate case `which` of `prepared` into `dir`; returns its metrics.
+    pub fn compute_case(
+        &self,
+        prepared: &PreparedThreeDof,
+        which: CaseInterface,
+        dir: &Path,
+    ) -> Result<Value> {
+        let isbl = match which {
+            CaseInterface::Isbl => &self.isbl_solid,
+            CaseInterface::Mtl(_) => self.isbl_mtl.as_ref().unwrap_or(&self.isbl_solid),
+        };
+        run_case(&prepared.params, which, isbl, self.tracks.as_ref(), dir)
+    }
+}
+
 impl StageKind for ThreeDofStage {
     const KIND: &'static str = "three_dof";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
@@ -581,52 +685,26 @@ impl StageKind for ThreeDofStage {
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         use rayon::prelude::*;
-        let p = &fitted_params(&self.params, &ctx.upstream)?;
-        let isbl_params = upstream_isbl_params(&ctx.upstream, &p.contact)?;
-        let tracks = match &p.dmw {
-            Some(d) => Some(read_dmw_tracks(&dmw_tracks::upstream_file(
-                &ctx.upstream_dirs,
-                d,
-            )?)?),
-            None => None,
-        };
-        let key_of = |name: &str| ctx.upstream_key(name);
+        let prepared = PreparedThreeDof::prepare(
+            &self.params,
+            &ctx.upstream,
+            &ctx.upstream_dirs,
+            |name: &str| ctx.upstream_key(name),
+        )?;
+        let p = &prepared.params;
         ctx.progress.set_message("interface tables");
-        // The MTL runs use the variable surface energy of Chapter 3 (contact-isbl §10).
-        let build = |variable: bool| -> Result<IsblLookup> {
-            let mut ip = isbl_params;
-            if variable {
-                ip.surface_energy = SurfaceEnergy::seed_variable();
-            }
-            Ok(IsblLookup::build_standard_unverified(IsblModel::new(ip)?)?)
-        };
-        let isbl_solid = build(false)?;
-        let isbl_mtl = if p.cases.iter().any(|c| matches!(c, CaseInterface::Mtl(_))) {
-            Some(build(true)?)
-        } else {
-            None
-        };
+        let solver = prepared.solver()?;
         ctx.progress.set_message(format!("{} cases", p.cases.len()));
-        let base = p.canonical();
-        let contact_key = key_of(&p.contact);
-        let dmw_key = p.dmw.as_deref().map(key_of);
-        let bulge_key = p.bulge.as_deref().map(key_of);
         let outcomes: Vec<Result<(CaseInterface, cases::CaseEntry)>> = p
             .cases
             .par_iter()
             .map(|&which| {
-                let mut params = json!({"instance": base, "case": which.label(), "contact_key": contact_key, "dmw_key": dmw_key});
-                // A fitted bulge keys the case by its instance's key (other cases keep theirs).
-                if let (Some(k), Some(obj)) = (&bulge_key, params.as_object_mut()) {
-                    obj.insert("bulge_key".into(), json!(k));
-                }
-                let isbl = match which {
-                    CaseInterface::Isbl => &isbl_solid,
-                    CaseInterface::Mtl(_) => isbl_mtl.as_ref().unwrap_or(&isbl_solid),
-                };
-                cases::get_or_compute(ctx.store, MODEL_VERSION, &params, |dir| {
-                    run_case(p, which, isbl, tracks.as_ref(), dir)
-                })
+                cases::get_or_compute(
+                    ctx.store,
+                    MODEL_VERSION,
+                    &prepared.case_params(which),
+                    |dir| solver.compute_case(&prepared, which, dir),
+                )
                 .map(|e| (which, e))
                 .map_err(|e| Error::Stage(format!("case {}: {e}", which.label())))
             })
@@ -635,6 +713,11 @@ impl StageKind for ThreeDofStage {
         for o in outcomes {
             done.push(o?);
         }
+        // How many cases came from the store (Slurm tasks, earlier runs): a run fact.
+        ctx.log_run(
+            "cases_cached",
+            json!(done.iter().filter(|(_, e)| e.cached).count()),
+        );
         let dir = ctx.out_dir.join(case_files::DIR);
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
         let mut rows = Vec::new();

@@ -24,8 +24,12 @@ use std::path::{Path, PathBuf};
 
 pub use plan::{plan_arrays, task_cases, ArraySubmission};
 
-/// Bumped when the case-manifest layout changes, so an old manifest is refused, not misread.
-pub const MANIFEST_SCHEMA_VERSION: u32 = 1;
+/// Version of the layout of the case manifest, outcome and submission-record JSON files
+/// (`docs/schemas/case-manifest.json`), bumped when it changes so a file of another layout is
+/// refused with both versions named rather than misread. Version 1 is the layout of issue 9
+/// (outcomes and submission records had no version field then: a missing one reads as 1);
+/// version 2 (issue 21) versions all three files and adds `three_dof` cases.
+pub const MANIFEST_SCHEMA_VERSION: u32 = 2;
 
 #[derive(Debug, thiserror::Error)]
 pub enum ExecutorError {
@@ -59,6 +63,18 @@ pub enum ExecutorError {
     },
     #[error("case manifest {}: {message}", path.display())]
     Manifest { path: PathBuf, message: String },
+    #[error(
+        "{}: schema version {found}, but this hdi (v{hdi}) reads schema version {expected} of \
+         case manifests, outcomes and submission records (written by another hdi version; \
+         `hdi run --executor slurm` with this one writes a new manifest)",
+        path.display(),
+        hdi = env!("CARGO_PKG_VERSION")
+    )]
+    SchemaVersion {
+        path: PathBuf,
+        found: u64,
+        expected: u32,
+    },
     #[error(
         "unsafe value for #SBATCH {directive}: {value:?} (no whitespace or control characters)"
     )]
@@ -187,6 +203,8 @@ pub struct CaseManifest {
 /// What a worker writes for one case: `outcomes/<case index>.json` beside the manifest.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct CaseOutcome {
+    /// [`MANIFEST_SCHEMA_VERSION`].
+    pub schema_version: u32,
     pub index: usize,
     pub key: String,
     pub status: CaseStatus,
@@ -291,20 +309,21 @@ impl CaseManifest {
 
     pub fn read(path: &Path) -> ExecResult<Self> {
         let bytes = std::fs::read(path).map_err(|e| ExecutorError::io(path, e))?;
+        Self::from_json_slice(&bytes, path)
+    }
+
+    /// Parse a manifest from its JSON bytes; `path` only names the file in errors. The one
+    /// parser of manifests (what [`Self::read`], `hdi exec-cases` and `hdi status` use, and
+    /// what the fuzz target exercises): the schema version is checked first, so a manifest
+    /// of another layout is refused naming both versions rather than failing on a field, and
+    /// a manifest whose `cases_per_task` is 0 is refused (it would divide by zero).
+    pub fn from_json_slice(bytes: &[u8], path: &Path) -> ExecResult<Self> {
+        check_schema_version(bytes, path)?;
         let manifest: Self =
-            serde_json::from_slice(&bytes).map_err(|e| ExecutorError::Manifest {
+            serde_json::from_slice(bytes).map_err(|e| ExecutorError::Manifest {
                 path: path.to_path_buf(),
                 message: e.to_string(),
             })?;
-        if manifest.schema_version != MANIFEST_SCHEMA_VERSION {
-            return Err(ExecutorError::Manifest {
-                path: path.to_path_buf(),
-                message: format!(
-                    "schema version {} (this hdi reads {MANIFEST_SCHEMA_VERSION})",
-                    manifest.schema_version
-                ),
-            });
-        }
         if manifest.cases_per_task == 0 {
             return Err(ExecutorError::Manifest {
                 path: path.to_path_buf(),
@@ -330,6 +349,7 @@ impl CaseManifest {
                 continue; // half-written temp files start with a dot and end in .tmp-PID
             }
             let bytes = std::fs::read(&path).map_err(|e| ExecutorError::io(&path, e))?;
+            check_schema_version(&bytes, &path)?;
             let outcome: CaseOutcome =
                 serde_json::from_slice(&bytes).map_err(|e| ExecutorError::Manifest {
                     path: path.clone(),
@@ -433,22 +453,84 @@ pub fn submissions_path(manifest_path: &Path) -> PathBuf {
     manifest_path.with_file_name(format!("{stem}.jobs.json"))
 }
 
+/// The `.jobs.json` file: the submission records with their schema version.
+#[derive(Serialize, Deserialize)]
+struct SubmissionLog {
+    schema_version: u32,
+    submissions: Vec<SubmissionRecord>,
+}
+
 /// The arrays submitted for a manifest so far (none if the file does not exist).
 pub fn read_submissions(manifest_path: &Path) -> ExecResult<Vec<SubmissionRecord>> {
     let path = submissions_path(manifest_path);
     match std::fs::read(&path) {
-        Ok(bytes) => serde_json::from_slice(&bytes).map_err(|e| ExecutorError::Manifest {
-            path,
-            message: e.to_string(),
-        }),
+        Ok(bytes) => {
+            check_schema_version(&bytes, &path)?;
+            serde_json::from_slice::<SubmissionLog>(&bytes)
+                .map(|log| log.submissions)
+                .map_err(|e| ExecutorError::Manifest {
+                    path,
+                    message: e.to_string(),
+                })
+        }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Vec::new()),
         Err(e) => Err(ExecutorError::io(path, e)),
     }
 }
 
+/// Refuse a manifest, outcome or submission-record file of another schema version, before
+/// its fields are read. A file without `schema_version` (or a bare array: the submission
+/// records of version 1) is version 1.
+fn check_schema_version(bytes: &[u8], path: &Path) -> ExecResult<()> {
+    #[derive(Deserialize)]
+    struct Versioned {
+        schema_version: Option<serde_json::Number>,
+    }
+    let first = bytes.iter().find(|b| !b.is_ascii_whitespace());
+    let found = if first == Some(&b'[') {
+        Some(1)
+    } else {
+        match serde_json::from_slice::<Versioned>(bytes) {
+            // Not an object, or not JSON: the full parse names what is wrong.
+            Err(_) => None,
+            Ok(Versioned {
+                schema_version: None,
+            }) => Some(1),
+            // Anything but the expected integer (2.5, -1, 2^70) is "another version" too.
+            Ok(Versioned {
+                schema_version: Some(n),
+            }) => match n.as_u64() {
+                Some(v) if v == u64::from(MANIFEST_SCHEMA_VERSION) => None,
+                Some(v) => Some(v),
+                None => {
+                    return Err(ExecutorError::Manifest {
+                        path: path.to_path_buf(),
+                        message: format!(
+                            "schema_version {n} is not a version number (this hdi reads \
+                             schema version {MANIFEST_SCHEMA_VERSION})"
+                        ),
+                    })
+                }
+            },
+        }
+    };
+    match found {
+        Some(found) => Err(ExecutorError::SchemaVersion {
+            path: path.to_path_buf(),
+            found,
+            expected: MANIFEST_SCHEMA_VERSION,
+        }),
+        None => Ok(()),
+    }
+}
+
 fn write_submissions(manifest_path: &Path, records: &[SubmissionRecord]) -> ExecResult<()> {
     let path = submissions_path(manifest_path);
-    let bytes = serde_json::to_vec_pretty(records).map_err(|e| ExecutorError::Manifest {
+    let log = SubmissionLog {
+        schema_version: MANIFEST_SCHEMA_VERSION,
+        submissions: records.to_vec(),
+    };
+    let bytes = serde_json::to_vec_pretty(&log).map_err(|e| ExecutorError::Manifest {
         path: path.clone(),
         message: e.to_string(),
     })?;
@@ -607,6 +689,7 @@ pub fn exec_task(
                 Err(e) => (failed_status(crate::core::chain(&*e), identity), None),
             };
             let outcome = CaseOutcome {
+                schema_version: MANIFEST_SCHEMA_VERSION,
                 index,
                 key: spec.key.clone(),
                 status,

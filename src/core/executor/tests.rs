@@ -75,6 +75,91 @@ fn manifest_round_trips_and_refuses_other_schemas() {
     assert!(e.to_string().contains("schema version 99"), "{e}");
 }
 
+/// Every versioned file names itself and both versions when refused; a file of issue 9's
+/// layout (manifest `schema_version: 1`, outcomes and job records without one) is version 1.
+#[test]
+fn manifests_outcomes_and_job_records_of_other_versions_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = CaseManifest::new((0..2).map(|i| spec("double", i)).collect(), 1).unwrap();
+    let path = manifest_path(dir.path(), &m.id());
+    m.write(&path).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.starts_with("{\"schema_version\":2,"), "{text}");
+    let expect_refusal = |e: ExecutorError, file: &Path, found: &str| {
+        let msg = e.to_string();
+        assert!(
+            msg.contains(&file.display().to_string())
+                && msg.contains(&format!("schema version {found}"))
+                && msg.contains("reads schema version 2"),
+            "{msg}"
+        );
+    };
+    // The manifest: version 1, missing, and not a number.
+    let mut v: Value = serde_json::from_str(&text).unwrap();
+    v["schema_version"] = json!(1);
+    let e = CaseManifest::from_json_slice(v.to_string().as_bytes(), &path).unwrap_err();
+    expect_refusal(e, &path, "1");
+    v.as_object_mut().unwrap().remove("schema_version");
+    let e = CaseManifest::from_json_slice(v.to_string().as_bytes(), &path).unwrap_err();
+    expect_refusal(e, &path, "1");
+    v["schema_version"] = json!(2.5);
+    let e = CaseManifest::from_json_slice(v.to_string().as_bytes(), &path).unwrap_err();
+    assert!(e.to_string().contains("not a version number"), "{e}");
+    // Garbage and a zero task size are errors, not panics.
+    for bad in [
+        &b""[..],
+        b"[",
+        b"{\"schema_version\":2}",
+        b"\xff\xfe",
+        b"null",
+    ] {
+        assert!(CaseManifest::from_json_slice(bad, &path).is_err());
+    }
+    v["schema_version"] = json!(2);
+    v["cases_per_task"] = json!(0);
+    let e = CaseManifest::from_json_slice(v.to_string().as_bytes(), &path).unwrap_err();
+    assert!(e.to_string().contains("cases_per_task is 0"), "{e}");
+
+    // An outcome file without a version (issue 9's layout).
+    let out = outcome_dir(&path);
+    std::fs::create_dir_all(&out).unwrap();
+    let outcome = out.join("0.json");
+    std::fs::write(
+        &outcome,
+        json!({"index": 0, "key": m.cases[0].spec.key, "status": {"state": "done"}}).to_string(),
+    )
+    .unwrap();
+    let e = m.clone().merge_outcomes(&path).unwrap_err();
+    expect_refusal(e, &outcome, "1");
+    // The current layout is read.
+    let current = CaseOutcome {
+        schema_version: MANIFEST_SCHEMA_VERSION,
+        index: 0,
+        key: m.cases[0].spec.key.clone(),
+        status: CaseStatus::Done,
+    };
+    std::fs::write(&outcome, serde_json::to_vec(&current).unwrap()).unwrap();
+    let mut merged = m.clone();
+    assert_eq!(merged.merge_outcomes(&path).unwrap(), 1);
+    assert_eq!(merged.cases[0].status, CaseStatus::Done);
+
+    // Job records: issue 9 wrote a bare array; version 2 an object with the version.
+    let jobs = submissions_path(&path);
+    let record = SubmissionRecord {
+        job_id: 7,
+        offset: 0,
+        tasks: 2,
+        submitted: "2026-01-01T00:00:00Z".into(),
+    };
+    write_submissions(&path, std::slice::from_ref(&record)).unwrap();
+    let written: Value = serde_json::from_slice(&std::fs::read(&jobs).unwrap()).unwrap();
+    assert_eq!(written["schema_version"], json!(2));
+    assert_eq!(read_submissions(&path).unwrap(), vec![record.clone()]);
+    std::fs::write(&jobs, json!([record]).to_string()).unwrap();
+    let e = read_submissions(&path).unwrap_err();
+    expect_refusal(e, &jobs, "1");
+}
+
 #[test]
 fn tasks_fill_the_cache_record_failures_and_resubmit_only_those() {
     let dir = tempfile::tempdir().unwrap();
