@@ -14,6 +14,7 @@ mod report;
 mod run;
 mod simulate;
 mod slurm;
+mod slurm_batch;
 mod surface;
 mod synth;
 mod validate;
@@ -44,8 +45,13 @@ pub fn main() -> Result<()> {
                 if !submitted {
                     return Ok(());
                 }
+                // The calibration's rounds go to Slurm during the local run.
+                let runner = slurm_batch::calibration_runner(&config, &slurm)?;
+                let ran = run::cmd_run(&config, only, force, dry_run, jobs, Some(runner.clone()));
+                slurm_batch::report(&runner);
+                return ran;
             }
-            run::cmd_run(&config, only, force, dry_run, jobs)
+            run::cmd_run(&config, only, force, dry_run, jobs, None)
         }
         Command::ExecCases {
             manifest,

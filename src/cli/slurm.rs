@@ -37,6 +37,7 @@ pub(super) fn run_cases_on_slurm(
                 force: false,
                 dry_run: false,
                 jobs: jobs_or_cores(jobs),
+                batch: None,
             },
             &StageBars::new("stages"),
         )?;

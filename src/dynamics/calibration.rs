@@ -882,6 +882,51 @@ pub struct CalibrationBase<'a> {
     pub dmw: Option<DmwInput<'a>>,
     pub options: SimOptions,
     pub case_params: CaseParams,
+    /// Who computes the cases of a round: `None` is this process's thread pool (the fit's
+    /// own code path); a [`CaseRounds`] can send them elsewhere (Slurm arrays, docs/slurm.md
+    /// "Calibration on Slurm"). The driver (the search, the touchdown scan) stays here.
+    pub rounds: Option<&'a dyn CaseRounds>,
+}
+
+/// One round of the fit's cases: independent cases at one point of knob space on one
+/// geometry, at several actuations (a trial point's target cases, a touchdown scan or
+/// refinement batch, a held-out sweep). Everything a case depends on besides the base.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CaseRound<'r> {
+    pub knobs: &'r [(Knob, f64)],
+    pub geometry: TargetGeometry,
+    pub actuations: &'r [f64],
+}
+
+/// Computes a round's cases somewhere else than this process's thread pool; each metric must
+/// be what [`round_case`] gives for that case (bit for bit: the fit's decisions compare
+/// them), in the order of `round.actuations`.
+pub trait CaseRounds: Sync {
+    fn run_round(&self, round: &CaseRound) -> Result<Vec<CaseMetrics>>;
+}
+
+/// One case of a round, computed here: what [`CaseRounds::run_round`] must reproduce (a
+/// worker process calls this with the same base, rebuilt from the same inputs).
+pub fn round_case(
+    base: &CalibrationBase,
+    knobs: &[(Knob, f64)],
+    geometry: TargetGeometry,
+    actuation: f64,
+) -> Result<CaseMetrics> {
+    let p = prepare(base, knobs)?;
+    on_geometry(&p, geometry)?.case(actuation)
+}
+
+/// The prepared cases of `p` on `geometry` (the optimised bulge replaces the base's).
+fn on_geometry<'a>(p: &Prepared<'a>, geometry: TargetGeometry) -> Result<Prepared<'a>> {
+    Ok(match geometry {
+        TargetGeometry::Base => p.clone(),
+        TargetGeometry::Optimised => Prepared {
+            model: p.model.with_bulge(optimised_bulge(OPTIMISED_WIDTH)?),
+            geometry,
+            ..p.clone()
+        },
+    })
 }
 
 /// Search settings.
@@ -1077,6 +1122,9 @@ struct Prepared<'a> {
     lookup: std::sync::Arc<IsblLookup>,
     dmw: std::sync::Arc<Option<ScaledDmw>>,
     base: &'a CalibrationBase<'a>,
+    /// What a [`CaseRound`] names (knobs applied above, geometry of `model`'s bulge).
+    knobs: std::sync::Arc<KnobValues>,
+    geometry: TargetGeometry,
 }
 
 impl Prepared<'_> {
@@ -1100,7 +1148,14 @@ impl Prepared<'_> {
     }
 
     fn cases(&self, actuations: &[f64]) -> Result<Vec<CaseMetrics>> {
-        actuations.par_iter().map(|&a| self.case(a)).collect()
+        match self.base.rounds {
+            Some(rounds) => rounds.run_round(&CaseRound {
+                knobs: &self.knobs,
+                geometry: self.geometry,
+                actuations,
+            }),
+            None => actuations.par_iter().map(|&a| self.case(a)).collect(),
+        }
     }
 }
 
@@ -1125,6 +1180,8 @@ fn prepare<'a>(base: &'a CalibrationBase<'a>, values: &[(Knob, f64)]) -> Result<
         lookup: std::sync::Arc::new(interface_table(isbl)?),
         dmw: std::sync::Arc::new(dmw),
         base,
+        knobs: std::sync::Arc::new(values.to_vec()),
+        geometry: TargetGeometry::Base,
     })
 }
 
@@ -1201,18 +1258,8 @@ fn evaluate_set(
         if targets.is_empty() {
             continue;
         }
-        let optimised;
-        let prepared = match geometry {
-            TargetGeometry::Base => &p,
-            TargetGeometry::Optimised => {
-                optimised = Prepared {
-                    model: p.model.with_bulge(optimised_bulge(OPTIMISED_WIDTH)?),
-                    ..p.clone()
-                };
-                &optimised
-            }
-        };
-        let (values, n, rejected) = evaluate_targets(prepared, settings, &targets, grid, cutoff)?;
+        let prepared = on_geometry(&p, geometry)?;
+        let (values, n, rejected) = evaluate_targets(&prepared, settings, &targets, grid, cutoff)?;
         cases += n;
         if let Some(lower_bound) = rejected {
             return Ok(Scored::Rejected { lower_bound, cases });
@@ -1764,6 +1811,7 @@ mod tests {
                 },
                 ..CaseParams::improved_2dof()
             },
+            rounds: None,
         }
     }
 

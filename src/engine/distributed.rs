@@ -295,5 +295,9 @@ pub fn registry() -> CaseRegistry {
     let mut r = CaseRegistry::new();
     r.register(SIMULATE_CASE, SweepWorker::new(SIMULATE_CASE));
     r.register(DOE_CASE, SweepWorker::new(DOE_CASE));
+    r.register(
+        crate::stages::calibrate::CALIBRATION_CASE,
+        super::distributed_calibration::CalibrationWorker::default(),
+    );
     r
 }
