@@ -1980,6 +1980,83 @@ mod tests {
         );
     }
 
+    /// Rounds computed elsewhere (here: one case at a time through `round_case`, the metrics
+    /// through JSON as a store entry carries them) give the in-process fit exactly: same
+    /// trajectory, knobs, objective and counts, early rejection included; and every case of
+    /// the fit, the held-out sweep's too, went through the runner.
+    #[test]
+    fn rounds_run_elsewhere_give_the_same_fit() {
+        struct Serial<'b> {
+            base: CalibrationBase<'b>,
+            rounds: std::sync::Mutex<Vec<usize>>,
+        }
+        impl CaseRounds for Serial<'_> {
+            fn run_round(&self, round: &CaseRound) -> Result<Vec<CaseMetrics>> {
+                self.rounds.lock().unwrap().push(round.actuations.len());
+                round
+                    .actuations
+                    .iter()
+                    .map(|&a| {
+                        let m = round_case(&self.base, round.knobs, round.geometry, a)?;
+                        let text = serde_json::to_string(&m).unwrap();
+                        Ok(serde_json::from_str(&text).unwrap())
+                    })
+                    .collect()
+            }
+        }
+        let nm = |x: f64| x * NM;
+        let mut settings = CalibrationSettings::new(
+            vec![
+                KnobRange::new(Knob::KrStiffeningBeta),
+                KnobRange::new(Knob::ContactDamping),
+            ],
+            vec![
+                t("td", Quantity::Touchdown, nm(10.5), nm(5.0), "", "nm", 1e9),
+                t(
+                    "c",
+                    Quantity::Clearance { actuation: nm(6.0) },
+                    1.5e-9,
+                    nm(0.002),
+                    "",
+                    "nm",
+                    1e9,
+                ),
+            ],
+        );
+        settings.held_out = vec![t(
+            "tdc",
+            Quantity::TouchdownClearance,
+            0.5e-9,
+            0.2e-9,
+            "",
+            "nm",
+            1e9,
+        )
+        .held_out()];
+        settings.sweep_grid = vec![0.0, nm(7.0), nm(14.0)];
+        settings.touchdown = TouchdownSearch {
+            start: 0.0,
+            stop: nm(14.0),
+            step: nm(2.0),
+            resolution: nm(0.25),
+            batch: 2,
+        };
+        settings.search.max_evaluations = 8;
+        let local = calibrate(&short_base(None), &settings, |_, _| {}).unwrap();
+        let runner = Serial {
+            base: short_base(None),
+            rounds: Default::default(),
+        };
+        let mut base = short_base(None);
+        base.rounds = Some(&runner);
+        let remote = calibrate(&base, &settings, |_, _| {}).unwrap();
+        assert_eq!(remote, local);
+        assert!(local.held_out_best.is_some());
+        let rounds = runner.rounds.into_inner().unwrap();
+        assert!(rounds.len() > 10, "{rounds:?}");
+        assert_eq!(rounds.iter().sum::<usize>(), local.cases);
+    }
+
     /// The held-out set never reaches the objective: moving a held-out target's published
     /// value leaves the fitted knobs bit-identical, while its own residual moves.
     #[test]
