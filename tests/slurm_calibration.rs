@@ -212,7 +212,9 @@ fn a_lost_calibration_task_fails_the_stage_instead_of_the_point() {
 #[test]
 fn real_slurm_calibration_round() {
     if std::env::var("HDI_SLURM_TESTS").as_deref() != Ok("1") {
-        eprintln!("skipped: set HDI_SLURM_TESTS=1 with a running Slurm (scripts/slurm-local-up.sh)");
+        eprintln!(
+            "skipped: set HDI_SLURM_TESTS=1 with a running Slurm (scripts/slurm-local-up.sh)"
+        );
         return;
     }
     let local = Project::shipped();

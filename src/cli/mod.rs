@@ -41,12 +41,14 @@ pub fn main() -> Result<()> {
             slurm,
         } => {
             if slurm.executor.parse::<ExecutorKind>()? == ExecutorKind::Slurm && !dry_run {
-                let submitted = slurm::run_cases_on_slurm(&config, &slurm, jobs)?;
-                if !submitted {
-                    return Ok(());
-                }
-                // The calibration's rounds go to Slurm during the local run.
+                // The calibration's rounds go to Slurm during the local runs (docs/slurm.md).
                 let runner = slurm_batch::calibration_runner(&config, &slurm)?;
+                let submitted =
+                    slurm::run_cases_on_slurm(&config, &slurm, jobs, Some(runner.clone()));
+                if !matches!(submitted, Ok(true)) {
+                    slurm_batch::report(&runner);
+                    return submitted.map(|_| ());
+                }
                 let ran = run::cmd_run(&config, only, force, dry_run, jobs, Some(runner.clone()));
                 slurm_batch::report(&runner);
                 return ran;

@@ -19,6 +19,7 @@ pub(super) fn run_cases_on_slurm(
     config: &Path,
     args: &SlurmArgs,
     jobs: Option<usize>,
+    batch: Option<std::sync::Arc<dyn hdi::core::executor::batch::BatchRunner>>,
 ) -> Result<bool> {
     use hdi::core::executor::manifest_path;
     use hdi::core::executor::slurm::{submit_manifest, ScriptOptions, SlurmClient};
@@ -37,7 +38,8 @@ pub(super) fn run_cases_on_slurm(
                 force: false,
                 dry_run: false,
                 jobs: jobs_or_cores(jobs),
-                batch: None,
+                // A calibration upstream of a calibrated sweep sends its rounds to Slurm too.
+                batch,
             },
             &StageBars::new("stages"),
         )?;
