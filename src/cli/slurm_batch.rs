@@ -11,8 +11,8 @@ use super::run::load;
 use hdi::core::executor::batch::SlurmBatchRunner;
 use hdi::core::executor::slurm::{ScriptOptions, SlurmClient};
 
-/// The Slurm runner of the rounds (the same job-script options as the sweep's arrays; poll
-/// period `HDI_SLURM_POLL_MS`, default 5 s, reached by doubling from 50 ms each round).
+/// The Slurm runner of the rounds (the same job-script options as the sweep's arrays; the
+/// `squeue` period is `HDI_SLURM_POLL_MS`, default 5 s; outcome files are checked every 50 ms).
 pub(super) fn calibration_runner(config: &Path, args: &SlurmArgs) -> Result<Arc<SlurmBatchRunner>> {
     let (file, _) = load(config)?;
     let processed = file.processed_dir();

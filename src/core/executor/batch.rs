@@ -66,9 +66,10 @@ pub struct BatchStats {
     pub seconds: f64,
 }
 
-/// One manifest and one set of arrays per round; waits for it with a poll period that starts
-/// at 50 ms and doubles up to `poll` (a round of flying cases takes seconds, a held-out sweep
-/// minutes: short rounds are not held back by a long period, long ones do not flood `squeue`).
+/// One manifest and one set of arrays per round. It waits on the round's outcome files
+/// (checked every 50 ms) and asks `squeue` every `poll` for tasks that ended without
+/// reporting: a round of a few flying cases takes about a second, so a detection delay of
+/// the poll period (5 s by default) would dominate it (docs/slurm.md).
 #[derive(Debug)]
 pub struct SlurmBatchRunner {
     pub client: SlurmClient,
@@ -133,18 +134,23 @@ impl SlurmBatchRunner {
         manifest.write(&path)?;
         let records =
             submit_manifest(&self.client, &self.script, &path, &manifest, self.max_array)?;
-        let mut period = Duration::from_millis(50).min(self.poll);
+        // Every case reported (its entry is committed before its outcome is written): done,
+        // without waiting for Slurm to notice the tasks ended. The outcome files are checked
+        // every 50 ms (a few `stat`s); `squeue`, which only has to catch tasks that end
+        // without reporting, every `poll`.
+        let tick = Duration::from_millis(50).min(self.poll);
+        let mut last_queue = Instant::now();
         let statuses = loop {
-            std::thread::sleep(period);
-            period = (period * 2).min(self.poll);
-            // Every case reported (entry committed before its outcome is written): done,
-            // without waiting for Slurm to notice the tasks ended.
+            std::thread::sleep(tick);
             if all_reported(&path, manifest.cases.len()) {
                 break Vec::new();
             }
-            let (total, each) = self.client.status_all(&records)?;
-            if total.is_finished() {
-                break each;
+            if last_queue.elapsed() >= self.poll {
+                last_queue = Instant::now();
+                let (total, each) = self.client.status_all(&records)?;
+                if total.is_finished() {
+                    break each;
+                }
             }
         };
         let mut done = CaseManifest::read(&path)?;
