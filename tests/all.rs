@@ -16,6 +16,7 @@ mod pipeline_cache;
 mod report_cli;
 mod rfft_numpy;
 mod simulate_cli;
+mod slurm_calibration;
 mod slurm_cli;
 mod standalone;
 mod surface_cli;

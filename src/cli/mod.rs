@@ -14,6 +14,7 @@ mod report;
 mod run;
 mod simulate;
 mod slurm;
+mod slurm_batch;
 mod surface;
 mod synth;
 mod validate;
@@ -40,12 +41,19 @@ pub fn main() -> Result<()> {
             slurm,
         } => {
             if slurm.executor.parse::<ExecutorKind>()? == ExecutorKind::Slurm && !dry_run {
-                let submitted = slurm::run_cases_on_slurm(&config, &only, &slurm, jobs)?;
-                if !submitted {
-                    return Ok(());
+                // The calibration's rounds go to Slurm during the local runs (docs/slurm.md).
+                let runner = slurm_batch::calibration_runner(&config, &slurm)?;
+                let submitted =
+                    slurm::run_cases_on_slurm(&config, &only, &slurm, jobs, Some(runner.clone()));
+                if !matches!(submitted, Ok(true)) {
+                    slurm_batch::report(&runner);
+                    return submitted.map(|_| ());
                 }
+                let ran = run::cmd_run(&config, only, force, dry_run, jobs, Some(runner.clone()));
+                slurm_batch::report(&runner);
+                return ran;
             }
-            run::cmd_run(&config, only, force, dry_run, jobs)
+            run::cmd_run(&config, only, force, dry_run, jobs, None)
         }
         Command::ExecCases {
             manifest,

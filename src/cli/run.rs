@@ -46,6 +46,7 @@ pub(super) fn cmd_run(
     force: bool,
     dry_run: bool,
     jobs: Option<usize>,
+    batch: Option<std::sync::Arc<dyn hdi::core::executor::batch::BatchRunner>>,
 ) -> Result<()> {
     let started = Instant::now();
     let (file, stages) = load(config)?;
@@ -57,6 +58,7 @@ pub(super) fn cmd_run(
         force,
         dry_run,
         jobs: jobs_or_cores(jobs),
+        batch,
     };
     let report = engine::run(stages, &store, &opts, &StageBars::new("stages"))?;
     if dry_run {

@@ -20,6 +20,7 @@ pub(super) fn run_cases_on_slurm(
     only: &[String],
     args: &SlurmArgs,
     jobs: Option<usize>,
+    batch: Option<std::sync::Arc<dyn hdi::core::executor::batch::BatchRunner>>,
 ) -> Result<bool> {
     use hdi::core::executor::manifest_path;
     use hdi::core::executor::slurm::{submit_manifest, ScriptOptions, SlurmClient};
@@ -38,6 +39,8 @@ pub(super) fn run_cases_on_slurm(
                 force: false,
                 dry_run: false,
                 jobs: jobs_or_cores(jobs),
+                // A calibration upstream of a calibrated sweep sends its rounds to Slurm too.
+                batch,
             },
             &StageBars::new("stages"),
         )?;

@@ -887,6 +887,51 @@ pub struct CalibrationBase<'a> {
     pub dmw: Option<DmwInput<'a>>,
     pub options: SimOptions,
     pub case_params: CaseParams,
+    /// Who computes the cases of a round: `None` is this process's thread pool (the fit's
+    /// own code path); a [`CaseRounds`] can send them elsewhere (Slurm arrays, docs/slurm.md
+    /// "Calibration on Slurm"). The driver (the search, the touchdown scan) stays here.
+    pub rounds: Option<&'a dyn CaseRounds>,
+}
+
+/// One round of the fit's cases: independent cases at one point of knob space on one
+/// geometry, at several actuations (a trial point's target cases, a touchdown scan or
+/// refinement batch, a held-out sweep). Everything a case depends on besides the base.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CaseRound<'r> {
+    pub knobs: &'r [(Knob, f64)],
+    pub geometry: TargetGeometry,
+    pub actuations: &'r [f64],
+}
+
+/// Computes a round's cases somewhere else than this process's thread pool; each metric must
+/// be what [`round_case`] gives for that case (bit for bit: the fit's decisions compare
+/// them), in the order of `round.actuations`.
+pub trait CaseRounds: Sync {
+    fn run_round(&self, round: &CaseRound) -> Result<Vec<CaseMetrics>>;
+}
+
+/// One case of a round, computed here: what [`CaseRounds::run_round`] must reproduce (a
+/// worker process calls this with the same base, rebuilt from the same inputs).
+pub fn round_case(
+    base: &CalibrationBase,
+    knobs: &[(Knob, f64)],
+    geometry: TargetGeometry,
+    actuation: f64,
+) -> Result<CaseMetrics> {
+    let p = prepare(base, knobs)?;
+    on_geometry(&p, geometry)?.case(actuation)
+}
+
+/// The prepared cases of `p` on `geometry` (the optimised bulge replaces the base's).
+fn on_geometry<'a>(p: &Prepared<'a>, geometry: TargetGeometry) -> Result<Prepared<'a>> {
+    Ok(match geometry {
+        TargetGeometry::Base => p.clone(),
+        TargetGeometry::Optimised => Prepared {
+            model: p.model.with_bulge(optimised_bulge(OPTIMISED_WIDTH)?),
+            geometry,
+            ..p.clone()
+        },
+    })
 }
 
 /// Search settings.
@@ -1082,6 +1127,9 @@ struct Prepared<'a> {
     lookup: std::sync::Arc<IsblLookup>,
     dmw: std::sync::Arc<Option<ScaledDmw>>,
     base: &'a CalibrationBase<'a>,
+    /// What a [`CaseRound`] names (knobs applied above, geometry of `model`'s bulge).
+    knobs: std::sync::Arc<KnobValues>,
+    geometry: TargetGeometry,
 }
 
 impl Prepared<'_> {
@@ -1105,7 +1153,14 @@ impl Prepared<'_> {
     }
 
     fn cases(&self, actuations: &[f64]) -> Result<Vec<CaseMetrics>> {
-        actuations.par_iter().map(|&a| self.case(a)).collect()
+        match self.base.rounds {
+            Some(rounds) => rounds.run_round(&CaseRound {
+                knobs: &self.knobs,
+                geometry: self.geometry,
+                actuations,
+            }),
+            None => actuations.par_iter().map(|&a| self.case(a)).collect(),
+        }
     }
 }
 
@@ -1130,6 +1185,8 @@ fn prepare<'a>(base: &'a CalibrationBase<'a>, values: &[(Knob, f64)]) -> Result<
         lookup: std::sync::Arc::new(interface_table(isbl)?),
         dmw: std::sync::Arc::new(dmw),
         base,
+        knobs: std::sync::Arc::new(values.to_vec()),
+        geometry: TargetGeometry::Base,
     })
 }
 
@@ -1206,18 +1263,8 @@ fn evaluate_set(
         if targets.is_empty() {
             continue;
         }
-        let optimised;
-        let prepared = match geometry {
-            TargetGeometry::Base => &p,
-            TargetGeometry::Optimised => {
-                optimised = Prepared {
-                    model: p.model.with_bulge(optimised_bulge(OPTIMISED_WIDTH)?),
-                    ..p.clone()
-                };
-                &optimised
-            }
-        };
-        let (values, n, rejected) = evaluate_targets(prepared, settings, &targets, grid, cutoff)?;
+        let prepared = on_geometry(&p, geometry)?;
+        let (values, n, rejected) = evaluate_targets(&prepared, settings, &targets, grid, cutoff)?;
         cases += n;
         if let Some(lower_bound) = rejected {
             return Ok(Scored::Rejected { lower_bound, cases });
@@ -1769,6 +1816,7 @@ mod tests {
                 },
                 ..CaseParams::improved_2dof()
             },
+            rounds: None,
         }
     }
 
@@ -1935,6 +1983,83 @@ mod tests {
             with.cases,
             without.cases
         );
+    }
+
+    /// Rounds computed elsewhere (here: one case at a time through `round_case`, the metrics
+    /// through JSON as a store entry carries them) give the in-process fit exactly: same
+    /// trajectory, knobs, objective and counts, early rejection included; and every case of
+    /// the fit, the held-out sweep's too, went through the runner.
+    #[test]
+    fn rounds_run_elsewhere_give_the_same_fit() {
+        struct Serial<'b> {
+            base: CalibrationBase<'b>,
+            rounds: std::sync::Mutex<Vec<usize>>,
+        }
+        impl CaseRounds for Serial<'_> {
+            fn run_round(&self, round: &CaseRound) -> Result<Vec<CaseMetrics>> {
+                self.rounds.lock().unwrap().push(round.actuations.len());
+                round
+                    .actuations
+                    .iter()
+                    .map(|&a| {
+                        let m = round_case(&self.base, round.knobs, round.geometry, a)?;
+                        let text = serde_json::to_string(&m).unwrap();
+                        Ok(serde_json::from_str(&text).unwrap())
+                    })
+                    .collect()
+            }
+        }
+        let nm = |x: f64| x * NM;
+        let mut settings = CalibrationSettings::new(
+            vec![
+                KnobRange::new(Knob::KrStiffeningBeta),
+                KnobRange::new(Knob::ContactDamping),
+            ],
+            vec![
+                t("td", Quantity::Touchdown, nm(10.5), nm(5.0), "", "nm", 1e9),
+                t(
+                    "c",
+                    Quantity::Clearance { actuation: nm(6.0) },
+                    1.5e-9,
+                    nm(0.002),
+                    "",
+                    "nm",
+                    1e9,
+                ),
+            ],
+        );
+        settings.held_out = vec![t(
+            "tdc",
+            Quantity::TouchdownClearance,
+            0.5e-9,
+            0.2e-9,
+            "",
+            "nm",
+            1e9,
+        )
+        .held_out()];
+        settings.sweep_grid = vec![0.0, nm(7.0), nm(14.0)];
+        settings.touchdown = TouchdownSearch {
+            start: 0.0,
+            stop: nm(14.0),
+            step: nm(2.0),
+            resolution: nm(0.25),
+            batch: 2,
+        };
+        settings.search.max_evaluations = 8;
+        let local = calibrate(&short_base(None), &settings, |_, _| {}).unwrap();
+        let runner = Serial {
+            base: short_base(None),
+            rounds: Default::default(),
+        };
+        let mut base = short_base(None);
+        base.rounds = Some(&runner);
+        let remote = calibrate(&base, &settings, |_, _| {}).unwrap();
+        assert_eq!(remote, local);
+        assert!(local.held_out_best.is_some());
+        let rounds = runner.rounds.into_inner().unwrap();
+        assert!(rounds.len() > 10, "{rounds:?}");
+        assert_eq!(rounds.iter().sum::<usize>(), local.cases);
     }
 
     /// The held-out set never reaches the objective: moving a held-out target's published

@@ -128,7 +128,7 @@ impl SteadyWindow {
 // ------------------------------------------------------------------------------------------
 
 /// Mean, standard deviation and range of a series (same unit as the series).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SeriesStats {
     pub mean: f64,
     /// Population standard deviation (divide by n): the RMS fluctuation about the mean over the
@@ -170,7 +170,7 @@ pub const EXTREME_COUNT: usize = 5;
 
 /// Flying-height modulation or bouncing vibration of one series (eq. 2.1):
 /// `percent = 100·(fh_max_m − fh_min_m)/FH_nom`.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Modulation {
     pub percent: f64,
     /// Mean of the largest values used [m].
@@ -183,7 +183,7 @@ pub struct Modulation {
 }
 
 /// What eq. 2.1 is called for a case.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum VibrationKind {
     /// Flying-height modulation: the case is flying.
     Fhm,
@@ -377,7 +377,7 @@ pub struct ContactSeries<'a> {
 /// `P_m = F_c/A_r`, `τ = Q/A_r` are averaged over the *loaded* samples only (`F_c >` threshold,
 /// and `A_r > 0` for `P_m` and `τ`); the ratio-of-means forms divide the time averages. Both are
 /// reported, as §8 asks; `None` when no sample is loaded.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ContactSeverity {
     pub contact_force_n: SeriesStats,
     pub friction_n: SeriesStats,
@@ -510,7 +510,7 @@ pub struct CaseSeries<'a> {
 }
 
 /// Metrics of one case on its steady window.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CaseMetrics {
     /// Sample indices of the steady window.
     pub window: Range<usize>,
@@ -590,7 +590,9 @@ pub fn case_metrics(s: &CaseSeries, p: &CaseParams) -> Result<CaseMetrics> {
 // ------------------------------------------------------------------------------------------
 
 /// Operating regime from the steady mean clearance `c̄` (§1.2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Regime {
     /// `c̄ > 2T0`.

@@ -511,5 +511,9 @@ pub fn registry() -> CaseRegistry {
     r.register(SIMULATE_CASE, SweepWorker::new(SIMULATE_CASE));
     r.register(DOE_CASE, SweepWorker::new(DOE_CASE));
     r.register(THREE_DOF_CASE, ThreeDofWorker::default());
+    r.register(
+        crate::stages::calibrate::CALIBRATION_CASE,
+        super::distributed_calibration::CalibrationWorker::default(),
+    );
     r
 }

@@ -3,8 +3,10 @@
 //! them through the [`Stage`] contract they define.
 pub mod diff;
 pub mod distributed;
+pub mod distributed_calibration;
 
 use crate::core::cache::{Fingerprint, InputRecord, Manifest, Store, UpstreamRecord, Verification};
+use crate::core::executor::batch::BatchRunner;
 use crate::core::progress::{Progress, RunObserver};
 use crate::error::{Error, Result};
 use crate::stages::{Stage, StageContext};
@@ -178,6 +180,8 @@ pub struct RunOptions {
     pub force: bool,
     pub dry_run: bool,
     pub jobs: usize,
+    /// Given to every stage as `StageContext::batch` (the calibration's rounds on Slurm).
+    pub batch: Option<std::sync::Arc<dyn crate::core::executor::batch::BatchRunner>>,
 }
 
 /// What happened to each instance.
@@ -270,7 +274,8 @@ pub fn run(
     observer.run_started(to_run.len());
 
     let mut settled = read_fresh(&plan, &selected, store);
-    run_waves(&plan, store, &pool, observer, to_run, &mut settled);
+    let batch = opts.batch.as_deref();
+    run_waves(&plan, store, &pool, observer, to_run, &mut settled, batch);
     observer.run_finished();
 
     report(&plan, store, settled)
@@ -374,6 +379,7 @@ fn run_waves(
     observer: &dyn RunObserver,
     to_run: Vec<usize>,
     settled: &mut Settled,
+    batch: Option<&dyn BatchRunner>,
 ) {
     let mut remaining: Vec<usize> = to_run;
     while !remaining.is_empty() {
@@ -398,7 +404,7 @@ fn run_waves(
             use rayon::prelude::*;
             ready
                 .par_iter()
-                .map(|&i| (i, run_instance(plan, i, store, results, observer)))
+                .map(|&i| (i, run_instance(plan, i, store, results, observer, batch)))
                 .collect()
         });
         for (i, r) in wave {
@@ -415,6 +421,7 @@ fn run_instance(
     store: &Store,
     results: &BTreeMap<String, std::result::Result<Value, String>>,
     observer: &dyn RunObserver,
+    batch: Option<&dyn BatchRunner>,
 ) -> Executed {
     let p = &plan.planned[i];
     let stage = &plan.stages[p.index];
@@ -439,6 +446,7 @@ fn run_instance(
         upstream,
         upstream_dirs,
         progress.as_ref(),
+        batch,
     );
     observer.stage_finished(&p.name, r.is_ok());
     r
@@ -489,6 +497,7 @@ fn execute(
     upstream: BTreeMap<String, Value>,
     upstream_dirs: BTreeMap<String, PathBuf>,
     progress: &dyn Progress,
+    batch: Option<&dyn BatchRunner>,
 ) -> Executed {
     let started = Instant::now();
     let work = store
@@ -504,6 +513,7 @@ fn execute(
         store,
         progress,
         run_log: Default::default(),
+        batch,
     };
     // A bug must not take the other stages down with it, nor leave a trusted output.
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| stage.run(&ctx)));

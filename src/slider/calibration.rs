@@ -49,6 +49,7 @@ pub fn base_of<'a>(
         }),
         options: p.options,
         case_params: p.case_metric_params(),
+        rounds: None,
     }
 }
 

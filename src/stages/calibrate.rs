@@ -7,10 +7,15 @@ use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::calibration::fitted_json;
 use crate::contact::isbl::IsblParams;
 use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::executor::batch::BatchRunner;
+use crate::core::executor::CaseSpec;
 use crate::dynamics::calibration::{
     apply_knobs, calibrate, default_knobs, held_out_for, in_band, targets_for, CalibrationResult,
-    CalibrationSettings, Evaluation, Knob, KnobRange, TargetOutcome, DEFAULT_MAX_EVALUATIONS,
+    CalibrationSettings, CaseRound, CaseRounds, Evaluation, Knob, KnobRange, TargetGeometry,
+    TargetOutcome, DEFAULT_MAX_EVALUATIONS,
 };
+use crate::dynamics::metrics::CaseMetrics;
+use crate::dynamics::DynamicsError;
 use crate::error::Result;
 use crate::slider::calibration::{base_inputs, base_of};
 use crate::slider::params::{uncalibrated_base, SimulateParams};
@@ -566,7 +571,11 @@ impl StageKind for CalibrateStage {
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         let (isbl, dmw) = base_inputs(&self.base, &ctx.upstream, &ctx.upstream_dirs)?;
-        let base = base_of(&self.base, isbl, dmw.as_ref());
+        // Under a batch runner (`hdi run --executor slurm`) the rounds of cases go to it; the
+        // search stays here (docs/slurm.md, "Calibration on Slurm").
+        let rounds = ctx.batch.map(|batch| StoreRounds::new(self, ctx, batch));
+        let mut base = base_of(&self.base, isbl, dmw.as_ref());
+        base.rounds = rounds.as_ref().map(|r| r as &dyn CaseRounds);
         // Every knob must have a value in the base (e.g. a constant Δγ for `surface_energy`).
         for r in &self.settings.knobs {
             r.knob.base_value(&base.model, &base.isbl)?;
@@ -585,7 +594,13 @@ impl StageKind for CalibrateStage {
         let result = calibrate(&base, &settings, |n, best| {
             ctx.progress
                 .set_message(format!("{n}/{budget} evaluations, objective {best:.3}"));
-        })?;
+        });
+        if let Some(r) = &rounds {
+            // A round that did not come back (scheduler, store) must not pass for an
+            // infeasible point: the fit is void.
+            r.finish(ctx)?;
+        }
+        let result = result?;
         let rows = table_rows(&result);
         crate::core::store::write_table(&rows, &ctx.out_dir.join("calibration"))?;
         crate::core::store::write_table(&knob_rows(self, &result), &ctx.out_dir.join("knobs"))?;
@@ -850,6 +865,208 @@ fn residuals_png(path: &std::path::Path, base: &str, r: &CalibrationResult) -> R
         1.0,
     )?;
     Ok(())
+}
+
+// ------------------------------------------------------------------------------------------
+// The fit's cases as store entries, for a batch runner (docs/slurm.md, "Calibration on Slurm")
+// ------------------------------------------------------------------------------------------
+
+/// Case kind of one calibration case sent to a batch runner (`hdi exec-cases` dispatches on
+/// it; the worker is `engine::distributed_calibration`).
+pub const CALIBRATION_CASE: &str = "calibration";
+
+/// Model version of a calibration case's store entry: its result is the case metrics of
+/// `dynamics::calibration::round_case` as JSON (or the error of a case that fails).
+pub const CASE_MODEL_VERSION: &str = "calibration-case-1";
+
+impl CalibrateStage {
+    /// What every case of this fit depends on besides its knobs, geometry and actuation: the
+    /// stage's and the simulation cases' model versions, the base instance's parameters
+    /// (without its actuation grid and history points) and the keys of its upstream entries.
+    pub fn case_base_params(&self, upstream_key: impl Fn(&str) -> String) -> Value {
+        let mut base = self.base.canonical();
+        if let Some(o) = base.as_object_mut() {
+            o.remove("actuations_m");
+            o.remove("histories_m");
+        }
+        let upstream: Vec<Value> = self
+            .base
+            .upstream()
+            .iter()
+            .map(|n| json!({"name": n, "key": upstream_key(n)}))
+            .collect();
+        json!({
+            "model_version": MODEL_VERSION,
+            "case_model_version": crate::slider::case::MODEL_VERSION,
+            "base_parameters": base,
+            "upstream": upstream,
+        })
+    }
+}
+
+/// `base` / `optimised`.
+pub fn geometry_name(g: TargetGeometry) -> &'static str {
+    match g {
+        TargetGeometry::Base => "base",
+        TargetGeometry::Optimised => "optimised",
+    }
+}
+
+pub fn geometry_from_name(s: &str) -> Option<TargetGeometry> {
+    match s {
+        "base" => Some(TargetGeometry::Base),
+        "optimised" => Some(TargetGeometry::Optimised),
+        _ => None,
+    }
+}
+
+/// `[[name, value], …]` (JSON numbers round-trip f64 exactly: serde_json `float_roundtrip`).
+pub fn knobs_json(knobs: &[(Knob, f64)]) -> Value {
+    json!(knobs
+        .iter()
+        .map(|(k, v)| json!([k.name(), v]))
+        .collect::<Vec<_>>())
+}
+
+/// The inverse of [`knobs_json`]; `None` for anything else.
+pub fn knobs_from_json(v: &Value) -> Option<Vec<(Knob, f64)>> {
+    v.as_array()?
+        .iter()
+        .map(|pair| {
+            let k = Knob::from_name(pair.get(0)?.as_str()?)?;
+            Some((k, pair.get(1)?.as_f64()?))
+        })
+        .collect()
+}
+
+/// Canonical parameters of one case (its store key).
+pub fn case_params(
+    base_params: &Value,
+    knobs: &[(Knob, f64)],
+    geometry: TargetGeometry,
+    actuation: f64,
+) -> Value {
+    json!({
+        "calibration_base": base_params,
+        "knobs": knobs_json(knobs),
+        "geometry": geometry_name(geometry),
+        "actuation_m": actuation,
+    })
+}
+
+/// A case's result as stored: `{"metrics": …}`, or `{"error": …}` for a case that fails (a
+/// failing case is deterministic, and the fit counts its point infeasible with this text).
+pub fn case_result(outcome: &crate::dynamics::Result<CaseMetrics>) -> Value {
+    match outcome {
+        Ok(m) => json!({ "metrics": m }),
+        Err(e) => json!({ "error": e.to_string() }),
+    }
+}
+
+/// The fit's rounds as store entries computed by a batch runner. A round that does not come
+/// back (scheduler, store, unreadable result) is recorded as fatal: the fit then fails fast
+/// and the stage reports it, instead of counting the point infeasible.
+struct StoreRounds<'c> {
+    batch: &'c dyn BatchRunner,
+    store: &'c crate::core::cache::Store,
+    instance: String,
+    base_params: Value,
+    /// `[{name, key, dir}]` with `dir` relative to `processed/`: where a worker reads the
+    /// base's contact and DMW entries.
+    upstream: Value,
+    fatal: std::sync::Mutex<Option<String>>,
+    counts: std::sync::Mutex<(usize, usize)>,
+}
+
+impl<'c> StoreRounds<'c> {
+    fn new(stage: &CalibrateStage, ctx: &StageContext<'c>, batch: &'c dyn BatchRunner) -> Self {
+        let processed = ctx.store.processed();
+        let upstream: Vec<Value> = stage
+            .base
+            .upstream()
+            .iter()
+            .map(|n| {
+                let dir = ctx
+                    .upstream_dirs
+                    .get(n)
+                    .map(|d| d.strip_prefix(processed).unwrap_or(d).display().to_string());
+                json!({"name": n, "key": ctx.upstream_key(n), "dir": dir})
+            })
+            .collect();
+        StoreRounds {
+            batch,
+            store: ctx.store,
+            instance: ctx.name.to_string(),
+            base_params: stage.case_base_params(|n| ctx.upstream_key(n)),
+            upstream: json!(upstream),
+            fatal: Default::default(),
+            counts: Default::default(),
+        }
+    }
+
+    fn fail(&self, message: String) -> DynamicsError {
+        if let Ok(mut f) = self.fatal.lock() {
+            f.get_or_insert(message.clone());
+        }
+        DynamicsError::Numerical(message)
+    }
+
+    /// The fatal error of a round, if one happened; the rounds and cases in the run's log.
+    fn finish(&self, ctx: &StageContext) -> Result<()> {
+        let (rounds, cases) = self.counts.lock().map(|c| *c).unwrap_or_default();
+        ctx.log_run("batch_rounds", json!({"rounds": rounds, "cases": cases}));
+        match self.fatal.lock().ok().and_then(|f| f.clone()) {
+            Some(m) => Err(crate::error::Error::Stage(format!(
+                "{}: a round of calibration cases did not come back: {m}",
+                self.instance
+            ))),
+            None => Ok(()),
+        }
+    }
+}
+
+impl CaseRounds for StoreRounds<'_> {
+    fn run_round(&self, round: &CaseRound) -> crate::dynamics::Result<Vec<CaseMetrics>> {
+        if let Some(m) = self.fatal.lock().ok().and_then(|f| f.clone()) {
+            return Err(DynamicsError::Numerical(m));
+        }
+        if let Ok(mut c) = self.counts.lock() {
+            c.0 += 1;
+            c.1 += round.actuations.len();
+        }
+        let specs: Vec<CaseSpec> = round
+            .actuations
+            .iter()
+            .map(|&a| {
+                let params = case_params(&self.base_params, round.knobs, round.geometry, a);
+                let key = crate::core::cases::case_fingerprint(CASE_MODEL_VERSION, &params).key();
+                let recipe = json!({
+                    "instance": self.instance,
+                    "upstream": self.upstream,
+                    "knobs": knobs_json(round.knobs),
+                    "geometry": geometry_name(round.geometry),
+                    "actuation_m": a,
+                    "key": key,
+                });
+                CaseSpec::new(CALIBRATION_CASE, CASE_MODEL_VERSION, params, recipe)
+            })
+            .collect();
+        let results = self
+            .batch
+            .run_batch(self.store, &specs)
+            .map_err(|e| self.fail(crate::core::chain(&e)))?;
+        let mut metrics = Vec::with_capacity(results.len());
+        for (spec, r) in specs.iter().zip(results) {
+            if let Some(e) = r.get("error").and_then(Value::as_str) {
+                // As the in-process round: the case's own error (the first in order).
+                return Err(DynamicsError::Numerical(e.to_string()));
+            }
+            let m = serde_json::from_value::<CaseMetrics>(r["metrics"].clone())
+                .map_err(|e| self.fail(format!("case {}: unreadable metrics: {e}", spec.key)))?;
+            metrics.push(m);
+        }
+        Ok(metrics)
+    }
 }
 
 #[cfg(test)]

@@ -62,6 +62,9 @@ pub struct StageContext<'a> {
     /// depend on what the store already held and on timing, so they go to the entry's
     /// `manifest.json` (`run_log`), never into `result.json` (docs/architecture.md).
     pub run_log: std::sync::Mutex<BTreeMap<String, Value>>,
+    /// Where a stage with a sequential driver sends its rounds of independent cases (the
+    /// calibration under `hdi run --executor slurm`); `None`: computed in this process.
+    pub batch: Option<&'a dyn crate::core::executor::batch::BatchRunner>,
 }
 
 impl StageContext<'_> {

@@ -10,6 +10,7 @@
 //! shared manifest: concurrent tasks on different nodes would lose each other's updates, so
 //! the submitter folds the outcome files back in ([`CaseManifest::merge_outcomes`]).
 
+pub mod batch;
 pub mod plan;
 pub mod slurm;
 
