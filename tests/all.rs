@@ -20,3 +20,4 @@ mod standalone;
 mod surface_cli;
 mod three_dof_cli;
 mod validate_cli;
+mod verify_cli;
