@@ -21,3 +21,4 @@ mod surface_cli;
 mod three_dof_cli;
 mod validate_cli;
 mod verify_cli;
+mod faults;

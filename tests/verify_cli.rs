@@ -30,6 +30,9 @@ actuations = ["4 nm", "12 nm"]
 duration = "0.4 ms"
 steady_start = "0.2 ms"
 refine_touchdown = false
+
+[report]
+validation = false
 "#;
 
 fn project() -> Project {

@@ -101,10 +101,24 @@ fn print_text(r: &verify::VerifyReport, before: Option<&verify::VerifyReport>) {
             println!("           {}: {}", p.file, p.detail);
         }
     }
-    for o in &r.orphans {
+    // Orphans are harmless: the first few by path, then a count per kind (`--json` lists all).
+    const SHOWN: usize = 10;
+    for o in r.orphans.iter().take(SHOWN) {
         println!(
             "orphan   {} (not referenced by the pipeline; `hdi gc` removes it)",
             o.path
+        );
+    }
+    if r.orphans.len() > SHOWN {
+        let mut by_kind = std::collections::BTreeMap::<&str, usize>::new();
+        for o in &r.orphans[SHOWN..] {
+            *by_kind.entry(o.kind.as_str()).or_default() += 1;
+        }
+        let kinds: Vec<String> = by_kind.iter().map(|(k, n)| format!("{n} {k}")).collect();
+        println!(
+            "orphan   … and {} more ({}; `--json` lists them)",
+            r.orphans.len() - SHOWN,
+            kinds.join(", ")
         );
     }
     if !r.not_run.is_empty() {
@@ -112,7 +126,7 @@ fn print_text(r: &verify::VerifyReport, before: Option<&verify::VerifyReport>) {
     }
     if r.leftover_work_dirs > 0 {
         println!(
-            "leftover {} of interrupted runs in .hdi/tmp/ (never trusted; `hdi gc` removes them)",
+            "leftover {} in .hdi/tmp/ (interrupted runs, quarantined entries: never trusted; `hdi gc` removes them)",
             count(r.leftover_work_dirs, "work dir", "work dirs")
         );
     }

@@ -502,10 +502,13 @@ fn execute(
     let started = Instant::now();
     // A full, read-only or forbidden processed/ says so first (docs/reliability.md), checked
     // before the work dir is removed (which frees the space again).
-    let explain = |msg: String| match crate::core::cache::filesystem_cause(store.processed(), &msg)
-    {
-        Some(cause) => format!("{cause}: {msg}"),
-        None => msg,
+    let explain = |msg: String| {
+        // One line: HDF5's error text carries a newline (after its timestamp).
+        let msg = msg.replace('\n', " ");
+        match crate::core::cache::filesystem_cause(store.processed(), &msg) {
+            Some(cause) => format!("{cause}: {msg}"),
+            None => msg,
+        }
     };
     let work = store.new_work_dir(&p.name, &p.key).map_err(|e| {
         explain(format!(

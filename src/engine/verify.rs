@@ -144,7 +144,8 @@ pub struct VerifyReport {
     /// Instances whose current key has no entry yet (never run or stale: `hdi status` says
     /// why). Not damage.
     pub not_run: Vec<String>,
-    /// Work dirs of interrupted runs under `.hdi/tmp/` (never trusted; `hdi gc` removes them).
+    /// Dirs under `.hdi/tmp/`: work dirs of interrupted runs and quarantined entries (never
+    /// trusted; `hdi gc` removes them).
     pub leftover_work_dirs: usize,
 }
 
