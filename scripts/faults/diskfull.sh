@@ -41,6 +41,10 @@ for f in $FRACTIONS; do
   if ! grep -qi 'no space left' <<<"$err"; then
     echo "size $f: the error does not say \"no space left\": $(tail -5 "$WORK/full.log")" >&2; ok=0
   fi
+  # …and names the instance (`name`) whose result could not be written.
+  if ! grep -q '`[A-Za-z0-9_-]*`' <<<"$err"; then
+    echo "size $f: the error names no instance: $err" >&2; ok=0
+  fi
   if grep -q 'panicked' "$WORK/full.log"; then echo "size $f: panic" >&2; ok=0; fi
   # Nothing half-written trusted: every entry in the store verifies (the full disk may even
   # refuse the verify's own nothing — it writes nothing).

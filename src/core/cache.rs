@@ -852,6 +852,82 @@ mod tests {
     }
 
     #[test]
+    fn check_entry_names_every_changed_missing_and_extra_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap();
+        let f = fp(5e-6, "aa");
+        let work = store.new_work_dir("disk", &f.key()).unwrap();
+        fs::write(work.join("a.txt"), b"alpha").unwrap();
+        fs::create_dir_all(work.join("sub")).unwrap();
+        fs::write(work.join("sub/b.txt"), b"beta").unwrap();
+        let m = store
+            .commit(&work, "disk", &f, 0.0, Default::default())
+            .unwrap();
+        let entry = store.entry_dir("surface", &m.key);
+        let clean = store.check_entry("surface", &m.key).unwrap();
+        assert!(clean.problems.is_empty(), "{:?}", clean.problems);
+        assert_eq!((clean.files, clean.bytes), (2, 9));
+        // Same size, one byte different: only the hash can tell.
+        fs::write(entry.join("a.txt"), b"alphA").unwrap();
+        fs::remove_file(entry.join("sub/b.txt")).unwrap();
+        fs::write(entry.join("c.txt"), b"").unwrap();
+        let got: Vec<(String, ProblemKind)> = store
+            .check_entry("surface", &m.key)
+            .unwrap()
+            .problems
+            .into_iter()
+            .map(|p| (p.file, p.problem))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                ("a.txt".to_string(), ProblemKind::Changed),
+                ("sub/b.txt".to_string(), ProblemKind::Missing),
+                ("c.txt".to_string(), ProblemKind::Extra),
+            ]
+        );
+        // A damaged manifest; a missing entry.
+        fs::write(entry.join("manifest.json"), b"{").unwrap();
+        let p = &store.check_entry("surface", &m.key).unwrap().problems;
+        assert_eq!(
+            (p[0].file.as_str(), p[0].problem),
+            ("manifest.json", ProblemKind::Unreadable)
+        );
+        assert!(store.check_entry("surface", "0000").is_none());
+        // Quarantine moves it into tmp/, where nothing is trusted.
+        let aside = store.quarantine("surface", &m.key).unwrap().unwrap();
+        assert!(aside.starts_with(dir.path().join(".hdi/tmp")) && aside.join("a.txt").is_file());
+        assert!(matches!(
+            store.verify("surface", &m.key),
+            Verification::Missing
+        ));
+    }
+
+    #[test]
+    fn filesystem_causes_are_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path();
+        let at = p.display().to_string();
+        let full = filesystem_cause(p, "x.h5: No space left on device (os error 28)").unwrap();
+        assert!(
+            full.starts_with("no space left on device") && full.contains(&at),
+            "{full}"
+        );
+        let ro = filesystem_cause(
+            p,
+            &format!("{at}/.hdi/lock: Read-only file system (os error 30)"),
+        );
+        assert_eq!(ro.unwrap(), format!("{at} is on a read-only filesystem"));
+        // Permission denied on a file outside processed/ (an input) is not the store's fault.
+        assert_eq!(
+            filesystem_cause(p, "raw/a.gwy: Permission denied (os error 13)"),
+            None
+        );
+        assert_eq!(filesystem_cause(p, "case h_TFC = 1 nm: diverged"), None);
+        assert!(free_bytes(p).is_some_and(|b| b > 0));
+    }
+
+    #[test]
     fn iso_dates_are_civil() {
         let s = now_iso8601();
         assert_eq!(s.len(), 20);

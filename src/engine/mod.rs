@@ -462,9 +462,16 @@ fn report(plan: &Plan, store: &Store, settled: Settled) -> Result<RunReport> {
         ..
     } = settled;
     for (name, m) in &manifests {
-        store
-            .write_ref(m)
-            .map_err(|e| Error::io(store.processed().join(name), e))?;
+        store.write_ref(m).map_err(|e| {
+            let msg = format!(
+                "`{name}` ran, but pointing {} at its result failed: {e}",
+                store.processed().join(name).display()
+            );
+            match crate::core::cache::filesystem_cause(store.processed(), &msg) {
+                Some(cause) => Error::Stage(format!("{cause}: {msg}")),
+                None => Error::io(store.processed().join(name), e),
+            }
+        })?;
     }
     let current = plan
         .planned
