@@ -62,11 +62,15 @@ if [ "$SLURM" = 1 ]; then
   ok=1
   [ $rs = 0 ] && [ $rl = 0 ] || { echo "slurm + local: exit $rs and $rl: $(tail -3 "$WORK/s.log") $(tail -3 "$WORK/l.log")" >&2; ok=0; }
   [ $ok = 1 ] && { check "slurm + local" "$P" || ok=0; }
-  job=$(grep -o 'submitted as job(s) [0-9, ]*' "$WORK/s.log" | head -1 || true)
-  log "slurm + local: exits $rs/$rl; $job"
+  job=$(grep -o 'slurm: [0-9]* cases in [0-9]* tasks submitted as job(s) [0-9, ]*' "$WORK/s.log" | head -1 || true)
+  # Who computed what: the tasks' own counts (`task N: C computed, K cached, F failed`).
+  tasks=$(cat "$P"/processed/.hdi/slurm/*.log 2>/dev/null | grep -o 'task [0-9]*: [0-9]* computed, [0-9]* cached' || true)
+  by_slurm=$(awk '{s += $3} END {print s + 0}' <<<"$tasks")
+  cached_for_slurm=$(awk '{s += $5} END {print s + 0}' <<<"$tasks")
+  log "slurm + local: exits $rs/$rl; $job; the array computed $by_slurm cases and found $cached_for_slurm already computed by the local run"
   [ $ok = 1 ] || fails=$((fails + 1))
   row "Slurm array + local \`hdi run\` on one store ($FAULTS_PIPELINE)" "$([ $ok = 1 ] && echo PASS || echo FAIL)" \
-    "both exit 0 ($job); results equal to the clean run, verify clean" "$(( ($(ms_now) - T1) / 1000 ))"
+    "both exit 0 ($job; the array computed $by_slurm, found $cached_for_slurm done by the local run); results equal to the clean run, verify clean" "$(( ($(ms_now) - T1) / 1000 ))"
 else
   log "no Slurm cluster answers sinfo: the Slurm part is skipped (bash scripts/slurm-local-up.sh)"
   row "Slurm array + local \`hdi run\` on one store" "SKIPPED" "no Slurm cluster (sinfo)" 0
