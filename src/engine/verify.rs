@@ -15,6 +15,9 @@ use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 
+/// A store entry: (kind, key).
+pub type EntryId = (String, String);
+
 /// Why an entry is referenced.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
 pub enum By {
@@ -48,8 +51,8 @@ impl By {
 
 /// Every store entry the pipeline references, `(kind, key)` → who references it. Entries that
 /// do not exist (never run) are included: the caller decides whether that is damage.
-pub fn references(plan: &Plan, store: &Store) -> BTreeMap<(String, String), BTreeSet<By>> {
-    let mut refs: BTreeMap<(String, String), BTreeSet<By>> = BTreeMap::new();
+pub fn references(plan: &Plan, store: &Store) -> BTreeMap<EntryId, BTreeSet<By>> {
+    let mut refs: BTreeMap<EntryId, BTreeSet<By>> = BTreeMap::new();
     for p in &plan.planned {
         refs.entry((p.kind.clone(), p.key.clone()))
             .or_default()
@@ -63,7 +66,7 @@ pub fn references(plan: &Plan, store: &Store) -> BTreeMap<(String, String), BTre
         }
     }
     // Case entries (core::cases) live as long as a referenced stage entry lists them.
-    let stage_entries: Vec<((String, String), Vec<String>)> = refs
+    let stage_entries: Vec<(EntryId, Vec<String>)> = refs
         .iter()
         .map(|(k, by)| {
             let names = by
@@ -178,7 +181,7 @@ pub fn verify(plan: &Plan, store: &Store, all: bool) -> VerifyReport {
         not_run: Vec::new(),
         leftover_work_dirs: store.tmp_dirs().len(),
     };
-    let mut to_check: Vec<((String, String), Option<&BTreeSet<By>>)> = Vec::new();
+    let mut to_check: Vec<(EntryId, Option<&BTreeSet<By>>)> = Vec::new();
     for (k, by) in &refs {
         to_check.push((k.clone(), Some(by)));
     }
