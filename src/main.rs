@@ -7,7 +7,9 @@ use std::process::ExitCode;
 fn main() -> ExitCode {
     match cli::main() {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) if e.is::<cli::Stale>() || e.is::<cli::Differs>() => ExitCode::from(1),
+        Err(e) if e.is::<cli::Stale>() || e.is::<cli::Differs>() || e.is::<cli::Damaged>() => {
+            ExitCode::from(1)
+        }
         Err(e) => {
             // One line: the whole context chain.
             eprintln!("error: {e:#}");

@@ -197,6 +197,24 @@ pub enum Command {
     /// changed (cache key), the parameters that changed, and the metric deltas of the summary
     /// tables and result.json (docs/diff.md). Exit 0 identical, 1 different, 2 error.
     Diff(Box<DiffArgs>),
+    /// Re-hash the store entries the pipeline references (`--all`: every entry) against their
+    /// manifests: damaged entries (a file edited, missing or extra) and orphans (docs/reliability.md).
+    /// Exit 0 clean, 1 damaged, 2 error.
+    Verify {
+        #[arg(long, default_value = "pipeline.toml")]
+        config: PathBuf,
+        /// Check every entry in the store, not only those the pipeline references.
+        #[arg(long)]
+        all: bool,
+        /// Move damaged entries aside and re-run the instances that made them, then verify again.
+        #[arg(long)]
+        repair: bool,
+        #[arg(long)]
+        json: bool,
+        /// Parallel jobs for `--repair` (default: number of cores).
+        #[arg(short = 'j', long)]
+        jobs: Option<usize>,
+    },
 }
 
 #[derive(Args, Debug)]

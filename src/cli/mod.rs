@@ -18,6 +18,7 @@ mod slurm_batch;
 mod surface;
 mod synth;
 mod validate;
+mod verify;
 
 use anyhow::{Context, Result};
 use clap::Parser;
@@ -28,6 +29,7 @@ use hdi::core::executor::ExecutorKind;
 
 pub use diff::Differs;
 pub use run::Stale;
+pub use verify::Damaged;
 
 pub fn main() -> Result<()> {
     let cli = Cli::parse();
@@ -113,6 +115,13 @@ pub fn main() -> Result<()> {
             force,
         } => report::cmd_report(&config, out, no_validation, validation, force),
         Command::Diff(args) => diff::cmd_diff(*args),
+        Command::Verify {
+            config,
+            all,
+            repair,
+            json,
+            jobs,
+        } => verify::cmd_verify(&config, all, repair, json, jobs),
     }
 }
 

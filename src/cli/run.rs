@@ -89,7 +89,16 @@ pub(super) fn cmd_run(
             _ => {}
         }
     }
-    engine::write_summary_tables(&store, &report)?;
+    if let Err(e) = engine::write_summary_tables(&store, &report) {
+        // A full disk fails the tables too: the failed instance is the error to report.
+        if first_failure.is_none() {
+            return Err(e.into());
+        }
+        eprintln!(
+            "warning: summary tables not written: {}",
+            hdi::error::chain(&e)
+        );
+    }
     let failed = report.failed();
     let total = report.outcomes.len();
     if ran == 0 && failed == 0 {

@@ -177,6 +177,67 @@ pub enum Verification {
     Damaged(String),
 }
 
+/// Everything [`Store::check_entry`] found in one entry.
+#[derive(Debug, Default)]
+pub struct EntryCheck {
+    /// The parsed manifest (`None` when it is missing or does not parse).
+    pub manifest: Option<Box<Manifest>>,
+    /// Files checked (listed in the manifest, or found when there is no manifest).
+    pub files: usize,
+    /// Bytes re-hashed.
+    pub bytes: u64,
+    /// Empty when the entry is intact.
+    pub problems: Vec<FileProblem>,
+}
+
+/// One file of an entry that does not match its manifest.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FileProblem {
+    /// Path relative to the entry directory.
+    pub file: String,
+    pub problem: ProblemKind,
+    pub detail: String,
+}
+
+impl FileProblem {
+    fn new(file: &str, problem: ProblemKind, detail: impl Into<String>) -> Self {
+        Self {
+            file: file.to_string(),
+            problem,
+            detail: detail.into(),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ProblemKind {
+    /// Present, but its size or blake3 differs from the manifest's.
+    Changed,
+    /// Listed in the manifest (or the manifest itself), not on disk.
+    Missing,
+    /// On disk, not listed in the manifest.
+    Extra,
+    /// Cannot be read (permissions, I/O error) or, for the manifest, does not parse.
+    Unreadable,
+}
+
+/// Files under `dir`, relative to `root`, in sorted order (unreadable directories are skipped:
+/// their listed files then show up as unreadable or missing).
+fn list_files(root: &Path, dir: &Path, out: &mut Vec<String>) {
+    let Ok(rd) = fs::read_dir(dir) else { return };
+    let mut v: Vec<_> = rd.flatten().collect();
+    v.sort_by_key(|e| e.file_name());
+    for e in v {
+        let p = e.path();
+        if e.file_type().is_ok_and(|t| t.is_dir()) {
+            list_files(root, &p, out);
+        } else if let Ok(rel) = p.strip_prefix(root) {
+            out.push(rel.to_string_lossy().to_string());
+        }
+    }
+}
+
 pub struct Store {
     processed: PathBuf,
     meta: PathBuf,
@@ -256,6 +317,122 @@ impl Store {
         Verification::Fresh(Box::new(manifest))
     }
 
+    /// Every problem of one entry, not just the first (for `hdi verify`): each output the
+    /// manifest lists is re-hashed (size and blake3), and files in the entry that the manifest
+    /// does not list are reported as extra. `None` when the entry directory does not exist.
+    pub fn check_entry(&self, kind: &str, key: &str) -> Option<EntryCheck> {
+        let dir = self.entry_dir(kind, key);
+        if !dir.is_dir() {
+            return None;
+        }
+        let mut check = EntryCheck::default();
+        let manifest: Option<Manifest> = match fs::read(dir.join("manifest.json")) {
+            Err(e) if e.kind() == io::ErrorKind::NotFound => {
+                check.problems.push(FileProblem::new(
+                    "manifest.json",
+                    ProblemKind::Missing,
+                    "manifest missing",
+                ));
+                None
+            }
+            Err(e) => {
+                check.problems.push(FileProblem::new(
+                    "manifest.json",
+                    ProblemKind::Unreadable,
+                    format!("manifest unreadable: {e}"),
+                ));
+                None
+            }
+            Ok(bytes) => match serde_json::from_slice::<Manifest>(&bytes) {
+                Ok(m) => Some(m),
+                Err(e) => {
+                    check.problems.push(FileProblem::new(
+                        "manifest.json",
+                        ProblemKind::Unreadable,
+                        format!("manifest does not parse: {e}"),
+                    ));
+                    None
+                }
+            },
+        };
+        let mut on_disk = Vec::new();
+        list_files(&dir, &dir, &mut on_disk);
+        let Some(manifest) = manifest else {
+            check.files = on_disk.len();
+            return Some(check);
+        };
+        if manifest.key != key {
+            check.problems.push(FileProblem::new(
+                "manifest.json",
+                ProblemKind::Changed,
+                format!("manifest belongs to key {}", manifest.key),
+            ));
+        }
+        let listed: std::collections::BTreeSet<&str> =
+            manifest.outputs.iter().map(|o| o.path.as_str()).collect();
+        for out in &manifest.outputs {
+            let p = dir.join(&out.path);
+            check.files += 1;
+            match fs::metadata(&p) {
+                Err(e) if e.kind() == io::ErrorKind::NotFound => check
+                    .problems
+                    .push(FileProblem::new(&out.path, ProblemKind::Missing, "missing")),
+                Err(e) => check.problems.push(FileProblem::new(
+                    &out.path,
+                    ProblemKind::Unreadable,
+                    format!("unreadable: {e}"),
+                )),
+                Ok(meta) => {
+                    check.bytes += meta.len();
+                    match hash_file(&p) {
+                        Ok(h) if h == out.blake3 && meta.len() == out.bytes => {}
+                        Ok(_) => check.problems.push(FileProblem::new(
+                            &out.path,
+                            ProblemKind::Changed,
+                            format!(
+                                "changed since written ({} bytes, manifest says {}; blake3 differs)",
+                                meta.len(),
+                                out.bytes
+                            ),
+                        )),
+                        Err(e) => check.problems.push(FileProblem::new(
+                            &out.path,
+                            ProblemKind::Unreadable,
+                            format!("unreadable: {e}"),
+                        )),
+                    }
+                }
+            }
+        }
+        for rel in on_disk {
+            if rel != "manifest.json" && !listed.contains(rel.as_str()) {
+                check.problems.push(FileProblem::new(
+                    &rel,
+                    ProblemKind::Extra,
+                    "not in the manifest",
+                ));
+            }
+        }
+        check.manifest = Some(Box::new(manifest));
+        Some(check)
+    }
+
+    /// Move an entry out of the store into `.hdi/tmp/` (never trusted; `hdi gc` removes it),
+    /// so the next run recomputes it. Returns where it went, `None` if there was no entry.
+    pub fn quarantine(&self, kind: &str, key: &str) -> io::Result<Option<PathBuf>> {
+        let dir = self.entry_dir(kind, key);
+        if !dir.exists() {
+            return Ok(None);
+        }
+        let aside = self.new_work_dir(&format!("quarantine-{kind}"), key)?;
+        fs::remove_dir(&aside)?;
+        fs::rename(&dir, &aside)?;
+        if let Some(parent) = dir.parent() {
+            sync_dir(parent);
+        }
+        Ok(Some(aside))
+    }
+
     /// Checksum the work dir's files, write the manifest last, fsync, and rename the whole
     /// directory into the store: a crash before the rename leaves only a tmp dir.
     pub fn commit(
@@ -303,7 +480,8 @@ impl Store {
                 let _ = fs::remove_dir_all(work_dir);
                 return Ok(*theirs);
             }
-            return Err(e);
+            // The kind stays (a full disk, a read-only store); the message names the entry.
+            return Err(io::Error::new(e.kind(), format!("{}: {e}", dest.display())));
         }
         if let Some(parent) = dest.parent() {
             sync_dir(parent);
@@ -540,6 +718,47 @@ fn sync_dir(dir: &Path) {
     }
 }
 
+/// The filesystem reason a write under `processed` failed, in words, when the failure is the
+/// disk's rather than hdi's: a full disk or quota, a read-only filesystem, a permission denied.
+/// `message` is the failure's whole chain. HDF5's own write errors do not always carry the
+/// errno, so a filesystem with (almost) no space left is also taken as the cause.
+/// (docs/reliability.md, "Fault campaigns".)
+pub fn filesystem_cause(processed: &Path, message: &str) -> Option<String> {
+    let m = message.to_ascii_lowercase();
+    let at = processed.display();
+    if m.contains("no space left") || m.contains("os error 28") {
+        return Some(format!("no space left on device (writing to {at})"));
+    }
+    if m.contains("quota exceeded") || m.contains("os error 122") {
+        return Some(format!(
+            "no space left: disk quota exceeded (writing to {at})"
+        ));
+    }
+    let mentions_store = message.contains(&processed.to_string_lossy().to_string());
+    if mentions_store && (m.contains("read-only file system") || m.contains("os error 30")) {
+        return Some(format!("{at} is on a read-only filesystem"));
+    }
+    if mentions_store && (m.contains("permission denied") || m.contains("os error 13")) {
+        return Some(format!("permission denied writing to {at}"));
+    }
+    match free_bytes(processed) {
+        Some(free) if free < 64 * 1024 => Some(format!(
+            "no space left on device (writing to {at}: {free} bytes free)"
+        )),
+        _ => None,
+    }
+}
+
+/// Bytes an unprivileged user may still write on the filesystem holding `dir`.
+pub fn free_bytes(dir: &Path) -> Option<u64> {
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(dir.as_os_str().as_bytes()).ok()?;
+    // SAFETY: `c` is a valid NUL-terminated path and `s` a properly sized, writable statvfs.
+    let mut s: libc::statvfs = unsafe { std::mem::zeroed() };
+    let r = unsafe { libc::statvfs(c.as_ptr(), &mut s) };
+    (r == 0).then(|| s.f_bavail as u64 * s.f_frsize as u64)
+}
+
 /// Write to a sibling temp file, fsync, rename: readers see the old or the new file, never half.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
     let parent = path.parent().unwrap_or_else(|| Path::new("."));
@@ -549,10 +768,13 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
         .map(|n| n.to_string_lossy().to_string())
         .unwrap_or_default();
     let tmp = parent.join(format!(".{file_name}.tmp-{}", std::process::id()));
-    write_synced(&tmp, bytes)?;
-    fs::rename(&tmp, path).inspect_err(|_| {
-        let _ = fs::remove_file(&tmp);
-    })
+    // A full disk fails the write half-way: remove the partial temp file, not only a failed
+    // rename's.
+    write_synced(&tmp, bytes)
+        .and_then(|()| fs::rename(&tmp, path))
+        .inspect_err(|_| {
+            let _ = fs::remove_file(&tmp);
+        })
 }
 
 /// Current UTC time as ISO 8601 (no external time crate needed for this).
@@ -627,6 +849,82 @@ mod tests {
         assert_eq!(a, back);
         assert!(a.explain_changes(&back).is_empty());
         assert_eq!(a.key(), back.key());
+    }
+
+    #[test]
+    fn check_entry_names_every_changed_missing_and_extra_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap();
+        let f = fp(5e-6, "aa");
+        let work = store.new_work_dir("disk", &f.key()).unwrap();
+        fs::write(work.join("a.txt"), b"alpha").unwrap();
+        fs::create_dir_all(work.join("sub")).unwrap();
+        fs::write(work.join("sub/b.txt"), b"beta").unwrap();
+        let m = store
+            .commit(&work, "disk", &f, 0.0, Default::default())
+            .unwrap();
+        let entry = store.entry_dir("surface", &m.key);
+        let clean = store.check_entry("surface", &m.key).unwrap();
+        assert!(clean.problems.is_empty(), "{:?}", clean.problems);
+        assert_eq!((clean.files, clean.bytes), (2, 9));
+        // Same size, one byte different: only the hash can tell.
+        fs::write(entry.join("a.txt"), b"alphA").unwrap();
+        fs::remove_file(entry.join("sub/b.txt")).unwrap();
+        fs::write(entry.join("c.txt"), b"").unwrap();
+        let got: Vec<(String, ProblemKind)> = store
+            .check_entry("surface", &m.key)
+            .unwrap()
+            .problems
+            .into_iter()
+            .map(|p| (p.file, p.problem))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                ("a.txt".to_string(), ProblemKind::Changed),
+                ("sub/b.txt".to_string(), ProblemKind::Missing),
+                ("c.txt".to_string(), ProblemKind::Extra),
+            ]
+        );
+        // A damaged manifest; a missing entry.
+        fs::write(entry.join("manifest.json"), b"{").unwrap();
+        let p = &store.check_entry("surface", &m.key).unwrap().problems;
+        assert_eq!(
+            (p[0].file.as_str(), p[0].problem),
+            ("manifest.json", ProblemKind::Unreadable)
+        );
+        assert!(store.check_entry("surface", "0000").is_none());
+        // Quarantine moves it into tmp/, where nothing is trusted.
+        let aside = store.quarantine("surface", &m.key).unwrap().unwrap();
+        assert!(aside.starts_with(dir.path().join(".hdi/tmp")) && aside.join("a.txt").is_file());
+        assert!(matches!(
+            store.verify("surface", &m.key),
+            Verification::Missing
+        ));
+    }
+
+    #[test]
+    fn filesystem_causes_are_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path();
+        let at = p.display().to_string();
+        let full = filesystem_cause(p, "x.h5: No space left on device (os error 28)").unwrap();
+        assert!(
+            full.starts_with("no space left on device") && full.contains(&at),
+            "{full}"
+        );
+        let ro = filesystem_cause(
+            p,
+            &format!("{at}/.hdi/lock: Read-only file system (os error 30)"),
+        );
+        assert_eq!(ro.unwrap(), format!("{at} is on a read-only filesystem"));
+        // Permission denied on a file outside processed/ (an input) is not the store's fault.
+        assert_eq!(
+            filesystem_cause(p, "raw/a.gwy: Permission denied (os error 13)"),
+            None
+        );
+        assert_eq!(filesystem_cause(p, "case h_TFC = 1 nm: diverged"), None);
+        assert!(free_bytes(p).is_some_and(|b| b > 0));
     }
 
     #[test]

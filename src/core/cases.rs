@@ -101,15 +101,17 @@ where
         let _ = std::fs::remove_dir_all(&work);
         return Err(CaseError::io(path, e).into());
     }
-    store
-        .commit(
-            &work,
-            "case",
-            &fp,
-            started.elapsed().as_secs_f64(),
-            Default::default(),
-        )
-        .map_err(|e| CaseError::io(store.entry_dir(CASE_KIND, &key), e))?;
+    if let Err(e) = store.commit(
+        &work,
+        "case",
+        &fp,
+        started.elapsed().as_secs_f64(),
+        Default::default(),
+    ) {
+        // (A full disk fails the manifest's write: free what the case wrote.)
+        let _ = std::fs::remove_dir_all(&work);
+        return Err(CaseError::io(store.entry_dir(CASE_KIND, &key), e).into());
+    }
     Ok(CaseEntry {
         dir: store.entry_dir(CASE_KIND, &key),
         key,

@@ -4,6 +4,7 @@
 pub mod diff;
 pub mod distributed;
 pub mod distributed_calibration;
+pub mod verify;
 
 use crate::core::cache::{Fingerprint, InputRecord, Manifest, Store, UpstreamRecord, Verification};
 use crate::core::executor::batch::BatchRunner;
@@ -248,7 +249,17 @@ pub fn run(
     let _lock = if opts.dry_run {
         None
     } else {
-        Some(store.lock().map_err(|e| Error::io(store.processed(), e))?)
+        Some(store.lock().map_err(|e| {
+            // A read-only or forbidden processed/ is refused here, before anything runs.
+            let lock = store.processed().join(".hdi").join("lock");
+            let msg = format!("{}: {e}", lock.display());
+            match crate::core::cache::filesystem_cause(store.processed(), &msg) {
+                Some(cause) => Error::Stage(format!(
+                    "{cause}: cannot take the workspace lock ({msg}); `hdi status` and `hdi verify` only read"
+                )),
+                None => Error::io(lock, e),
+            }
+        })?)
     };
     let force = forced(&stages, opts);
     let plan = plan(stages, store, &force)?;
@@ -461,9 +472,16 @@ fn report(plan: &Plan, store: &Store, settled: Settled) -> Result<RunReport> {
         ..
     } = settled;
     for (name, m) in &manifests {
-        store
-            .write_ref(m)
-            .map_err(|e| Error::io(store.processed().join(name), e))?;
+        store.write_ref(m).map_err(|e| {
+            let msg = format!(
+                "`{name}` ran, but pointing {} at its result failed: {e}",
+                store.processed().join(name).display()
+            );
+            match crate::core::cache::filesystem_cause(store.processed(), &msg) {
+                Some(cause) => Error::Stage(format!("{cause}: {msg}")),
+                None => Error::io(store.processed().join(name), e),
+            }
+        })?;
     }
     let current = plan
         .planned
@@ -500,9 +518,22 @@ fn execute(
     batch: Option<&dyn BatchRunner>,
 ) -> Executed {
     let started = Instant::now();
-    let work = store
-        .new_work_dir(&p.name, &p.key)
-        .map_err(|e| format!("cannot create work dir: {e}"))?;
+    // A full, read-only or forbidden processed/ says so first (docs/reliability.md), checked
+    // before the work dir is removed (which frees the space again).
+    let explain = |msg: String| {
+        // One line: HDF5's error text carries a newline (after its timestamp).
+        let msg = msg.replace('\n', " ");
+        match crate::core::cache::filesystem_cause(store.processed(), &msg) {
+            Some(cause) => format!("{cause}: {msg}"),
+            None => msg,
+        }
+    };
+    let work = store.new_work_dir(&p.name, &p.key).map_err(|e| {
+        explain(format!(
+            "cannot create a work dir in {}: {e}",
+            store.processed().join(".hdi/tmp").display()
+        ))
+    })?;
     let ctx = StageContext {
         name: &p.name,
         key: &p.key,
@@ -520,17 +551,19 @@ fn execute(
     let out = match outcome {
         Ok(Ok(out)) => out,
         Ok(Err(e)) => {
+            let msg = explain(crate::error::chain(&e));
             let _ = std::fs::remove_dir_all(&work);
-            return Err(crate::error::chain(&e));
+            return Err(msg);
         }
         Err(panic) => {
-            let _ = std::fs::remove_dir_all(&work);
             let msg = panic
                 .downcast_ref::<String>()
                 .cloned()
                 .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
                 .unwrap_or_default();
-            return Err(format!("internal error (please report): {msg}"));
+            let msg = explain(format!("internal error (please report): {msg}"));
+            let _ = std::fs::remove_dir_all(&work);
+            return Err(msg);
         }
     };
     // Inputs that changed while the stage ran would make the recorded hashes lie.
@@ -554,14 +587,20 @@ fn execute(
         map.insert("summary_row".into(), Value::Object(row));
     }
     let bytes = serde_json::to_vec_pretty(&result).map_err(|e| e.to_string())?;
-    std::fs::write(work.join("result.json"), bytes).map_err(|e| e.to_string())?;
+    let result_path = work.join("result.json");
+    if let Err(e) = std::fs::write(&result_path, bytes) {
+        let msg = explain(format!("{}: {e}", result_path.display()));
+        let _ = std::fs::remove_dir_all(&work);
+        return Err(msg);
+    }
     let secs = started.elapsed().as_secs_f64();
     let run_log = ctx.run_log.into_inner().unwrap_or_default();
     let manifest = store
         .commit(&work, &p.name, &p.fingerprint, secs, run_log)
         .map_err(|e| {
+            let msg = explain(format!("cannot record the output in the store: {e}"));
             let _ = std::fs::remove_dir_all(&work);
-            format!("cannot record the output in the store: {e}")
+            msg
         })?;
     Ok((result, manifest, secs))
 }
@@ -593,42 +632,10 @@ pub fn gc(plan: &Plan, store: &Store, dry_run: bool) -> Result<Vec<PathBuf>> {
     } else {
         Some(store.lock().map_err(|e| Error::io(store.processed(), e))?)
     };
-    let mut keep: BTreeSet<(String, String)> = BTreeSet::new();
     let current: BTreeSet<&str> = plan.planned.iter().map(|p| p.name.as_str()).collect();
-    for p in &plan.planned {
-        keep.insert((p.kind.clone(), p.key.clone()));
-        if let Some(m) = store.read_ref(&p.name) {
-            keep.insert((m.fingerprint.kind.clone(), m.key.clone()));
-        }
-    }
-    // Case entries (core::cases) live as long as a kept stage entry lists them.
-    let kept: Vec<(String, String)> = keep.iter().cloned().collect();
-    for (kind, key) in kept {
-        let result = store.entry_dir(&kind, &key).join("result.json");
-        let Some(v) = std::fs::read(&result)
-            .ok()
-            .and_then(|b| serde_json::from_slice::<Value>(&b).ok())
-        else {
-            continue;
-        };
-        for k in v["case_keys"].as_array().into_iter().flatten() {
-            if let Some(k) = k.as_str() {
-                keep.insert((crate::core::cases::CASE_KIND.to_string(), k.to_string()));
-            }
-        }
-    }
-    // …and as long as a Slurm case manifest lists them: cases finished by a `--no-wait`
-    // array before their stage ran are listed nowhere else yet.
-    for path in crate::core::executor::list_manifests(store.processed()).unwrap_or_default() {
-        if let Ok(m) = crate::core::executor::CaseManifest::read(&path) {
-            for e in &m.cases {
-                keep.insert((
-                    crate::core::cases::CASE_KIND.to_string(),
-                    e.spec.key.clone(),
-                ));
-            }
-        }
-    }
+    // What `hdi verify` calls referenced: current and last-run entries, the cases they list
+    // and the cases of Slurm case manifests.
+    let keep: BTreeSet<(String, String)> = verify::references(plan, store).into_keys().collect();
     let mut removed = Vec::new();
     for (kind, key, path) in store.entries() {
         if !keep.contains(&(kind, key)) {

@@ -428,7 +428,11 @@ fn write_dir(out: &Path, files: &[(&str, &[u8])]) -> Result<()> {
     std::fs::create_dir_all(&tmp).map_err(|e| Error::io(&tmp, e))?;
     for (f, bytes) in files {
         let p = tmp.join(f);
-        std::fs::write(&p, bytes).map_err(|e| Error::io(&p, e))?;
+        if let Err(e) = std::fs::write(&p, bytes) {
+            // A full disk: leave no half-written report dir behind (docs/reliability.md).
+            let _ = std::fs::remove_dir_all(&tmp);
+            return Err(Error::io(&p, e));
+        }
     }
     if out.exists() {
         let _ = std::fs::remove_dir_all(&old);
