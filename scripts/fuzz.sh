@@ -47,11 +47,13 @@ fi
 # `config --build` refuses (non-zero) when the runtime is already built: that is the idempotent case.
 cargo afl config --build >/dev/null 2>&1 || true
 
-# --- build (release profile; instrumentation on hdi and the targets only, see fuzz/rustc-wrapper.sh)
+# --- build: release profile, instrumentation on hdi and the targets only (fuzz/rustc-wrapper.sh).
+# Not --locked: fuzz/Cargo.lock is a copy of the main Cargo.lock plus afl, and cargo refreshes it
+# when hdi's dependencies move.
 export CARGO_TARGET_DIR="${HDI_FUZZ_TARGET_DIR:-/var/tmp/hdi-fuzz-target}"
 export RUSTC_WRAPPER="$root/fuzz/rustc-wrapper.sh"
 export AFL_OPT_LEVEL="${AFL_OPT_LEVEL:-1}"
-(cd fuzz && cargo afl build --release --locked --quiet --bin "$target")
+(cd fuzz && cargo afl build --release --quiet --bin "$target")
 bin="$CARGO_TARGET_DIR/release/$target"
 
 # --- run
