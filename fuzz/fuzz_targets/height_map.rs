@@ -12,6 +12,9 @@ fn main() {
         z_unit: Some("nm".into()),
     };
     afl::fuzz_nohook!(|data: &[u8]| {
+        if hdi_fuzz::skip(data) {
+            return;
+        }
         let path = hdi_fuzz::input_file("map", data);
         let _ = read_height_map(&path, &opts);
     });

@@ -9,6 +9,9 @@ fn main() {
         ..ReadOptions::default()
     };
     afl::fuzz_nohook!(|data: &[u8]| {
+        if hdi_fuzz::skip(data) {
+            return;
+        }
         let path = hdi_fuzz::input_file("record", data);
         // Records that state no sample rate stop at the first check without one; a second
         // read with the option covers their data paths.
