@@ -415,3 +415,15 @@ fn fuzzed_hdf5_files_fail_cleanly() {
         assert_clean_failure(&o, name);
     }
 }
+
+/// An Arrow IPC file the `ldv` fuzz target found: its LZ4 buffer declares 2.4·10¹⁸ bytes
+/// decompressed, and arrow-ipc's allocation of that aborted `hdi dmw` (SIGABRT, no panic to
+/// catch). Now one clear error naming the file.
+#[test]
+fn fuzzed_arrow_file_with_a_huge_decompressed_length_fails_cleanly() {
+    let name = "arrow_lz4_huge_length.arrow";
+    let file = test_data().join("fuzz").join(name);
+    let o = hdi().arg("dmw").arg(&file).output().expect("run hdi");
+    assert_clean_failure(&o, name);
+    assert!(stderr(&o).contains("decompressed"), "{}", stderr(&o));
+}
