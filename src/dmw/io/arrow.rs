@@ -111,6 +111,7 @@ fn decode_file(path: &Path, file: &std::fs::File) -> Result<Decoded, DmwError> {
     let mut batches = Vec::new();
     for block in footer.recordBatches().iter().flat_map(|v| v.iter()) {
         let data = block_bytes(block)?;
+        check_compressed_lengths(block, &data).map_err(bad)?;
         if let Some(batch) = decoder
             .read_record_batch(block, &data)
             .map_err(|e| bad(e.to_string()))?
@@ -123,6 +124,68 @@ fn decode_file(path: &Path, file: &std::fs::File) -> Result<Decoded, DmwError> {
         batches,
         kind: "arrow-file",
     })
+}
+
+/// Rejects a record batch whose compressed buffers declare a decompressed length out of
+/// proportion to the batch: arrow-ipc allocates the declared length before decompressing, and a
+/// failed allocation aborts the process (no panic to catch). Found by the `ldv` fuzz target
+/// (docs/reliability.md, "Coverage-guided fuzzing"): an LZ4 buffer declaring 2.4·10¹⁸ bytes.
+/// Bound: 1 KiB per row, and 2¹⁶ × the compressed size (LZ4 expands at most ~255×, zstd at most
+/// ~32 768× with RLE blocks), whichever is smaller, plus 1 MiB.
+fn check_compressed_lengths(block: &arrow_ipc::Block, data: &Buffer) -> Result<(), String> {
+    let Ok(meta_len) = usize::try_from(block.metaDataLength()) else {
+        return Ok(());
+    };
+    let bytes = data.as_slice();
+    let Some(meta) = bytes.get(..meta_len) else {
+        return Ok(());
+    };
+    // The message: an optional 0xFFFFFFFF continuation marker, its length, the flatbuffer.
+    let fb = if meta.starts_with(&[0xff; 4]) {
+        meta.get(8..)
+    } else {
+        meta.get(4..)
+    };
+    // Anything unreadable here is left to arrow-ipc's decoder, which reports it.
+    let Some(message) = fb.and_then(|fb| arrow_ipc::root_as_message(fb).ok()) else {
+        return Ok(());
+    };
+    let Some(batch) = message.header_as_record_batch() else {
+        return Ok(());
+    };
+    if batch.compression().is_none() {
+        return Ok(());
+    }
+    let body = &bytes[meta_len..];
+    let rows = u64::try_from(batch.length()).unwrap_or(u64::MAX);
+    for b in batch.buffers().iter().flat_map(|v| v.iter()) {
+        let (Ok(off), Ok(len)) = (usize::try_from(b.offset()), usize::try_from(b.length())) else {
+            continue;
+        };
+        let Some(buf) = off.checked_add(len).and_then(|end| body.get(off..end)) else {
+            continue;
+        };
+        let Some(prefix) = buf.get(..8) else {
+            continue;
+        };
+        let mut le = [0u8; 8];
+        le.copy_from_slice(prefix);
+        // −1: the buffer is stored uncompressed.
+        let Ok(declared) = u64::try_from(i64::from_le_bytes(le)) else {
+            continue;
+        };
+        let bound = rows
+            .saturating_mul(1024)
+            .min((len as u64).saturating_mul(1 << 16))
+            .saturating_add(1 << 20);
+        if declared > bound {
+            return Err(format!(
+                "a compressed buffer of {len} bytes declares {declared} bytes decompressed \
+                 ({rows} rows); is the file corrupt?"
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn decode_stream(path: &Path, file: std::fs::File) -> Result<Decoded, DmwError> {

@@ -1,0 +1,199 @@
+"""Writes the fuzz targets' seed corpora into fuzz/corpus/<target>/ (run from the repository
+root: .venv/bin/python fuzz/make_seeds.py). Small inputs fuzz fastest, so each format gets a
+tiny record or map written here with independent writers (numpy, pyarrow, h5py, Python's wave
+and struct), beside the repository's own small test files. scripts/fuzz.sh reads the result;
+Beside these, `found_*` files are what the long runs added, pruned with afl-cmin to
+the inputs under 4 KiB (LDV: 1.5 kB) among those that reach coverage nothing else does (docs/reliability.md,
+"Coverage-guided fuzzing"); this script leaves them alone.
+"""
+import io
+import json
+import os
+import shutil
+import struct
+import wave
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pyarrow as pa
+import pyarrow.feather as feather
+import pyarrow.ipc as ipc
+import pyarrow.parquet as pq
+
+ROOT = Path(__file__).resolve().parent.parent
+OUT = ROOT / "fuzz" / "corpus"
+
+
+def target(name):
+    d = OUT / name
+    d.mkdir(parents=True, exist_ok=True)
+    return d
+
+
+def copy(target_dir, *paths, limit=200_000):
+    for p in paths:
+        p = ROOT / p
+        if p.stat().st_size <= limit:
+            shutil.copy(p, target_dir / p.name)
+
+
+# --- LDV records: 64 samples at 100 kHz, velocity in V, a once-per-rev index pulse.
+ldv = target("ldv")
+N, FS = 64, 100e3
+i = np.arange(N)
+t = 0.125 + i / FS
+v = np.round(0.2 * np.sin(2 * np.pi * 3 * i / N) * 1024) / 1024
+idx = np.where(i % 32 < 2, 4.875, 0.0195)
+with open(ldv / "record.csv", "w") as f:
+    f.write("# sample_rate = 100 kHz\n# sensitivity = 0.025\n# rpm = 6000\n")
+    f.write("time_s,velocity_V,index_V\n")
+    for row in zip(t, v, idx):
+        f.write(",".join(repr(float(x)) for x in row) + "\n")
+with open(ldv / "record.tsv", "w") as f:
+    f.write("# fs: 100000\n# layout = averaged\nsample\tvelocity_m_s\n")
+    for k, x in zip(i, v):
+        f.write(f"{k}\t{x!r}\n")
+with open(ldv / "record_semicolon.txt", "w") as f:
+    f.write("t (ms);U [mV];trigger\n")
+    for row in zip(t * 1e3, v * 1e3, idx):
+        f.write(";".join(repr(float(x)) for x in row) + "\n")
+table = pa.table({"time_s": t, "velocity_V": v, "index_V": idx})
+pq.write_table(
+    table.replace_schema_metadata({"sample_rate": "100000", "rpm": "6000"}),
+    ldv / "record.parquet", compression="zstd")
+pq.write_table(pa.table({"sample_index": i, "velocity_m_s": v.astype(np.float32)}),
+               ldv / "record_plain.parquet", compression="none")
+feather.write_feather(table, ldv / "record_lz4.feather")
+feather.write_feather(table, ldv / "record_plain.arrow", compression="uncompressed")
+sink = io.BytesIO()
+with ipc.new_stream(sink, table.schema) as w:
+    w.write_table(table)
+(ldv / "record.arrows").write_bytes(sink.getvalue())
+with h5py.File(ldv / "record.h5", "w") as f:
+    f.attrs["NX_class"] = "NXroot"
+    f.attrs["default"] = "ldv"
+    g = f.create_group("ldv")
+    g.attrs.update({"NX_class": "NXdata", "signal": "velocity", "sampling_rate": FS,
+                    "t0": 0.125, "layout": "continuous", "rpm": 6000.0})
+    g.create_dataset("velocity", data=v).attrs["units"] = "V"
+    g.create_dataset("index", data=idx).attrs["units"] = "V"
+    g.create_dataset("time", data=t).attrs["units"] = "s"
+with h5py.File(ldv / "record_counts.h5", "w") as f:
+    g = f.create_group("ldv")
+    g.attrs.update({"sampling_rate": FS, "layout": "segments"})
+    d = g.create_dataset("velocity", data=np.round(v * 1000).astype(np.int16).reshape(2, 32),
+                         chunks=(1, 32), shuffle=True, compression="gzip")
+    d.attrs.update({"scale": 1e-3, "offset": 0.0, "units": "V"})
+with h5py.File(ldv / "record_root.h5", "w") as f:
+    d = f.create_dataset("U_mV", data=(v * 1e3).astype(np.float32))
+    d.attrs["scale_factor"] = 1.0
+    d.attrs["fs"] = FS
+np.save(ldv / "record.npy", np.stack([t, v, idx], axis=1))
+np.save(ldv / "record_velocity.npy", v.astype(">f4"))
+rec = np.zeros(N, dtype=[("time_s", "<f8"), ("velocity_V", "<f4")])
+rec["time_s"], rec["velocity_V"] = t, v
+np.save(ldv / "record_structured.npy", rec)
+np.savez(ldv / "record.npz", velocity_V=v, index_V=idx, sample_rate=np.array(FS))
+np.savez_compressed(ldv / "record_deflate.npz", velocity=v, sample_rate=np.array(FS))
+for name, width in [("record_int16.wav", 2), ("record_int24.wav", 3)]:
+    with wave.open(str(ldv / name), "wb") as w:
+        w.setnchannels(2)
+        w.setsampwidth(width)
+        w.setframerate(int(FS))
+        scale = 2 ** (8 * width - 1) - 1
+        frames = b"".join(
+            int(a * scale).to_bytes(width, "little", signed=True)
+            + int(b / 5 * scale).to_bytes(width, "little", signed=True)
+            for a, b in zip(v, idx))
+        w.writeframes(frames)
+# IEEE-float WAV (format tag 3), written by hand: the wave module writes PCM only.
+data = v.astype("<f4").tobytes()
+fmt = struct.pack("<HHIIHH", 3, 1, int(FS), int(FS) * 4, 4, 32)
+wav = b"WAVE" + b"fmt " + struct.pack("<I", len(fmt)) + fmt + b"data" + struct.pack("<I", len(data)) + data
+(ldv / "record_f32.wav").write_bytes(b"RIFF" + struct.pack("<I", len(wav)) + wav)
+copy(ldv, "tests/data/ldv/record_binary.uff", "tests/data/ldv/record_ascii_single.uff")
+
+# --- Height maps: 8×6 maps in the formats Python writes easily, plus the small test files.
+maps = target("height_map")
+nx, ny = 8, 6
+z = np.round(np.sin(np.arange(nx * ny) * 0.7).reshape(ny, nx) * 1e-9, 15)
+hdr = ("Gwyddion Simple Field 1.0\n"
+       f"XRes = {nx}\nYRes = {ny}\nXReal = 8e-07\nYReal = 6e-07\n"
+       "XYUnits = m\nZUnits = m\nTitle = Height\n").encode()
+hdr += b"\0" * (4 - len(hdr) % 4)
+(maps / "map.gsf").write_bytes(hdr + z.astype("<f4").tobytes())
+with open(maps / "map.txt", "w") as f:
+    f.write("# Channel: Height\n# Width: 0.8 um\n# Height: 0.6 um\n# Value units: nm\n")
+    for row in z * 1e9:
+        f.write("\t".join(f"{x:.4f}" for x in row) + "\n")
+with open(maps / "map.csv", "w") as f:
+    for row in z * 1e9:
+        f.write(",".join(f"{x:.4f}" for x in row) + "\n")
+with open(maps / "map.xyz", "w") as f:
+    f.write("# xy_unit: um\n# z_unit: nm\n")
+    for j in range(ny):
+        for k in range(nx):
+            f.write(f"{k * 0.1:.2f} {j * 0.1:.2f} {z[j, k] * 1e9:.4f}\n")
+# MetroPro header format 3 with a 4×3 phase map (the byte layout of metropro.rs's test).
+b = bytearray(4096)
+b[:4] = bytes.fromhex("881b0371")
+b[4:6] = struct.pack(">H", 3)
+b[6:10] = struct.pack(">I", 4096)
+b[68:72] = struct.pack(">HH", 4, 3)
+b[164:168] = struct.pack(">f", 0.5)
+b[168:172] = struct.pack(">f", 632.8e-9)
+b[176:180] = struct.pack(">f", 1.0)
+b[184:188] = struct.pack(">f", 2e-6)
+b[232:234] = struct.pack(">h", 1)
+b += b"".join(struct.pack(">i", 100 * k - 300) for k in range(12))
+(maps / "map_metropro.dat").write_bytes(bytes(b))
+# Digital Surf: the header of the SurfaceTopography sample with an 8×6 data block.
+sur = bytearray((ROOT / "tests/data/surfaces/sur-3.sur").read_bytes())
+comment, private = struct.unpack("<HH", sur[334:338])
+bits = struct.unpack("<H", sur[16:18])[0]
+sur[108:116] = struct.pack("<ii", nx, ny)
+start = 512 + comment + private
+(maps / "map.sur").write_bytes(bytes(sur[:start + nx * ny * bits // 8]))
+copy(maps, "src/surface/io/testdata/gwyfile_writer.gwy",
+     "tests/data/surfaces/bcr_binary_int16.sdf", "tests/data/surfaces/sdf-1.sdf",
+     "tests/data/surfaces/10x10-one_channel_without_name.ibw",
+     "tests/data/surfaces/igor_be_int16_3layers.ibw",
+     "tests/data/surfaces/readers_b/x3p_int16.x3p", "tests/data/surfaces/readers_b/x3p_float64.x3p",
+     "tests/data/surfaces/readers_b/x3p_int32_mask.x3p", "tests/data/surfaces/readers_b/x3p_datalist.x3p",
+     "tests/data/surfaces/readers_b/datx_fixed.datx", "tests/data/surfaces/readers_b/datx_vlen.datx",
+     "raw/bulge/tfc_30mW.gsf", "raw/afm/slider_tfc_1um.spm")
+
+# --- pipeline.toml: the shipped file and the examples'.
+pipe = target("pipeline")
+copy(pipe, "pipeline.toml")
+# Prefixes of the shipped file cut before every fourth instance: valid pipelines of 1, 5, 9, …
+# stages.
+lines = (ROOT / "pipeline.toml").read_text().splitlines(keepends=True)
+heads = [k for k, l in enumerate(lines) if l.startswith("[") and not l.startswith("[project")]
+for n, k in list(enumerate(heads[1:], 1))[::4]:
+    (pipe / f"pipeline_{n:02d}.toml").write_text("".join(lines[:k]))
+# The ```toml blocks of the docs: small pipelines, each one stage kind or feature.
+for doc in sorted((ROOT / "docs").glob("*.md")):
+    blocks = doc.read_text().split("```toml\n")[1:]
+    for k, block in enumerate(blocks):
+        (pipe / f"{doc.stem}_{k}.toml").write_text(block.split("```")[0])
+
+# --- Case manifests and the submissions file beside one.
+man = target("manifest")
+def entry(k, status):
+    return {"kind": "simulate", "key": f"{k:064x}", "model_version": "2dof-7",
+            "params": {"case": k, "model_parameters": {"variant": "Improved"}},
+            "recipe": {"stage": "sweep", "upstream": ["a" * 64]}, "status": status}
+cases = [entry(0, {"state": "pending"}), entry(1, {"state": "done"}),
+         entry(2, {"state": "failed", "error": "diverged", "job_id": 17, "task_id": 1,
+                   "log": "processed/.hdi/slurm/logs/17_1.log"})]
+for name, cpt, cs in [("manifest.json", 2, cases), ("manifest_one.json", 1, cases[:1])]:
+    (man / name).write_text(json.dumps({
+        "schema_version": 1, "hdi_version": "0.1.0", "created": "2026-11-26T08:00:00Z",
+        "cases_per_task": cpt, "cases": cs}))
+(man / "submissions.json").write_text(json.dumps(
+    [{"job_id": 17, "offset": 0, "tasks": 2, "submitted": "2026-11-26T08:00:01Z"}]))
+for d in sorted(OUT.iterdir()):
+    files = list(d.iterdir())
+    print(f"{d.name}: {len(files)} files, {sum(f.stat().st_size for f in files)} bytes")
