@@ -3,7 +3,7 @@
 //! case manifest and array jobs, and the outputs must equal a local run's byte for byte. A
 //! fake scheduler (`sbatch` runs the tasks at once) for CI; the real single-node Slurm opt-in.
 use crate::common::*;
-use std::path::Path;
+use crate::slurm_cli::{fake_slurm, run_with};
 
 /// The shipped test pipeline's calibration and what it consumes (the base sweep included:
 /// the sweep's own cases then go out first, as `hdi run --executor slurm` does).
@@ -26,63 +26,6 @@ fn calibration_config(full: &str) -> String {
         }
     }
     out
-}
-
-/// Fake `sbatch`/`squeue`/`sacct` in `bin/` (as tests/slurm_cli.rs): `sbatch` runs every task
-/// of the array now; `fail_task` makes that array task exit 1 before computing anything.
-fn fake_slurm(bin: &Path, fail_task: Option<usize>) {
-    std::fs::create_dir_all(bin).unwrap();
-    let fail = fail_task.map_or("-1".to_string(), |t| t.to_string());
-    let sbatch = format!(
-        r#"#!/bin/sh
-script="$2"
-dir=$(dirname "$0")
-spec=$(sed -n 's/^#SBATCH --array=\([0-9]*-[0-9]*\).*/\1/p' "$script")
-chdir=$(sed -n 's/^#SBATCH --chdir=//p' "$script")
-id=$(( $(cat "$dir/next_id" 2>/dev/null || echo 4241) + 1 ))
-echo $id > "$dir/next_id"
-i=${{spec%-*}}
-: > "$dir/sacct_$id"
-while [ "$i" -le "${{spec#*-}}" ]; do
-  if [ "$i" -eq {fail} ]; then
-    echo "${{id}}_$i|FAILED|1:0" >> "$dir/sacct_$id"
-  elif (cd "$chdir" && SLURM_ARRAY_JOB_ID=$id SLURM_ARRAY_TASK_ID=$i sh "$script") > "$dir/task_${{id}}_$i.log" 2>&1; then
-    echo "${{id}}_$i|COMPLETED|0:0" >> "$dir/sacct_$id"
-  else
-    echo "${{id}}_$i|FAILED|1:0" >> "$dir/sacct_$id"
-  fi
-  i=$((i + 1))
-done
-echo $id
-"#
-    );
-    let squeue = "#!/bin/sh\nexit 0\n";
-    let sacct = "#!/bin/sh\ndir=$(dirname \"$0\")\nwhile [ $# -gt 0 ]; do [ \"$1\" = -j ] && id=$2; shift; done\ncat \"$dir/sacct_$id\"\n";
-    for (name, text) in [
-        ("sbatch", sbatch.as_str()),
-        ("squeue", squeue),
-        ("sacct", sacct),
-    ] {
-        let p = bin.join(name);
-        std::fs::write(&p, text).unwrap();
-        use std::os::unix::fs::PermissionsExt;
-        std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o755)).unwrap();
-    }
-}
-
-fn run_with(p: &Project, bin: &Path, args: &[&str]) -> std::process::Output {
-    let path = format!(
-        "{}:{}",
-        bin.display(),
-        std::env::var("PATH").unwrap_or_default()
-    );
-    hdi()
-        .current_dir(p.path())
-        .env("PATH", path)
-        .env("HDI_SLURM_POLL_MS", "20")
-        .args(args)
-        .output()
-        .expect("run hdi")
 }
 
 /// Every output file of the calibration, by name.

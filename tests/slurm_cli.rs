@@ -34,8 +34,8 @@ fn sections(full: &str, keep_headers: &[&str]) -> String {
 }
 
 /// Fake `sbatch`/`squeue`/`sacct` in `bin/`. `FAIL_TASK` (an array task id) makes that task
-/// exit 1 before computing anything.
-fn fake_slurm(bin: &Path, fail_task: Option<usize>) {
+/// exit 1 before computing anything. Shared with tests/slurm_calibration.rs.
+pub(crate) fn fake_slurm(bin: &Path, fail_task: Option<usize>) {
     std::fs::create_dir_all(bin).unwrap();
     let fail = fail_task.map_or("-1".to_string(), |t| t.to_string());
     let sbatch = format!(
@@ -76,7 +76,8 @@ echo $id
     }
 }
 
-fn run_with(p: &Project, bin: &Path, args: &[&str]) -> std::process::Output {
+/// `hdi ARGS` in the project with the fake scheduler of `bin` first on PATH.
+pub(crate) fn run_with(p: &Project, bin: &Path, args: &[&str]) -> std::process::Output {
     let path = format!(
         "{}:{}",
         bin.display(),
