@@ -490,7 +490,11 @@ fn three_dof_cases_run_on_slurm_and_match_the_local_run() {
         .iter()
         .map(|c| {
             assert_eq!(c["kind"], "three_dof", "{c}");
-            assert_eq!(c["model_version"], "three-dof-3", "{c}");
+            assert_eq!(
+                c["model_version"],
+                hdi::stages::three_dof::MODEL_VERSION,
+                "{c}"
+            );
             c["recipe"]["case"].as_str().unwrap()
         })
         .collect();
