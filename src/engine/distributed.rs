@@ -348,6 +348,17 @@ impl SweepWorker {
     }
 }
 
+/// The string field `k` of a case recipe, or the error naming the case kind and the field.
+pub(crate) fn recipe_field(recipe: &Value, kind: &'static str, k: &str) -> Result<String> {
+    recipe[k]
+        .as_str()
+        .map(str::to_string)
+        .ok_or_else(|| Error::RecipeField {
+            kind,
+            field: k.to_string(),
+        })
+}
+
 impl CaseComputer for SweepWorker {
     fn compute(
         &self,
@@ -361,15 +372,7 @@ impl CaseComputer for SweepWorker {
 
 impl SweepWorker {
     fn compute_recipe(&self, recipe: &Value, store: &Store, dir: &Path) -> Result<Value> {
-        let field = |k: &str| {
-            recipe[k]
-                .as_str()
-                .map(str::to_string)
-                .ok_or_else(|| Error::RecipeField {
-                    kind: self.kind,
-                    field: k.to_string(),
-                })
-        };
+        let field = |k: &str| recipe_field(recipe, self.kind, k);
         let (config, instance) = (field("config")?, field("instance")?);
         let actuation = recipe["actuation_m"]
             .as_f64()
@@ -453,15 +456,7 @@ impl CaseComputer for ThreeDofWorker {
 
 impl ThreeDofWorker {
     fn compute_recipe(&self, recipe: &Value, store: &Store, dir: &Path) -> Result<Value> {
-        let field = |k: &str| {
-            recipe[k]
-                .as_str()
-                .map(str::to_string)
-                .ok_or_else(|| Error::RecipeField {
-                    kind: THREE_DOF_CASE,
-                    field: k.to_string(),
-                })
-        };
+        let field = |k: &str| recipe_field(recipe, THREE_DOF_CASE, k);
         let (config, instance, label) = (field("config")?, field("instance")?, field("case")?);
         let prepared = {
             let mut instances = self

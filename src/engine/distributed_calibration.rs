@@ -36,13 +36,7 @@ pub struct CalibrationWorker {
 }
 
 fn field(recipe: &Value, k: &str) -> Result<String> {
-    recipe[k]
-        .as_str()
-        .map(str::to_string)
-        .ok_or_else(|| Error::RecipeField {
-            kind: CALIBRATION_CASE,
-            field: k.to_string(),
-        })
+    super::distributed::recipe_field(recipe, CALIBRATION_CASE, k)
 }
 
 impl CalibrationWorker {
