@@ -143,7 +143,7 @@ impl IsblLookup {
     }
 
     /// [`IsblLookup::build_standard`] without the verification against direct evaluation
-    /// (its `verified_error` is empty): the same table, bit for bit, at 5/7 of the cost. For
+    /// (its `verified_error` is empty): the same table, bit for bit, with 5 instead of 7 ISBL evaluations per node. For
     /// tables whose error nobody reads — one per calibration evaluation, per sweep, per
     /// validation case set; the `[contact]` stage, which reports the error, verifies the
     /// interface's table (docs/contact.md).
