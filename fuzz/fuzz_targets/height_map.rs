@@ -11,6 +11,7 @@ fn main() {
         size_y: Some(1e-5),
         z_unit: Some("nm".into()),
     };
+    hdi_fuzz::setup();
     afl::fuzz_nohook!(|data: &[u8]| {
         if hdi_fuzz::skip(data) {
             return;

@@ -8,6 +8,7 @@ fn main() {
         sample_rate: Some(1e5),
         ..ReadOptions::default()
     };
+    hdi_fuzz::setup();
     afl::fuzz_nohook!(|data: &[u8]| {
         if hdi_fuzz::skip(data) {
             return;

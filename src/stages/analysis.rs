@@ -274,7 +274,86 @@ pub fn read_any_series(
 /// rates must agree with a time axis. Samples flagged in an `edge_transient` dataset beside it
 /// are dropped from both ends. Without `dataset`: hdi's default series, else the only 1-D
 /// numeric dataset that is not a time axis.
+///
+/// Reads in a child process (`formats::isolated`): libhdf5 1.10 crashes or spins on some
+/// corrupt files, and that must be an error naming the file, not the end of hdi.
 pub fn read_series(
+    path: &Path,
+    dataset: Option<&str>,
+    velocity: Option<&str>,
+    sample_rate: Option<f64>,
+) -> Result<Series> {
+    use crate::formats::isolated::{self, Reader, Writer};
+    fn send(reply: &Result<Series>, w: &mut Writer) -> std::io::Result<()> {
+        let s = match reply {
+            Ok(s) => s,
+            Err(e) => {
+                w.bool(false)?;
+                return w.str(&e.to_string());
+            }
+        };
+        w.bool(true)?;
+        w.f64s(&s.x)?;
+        w.bool(s.v.is_some())?;
+        w.f64s(s.v.as_deref().unwrap_or_default())?;
+        w.f64(s.sample_rate)?;
+        w.f64(s.t0)?;
+        for text in [
+            &s.unit,
+            &s.velocity_unit,
+            &s.name,
+            &s.format,
+            &s.rate_source,
+        ] {
+            w.str(text)?;
+        }
+        Ok(())
+    }
+    fn receive(r: &mut Reader) -> std::io::Result<Result<Series>> {
+        if !r.bool()? {
+            return Ok(Err(Error::Stage(r.str()?)));
+        }
+        let x = r.f64s()?;
+        let has_v = r.bool()?;
+        let v = r.f64s()?;
+        Ok(Ok(Series {
+            x,
+            v: has_v.then_some(v),
+            sample_rate: r.f64()?,
+            t0: r.f64()?,
+            unit: r.str()?,
+            velocity_unit: r.str()?,
+            name: r.str()?,
+            format: r.str()?,
+            rate_source: r.str()?,
+        }))
+    }
+    let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+    let limit = isolated::time_limit_for(bytes);
+    // The bindings' global lock is held across the fork (formats::isolated's module docs).
+    let reply = hdf5::sync::sync(|| {
+        isolated::run(
+            limit,
+            || {
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    read_series_in_process(path, dataset, velocity, sample_rate)
+                }))
+                .unwrap_or_else(|_| Err(h5err(path, "cannot read", "the HDF5 reader failed")))
+            },
+            send,
+            receive,
+        )
+    });
+    reply.unwrap_or_else(|failure| {
+        Err(h5err(
+            path,
+            "cannot read",
+            format!("{failure}; is the file corrupt?"),
+        ))
+    })
+}
+
+fn read_series_in_process(
     path: &Path,
     dataset: Option<&str>,
     velocity: Option<&str>,

@@ -5,7 +5,8 @@
 use super::names::{self, parse_unit, Meta, TimeKind, Unit};
 use super::stream::{Col, Stream, TimeAcc};
 use super::{finish, no_panic, read_err, record_err, velocity_unit, Raw, ReadOptions, F};
-use crate::dmw::{DmwError, Layout, LdvRecord};
+use crate::dmw::{DmwError, Layout, LdvRecord, VelocityUnit};
+use crate::formats::isolated;
 use hdf5::types::{FixedAscii, FixedUnicode, TypeDescriptor, VarLenAscii, VarLenUnicode};
 use ndarray::s;
 use std::path::Path;
@@ -128,8 +129,121 @@ fn read_part(
     Ok(())
 }
 
+/// Reads in a child process (`formats::isolated`): libhdf5 1.10 crashes or spins on some
+/// corrupt files, and that must be an error naming the file, not the end of hdi.
 pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
-    no_panic(path, "the HDF5 reader", || read_inner(path, opts))
+    let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+    let limit = isolated::time_limit_for(bytes);
+    // The bindings' global lock is held across the fork, so no other thread is inside libhdf5
+    // when the child copies its state (the child's reads re-enter the lock it inherits).
+    let reply = hdf5::sync::sync(|| {
+        isolated::run(
+            limit,
+            || no_panic(path, "the HDF5 reader", || read_inner(path, opts)),
+            send,
+            |r| receive(path, r),
+        )
+    });
+    reply.unwrap_or_else(|failure| {
+        Err(read_err(
+            path,
+            format!("{failure} on this HDF5 file; is it corrupt?"),
+        ))
+    })
+}
+
+/// The child's reply: tag 0 and the record, or an error's kind and text (the path is the
+/// parent's own).
+fn send(reply: &Result<LdvRecord, DmwError>, w: &mut isolated::Writer) -> std::io::Result<()> {
+    let rec = match reply {
+        Ok(rec) => rec,
+        Err(e) => {
+            let (tag, text) = match e {
+                DmwError::Read { message, .. } => (1, message.clone()),
+                DmwError::Record { message, .. } => (2, message.clone()),
+                DmwError::Processing(m) => (3, m.clone()),
+                other => (3, other.to_string()),
+            };
+            w.u64(tag)?;
+            return w.str(&text);
+        }
+    };
+    w.u64(0)?;
+    w.f64(rec.sample_rate)?;
+    w.f64(rec.t0)?;
+    w.f64s(&rec.velocity)?;
+    w.bool(rec.velocity_unit == VelocityUnit::Volt)?;
+    w.bool(rec.index.is_some())?;
+    w.f64s(rec.index.as_deref().unwrap_or_default())?;
+    let (kind, n, len) = match rec.layout {
+        Layout::Continuous => (0, 0, 0),
+        Layout::Segments {
+            n_segments,
+            segment_len,
+        } => (1, n_segments, segment_len),
+        Layout::Averaged => (2, 0, 0),
+    };
+    for x in [kind, n, len] {
+        w.u64(x as u64)?;
+    }
+    w.opt_f64(rec.sensitivity)?;
+    w.opt_f64(rec.rpm)?;
+    w.u64(rec.provenance.len() as u64)?;
+    for (k, v) in &rec.provenance {
+        w.str(k)?;
+        w.str(v)?;
+    }
+    Ok(())
+}
+
+fn receive(path: &Path, r: &mut isolated::Reader) -> std::io::Result<Result<LdvRecord, DmwError>> {
+    let bad = || std::io::Error::from(std::io::ErrorKind::InvalidData);
+    match r.u64()? {
+        0 => {}
+        1 => return Ok(Err(read_err(path, r.str()?))),
+        2 => return Ok(Err(record_err(path, r.str()?))),
+        3 => return Ok(Err(DmwError::Processing(r.str()?))),
+        _ => return Err(bad()),
+    }
+    let sample_rate = r.f64()?;
+    let t0 = r.f64()?;
+    let velocity = r.f64s()?;
+    let velocity_unit = if r.bool()? {
+        VelocityUnit::Volt
+    } else {
+        VelocityUnit::MetrePerSecond
+    };
+    let has_index = r.bool()?;
+    let index = r.f64s()?;
+    let layout = match (r.u64()?, r.usize()?, r.usize()?) {
+        (0, _, _) => Layout::Continuous,
+        (1, n_segments, segment_len) => Layout::Segments {
+            n_segments,
+            segment_len,
+        },
+        (2, _, _) => Layout::Averaged,
+        _ => return Err(bad()),
+    };
+    let sensitivity = r.opt_f64()?;
+    let rpm = r.opt_f64()?;
+    let mut provenance = Vec::new();
+    for _ in 0..r.u64()? {
+        let k = r.str()?;
+        provenance.push((k, r.str()?));
+    }
+    Ok(Ok(LdvRecord {
+        source: path.to_path_buf(),
+        format: "hdf5",
+        sample_rate,
+        t0,
+        velocity,
+        velocity_unit,
+        index: has_index.then_some(index),
+        layout,
+        sensitivity,
+        rpm,
+        provenance,
+    }))
 }
 
 fn read_inner(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {

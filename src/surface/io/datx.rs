@@ -17,7 +17,8 @@
 //! variable-length or fixed-size float64 array: compound fields are read by name (HDF5
 //! converts a compound to a subset of its fields), trying each string encoding in turn.
 use super::{find_channel, format_error, units, unsupported, RawMap, ReadOptions};
-use crate::surface::Result;
+use crate::formats::isolated;
+use crate::surface::{Result, SurfaceError};
 use hdf5::types::{
     FixedAscii, FixedUnicode, TypeDescriptor, VarLenArray, VarLenAscii, VarLenUnicode,
 };
@@ -291,10 +292,32 @@ fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
+/// Reads in a child process (`formats::isolated`): libhdf5 1.10 crashes or spins on some
+/// corrupt files, and that must be an error naming the file, not the end of hdi.
 pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawMap> {
-    // The HDF5 library or its bindings must not take the process down on a hostile file.
+    let limit = isolated::time_limit_for(bytes.len() as u64);
+    // The bindings' global lock is held across the fork, so no other thread is inside libhdf5
+    // when the child copies its state (the child's reads re-enter the lock it inherits).
+    let reply = hdf5::sync::sync(|| {
+        isolated::run(
+            limit,
+            || read_in_process(path, bytes.len(), opts),
+            send,
+            |r| receive(path, r),
+        )
+    });
+    reply.unwrap_or_else(|failure| {
+        Err(format_error(
+            path,
+            format!("{failure} on this .datx (HDF5) file; is it corrupt?"),
+        ))
+    })
+}
+
+fn read_in_process(path: &Path, file_len: usize, opts: &ReadOptions) -> Result<RawMap> {
+    // The HDF5 bindings must not take the reader down on a hostile file either.
     match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        read_inner(path, bytes.len(), opts)
+        read_inner(path, file_len, opts)
     })) {
         Ok(r) => r,
         Err(_) => Err(format_error(
@@ -302,6 +325,72 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
             "the .datx (HDF5) reader failed on this file",
         )),
     }
+}
+
+/// The child's reply: tag 0 and the map, or an error's kind and text (the path is the
+/// parent's own).
+fn send(reply: &Result<RawMap>, w: &mut isolated::Writer) -> std::io::Result<()> {
+    let map = match reply {
+        Ok(map) => map,
+        Err(e) => {
+            let (tag, text) = match e {
+                SurfaceError::Format { reason, .. } => (1, reason.clone()),
+                SurfaceError::Unsupported { reason, .. } => (2, reason.clone()),
+                SurfaceError::InvalidData(m) => (3, m.clone()),
+                other => (1, other.to_string()),
+            };
+            w.u64(tag)?;
+            return w.str(&text);
+        }
+    };
+    w.u64(0)?;
+    let (ny, nx) = map.z.dim();
+    w.u64(ny as u64)?;
+    w.u64(nx as u64)?;
+    let z = map.z.as_standard_layout();
+    let values = z.as_slice().ok_or(std::io::ErrorKind::InvalidData)?;
+    w.f64s(values)?;
+    for x in [map.dx, map.dy, map.x0, map.y0] {
+        w.f64(x)?;
+    }
+    w.str(&map.channel)?;
+    w.u64(map.header.len() as u64)?;
+    for (k, v) in &map.header {
+        w.str(k)?;
+        w.str(v)?;
+    }
+    Ok(())
+}
+
+fn receive(path: &Path, r: &mut isolated::Reader) -> std::io::Result<Result<RawMap>> {
+    let bad = || std::io::Error::from(std::io::ErrorKind::InvalidData);
+    match r.u64()? {
+        0 => {}
+        1 => return Ok(Err(format_error(path, r.str()?))),
+        2 => return Ok(Err(unsupported(path, r.str()?))),
+        3 => return Ok(Err(SurfaceError::InvalidData(r.str()?))),
+        _ => return Err(bad()),
+    }
+    let ny = r.usize()?;
+    let nx = r.usize()?;
+    let z = Array2::from_shape_vec((ny, nx), r.f64s()?).map_err(|_| bad())?;
+    let [dx, dy, x0, y0] = [r.f64()?, r.f64()?, r.f64()?, r.f64()?];
+    let channel = r.str()?;
+    let mut header = BTreeMap::new();
+    for _ in 0..r.u64()? {
+        let k = r.str()?;
+        header.insert(k, r.str()?);
+    }
+    Ok(Ok(RawMap {
+        z,
+        dx,
+        dy,
+        x0,
+        y0,
+        channel,
+        format: "datx",
+        header,
+    }))
 }
 
 fn read_inner(path: &Path, file_len: usize, opts: &ReadOptions) -> Result<RawMap> {
