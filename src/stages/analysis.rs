@@ -284,7 +284,7 @@ pub fn read_series(
     sample_rate: Option<f64>,
 ) -> Result<Series> {
     use crate::formats::isolated::{self, Reader, Writer};
-    fn send(reply: &Result<Series>, w: &mut Writer) -> std::io::Result<()> {
+    fn send(reply: Result<Series>, w: &mut Writer) -> std::io::Result<()> {
         let s = match reply {
             Ok(s) => s,
             Err(e) => {

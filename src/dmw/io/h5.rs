@@ -154,27 +154,33 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
 
 /// The child's reply: tag 0 and the record, or an error's kind and text (the path is the
 /// parent's own).
-fn send(reply: &Result<LdvRecord, DmwError>, w: &mut isolated::Writer) -> std::io::Result<()> {
+fn send(reply: Result<LdvRecord, DmwError>, w: &mut isolated::Writer) -> std::io::Result<()> {
     let rec = match reply {
         Ok(rec) => rec,
         Err(e) => {
             let (tag, text) = match e {
-                DmwError::Read { message, .. } => (1, message.clone()),
-                DmwError::Record { message, .. } => (2, message.clone()),
-                DmwError::Processing(m) => (3, m.clone()),
+                DmwError::Read { message, .. } => (1, message),
+                DmwError::Record { message, .. } => (2, message),
+                DmwError::Processing(m) => (3, m),
                 other => (3, other.to_string()),
             };
             w.u64(tag)?;
             return w.str(&text);
         }
     };
+    let LdvRecord {
+        velocity, index, ..
+    } = rec;
     w.u64(0)?;
     w.f64(rec.sample_rate)?;
     w.f64(rec.t0)?;
-    w.f64s(&rec.velocity)?;
+    // Each channel is freed once sent (the child's memory falls as the parent's grows).
+    w.f64s(&velocity)?;
+    drop(velocity);
     w.bool(rec.velocity_unit == VelocityUnit::Volt)?;
-    w.bool(rec.index.is_some())?;
-    w.f64s(rec.index.as_deref().unwrap_or_default())?;
+    w.bool(index.is_some())?;
+    w.f64s(index.as_deref().unwrap_or_default())?;
+    drop(index);
     let (kind, n, len) = match rec.layout {
         Layout::Continuous => (0, 0, 0),
         Layout::Segments {

@@ -329,14 +329,14 @@ fn read_in_process(path: &Path, file_len: usize, opts: &ReadOptions) -> Result<R
 
 /// The child's reply: tag 0 and the map, or an error's kind and text (the path is the
 /// parent's own).
-fn send(reply: &Result<RawMap>, w: &mut isolated::Writer) -> std::io::Result<()> {
+fn send(reply: Result<RawMap>, w: &mut isolated::Writer) -> std::io::Result<()> {
     let map = match reply {
         Ok(map) => map,
         Err(e) => {
             let (tag, text) = match e {
-                SurfaceError::Format { reason, .. } => (1, reason.clone()),
-                SurfaceError::Unsupported { reason, .. } => (2, reason.clone()),
-                SurfaceError::InvalidData(m) => (3, m.clone()),
+                SurfaceError::Format { reason, .. } => (1, reason),
+                SurfaceError::Unsupported { reason, .. } => (2, reason),
+                SurfaceError::InvalidData(m) => (3, m),
                 other => (1, other.to_string()),
             };
             w.u64(tag)?;
@@ -350,6 +350,7 @@ fn send(reply: &Result<RawMap>, w: &mut isolated::Writer) -> std::io::Result<()>
     let z = map.z.as_standard_layout();
     let values = z.as_slice().ok_or(std::io::ErrorKind::InvalidData)?;
     w.f64s(values)?;
+    drop(z);
     for x in [map.dx, map.dy, map.x0, map.y0] {
         w.f64(x)?;
     }
