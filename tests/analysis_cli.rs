@@ -40,6 +40,17 @@ fn a_sine_driven_slider_answers_at_the_sine_and_is_periodic() {
     let ridge = s["ridge_median_Hz"].as_f64().unwrap();
     assert!((ridge - 10.7e3).abs() < 0.05 * 10.7e3, "{ridge}");
 
+    // The excitation's result states its parameters as data, SI (not a Rust Debug string):
+    // 10.7 kHz and 1 nm RMS.
+    let x: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(p.processed().join("sine").join("result.json")).unwrap(),
+    )
+    .unwrap();
+    let sine = &x["params"]["sinusoid"];
+    assert_eq!(sine["frequency"], serde_json::json!(10.7e3), "{x}");
+    let rms = sine["rms"].as_f64().unwrap_or(f64::NAN);
+    assert!((rms - 1e-9).abs() < 1e-21, "{x}");
+
     // The same case through `hdi analyze`: the same numbers.
     let case = p
         .processed()

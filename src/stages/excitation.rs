@@ -18,7 +18,8 @@ use serde_json::{json, Map, Value};
 use std::path::Path;
 
 // excitation-2: the key holds the excitation as plain JSON, not a Debug string (same numbers).
-pub const MODEL_VERSION: &str = "excitation-2";
+// excitation-3: so do the outputs (result.json `params`, the HDF5 root's `parameters`).
+pub const MODEL_VERSION: &str = "excitation-3";
 
 fn default_duration() -> TimeSpan {
     TimeSpan(2e-3)
@@ -272,7 +273,7 @@ fn write_tracks(path: &Path, key: &str, p: &ExcitationParams, x: &Excitation) ->
     out.root_attributes(
         "excitation",
         key,
-        &json!({"excitation": format!("{p:?}")}),
+        &json!({ "excitation": p }),
         &json!({}),
         "dmw",
     )?;
@@ -365,7 +366,7 @@ impl StageKind for ExcitationStage {
         Ok(StageOutput {
             result: json!({
                 "kind": p.label(),
-                "params": format!("{:?}", p.kind),
+                "params": p.kind,
                 "sample_rate_Hz": x.fs,
                 "samples": x.displacement.len(),
                 "rms_m": sigma,
