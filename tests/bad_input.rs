@@ -430,3 +430,15 @@ fn fuzzed_arrow_file_with_a_huge_decompressed_length_fails_cleanly() {
     assert_clean_failure(&o, name);
     assert!(stderr(&o).contains("decompressed"), "{}", stderr(&o));
 }
+
+/// The same defect in an Arrow IPC stream (tests/data/README.md): arrow-ipc's `StreamReader`
+/// aborted on the allocation; the messages are now checked before it decodes them.
+#[test]
+fn an_arrow_stream_with_a_huge_decompressed_length_fails_cleanly() {
+    let name = "arrow_stream_lz4_huge_length.arrows";
+    let file = test_data().join("fuzz").join(name);
+    let o = hdi().arg("dmw").arg(&file).output().expect("run hdi");
+    assert!(o.status.code().is_some(), "killed by a signal");
+    assert_clean_failure(&o, name);
+    assert!(stderr(&o).contains("decompressed"), "{}", stderr(&o));
+}

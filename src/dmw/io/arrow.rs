@@ -111,7 +111,7 @@ fn decode_file(path: &Path, file: &std::fs::File) -> Result<Decoded, DmwError> {
     let mut batches = Vec::new();
     for block in footer.recordBatches().iter().flat_map(|v| v.iter()) {
         let data = block_bytes(block)?;
-        check_compressed_lengths(block, &data).map_err(bad)?;
+        check_block_lengths(block, &data).map_err(bad)?;
         if let Some(batch) = decoder
             .read_record_batch(block, &data)
             .map_err(|e| bad(e.to_string()))?
@@ -132,14 +132,19 @@ fn decode_file(path: &Path, file: &std::fs::File) -> Result<Decoded, DmwError> {
 /// (docs/reliability.md, "Coverage-guided fuzzing"): an LZ4 buffer declaring 2.4·10¹⁸ bytes.
 /// Bound: 1 KiB per row, and 2¹⁶ × the compressed size (LZ4 expands at most ~255×, zstd at most
 /// ~32 768× with RLE blocks), whichever is smaller, plus 1 MiB.
-fn check_compressed_lengths(block: &arrow_ipc::Block, data: &Buffer) -> Result<(), String> {
-    let Ok(meta_len) = usize::try_from(block.metaDataLength()) else {
-        return Ok(());
-    };
+fn check_block_lengths(block: &arrow_ipc::Block, data: &Buffer) -> Result<(), String> {
     let bytes = data.as_slice();
-    let Some(meta) = bytes.get(..meta_len) else {
-        return Ok(());
-    };
+    match usize::try_from(block.metaDataLength()) {
+        Ok(meta_len) if meta_len <= bytes.len() => {
+            check_compressed_lengths(&bytes[..meta_len], &bytes[meta_len..])
+        }
+        _ => Ok(()),
+    }
+}
+
+/// [`check_block_lengths`] for a message: `meta` is its framed metadata (marker, length,
+/// flatbuffer), `body` its body.
+fn check_compressed_lengths(meta: &[u8], body: &[u8]) -> Result<(), String> {
     // The message: an optional 0xFFFFFFFF continuation marker, its length, the flatbuffer.
     let fb = if meta.starts_with(&[0xff; 4]) {
         meta.get(8..)
@@ -156,7 +161,6 @@ fn check_compressed_lengths(block: &arrow_ipc::Block, data: &Buffer) -> Result<(
     if batch.compression().is_none() {
         return Ok(());
     }
-    let body = &bytes[meta_len..];
     let rows = u64::try_from(batch.length()).unwrap_or(u64::MAX);
     for b in batch.buffers().iter().flat_map(|v| v.iter()) {
         let (Ok(off), Ok(len)) = (usize::try_from(b.offset()), usize::try_from(b.length())) else {
@@ -188,9 +192,58 @@ fn check_compressed_lengths(block: &arrow_ipc::Block, data: &Buffer) -> Result<(
     Ok(())
 }
 
+/// The same check over a stream's messages, walked by their framing before arrow-ipc's
+/// `StreamReader` decodes them (it has no hook between reading a message and allocating its
+/// buffers). Anything the walk cannot frame is left to the reader, which reports it.
+fn check_stream_lengths(bytes: &[u8]) -> Result<(), String> {
+    let word = |at: usize| {
+        let w = bytes.get(at..at.checked_add(4)?)?;
+        Some(i32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+    };
+    let mut at = 0usize;
+    while let Some(first) = word(at) {
+        // A continuation marker (−1) and the length, or (before format 0.15) the length alone.
+        let (prefix, len) = match first {
+            -1 => match word(at + 4) {
+                Some(len) => (8, len),
+                None => return Ok(()),
+            },
+            len => (4, len),
+        };
+        let Ok(len) = usize::try_from(len) else {
+            return Ok(());
+        };
+        if len == 0 {
+            return Ok(()); // end of stream
+        }
+        let Some(meta_end) = at.checked_add(prefix + len) else {
+            return Ok(());
+        };
+        let Some(meta) = bytes.get(at..meta_end) else {
+            return Ok(());
+        };
+        let Ok(message) = arrow_ipc::root_as_message(&meta[prefix..]) else {
+            return Ok(());
+        };
+        let body_end = usize::try_from(message.bodyLength())
+            .ok()
+            .and_then(|n| meta_end.checked_add(n));
+        let Some(body) = body_end.and_then(|end| bytes.get(meta_end..end)) else {
+            return Ok(());
+        };
+        check_compressed_lengths(meta, body)?;
+        at = meta_end + body.len();
+    }
+    Ok(())
+}
+
 fn decode_stream(path: &Path, file: std::fs::File) -> Result<Decoded, DmwError> {
     let bad = |e: arrow_schema::ArrowError| read_err(path, format!("Arrow IPC stream: {e}"));
-    let reader = StreamReader::try_new(std::io::BufReader::new(file), None).map_err(bad)?;
+    // SAFETY: read-only map, as in `decode_file`.
+    let mmap = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| read_err(path, e))?;
+    check_stream_lengths(&mmap)
+        .map_err(|what| read_err(path, format!("Arrow IPC stream: {what}")))?;
+    let reader = StreamReader::try_new(std::io::Cursor::new(&mmap[..]), None).map_err(bad)?;
     let schema = reader.schema();
     let batches = reader.collect::<Result<Vec<_>, _>>().map_err(bad)?;
     Ok(Decoded {
