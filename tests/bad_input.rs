@@ -419,6 +419,24 @@ fn fuzzed_hdf5_files_fail_cleanly() {
     }
 }
 
+/// An HDF5 record the `ldv` fuzz target found on which libhdf5 1.10.8 loops for ever (in its
+/// object-header code; `hdi dmw` spun at 100 % CPU until killed). The child reading it is
+/// killed at the time limit: here 2 s, set through the library (the size rule gives this
+/// 9.7 kB file one minute, which `hdi dmw` then reports the same way).
+#[test]
+fn an_hdf5_file_that_spins_libhdf5_is_a_timeout_error() {
+    use hdi::formats::isolated::set_time_limit;
+    let file = test_data().join("fuzz").join("hdf5_endless_loop.h5");
+    set_time_limit(Some(std::time::Duration::from_secs(2)));
+    let started = std::time::Instant::now();
+    let r = hdi::dmw::io::read_ldv(&file, &hdi::dmw::io::ReadOptions::default());
+    set_time_limit(None);
+    let e = r.expect_err("a record from a spinning library").to_string();
+    assert!(e.contains("still busy after 2.0 s"), "{e}");
+    assert!(e.contains("hdf5_endless_loop.h5"), "{e}");
+    assert!(started.elapsed() < std::time::Duration::from_secs(20));
+}
+
 /// An Arrow IPC file the `ldv` fuzz target found: its LZ4 buffer declares 2.4·10¹⁸ bytes
 /// decompressed, and arrow-ipc's allocation of that aborted `hdi dmw` (SIGABRT, no panic to
 /// catch). Now one clear error naming the file.

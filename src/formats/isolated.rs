@@ -43,7 +43,7 @@ impl fmt::Display for ChildFailure {
             ChildFailure::TimedOut { limit } => {
                 write!(
                     f,
-                    "the reader was still busy after {} s",
+                    "the reader was still busy after {:.1} s",
                     limit.as_secs_f64()
                 )
             }

@@ -42,6 +42,11 @@ pub(super) fn attr_number(loc: &hdf5::Location, name: &str) -> Option<f64> {
     if let Ok(x) = a.read_scalar::<f64>() {
         return Some(x);
     }
+    // A corrupt dataspace may declare millions of elements: `read_raw` would allocate them
+    // all before the length check below could refuse them.
+    if a.size() != 1 {
+        return None;
+    }
     match a.read_raw::<f64>() {
         Ok(v) if v.len() == 1 => Some(v[0]),
         _ => None,
