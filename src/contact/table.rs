@@ -10,7 +10,7 @@
 //! solver's error control needs; linear interpolation would make the stiffness jump at nodes.
 
 use super::ContactError;
-use crate::signal::resample::hermite_segment;
+use crate::signal::resample::{hermite_segment, hermite_weights};
 use rayon::prelude::*;
 
 /// How a channel is interpolated between nodes.
@@ -27,11 +27,19 @@ pub enum Interp {
 struct Channel {
     name: String,
     interp: Interp,
-    /// `y` or `ln y` at the nodes.
-    value: Vec<f64>,
-    /// Derivative of `value` with respect to x at the nodes, times the grid step (so the
-    /// Hermite basis needs no extra multiply).
-    slope_dx: Vec<f64>,
+    /// Per node: `y` or `ln y`, and its derivative with respect to x times the grid step (so
+    /// the Hermite basis needs no extra multiply). Interleaved: a lookup reads its cell's two
+    /// nodes from one contiguous 32-byte span.
+    nodes: Vec<[f64; 2]>,
+}
+
+impl Channel {
+    /// Nodes `i` and `i + 1` (one bounds check).
+    #[inline]
+    fn cell_nodes(&self, i: usize) -> [[f64; 2]; 2] {
+        let pair = &self.nodes[i..i + 2];
+        [pair[0], pair[1]]
+    }
 }
 
 /// A uniform-grid table of several smooth curves of one abscissa.
@@ -41,7 +49,17 @@ pub struct ForceTable {
     dx: f64,
     inv_dx: f64,
     n: usize,
+    /// `n − 1` as f64 (the last node's position).
+    last: f64,
     channels: Vec<Channel>,
+}
+
+/// Where an abscissa falls in a table ([`ForceTable::locate`]): the cell and the Hermite
+/// value weights at its fraction, computed once and shared by every channel read there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TablePoint {
+    i: usize,
+    w: [f64; 4],
 }
 
 /// Value and derivative of every channel at one abscissa, as the physics computes them.
@@ -141,8 +159,7 @@ impl ForceTable {
             .map(|(name, interp)| Channel {
                 name: name.to_string(),
                 interp: *interp,
-                value: Vec::with_capacity(n),
-                slope_dx: Vec::with_capacity(n),
+                nodes: Vec::with_capacity(n),
             })
             .collect();
         for (i, s) in samples.into_iter().enumerate() {
@@ -173,12 +190,10 @@ impl ForceTable {
                                 ch.name
                             )));
                         }
-                        ch.value.push(y.ln());
-                        ch.slope_dx.push(dy / y * dx);
+                        ch.nodes.push([y.ln(), dy / y * dx]);
                     }
                     Interp::Linear => {
-                        ch.value.push(y);
-                        ch.slope_dx.push(dy * dx);
+                        ch.nodes.push([y, dy * dx]);
                     }
                 }
             }
@@ -188,13 +203,14 @@ impl ForceTable {
             dx,
             inv_dx: 1.0 / dx,
             n,
+            last: (n - 1) as f64,
             channels: out,
         })
     }
 
     /// First and last node abscissa.
     pub fn range(&self) -> (f64, f64) {
-        (self.x0, self.x0 + (self.n - 1) as f64 * self.dx)
+        (self.x0, self.x0 + self.last * self.dx)
     }
 
     pub fn step(&self) -> f64 {
@@ -219,19 +235,9 @@ impl ForceTable {
     #[inline]
     pub fn eval_with_slope(&self, c: usize, x: f64) -> Option<(f64, f64)> {
         let ch = self.channels.get(c)?;
-        let u = (x - self.x0) * self.inv_dx;
-        if !(u >= 0.0 && u <= (self.n - 1) as f64) {
-            return None;
-        }
-        let i = (u as usize).min(self.n - 2);
-        let t = u - i as f64;
-        let (v, dv) = hermite_segment(
-            ch.value[i],
-            ch.value[i + 1],
-            ch.slope_dx[i],
-            ch.slope_dx[i + 1],
-            t,
-        );
+        let (i, t) = self.cell(x)?;
+        let [[p0, m0], [p1, m1]] = ch.cell_nodes(i);
+        let (v, dv) = hermite_segment(p0, p1, m0, m1, t);
         let dv = dv * self.inv_dx;
         Some(match ch.interp {
             Interp::Linear => (v, dv),
@@ -239,6 +245,47 @@ impl ForceTable {
                 let y = v.exp();
                 (y, y * dv)
             }
+        })
+    }
+
+    /// The cell `i` (0..=n−2) holding `x` and the fraction `t ∈ [0, 1]` in it; `None` outside
+    /// the table (or NaN).
+    #[inline]
+    fn cell(&self, x: f64) -> Option<(usize, f64)> {
+        let u = (x - self.x0) * self.inv_dx;
+        if !(u >= 0.0 && u <= self.last) {
+            return None;
+        }
+        // Through i64: one instruction each way, where usize ↔ f64 takes a dozen on baseline
+        // x86-64 (exact either way: 0 ≤ u ≤ n − 1 < 2⁵³).
+        let i = (u as i64).min(self.n as i64 - 2);
+        Some((i as usize, u - i as f64))
+    }
+
+    /// Where `x` falls in the table, for reading several channels there with
+    /// [`ForceTable::value_at`]; `None` exactly where [`ForceTable::eval_with_slope`] is.
+    #[inline]
+    pub fn locate(&self, x: f64) -> Option<TablePoint> {
+        let (i, t) = self.cell(x)?;
+        Some(TablePoint {
+            i,
+            w: hermite_weights(t),
+        })
+    }
+
+    /// Value of channel `c` at a located point: bit for bit the value of
+    /// [`ForceTable::eval_with_slope`] at the same abscissa, without its slope; `None` for an
+    /// unknown channel.
+    #[inline]
+    pub fn value_at(&self, c: usize, p: &TablePoint) -> Option<f64> {
+        let ch = self.channels.get(c)?;
+        let [[p0, m0], [p1, m1]] = ch.cell_nodes(p.i);
+        let [w0, w1, w2, w3] = p.w;
+        // hermite_segment's value, term for term.
+        let v = w0 * p0 + w1 * m0 + w2 * p1 + w3 * m1;
+        Some(match ch.interp {
+            Interp::Linear => v,
+            Interp::Log => v.exp(),
         })
     }
 
@@ -259,26 +306,28 @@ impl ForceTable {
             Interp::Log => return None,
             Interp::Linear => y,
         };
-        let v = &ch.value;
-        if !(target <= v[0] && target >= v[self.n - 1]) {
+        let nodes = &ch.nodes;
+        if !(target <= nodes[0][0] && target >= nodes[self.n - 1][0]) {
             return None;
         }
         // Largest i with v[i] ≥ target (v decreasing).
         let (mut lo, mut hi) = (0usize, self.n - 1);
         while hi - lo > 1 {
             let mid = (lo + hi) / 2;
-            if v[mid] >= target {
+            if nodes[mid][0] >= target {
                 lo = mid;
             } else {
                 hi = mid;
             }
         }
         let i = lo;
-        let cell = |s: f64| hermite_segment(v[i], v[i + 1], ch.slope_dx[i], ch.slope_dx[i + 1], s);
+        // The cell's nodes loaded once, outside the Newton loop.
+        let [[p0, m0], [p1, m1]] = ch.cell_nodes(i);
+        let cell = |s: f64| hermite_segment(p0, p1, m0, m1, s);
         let (mut a, mut b) = (0.0f64, 1.0f64);
-        let span = v[i] - v[i + 1];
+        let span = p0 - p1;
         let mut s = if span > 0.0 {
-            ((v[i] - target) / span).clamp(0.0, 1.0)
+            ((p0 - target) / span).clamp(0.0, 1.0)
         } else {
             0.0
         };
@@ -310,9 +359,9 @@ impl ForceTable {
     /// Largest node value of a channel (for relative floors).
     fn peak(&self, c: usize) -> f64 {
         let ch = &self.channels[c];
-        ch.value
+        ch.nodes
             .iter()
-            .map(|&v| match ch.interp {
+            .map(|&[v, _]| match ch.interp {
                 Interp::Log => v.exp(),
                 Interp::Linear => v.abs(),
             })
