@@ -310,15 +310,14 @@ impl ForceTable {
         if !(target <= nodes[0][0] && target >= nodes[self.n - 1][0]) {
             return None;
         }
-        // Largest i with v[i] ≥ target (v decreasing).
+        // Largest i with v[i] ≥ target (v decreasing). Both ends as selects, not a branch:
+        // the comparison is a coin toss, and a mispredicted branch costs more than the search.
         let (mut lo, mut hi) = (0usize, self.n - 1);
         while hi - lo > 1 {
             let mid = (lo + hi) / 2;
-            if nodes[mid][0] >= target {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
+            let keep_upper = nodes[mid][0] >= target;
+            lo = if keep_upper { mid } else { lo };
+            hi = if keep_upper { hi } else { mid };
         }
         let i = lo;
         // The cell's nodes loaded once, outside the Newton loop.

@@ -249,6 +249,24 @@ impl KinematicsCache {
     };
 }
 
+/// What one right-hand-side call leaves for the next call and for the step cap.
+struct RhsCache {
+    kinematics: Cell<KinematicsCache>,
+    /// The DMW under the AB springs at time `.0` (NaN: none yet). It depends on the time
+    /// alone, and DP5's sixth and seventh stages share theirs, so the seventh reuses the
+    /// sixth's two track lookups.
+    springs: Cell<(f64, DmwAtSprings)>,
+}
+
+impl RhsCache {
+    fn new() -> Self {
+        RhsCache {
+            kinematics: Cell::new(KinematicsCache::EMPTY),
+            springs: Cell::new((f64::NAN, DmwAtSprings::default())),
+        }
+    }
+}
+
 /// Sampled time histories of one case (SI).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CaseHistory {
@@ -316,6 +334,8 @@ pub struct TwoDofCase<'a> {
     /// The bulge POC at this actuation, state-independent terms precomputed.
     poc_frame: PocFrame,
     air_bearing: AirBearing2Dof,
+    /// `k_r(h_TFC)` of the AB's rear spring at this actuation.
+    rear_stiffness: f64,
     inverse_mass: Matrix2<f64>,
     damping: Matrix2<f64>,
     stiffness: Matrix2<f64>,
@@ -461,6 +481,7 @@ impl<'a> TwoDofCase<'a> {
             options,
             geometry,
             poc_frame,
+            rear_stiffness: air_bearing.rear_stiffness(actuation),
             air_bearing,
             inverse_mass,
             damping: m.damping,
@@ -500,6 +521,19 @@ impl<'a> TwoDofCase<'a> {
                 }
                 track.eval(tau)
             }
+        }
+    }
+
+    /// The DMW under the front and rear AB springs at time `t`.
+    #[inline]
+    fn dmw_at_springs(&self, t: f64) -> DmwAtSprings {
+        let (front, front_rate) = self.disk(t, self.delay_front);
+        let (rear, rear_rate) = self.disk(t, self.delay_rear);
+        DmwAtSprings {
+            front,
+            front_rate,
+            rear,
+            rear_rate,
         }
     }
 
@@ -639,7 +673,7 @@ impl<'a> TwoDofCase<'a> {
         t: f64,
         y: &[f64; 4],
         dy: &mut [f64; 4],
-        cache: Option<&Cell<KinematicsCache>>,
+        cache: Option<&RhsCache>,
     ) -> Result<(), DynamicsError> {
         let state = HeavePitchState {
             heave: y[0],
@@ -647,20 +681,24 @@ impl<'a> TwoDofCase<'a> {
             heave_rate: y[2],
             pitch_rate: y[3],
         };
-        let (front, front_rate) = self.disk(t, self.delay_front);
-        let (rear, rear_rate) = self.disk(t, self.delay_rear);
-        let dmw = DmwAtSprings {
-            front,
-            front_rate,
-            rear,
-            rear_rate,
+        let dmw = match cache.map(|c| c.springs.get()) {
+            Some((t_cached, dmw)) if t_cached == t => dmw,
+            _ => {
+                let dmw = self.dmw_at_springs(t);
+                if let Some(c) = cache {
+                    c.springs.set((t, dmw));
+                }
+                dmw
+            }
         };
-        let f_a = self.air_bearing.eom_forcing(&state, &dmw, self.actuation);
+        let f_a = self
+            .air_bearing
+            .eom_forcing_at(&state, &dmw, self.rear_stiffness);
         // AB loss is checked on the sampled (accepted) states in `run`: trial stages of a step
         // the controller will reject may overshoot.
         let kinematics = self.poc_kinematics(t, y);
         if let Some(c) = cache {
-            c.set(KinematicsCache {
+            c.kinematics.set(KinematicsCache {
                 t,
                 y: *y,
                 kinematics: kinematics.as_ref().ok().copied(),
@@ -696,14 +734,8 @@ impl<'a> TwoDofCase<'a> {
     /// `contact_max_step` — so a step ends close to every contact switch (onset, release, the
     /// damper clip that happens next to it) and the error control resolves it, while smooth
     /// steady contact and free flight run at the steps accuracy needs.
-    fn step_cap(
-        &self,
-        t: f64,
-        y: &[f64; 4],
-        contact_max_step: f64,
-        cache: &Cell<KinematicsCache>,
-    ) -> f64 {
-        let c = cache.get();
+    fn step_cap(&self, t: f64, y: &[f64; 4], contact_max_step: f64, cache: &RhsCache) -> f64 {
+        let c = cache.kinematics.get();
         let kinematics = if c.t == t && c.y == *y {
             c.kinematics
         } else {
@@ -908,7 +940,7 @@ impl<'a> TwoDofCase<'a> {
             start[0] += q[0];
             start[1] += q[1];
         }
-        let cache = Cell::new(KinematicsCache::EMPTY);
+        let cache = RhsCache::new();
         let rhs = |t: f64, y: &[f64; 4], dy: &mut [f64; 4]| self.rhs_cached(t, y, dy, Some(&cache));
         let sampling = Sampling::Uniform { dt: o.output_step };
         let result = match o.integrator {
