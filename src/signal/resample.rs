@@ -304,7 +304,7 @@ impl<'a> HermiteTrack<'a> {
     /// keeps an ODE step that overshoots slightly well-behaved; callers that must not rely on
     /// that check the range with [`duration`](Self::duration). A NaN `t` gives NaN.
     /// Inlined: three calls per 2-DOF right-hand side, ~10 % of a cold main job's CPU as a call.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, t: f64) -> (f64, f64) {
         let n = self.d.len();
         let position = (t - self.t0) * self.fs;
