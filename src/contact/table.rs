@@ -31,6 +31,66 @@ struct Channel {
     /// the Hermite basis needs no extra multiply). Interleaved: a lookup reads its cell's two
     /// nodes from one contiguous 32-byte span.
     nodes: Vec<[f64; 2]>,
+    /// Where the node values decrease strictly: the bracket index of `invert_decreasing`.
+    index: Option<DecreasingIndex>,
+}
+
+/// A coarse value → node index over a channel whose node values decrease strictly, so
+/// [`ForceTable::invert_decreasing`] bisects from a bracket of a node or two instead of the
+/// whole table (nine unpredictable comparisons per `P⁻¹`, on the 2-DOF right-hand side's
+/// critical path). The answer does not depend on the bracket: on strictly decreasing values
+/// every bracket `(lo, hi)` with `v[lo] ≥ y` and `hi = n − 1` or `v[hi] < y` bisects to the
+/// largest `i ≤ n − 2` with `v[i] ≥ y`, and so does the whole table `(0, n − 1)`.
+#[derive(Debug, Clone)]
+struct DecreasingIndex {
+    /// The first node's value and buckets per unit value.
+    top: f64,
+    per_value: f64,
+    /// `start[b]`: the largest node `i ≤ n − 2` with `v[i] ≥ top − b/per_value`.
+    start: Vec<usize>,
+}
+
+impl DecreasingIndex {
+    /// Four buckets per node; `None` unless the values decrease strictly.
+    fn new(nodes: &[[f64; 2]]) -> Option<Self> {
+        let n = nodes.len();
+        if n < 2 || !nodes.windows(2).all(|w| w[0][0] > w[1][0]) {
+            return None;
+        }
+        let top = nodes[0][0];
+        let buckets = 4 * n;
+        let per_value = buckets as f64 / (top - nodes[n - 1][0]);
+        if !per_value.is_finite() {
+            return None;
+        }
+        let mut start = Vec::with_capacity(buckets + 2);
+        let mut i = 0;
+        for b in 0..=buckets + 1 {
+            let bound = top - b as f64 / per_value;
+            while i + 2 < n && nodes[i + 1][0] >= bound {
+                i += 1;
+            }
+            start.push(i);
+        }
+        Some(DecreasingIndex {
+            top,
+            per_value,
+            start,
+        })
+    }
+
+    /// A bracket for `y` (`v[n−1] ≤ y ≤ v[0]`), checked against the nodes; `None` where the
+    /// bucket's rounding missed (the caller searches the whole table).
+    #[inline]
+    fn bracket(&self, nodes: &[[f64; 2]], y: f64) -> Option<(usize, usize)> {
+        let last = nodes.len() - 1;
+        // Saturating: 0 for y at the top, beyond `start` (→ None) never for y ≥ v[n−1].
+        let b = ((self.top - y) * self.per_value) as usize;
+        let lo = *self.start.get(b)?;
+        let hi = (*self.start.get(b + 1)? + 1).min(last);
+        let valid = lo < hi && nodes[lo][0] >= y && (hi == last || nodes[hi][0] < y);
+        valid.then_some((lo, hi))
+    }
 }
 
 impl Channel {
@@ -160,6 +220,7 @@ impl ForceTable {
                 name: name.to_string(),
                 interp: *interp,
                 nodes: Vec::with_capacity(n),
+                index: None,
             })
             .collect();
         for (i, s) in samples.into_iter().enumerate() {
@@ -197,6 +258,9 @@ impl ForceTable {
                     }
                 }
             }
+        }
+        for ch in &mut out {
+            ch.index = DecreasingIndex::new(&ch.nodes);
         }
         Ok(ForceTable {
             x0,
@@ -310,9 +374,13 @@ impl ForceTable {
         if !(target <= nodes[0][0] && target >= nodes[self.n - 1][0]) {
             return None;
         }
-        // Largest i with v[i] ≥ target (v decreasing). Both ends as selects, not a branch:
-        // the comparison is a coin toss, and a mispredicted branch costs more than the search.
-        let (mut lo, mut hi) = (0usize, self.n - 1);
+        // Largest i with v[i] ≥ target (v decreasing), from the index's bracket where the
+        // values decrease strictly (the same i, see DecreasingIndex), else the whole table.
+        let (mut lo, mut hi) = ch
+            .index
+            .as_ref()
+            .and_then(|index| index.bracket(nodes, target))
+            .unwrap_or((0, self.n - 1));
         while hi - lo > 1 {
             let mid = (lo + hi) / 2;
             let keep_upper = nodes[mid][0] >= target;
@@ -541,6 +609,40 @@ mod tests {
         assert!(t.invert_decreasing(0, -1.0).is_none());
         assert!(t.invert_decreasing(0, f64::NAN).is_none());
         assert!(t.invert_decreasing(5, 0.5).is_none());
+    }
+
+    /// The bracket index changes where the search starts, never its answer: every inversion
+    /// equals the whole-table bisection's, bit for bit, on a channel steep in places and flat
+    /// in others (uneven nodes per bucket).
+    #[test]
+    fn indexed_inversion_equals_the_whole_table_search() {
+        let f = |x: f64| -> Result<Sample, ContactError> {
+            let y = (-x * x * x.abs() - x).exp() + 1e-3 * (-x).exp();
+            Ok(Sample {
+                value: vec![y],
+                derivative: vec![-(3.0 * x * x.abs() + 1.0) * (-x * x * x.abs() - x).exp()
+                    - 1e-3 * (-x).exp()],
+            })
+        };
+        let t = ForceTable::build(&[("p", Interp::Log)], -2.0, 3.0, 0.05, f).unwrap();
+        assert!(t.channels[0].index.is_some());
+        let mut plain = t.clone();
+        plain.channels[0].index = None;
+        let (y_top, y_bottom) = (t.eval(0, -2.0).unwrap(), t.eval(0, 3.0).unwrap());
+        let steps = 20_000;
+        for k in 0..=steps {
+            // Log-uniform over the whole tabulated range, ends included.
+            let y = y_top * (y_bottom / y_top).powf(k as f64 / steps as f64);
+            let (a, b) = (t.invert_decreasing(0, y), plain.invert_decreasing(0, y));
+            assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "{y}");
+        }
+        for node in &t.channels[0].nodes {
+            let y = node[0].exp();
+            assert_eq!(
+                t.invert_decreasing(0, y).map(f64::to_bits),
+                plain.invert_decreasing(0, y).map(f64::to_bits)
+            );
+        }
     }
 
     #[test]
