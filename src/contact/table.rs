@@ -620,8 +620,9 @@ mod tests {
             let y = (-x * x * x.abs() - x).exp() + 1e-3 * (-x).exp();
             Ok(Sample {
                 value: vec![y],
-                derivative: vec![-(3.0 * x * x.abs() + 1.0) * (-x * x * x.abs() - x).exp()
-                    - 1e-3 * (-x).exp()],
+                derivative: vec![
+                    -(3.0 * x * x.abs() + 1.0) * (-x * x * x.abs() - x).exp() - 1e-3 * (-x).exp(),
+                ],
             })
         };
         let t = ForceTable::build(&[("p", Interp::Log)], -2.0, 3.0, 0.05, f).unwrap();

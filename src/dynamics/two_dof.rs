@@ -899,35 +899,17 @@ impl<'a> TwoDofCase<'a> {
         ] {
             v.reserve_exact(n_samples);
         }
-        let mut sample_error: Option<DynamicsError> = None;
-        let mut ab_lost: Option<(f64, f64)> = None;
-        let observer = |t: f64, y: &[f64; 4]| match self.sample(t, y) {
-            Ok((i, te_spacing)) => {
-                let te_fh = self.flying_height(te_spacing);
-                if te_fh > AB_LOSS_FLYING_HEIGHT && ab_lost.is_none() {
-                    ab_lost = Some((t, te_fh));
-                }
-                h.heave.push(y[0]);
-                h.pitch_offset.push(y[1]);
-                h.heave_rate.push(y[2]);
-                h.pitch_rate.push(y[3]);
-                h.spacing.push(i.spacing);
-                h.clearance.push(i.clearance);
-                h.flying_height.push(self.flying_height(i.spacing));
-                h.contact_force.push(i.contact_force);
-                h.lubricant_force.push(i.lubricant_force);
-                h.friction.push(i.friction);
-                h.adhesion.push(i.adhesion);
-                h.real_area.push(i.real_area);
-                h.disk_displacement.push(i.disk_displacement);
-                h.trailing_edge_spacing.push(te_spacing);
-                h.clipped_samples += usize::from(i.clipped);
-            }
-            Err(e) => {
-                if sample_error.is_none() {
-                    sample_error = Some(e);
-                }
-            }
+        // The observer only records the sampled times and states; their interface outputs are
+        // computed after the integration (`sample` is pure, so the values are the same):
+        // independent of one another there, their trigonometry and table lookups overlap,
+        // where inside the step loop each waited on the integrator's serial chain of stages.
+        let mut times: Vec<f64> = Vec::with_capacity(n_samples);
+        let observer = |t: f64, y: &[f64; 4]| {
+            times.push(t);
+            h.heave.push(y[0]);
+            h.pitch_offset.push(y[1]);
+            h.heave_rate.push(y[2]);
+            h.pitch_rate.push(y[3]);
         };
         // atol: 1e-14 m, 1e-11 rad; rates × 2π × 1 MHz (docs/integrator.md).
         let w = 2.0 * std::f64::consts::PI * 1e6;
@@ -972,6 +954,40 @@ impl<'a> TwoDofCase<'a> {
                 )
             }
         };
+        let mut sample_error: Option<DynamicsError> = None;
+        let mut ab_lost: Option<(f64, f64)> = None;
+        for (k, &t) in times.iter().enumerate() {
+            let y = [
+                h.heave[k],
+                h.pitch_offset[k],
+                h.heave_rate[k],
+                h.pitch_rate[k],
+            ];
+            match self.sample(t, &y) {
+                Ok((i, te_spacing)) => {
+                    let te_fh = self.flying_height(te_spacing);
+                    if te_fh > AB_LOSS_FLYING_HEIGHT && ab_lost.is_none() {
+                        ab_lost = Some((t, te_fh));
+                    }
+                    h.spacing.push(i.spacing);
+                    h.clearance.push(i.clearance);
+                    h.flying_height.push(self.flying_height(i.spacing));
+                    h.contact_force.push(i.contact_force);
+                    h.lubricant_force.push(i.lubricant_force);
+                    h.friction.push(i.friction);
+                    h.adhesion.push(i.adhesion);
+                    h.real_area.push(i.real_area);
+                    h.disk_displacement.push(i.disk_displacement);
+                    h.trailing_edge_spacing.push(te_spacing);
+                    h.clipped_samples += usize::from(i.clipped);
+                }
+                Err(e) => {
+                    if sample_error.is_none() {
+                        sample_error = Some(e);
+                    }
+                }
+            }
+        }
         // The first sample beyond the AB limit decides, whatever happened after it.
         if let Some((t, fh)) = ab_lost {
             return Err(DynamicsError::Numerical(format!(
