@@ -383,9 +383,11 @@ impl ForceTable {
             .unwrap_or((0, self.n - 1));
         while hi - lo > 1 {
             let mid = (lo + hi) / 2;
-            let keep_upper = nodes[mid][0] >= target;
-            lo = if keep_upper { mid } else { lo };
-            hi = if keep_upper { hi } else { mid };
+            if nodes[mid][0] >= target {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
         }
         let i = lo;
         // The cell's nodes loaded once, outside the Newton loop.
@@ -617,12 +619,11 @@ mod tests {
     #[test]
     fn indexed_inversion_equals_the_whole_table_search() {
         let f = |x: f64| -> Result<Sample, ContactError> {
-            let y = (-x * x * x.abs() - x).exp() + 1e-3 * (-x).exp();
+            let steep = (-x * x * x - x).exp();
+            let flat = 1e-3 * (-x).exp();
             Ok(Sample {
-                value: vec![y],
-                derivative: vec![
-                    -(3.0 * x * x.abs() + 1.0) * (-x * x * x.abs() - x).exp() - 1e-3 * (-x).exp(),
-                ],
+                value: vec![steep + flat],
+                derivative: vec![-(3.0 * x * x + 1.0) * steep - flat],
             })
         };
         let t = ForceTable::build(&[("p", Interp::Log)], -2.0, 3.0, 0.05, f).unwrap();
