@@ -84,7 +84,8 @@ impl DecreasingIndex {
     #[inline]
     fn bracket(&self, nodes: &[[f64; 2]], y: f64) -> Option<(usize, usize)> {
         let last = nodes.len() - 1;
-        // Saturating: 0 for y at the top, beyond `start` (→ None) never for y ≥ v[n−1].
+        // Saturating cast: 0 at the top; past the end of `start` only by rounding at the
+        // bottom (→ None).
         let b = ((self.top - y) * self.per_value) as usize;
         let lo = *self.start.get(b)?;
         let hi = (*self.start.get(b + 1)? + 1).min(last);
