@@ -4,7 +4,7 @@
 
 use super::isbl::{IsblModel, IsblPoint};
 use super::mtl::rough::{SolidContact, SolidResponse};
-use super::table::{ChannelError, ForceTable, Interp, Sample};
+use super::table::{ChannelError, ForceTable, Interp, Sample, TablePoint};
 use super::ContactError;
 use std::sync::Arc;
 
@@ -256,9 +256,24 @@ impl IsblLookup {
             let x = h * self.inv_sigma;
             let (lo, hi) = self.table.range();
             if (lo..=hi).contains(&x) {
-                return Ok(IsblAt::Table {
-                    table: &self.table,
-                    x,
+                // The cell and its Hermite weights once for every channel read here.
+                return Ok(match self.table.locate(x) {
+                    Some(point) => IsblAt::Table {
+                        table: &self.table,
+                        point,
+                    },
+                    // Only where rounding puts x a hair outside the last node: every channel
+                    // of `eval_with_slope` answers None there, which `at` reads as 0.
+                    None => IsblAt::Forces(IsblForces {
+                        pressure: 0.0,
+                        stiffness: 0.0,
+                        real_area_fraction: 0.0,
+                        friction: 0.0,
+                        friction_stiffness: 0.0,
+                        adhesion: 0.0,
+                        adhesion_gradient: 0.0,
+                        range: LookupRange::Table,
+                    }),
                 });
             }
         }
@@ -307,8 +322,11 @@ impl IsblLookup {
 /// A lookup whose channels are interpolated on demand ([`IsblLookup::at_lazy`]).
 #[derive(Debug, Clone, Copy)]
 pub enum IsblAt<'a> {
-    /// Inside the table at h* = `x`.
-    Table { table: &'a ForceTable, x: f64 },
+    /// Inside the table, at a located point.
+    Table {
+        table: &'a ForceTable,
+        point: TablePoint,
+    },
     /// Outside the table: every channel already evaluated.
     Forces(IsblForces),
 }
@@ -318,7 +336,7 @@ impl IsblAt<'_> {
     fn channel(&self, c: usize) -> f64 {
         match self {
             // In range by construction, so every channel answers.
-            IsblAt::Table { table, x } => table.eval_with_slope(c, *x).unwrap_or((0.0, 0.0)).0,
+            IsblAt::Table { table, point } => table.value_at(c, point).unwrap_or(0.0),
             IsblAt::Forces(f) => match c {
                 P => f.pressure,
                 KC => f.stiffness,

@@ -10,7 +10,7 @@
 //! solver's error control needs; linear interpolation would make the stiffness jump at nodes.
 
 use super::ContactError;
-use crate::signal::resample::hermite_segment;
+use crate::signal::resample::{hermite_segment, hermite_weights};
 use rayon::prelude::*;
 
 /// How a channel is interpolated between nodes.
@@ -27,11 +27,80 @@ pub enum Interp {
 struct Channel {
     name: String,
     interp: Interp,
-    /// `y` or `ln y` at the nodes.
-    value: Vec<f64>,
-    /// Derivative of `value` with respect to x at the nodes, times the grid step (so the
-    /// Hermite basis needs no extra multiply).
-    slope_dx: Vec<f64>,
+    /// Per node: `y` or `ln y`, and its derivative with respect to x times the grid step (so
+    /// the Hermite basis needs no extra multiply). Interleaved: a lookup reads its cell's two
+    /// nodes from one contiguous 32-byte span.
+    nodes: Vec<[f64; 2]>,
+    /// Where the node values decrease strictly: the bracket index of `invert_decreasing`.
+    index: Option<DecreasingIndex>,
+}
+
+/// A coarse value → node index over a channel whose node values decrease strictly, so
+/// [`ForceTable::invert_decreasing`] bisects from a bracket of a node or two instead of the
+/// whole table (nine unpredictable comparisons per `P⁻¹`, on the 2-DOF right-hand side's
+/// critical path). The answer does not depend on the bracket: on strictly decreasing values
+/// every bracket `(lo, hi)` with `v[lo] ≥ y` and `hi = n − 1` or `v[hi] < y` bisects to the
+/// largest `i ≤ n − 2` with `v[i] ≥ y`, and so does the whole table `(0, n − 1)`.
+#[derive(Debug, Clone)]
+struct DecreasingIndex {
+    /// The first node's value and buckets per unit value.
+    top: f64,
+    per_value: f64,
+    /// `start[b]`: the largest node `i ≤ n − 2` with `v[i] ≥ top − b/per_value`.
+    start: Vec<usize>,
+}
+
+impl DecreasingIndex {
+    /// Four buckets per node; `None` unless the values decrease strictly.
+    fn new(nodes: &[[f64; 2]]) -> Option<Self> {
+        let n = nodes.len();
+        if n < 2 || !nodes.windows(2).all(|w| w[0][0] > w[1][0]) {
+            return None;
+        }
+        let top = nodes[0][0];
+        let buckets = 4 * n;
+        let per_value = buckets as f64 / (top - nodes[n - 1][0]);
+        if !per_value.is_finite() {
+            return None;
+        }
+        let mut start = Vec::with_capacity(buckets + 2);
+        let mut i = 0;
+        for b in 0..=buckets + 1 {
+            let bound = top - b as f64 / per_value;
+            while i + 2 < n && nodes[i + 1][0] >= bound {
+                i += 1;
+            }
+            start.push(i);
+        }
+        Some(DecreasingIndex {
+            top,
+            per_value,
+            start,
+        })
+    }
+
+    /// A bracket for `y` (`v[n−1] ≤ y ≤ v[0]`), checked against the nodes; `None` where the
+    /// bucket's rounding missed (the caller searches the whole table).
+    #[inline]
+    fn bracket(&self, nodes: &[[f64; 2]], y: f64) -> Option<(usize, usize)> {
+        let last = nodes.len() - 1;
+        // Saturating cast: 0 at the top; past the end of `start` only by rounding at the
+        // bottom (→ None).
+        let b = ((self.top - y) * self.per_value) as usize;
+        let lo = *self.start.get(b)?;
+        let hi = (*self.start.get(b + 1)? + 1).min(last);
+        let valid = lo < hi && nodes[lo][0] >= y && (hi == last || nodes[hi][0] < y);
+        valid.then_some((lo, hi))
+    }
+}
+
+impl Channel {
+    /// Nodes `i` and `i + 1` (one bounds check).
+    #[inline]
+    fn cell_nodes(&self, i: usize) -> [[f64; 2]; 2] {
+        let pair = &self.nodes[i..i + 2];
+        [pair[0], pair[1]]
+    }
 }
 
 /// A uniform-grid table of several smooth curves of one abscissa.
@@ -41,7 +110,17 @@ pub struct ForceTable {
     dx: f64,
     inv_dx: f64,
     n: usize,
+    /// `n − 1` as f64 (the last node's position).
+    last: f64,
     channels: Vec<Channel>,
+}
+
+/// Where an abscissa falls in a table ([`ForceTable::locate`]): the cell and the Hermite
+/// value weights at its fraction, computed once and shared by every channel read there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TablePoint {
+    i: usize,
+    w: [f64; 4],
 }
 
 /// Value and derivative of every channel at one abscissa, as the physics computes them.
@@ -141,8 +220,8 @@ impl ForceTable {
             .map(|(name, interp)| Channel {
                 name: name.to_string(),
                 interp: *interp,
-                value: Vec::with_capacity(n),
-                slope_dx: Vec::with_capacity(n),
+                nodes: Vec::with_capacity(n),
+                index: None,
             })
             .collect();
         for (i, s) in samples.into_iter().enumerate() {
@@ -173,28 +252,30 @@ impl ForceTable {
                                 ch.name
                             )));
                         }
-                        ch.value.push(y.ln());
-                        ch.slope_dx.push(dy / y * dx);
+                        ch.nodes.push([y.ln(), dy / y * dx]);
                     }
                     Interp::Linear => {
-                        ch.value.push(y);
-                        ch.slope_dx.push(dy * dx);
+                        ch.nodes.push([y, dy * dx]);
                     }
                 }
             }
+        }
+        for ch in &mut out {
+            ch.index = DecreasingIndex::new(&ch.nodes);
         }
         Ok(ForceTable {
             x0,
             dx,
             inv_dx: 1.0 / dx,
             n,
+            last: (n - 1) as f64,
             channels: out,
         })
     }
 
     /// First and last node abscissa.
     pub fn range(&self) -> (f64, f64) {
-        (self.x0, self.x0 + (self.n - 1) as f64 * self.dx)
+        (self.x0, self.x0 + self.last * self.dx)
     }
 
     pub fn step(&self) -> f64 {
@@ -219,19 +300,9 @@ impl ForceTable {
     #[inline]
     pub fn eval_with_slope(&self, c: usize, x: f64) -> Option<(f64, f64)> {
         let ch = self.channels.get(c)?;
-        let u = (x - self.x0) * self.inv_dx;
-        if !(u >= 0.0 && u <= (self.n - 1) as f64) {
-            return None;
-        }
-        let i = (u as usize).min(self.n - 2);
-        let t = u - i as f64;
-        let (v, dv) = hermite_segment(
-            ch.value[i],
-            ch.value[i + 1],
-            ch.slope_dx[i],
-            ch.slope_dx[i + 1],
-            t,
-        );
+        let (i, t) = self.cell(x)?;
+        let [[p0, m0], [p1, m1]] = ch.cell_nodes(i);
+        let (v, dv) = hermite_segment(p0, p1, m0, m1, t);
         let dv = dv * self.inv_dx;
         Some(match ch.interp {
             Interp::Linear => (v, dv),
@@ -239,6 +310,47 @@ impl ForceTable {
                 let y = v.exp();
                 (y, y * dv)
             }
+        })
+    }
+
+    /// The cell `i` (0..=n−2) holding `x` and the fraction `t ∈ [0, 1]` in it; `None` outside
+    /// the table (or NaN).
+    #[inline]
+    fn cell(&self, x: f64) -> Option<(usize, f64)> {
+        let u = (x - self.x0) * self.inv_dx;
+        if !(u >= 0.0 && u <= self.last) {
+            return None;
+        }
+        // Through i64: one instruction each way, where usize ↔ f64 takes a dozen on baseline
+        // x86-64 (exact either way: 0 ≤ u ≤ n − 1 < 2⁵³).
+        let i = (u as i64).min(self.n as i64 - 2);
+        Some((i as usize, u - i as f64))
+    }
+
+    /// Where `x` falls in the table, for reading several channels there with
+    /// [`ForceTable::value_at`]; `None` exactly where [`ForceTable::eval_with_slope`] is.
+    #[inline]
+    pub fn locate(&self, x: f64) -> Option<TablePoint> {
+        let (i, t) = self.cell(x)?;
+        Some(TablePoint {
+            i,
+            w: hermite_weights(t),
+        })
+    }
+
+    /// Value of channel `c` at a located point: bit for bit the value of
+    /// [`ForceTable::eval_with_slope`] at the same abscissa, without its slope; `None` for an
+    /// unknown channel.
+    #[inline]
+    pub fn value_at(&self, c: usize, p: &TablePoint) -> Option<f64> {
+        let ch = self.channels.get(c)?;
+        let [[p0, m0], [p1, m1]] = ch.cell_nodes(p.i);
+        let [w0, w1, w2, w3] = p.w;
+        // hermite_segment's value, term for term.
+        let v = w0 * p0 + w1 * m0 + w2 * p1 + w3 * m1;
+        Some(match ch.interp {
+            Interp::Linear => v,
+            Interp::Log => v.exp(),
         })
     }
 
@@ -259,26 +371,33 @@ impl ForceTable {
             Interp::Log => return None,
             Interp::Linear => y,
         };
-        let v = &ch.value;
-        if !(target <= v[0] && target >= v[self.n - 1]) {
+        let nodes = &ch.nodes;
+        if !(target <= nodes[0][0] && target >= nodes[self.n - 1][0]) {
             return None;
         }
-        // Largest i with v[i] ≥ target (v decreasing).
-        let (mut lo, mut hi) = (0usize, self.n - 1);
+        // Largest i with v[i] ≥ target (v decreasing), from the index's bracket where the
+        // values decrease strictly (the same i, see DecreasingIndex), else the whole table.
+        let (mut lo, mut hi) = ch
+            .index
+            .as_ref()
+            .and_then(|index| index.bracket(nodes, target))
+            .unwrap_or((0, self.n - 1));
         while hi - lo > 1 {
             let mid = (lo + hi) / 2;
-            if v[mid] >= target {
+            if nodes[mid][0] >= target {
                 lo = mid;
             } else {
                 hi = mid;
             }
         }
         let i = lo;
-        let cell = |s: f64| hermite_segment(v[i], v[i + 1], ch.slope_dx[i], ch.slope_dx[i + 1], s);
+        // The cell's nodes loaded once, outside the Newton loop.
+        let [[p0, m0], [p1, m1]] = ch.cell_nodes(i);
+        let cell = |s: f64| hermite_segment(p0, p1, m0, m1, s);
         let (mut a, mut b) = (0.0f64, 1.0f64);
-        let span = v[i] - v[i + 1];
+        let span = p0 - p1;
         let mut s = if span > 0.0 {
-            ((v[i] - target) / span).clamp(0.0, 1.0)
+            ((p0 - target) / span).clamp(0.0, 1.0)
         } else {
             0.0
         };
@@ -310,9 +429,9 @@ impl ForceTable {
     /// Largest node value of a channel (for relative floors).
     fn peak(&self, c: usize) -> f64 {
         let ch = &self.channels[c];
-        ch.value
+        ch.nodes
             .iter()
-            .map(|&v| match ch.interp {
+            .map(|&[v, _]| match ch.interp {
                 Interp::Log => v.exp(),
                 Interp::Linear => v.abs(),
             })
@@ -493,6 +612,40 @@ mod tests {
         assert!(t.invert_decreasing(0, -1.0).is_none());
         assert!(t.invert_decreasing(0, f64::NAN).is_none());
         assert!(t.invert_decreasing(5, 0.5).is_none());
+    }
+
+    /// The bracket index changes where the search starts, never its answer: every inversion
+    /// equals the whole-table bisection's, bit for bit, on a channel steep in places and flat
+    /// in others (uneven nodes per bucket).
+    #[test]
+    fn indexed_inversion_equals_the_whole_table_search() {
+        let f = |x: f64| -> Result<Sample, ContactError> {
+            let steep = (-x * x * x - x).exp();
+            let flat = 1e-3 * (-x).exp();
+            Ok(Sample {
+                value: vec![steep + flat],
+                derivative: vec![-(3.0 * x * x + 1.0) * steep - flat],
+            })
+        };
+        let t = ForceTable::build(&[("p", Interp::Log)], -2.0, 3.0, 0.05, f).unwrap();
+        assert!(t.channels[0].index.is_some());
+        let mut plain = t.clone();
+        plain.channels[0].index = None;
+        let (y_top, y_bottom) = (t.eval(0, -2.0).unwrap(), t.eval(0, 3.0).unwrap());
+        let steps = 20_000;
+        for k in 0..=steps {
+            // Log-uniform over the whole tabulated range, ends included.
+            let y = y_top * (y_bottom / y_top).powf(k as f64 / steps as f64);
+            let (a, b) = (t.invert_decreasing(0, y), plain.invert_decreasing(0, y));
+            assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "{y}");
+        }
+        for node in &t.channels[0].nodes {
+            let y = node[0].exp();
+            assert_eq!(
+                t.invert_decreasing(0, y).map(f64::to_bits),
+                plain.invert_decreasing(0, y).map(f64::to_bits)
+            );
+        }
     }
 
     #[test]

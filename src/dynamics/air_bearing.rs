@@ -441,9 +441,21 @@ impl AirBearing2Dof {
         dmw: &DmwAtSprings,
         actuation: f64,
     ) -> Vector2<f64> {
+        self.eom_forcing_at(state, dmw, self.rear_stiffness(actuation))
+    }
+
+    /// [`Self::eom_forcing`] with the rear stiffness `k_r(h)` given (constant per case, so the
+    /// 2-DOF right-hand side computes it once).
+    #[inline]
+    pub fn eom_forcing_at(
+        &self,
+        state: &HeavePitchState,
+        dmw: &DmwAtSprings,
+        rear_stiffness: f64,
+    ) -> Vector2<f64> {
         let d = self.half_length;
         let z_r = state.heave - d * state.pitch_offset;
-        let f_ar = self.rear_stiffness(actuation) * (dmw.rear - z_r);
+        let f_ar = rear_stiffness * (dmw.rear - z_r);
         let front = self.front_stiffness * dmw.front + self.front_damping * dmw.front_rate;
         let rear = self.rear_damping * dmw.rear_rate + f_ar;
         Vector2::new(front + rear, d * front - d * rear)

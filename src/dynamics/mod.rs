@@ -89,16 +89,21 @@ pub(crate) fn require_non_negative(name: &str, value: f64) -> Result<f64> {
 }
 
 /// `value` must be finite and inside `[lo, hi]`; `unit` only decorates the message.
+/// Inlined with the error path out of line: the 2-DOF POC checks the pitch once per
+/// right-hand side (docs/performance.md).
+#[inline]
 pub(crate) fn require_in(name: &str, value: f64, lo: f64, hi: f64, unit: &str) -> Result<f64> {
     if value.is_finite() && value >= lo && value <= hi {
         Ok(value)
     } else {
-        Err(DynamicsError::parameter(
-            name,
-            value,
-            format!("must lie in [{lo:e}, {hi:e}] {unit}"),
-        ))
+        Err(out_of_range(name, value, lo, hi, unit))
     }
+}
+
+#[cold]
+#[inline(never)]
+fn out_of_range(name: &str, value: f64, lo: f64, hi: f64, unit: &str) -> DynamicsError {
+    DynamicsError::parameter(name, value, format!("must lie in [{lo:e}, {hi:e}] {unit}"))
 }
 
 /// `value` must be finite (any sign).

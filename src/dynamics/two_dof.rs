@@ -249,6 +249,24 @@ impl KinematicsCache {
     };
 }
 
+/// What one right-hand-side call leaves for the next call and for the step cap.
+struct RhsCache {
+    kinematics: Cell<KinematicsCache>,
+    /// The DMW under the AB springs at time `.0` (NaN: none yet). It depends on the time
+    /// alone, and DP5's sixth and seventh stages share theirs, so the seventh reuses the
+    /// sixth's two track lookups.
+    springs: Cell<(f64, DmwAtSprings)>,
+}
+
+impl RhsCache {
+    fn new() -> Self {
+        RhsCache {
+            kinematics: Cell::new(KinematicsCache::EMPTY),
+            springs: Cell::new((f64::NAN, DmwAtSprings::default())),
+        }
+    }
+}
+
 /// Sampled time histories of one case (SI).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CaseHistory {
@@ -316,6 +334,8 @@ pub struct TwoDofCase<'a> {
     /// The bulge POC at this actuation, state-independent terms precomputed.
     poc_frame: PocFrame,
     air_bearing: AirBearing2Dof,
+    /// `k_r(h_TFC)` of the AB's rear spring at this actuation.
+    rear_stiffness: f64,
     inverse_mass: Matrix2<f64>,
     damping: Matrix2<f64>,
     stiffness: Matrix2<f64>,
@@ -461,6 +481,7 @@ impl<'a> TwoDofCase<'a> {
             options,
             geometry,
             poc_frame,
+            rear_stiffness: air_bearing.rear_stiffness(actuation),
             air_bearing,
             inverse_mass,
             damping: m.damping,
@@ -488,8 +509,9 @@ impl<'a> TwoDofCase<'a> {
         self.contact_damping
     }
 
-    /// DMW displacement and velocity under a point delayed by `delay` [s].
-    #[inline]
+    /// DMW displacement and velocity under a point delayed by `delay` [s]. Always inlined:
+    /// three per right-hand side, on its critical path (the POC's).
+    #[inline(always)]
     fn disk(&self, t: f64, delay: f64) -> (f64, f64) {
         match &self.dmw {
             None => (0.0, 0.0),
@@ -500,6 +522,19 @@ impl<'a> TwoDofCase<'a> {
                 }
                 track.eval(tau)
             }
+        }
+    }
+
+    /// The DMW under the front and rear AB springs at time `t`.
+    #[inline]
+    fn dmw_at_springs(&self, t: f64) -> DmwAtSprings {
+        let (front, front_rate) = self.disk(t, self.delay_front);
+        let (rear, rear_rate) = self.disk(t, self.delay_rear);
+        DmwAtSprings {
+            front,
+            front_rate,
+            rear,
+            rear_rate,
         }
     }
 
@@ -639,7 +674,7 @@ impl<'a> TwoDofCase<'a> {
         t: f64,
         y: &[f64; 4],
         dy: &mut [f64; 4],
-        cache: Option<&Cell<KinematicsCache>>,
+        cache: Option<&RhsCache>,
     ) -> Result<(), DynamicsError> {
         let state = HeavePitchState {
             heave: y[0],
@@ -647,20 +682,24 @@ impl<'a> TwoDofCase<'a> {
             heave_rate: y[2],
             pitch_rate: y[3],
         };
-        let (front, front_rate) = self.disk(t, self.delay_front);
-        let (rear, rear_rate) = self.disk(t, self.delay_rear);
-        let dmw = DmwAtSprings {
-            front,
-            front_rate,
-            rear,
-            rear_rate,
+        let dmw = match cache.map(|c| c.springs.get()) {
+            Some((t_cached, dmw)) if t_cached == t => dmw,
+            _ => {
+                let dmw = self.dmw_at_springs(t);
+                if let Some(c) = cache {
+                    c.springs.set((t, dmw));
+                }
+                dmw
+            }
         };
-        let f_a = self.air_bearing.eom_forcing(&state, &dmw, self.actuation);
+        let f_a = self
+            .air_bearing
+            .eom_forcing_at(&state, &dmw, self.rear_stiffness);
         // AB loss is checked on the sampled (accepted) states in `run`: trial stages of a step
         // the controller will reject may overshoot.
         let kinematics = self.poc_kinematics(t, y);
         if let Some(c) = cache {
-            c.set(KinematicsCache {
+            c.kinematics.set(KinematicsCache {
                 t,
                 y: *y,
                 kinematics: kinematics.as_ref().ok().copied(),
@@ -696,14 +735,8 @@ impl<'a> TwoDofCase<'a> {
     /// `contact_max_step` — so a step ends close to every contact switch (onset, release, the
     /// damper clip that happens next to it) and the error control resolves it, while smooth
     /// steady contact and free flight run at the steps accuracy needs.
-    fn step_cap(
-        &self,
-        t: f64,
-        y: &[f64; 4],
-        contact_max_step: f64,
-        cache: &Cell<KinematicsCache>,
-    ) -> f64 {
-        let c = cache.get();
+    fn step_cap(&self, t: f64, y: &[f64; 4], contact_max_step: f64, cache: &RhsCache) -> f64 {
+        let c = cache.kinematics.get();
         let kinematics = if c.t == t && c.y == *y {
             c.kinematics
         } else {
@@ -866,35 +899,17 @@ impl<'a> TwoDofCase<'a> {
         ] {
             v.reserve_exact(n_samples);
         }
-        let mut sample_error: Option<DynamicsError> = None;
-        let mut ab_lost: Option<(f64, f64)> = None;
-        let observer = |t: f64, y: &[f64; 4]| match self.sample(t, y) {
-            Ok((i, te_spacing)) => {
-                let te_fh = self.flying_height(te_spacing);
-                if te_fh > AB_LOSS_FLYING_HEIGHT && ab_lost.is_none() {
-                    ab_lost = Some((t, te_fh));
-                }
-                h.heave.push(y[0]);
-                h.pitch_offset.push(y[1]);
-                h.heave_rate.push(y[2]);
-                h.pitch_rate.push(y[3]);
-                h.spacing.push(i.spacing);
-                h.clearance.push(i.clearance);
-                h.flying_height.push(self.flying_height(i.spacing));
-                h.contact_force.push(i.contact_force);
-                h.lubricant_force.push(i.lubricant_force);
-                h.friction.push(i.friction);
-                h.adhesion.push(i.adhesion);
-                h.real_area.push(i.real_area);
-                h.disk_displacement.push(i.disk_displacement);
-                h.trailing_edge_spacing.push(te_spacing);
-                h.clipped_samples += usize::from(i.clipped);
-            }
-            Err(e) => {
-                if sample_error.is_none() {
-                    sample_error = Some(e);
-                }
-            }
+        // The observer only records the sampled times and states; their interface outputs are
+        // computed after the integration (`sample` is pure, so the values are the same):
+        // independent of one another there, their trigonometry and table lookups overlap,
+        // where inside the step loop each waited on the integrator's serial chain of stages.
+        let mut times: Vec<f64> = Vec::with_capacity(n_samples);
+        let observer = |t: f64, y: &[f64; 4]| {
+            times.push(t);
+            h.heave.push(y[0]);
+            h.pitch_offset.push(y[1]);
+            h.heave_rate.push(y[2]);
+            h.pitch_rate.push(y[3]);
         };
         // atol: 1e-14 m, 1e-11 rad; rates × 2π × 1 MHz (docs/integrator.md).
         let w = 2.0 * std::f64::consts::PI * 1e6;
@@ -908,7 +923,7 @@ impl<'a> TwoDofCase<'a> {
             start[0] += q[0];
             start[1] += q[1];
         }
-        let cache = Cell::new(KinematicsCache::EMPTY);
+        let cache = RhsCache::new();
         let rhs = |t: f64, y: &[f64; 4], dy: &mut [f64; 4]| self.rhs_cached(t, y, dy, Some(&cache));
         let sampling = Sampling::Uniform { dt: o.output_step };
         let result = match o.integrator {
@@ -939,6 +954,40 @@ impl<'a> TwoDofCase<'a> {
                 )
             }
         };
+        let mut sample_error: Option<DynamicsError> = None;
+        let mut ab_lost: Option<(f64, f64)> = None;
+        for (k, &t) in times.iter().enumerate() {
+            let y = [
+                h.heave[k],
+                h.pitch_offset[k],
+                h.heave_rate[k],
+                h.pitch_rate[k],
+            ];
+            match self.sample(t, &y) {
+                Ok((i, te_spacing)) => {
+                    let te_fh = self.flying_height(te_spacing);
+                    if te_fh > AB_LOSS_FLYING_HEIGHT && ab_lost.is_none() {
+                        ab_lost = Some((t, te_fh));
+                    }
+                    h.spacing.push(i.spacing);
+                    h.clearance.push(i.clearance);
+                    h.flying_height.push(self.flying_height(i.spacing));
+                    h.contact_force.push(i.contact_force);
+                    h.lubricant_force.push(i.lubricant_force);
+                    h.friction.push(i.friction);
+                    h.adhesion.push(i.adhesion);
+                    h.real_area.push(i.real_area);
+                    h.disk_displacement.push(i.disk_displacement);
+                    h.trailing_edge_spacing.push(te_spacing);
+                    h.clipped_samples += usize::from(i.clipped);
+                }
+                Err(e) => {
+                    if sample_error.is_none() {
+                        sample_error = Some(e);
+                    }
+                }
+            }
+        }
         // The first sample beyond the AB limit decides, whatever happened after it.
         if let Some((t, fh)) = ab_lost {
             return Err(DynamicsError::Numerical(format!(

@@ -217,6 +217,8 @@ pub struct HermiteTrack<'a> {
     fs: f64,
     /// Sample spacing `1/fs` (s).
     dt: f64,
+    /// Position of the last sample, `(len − 1)` as f64.
+    last: f64,
 }
 
 /// Cubic Hermite on one unit interval: values `p0`, `p1` and slopes `m0`, `m1` (per unit of
@@ -225,15 +227,27 @@ pub struct HermiteTrack<'a> {
 #[inline]
 pub fn hermite_segment(p0: f64, p1: f64, m0: f64, m1: f64, s: f64) -> (f64, f64) {
     let s2 = s * s;
-    let s3 = s2 * s;
-    let value = (2.0 * s3 - 3.0 * s2 + 1.0) * p0
-        + (s3 - 2.0 * s2 + s) * m0
-        + (3.0 * s2 - 2.0 * s3) * p1
-        + (s3 - s2) * m1;
+    let [w0, w1, w2, w3] = hermite_weights(s);
+    let value = w0 * p0 + w1 * m0 + w2 * p1 + w3 * m1;
     let slope = (6.0 * s2 - 6.0 * s) * (p0 - p1)
         + (3.0 * s2 - 4.0 * s + 1.0) * m0
         + (3.0 * s2 - 2.0 * s) * m1;
     (value, slope)
+}
+
+/// The value weights of [`hermite_segment`] at `s`, for `p0`, `m0`, `p1`, `m1` in that order:
+/// `value = w0·p0 + w1·m0 + w2·p1 + w3·m1`, the same operations in the same order, so a caller
+/// reading several curves at one `s` computes them once (the contact tables' channels).
+#[inline]
+pub fn hermite_weights(s: f64) -> [f64; 4] {
+    let s2 = s * s;
+    let s3 = s2 * s;
+    [
+        2.0 * s3 - 3.0 * s2 + 1.0,
+        s3 - 2.0 * s2 + s,
+        3.0 * s2 - 2.0 * s3,
+        s3 - s2,
+    ]
 }
 
 impl<'a> HermiteTrack<'a> {
@@ -281,6 +295,7 @@ impl<'a> HermiteTrack<'a> {
             t0,
             fs,
             dt: 1.0 / fs,
+            last: (d.len() - 1) as f64,
         })
     }
 
@@ -289,7 +304,7 @@ impl<'a> HermiteTrack<'a> {
     /// keeps an ODE step that overshoots slightly well-behaved; callers that must not rely on
     /// that check the range with [`duration`](Self::duration). A NaN `t` gives NaN.
     /// Inlined: three calls per 2-DOF right-hand side, ~10 % of a cold main job's CPU as a call.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, t: f64) -> (f64, f64) {
         let n = self.d.len();
         let position = (t - self.t0) * self.fs;
@@ -299,22 +314,21 @@ impl<'a> HermiteTrack<'a> {
         if position <= 0.0 {
             return (self.d[0], self.v[0]);
         }
-        if position >= (n - 1) as f64 {
+        if position >= self.last {
             return (self.d[n - 1], self.v[n - 1]);
         }
         // 0 < position < n − 1, so the interval index is in 0..=n−2 (the min guards rounding);
         // truncation is the floor for a positive position and, unlike `floor`, needs no libm
-        // call on baseline x86-64 (three of these per 2-DOF right-hand side).
-        let i = (position as usize).min(n - 2);
+        // call on baseline x86-64 (three of these per 2-DOF right-hand side). Through i64: one
+        // instruction each way, where usize ↔ f64 takes a dozen (exact either way, n < 2⁵³).
+        let i = (position as i64).min(n as i64 - 2);
         let s = position - i as f64;
+        let i = i as usize;
+        // One bounds check per track for the interval's two samples.
+        let (d, v) = (&self.d[i..i + 2], &self.v[i..i + 2]);
         // Slopes per unit s (one sample spacing).
-        let (value, slope_per_sample) = hermite_segment(
-            self.d[i],
-            self.d[i + 1],
-            self.v[i] * self.dt,
-            self.v[i + 1] * self.dt,
-            s,
-        );
+        let (value, slope_per_sample) =
+            hermite_segment(d[0], d[1], v[0] * self.dt, v[1] * self.dt, s);
         (value, slope_per_sample * self.fs)
     }
 
