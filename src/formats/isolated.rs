@@ -11,14 +11,15 @@
 //! Why fork and not a helper executable: the library (and the test and fuzz binaries that link
 //! it) has no executable of its own to start, and the child needs nothing but the code already
 //! mapped. A fork of a threaded process may only touch what no other thread can hold locked:
-//! the caller takes the HDF5 bindings' global lock around [`run`] (the child inherits it, held
-//! by its one thread), the readers use neither rayon nor logging, and glibc's `malloc` is
+//! [`read_hdf5`] takes the HDF5 bindings' global lock around [`run`] (the child inherits it,
+//! held by its one thread), the readers use neither rayon nor logging, and glibc's `malloc` is
 //! fork-safe. The child's stdout and stderr go to `/dev/null` (glibc's abort message, libhdf5's
 //! diagnostics), and it leaves with `_exit`, running no destructor or `atexit` handler.
 //!
 //! On other than Unix the work runs in-process, as before.
 use std::fmt;
 use std::io::{self, Read, Write};
+use std::path::Path;
 use std::time::Duration;
 
 /// Why the child gave no result.
@@ -183,10 +184,23 @@ impl Reader<'_> {
     }
 }
 
+/// [`run`] for a reader of the HDF5 file at `path`, with [`time_limit_for`] its size. The HDF5
+/// bindings' global lock is held across the fork, so no other thread is inside libhdf5 when
+/// the child copies its state (the child's reads re-enter the lock it inherits).
+pub fn read_hdf5<T>(
+    path: &Path,
+    work: impl FnOnce() -> T,
+    send: impl FnOnce(T, &mut Writer) -> io::Result<()>,
+    receive: impl FnOnce(&mut Reader) -> io::Result<T>,
+) -> Result<T, ChildFailure> {
+    let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+    hdf5::sync::sync(|| run(time_limit_for(bytes), work, send, receive))
+}
+
 /// Runs `work` in a child process and returns what `receive` decodes from what `send` wrote
 /// there, or why there is nothing. `send` owns the value, so it can free each array once
-/// written: the child's copy shrinks while the parent's grows. The caller holds whatever global lock the work's library
-/// needs (module docs).
+/// written: the child's copy shrinks while the parent's grows. The caller holds whatever
+/// global lock the work's library needs (module docs; [`read_hdf5`] for libhdf5).
 pub fn run<T>(
     limit: Duration,
     work: impl FnOnce() -> T,

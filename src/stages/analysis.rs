@@ -328,22 +328,17 @@ pub fn read_series(
             rate_source: r.str()?,
         }))
     }
-    let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
-    let limit = isolated::time_limit_for(bytes);
-    // The bindings' global lock is held across the fork (formats::isolated's module docs).
-    let reply = hdf5::sync::sync(|| {
-        isolated::run(
-            limit,
-            || {
-                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    read_series_in_process(path, dataset, velocity, sample_rate)
-                }))
-                .unwrap_or_else(|_| Err(h5err(path, "cannot read", "the HDF5 reader failed")))
-            },
-            send,
-            receive,
-        )
-    });
+    let reply = isolated::read_hdf5(
+        path,
+        || {
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                read_series_in_process(path, dataset, velocity, sample_rate)
+            }))
+            .unwrap_or_else(|_| Err(h5err(path, "cannot read", "the HDF5 reader failed")))
+        },
+        send,
+        receive,
+    );
     reply.unwrap_or_else(|failure| {
         Err(h5err(
             path,

@@ -137,18 +137,12 @@ fn read_part(
 /// Reads in a child process (`formats::isolated`): libhdf5 1.10 crashes or spins on some
 /// corrupt files, and that must be an error naming the file, not the end of hdi.
 pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
-    let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
-    let limit = isolated::time_limit_for(bytes);
-    // The bindings' global lock is held across the fork, so no other thread is inside libhdf5
-    // when the child copies its state (the child's reads re-enter the lock it inherits).
-    let reply = hdf5::sync::sync(|| {
-        isolated::run(
-            limit,
-            || no_panic(path, "the HDF5 reader", || read_inner(path, opts)),
-            send,
-            |r| receive(path, r),
-        )
-    });
+    let reply = isolated::read_hdf5(
+        path,
+        || no_panic(path, "the HDF5 reader", || read_inner(path, opts)),
+        send,
+        |r| receive(path, r),
+    );
     reply.unwrap_or_else(|failure| {
         Err(read_err(
             path,

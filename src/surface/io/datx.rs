@@ -295,17 +295,12 @@ fn one_line(s: &str) -> String {
 /// Reads in a child process (`formats::isolated`): libhdf5 1.10 crashes or spins on some
 /// corrupt files, and that must be an error naming the file, not the end of hdi.
 pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawMap> {
-    let limit = isolated::time_limit_for(bytes.len() as u64);
-    // The bindings' global lock is held across the fork, so no other thread is inside libhdf5
-    // when the child copies its state (the child's reads re-enter the lock it inherits).
-    let reply = hdf5::sync::sync(|| {
-        isolated::run(
-            limit,
-            || read_in_process(path, bytes.len(), opts),
-            send,
-            |r| receive(path, r),
-        )
-    });
+    let reply = isolated::read_hdf5(
+        path,
+        || read_in_process(path, bytes.len(), opts),
+        send,
+        |r| receive(path, r),
+    );
     reply.unwrap_or_else(|failure| {
         Err(format_error(
             path,
