@@ -278,6 +278,71 @@ pub struct Calibrated {
     pub origin: Origin,
 }
 
+/// What a row's target is (the ledger of docs/validation.md): a number the dissertation
+/// prints, a number computed from printed ones, or an input hdi was built from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Basis {
+    /// Printed in the dissertation; `at` says where (section, table, figure).
+    Published { at: String },
+    /// Computed from published numbers (or by an independent implementation of the printed
+    /// equations with the printed parameters); `how` says how.
+    Derived { how: String },
+    /// Recovers an input hdi was built from (`what`): a consistency check, class C, never a
+    /// reproduction.
+    ByConstruction { what: String },
+    /// Not stated by the row's builder: shown as such, and refused by the ledger's tests.
+    Unstated,
+}
+
+impl Basis {
+    /// `published`, `derived`, `by_construction` or `unstated`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Basis::Published { .. } => "published",
+            Basis::Derived { .. } => "derived",
+            Basis::ByConstruction { .. } => "by_construction",
+            Basis::Unstated => "unstated",
+        }
+    }
+
+    /// Where, how, or what: the basis's text.
+    pub fn detail(&self) -> &str {
+        match self {
+            Basis::Published { at } => at,
+            Basis::Derived { how } => how,
+            Basis::ByConstruction { what } => what,
+            Basis::Unstated => "",
+        }
+    }
+
+    pub fn to_json(&self) -> Value {
+        json!({"kind": self.kind(), "detail": self.detail()})
+    }
+}
+
+/// A row's value under another model variant than the row's own (a named switch), so the
+/// ledger shows which reading produced which number (docs/model-form.md).
+#[derive(Debug, Clone, PartialEq)]
+pub struct VariantValue {
+    /// The switches, as `key = value` (`friction_law = ke_static`).
+    pub variant: String,
+    /// The value in the row's unit (NaN for an ordering row or when undefined).
+    pub value: f64,
+    /// Q rows: the ordering under this variant.
+    pub ordering: Option<Ordering>,
+    pub inputs: String,
+    pub origin: Origin,
+}
+
+impl VariantValue {
+    fn pass(&self, row: &Row) -> bool {
+        match &self.ordering {
+            Some(o) => o.holds(),
+            None => row.tolerance.holds(row.target, self.value),
+        }
+    }
+}
+
 /// One validation target.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Row {
@@ -307,6 +372,10 @@ pub struct Row {
     pub inputs: String,
     pub origin: Origin,
     pub note: String,
+    /// What the target is: published, derived or by construction ([`Basis`]).
+    pub basis: Basis,
+    /// The value under other switches than the row's own variant.
+    pub variants: Vec<VariantValue>,
 }
 
 /// A row as the cells of a table ([`Row::cells`]).
@@ -352,6 +421,8 @@ impl Row {
             inputs: String::new(),
             origin: Origin::Computed,
             note: String::new(),
+            basis: Basis::Unstated,
+            variants: Vec::new(),
         }
     }
 
@@ -392,6 +463,51 @@ impl Row {
 
     pub fn reference(mut self, s: &str) -> Row {
         self.reference = s.into();
+        self
+    }
+    /// The target is printed in the dissertation at `at` (also the row's reference).
+    pub fn published(mut self, at: &str) -> Row {
+        self.reference = at.into();
+        self.basis = Basis::Published { at: at.into() };
+        self
+    }
+    /// The target is computed from published numbers, `how`.
+    pub fn derived(mut self, how: &str) -> Row {
+        self.basis = Basis::Derived { how: how.into() };
+        self
+    }
+    /// The target recovers an input hdi was built from: a consistency check (class C).
+    pub fn by_construction(mut self, what: &str) -> Row {
+        self.basis = Basis::ByConstruction { what: what.into() };
+        self.class = Class::C;
+        self
+    }
+    /// The row's value under another variant (`variant`: the switches as `key = value`).
+    pub fn with_variant(mut self, variant: &str, value: f64, inputs: &str, origin: Origin) -> Row {
+        self.variants.push(VariantValue {
+            variant: variant.into(),
+            value,
+            ordering: None,
+            inputs: inputs.into(),
+            origin,
+        });
+        self
+    }
+    /// A Q row's ordering under another variant.
+    pub fn with_variant_ordering(
+        mut self,
+        variant: &str,
+        ordering: Ordering,
+        inputs: &str,
+        origin: Origin,
+    ) -> Row {
+        self.variants.push(VariantValue {
+            variant: variant.into(),
+            value: f64::NAN,
+            ordering: Some(ordering),
+            inputs: inputs.into(),
+            origin,
+        });
         self
     }
     pub fn variant(mut self, s: &str) -> Row {
@@ -508,6 +624,15 @@ impl Row {
             "inputs": self.inputs,
             "origin": self.origin.to_json(),
             "note": self.note,
+            "basis": self.basis.to_json(),
+            "variants": self.variants.iter().map(|v| json!({
+                "variant": v.variant,
+                "value": num(v.value),
+                "ordering": v.ordering.as_ref().map(Ordering::to_json),
+                "pass": v.pass(self),
+                "inputs": v.inputs,
+                "origin": v.origin.to_json(),
+            })).collect::<Vec<_>>(),
         })
     }
 }
