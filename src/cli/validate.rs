@@ -3,7 +3,7 @@
 //! says so (calibrated values, the DOE optimum, the 3-DOF stage outputs, the spectra).
 
 use anyhow::{bail, Context, Result};
-use hdi::validation::{class_counts, gate, Class, Row};
+use hdi::validation::{class_counts, gate, ledger, Class, Row};
 use serde_json::{json, Value};
 use std::path::Path;
 
@@ -44,20 +44,22 @@ fn print_table(areas: &[(&'static str, Vec<&Row>)]) {
     for (area, rows) in areas {
         println!("── {area} ──");
         println!(
-            "{:<7} {:<22} {:<2} {:<62} {:>12} {:>12} {:>12} {:>10}  origin / variant / note",
-            "", "id", "cl", "quantity", "target", "hdi", "calibrated", "tolerance"
+            "{:<7} {:<22} {:<2} {:<15} {:<62} {:>12} {:>12} {:>14} {:>16} {:>10}  origin / variant / note",
+            "", "id", "cl", "basis", "quantity", "target", "hdi", "synth. record", "calibrated", "tolerance"
         );
         for r in rows {
             let c = r.cells(fmt_number);
             let unit = c.unit.map_or(String::new(), |u| format!(" {u}"));
             println!(
-                "{:<7} {:<22} {:<2} {:<62} {:>12} {:>12} {:>12} {:>10}  {}",
+                "{:<7} {:<22} {:<2} {:<15} {:<62} {:>12} {:>12} {:>14} {:>16} {:>10}  {}",
                 r.verdict(),
                 r.id,
                 r.class.label(),
+                c.basis,
                 format!("{}{}", r.quantity, unit),
                 c.target,
                 c.value,
+                c.record,
                 c.calibrated,
                 c.tolerance,
                 c.notes
@@ -129,10 +131,14 @@ pub(super) fn cmd_validate(
                 "classes": per_class,
                 "failed": failed.len(),
                 "failed_ids": failed.iter().map(|r| r.id.clone()).collect::<Vec<_>>(),
+                "ledger": ledger(all.iter().copied()).to_json(),
             })
         );
     } else {
         print_table(&areas);
+        for line in ledger(all.iter().copied()).lines() {
+            eprintln!("{line}");
+        }
         eprintln!(
             "{} rows (passes/rows per class: {}); {} gated row(s) failed{}",
             all.len(),

@@ -3,7 +3,7 @@
 //! pipeline file or a result goes through [`esc`].
 
 use super::{Instance, Page};
-use crate::validation::{class_counts, Row};
+use crate::validation::{class_counts, ledger, Row};
 use serde_json::Value;
 use std::fmt::Write;
 
@@ -126,7 +126,7 @@ figcaption{font-size:12px;color:#555}
 .s-stale,.s-missing,.v-differs,.v-no{background:#fdf0cf;color:#7a5200}
 .o-failed,.o-skipped,.v-fail{background:#fbdada;color:#8a1c1c}
 tr.v-pass td.st{background:#d9f2dc}tr.v-differs td.st,tr.v-no td.st{background:#fdf0cf}
-tr.v-fail td.st{background:#fbdada}
+tr.v-fail td.st{background:#fbdada}tr.v-not-run td.st{background:#e4ebf5;color:#23395d}
 .banner{padding:6px 10px;border-radius:4px;margin:10px 0;background:#eef1f5}
 .banner.ok{background:#d9f2dc}.banner.bad{background:#fbdada}
 .muted{color:#667}
@@ -362,7 +362,7 @@ fn instance_body(h: &mut String, inst: &Instance) {
 /// The row's CSS class and status word (`Row::verdict`).
 fn verdict(r: &Row) -> (String, &'static str) {
     let word = r.verdict();
-    (format!("v-{}", word.to_lowercase()), word)
+    (format!("v-{}", word.to_lowercase().replace(' ', "-")), word)
 }
 
 fn validation(h: &mut String, p: &Page) {
@@ -380,6 +380,11 @@ fn validation(h: &mut String, p: &Page) {
         .filter_map(|(_, r)| r.as_ref().ok())
         .flatten()
         .collect();
+    h.push_str("<ul id=\"validation-ledger\">\n");
+    for line in ledger(all.iter().copied()).lines() {
+        let _ = writeln!(h, "<li>{}</li>", esc(&line));
+    }
+    h.push_str("</ul>\n");
     h.push_str(
         "<p>The published targets (docs/validation.md): G and K rows must pass, D rows \
          depend on inputs the dissertation does not give (shown before and after \
@@ -398,20 +403,21 @@ fn validation(h: &mut String, p: &Page) {
     }
     h.push_str(
         "</table>\n<table id=\"validation-table\"><tr><th>status</th><th>id</th>\
-                <th>class</th><th>reference</th><th>quantity</th><th>target</th><th>value</th>\
-                <th>calibrated</th><th>tolerance</th><th>origin / note</th></tr>\n",
+                <th>class</th><th>basis</th><th>reference</th><th>quantity</th><th>target</th>\
+                <th>value</th><th>synthetic record</th><th>calibrated</th><th>tolerance</th>\
+                <th>origin / note</th></tr>\n",
     );
     for (area, rows) in &v.areas {
         let _ = writeln!(
             h,
-            "<tr class=\"area\"><th colspan=\"10\">{}</th></tr>",
+            "<tr class=\"area\"><th colspan=\"12\">{}</th></tr>",
             esc(area)
         );
         match rows {
             Err(e) => {
                 let _ = writeln!(
                     h,
-                    "<tr class=\"area-error\"><td colspan=\"10\" class=\"banner bad\">{}</td></tr>",
+                    "<tr class=\"area-error\"><td colspan=\"12\" class=\"banner bad\">{}</td></tr>",
                     esc(e)
                 );
             }
@@ -424,13 +430,17 @@ fn validation(h: &mut String, p: &Page) {
                         h,
                         "<tr class=\"{cls}\" data-id=\"{id}\" data-area=\"{area}\" data-pass=\"{pass}\">\
                          <td class=\"st\">{word}</td><td><code>{id}</code></td><td>{class}</td>\
+                         <td title=\"{basis_detail}\">{basis}</td>\
                          <td>{reference}</td><td>{quantity}{unit}</td><td class=\"n\">{target}</td>\
-                         <td class=\"n\">{value}</td><td class=\"n\">{cal}</td><td>{tol}</td>\
-                         <td>{tail}</td></tr>",
+                         <td class=\"n\">{value}</td><td class=\"n\">{record}</td>\
+                         <td class=\"n\">{cal}</td><td>{tol}</td><td>{tail}</td></tr>",
                         id = esc(&r.id),
                         area = esc(area),
                         pass = r.pass(),
                         class = r.class.label(),
+                        basis = esc(&c.basis),
+                        basis_detail = esc(r.basis.detail()),
+                        record = esc(&c.record),
                         reference = esc(&r.reference),
                         quantity = esc(&r.quantity),
                         unit = esc(&unit),

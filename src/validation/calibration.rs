@@ -54,9 +54,8 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
                     Tolerance::Absolute(1.0),
                 )
                 .variant("not run")
-                .note(&format!(
-                    "no current result: run `hdi run --only {name}` first"
-                )),
+                .by_construction("the fit's own record")
+                .not_run(&format!("a current result of [calibrate.{name}]")),
             );
             continue;
         }
@@ -77,28 +76,44 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
             dirs.insert(u.clone(), entry(u));
         }
         let e = re_evaluate(&stage, &fitted, &up, &dirs)?;
-        let defaults = result["defaults"]["targets"]
-            .as_array()
-            .cloned()
-            .unwrap_or_default();
+        let recorded = |set: &str| {
+            result[set]["targets"]
+                .as_array()
+                .cloned()
+                .unwrap_or_default()
+        };
+        let (defaults, fit) = (recorded("defaults"), recorded("calibrated"));
+        let key = planned(name).map_or(String::new(), |p| p.key.clone());
         for o in &e.outcomes {
             let t = &o.target;
-            let before = defaults
-                .iter()
-                .find(|d| d["id"] == t.id)
-                .and_then(|d| d["value"].as_f64())
-                .map_or("–".into(), |v| format!("{:.3}", v * t.display_scale));
-            let key = planned(name).map_or(String::new(), |p| p.key.clone());
+            let scale = t.display_scale;
+            let of = |set: &[Value]| {
+                set.iter()
+                    .find(|d| d["id"] == t.id)
+                    .and_then(|d| d["value"].as_f64())
+            };
+            let before = of(&defaults).map_or("–".into(), |v| format!("{:.3}", v * scale));
+            let now = o.value.map_or(f64::NAN, |v| v * scale);
+            let in_band = (now - t.published * scale).abs() <= t.tolerance * scale;
+            // The fit's own record at its knobs is the target: the row checks that the fit
+            // still holds with the current code. The published number it was fitted to is in
+            // the note; whether that is in band says how well the fit did, not what hdi
+            // reproduces (a fitted target is no reproduction).
+            let recorded = of(&fit).map_or(f64::NAN, |v| v * scale);
             rows.push(
                 Row::new(
                     &format!("cal-{}", t.id),
-                    Class::D,
-                    &format!("{} (calibrated)", t.id),
+                    Class::C,
+                    &format!("{} at the fitted knobs, re-evaluated now", t.id),
                     t.unit,
-                    t.published * t.display_scale,
-                    o.value.map_or(f64::NAN, |v| v * t.display_scale),
-                    Tolerance::Absolute(t.tolerance * t.display_scale),
+                    recorded,
+                    now,
+                    Tolerance::Absolute(1e-9 * recorded.abs().max(t.tolerance * scale)),
                 )
+                .by_construction(&format!(
+                    "the value [calibrate.{name}] recorded at its fitted knobs (a fit's own \
+                     output)"
+                ))
                 .reference(&format!(
                     "dissertation Ch. 2, target dyn-{}",
                     t.source.trim_start_matches('#')
@@ -107,13 +122,18 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
                 .inputs(&format!("the calibration's own inputs (base sweep `{}`), fitted knobs of [calibrate.{name}]", stage.base_name))
                 .origin(Origin::Recomputed {
                     instance: format!("calibrate.{name}"),
-                    key,
+                    key: key.clone(),
                 })
                 .note(&format!(
-                    "default inputs {before}; residual/tolerance {:+.2}{}",
+                    "fitted to the published {} ± {} {}: {} (residual/tolerance {:+.2}{}); \
+                     default inputs {before}",
+                    super::sig(t.published * scale),
+                    super::sig(t.tolerance * scale),
+                    t.unit,
+                    if in_band { "in band" } else { "out of band" },
                     o.normalised_residual,
                     if t.weight == 0.0 {
-                        " (reported, not fitted)"
+                        ", reported, not fitted"
                     } else {
                         ""
                     }

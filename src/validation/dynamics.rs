@@ -14,7 +14,7 @@
 //! The App. B rows read the excitation studies' spectra from the cache; the chirp is computed.
 
 use super::pipeline::{self, Cache, Stored};
-use super::{Calibrated, Class, Ordering, Origin, Relation, Row, Tolerance};
+use super::{Basis, Calibrated, Class, Ordering, Origin, Relation, Row, Tolerance};
 use crate::contact::isbl::{IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
 use crate::core::cache::Store;
@@ -618,16 +618,177 @@ fn cached_sweep(cache: &Cache, name: &str) -> Option<Sweep> {
                 .join(", ")
         })
         .unwrap_or_default();
+    let record = cache
+        .record_label(name)
+        .unwrap_or_else(|| "the pipeline's DMW record".into());
     let inputs = match result["calibration"].as_str() {
-        Some(name) => format!(
-            "shipped DMW record, static start (up branch), calibration [calibrate.{name}] \
+        Some(cal) => format!(
+            "{record}, static start (up branch), calibration [calibrate.{cal}] \
              ({knobs}); the stage's own 0.2 nm grid and grid touchdown"
         ),
-        None => "shipped DMW record, static start (up branch), no calibration; the stage's own \
-                 0.2 nm grid and grid touchdown"
-            .to_string(),
+        None => format!(
+            "{record}, static start (up branch), no calibration; the stage's own 0.2 nm grid \
+             and grid touchdown"
+        ),
     };
     Some(Sweep::new(pts, td, inputs, origin))
+}
+
+/// The rows whose targets were in the objective (weight > 0) of the calibration behind the
+/// calibrated sweep `name`: their calibrated values are fits, not reproductions.
+fn fitted_rows(cache: &Cache, name: &str) -> Vec<&'static str> {
+    let Some(cal) = cache
+        .current(name)
+        .and_then(|s| s.result["calibration"].as_str().map(str::to_string))
+    else {
+        return Vec::new();
+    };
+    let Some(fit) = cache.current(&cal) else {
+        return Vec::new();
+    };
+    let targets = fit.result["calibrated"]["targets"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default();
+    targets
+        .iter()
+        .filter(|t| t["set"] == "fitted" && t["weight"].as_f64().is_some_and(|w| w > 0.0))
+        .filter_map(|t| row_of_calibration_target(t["id"].as_str()?))
+        .collect()
+}
+
+/// The row that answers a `[calibrate]` fitted-set target (docs/calibration.md).
+fn row_of_calibration_target(id: &str) -> Option<&'static str> {
+    Some(match id {
+        "touchdown" => "dyn-16",
+        "clearance_8.5nm" => "dyn-18",
+        "fhm_8.5nm" => "dyn-18.fhm",
+        "clearance_9.5nm" => "dyn-19",
+        "fhm_9.5nm" => "dyn-19.fhm",
+        "shear_traction_9.8nm" => "dyn-23",
+        "clearance_12nm" => "dyn-24",
+        "contact_force_12nm" => "dyn-24.force",
+        "friction_force_12nm" => "dyn-24.friction",
+        "adhesion_12nm" => "dyn-24.adhesion",
+        "friction_coefficient_12nm" => "dyn-24.mu",
+        "mean_pressure_12nm" => "dyn-24.pressure",
+        "shear_traction_12nm" => "dyn-24.shear",
+        "real_area_12nm" => "dyn-24.area",
+        _ => return None,
+    })
+}
+
+/// The ledger of the 2-DOF rows (docs/validation.md): one row per printed number, each with
+/// its basis. Other estimators of a printed number become variants of its row; restatements
+/// of one number (shifted or scaled by a constant) are folded into its row's note, since they
+/// cannot pass or fail apart from it. `fitted` names the rows whose calibrated value is a fit.
+fn ledger(rows: &mut Vec<Row>, fitted: &[&str]) {
+    for (from, into, variant) in [
+        (
+            "dyn-13.instantaneous",
+            "dyn-13",
+            "estimator = mean of F_c/A_r over loaded samples",
+        ),
+        (
+            "dyn-23.instantaneous",
+            "dyn-23",
+            "estimator = mean of Q/A_r over loaded samples",
+        ),
+        (
+            "dyn-24.mu_instantaneous",
+            "dyn-24.mu",
+            "estimator = mean of Q/F_c over loaded samples",
+        ),
+    ] {
+        fold(rows, from, into, |into, r| {
+            into.variants.push(super::VariantValue {
+                variant: variant.into(),
+                value: r.value,
+                ordering: None,
+                inputs: r.inputs.clone(),
+                origin: r.origin.clone(),
+            })
+        });
+    }
+    for (from, into, how) in [
+        ("dyn-13.p0", "dyn-13", "P_0 = 1.5 P_m"),
+        ("dyn-18.hms", "dyn-18", "HMS = c̄ − 2T0"),
+        (
+            "dyn-18.magnetic",
+            "dyn-18",
+            "magnetic spacing = HMS + t + 2 nm DLC + 3σ",
+        ),
+        ("dyn-28", "dyn-26.clearance", "HMS = c̄ − 2T0 (target #28)"),
+    ] {
+        fold(rows, from, into, |into, r| {
+            let sep = if into.note.is_empty() { "" } else { "; " };
+            into.note = format!(
+                "{}{sep}also printed as {} {} {} ({how}; hdi {}): the same number restated, \
+                 not a separate reproduction",
+                into.note,
+                r.quantity,
+                r.target,
+                r.unit,
+                super::sig(r.value)
+            );
+        });
+    }
+    for r in rows.iter_mut() {
+        // The optimised design's flying clearance at 8.6 nm is kinematic like dyn-18's at
+        // 8.5 nm: it holds on every input (default, the synthetic record, calibrated).
+        if r.id == "dyn-26.clearance" {
+            r.class = Class::K;
+        }
+        if r.class == Class::D {
+            r.fitted = fitted.contains(&r.id.as_str());
+        }
+        if r.basis == Basis::Unstated {
+            r.basis = basis_of(&r.id, &r.reference);
+        }
+        if matches!(r.basis, Basis::ByConstruction { .. }) {
+            r.class = Class::C;
+        }
+    }
+}
+
+/// Moves the row `from` into the row `into` with `merge` (and drops `from`).
+fn fold(rows: &mut Vec<Row>, from: &str, into: &str, merge: impl Fn(&mut Row, &Row)) {
+    let Some(k) = rows.iter().position(|r| r.id == from) else {
+        return;
+    };
+    let r = rows.remove(k);
+    if let Some(target) = rows.iter_mut().find(|t| t.id == into) {
+        merge(target, &r);
+    }
+}
+
+/// A 2-DOF row's basis: printed at its reference unless listed here.
+fn basis_of(id: &str, reference: &str) -> Basis {
+    match id {
+        "dyn-21.B" => Basis::Derived {
+            how: "not printed: the slope between the printed critical point (8.6 nm, 2.39 nm) \
+                  and the mobile-lubricant onset (8.8 nm, ≈ 1.5 nm)"
+                .into(),
+        },
+        "dyn-21.D" => Basis::Derived {
+            how: "not printed: the slope between the printed clearances 0 nm at 10.4 nm and \
+                  −0.34 nm at 12 nm"
+                .into(),
+        },
+        "dyn-24.adhesion" => Basis::ByConstruction {
+            what: "Δγ = 0.06 N/m was back-solved from this 0.98 mN (docs/contact.md)".into(),
+        },
+        "dyn-14" => Basis::ByConstruction {
+            what: "ν = 0.25 was back-solved from ψ = 0.52 (docs/contact.md)".into(),
+        },
+        "ab2-pitch" | "ab2-normal" => Basis::ByConstruction {
+            what: "the AB springs are inverted from the 110 and 300 kHz modes".into(),
+        },
+        _ if reference.starts_with("dissertation") => Basis::Published {
+            at: reference.into(),
+        },
+        _ => Basis::Unstated,
+    }
 }
 
 // ------------------------------------------------------------------------------------------
@@ -878,9 +1039,9 @@ fn not_run(
     tol: Tolerance,
     instance: &str,
 ) -> Row {
-    Row::new(id, class, quantity, unit, target, f64::NAN, tol).note(&format!(
-        "needs the pipeline's `{instance}` result: run `hdi run` first"
-    ))
+    Row::new(id, class, quantity, unit, target, f64::NAN, tol)
+        .published("dissertation App. B")
+        .not_run(&format!("the pipeline's `{instance}` result"))
 }
 
 fn app_b_rows(cache: Option<&Cache>) -> Vec<Row> {
@@ -1017,8 +1178,14 @@ fn app_b_rows(cache: Option<&Cache>) -> Vec<Row> {
                 Ordering::new(
                     Relation::AllTrue,
                     &[
-                        ("sinusoid response periodic", f64::from(sine.starts_with("periodic"))),
-                        ("zero-excitation response a fixed point", f64::from(still == "fixed point")),
+                        (
+                            "sinusoid response periodic",
+                            f64::from(sine.starts_with("periodic")),
+                        ),
+                        (
+                            "zero-excitation response a fixed point",
+                            f64::from(still == "fixed point"),
+                        ),
                     ],
                 ),
             )
@@ -1029,8 +1196,12 @@ fn app_b_rows(cache: Option<&Cache>) -> Vec<Row> {
             .note(&format!("classes: sinusoid `{sine}`, zero `{still}`")),
         ),
         _ => rows.push(
-            Row::ordering("dyn-37", "sinusoid → periodic response; zero excitation → fixed point", Ordering::new(Relation::AllTrue, &[]))
-                .note("needs the pipeline's analysis.sine_response and analysis.still_response: run `hdi run` first"),
+            Row::ordering(
+                "dyn-37",
+                "sinusoid → periodic response; zero excitation → fixed point",
+                Ordering::new(Relation::AllTrue, &[]),
+            )
+            .not_run("the pipeline's analysis.sine_response and analysis.still_response"),
         ),
     }
     rows.extend(chirp_rows());
@@ -1306,6 +1477,11 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
         rows.extend(optimised_rows(&s, optimised_cached, fhm86));
     }
     rows.extend(app_b_rows(cache.as_ref()));
+    let fitted = cache
+        .as_ref()
+        .map(|c| fitted_rows(c, "improved_calibrated"))
+        .unwrap_or_default();
+    ledger(&mut rows, &fitted);
     rows
 }
 
@@ -1382,6 +1558,61 @@ mod tests {
         // K rows do not depend on the dropped inputs: no alternative values.
         let k = target_row(clearance_target(Class::K, &value), &own, cached, "v");
         assert!(k.record.is_none() && k.calibrated.is_none());
+    }
+
+    /// The ledger of every sweep row: each states its basis; restatements of one printed
+    /// number are folded into it, estimators become its variants; targets built from inputs
+    /// are class C; the fitted rows are marked.
+    #[test]
+    fn the_sweep_rows_form_a_ledger_with_one_row_per_printed_number() {
+        let s = line(11.05, "own");
+        let mut fhm86 = f64::NAN;
+        let mut rows = geometry_rows();
+        rows.extend(improved_rows(&s, CachedSweeps::default(), &mut fhm86));
+        rows.extend(initial_rows(&s));
+        rows.extend(optimised_rows(&s, CachedSweeps::default(), fhm86));
+        ledger(&mut rows, &["dyn-16", "dyn-24.force"]);
+        for r in &rows {
+            assert_ne!(r.basis, Basis::Unstated, "{}", r.id);
+            if matches!(r.basis, Basis::ByConstruction { .. }) {
+                assert_eq!(r.class, Class::C, "{}", r.id);
+            }
+            assert_eq!(
+                r.fitted,
+                r.id == "dyn-16" || r.id == "dyn-24.force",
+                "{}",
+                r.id
+            );
+        }
+        let ids: Vec<&str> = rows.iter().map(|r| r.id.as_str()).collect();
+        for gone in [
+            "dyn-18.hms",
+            "dyn-18.magnetic",
+            "dyn-28",
+            "dyn-13.p0",
+            "dyn-13.instantaneous",
+            "dyn-23.instantaneous",
+            "dyn-24.mu_instantaneous",
+        ] {
+            assert!(!ids.contains(&gone), "{gone} is still a row");
+        }
+        let row = |id: &str| rows.iter().find(|r| r.id == id).unwrap();
+        assert!(row("dyn-18").note.contains("HMS"), "{}", row("dyn-18").note);
+        assert_eq!(row("dyn-26.clearance").class, Class::K);
+        assert!(row("dyn-26.clearance").note.contains("0.73"));
+        assert_eq!(row("dyn-24.mu").variants.len(), 1);
+        assert!(matches!(row("dyn-21.B").basis, Basis::Derived { .. }));
+        assert_eq!(row("dyn-14").class, Class::C);
+        assert_eq!(row("dyn-24.adhesion").class, Class::C);
+        // No two rows of the ledger carry the same printed number for the same quantity.
+        let mut seen = std::collections::HashSet::new();
+        for r in rows.iter().filter(|r| r.ordering.is_none()) {
+            assert!(
+                seen.insert((r.quantity.clone(), r.target.to_bits())),
+                "{} repeats a row",
+                r.id
+            );
+        }
     }
 
     /// A computed case stored and read back is the case computed directly, bit for bit

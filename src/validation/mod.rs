@@ -222,7 +222,7 @@ impl Ordering {
 }
 
 /// Four significant digits for the text forms.
-fn sig(x: f64) -> String {
+pub(crate) fn sig(x: f64) -> String {
     if !x.is_finite() {
         return "–".into();
     }
@@ -376,6 +376,12 @@ pub struct Row {
     pub basis: Basis,
     /// The value under other switches than the row's own variant.
     pub variants: Vec<VariantValue>,
+    /// Set when the row's input has not been computed yet (a pipeline result it reads): what
+    /// it needs. Such a row is `not run`: neither a pass nor a failure, and never gates.
+    pub needs: Option<String>,
+    /// D rows: the target was in the objective of the calibration whose knobs give the
+    /// `calibrated` value, so that value is a fit, not a reproduction (docs/calibration.md).
+    pub fitted: bool,
 }
 
 /// A row as the cells of a table ([`Row::cells`]).
@@ -388,6 +394,11 @@ pub struct RowCells {
     pub value: String,
     /// The calibrated value, `✓` when within tolerance; empty without one.
     pub calibrated: String,
+    /// The uncalibrated value on the synthetic DMW record of `raw/`, `✓` when within
+    /// tolerance; empty without one.
+    pub record: String,
+    /// `published`, `derived`, `by construction` (or `unstated`).
+    pub basis: String,
     pub tolerance: String,
     /// Origin, variant and note, joined by ` — `.
     pub notes: String,
@@ -423,6 +434,8 @@ impl Row {
             note: String::new(),
             basis: Basis::Unstated,
             variants: Vec::new(),
+            needs: None,
+            fitted: false,
         }
     }
 
@@ -442,8 +455,8 @@ impl Row {
         }
     }
 
-    /// A closed-form / reference check (class G) without an id yet: the area assigns one
-    /// ([`assign_ids`]).
+    /// A closed-form / reference check (class G, basis `derived`: `reference` says how) without
+    /// an id yet: the area assigns one ([`assign_ids`]).
     #[allow(clippy::too_many_arguments)] // a table row: positional reads like the table
     pub fn check(
         reference: &str,
@@ -457,6 +470,7 @@ impl Row {
     ) -> Row {
         Row::new("", Class::G, quantity, unit, target, value, tolerance)
             .reference(reference)
+            .derived(reference)
             .variant(variant)
             .note(note)
     }
@@ -480,6 +494,19 @@ impl Row {
     pub fn by_construction(mut self, what: &str) -> Row {
         self.basis = Basis::ByConstruction { what: what.into() };
         self.class = Class::C;
+        self
+    }
+    /// The row's input is not computed yet: `what` names it (a pipeline result). The row is
+    /// `not run`, not a failure.
+    pub fn not_run(mut self, what: &str) -> Row {
+        self.needs = Some(what.into());
+        self.value = f64::NAN;
+        self.note = format!("not run: needs {what} (run `hdi run` first)");
+        self
+    }
+    /// D rows: the calibrated value comes from a fit whose objective contains this target.
+    pub fn fitted(mut self, fitted: bool) -> Row {
+        self.fitted = fitted;
         self
     }
     /// The row's value under another variant (`variant`: the switches as `key = value`).
@@ -540,7 +567,11 @@ impl Row {
     }
 
     /// Q rows: the ordering holds; others: the value is within the tolerance of the target.
+    /// A row that has not run does not pass (and does not fail: [`Row::status`]).
     pub fn pass(&self) -> bool {
+        if self.needs.is_some() {
+            return false;
+        }
         match &self.ordering {
             Some(o) => o.holds(),
             None => self.tolerance.holds(self.target, self.value),
@@ -550,11 +581,23 @@ impl Row {
     /// The row's status word: `pass`, `differs` (a class-D miss), `no` (a Q ordering that does
     /// not hold) or `FAIL`.
     pub fn verdict(&self) -> &'static str {
+        if self.needs.is_some() {
+            return "not run";
+        }
         match (self.pass(), self.class) {
             (true, _) => "pass",
             (false, Class::D) => "differs",
             (false, Class::Q) => "no",
             (false, _) => "FAIL",
+        }
+    }
+
+    /// `pass`, `fail` or `not_run` (the JSON `status`).
+    pub fn status(&self) -> &'static str {
+        match (self.needs.is_some(), self.pass()) {
+            (true, _) => "not_run",
+            (false, true) => "pass",
+            (false, false) => "fail",
         }
     }
 
@@ -565,14 +608,18 @@ impl Row {
             Some(o) => (String::new(), String::new(), o.describe()),
             None => (num(self.target), num(self.value), self.tolerance.short()),
         };
-        let calibrated = self.calibrated.as_ref().map_or(String::new(), |c| {
-            let mark = if self.calibrated_pass() == Some(true) {
-                " ✓"
-            } else {
-                ""
-            };
-            format!("{}{mark}", num(c.value))
-        });
+        let alternative = |c: &Option<Calibrated>, suffix: &str| {
+            c.as_ref().map_or(String::new(), |c| {
+                let mark = if self.tolerance.holds(self.target, c.value) {
+                    " ✓"
+                } else {
+                    ""
+                };
+                format!("{}{mark}{suffix}", num(c.value))
+            })
+        };
+        let calibrated = alternative(&self.calibrated, if self.fitted { " (fit)" } else { "" });
+        let record = alternative(&self.record, "");
         let mut notes = vec![self.origin.short()];
         if !self.variant.is_empty() {
             notes.push(self.variant.clone());
@@ -585,6 +632,8 @@ impl Row {
             target,
             value,
             calibrated,
+            record,
+            basis: self.basis.kind().replace('_', " "),
             tolerance,
             notes: notes.join(" — "),
         }
@@ -618,6 +667,9 @@ impl Row {
             "tolerance": self.tolerance.to_json(),
             "ordering": self.ordering.as_ref().map(Ordering::to_json),
             "pass": self.pass(),
+            "status": self.status(),
+            "needs": self.needs,
+            "fitted": self.fitted,
             "uncalibrated_record": self.record.as_ref().map(alternative),
             "calibrated": self.calibrated.as_ref().map(alternative),
             "variant": self.variant,
@@ -771,8 +823,179 @@ pub fn gate<'a>(rows: impl IntoIterator<Item = &'a Row>, selected: &[Class]) -> 
             Class::Q => selected.contains(&Class::Q),
             c => c.gates_by_default(),
         })
-        .filter(|r| !r.pass())
+        .filter(|r| r.needs.is_none() && !r.pass())
         .collect()
+}
+
+/// Passes out of rows; rows that have not run are counted apart (in `rows`, not in `pass`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Tally {
+    pub rows: usize,
+    pub pass: usize,
+    pub not_run: usize,
+}
+
+impl Tally {
+    fn add(&mut self, row: &Row, pass: bool) {
+        self.rows += 1;
+        if row.needs.is_some() {
+            self.not_run += 1;
+        } else if pass {
+            self.pass += 1;
+        }
+    }
+
+    /// `12/30` (`, 2 not run`).
+    pub fn short(&self) -> String {
+        if self.not_run > 0 {
+            format!("{}/{} ({} not run)", self.pass, self.rows, self.not_run)
+        } else {
+            format!("{}/{}", self.pass, self.rows)
+        }
+    }
+
+    pub fn to_json(&self) -> Value {
+        json!({"rows": self.rows, "pass": self.pass, "not_run": self.not_run})
+    }
+}
+
+/// The ledger's summary (docs/validation.md): what is reproduced, what only derived or
+/// consistent by construction.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Ledger {
+    /// Numbers printed in the dissertation (basis `published`, a numeric target), reproduced
+    /// (in tolerance) with each row's own inputs, and per class.
+    pub published: Tally,
+    pub published_by_class: Vec<(Class, Tally)>,
+    /// Targets computed from published numbers (basis `derived`).
+    pub derived: Tally,
+    /// Rows that recover an input hdi was built from (class C): they must hold.
+    pub by_construction: Tally,
+    /// Class-D rows in tolerance with the row's own inputs (default inputs, synthetic DMW).
+    pub d_default: Tally,
+    /// The same D rows on the synthetic DMW record shipped in `raw/`, uncalibrated.
+    pub d_record: Tally,
+    /// D rows after calibration whose target the fit did not see (held out).
+    pub d_calibrated_held_out: Tally,
+    /// D rows after calibration whose target was in the fit's objective (fits, not
+    /// reproductions).
+    pub d_calibrated_fitted: Tally,
+    /// Q orderings that hold.
+    pub q: Tally,
+    /// Rows whose builder stated no basis (a defect the tests refuse).
+    pub unstated: usize,
+}
+
+/// The ledger of `rows` ([`Ledger`]).
+pub fn ledger<'a>(rows: impl IntoIterator<Item = &'a Row>) -> Ledger {
+    let mut l = Ledger::default();
+    let mut by_class: Vec<(Class, Tally)> = Vec::new();
+    for r in rows {
+        let pass = r.pass();
+        match &r.basis {
+            Basis::Published { .. } if r.ordering.is_none() => {
+                l.published.add(r, pass);
+                match by_class.iter_mut().find(|(c, _)| *c == r.class) {
+                    Some((_, t)) => t.add(r, pass),
+                    None => {
+                        let mut t = Tally::default();
+                        t.add(r, pass);
+                        by_class.push((r.class, t));
+                    }
+                }
+            }
+            Basis::Derived { .. } if r.ordering.is_none() => l.derived.add(r, pass),
+            Basis::ByConstruction { .. } => l.by_construction.add(r, pass),
+            Basis::Unstated => l.unstated += 1,
+            _ => {}
+        }
+        if r.class == Class::D {
+            l.d_default.add(r, pass);
+            if let Some(c) = &r.record {
+                l.d_record.add(r, r.tolerance.holds(r.target, c.value));
+            }
+            if let Some(c) = &r.calibrated {
+                let t = if r.fitted {
+                    &mut l.d_calibrated_fitted
+                } else {
+                    &mut l.d_calibrated_held_out
+                };
+                t.add(r, r.tolerance.holds(r.target, c.value));
+            }
+        }
+        if r.class == Class::Q {
+            l.q.add(r, pass);
+        }
+    }
+    by_class.sort_by_key(|(c, _)| *c);
+    l.published_by_class = by_class;
+    l
+}
+
+impl Ledger {
+    /// The summary lines, leading with the published numbers reproduced.
+    pub fn lines(&self) -> Vec<String> {
+        let per_class = self
+            .published_by_class
+            .iter()
+            .map(|(c, t)| format!("{} {}", c.label(), t.short()))
+            .collect::<Vec<_>>()
+            .join(", ");
+        let mut out = vec![format!(
+            "published numbers: {} reproduced of {}{} ({per_class})",
+            self.published.pass,
+            self.published.rows,
+            if self.published.not_run > 0 {
+                format!(", {} not run", self.published.not_run)
+            } else {
+                String::new()
+            }
+        )];
+        let mut d = format!("D in band: {} with default inputs", self.d_default.short());
+        if self.d_record.rows > 0 {
+            d.push_str(&format!(
+                "; {} on the synthetic DMW record, uncalibrated",
+                self.d_record.short()
+            ));
+        }
+        if self.d_calibrated_held_out.rows + self.d_calibrated_fitted.rows > 0 {
+            d.push_str(&format!(
+                "; calibrated: {} held out, {} fitted (fits, not reproductions)",
+                self.d_calibrated_held_out.short(),
+                self.d_calibrated_fitted.short()
+            ));
+        }
+        out.push(d);
+        out.push(format!("Q orderings: {} hold", self.q.short()));
+        out.push(format!(
+            "derived targets: {} in tolerance; consistency checks (by construction): {} hold",
+            self.derived.short(),
+            self.by_construction.short()
+        ));
+        if self.unstated > 0 {
+            out.push(format!("{} row(s) state no basis", self.unstated));
+        }
+        out
+    }
+
+    pub fn to_json(&self) -> Value {
+        json!({
+            "published": self.published.to_json(),
+            "published_by_class": self.published_by_class.iter()
+                .map(|(c, t)| (c.label().to_string(), t.to_json()))
+                .collect::<serde_json::Map<String, Value>>(),
+            "derived": self.derived.to_json(),
+            "by_construction": self.by_construction.to_json(),
+            "d_in_band": {
+                "default_inputs": self.d_default.to_json(),
+                "synthetic_record": self.d_record.to_json(),
+                "calibrated_held_out": self.d_calibrated_held_out.to_json(),
+                "calibrated_fitted": self.d_calibrated_fitted.to_json(),
+            },
+            "q_orderings": self.q.to_json(),
+            "unstated": self.unstated,
+        })
+    }
 }
 
 /// Rows and passes per class, in [`Class::ALL`] order (classes without rows left out).
@@ -908,6 +1131,41 @@ mod tests {
                 "no row for {id}"
             );
         }
+    }
+
+    #[test]
+    fn the_ledger_counts_published_numbers_apart_from_derived_and_built_ones() {
+        let published = |v: f64| row(1.0, v, Tolerance::Absolute(0.1)).published("dissertation §1");
+        let rows = vec![
+            published(1.0),
+            published(2.0).class(Class::D).record(Some(Calibrated {
+                value: 1.05,
+                inputs: String::new(),
+                origin: Origin::Computed,
+            })),
+            published(1.0).class(Class::K).not_run("a result"),
+            row(1.0, 1.0, Tolerance::Absolute(0.1)).derived("closed form"),
+            row(1.0, 1.0, Tolerance::Absolute(0.1)).by_construction("an input"),
+            row(1.0, 1.0, Tolerance::Absolute(0.1)),
+        ];
+        let l = ledger(&rows);
+        assert_eq!(
+            (l.published.rows, l.published.pass, l.published.not_run),
+            (3, 1, 1)
+        );
+        assert_eq!((l.derived.rows, l.derived.pass), (1, 1));
+        assert_eq!((l.by_construction.rows, l.by_construction.pass), (1, 1));
+        assert_eq!(rows[4].class, Class::C);
+        assert_eq!((l.d_default.pass, l.d_record.pass), (0, 1));
+        assert_eq!(l.unstated, 1);
+        assert!(l.lines()[0].starts_with("published numbers: 1 reproduced of 3, 1 not run"));
+        // A row that has not run neither passes nor gates, even in a gating class.
+        assert_eq!(rows[2].status(), "not_run");
+        assert_eq!(rows[2].verdict(), "not run");
+        assert!(gate(&rows, &[Class::K]).is_empty());
+        let j = rows[2].to_json();
+        assert_eq!(j["status"], "not_run");
+        assert_eq!(j["basis"]["kind"], "published");
     }
 
     #[test]

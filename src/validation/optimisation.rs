@@ -33,10 +33,8 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
                     f64::NAN,
                     Tolerance::Absolute(0.5),
                 )
-                .variant("not run")
-                .note(&format!(
-                    "no current result: run `hdi run --only {name}` first"
-                )),
+                .published("dissertation §2.3.2")
+                .not_run(&format!("a current result of [doe.{name}]")),
             );
             continue;
         };
@@ -67,10 +65,10 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
                     o[key].as_f64().unwrap_or(f64::NAN) / UM,
                     Tolerance::Absolute(0.5),
                 )
-                .reference("dissertation §2.3.2")
+                .published("dissertation §2.3.2")
                 .variant(&variant)
                 .inputs(&format!(
-                    "the DOE's base sweep `{}` (shipped DMW record), no calibration",
+                    "the DOE's base sweep `{}` (the pipeline's DMW record), no calibration",
                     cfg.simulate
                 ))
                 .origin(Origin::Cache {

@@ -13,6 +13,8 @@ use std::path::{Path, PathBuf};
 pub struct Cache {
     store: Store,
     plan: Plan,
+    /// The project directory (the pipeline file's), against which input paths resolve.
+    root: PathBuf,
 }
 
 /// One current stage result.
@@ -29,7 +31,11 @@ impl Cache {
         let stages = crate::stages::build(&file)?;
         let store = Store::open_existing(&file.processed_dir());
         let plan = plan(stages, &store, &Default::default())?;
-        Ok(Cache { store, plan })
+        let root = config
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+        Ok(Cache { store, plan, root })
     }
 
     /// The pipeline's store (its case store holds `hdi validate`'s computed 2-DOF cases).
@@ -55,6 +61,69 @@ impl Cache {
             },
         })
     }
+}
+
+impl Cache {
+    /// How the ledger names the DMW record under the instance `name` (a `[dmw.*]` instance, or
+    /// one downstream of it): `synthetic DMW record \`disk_md\`` when its file sits beside a
+    /// `samples.json` written by `hdi synth` (raw/ldv/README.md), `measured DMW record …`
+    /// otherwise; `None` if no current `[dmw]` instance is upstream.
+    pub fn record_label(&self, name: &str) -> Option<String> {
+        let mut todo = vec![name.to_string()];
+        let mut seen = std::collections::BTreeSet::new();
+        while let Some(n) = todo.pop() {
+            if !seen.insert(n.clone()) {
+                continue;
+            }
+            let p = self
+                .plan
+                .planned
+                .iter()
+                .find(|p| p.name == n && p.state == State::Fresh)?;
+            let dir = self.store.entry_dir(&p.kind, &p.key);
+            if p.kind == "dmw" {
+                let file = read_result(&dir).ok()?["file"].as_str()?.to_string();
+                return Some(format!(
+                    "{} DMW record `{n}`",
+                    if synthesised(&self.root.join(file)) {
+                        "synthetic"
+                    } else {
+                        "measured"
+                    }
+                ));
+            }
+            let manifest: Value =
+                serde_json::from_slice(&std::fs::read(dir.join("manifest.json")).ok()?).ok()?;
+            for u in manifest["fingerprint"]["upstream"].as_array()? {
+                if let Some(u) = u["name"].as_str() {
+                    todo.push(u.to_string());
+                }
+            }
+        }
+        None
+    }
+}
+
+/// Whether `file` was written by `hdi synth`: its folder's `samples.json` names it and that
+/// generator.
+fn synthesised(file: &Path) -> bool {
+    let Some(samples) = file.parent().map(|d| d.join("samples.json")) else {
+        return false;
+    };
+    let Ok(text) = std::fs::read(samples) else {
+        return false;
+    };
+    let Ok(v) = serde_json::from_slice::<Value>(&text) else {
+        return false;
+    };
+    let named = file
+        .file_name()
+        .and_then(|f| f.to_str())
+        .is_some_and(|f| v["file"].as_str() == Some(f));
+    named
+        && v["generator"]
+            .as_str()
+            .is_some_and(|g| g.starts_with("hdi synth"))
 }
 
 /// The cache of `config`, if it exists and plans.
