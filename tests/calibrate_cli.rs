@@ -115,7 +115,24 @@ fn calibrated_numbers_match_an_independent_sweep_and_the_counts_match_the_table(
             })
             .count() as u64
     };
-    for (set, key) in [("fitted", "fitted"), ("held_out", "held_out")] {
+    // The held-out targets are the selection set (the dissertation geometry) and the final
+    // set (the optimised design); `held_out` counts both.
+    assert!(table
+        .iter()
+        .all(|t| ["fitted", "selection", "final"].contains(&t["set"].as_str())));
+    for key in ["targets", "defaults", "calibrated"] {
+        assert_eq!(
+            r["in_band"]["held_out"][key].as_u64().unwrap(),
+            r["in_band"]["selection"][key].as_u64().unwrap()
+                + r["in_band"]["final"][key].as_u64().unwrap(),
+            "{key}"
+        );
+    }
+    for (set, key) in [
+        ("fitted", "fitted"),
+        ("selection", "selection"),
+        ("final", "final"),
+    ] {
         let n = table.iter().filter(|t| t["set"] == set).count() as u64;
         assert_eq!(r["in_band"][key]["targets"], n, "{set}");
         assert_eq!(

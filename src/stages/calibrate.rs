@@ -12,7 +12,7 @@ use crate::core::executor::CaseSpec;
 use crate::dynamics::calibration::{
     apply_knobs, calibrate, default_knobs, held_out_for, in_band, targets_for, CalibrationResult,
     CalibrationSettings, CaseRound, CaseRounds, Evaluation, Knob, KnobRange, TargetGeometry,
-    TargetOutcome, DEFAULT_MAX_EVALUATIONS,
+    TargetOutcome, TargetSet, DEFAULT_MAX_EVALUATIONS,
 };
 use crate::dynamics::metrics::CaseMetrics;
 use crate::dynamics::DynamicsError;
@@ -24,8 +24,13 @@ use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
 
+// calibrate-6: the held-out set split into selection and final (outputs only; the fit is
+// calibrate-5's, FIT_VERSION).
+pub const MODEL_VERSION: &str = "calibrate-6";
+/// What the fit computes (objective, search, cases): the fit-inputs fingerprint and the case
+/// keys carry it, so an output-only change of the stage keeps its fits and warm start.
 // calibrate-5: key params as plain JSON (settings, base model), not Rust Debug strings.
-pub const MODEL_VERSION: &str = "calibrate-5";
+const FIT_VERSION: &str = "calibrate-5";
 
 /// Hex digits of the fit-inputs fingerprint written to `result.json` (64 bits of blake3).
 pub const FIT_INPUTS_DIGITS: usize = 16;
@@ -147,7 +152,7 @@ impl CalibrateStage {
             .collect();
         let mut h = crate::core::hash::hash_json(&json!({
             "fingerprint": "calibrate-fit-inputs-1",
-            "model_version": MODEL_VERSION,
+            "model_version": FIT_VERSION,
             "case_model_version": crate::slider::case::MODEL_VERSION,
             "base_parameters": base,
             "upstream": upstream,
@@ -646,6 +651,14 @@ impl StageKind for CalibrateStage {
             "held_out_in_band_calibrated".into(),
             json!(counts.held_out.1),
         );
+        for (name, (d, c), total) in [
+            ("selection", counts.selection, counts.selection_total),
+            ("final", counts.final_set, counts.final_total),
+        ] {
+            row.insert(format!("{name}_targets"), json!(total));
+            row.insert(format!("{name}_in_band_defaults"), json!(d));
+            row.insert(format!("{name}_in_band_calibrated"), json!(c));
+        }
         row.insert("converged".into(), json!(result.converged));
         row.insert("evaluations".into(), json!(result.evaluations));
         row.insert("cases".into(), json!(result.cases));
@@ -670,6 +683,8 @@ impl StageKind for CalibrateStage {
                 "in_band": {
                     "fitted": {"targets": counts.fitted_total, "defaults": counts.fitted.0, "calibrated": counts.fitted.1},
                     "held_out": {"targets": counts.held_out_total, "defaults": counts.held_out.0, "calibrated": counts.held_out.1},
+                    "selection": {"targets": counts.selection_total, "defaults": counts.selection.0, "calibrated": counts.selection.1},
+                    "final": {"targets": counts.final_total, "defaults": counts.final_set.0, "calibrated": counts.final_set.1},
                 },
                 "converged": result.converged,
                 "convergence": {
@@ -712,12 +727,17 @@ impl StageKind for CalibrateStage {
     }
 }
 
-/// In-band counts `(spec defaults, calibrated)` of the fitted and the held-out sets.
+/// In-band counts `(spec defaults, calibrated)` of the fitted and the held-out sets, and of the
+/// held-out set's selection and final parts.
 struct InBandCounts {
     fitted: (usize, usize),
     fitted_total: usize,
     held_out: (usize, usize),
     held_out_total: usize,
+    selection: (usize, usize),
+    selection_total: usize,
+    final_set: (usize, usize),
+    final_total: usize,
 }
 
 impl InBandCounts {
@@ -726,11 +746,26 @@ impl InBandCounts {
         let (f1, _) = in_band(&r.best);
         let (h0, ht) = r.held_out_initial.as_ref().map_or((0, 0), in_band);
         let (h1, _) = r.held_out_best.as_ref().map_or((0, 0), in_band);
+        // In band / total of the held-out targets of one set.
+        let part = |e: &Option<Evaluation>, set: TargetSet| {
+            e.as_ref().map_or((0, 0), |e| {
+                let of: Vec<_> = e.outcomes.iter().filter(|o| o.target.set == set).collect();
+                (of.iter().filter(|o| o.within_tolerance()).count(), of.len())
+            })
+        };
+        let (s0, st) = part(&r.held_out_initial, TargetSet::Selection);
+        let (s1, _) = part(&r.held_out_best, TargetSet::Selection);
+        let (x0, xt) = part(&r.held_out_initial, TargetSet::Final);
+        let (x1, _) = part(&r.held_out_best, TargetSet::Final);
         InBandCounts {
             fitted: (f0, f1),
             fitted_total: ft,
             held_out: (h0, h1),
             held_out_total: ht,
+            selection: (s0, s1),
+            selection_total: st,
+            final_set: (x0, x1),
+            final_total: xt,
         }
     }
 }
@@ -751,7 +786,7 @@ fn summary_text(
     }
     let _ = writeln!(
         s,
-        "{}: fitted set {}/{} → {}/{} in band, held-out set {}/{} → {}/{}; objective {:.3} → {:.3}; {} after {} evaluations ({} cases)",
+        "{}: fitted set {}/{} → {}/{} in band, held-out set {}/{} → {}/{} (selection {}/{} → {}/{}, final {}/{} → {}/{}); objective {:.3} → {:.3}; {} after {} evaluations ({} cases)",
         stage.name,
         c.fitted.0,
         c.fitted_total,
@@ -761,6 +796,14 @@ fn summary_text(
         c.held_out_total,
         c.held_out.1,
         c.held_out_total,
+        c.selection.0,
+        c.selection_total,
+        c.selection.1,
+        c.selection_total,
+        c.final_set.0,
+        c.final_total,
+        c.final_set.1,
+        c.final_total,
         r.initial.objective,
         r.best.objective,
         if r.converged {
@@ -896,7 +939,7 @@ impl CalibrateStage {
             .map(|n| json!({"name": n, "key": upstream_key(n)}))
             .collect();
         json!({
-            "model_version": MODEL_VERSION,
+            "model_version": FIT_VERSION,
             "case_model_version": crate::slider::case::MODEL_VERSION,
             "base_parameters": base,
             "upstream": upstream,

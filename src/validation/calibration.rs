@@ -55,7 +55,9 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
                 )
                 .variant("not run")
                 .by_construction("the fit's own record")
-                .not_run(&format!("a current result of [calibrate.{name}]")),
+                .not_run(&format!(
+                    "a current result of [calibrate.{name}]: `hdi run --only {name}`"
+                )),
             );
             continue;
         }

@@ -21,6 +21,7 @@ use crate::core::cache::Store;
 use crate::core::cases::{get_or_compute, CaseError};
 use crate::dmw::excitation_tracks::{quadratic_chirp, synthetic_dmw, Excitation};
 use crate::dynamics::air_bearing::heave_pitch_modes;
+use crate::dynamics::calibration::TargetSet;
 use crate::dynamics::metrics::{
     optimum_operating_point, slopes, CaseParams, Regime, SlopeAnalysis, SlopeParams, SweepPoint,
 };
@@ -739,8 +740,8 @@ fn ledger(rows: &mut Vec<Row>, fitted: &[&str]) {
         if r.id == "dyn-26.clearance" {
             r.class = Class::K;
         }
-        if r.class == Class::D {
-            r.fitted = fitted.contains(&r.id.as_str());
+        if r.class == Class::D && fitted.contains(&r.id.as_str()) {
+            r.calibration_set = Some(TargetSet::Fitted);
         }
         if r.basis == Basis::Unstated {
             r.basis = basis_of(&r.id, &r.reference);
@@ -1467,14 +1468,30 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
         record: rec_improved.as_ref(),
         calibrated: cal_improved.as_ref(),
     };
-    rows.extend(improved_rows(&s_improved, improved_cached, &mut fhm86));
+    // The dissertation geometry's held-out rows are the selection set, the optimised design's
+    // the final set (docs/calibration.md); `ledger` marks the fitted ones.
+    let set_of = |mut rows: Vec<Row>, set: TargetSet| {
+        for r in &mut rows {
+            if r.calibrated.is_some() {
+                r.calibration_set = Some(set);
+            }
+        }
+        rows
+    };
+    rows.extend(set_of(
+        improved_rows(&s_improved, improved_cached, &mut fhm86),
+        TargetSet::Selection,
+    ));
     rows.extend(initial_rows(&s_initial));
     if let Some(s) = s_optimised {
         let optimised_cached = CachedSweeps {
             record: rec_optimised.as_ref(),
             calibrated: cal_optimised.as_ref(),
         };
-        rows.extend(optimised_rows(&s, optimised_cached, fhm86));
+        rows.extend(set_of(
+            optimised_rows(&s, optimised_cached, fhm86),
+            TargetSet::Final,
+        ));
     }
     rows.extend(app_b_rows(cache.as_ref()));
     let fitted = cache
@@ -1578,7 +1595,7 @@ mod tests {
                 assert_eq!(r.class, Class::C, "{}", r.id);
             }
             assert_eq!(
-                r.fitted,
+                r.calibration_set == Some(TargetSet::Fitted),
                 r.id == "dyn-16" || r.id == "dyn-24.force",
                 "{}",
                 r.id

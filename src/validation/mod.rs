@@ -10,6 +10,7 @@
 //! the physics modules (and, for the pipeline areas, the pipeline's current results); no
 //! physics module imports this one.
 
+use crate::dynamics::calibration::TargetSet;
 use crate::error::{Error, Result};
 use serde_json::{json, Value};
 use std::path::Path;
@@ -379,9 +380,11 @@ pub struct Row {
     /// Set when the row's input has not been computed yet (a pipeline result it reads): what
     /// it needs. Such a row is `not run`: neither a pass nor a failure, and never gates.
     pub needs: Option<String>,
-    /// D rows: the target was in the objective of the calibration whose knobs give the
-    /// `calibrated` value, so that value is a fit, not a reproduction (docs/calibration.md).
-    pub fitted: bool,
+    /// D rows with a `calibrated` value: the calibration's set the target belongs to —
+    /// `Fitted` (in the fit's objective: the calibrated value is a fit, not a reproduction),
+    /// `Selection` (held out; model-form switches are chosen on it) or `Final` (held out from
+    /// the fit and from every choice; docs/calibration.md).
+    pub calibration_set: Option<TargetSet>,
 }
 
 /// A row as the cells of a table ([`Row::cells`]).
@@ -435,7 +438,7 @@ impl Row {
             basis: Basis::Unstated,
             variants: Vec::new(),
             needs: None,
-            fitted: false,
+            calibration_set: None,
         }
     }
 
@@ -504,9 +507,9 @@ impl Row {
         self.note = format!("not run: needs {what} (run `hdi run` first)");
         self
     }
-    /// D rows: the calibrated value comes from a fit whose objective contains this target.
-    pub fn fitted(mut self, fitted: bool) -> Row {
-        self.fitted = fitted;
+    /// D rows: the calibration set of the target behind the calibrated value.
+    pub fn calibration_set(mut self, set: Option<TargetSet>) -> Row {
+        self.calibration_set = set;
         self
     }
     /// The row's value under another variant (`variant`: the switches as `key = value`).
@@ -618,7 +621,8 @@ impl Row {
                 format!("{}{mark}{suffix}", num(c.value))
             })
         };
-        let calibrated = alternative(&self.calibrated, if self.fitted { " (fit)" } else { "" });
+        let fitted = self.calibration_set == Some(TargetSet::Fitted);
+        let calibrated = alternative(&self.calibrated, if fitted { " (fit)" } else { "" });
         let record = alternative(&self.record, "");
         let mut notes = vec![self.origin.short()];
         if !self.variant.is_empty() {
@@ -669,7 +673,7 @@ impl Row {
             "pass": self.pass(),
             "status": self.status(),
             "needs": self.needs,
-            "fitted": self.fitted,
+            "calibration_set": self.calibration_set.map(TargetSet::name),
             "uncalibrated_record": self.record.as_ref().map(alternative),
             "calibrated": self.calibrated.as_ref().map(alternative),
             "variant": self.variant,
@@ -875,8 +879,10 @@ pub struct Ledger {
     pub d_default: Tally,
     /// The same D rows on the synthetic DMW record shipped in `raw/`, uncalibrated.
     pub d_record: Tally,
-    /// D rows after calibration whose target the fit did not see (held out).
-    pub d_calibrated_held_out: Tally,
+    /// D rows after calibration whose target the fit did not see: the selection set (switches
+    /// are chosen on it) and the final set (never tuned on).
+    pub d_calibrated_selection: Tally,
+    pub d_calibrated_final: Tally,
     /// D rows after calibration whose target was in the fit's objective (fits, not
     /// reproductions).
     pub d_calibrated_fitted: Tally,
@@ -914,11 +920,11 @@ pub fn ledger<'a>(rows: impl IntoIterator<Item = &'a Row>) -> Ledger {
             if let Some(c) = &r.record {
                 l.d_record.add(r, r.tolerance.holds(r.target, c.value));
             }
-            if let Some(c) = &r.calibrated {
-                let t = if r.fitted {
-                    &mut l.d_calibrated_fitted
-                } else {
-                    &mut l.d_calibrated_held_out
+            if let (Some(c), Some(set)) = (&r.calibrated, r.calibration_set) {
+                let t = match set {
+                    TargetSet::Fitted => &mut l.d_calibrated_fitted,
+                    TargetSet::Selection => &mut l.d_calibrated_selection,
+                    TargetSet::Final => &mut l.d_calibrated_final,
                 };
                 t.add(r, r.tolerance.holds(r.target, c.value));
             }
@@ -958,11 +964,22 @@ impl Ledger {
                 self.d_record.short()
             ));
         }
-        if self.d_calibrated_held_out.rows + self.d_calibrated_fitted.rows > 0 {
+        let calibrated = [
+            ("selection set", &self.d_calibrated_selection),
+            ("final set", &self.d_calibrated_final),
+            (
+                "fitted (fits, not reproductions)",
+                &self.d_calibrated_fitted,
+            ),
+        ];
+        if calibrated.iter().any(|(_, t)| t.rows > 0) {
             d.push_str(&format!(
-                "; calibrated: {} held out, {} fitted (fits, not reproductions)",
-                self.d_calibrated_held_out.short(),
-                self.d_calibrated_fitted.short()
+                "; calibrated: {}",
+                calibrated
+                    .iter()
+                    .map(|(name, t)| format!("{} {name}", t.short()))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ));
         }
         out.push(d);
@@ -989,7 +1006,8 @@ impl Ledger {
             "d_in_band": {
                 "default_inputs": self.d_default.to_json(),
                 "synthetic_record": self.d_record.to_json(),
-                "calibrated_held_out": self.d_calibrated_held_out.to_json(),
+                "calibrated_selection": self.d_calibrated_selection.to_json(),
+                "calibrated_final": self.d_calibrated_final.to_json(),
                 "calibrated_fitted": self.d_calibrated_fitted.to_json(),
             },
             "q_orderings": self.q.to_json(),

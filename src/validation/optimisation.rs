@@ -34,7 +34,9 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
                     Tolerance::Absolute(0.5),
                 )
                 .published("dissertation §2.3.2")
-                .not_run(&format!("a current result of [doe.{name}]")),
+                .not_run(&format!(
+                    "a current result of [doe.{name}]: `hdi run --only {name}`"
+                )),
             );
             continue;
         };
