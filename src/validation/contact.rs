@@ -470,8 +470,8 @@ fn sphere_rows() -> Vec<Row> {
                         }
                         _ => {
                             "adhesion-augmented load with Δγ = 0.06 N/m, ε = 0.3 nm (Ch. 2's; \
-                             Ch. 3.1 names none): without adhesion the law gives the seed \
-                             power law's values (by construction)"
+                             Ch. 3.1 names none): without adhesion the law gives the values \
+                             of the Ch. 3.1 power law it is built on (by construction)"
                         }
                     };
                     friction =
