@@ -92,9 +92,9 @@ pub fn seed_power_friction_ratio(omega_star: f64) -> f64 {
 /// elastic-plastic sphere; used by KE 2004, J. Tribol. 126:34, whose rough-surface sum is
 /// eq. A.6) could not be recovered: eq. A.6's exponents and coefficients were lost in the
 /// extraction of the dissertation, and the stored copies of the papers give their abstracts
-/// (and KE 2004's first page) only. What is known: KE 2003 give `Q_max` of one sphere as a function of its normal
-/// load through "an internal static friction coefficient" that falls with the load (their
-/// abstract), and the dissertation prints two single-sphere values of the model it used
+/// (and KE 2004's first page) only. What is known: KE 2003 give `Q_max` of one sphere as a
+/// function of its normal load through "an internal static friction coefficient" that falls
+/// with the load (their abstract), and the dissertation prints two single-sphere values of the model it used
 /// (Ch. 3.1: 120 µN at ω = 0.1 nm and 1120 µN at 1 nm for R = 102 µm, E = 180 GPa, ν = 0.24,
 /// H = 18 GPa, no adhesion input named). A power law in the Hertz load through those two
 /// points is `Q_max/L_c = 0.4155·(P/L_c)^(0.970/1.5)` — the same curve as
