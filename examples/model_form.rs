@@ -1,18 +1,20 @@
 //! The model-form experiments of docs/model-form.md: one variant of the 2-DOF improved model's
-//! interface (contact-force reading, lubricant force, ISBL summit offset, surface energy) →
+//! interface (contact-force reading, lubricant force, ISBL summit offset, surface energy,
+//! static friction law) →
 //! the structural misses it attacks and the held-out set it is judged on.
 //!
 //! ```text
 //! cargo run --release --example model_form -- [contact_force=interference_tangent|static_curve|integrated_stiffness]
 //!     [lubricant=none|mtl] [summit_offset=none|mccool] [surface_energy=constant|variable]
-//!     [dmw_seed=1] [model=initial_2dof]
+//!     [friction_law=junction_shear|seed_power_elastic|ke_static] [dmw_seed=1]
+//!     [model=initial_2dof]
 //! ```
 //!
 //! Every case starts from its static equilibrium (`init = "static"`) and sees the validation's
 //! synthetic DMW (σ 1 nm, seed 1) unless stated; the no-DMW numbers are the steady states the
 //! calibration notes quote (docs/calibration.md).
 
-use hdi::contact::isbl::{IsblModel, IsblParams, SummitOffset, SurfaceEnergy};
+use hdi::contact::isbl::{FrictionLaw, IsblModel, IsblParams, SummitOffset, SurfaceEnergy};
 use hdi::contact::lookup::IsblLookup;
 use hdi::dmw::excitation_tracks::{synthetic_dmw, Excitation};
 use hdi::dynamics::metrics::{slopes, CaseParams, SlopeParams, SweepPoint};
@@ -31,6 +33,20 @@ struct Outcome {
     contact_force: f64,
     lubricant_force: f64,
     adhesion: f64,
+    friction: f64,
+    real_area: f64,
+    nominal_area: f64,
+}
+
+impl Outcome {
+    /// `Q̄/F̄_c` and `Q̄/Ā_r` (GPa), the ratios of means of `hdi validate`.
+    fn mu_tau(&self) -> (f64, f64) {
+        let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::NAN };
+        (
+            ratio(self.friction, self.contact_force),
+            ratio(self.friction, self.real_area) * 1e-9,
+        )
+    }
 }
 
 fn run(
@@ -72,6 +88,9 @@ fn run(
         contact_force: mean(&hist.contact_force),
         lubricant_force: mean(&hist.lubricant_force),
         adhesion: mean(&hist.adhesion),
+        friction: mean(&hist.friction),
+        real_area: mean(&hist.real_area),
+        nominal_area: hist.nominal_area,
     })
 }
 
@@ -122,6 +141,19 @@ fn touchdown(
         .map_or(f64::NAN, |h| h / NM)
 }
 
+/// The friction the table gives at the slider's mean adhesion-augmented load `F̄_c + F̄_s`
+/// (Ch. 4: "the net vertical force … determines the value of the maximum friction force"),
+/// evaluated once at the steady state (the dynamics read Q at `F_c` alone): `(Q, μ = Q/F̄_c,
+/// τ = Q/Ā_r in GPa)`. A reading of the text, not a switch of the dynamics.
+fn slider_level_augmented(isbl: &IsblLookup, m: &Outcome) -> (f64, f64, f64) {
+    let a = m.nominal_area;
+    let q = isbl
+        .separation_for_pressure((m.contact_force + m.adhesion) / a)
+        .and_then(|h| isbl.at(h).ok())
+        .map_or(f64::NAN, |f| f.friction * a);
+    (q, q / m.contact_force, q / m.real_area * 1e-9)
+}
+
 fn band(name: &str, value: f64, target: f64, lo: f64, hi: f64) -> bool {
     let ok = value >= lo && value <= hi;
     println!(
@@ -159,6 +191,11 @@ fn main() {
             ("summit_offset", "mccool") => ip.summit_offset = SummitOffset::McCool,
             ("surface_energy", "constant") => {}
             ("surface_energy", "variable") => ip.surface_energy = SurfaceEnergy::seed_variable(),
+            ("friction_law", "junction_shear") => ip.friction_law = FrictionLaw::JunctionShear,
+            ("friction_law", "seed_power_elastic") => {
+                ip.friction_law = FrictionLaw::SeedPowerElastic
+            }
+            ("friction_law", "ke_static") => ip.friction_law = FrictionLaw::KeStatic,
             ("dmw_seed", s) => seed = s.parse().expect("dmw_seed=N"),
             ("model", "initial_2dof") => initial = true,
             _ => panic!("unknown {arg}"),
@@ -169,6 +206,7 @@ fn main() {
         // §12.2 #9: the initial model's mean FHM at 4–7 nm (its own interface, 1.2σ criterion).
         let mut ip0 = IsblParams::initial_2dof();
         ip0.summit_offset = ip.summit_offset;
+        ip0.friction_law = ip.friction_law;
         ip0.surface_energy = match ip.surface_energy {
             SurfaceEnergy::Variable { .. } => ip.surface_energy,
             SurfaceEnergy::Constant { .. } => ip0.surface_energy,
@@ -190,6 +228,24 @@ fn main() {
             "  initial model mean FHM 4–7 nm: {:.2} % (published 12.5)",
             sum / 4.0
         );
+        if let Some(m) = run(&model, &isbl0, options, 11.0 * NM, Some(&dmw)) {
+            let (mu, tau) = m.mu_tau();
+            println!(
+                "  initial model 11 nm: F_c {:.3} mN, Q {:.3} mN, μ {mu:.3} (published 1.2), \
+                 τ {:.0} MPa (published 438), A_r {:.3} μm²",
+                m.contact_force * 1e3,
+                m.friction * 1e3,
+                tau * 1e3,
+                m.real_area * 1e12
+            );
+            let (q, mu, tau) = slider_level_augmented(&isbl0, &m);
+            println!(
+                "    Q read at F̄_c + F̄_s (slider level, static): Q {:.3} mN, μ {mu:.3}, \
+                 τ {:.0} MPa",
+                q * 1e3,
+                tau * 1e3
+            );
+        }
         return;
     }
     let isbl = IsblLookup::build_standard(IsblModel::new(ip).expect("ISBL")).expect("table");
@@ -199,12 +255,20 @@ fn main() {
     println!("structural misses (no DMW, static init):");
     let none = |h: f64| run(&model, &isbl, options, h * NM, None);
     if let Some(m) = none(12.0) {
+        let (mu, tau) = m.mu_tau();
         println!(
-            "  12 nm: interference {:.3} nm, F_c {:.3} mN, P_lub {:.3} mN, F_s {:.3} mN",
+            "  12 nm: interference {:.3} nm, F_c {:.3} mN, P_lub {:.3} mN, F_s {:.3} mN, \
+             Q {:.3} mN, μ {mu:.3}, τ {tau:.3} GPa",
             -m.clearance / NM,
             m.contact_force * 1e3,
             m.lubricant_force * 1e3,
-            m.adhesion * 1e3
+            m.adhesion * 1e3,
+            m.friction * 1e3
+        );
+        let (q, mu, tau) = slider_level_augmented(&isbl, &m);
+        println!(
+            "    Q read at F̄_c + F̄_s (slider level, static): Q {:.3} mN, μ {mu:.3}, τ {tau:.3} GPa",
+            q * 1e3
         );
     }
     if let Some(m) = none(9.5) {
@@ -217,12 +281,16 @@ fn main() {
     println!("structural misses (synthetic DMW σ 1 nm, static init):");
     for h in [9.5, 12.0] {
         if let Some(m) = run(&model, &isbl, options, h * NM, Some(&dmw)) {
+            let (mu, tau) = m.mu_tau();
             println!(
-                "  {h} nm: c̄ {:.3} nm, FHM/BV {:.2} %, F_c {:.3} mN, P_lub {:.3} mN",
+                "  {h} nm: c̄ {:.3} nm, FHM/BV {:.2} %, F_c {:.3} mN, P_lub {:.3} mN, \
+                 Q {:.3} mN, μ {mu:.3}, τ {tau:.3} GPa, A_r {:.3} μm²",
                 m.clearance / NM,
                 m.vibration,
                 m.contact_force * 1e3,
-                m.lubricant_force * 1e3
+                m.lubricant_force * 1e3,
+                m.friction * 1e3,
+                m.real_area * 1e12
             );
         }
     }

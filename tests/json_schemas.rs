@@ -186,6 +186,14 @@ fn contact_json_matches_its_schema() {
     let v: Value = serde_json::from_str(&mtl).unwrap();
     assert_eq!(v["inputs"]["summit_offset"], "mccool");
     assert!(v["mtl"]["curves"].as_array().is_some_and(|c| !c.is_empty()));
+    let ke = json_of(
+        dir.path(),
+        &["contact", "--friction-law", "ke_static", "--json"],
+        true,
+    );
+    assert_matches_schema("contact", &ke);
+    let v: Value = serde_json::from_str(&ke).unwrap();
+    assert_eq!(v["inputs"]["friction_law"], "ke_static");
 }
 
 #[test]

@@ -405,7 +405,7 @@ pub struct ContactArgs {
     /// none (default) or mccool.
     #[arg(long)]
     pub summit_offset: Option<String>,
-    /// junction_shear (default) or seed_power_elastic.
+    /// junction_shear (default), seed_power_elastic or ke_static (docs/contact.md, "Friction").
     #[arg(long)]
     pub friction_law: Option<String>,
     #[arg(long, allow_hyphen_values = true)]
@@ -462,6 +462,10 @@ pub struct SimulateArgs {
     pub eta: Option<PerArea>,
     #[arg(long, allow_hyphen_values = true)]
     pub hardness: Option<Pressure>,
+    /// Static friction law of the interface: junction_shear (default), seed_power_elastic or
+    /// ke_static (the `[contact] friction_law` key; docs/contact.md, "Friction").
+    #[arg(long)]
+    pub friction_law: Option<String>,
     /// One or more actuations, e.g. "8.5 nm" "12 nm"; otherwise the sweep below.
     #[arg(long, num_args = 1..)]
     pub actuation: Vec<Length>,

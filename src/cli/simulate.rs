@@ -62,6 +62,9 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     interface.r = a.r;
     interface.eta = a.eta;
     interface.hardness = a.hardness;
+    if let Some(law) = &a.friction_law {
+        interface.friction_law = law.clone();
+    }
     let isbl_params = contact::check(&interface)
         .map_err(|e| {
             let flag = if e.key == "parameter_set" {

@@ -1,8 +1,28 @@
 //! `hdi validate` rows of the ISBL contact model (docs/contact.md): computed now with the
 //! same model the contact stage and the dynamics use.
 
-use super::{Basis, Class, Row, Tolerance};
-use crate::contact::isbl::{IsblModel, IsblParams};
+use super::{Basis, Class, Origin, Row, Tolerance};
+use crate::artefacts::contact::friction_law_name;
+use crate::contact::isbl::{FrictionLaw, IsblModel, IsblParams};
+
+/// The friction laws other than the default whose values the friction rows also carry
+/// (docs/model-form.md, "Friction").
+const OTHER_FRICTION_LAWS: [FrictionLaw; 2] =
+    [FrictionLaw::SeedPowerElastic, FrictionLaw::KeStatic];
+
+/// `model` with friction law `law` (the inputs are the validated ones, so this cannot fail).
+fn with_law(model: &IsblModel, law: FrictionLaw) -> Option<IsblModel> {
+    IsblModel::new(IsblParams {
+        friction_law: law,
+        ..*model.params()
+    })
+    .ok()
+}
+
+/// `friction_law = NAME`.
+fn law_variant(law: FrictionLaw) -> String {
+    format!("friction_law = {}", friction_law_name(law))
+}
 
 /// A row with borrowed text, built by name (the MTL rows use it too).
 pub(super) struct R<'a> {
@@ -312,6 +332,8 @@ struct ForcePoint<'a> {
     mu_target: f64,
     real_area_target: f64,
     mu_reproducible: bool,
+    /// Where the dissertation prints μ.
+    mu_at: &'a str,
     note_mu: &'a str,
     note_real_area: &'a str,
 }
@@ -327,6 +349,7 @@ fn static_contact_force_rows(sets: &Sets) -> Vec<Row> {
             mu_target: 1.49,
             real_area_target: 0.36,
             mu_reproducible: false,
+            mu_at: "dissertation §2.2.2, Fig. 2.14(a)",
             note_mu:
                 "−14 %: the dissertation's μ lies inside the model's μ(h) range (1.65 at the mean clearance)",
             note_real_area:
@@ -340,6 +363,7 @@ fn static_contact_force_rows(sets: &Sets) -> Vec<Row> {
             mu_target: 1.2,
             real_area_target: 2.7,
             mu_reproducible: true,
+            mu_at: "dissertation §2.1.3, Fig. 2.5(a)",
             note_mu: "",
             note_real_area:
                 "A_r = 2.72 μm² needs h* = 0.21 where P = 8.1 mN: the dynamic-vs-static caveat of #2b",
@@ -350,20 +374,32 @@ fn static_contact_force_rows(sets: &Sets) -> Vec<Row> {
         let label = pt.label;
         match separation_for_load(pt.model, pt.force / pt.area) {
             Ok(p) => {
-                rows.push(
-                    R {
-                        source: "contact-isbl §9 #2a/#2d [dissertation Ch. 2]",
-                        quantity: &format!("μ = Q/P at P·A_n = F_c, {label}"),
-                        unit: "1",
-                        target: pt.mu_target,
-                        ours: p.friction_stress / p.contact_pressure,
-                        tolerance: Tolerance::Relative(0.10),
-                        reproducible: pt.mu_reproducible,
-                        variant: VARIANT,
-                        note: pt.note_mu,
-                    }
-                    .row(),
-                );
+                // The same separation under the other laws (P does not depend on the law).
+                let mut mu = R {
+                    source: "contact-isbl §9 #2a/#2d [dissertation Ch. 2]",
+                    quantity: &format!("μ = Q/P at P·A_n = F_c, {label}"),
+                    unit: "1",
+                    target: pt.mu_target,
+                    ours: p.friction_stress / p.contact_pressure,
+                    tolerance: Tolerance::Relative(0.10),
+                    reproducible: pt.mu_reproducible,
+                    variant: VARIANT,
+                    note: pt.note_mu,
+                }
+                .row()
+                .published(pt.mu_at);
+                for law in OTHER_FRICTION_LAWS {
+                    let value = with_law(pt.model, law)
+                        .and_then(|m| m.at(p.separation).ok())
+                        .map_or(f64::NAN, |q| q.friction_stress / q.contact_pressure);
+                    mu = mu.with_variant(
+                        &law_variant(law),
+                        value,
+                        "the same h (P·A_n = F_c); P does not depend on the law",
+                        Origin::Computed,
+                    );
+                }
+                rows.push(mu);
                 rows.push(
                     R {
                         source: "contact-isbl §9 #2b/#2d [dissertation Ch. 2]",
@@ -459,20 +495,38 @@ fn sphere_rows() -> Vec<Row> {
                     }
                     .row(),
                 );
-                rows.push(
-                    R {
-                        source: "contact-isbl §9 #4 [dissertation Ch. 3.1]",
-                        quantity: &format!("sphere static friction at ω = {} nm", omega * 1e9),
-                        unit: "μN",
-                        target: pt.friction_target,
-                        ours: a.friction * 1e6,
-                        tolerance: Tolerance::Relative(0.10),
-                        reproducible: true,
-                        variant: "junction shear τ_s = H/(2.8√3)",
-                        note: "",
-                    }
-                    .row(),
-                );
+                let mut friction = R {
+                    source: "contact-isbl §9 #4 [dissertation Ch. 3.1]",
+                    quantity: &format!("sphere static friction at ω = {} nm", omega * 1e9),
+                    unit: "μN",
+                    target: pt.friction_target,
+                    ours: a.friction * 1e6,
+                    tolerance: Tolerance::Relative(0.10),
+                    reproducible: true,
+                    variant: "junction shear τ_s = H/(2.8√3)",
+                    note: "",
+                }
+                .row()
+                .published("dissertation §3.1");
+                for law in OTHER_FRICTION_LAWS {
+                    let value = with_law(&sphere, law)
+                        .and_then(|m| m.asperity_at(omega).ok())
+                        .map_or(f64::NAN, |a| a.friction * 1e6);
+                    let inputs = match law {
+                        // The power law is back-solved from these two numbers.
+                        FrictionLaw::SeedPowerElastic => {
+                            "by construction: the law is back-solved from these two values"
+                        }
+                        _ => {
+                            "adhesion-augmented load with Δγ = 0.06 N/m, ε = 0.3 nm (Ch. 2's; \
+                             Ch. 3.1 names none): without adhesion the law gives the values \
+                             of the Ch. 3.1 power law it is built on (by construction)"
+                        }
+                    };
+                    friction =
+                        friction.with_variant(&law_variant(law), value, inputs, Origin::Computed);
+                }
+                rows.push(friction);
             }
             Err(e) => rows.push(failed("Ch. 3.1 sphere", e.to_string())),
         }

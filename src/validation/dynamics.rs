@@ -15,7 +15,7 @@
 
 use super::pipeline::{self, Cache, Stored};
 use super::{Basis, Calibrated, Class, Ordering, Origin, Relation, Row, Tolerance};
-use crate::contact::isbl::{IsblModel, IsblParams};
+use crate::contact::isbl::{FrictionLaw, IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
 use crate::core::cache::Store;
 use crate::core::cases::{get_or_compute, CaseError};
@@ -848,12 +848,69 @@ fn target_row(t: Target, sweep: &Sweep, cached: CachedSweeps, variant: &str) -> 
     .note(t.note)
 }
 
+/// The τ and μ rows (and the 12 nm interference the friction moment moves) also evaluated
+/// under the other friction laws (docs/model-form.md, "Friction"), with where the dissertation
+/// prints each target.
+const FRICTION_ROWS: [(&str, &str); 12] = [
+    ("dyn-12.mu", "dissertation §2.1.3, Fig. 2.5(a)"),
+    ("dyn-13.shear", "dissertation §2.1.3"),
+    ("dyn-23", "dissertation §2.2.2, Fig. 2.21"),
+    ("dyn-23.instantaneous", "dissertation §2.2.2, Fig. 2.21"),
+    ("dyn-24", "dissertation §2.2.2, Fig. 2.13(a)"),
+    ("dyn-24.friction", "dissertation §2.2.2, Fig. 2.13(c)"),
+    ("dyn-24.mu", "dissertation §2.2.2, Fig. 2.14(a)"),
+    ("dyn-24.shear", "dissertation §2.2.2, Fig. 2.21(a)"),
+    ("dyn-25", "dissertation §2.2.2, Fig. 2.21(a)"),
+    ("dyn-29", "dissertation §2.3.2, Fig. 2.34(c)"),
+    ("dyn-29.mu", "dissertation §2.3.2, Fig. 2.34(a)"),
+    ("dyn-24.pressure", "dissertation §2.2.2"),
+];
+
+/// The laws other than the default, with the actuations (nm) each model's friction rows need:
+/// the improved model's 9.8 nm (dyn-23), 10.6 nm (≈ touchdown + 0.2 nm), 12 and 12.2 nm
+/// (dyn-24, dyn-25's published maximum); the initial model's 11 nm; the optimised design's
+/// 12 and 13 nm.
+const OTHER_FRICTION_LAWS: [FrictionLaw; 2] =
+    [FrictionLaw::SeedPowerElastic, FrictionLaw::KeStatic];
+const FRICTION_IMPROVED_NM: [f64; 4] = [9.8, 10.6, 12.0, 12.2];
+const FRICTION_INITIAL_NM: [f64; 1] = [11.0];
+const FRICTION_OPTIMISED_NM: [f64; 2] = [12.0, 13.0];
+
+/// One friction law's cases of one model: `friction_law = NAME` and a sweep of the listed
+/// actuations only (no touchdown: dyn-25 is then the largest τ of those cases).
+struct LawSweep {
+    variant: String,
+    sweep: Sweep,
+}
+
+/// `row` with its basis and its value under each law of `laws`, when it is a friction row.
+fn with_friction_variants(row: Row, t_value: &dyn Fn(&Sweep) -> f64, laws: &[LawSweep]) -> Row {
+    let Some((_, at)) = FRICTION_ROWS.iter().find(|(id, _)| *id == row.id) else {
+        return row;
+    };
+    let mut row = row.published(at);
+    for l in laws {
+        row = row.with_variant(
+            &l.variant,
+            t_value(&l.sweep),
+            &l.sweep.inputs,
+            l.sweep.origin.clone(),
+        );
+    }
+    row
+}
+
 const D_NOTE: &str =
     "class D: depends on dropped inputs (DMW spectrum, AB damping, rear stiffening \
                       β, Δγ, ε, ζ_c)";
 
 /// Improved model, dissertation geometry (S2, targets #16–#25).
-fn improved_rows(s: &Sweep, cached: CachedSweeps, initial_geometry_fhm86: &mut f64) -> Vec<Row> {
+fn improved_rows(
+    s: &Sweep,
+    cached: CachedSweeps,
+    initial_geometry_fhm86: &mut f64,
+    laws: &[LawSweep],
+) -> Vec<Row> {
     let variant = "improved 2-DOF, default inputs, eq. 2.16 interference-tangent contact force";
     let r = "dissertation §2.2.2";
     let abs = Tolerance::Absolute;
@@ -900,12 +957,15 @@ fn improved_rows(s: &Sweep, cached: CachedSweeps, initial_geometry_fhm86: &mut f
     ];
     targets
         .into_iter()
-        .map(|t| target_row(t, s, cached, variant))
+        .map(|t| {
+            let value = t.value;
+            with_friction_variants(target_row(t, s, cached, variant), value, laws)
+        })
         .collect()
 }
 
 /// Initial model (S1, targets #7–#15): bulge-centre anchor, 1.2σ criterion, static start.
-fn initial_rows(s: &Sweep) -> Vec<Row> {
+fn initial_rows(s: &Sweep, laws: &[LawSweep]) -> Vec<Row> {
     let variant = "initial 2-DOF (bulge-centre anchor, 1.2σ contact criterion)";
     let r = "dissertation §2.1.3";
     let abs = Tolerance::Absolute;
@@ -931,7 +991,14 @@ fn initial_rows(s: &Sweep) -> Vec<Row> {
     ];
     let mut rows: Vec<Row> = targets
         .into_iter()
-        .map(|t| target_row(t, s, CachedSweeps::default(), variant))
+        .map(|t| {
+            let value = t.value;
+            with_friction_variants(
+                target_row(t, s, CachedSweeps::default(), variant),
+                value,
+                laws,
+            )
+        })
         .collect();
     // #10: the BV peaks above 20 % between touchdown and 11 nm.
     let peak = s
@@ -957,7 +1024,12 @@ fn initial_rows(s: &Sweep) -> Vec<Row> {
 }
 
 /// Optimised design (S2o, targets #26–#29), w_TFC = 50 µm (assumed).
-fn optimised_rows(s: &Sweep, cached: CachedSweeps, dissertation_fhm86: f64) -> Vec<Row> {
+fn optimised_rows(
+    s: &Sweep,
+    cached: CachedSweeps,
+    dissertation_fhm86: f64,
+    laws: &[LawSweep],
+) -> Vec<Row> {
     let variant = "improved 2-DOF, optimised bulge a = 4.86 µm, x = 6.35 µm, w = 50 µm (assumed)";
     let r = "dissertation §2.3.2";
     let abs = Tolerance::Absolute;
@@ -981,7 +1053,10 @@ fn optimised_rows(s: &Sweep, cached: CachedSweeps, dissertation_fhm86: f64) -> V
     ];
     let mut rows: Vec<Row> = targets
         .into_iter()
-        .map(|t| target_row(t, s, cached, variant))
+        .map(|t| {
+            let value = t.value;
+            with_friction_variants(target_row(t, s, cached, variant), value, laws)
+        })
         .collect();
     rows.push(
         Row::ordering(
@@ -1460,6 +1535,64 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
             })
         },
     );
+    // The friction rows under the other laws: the same models, DMW and start, a few cases each.
+    let law_sweeps: Vec<(LawSweep, LawSweep, Option<LawSweep>)> = OTHER_FRICTION_LAWS
+        .par_iter()
+        .filter_map(|&law| {
+            let with_law = |p: IsblParams| IsblParams {
+                friction_law: law,
+                ..p
+            };
+            let (improved_p, initial_p) = (
+                with_law(IsblParams::improved_2dof()),
+                with_law(IsblParams::initial_2dof()),
+            );
+            let (improved_l, initial_l) = (interface(improved_p).ok()?, interface(initial_p).ok()?);
+            let name = crate::artefacts::contact::friction_law_name(law);
+            let variant = format!("friction_law = {name}");
+            let cases = |model: &Model2Dof, isbl: &IsblLookup, p: IsblParams, grid: &[f64]| {
+                let store = case_store(model, p);
+                let pts: Vec<Pt> = grid
+                    .par_iter()
+                    .filter_map(|&h| run_case(model, isbl, h * NM, &track, true, store.as_ref()))
+                    .collect();
+                let listed = grid
+                    .iter()
+                    .map(|h| format!("{h}"))
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                LawSweep {
+                    variant: variant.clone(),
+                    sweep: Sweep::new(
+                        pts,
+                        None,
+                        format!("{synth}, static start; cases at {listed} nm only"),
+                        Origin::Computed,
+                    ),
+                }
+            };
+            let improved_s = cases(
+                &improved_model,
+                &improved_l,
+                improved_p,
+                &FRICTION_IMPROVED_NM,
+            );
+            let initial_s = cases(&initial_2dof(), &initial_l, initial_p, &FRICTION_INITIAL_NM);
+            let optimised_s = optimised_model
+                .as_ref()
+                .ok()
+                .map(|m| cases(m, &improved_l, improved_p, &FRICTION_OPTIMISED_NM));
+            Some((improved_s, initial_s, optimised_s))
+        })
+        .collect();
+    let mut improved_laws = Vec::new();
+    let mut initial_laws = Vec::new();
+    let mut optimised_laws = Vec::new();
+    for (a, b, c) in law_sweeps {
+        improved_laws.push(a);
+        initial_laws.push(b);
+        optimised_laws.extend(c);
+    }
     let sweep = |name: &str| cache.as_ref().and_then(|c| cached_sweep(c, name));
     let (rec_improved, cal_improved) = (sweep("improved_sweep"), sweep("improved_calibrated"));
     let (rec_optimised, cal_optimised) = (sweep("optimised_sweep"), sweep("optimised_calibrated"));
@@ -1479,17 +1612,17 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
         rows
     };
     rows.extend(set_of(
-        improved_rows(&s_improved, improved_cached, &mut fhm86),
+        improved_rows(&s_improved, improved_cached, &mut fhm86, &improved_laws),
         TargetSet::Selection,
     ));
-    rows.extend(initial_rows(&s_initial));
+    rows.extend(initial_rows(&s_initial, &initial_laws));
     if let Some(s) = s_optimised {
         let optimised_cached = CachedSweeps {
             record: rec_optimised.as_ref(),
             calibrated: cal_optimised.as_ref(),
         };
         rows.extend(set_of(
-            optimised_rows(&s, optimised_cached, fhm86),
+            optimised_rows(&s, optimised_cached, fhm86, &optimised_laws),
             TargetSet::Final,
         ));
     }
@@ -1585,9 +1718,9 @@ mod tests {
         let s = line(11.05, "own");
         let mut fhm86 = f64::NAN;
         let mut rows = geometry_rows();
-        rows.extend(improved_rows(&s, CachedSweeps::default(), &mut fhm86));
-        rows.extend(initial_rows(&s));
-        rows.extend(optimised_rows(&s, CachedSweeps::default(), fhm86));
+        rows.extend(improved_rows(&s, CachedSweeps::default(), &mut fhm86, &[]));
+        rows.extend(initial_rows(&s, &[]));
+        rows.extend(optimised_rows(&s, CachedSweeps::default(), fhm86, &[]));
         ledger(&mut rows, &["dyn-16", "dyn-24.force"]);
         for r in &rows {
             assert_ne!(r.basis, Basis::Unstated, "{}", r.id);
@@ -1628,6 +1761,62 @@ mod tests {
                 seen.insert((r.quantity.clone(), r.target.to_bits())),
                 "{} repeats a row",
                 r.id
+            );
+        }
+    }
+
+    /// The friction rows carry their published basis and one value per other law, each from
+    /// that law's own cases; other rows are left as they were.
+    #[test]
+    fn friction_rows_carry_a_value_under_every_other_law() {
+        let value = |s: &Sweep| s.at(8.5 * NM, |p| p.clearance / NM);
+        let own = line(11.05, "own");
+        let laws = [
+            LawSweep {
+                variant: "friction_law = seed_power_elastic".into(),
+                sweep: line(11.0, "seed"),
+            },
+            LawSweep {
+                variant: "friction_law = ke_static".into(),
+                sweep: line(11.1, "ke"),
+            },
+        ];
+        let mut t = clearance_target(Class::D, &value);
+        t.id = "dyn-24.shear";
+        let r = with_friction_variants(
+            target_row(t, &own, CachedSweeps::default(), "v"),
+            &value,
+            &laws,
+        );
+        assert_eq!(r.basis.kind(), "published");
+        assert_eq!(r.basis.detail(), "dissertation §2.2.2, Fig. 2.21(a)");
+        let got: Vec<(&str, f64)> = r
+            .variants
+            .iter()
+            .map(|v| (v.variant.as_str(), v.value))
+            .collect();
+        assert_eq!(got.len(), 2);
+        assert_eq!(got[0].0, "friction_law = seed_power_elastic");
+        assert!((got[0].1 - 2.5).abs() < 1e-9 && (got[1].1 - 2.6).abs() < 1e-9);
+        assert_eq!(r.variants[1].inputs, "ke");
+        // Every listed id is a row of this area (no stale id), and a row not listed is untouched.
+        let other = with_friction_variants(
+            target_row(
+                clearance_target(Class::D, &value),
+                &own,
+                CachedSweeps::default(),
+                "v",
+            ),
+            &value,
+            &laws,
+        );
+        assert!(other.variants.is_empty() && other.basis.kind() == "unstated");
+        let ids: Vec<&str> = FRICTION_ROWS.iter().map(|(id, _)| *id).collect();
+        let source = include_str!("dynamics.rs");
+        for id in ids {
+            assert!(
+                source.contains(&format!("id: \"{id}\"")),
+                "{id} is not a row"
             );
         }
     }

@@ -85,6 +85,47 @@ pub fn seed_power_friction_ratio(omega_star: f64) -> f64 {
     }
 }
 
+/// Coefficient `C` of the static-friction power law in the contact load,
+/// `Q_max/L_c = C·(P/L_c)^m` (friction law `ke_static`, docs/contact.md, "Friction").
+///
+/// Kogut & Etsion's own fit constants (KE 2003, J. Tribol. 125:499, sliding inception of an
+/// elastic-plastic sphere; used by KE 2004, J. Tribol. 126:34, whose rough-surface sum is
+/// eq. A.6) could not be recovered: eq. A.6's exponents and coefficients were lost in the
+/// extraction of the dissertation, and the stored copies of the papers give their abstracts
+/// (and KE 2004's first page) only. What is known: KE 2003 give `Q_max` of one sphere as a
+/// function of its normal load through "an internal static friction coefficient" that falls
+/// with the load (their abstract), and the dissertation prints two single-sphere values of the model it used
+/// (Ch. 3.1: 120 µN at ω = 0.1 nm and 1120 µN at 1 nm for R = 102 µm, E = 180 GPa, ν = 0.24,
+/// H = 18 GPa, no adhesion input named). A power law in the Hertz load through those two
+/// points is `Q_max/L_c = 0.4155·(P/L_c)^(0.970/1.5)` — the same curve as
+/// [`seed_power_friction_ratio`] on elastic summits, written in the load instead of `ω*`
+/// so that it can take the adhesion-augmented load.
+pub const KE_STATIC_COEFFICIENT: f64 = 0.4155;
+/// Exponent `m` of [`KE_STATIC_COEFFICIENT`]'s law: 0.970 (the Ch. 3.1 back-solve in `ω*`)
+/// over the Hertz exponent 1.5. `μ = Q_max/P ∝ P^(m−1)` falls with the load, as KE 2003's
+/// internal static friction coefficient does.
+pub const KE_STATIC_EXPONENT: f64 = 0.970 / 1.5;
+/// `Q_max/L_c` of one summit under the `ke_static` law (docs/contact.md, "Friction"): the
+/// static-friction power law [`KE_STATIC_COEFFICIENT`]`·(P*_aug)^`[`KE_STATIC_EXPONENT`] at
+/// the adhesion-augmented load `P*_aug = P/L_c + F_s/L_c`, with `P/L_c` from the KE 2002
+/// fits of `regime` and `adhesion_load = F_s/L_c` the summit's adhesion force (the caller's
+/// `2πΔγ_max·R·f_el(ω/ε)/L_c`). Zero for `ω* ≤ 0` and for fully plastic summits
+/// (`ω* > 110`): the dissertation sums the friction over "elastically and
+/// elastically-plastically deforming asperities" (Ch. 2.1; eq. A.6's elastic and
+/// elastic-plastic ranges).
+pub fn ke_static_friction_ratio_in(
+    regime: KeRegime,
+    omega_star: f64,
+    k_factor: f64,
+    adhesion_load: f64,
+) -> f64 {
+    if omega_star <= 0.0 || regime == KeRegime::FullyPlastic {
+        return 0.0;
+    }
+    let load = ke_load_ratio_in(regime, omega_star, k_factor) + adhesion_load;
+    KE_STATIC_COEFFICIENT * load.powf(KE_STATIC_EXPONENT)
+}
+
 /// Hertz gap outside the contact, `G(x) = √(x²−1) − (2−x²)·arccos(1/x)` for `x = r/a ≥ 1`,
 /// written in `w = √(x²−1)` as `G = w − (1−w²)·atan(w)`, with its Taylor series
 /// `Σ_{m≥1} (−1)^{m+1}·4m/(4m²−1)·w^{2m+1}` for small `w` where the closed form cancels.

@@ -18,8 +18,8 @@ mod tests;
 
 use crate::contact::ContactError;
 use asperity::{
-    adhesion_factor_elastic_fast, ke_area_ratio_in, ke_load_ratio_in, seed_power_friction_ratio,
-    KeRegime,
+    adhesion_factor_elastic_fast, ke_area_ratio_in, ke_load_ratio_in, ke_static_friction_ratio_in,
+    seed_power_friction_ratio, KeRegime,
 };
 use std::f64::consts::PI;
 
@@ -33,15 +33,23 @@ pub enum SummitOffset {
     McCool,
 }
 
-/// Single-summit static-friction law (eq. A.6). An enum so KE 2004's fit can be added.
+/// Single-summit static-friction law (eq. A.6; docs/contact.md, "Friction"). An enum so that
+/// Kogut & Etsion's own fit, whose constants could not be recovered, can be added.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FrictionLaw {
     /// `Q_max = τ_s·A(ω)`, `τ_s = H/(2.8·√3)` (von Mises shear yield with KE's `H = 2.8·Y`),
-    /// so `Q = τ_s·A_r`. Anchored on the seed's Ch. 3.1 single-asperity numbers.
+    /// so `Q = τ_s·A_r` and `Q/A_r` is the constant `τ_s`. Anchored on the dissertation's
+    /// Ch. 3.1 single-asperity numbers.
     #[default]
     JunctionShear,
     /// `Q_max/L_c = 0.4155·ω*^0.970` on elastic summits only (back-solved from Ch. 3.1).
     SeedPowerElastic,
+    /// Eq. A.6 read as Kogut & Etsion's static friction (KE 2004): each summit's maximum
+    /// static friction at its adhesion-augmented load, `Q_max/L_c = 0.4155·(P/L_c +
+    /// F_s/L_c)^(0.970/1.5)` with `F_s = 2πΔγ_max·R·f_el(ω/ε)`, summed over the elastic and
+    /// elastic-plastic summits (`0 < ω* ≤ 110`). The power law is the Ch. 3.1 back-solve
+    /// ([`asperity::KE_STATIC_COEFFICIENT`] says why KE's constants are not used).
+    KeStatic,
 }
 
 /// Surface (adhesion) energy model (eq. 3.50, Fig. 3.17).
@@ -282,6 +290,9 @@ pub struct IsblDerived {
     /// True when `ψ_KE > 1`: summits beyond `ω_c` may then carry a noticeable share of the
     /// solid adhesion, for which the elastic `f_el` is used without KE's fits (docs/contact.md).
     pub elastic_plastic_adhesion_assumed: bool,
+    /// `2πΔγ_max·R/L_c`: a contacting summit's adhesion force over `L_c` per unit `f_el` (the
+    /// load `ke_static` adds to the contact load).
+    pub adhesion_load_ratio: f64,
 }
 
 /// All ISBL curves at one solid separation `h`, per unit nominal area.
@@ -369,6 +380,7 @@ impl IsblModel {
                 surface_energy_at(&params, params.lj_spacing),
             ),
         };
+        let adhesion_load_ratio = 2.0 * PI * delta_gamma_max * params.summit_radius / critical_load;
         let derived = IsblDerived {
             composite_modulus,
             k_factor,
@@ -384,6 +396,7 @@ impl IsblModel {
             delta_gamma_min,
             delta_gamma_max,
             elastic_plastic_adhesion_assumed: plasticity_index_ke > 1.0,
+            adhesion_load_ratio,
         };
         let all_finite = [
             composite_modulus,
@@ -437,7 +450,7 @@ impl IsblModel {
                 dv.junction_shear_strength * real_area_fraction,
                 dv.junction_shear_strength * real_area_gradient,
             ),
-            FrictionLaw::SeedPowerElastic => (
+            FrictionLaw::SeedPowerElastic | FrictionLaw::KeStatic => (
                 eta * dv.critical_load * contact[5],
                 eta * dv.critical_load * contact[6],
             ),
@@ -488,6 +501,20 @@ impl IsblModel {
             FrictionLaw::SeedPowerElastic => {
                 dv.critical_load * seed_power_friction_ratio(omega_star)
             }
+            FrictionLaw::KeStatic => {
+                let adhesion = if omega > 0.0 {
+                    adhesion_factor_elastic_fast(omega / self.params.lj_spacing)?
+                } else {
+                    0.0
+                };
+                dv.critical_load
+                    * ke_static_friction_ratio_in(
+                        KeRegime::of(omega_star),
+                        omega_star,
+                        dv.k_factor,
+                        dv.adhesion_load_ratio * adhesion,
+                    )
+            }
         };
         Ok(AsperityContact {
             load,
@@ -505,7 +532,9 @@ impl IsblModel {
     /// Integrals over the solid-contacting summits, in `ω = z − d ∈ [0, ω_max]`
     /// (dimensionless; scaled by the caller):
     /// `[∫p*φ, ∫p*·(z/σ_s²)φ, ∫a*φ, ∫a*·(z/σ_s²)φ, ∫φ, ∫q*φ, ∫q*·(z/σ_s²)φ, ∫f_el φ,
-    ///   −∫f_el·(z/σ_s²)φ]` where `z/σ_s²·φ = −φ'` turns `−d/dh` into a density weight.
+    ///   −∫f_el·(z/σ_s²)φ]` where `z/σ_s²·φ = −φ'` turns `−d/dh` into a density weight, and
+    /// `q*` is `Q_max/L_c` of the `ke_static` law, or the seed power law for the other two
+    /// (which the junction-shear law does not read, but whose tolerance it has always shared).
     ///
     /// The elastic piece uses `ω = ω_c·u²` so the `ω^{1/2}`-type endpoint behaviour of the
     /// Hertz laws becomes polynomial; the other pieces are the KE regimes in `ω`.
@@ -515,6 +544,8 @@ impl IsblModel {
         let sigma_s = dv.summit_sigma;
         let eps = self.params.lj_spacing;
         let k = dv.k_factor;
+        let ke_static = self.params.friction_law == FrictionLaw::KeStatic;
+        let adhesion_load_ratio = dv.adhesion_load_ratio;
         let omega_max = (-d).max(0.0) + GAUSSIAN_CUTOFF_SIGMAS * sigma_s;
         let regimes = [
             (KeRegime::ElasticPlasticI, 1.0, 6.0),
@@ -543,13 +574,22 @@ impl IsblModel {
                 let slope = z / (sigma_s * sigma_s);
                 let load = ke_load_ratio_in(regime, omega_star, k);
                 let area = ke_area_ratio_in(regime, omega_star);
-                let friction = seed_power_friction_ratio(omega_star);
                 let adhesion = match adhesion_factor_elastic_fast(omega / eps) {
                     Ok(v) => v,
                     Err(e) => {
                         failure = Some(e);
                         f64::NAN
                     }
+                };
+                let friction = if ke_static {
+                    ke_static_friction_ratio_in(
+                        regime,
+                        omega_star,
+                        k,
+                        adhesion_load_ratio * adhesion,
+                    )
+                } else {
+                    seed_power_friction_ratio(omega_star)
                 };
                 [
                     load * weight,

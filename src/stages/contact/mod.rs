@@ -97,7 +97,8 @@ pub struct ContactConfig {
     /// `none` (d = h, σ_s = σ: the dissertation) or `mccool`.
     #[serde(default = "default_offset")]
     pub summit_offset: String,
-    /// `junction_shear` (recommended) or `seed_power_elastic`.
+    /// `junction_shear` (default), `seed_power_elastic` or `ke_static` (docs/contact.md,
+    /// "Friction").
     #[serde(default = "default_friction")]
     pub friction_law: String,
     /// Output curves from h* = h_star_min to h_star_max in steps of `step` (also the table's
@@ -226,10 +227,11 @@ pub fn check(
     p.friction_law = match cfg.friction_law.as_str() {
         "junction_shear" => FrictionLaw::JunctionShear,
         "seed_power_elastic" => FrictionLaw::SeedPowerElastic,
+        "ke_static" => FrictionLaw::KeStatic,
         o => {
             return bad(
                 "friction_law",
-                format!("unknown `{o}` (junction_shear, seed_power_elastic)"),
+                format!("unknown `{o}` (junction_shear, seed_power_elastic, ke_static)"),
             )
         }
     };
