@@ -9,8 +9,9 @@ fn json_of(o: &std::process::Output) -> serde_json::Value {
 
 #[test]
 fn a_sine_driven_slider_answers_at_the_sine_and_is_periodic() {
+    // App. B on the 3-DOF slider (12 nm, S3) and the 2-DOF variant (5 nm).
     let p = Project::shipped();
-    let o = p.run(&["run", "--only", "sine_response"]);
+    let o = p.run(&["run", "--only", "sine_response", "sine_response_2dof"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let dir = p.processed().join("sine_response");
     for f in [
@@ -56,7 +57,7 @@ fn a_sine_driven_slider_answers_at_the_sine_and_is_periodic() {
         .processed()
         .join("sine_flight")
         .join("cases")
-        .join("h_005.00nm.h5");
+        .join("isbl.h5");
     let j = json_of(
         &hdi()
             .arg("analyze")
@@ -72,28 +73,47 @@ fn a_sine_driven_slider_answers_at_the_sine_and_is_periodic() {
     assert_eq!(j["summary"]["class"], s["class"]);
     assert_eq!(j["input"]["series"], "case/history/heave");
 
-    // 10.7 kHz is far below the AB modes: the bulge tracks the disk, so the clearance barely
-    // moves — 0.049 nm, 3 % of the 1.414 nm disk motion (the quasi-static (10.7/110)² ≈ 1 %
-    // plus the pitch the transit delay imposes).
-    let c = json_of(
-        &hdi()
-            .arg("analyze")
-            .arg(&case)
-            .args(["--dataset", "case/history/clearance", "--velocity", "none"])
-            .args(["--window", "0.5 ms", "2 ms", "--json"])
-            .output()
-            .unwrap(),
-    );
-    let line = c["summary"]["peaks"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|p| (p["frequency_Hz"].as_f64().unwrap() - 10.7e3).abs() < 200.0)
-        .map_or(0.0, |p| p["amplitude_nm"].as_f64().unwrap());
+    // 10.7 kHz is far below the AB modes: the bulge tracks the disk, so its spacing moves far
+    // less than the disk. 3-DOF bulge spacing: 0.26 nm, 18 % of the 1.414 nm disk motion;
+    // 2-DOF clearance: 0.049 nm, 3 % (the quasi-static (10.7/110)² ≈ 1 % plus the pitch the
+    // transit delay imposes).
+    let line_at_sine = |case: &std::path::Path, dataset: &str| {
+        let c = json_of(
+            &hdi()
+                .arg("analyze")
+                .arg(case)
+                .args(["--dataset", dataset, "--velocity", "none"])
+                .args(["--window", "0.5 ms", "2 ms", "--json"])
+                .output()
+                .unwrap(),
+        );
+        c["summary"]["peaks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| (p["frequency_Hz"].as_f64().unwrap() - 10.7e3).abs() < 200.0)
+            .map_or(0.0, |p| p["amplitude_nm"].as_f64().unwrap())
+    };
+    let bulge = line_at_sine(&case, "case/history/bulge_spacing");
     assert!(
-        line > 0.0 && line < 0.1,
-        "clearance modulation at 10.7 kHz {line} nm"
+        bulge > 0.0 && bulge < 0.35,
+        "3-DOF bulge-spacing modulation at 10.7 kHz {bulge} nm"
     );
+    let case2 = p
+        .processed()
+        .join("sine_flight_2dof")
+        .join("cases")
+        .join("h_005.00nm.h5");
+    let clearance = line_at_sine(&case2, "case/history/clearance");
+    assert!(
+        clearance > 0.0 && clearance < 0.1,
+        "2-DOF clearance modulation at 10.7 kHz {clearance} nm"
+    );
+    let r2: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(p.processed().join("sine_response_2dof").join("result.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(r2["summary"]["class"], "periodic", "{r2}");
 }
 
 #[test]
@@ -156,13 +176,13 @@ fn bad_analysis_and_excitation_keys_name_the_key() {
     let base = p.config();
     for (from, to, needle) in [
         (
-            "[analysis.sine_response]\nsource = \"sine_flight\"",
-            "[analysis.sine_response]\nsource = \"sine_flite\"",
-            "analysis.sine_response.source",
+            "[analysis.sine_response_2dof]\nsource = \"sine_flight_2dof\"",
+            "[analysis.sine_response_2dof]\nsource = \"sine_flite\"",
+            "analysis.sine_response_2dof.source",
         ),
         (
-            "[analysis.dmw_response]\nsource = \"dmw_flight\"",
-            "[analysis.dmw_response]\nsource = \"dmw_flight\"\nactuation = \"7 nm\"",
+            "[analysis.dmw_response_2dof]\nsource = \"dmw_flight_2dof\"",
+            "[analysis.dmw_response_2dof]\nsource = \"dmw_flight_2dof\"\nactuation = \"7 nm\"",
             "has no case at 7 nm",
         ),
         (

@@ -9,7 +9,7 @@ fn default_pipeline_writes_hdf5_tables_and_plots_readable_by_others() {
     let o = p.run(&["run"]);
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("ran 36, cached 0, failed 0, skipped 0 of 36"),
+        stderr(&o).contains("ran 55, cached 0, failed 0, skipped 0 of 55"),
         "{}",
         stderr(&o)
     );
@@ -102,7 +102,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let o = p.run(&["run"]);
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("nothing to do: all 36 stage instances fresh"),
+        stderr(&o).contains("nothing to do: all 55 stage instances fresh"),
         "{}",
         stderr(&o)
     );
@@ -141,7 +141,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let o = p.run(&["run"]);
     assert_ok(&o);
     let e = stderr(&o);
-    assert!(e.contains("ran 3, cached 33"), "{e}");
+    assert!(e.contains("ran 3, cached 52"), "{e}");
     assert!(
         e.contains("ran     disk") && e.contains("ran     hdi"),
         "{e}"

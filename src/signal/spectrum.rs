@@ -238,6 +238,39 @@ impl AmplitudeSpectrum {
     }
 }
 
+/// The strongest line of a stored one-sided Hann amplitude spectrum (`frequency`, `amplitude`,
+/// as `AmplitudeSpectrum` writes them) inside `[lo, hi]` Hz: the largest local maximum whose
+/// bin lies in the band, refined by the exact two-bin Hann estimator (amplitudes of interior
+/// bins are proportional to |X_k|, so their ratio is the one [`AmplitudeSpectrum::refine`]
+/// uses). The band is chosen by the caller on physical grounds; no line outside it is looked
+/// at. `None` without a local maximum in the band or for malformed input.
+pub fn strongest_line(frequency: &[f64], amplitude: &[f64], lo: f64, hi: f64) -> Option<Peak> {
+    let n = amplitude.len();
+    if n < 3 || frequency.len() != n || hi.is_nan() || lo.is_nan() || hi < lo {
+        return None;
+    }
+    let df = frequency[1] - frequency[0];
+    if df.is_nan() || df <= 0.0 {
+        return None;
+    }
+    let a = amplitude;
+    let k = (1..n - 1)
+        .filter(|&k| frequency[k] >= lo && frequency[k] <= hi)
+        .filter(|&k| a[k] > a[k - 1] && a[k] >= a[k + 1])
+        .max_by(|&i, &j| a[i].total_cmp(&a[j]))?;
+    let (r, sign) = if a[k + 1] >= a[k - 1] {
+        (a[k + 1] / a[k], 1.0)
+    } else {
+        (a[k - 1] / a[k], -1.0)
+    };
+    let delta = sign * (2.0 * r - 1.0) / (r + 1.0);
+    Some(Peak {
+        frequency: frequency[k] + delta * df,
+        amplitude: a[k] / hann_lobe(delta),
+        bin: k,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -284,6 +317,35 @@ mod tests {
                 assert!((s.amplitude[p.bin] - 1.27324).abs() < 2e-5);
             }
         }
+    }
+
+    #[test]
+    fn strongest_line_looks_only_inside_its_band_and_refines_like_the_peaks() {
+        // A 2.0 tone at 50 kHz outside the band, a 0.3 tone at 104.3 kHz and a 0.1 tone at
+        // 112.7 kHz inside it: the band's strongest line is the 0.3 tone, refined exactly.
+        let (n, fs) = (6000, 4e6);
+        let x: Vec<f64> = tone(n, fs, 50e3, 2.0, 0.1)
+            .iter()
+            .zip(tone(n, fs, 104.3e3, 0.3, 0.4))
+            .zip(tone(n, fs, 112.7e3, 0.1, 1.1))
+            .map(|((a, b), c)| a + b + c)
+            .collect();
+        let s = amplitude_spectrum(&x, fs, Window::Hann).unwrap();
+        let p = strongest_line(&s.frequency, &s.amplitude, 90e3, 120e3).unwrap();
+        assert!((p.frequency - 104.3e3).abs() < 5.0, "{}", p.frequency);
+        assert!((p.amplitude - 0.3).abs() < 3e-3, "{}", p.amplitude);
+        // The same as the peak picker's refinement of that bin.
+        let r = s.refine(p.bin);
+        assert!(
+            (r.frequency - p.frequency).abs() < 1e-6 && (r.amplitude - p.amplitude).abs() < 1e-12
+        );
+        // The whole spectrum's strongest line is the 50 kHz tone.
+        let top = strongest_line(&s.frequency, &s.amplitude, 0.0, 2e6).unwrap();
+        assert!((top.frequency - 50e3).abs() < 5.0);
+        // Nothing in an empty band; malformed input refused.
+        assert!(strongest_line(&s.frequency, &s.amplitude, 600e3, 601e3).is_none());
+        assert!(strongest_line(&s.frequency, &s.amplitude[1..], 90e3, 120e3).is_none());
+        assert!(strongest_line(&s.frequency, &s.amplitude, 120e3, 90e3).is_none());
     }
 
     #[test]

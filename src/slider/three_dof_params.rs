@@ -118,6 +118,11 @@ pub struct ThreeDofConfig {
     /// `static` (the push-back already in place) or `nominal`.
     #[serde(default = "default_init")]
     pub init: String,
+    /// Heave offset of the start state, e.g. `"1 nm"` (|z0| ≤ 5 nm; default none): a kick whose
+    /// free decay shows the heave/pitch AB modes (App. B's zero excitation; the Table 4.1
+    /// initial roll of −10 µrad only rings the roll mode).
+    #[serde(default)]
+    pub initial_heave: Option<Length>,
     /// `three` (D1 centre, D2 +y, D3 −y) or `one` (D1 everywhere).
     #[serde(default = "default_tracks")]
     pub tracks: String,
@@ -332,6 +337,13 @@ fn check_options(
         "one" => TrackAssignment::One,
         o => return bad("tracks", format!("unknown `{o}` (three, one)")),
     };
+    let initial_heave = cfg.initial_heave.map_or(0.0, |l| l.0);
+    if !(initial_heave.is_finite() && initial_heave.abs() <= 5e-9) {
+        return bad(
+            "initial_heave",
+            format!("{initial_heave} m is out of range: |z0| ≤ 5 nm"),
+        );
+    }
     let options = Options3Dof {
         duration: cfg.duration.0,
         output_step: cfg.output_step.0,
@@ -339,6 +351,7 @@ fn check_options(
         wrap_dmw: cfg.dmw_wrap,
         tracks,
         init,
+        initial_heave,
         ..Options3Dof::default()
     };
     options
@@ -427,6 +440,10 @@ impl ThreeDofParams {
         // Only instances with a fitted bulge carry the key: the others keep theirs.
         if let (Some(b), Some(obj)) = (&self.bulge, v.as_object_mut()) {
             obj.insert("bulge".into(), json!(b));
+        }
+        // Likewise a heave kick at the start (App. B's zero excitation).
+        if let (true, Some(obj)) = (o.initial_heave != 0.0, v.as_object_mut()) {
+            obj.insert("initial_heave_m".into(), json!(o.initial_heave));
         }
         // Likewise a non-default contact-force reading.
         if let (ContactForceForm::StaticCurve | ContactForceForm::IntegratedStiffness, Some(obj)) =
@@ -522,5 +539,22 @@ mod tests {
         let e = ThreeDofParams::check(&cfg).unwrap_err();
         assert_eq!(e.key, "contact_force");
         assert!(e.message.contains("hertz") && e.message.contains("static_curve"));
+    }
+
+    #[test]
+    fn initial_heave_kicks_the_start_and_keys_only_when_set() {
+        let base = "contact = \"c\"\ndmw = \"still\"";
+        let plain = params(base);
+        assert_eq!(plain.options.initial_heave, 0.0);
+        // Unset leaves the instance key as it was (cached outputs stay valid).
+        assert!(plain.canonical().get("initial_heave_m").is_none());
+        let kicked = params(&format!("{base}\ninitial_heave = \"1 nm\""));
+        assert_eq!(kicked.options.initial_heave, 1e-9);
+        assert_eq!(kicked.canonical()["initial_heave_m"], 1e-9);
+        let cfg: ThreeDofConfig =
+            toml::from_str(&format!("{base}\ninitial_heave = \"6 nm\"")).unwrap();
+        let e = ThreeDofParams::check(&cfg).unwrap_err();
+        assert_eq!(e.key, "initial_heave");
+        assert!(e.message.contains("5 nm"), "{}", e.message);
     }
 }

@@ -720,6 +720,7 @@ pub mod dynamics;
 pub mod mtl;
 pub mod optimisation;
 pub mod pipeline;
+pub mod spectral;
 pub mod three_dof;
 
 /// Where an area's rows come from.

@@ -94,6 +94,10 @@ pub struct Options3Dof {
     pub wrap_dmw: bool,
     pub tracks: TrackAssignment,
     pub init: Init3Dof,
+    /// Heave offset added to the start state [m] (0 by default): a kick whose free decay shows
+    /// the heave/pitch AB modes (App. B's zero excitation; the initial roll `φ0` only excites
+    /// the roll mode, which is decoupled from heave and pitch while no feature touches).
+    pub initial_heave: f64,
 }
 
 impl Default for Options3Dof {
@@ -108,6 +112,7 @@ impl Default for Options3Dof {
             wrap_dmw: false,
             tracks: TrackAssignment::Three,
             init: Init3Dof::AirBearingStatic,
+            initial_heave: 0.0,
         }
     }
 }
@@ -136,6 +141,13 @@ impl Options3Dof {
         }
         if !(self.rtol > 0.0 && self.rtol < 1e-2) {
             return Err(parameter("rtol", self.rtol, "must lie in (0, 0.01)"));
+        }
+        if !(self.initial_heave.is_finite() && self.initial_heave.abs() <= 5e-9) {
+            return Err(parameter(
+                "initial heave (m)",
+                self.initial_heave,
+                "|z0| ≤ 5 nm",
+            ));
         }
         for (name, v) in [
             ("contact_max_step (s)", self.contact_max_step),
@@ -625,11 +637,12 @@ impl<'a> ThreeDofCase<'a> {
         Ok(())
     }
 
-    /// Start state (§5.4).
+    /// Start state (§5.4), plus the options' heave kick.
     pub fn initial_state(&self) -> Result<[f64; 6], DynamicsError> {
         let roll = self.model.initial_roll;
+        let kick = self.options.initial_heave;
         match self.options.init {
-            Init3Dof::Nominal => Ok([0.0, 0.0, roll, 0.0, 0.0, 0.0]),
+            Init3Dof::Nominal => Ok([kick, 0.0, roll, 0.0, 0.0, 0.0]),
             Init3Dof::AirBearingStatic => {
                 // Solved for the calibration's own rise, not for ΔF_AB: with k tied to PT the
                 // same ΔF_AB also balances on a stiff branch with a much smaller PT (docs).
@@ -641,7 +654,7 @@ impl<'a> ThreeDofCase<'a> {
                     false,
                 )?;
                 Ok([
-                    s.heave,
+                    s.heave + kick,
                     s.pitch - self.model.geometry.nominal_pitch,
                     roll,
                     0.0,

@@ -156,6 +156,104 @@ fn pole_tip_at_12_nm_near_the_dissertation_7_5_nm() {
 }
 
 #[test]
+fn a_heave_kick_rings_the_heave_pitch_modes_of_the_linearised_slider() {
+    // App. B's zero excitation: 1 nm above the 12 nm static state, no DMW, no roll. The free
+    // decay's spectrum has its lines at the two heave/pitch modes of the case's own equations
+    // linearised at the static state (central differences of the right-hand side, velocities
+    // zero: ω² the eigenvalues of −∂a/∂q). Not the AB table's modes at the static PT (1st pitch
+    // 110 kHz, normal 385 kHz): under push-back the springs' stiffness is taken at each
+    // spring's own spacing, not at the PT (docs/analysis.md).
+    use crate::signal::spectrum::{amplitude_spectrum, PeakOptions, Window};
+    let lookup = isbl();
+    let mut model = Model3Dof::dissertation();
+    model.initial_roll = 0.0;
+    let case = |kick: f64| {
+        let options = Options3Dof {
+            duration: 0.5e-3,
+            initial_heave: kick,
+            ..Options3Dof::default()
+        };
+        ThreeDofCase::new(
+            &model,
+            interface(&lookup),
+            ActuationProfile::constant(12.0 * NM).unwrap(),
+            None,
+            None,
+            options,
+        )
+        .unwrap()
+    };
+    let rest = case(0.0);
+    let y0 = rest.initial_state().unwrap();
+    let kicked = case(1.0 * NM);
+    assert!(((kicked.initial_state().unwrap()[0] - y0[0]) / NM - 1.0).abs() < 1e-9);
+    // ∂(z̈, ϑ̈)/∂(z, ϑ) at rest.
+    let steps = [1e-12, 1e-9];
+    let mut j = [[0.0; 2]; 2];
+    for (c, h) in steps.iter().enumerate() {
+        let acc = |sign: f64| {
+            let mut y = y0;
+            y[c] += sign * h;
+            let mut dy = [0.0; 6];
+            rest.rhs(0.0, &y, &mut dy, None).unwrap();
+            [dy[3], dy[4]]
+        };
+        let (p, m) = (acc(1.0), acc(-1.0));
+        for r in 0..2 {
+            j[r][c] = (p[r] - m[r]) / (2.0 * h);
+        }
+    }
+    // ω² of −J (2×2): trace/determinant.
+    let (tr, det) = (-(j[0][0] + j[1][1]), j[0][0] * j[1][1] - j[0][1] * j[1][0]);
+    let disc = (tr * tr - 4.0 * det).sqrt();
+    let f = |w2: f64| w2.sqrt() / std::f64::consts::TAU;
+    let (pitch, normal) = (f(0.5 * (tr - disc)), f(0.5 * (tr + disc)));
+    eprintln!(
+        "12 nm, linearised: 1st pitch {:.1} kHz, normal {:.1} kHz",
+        pitch / 1e3,
+        normal / 1e3
+    );
+    assert!(
+        (90e3..120e3).contains(&pitch) && normal > 200e3,
+        "{pitch} {normal}"
+    );
+    let h = kicked.run().unwrap();
+    let s = amplitude_spectrum(&h.heave, 1.0 / h.dt, Window::Hann).unwrap();
+    let peaks = s.peaks(&PeakOptions {
+        max_peaks: 5,
+        min_frequency: 20e3,
+        ..PeakOptions::default()
+    });
+    for f in [pitch, normal] {
+        assert!(
+            peaks.iter().any(|p| (p.frequency / f - 1.0).abs() < 0.01),
+            "no line within 1 % of {:.1} kHz: {:?}",
+            f / 1e3,
+            peaks.iter().map(|p| p.frequency / 1e3).collect::<Vec<_>>()
+        );
+    }
+    // It decays (ζ 3 %): the last 0.1 ms swings far less than the first.
+    let swing = |x: &[f64]| {
+        x.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+            - x.iter().cloned().fold(f64::INFINITY, f64::min)
+    };
+    let n = h.len();
+    let (first, last) = (&h.heave[..n / 5], &h.heave[n - n / 5..]);
+    assert!(
+        swing(last) < 0.1 * swing(first),
+        "{:e} vs {:e}",
+        swing(last),
+        swing(first)
+    );
+    // Out of range: refused.
+    let bad = Options3Dof {
+        initial_heave: 6.0 * NM,
+        ..Options3Dof::default()
+    };
+    assert!(bad.validate().is_err());
+}
+
+#[test]
 fn shock_makes_the_pads_touch_and_the_bulge_recovers() {
     let lookup = isbl();
     let model = Model3Dof::dissertation();
