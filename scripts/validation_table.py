@@ -3,7 +3,10 @@
 
     ./target/release/hdi validate --json > v.json; python3 scripts/validation_table.py v.json
 
-One line per row whose id starts with `dyn-` (plus the consistency checks), in id order.
+One line per row whose id starts with `dyn-`, in id order: class, basis (published / derived /
+by construction), the value with the row's own inputs, on the synthetic DMW record of raw/, after
+calibration (with the calibration set: fitted / selection / final), status, and the values under
+other variants (friction laws, summit distributions, readings of the 3-DOF air bearing).
 """
 import json
 import re
@@ -36,14 +39,18 @@ def key(r):
     return (int(m.group(1)), m.group(2)) if m else (99, r["id"])
 
 
+BASIS = {"published": "published", "derived": "derived", "by_construction": "by constr.", "unstated": "?"}
+
+
 def main():
     d = json.load(open(sys.argv[1]))
     rows = [r for a in d["areas"].values() for r in a]
     dyn = sorted((r for r in rows if r["id"].startswith("dyn-")), key=key)
     print(
-        "| id | class | quantity | published | tolerance | hdi | record | calibrated | pass | origin |"
+        "| id | class | basis | quantity | published | tolerance | hdi | synthetic record "
+        "| calibrated | status | other variants |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for r in dyn:
         o = r["ordering"]
         if o:
@@ -51,17 +58,23 @@ def main():
             target, t, value = "ordering", o["relation"]["kind"], items
         else:
             target, t, value = num(r["target"]), tol(r["tolerance"]), num(r["value"])
+
         def alt(c):
             return "–" if not c else num(c["value"]) + (" ✓" if c["pass"] else "")
 
         rec, cal = alt(r.get("uncalibrated_record")), alt(r["calibrated"])
-        origin = r["origin"]["kind"]
-        if origin != "computed":
-            origin += " " + r["origin"]["instance"]
+        if r["calibrated"] and r.get("calibration_set"):
+            cal += f" ({r['calibration_set']})"
+        status = {"pass": "yes", "fail": "no", "not_run": "not run"}[r["status"]]
+        variants = "; ".join(
+            f"{v['variant']}: "
+            + (("holds" if v["pass"] else "no") if v["ordering"] else num(v["value"]) + (" ✓" if v["pass"] else ""))
+            for v in r.get("variants", [])
+        ) or "–"
         unit = "" if r["unit"] in ("1", "") else f" ({r['unit']})"
         print(
-            f"| {r['id']} | {r['class']} | {r['quantity']}{unit} | {target} | {t} | {value} | {rec} | {cal} "
-            f"| {'yes' if r['pass'] else 'no'} | {origin} |"
+            f"| {r['id']} | {r['class']} | {BASIS[r['basis']['kind']]} | {r['quantity']}{unit} | {target} | {t} "
+            f"| {value} | {rec} | {cal} | {status} | {variants} |"
         )
 
 

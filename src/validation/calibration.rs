@@ -4,7 +4,7 @@
 use super::{Class, Origin, Row, Tolerance};
 use crate::artefacts::calibration::fitted_knobs;
 use crate::core::cache::Store;
-use crate::dynamics::calibration::{evaluate, Evaluation, Knob};
+use crate::dynamics::calibration::{evaluate, evaluate_held_out, Evaluation, Knob};
 use crate::engine::{plan, read_result, State};
 use crate::error::{Error, Result};
 use crate::slider::calibration::{base_inputs, base_of};
@@ -25,6 +25,54 @@ pub fn re_evaluate(
     let (isbl, dmw) = base_inputs(&stage.base, upstream, upstream_dirs)?;
     let base = base_of(&stage.base, isbl, dmw.as_ref());
     Ok(evaluate(&base, &stage.settings, fitted)?)
+}
+
+/// The held-out sets of `[calibrate.NAME]` in the pipeline `config`, evaluated now at the spec
+/// defaults (no fitted knobs) on the calibration's own base, grid and upstream inputs, after
+/// `adjust` has changed the base's case options and interface (a model-form variant; the
+/// selection discipline of docs/model-form.md). The upstream instances must be current (`hdi
+/// run --only NAME` has run); the calibration itself need not be.
+pub fn held_out_under(
+    config: &Path,
+    name: &str,
+    adjust: impl Fn(&mut crate::slider::params::SimulateParams, &mut crate::contact::isbl::IsblParams),
+) -> Result<Evaluation> {
+    let file = crate::stages::load(config)?;
+    let stages = crate::stages::build(&file)?;
+    let store = Store::open_existing(&file.processed_dir());
+    let plan = plan(stages, &store, &Default::default())?;
+    let cfg = file
+        .instances::<CalibrateConfig>("calibrate")?
+        .into_iter()
+        .find(|(n, _)| n == name)
+        .map(|(_, c)| c)
+        .ok_or_else(|| Error::UpstreamField {
+            kind: "calibrate",
+            name: name.to_string(),
+            what: "an instance of that name in the pipeline".into(),
+        })?;
+    let stage = CalibrateStage::from_config(&file, name, &cfg)?;
+    let mut up = BTreeMap::new();
+    let mut dirs = BTreeMap::new();
+    for u in stage.upstream() {
+        let p = plan
+            .planned
+            .iter()
+            .find(|p| p.name == u && p.state == State::Fresh)
+            .ok_or_else(|| Error::UpstreamField {
+                kind: "calibrate",
+                name: name.to_string(),
+                what: format!("a current `{u}` (run `hdi run --only {name}` first)"),
+            })?;
+        let dir = store.entry_dir(&p.kind, &p.key);
+        up.insert(u.clone(), read_result(&dir)?);
+        dirs.insert(u, dir);
+    }
+    let (mut isbl, dmw) = base_inputs(&stage.base, &up, &dirs)?;
+    let mut params = stage.base.clone();
+    adjust(&mut params, &mut isbl);
+    let base = base_of(&params, isbl, dmw.as_ref());
+    Ok(evaluate_held_out(&base, &stage.settings, &[])?)
 }
 
 /// `hdi validate` area `calibration`: for every `[calibrate.*]` of the pipeline whose result is
