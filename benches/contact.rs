@@ -12,14 +12,17 @@ fn contact(c: &mut Criterion) {
     let cfg = ContactConfig::defaults();
     let params = check(&cfg).unwrap();
     let model = IsblModel::new(IsblParams::improved_2dof()).unwrap();
-    let table = analyse(&params.params, &params).unwrap().table().clone();
+    let table = analyse(&params.params, &params, None)
+        .unwrap()
+        .table()
+        .clone();
     let mut g = c.benchmark_group("contact");
     g.sample_size(10);
     g.bench_function("isbl_direct_evaluation_h_3sigma", |b| {
         b.iter(|| model.at(black_box(1.5e-9)).unwrap())
     });
     g.bench_function("build_curves_and_verified_table_improved_set", |b| {
-        b.iter(|| analyse(&params.params, &params).unwrap())
+        b.iter(|| analyse(&params.params, &params, None).unwrap())
     });
     g.finish();
     let mut g = c.benchmark_group("force_table");

@@ -5,16 +5,23 @@
 //!
 //! ```text
 //! cargo run --release --example model_form -- [contact_force=interference_tangent|static_curve|integrated_stiffness]
-//!     [lubricant=none|mtl] [summit_offset=none|mccool] [surface_energy=constant|variable]
+//!     [lubricant=none|mtl] [summit_distribution=surface|mccool|fig_2_11|given]
+//!     [fig_2_11_area=55] [summits=S,Y] [surface_energy=constant|variable]
 //!     [friction_law=junction_shear|seed_power_elastic|ke_static] [dmw_seed=1]
 //!     [model=initial_2dof]
 //! ```
+//!
+//! `summit_offset=none|mccool` is still read (the older name). `fig_2_11` fits σ_s and y_s to
+//! Fig. 2.11 on the variant's interface with the force on `fig_2_11_area` µm² (default 55);
+//! `given` takes `summits=σ_s/σ,y_s/σ` (e.g. the measured ones a `[contact]` stage with
+//! `summit_distribution = "measured"` writes in its result).
 //!
 //! Every case starts from its static equilibrium (`init = "static"`) and sees the validation's
 //! synthetic DMW (σ 1 nm, seed 1) unless stated; the no-DMW numbers are the steady states the
 //! calibration notes quote (docs/calibration.md).
 
-use hdi::contact::isbl::{FrictionLaw, IsblModel, IsblParams, SummitOffset, SurfaceEnergy};
+use hdi::contact::isbl::summits::{fit_two_point, TwoPointTarget};
+use hdi::contact::isbl::{FrictionLaw, IsblModel, IsblParams, SummitDistribution, SurfaceEnergy};
 use hdi::contact::lookup::IsblLookup;
 use hdi::dmw::excitation_tracks::{synthetic_dmw, Excitation};
 use hdi::dynamics::metrics::{slopes, CaseParams, SlopeParams, SweepPoint};
@@ -24,6 +31,15 @@ use hdi::dynamics::two_dof::{ContactForceForm, DmwInput, LubricantForce, SimOpti
 use rayon::prelude::*;
 
 const NM: f64 = 1e-9;
+
+/// The `summit_distribution` flag.
+#[derive(Clone, Copy)]
+enum Summits {
+    Surface,
+    McCool,
+    Fig211,
+    Given,
+}
 
 #[derive(Clone, Copy)]
 struct Outcome {
@@ -172,6 +188,9 @@ fn main() {
     let mut label = Vec::new();
     let mut seed = 1;
     let mut initial = false;
+    let mut summits = Summits::Surface;
+    let mut fig_area = 55e-12;
+    let mut given = (f64::NAN, f64::NAN);
     for arg in std::env::args().skip(1) {
         let (k, v) = arg.split_once('=').expect("key=value");
         label.push(arg.clone());
@@ -187,8 +206,19 @@ fn main() {
             }
             ("lubricant", "none") => options.lubricant = LubricantForce::None,
             ("lubricant", "mtl") => options.lubricant = LubricantForce::Mtl,
-            ("summit_offset", "none") => ip.summit_offset = SummitOffset::None,
-            ("summit_offset", "mccool") => ip.summit_offset = SummitOffset::McCool,
+            ("summit_offset", "none") | ("summit_distribution", "surface") => {
+                summits = Summits::Surface
+            }
+            ("summit_offset", "mccool") | ("summit_distribution", "mccool") => {
+                summits = Summits::McCool
+            }
+            ("summit_distribution", "fig_2_11") => summits = Summits::Fig211,
+            ("summit_distribution", "given") => summits = Summits::Given,
+            ("fig_2_11_area", a) => fig_area = a.parse::<f64>().expect("fig_2_11_area=µm²") * 1e-12,
+            ("summits", r) => {
+                let (a, b) = r.split_once(',').expect("summits=S,Y");
+                given = (a.parse().expect("σ_s/σ"), b.parse().expect("y_s/σ"));
+            }
             ("surface_energy", "constant") => {}
             ("surface_energy", "variable") => ip.surface_energy = SurfaceEnergy::seed_variable(),
             ("friction_law", "junction_shear") => ip.friction_law = FrictionLaw::JunctionShear,
@@ -202,15 +232,37 @@ fn main() {
         }
     }
     println!("variant: {}", label.join(" "));
+    // The summit distribution on the variant's interface (as a [contact] stage would resolve it).
+    let distribution = |p: &IsblParams| match summits {
+        Summits::Surface => SummitDistribution::Surface,
+        Summits::McCool => SummitDistribution::McCool,
+        Summits::Given => SummitDistribution::Given {
+            sigma_ratio: given.0,
+            offset_ratio: given.1,
+        },
+        Summits::Fig211 => {
+            let fit = fit_two_point(p, &TwoPointTarget::fig_2_11(fig_area)).expect("Fig. 2.11 fit");
+            println!(
+                "  Fig. 2.11 fit on A_n = {:.1} µm²: σ_s/σ = {:.4}, y_s/σ = {:.4} (P(3σ)·A_n = {:.3} µN, \
+                 P(3σ)/P(2.5σ) = {:.4})",
+                fig_area * 1e12,
+                fit.sigma_ratio,
+                fit.offset_ratio,
+                fit.force * 1e6,
+                fit.ratio
+            );
+            fit.distribution()
+        }
+    };
     if initial {
         // §12.2 #9: the initial model's mean FHM at 4–7 nm (its own interface, 1.2σ criterion).
         let mut ip0 = IsblParams::initial_2dof();
-        ip0.summit_offset = ip.summit_offset;
         ip0.friction_law = ip.friction_law;
         ip0.surface_energy = match ip.surface_energy {
             SurfaceEnergy::Variable { .. } => ip.surface_energy,
             SurfaceEnergy::Constant { .. } => ip0.surface_energy,
         };
+        ip0.summits = distribution(&ip0);
         let isbl0 = IsblLookup::build_standard(IsblModel::new(ip0).expect("ISBL")).expect("table");
         let dmw = synthetic_dmw(2.2e-3, 4e6, 1e-9, seed).expect("DMW");
         let model = initial_2dof();
@@ -248,6 +300,7 @@ fn main() {
         }
         return;
     }
+    ip.summits = distribution(&ip);
     let isbl = IsblLookup::build_standard(IsblModel::new(ip).expect("ISBL")).expect("table");
     let model = improved_2dof();
     let dmw = synthetic_dmw(2.2e-3, 4e6, 1e-9, seed).expect("DMW");

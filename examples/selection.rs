@@ -62,10 +62,8 @@ fn main() {
             .collect::<Vec<_>>()
             .join(", ")
     };
-    let e = hdi::validation::calibration::held_out_under(
-        &config,
-        "improved_calibration",
-        |p, isbl| {
+    let e =
+        hdi::validation::calibration::held_out_under(&config, "improved_calibration", |p, isbl| {
             for (k, v) in &switches {
                 match (k.as_str(), v.as_str()) {
                     ("contact_force", "interference_tangent") => {
@@ -93,9 +91,8 @@ fn main() {
                     _ => panic!("unknown switch {k} = {v}"),
                 }
             }
-        },
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
     println!("variant: {label} (spec defaults, no fitted knobs; the calibration's base and grid)");
     println!("selection set (dissertation geometry):");
     let (s, st) = print_set(&e, TargetSet::Selection);

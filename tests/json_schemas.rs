@@ -194,6 +194,20 @@ fn contact_json_matches_its_schema() {
     assert_matches_schema("contact", &ke);
     let v: Value = serde_json::from_str(&ke).unwrap();
     assert_eq!(v["inputs"]["friction_law"], "ke_static");
+    // A fitted summit distribution: its ratios in the inputs, how they were obtained beside.
+    let fit = json_of(
+        dir.path(),
+        &["contact", "--summit-distribution", "fig_2_11", "--json"],
+        true,
+    );
+    assert_matches_schema("contact", &fit);
+    let v: Value = serde_json::from_str(&fit).unwrap();
+    assert_eq!(v["inputs"]["summit_offset"], "given");
+    assert_eq!(v["summit_distribution"]["kind"], "fig_2_11");
+    let force = v["summit_distribution"]["fitted"]["force_N"]
+        .as_f64()
+        .unwrap();
+    assert!((force / 7.30e-6 - 1.0).abs() < 1e-9, "{force}");
 }
 
 #[test]

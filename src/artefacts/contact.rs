@@ -2,7 +2,7 @@
 //! string of `contact.h5`): everything a downstream stage needs to rebuild the ISBL model and
 //! its force table (the 2-DOF and 3-DOF cases, the calibration).
 
-use crate::contact::isbl::{FrictionLaw, IsblParams, SummitOffset, SurfaceEnergy};
+use crate::contact::isbl::{FrictionLaw, IsblParams, SummitDistribution, SurfaceEnergy};
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -36,19 +36,32 @@ pub struct ContactInputs {
     #[serde(rename = "t_m")]
     pub lubricant_thickness: f64,
     pub surface_energy: SurfaceEnergyInput,
-    /// `none` or `mccool` (the `[contact] summit_offset` values; the legacy `None`/`McCool`
-    /// of results written before docs/json.md are still read).
+    /// The summit distribution: `none` (the surface heights' statistics), `mccool`, or
+    /// `given` with `summit_ratios` (the legacy `None`/`McCool` of results written before
+    /// docs/json.md are still read). The key keeps its old name so that results and cache
+    /// keys of the default are unchanged.
     pub summit_offset: String,
     /// `junction_shear`, `seed_power_elastic` or `ke_static` (legacy `JunctionShear`/
     /// `SeedPowerElastic`).
     pub friction_law: String,
+    /// `σ_s/σ` and `y_s/σ` of a `given` distribution; absent (not written) otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub summit_ratios: Option<SummitRatios>,
 }
 
-/// The `[contact] summit_offset` name of an offset.
-pub fn summit_offset_name(o: SummitOffset) -> &'static str {
+/// A given summit distribution in units of σ.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SummitRatios {
+    pub sigma_s_over_sigma: f64,
+    pub y_s_over_sigma: f64,
+}
+
+/// The `inputs.summit_offset` name of a summit distribution.
+pub fn summit_offset_name(o: SummitDistribution) -> &'static str {
     match o {
-        SummitOffset::None => "none",
-        SummitOffset::McCool => "mccool",
+        SummitDistribution::Surface => "none",
+        SummitDistribution::McCool => "mccool",
+        SummitDistribution::Given { .. } => "given",
     }
 }
 
@@ -107,8 +120,18 @@ impl From<&IsblParams> for ContactInputs {
                     variable: VariableSurfaceEnergy { c1, c2, c3 },
                 },
             },
-            summit_offset: summit_offset_name(p.summit_offset).to_string(),
+            summit_offset: summit_offset_name(p.summits).to_string(),
             friction_law: friction_law_name(p.friction_law).to_string(),
+            summit_ratios: match p.summits {
+                SummitDistribution::Given {
+                    sigma_ratio,
+                    offset_ratio,
+                } => Some(SummitRatios {
+                    sigma_s_over_sigma: sigma_ratio,
+                    y_s_over_sigma: offset_ratio,
+                }),
+                _ => None,
+            },
         }
     }
 }
@@ -124,7 +147,8 @@ impl ContactInputs {
         Self::deserialize(v).ok()
     }
 
-    /// The ISBL parameters; `None` for an unknown summit offset or friction law.
+    /// The ISBL parameters; `None` for an unknown summit offset or friction law (or a `given`
+    /// one without its ratios).
     pub fn params(&self) -> Option<IsblParams> {
         Some(IsblParams {
             sigma: self.sigma,
@@ -146,9 +170,13 @@ impl ContactInputs {
                     variable: VariableSurfaceEnergy { c1, c2, c3 },
                 } => SurfaceEnergy::Variable { c1, c2, c3 },
             },
-            summit_offset: match self.summit_offset.as_str() {
-                "none" | "None" => SummitOffset::None,
-                "mccool" | "McCool" => SummitOffset::McCool,
+            summits: match (self.summit_offset.as_str(), self.summit_ratios) {
+                ("none" | "None", None) => SummitDistribution::Surface,
+                ("mccool" | "McCool", None) => SummitDistribution::McCool,
+                ("given", Some(r)) => SummitDistribution::Given {
+                    sigma_ratio: r.sigma_s_over_sigma,
+                    offset_ratio: r.y_s_over_sigma,
+                },
                 _ => return None,
             },
             friction_law: match self.friction_law.as_str() {
@@ -201,7 +229,10 @@ mod tests {
             "E2_Pa": p.disk_modulus, "nu2": p.disk_poisson, "nu_yielding": p.yielding_poisson,
             "H_Pa": p.hardness, "epsilon_m": p.lj_spacing, "t_m": p.lubricant_thickness,
             "surface_energy": surface_energy,
-            "summit_offset": format!("{:?}", p.summit_offset),
+            "summit_offset": match p.summits {
+                SummitDistribution::Surface => "None",
+                _ => "McCool",
+            },
             "friction_law": format!("{:?}", p.friction_law),
         })
     }
@@ -209,7 +240,7 @@ mod tests {
     #[test]
     fn written_json_is_unchanged_and_reads_back() {
         let mut mccool = IsblParams::improved_2dof();
-        mccool.summit_offset = SummitOffset::McCool;
+        mccool.summits = SummitDistribution::McCool;
         mccool.friction_law = FrictionLaw::SeedPowerElastic;
         let ke_static = IsblParams {
             friction_law: FrictionLaw::KeStatic,
@@ -229,11 +260,32 @@ mod tests {
             }
             // The results name the enums explicitly (docs/json.md), no Rust debug form.
             let v = inputs.to_json();
-            assert_eq!(v["summit_offset"], summit_offset_name(p.summit_offset));
+            assert_eq!(v["summit_offset"], summit_offset_name(p.summits));
+            assert!(v.get("summit_ratios").is_none());
             assert_eq!(v["friction_law"], friction_law_name(p.friction_law));
             let back = ContactInputs::from_json(&v).unwrap().params().unwrap();
             assert_eq!(back, p);
         }
+    }
+
+    /// A given distribution writes its ratios and reads back; without them it is unusable.
+    #[test]
+    fn a_given_summit_distribution_round_trips_with_its_ratios() {
+        let p = IsblParams {
+            summits: SummitDistribution::Given {
+                sigma_ratio: 0.42,
+                offset_ratio: 1.9,
+            },
+            ..IsblParams::improved_2dof()
+        };
+        let v = ContactInputs::from(&p).to_json();
+        assert_eq!(v["summit_offset"], "given");
+        assert_eq!(v["summit_ratios"]["sigma_s_over_sigma"], 0.42);
+        assert_eq!(v["summit_ratios"]["y_s_over_sigma"], 1.9);
+        assert_eq!(ContactInputs::from_json(&v).unwrap().params().unwrap(), p);
+        let mut bare = v.clone();
+        bare.as_object_mut().unwrap().remove("summit_ratios");
+        assert!(ContactInputs::from_json(&bare).unwrap().params().is_none());
     }
 
     #[test]

@@ -64,6 +64,35 @@ pub fn upstream_summits(upstream: &BTreeMap<String, Value>, name: &str) -> Resul
     Ok([get("sigma_m")?, get("R_m")?, get("eta_per_m2")?])
 }
 
+/// What an `[interface.NAME]` table says about its surfaces, read leniently (the interface
+/// stage checks the table itself): its combination rule and the `[surface.*]` instances.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+pub struct InterfaceSurfaces {
+    #[serde(default = "default_rule")]
+    pub rule: String,
+    #[serde(default)]
+    pub surfaces: Vec<String>,
+}
+
+fn default_rule() -> String {
+    "sum_surface".into()
+}
+
+impl InterfaceSurfaces {
+    /// The table of `[interface.name]` in `file`, `None` if the file has no such instance.
+    pub fn of(
+        file: &crate::core::config::PipelineFile,
+        name: &str,
+    ) -> std::result::Result<Option<Self>, crate::core::config::ConfigError> {
+        file.instance::<Self>("interface", name)
+    }
+
+    /// Two measured surfaces (not `explicit` numbers).
+    pub fn has_two_surfaces(&self) -> bool {
+        self.rule != "explicit" && self.surfaces.len() == 2
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -2,7 +2,7 @@
 //! `result.json`): σ, R, η and the spectral moments the combination rules need.
 
 use crate::error::{Error, Result};
-use crate::surface::combine::SurfaceStats;
+use crate::surface::combine::{SummitHeights, SurfaceStats};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -66,6 +66,38 @@ pub fn upstream_surface_stats(
     Ok(SummitStats::from_result(result, name)?.stats())
 }
 
+/// The measured summit heights of the upstream surface instance `name` (its discrete summits:
+/// `mean_summit_height_m`, `sigma_s_m`, with `sigma_m` and `eta_per_m2`). A surface of several
+/// areas is refused: its result carries these for the first area only.
+pub fn upstream_summit_heights(
+    upstream: &BTreeMap<String, Value>,
+    name: &str,
+) -> Result<SummitHeights> {
+    let result = upstream.get(name).ok_or_else(|| Error::MissingUpstream {
+        kind: "surface",
+        name: name.to_string(),
+    })?;
+    let field = |what: String| Error::UpstreamField {
+        kind: "surface",
+        name: name.to_string(),
+        what,
+    };
+    if result.get("areas").is_some() {
+        return Err(field(
+            "summit heights over its areas (several areas: the result holds the first \
+             area's only; measure the summits on one area)"
+                .into(),
+        ));
+    }
+    let get = |k: &str| result[k].as_f64().ok_or_else(|| field(format!("`{k}`")));
+    Ok(SummitHeights {
+        sigma: get("sigma_m")?,
+        eta: get("eta_per_m2")?,
+        mean: get("mean_summit_height_m")?,
+        std: get("sigma_s_m")?,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -91,5 +123,27 @@ mod tests {
         let up = BTreeMap::from([("s".to_string(), json!({"stats": {"sigma": 1.0}}))]);
         let e = upstream_surface_stats(&up, "s").unwrap_err().to_string();
         assert_eq!(e, "surface `s` result has no `r`");
+    }
+
+    #[test]
+    fn summit_heights_read_from_a_single_area_result_only() {
+        let r = json!({"sigma_m": 0.4e-9, "eta_per_m2": 3e14, "mean_summit_height_m": 0.45e-9,
+                       "sigma_s_m": 0.33e-9});
+        let up = BTreeMap::from([("s".to_string(), r.clone())]);
+        let h = upstream_summit_heights(&up, "s").unwrap();
+        assert_eq!(
+            (h.sigma, h.eta, h.mean, h.std),
+            (0.4e-9, 3e14, 0.45e-9, 0.33e-9)
+        );
+        let mut areas = r.clone();
+        areas["areas"] = json!({"n": 2});
+        let up = BTreeMap::from([("s".to_string(), areas)]);
+        assert!(upstream_summit_heights(&up, "s").is_err());
+        // No summits found: σ_s is not a number (null), an error naming it.
+        let mut none = r;
+        none["sigma_s_m"] = Value::Null;
+        let up = BTreeMap::from([("s".to_string(), none)]);
+        let e = upstream_summit_heights(&up, "s").unwrap_err().to_string();
+        assert!(e.contains("sigma_s_m"), "{e}");
     }
 }

@@ -402,9 +402,15 @@ pub struct ContactArgs {
     /// Constant Δγ ("60 mN/m") or "variable".
     #[arg(long)]
     pub surface_energy: Option<String>,
-    /// none (default) or mccool.
+    /// Older name of --summit-distribution: none (= surface) or mccool.
     #[arg(long)]
     pub summit_offset: Option<String>,
+    /// surface (default), mccool or fig_2_11 (σ_s, y_s fitted to Fig. 2.11's two numbers).
+    #[arg(long)]
+    pub summit_distribution: Option<String>,
+    /// fig_2_11: the nominal area of Fig. 2.11's 7.30 µN, e.g. "55 um^2" (the default).
+    #[arg(long, allow_hyphen_values = true)]
+    pub fig_2_11_nominal_area: Option<Area>,
     /// junction_shear (default), seed_power_elastic or ke_static (docs/contact.md, "Friction").
     #[arg(long)]
     pub friction_law: Option<String>,

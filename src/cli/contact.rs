@@ -21,9 +21,9 @@ pub(super) fn cmd_contact(a: ContactArgs) -> Result<()> {
     cfg.lj_spacing = a.lj_spacing;
     cfg.lubricant_thickness = a.lubricant_thickness;
     cfg.surface_energy = a.surface_energy.map(SurfaceEnergyConfig::Text);
-    if let Some(v) = a.summit_offset {
-        cfg.summit_offset = v;
-    }
+    cfg.summit_offset = a.summit_offset;
+    cfg.summit_distribution = a.summit_distribution;
+    cfg.fig_2_11_nominal_area = a.fig_2_11_nominal_area;
     if let Some(v) = a.friction_law {
         cfg.friction_law = v;
     }
@@ -43,7 +43,7 @@ pub(super) fn cmd_contact(a: ContactArgs) -> Result<()> {
     cfg.gyration_radius = a.gyration_radius;
     let params =
         contact::check(&cfg).map_err(|e| anyhow::anyhow!("{}: {}", flag(&e.key), e.message))?;
-    let analysis = contact::analyse(&params.params, &params)?;
+    let analysis = contact::analyse(&params.params, &params, None)?;
     if let Some(out) = &a.out {
         let dir = out_parent(out)?;
         contact::write_outputs(&analysis, &params, out, Some(dir), "", &json!([]))?;
@@ -70,6 +70,20 @@ pub(super) fn cmd_contact(a: ContactArgs) -> Result<()> {
         p.lubricant_thickness * 1e9,
         p.lj_spacing * 1e9
     );
+    println!(
+        "  summits ({}): σ_s = {:.4}σ, y_s = {:.4}σ above the mean plane",
+        params.summits.name(p.summits),
+        d.summit_sigma / p.sigma,
+        d.summit_offset / p.sigma
+    );
+    if let Some(contact::SummitOrigin::Fig211 { nominal_area, fit }) = &analysis.summit_origin {
+        println!(
+            "    fitted to Fig. 2.11 on A_n = {:.1} µm²: P(3σ)·A_n = {:.3} µN, P(3σ)/P(2.5σ) = {:.4}",
+            nominal_area * 1e12,
+            fit.force * 1e6,
+            fit.ratio
+        );
+    }
     println!(
         "  {:>6} {:>12} {:>12} {:>12} {:>12} {:>12}",
         "h/σ", "P (Pa)", "k_c (Pa/nm)", "A_r/A_n", "Q (Pa)", "F_s (Pa)"

@@ -588,21 +588,32 @@ impl<'a> TwoDofCase<'a> {
     /// The interface at state `y` and time `t`.
     #[cfg(test)]
     fn interface(&self, t: f64, y: &[f64; 4]) -> Result<InterfaceState, DynamicsError> {
-        self.interface_of(self.poc_kinematics(t, y)?, true)
+        self.interface_of(self.poc_kinematics(t, y)?, true, self.contact_damping)
     }
 
     /// The interface at state `y` and time `t` and the TE spacing (one sample's outputs).
     fn sample(&self, t: f64, y: &[f64; 4]) -> Result<(InterfaceState, f64), DynamicsError> {
         let tr = self.poc_frame.pitch_terms(self.model.nominal_pitch + y[1]);
-        let i = self.interface_of(self.poc_kinematics_with(t, y, &tr)?, true)?;
+        let i = self.interface_of(
+            self.poc_kinematics_with(t, y, &tr)?,
+            true,
+            self.contact_damping,
+        )?;
         Ok((i, self.trailing_edge_spacing(t, y, &tr)))
     }
 
     /// The interface at POC kinematics `k`. With `full = false` (the right-hand side) the
     /// real area is left at 0: the equations of motion do not use it, and skipping its
     /// lookup saves an `exp` per call; every other field is the same, bit for bit.
+    /// `contact_damping`: the damper's coefficient (the case's own, or 0 for the damper-free
+    /// rest state of [`Self::static_equilibrium`]).
     #[inline]
-    fn interface_of(&self, k: PocKinematics, full: bool) -> Result<InterfaceState, DynamicsError> {
+    fn interface_of(
+        &self,
+        k: PocKinematics,
+        full: bool,
+        contact_damping: f64,
+    ) -> Result<InterfaceState, DynamicsError> {
         let (spacing, spacing_rate) = (k.spacing, k.spacing_rate);
         let clearance = self.criterion.clearance(spacing, self.sigma);
         let area = self.nominal_area;
@@ -620,7 +631,7 @@ impl<'a> TwoDofCase<'a> {
                     area * at_spacing.pressure() - self.threshold_force
                 }
             };
-            contact_force = elastic - self.contact_damping * spacing_rate;
+            contact_force = elastic - contact_damping * spacing_rate;
             if contact_force < 0.0 {
                 contact_force = 0.0;
                 clipped = true;
@@ -661,9 +672,11 @@ impl<'a> TwoDofCase<'a> {
         })
     }
 
-    /// `y' = f(t, y)`.
+    /// `y' = f(t, y)` (the tests' entry; the integrator and the rest state call
+    /// `rhs_cached`).
+    #[cfg(test)]
     fn rhs(&self, t: f64, y: &[f64; 4], dy: &mut [f64; 4]) -> Result<(), DynamicsError> {
-        self.rhs_cached(t, y, dy, None)
+        self.rhs_cached(t, y, dy, None, self.contact_damping)
     }
 
     /// [`Self::rhs`], leaving the POC kinematics of `(t, y)` in `cache` for the step cap:
@@ -675,6 +688,7 @@ impl<'a> TwoDofCase<'a> {
         y: &[f64; 4],
         dy: &mut [f64; 4],
         cache: Option<&RhsCache>,
+        contact_damping: f64,
     ) -> Result<(), DynamicsError> {
         let state = HeavePitchState {
             heave: y[0],
@@ -705,7 +719,7 @@ impl<'a> TwoDofCase<'a> {
                 kinematics: kinematics.as_ref().ok().copied(),
             });
         }
-        let i = match kinematics.and_then(|k| self.interface_of(k, false)) {
+        let i = match kinematics.and_then(|k| self.interface_of(k, false, contact_damping)) {
             Ok(i) => i,
             // A trial stage of a step the controller will reject can leave the geometry's
             // domain (e.g. a pitch of radians): NaN makes the integrator shrink the step.
@@ -758,29 +772,70 @@ impl<'a> TwoDofCase<'a> {
         }
     }
 
-    /// Accelerations at rest at `(z, ϑ)` and `t = 0`; `None` outside the model's domain.
-    fn rest_acceleration(&self, z: f64, pitch_offset: f64) -> Option<[f64; 2]> {
+    /// Accelerations at rest at `(z, ϑ)` and `t = 0` with the contact damper's coefficient
+    /// `contact_damping`; `None` outside the model's domain.
+    fn rest_acceleration(
+        &self,
+        z: f64,
+        pitch_offset: f64,
+        contact_damping: f64,
+    ) -> Option<[f64; 2]> {
         let mut dy = [0.0; 4];
-        self.rhs(0.0, &[z, pitch_offset, 0.0, 0.0], &mut dy).ok()?;
+        self.rhs_cached(
+            0.0,
+            &[z, pitch_offset, 0.0, 0.0],
+            &mut dy,
+            None,
+            contact_damping,
+        )
+        .ok()?;
         (dy[2].is_finite() && dy[3].is_finite()).then_some([dy[2], dy[3]])
     }
 
+    /// Newton from each of `offsets` (nm of heave around `start`) with the case's contact
+    /// damper, then — only if every start fails — from each again without it.
+    ///
+    /// The frozen DMW moves the disk at t = 0, so at rest the POC spacing changes at the
+    /// DMW's rate and the contact damper adds `−c_c·ṡ` as soon as the clearance is negative:
+    /// the rest force jumps by `c_c|ṡ|` at the threshold. Where the damper-free equilibrium
+    /// lies just inside it (within ≈ 0.1 nm, measured: docs/model-form.md, "Summit
+    /// heights") and the disk approaches, the jump straddles zero and no rest state exists;
+    /// the case then starts from the damper-free one (the elastic, adhesive and AB forces
+    /// balanced), the damper acting from the first step. Where a rest state with the damper
+    /// exists it is returned, as before.
+    fn static_equilibrium_over(
+        &self,
+        start: [f64; 2],
+        offsets: &[f64],
+    ) -> Result<[f64; 2], DynamicsError> {
+        let mut first_error = None;
+        for damping in [self.contact_damping, 0.0] {
+            for dz in offsets {
+                match self.static_equilibrium_from([start[0] + dz * 1e-9, start[1]], damping) {
+                    Ok(q) => return Ok(q),
+                    Err(e) => {
+                        first_error.get_or_insert(e);
+                    }
+                }
+            }
+            if self.contact_damping == 0.0 {
+                break;
+            }
+        }
+        Err(first_error.expect("at least one start"))
+    }
+
     /// Static equilibrium `(z, ϑ)` at this actuation with the DMW frozen at t = 0 (§5.4):
-    /// damped Newton on the rest accelerations with a finite-difference Jacobian.
+    /// damped Newton on the rest accelerations with a finite-difference Jacobian (without
+    /// the contact damper where no rest state with it exists: `static_equilibrium_over`).
     pub fn static_equilibrium(&self) -> Result<[f64; 2], DynamicsError> {
         // Newton from the nominal state first; where strong adhesion makes the rest forces
         // fold (a jump to contact), the root lies on the other side of the fold and Newton
         // from the nominal state stalls on it, so retry from heave offsets on either side.
-        let mut first_error = None;
-        for dz in [0.0, -0.5, 0.5, -1.0, 1.0, -2.0, 2.0, -4.0, 4.0] {
-            match self.static_equilibrium_from([dz * 1e-9, 0.0]) {
-                Ok(q) => return Ok(q),
-                Err(e) => {
-                    first_error.get_or_insert(e);
-                }
-            }
-        }
-        Err(first_error.expect("at least one start"))
+        self.static_equilibrium_over(
+            [0.0, 0.0],
+            &[0.0, -0.5, 0.5, -1.0, 1.0, -2.0, 2.0, -4.0, 4.0],
+        )
     }
 
     /// Static equilibrium by continuation from `start` (a neighbouring equilibrium): Newton
@@ -788,19 +843,17 @@ impl<'a> TwoDofCase<'a> {
     /// Newton sense to `start` is kept, so a sweep stepping along the actuation stays on
     /// its branch until the branch ends at a fold (docs/conventions.md).
     pub fn static_equilibrium_near(&self, start: [f64; 2]) -> Result<[f64; 2], DynamicsError> {
-        let mut first_error = None;
-        for dz in [0.0, -0.25, 0.25, -0.5, 0.5, -1.0, 1.0, -2.0, 2.0, -4.0, 4.0] {
-            match self.static_equilibrium_from([start[0] + dz * 1e-9, start[1]]) {
-                Ok(q) => return Ok(q),
-                Err(e) => {
-                    first_error.get_or_insert(e);
-                }
-            }
-        }
-        Err(first_error.expect("at least one start"))
+        self.static_equilibrium_over(
+            start,
+            &[0.0, -0.25, 0.25, -0.5, 0.5, -1.0, 1.0, -2.0, 2.0, -4.0, 4.0],
+        )
     }
 
-    fn static_equilibrium_from(&self, start: [f64; 2]) -> Result<[f64; 2], DynamicsError> {
+    fn static_equilibrium_from(
+        &self,
+        start: [f64; 2],
+        contact_damping: f64,
+    ) -> Result<[f64; 2], DynamicsError> {
         let fail = |why: &str| {
             DynamicsError::Numerical(format!(
                 "static equilibrium at h_TFC = {:.3} nm: {why}",
@@ -812,15 +865,15 @@ impl<'a> TwoDofCase<'a> {
         let norm = |a: [f64; 2]| a[0].hypot(a[1] * arm);
         let mut q = start;
         let mut a = self
-            .rest_acceleration(q[0], q[1])
+            .rest_acceleration(q[0], q[1], contact_damping)
             .ok_or_else(|| fail("the start state is outside the model's domain"))?;
         for _ in 0..100 {
             let (dz, dp) = (1e-13, 1e-13 / arm);
             let az = self
-                .rest_acceleration(q[0] + dz, q[1])
+                .rest_acceleration(q[0] + dz, q[1], contact_damping)
                 .ok_or_else(|| fail("Jacobian probe left the domain"))?;
             let ap = self
-                .rest_acceleration(q[0], q[1] + dp)
+                .rest_acceleration(q[0], q[1] + dp, contact_damping)
                 .ok_or_else(|| fail("Jacobian probe left the domain"))?;
             let j = Matrix2::new(
                 (az[0] - a[0]) / dz,
@@ -835,7 +888,7 @@ impl<'a> TwoDofCase<'a> {
             let mut accepted = None;
             for _ in 0..40 {
                 let trial = [q[0] + lambda * step[0], q[1] + lambda * step[1]];
-                if let Some(at) = self.rest_acceleration(trial[0], trial[1]) {
+                if let Some(at) = self.rest_acceleration(trial[0], trial[1], contact_damping) {
                     if norm(at) < norm(a) || norm(at) == 0.0 {
                         accepted = Some((trial, at));
                         break;
@@ -924,7 +977,9 @@ impl<'a> TwoDofCase<'a> {
             start[1] += q[1];
         }
         let cache = RhsCache::new();
-        let rhs = |t: f64, y: &[f64; 4], dy: &mut [f64; 4]| self.rhs_cached(t, y, dy, Some(&cache));
+        let rhs = |t: f64, y: &[f64; 4], dy: &mut [f64; 4]| {
+            self.rhs_cached(t, y, dy, Some(&cache), self.contact_damping)
+        };
         let sampling = Sampling::Uniform { dt: o.output_step };
         let result = match o.integrator {
             Integrator::Dopri5 {

@@ -147,6 +147,70 @@ pub fn combine(a: &SurfaceStats, b: &SurfaceStats, rule: CombineRule) -> Result<
     }
 }
 
+/// One surface's measured summit heights (the discrete summits of the surfaces stage): the
+/// surface's σ, its summit density η and the mean and standard deviation of the summit
+/// heights above its mean plane (SI). For a combination, `eta` is the mixture's summit count
+/// `η1 + η2` (its weights), not the contact model's η.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SummitHeights {
+    pub sigma: f64,
+    pub eta: f64,
+    pub mean: f64,
+    pub std: f64,
+}
+
+impl SummitHeights {
+    fn validate(&self, which: &str) -> Result<()> {
+        check_positive(&format!("{which}.sigma"), self.sigma)?;
+        check_positive(&format!("{which}.eta"), self.eta)?;
+        check_positive(&format!("{which}.summit_std"), self.std)?;
+        if !self.mean.is_finite() {
+            return Err(SurfaceError::Parameter {
+                name: format!("{which}.summit_mean"),
+                value: format!("{:e}", self.mean),
+                expected: "a finite number".into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// `σ_s/σ`.
+    pub fn std_ratio(&self) -> f64 {
+        self.std / self.sigma
+    }
+
+    /// `y_s/σ`.
+    pub fn mean_ratio(&self) -> f64 {
+        self.mean / self.sigma
+    }
+}
+
+/// The summit heights of the sum surface `z1 + z2` of two independent surfaces, from each
+/// surface's measured summits (docs/model-form.md, "Summit heights").
+///
+/// A summit of the sum surface is taken to be a summit of one surface standing on the other
+/// surface at a point unrelated to it: with probability `w_i = η_i/(η1 + η2)` its height is
+/// `S_i + Z_j`, `S_i` surface i's summit height (mean `m_i`, std `s_i`) and `Z_j` surface j's
+/// height (mean 0, std `σ_j`). The mixture has mean `Σ w_i m_i` and variance
+/// `Σ w_i (s_i² + σ_j² + (m_i − m̄)²)`; σ adds in quadrature as for the surface heights. Exact
+/// when one surface carries all summits and the other is smooth at their scale; for two
+/// comparable surfaces it ignores summits that merge or shift on the other's slope.
+pub fn combine_summit_heights(a: &SummitHeights, b: &SummitHeights) -> Result<SummitHeights> {
+    a.validate("surface_1")?;
+    b.validate("surface_2")?;
+    let eta = a.eta + b.eta;
+    let (wa, wb) = (a.eta / eta, b.eta / eta);
+    let mean = wa * a.mean + wb * b.mean;
+    let variance = wa * (a.std.powi(2) + b.sigma.powi(2) + (a.mean - mean).powi(2))
+        + wb * (b.std.powi(2) + a.sigma.powi(2) + (b.mean - mean).powi(2));
+    Ok(SummitHeights {
+        sigma: a.sigma.hypot(b.sigma),
+        eta,
+        mean,
+        std: variance.sqrt(),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -186,6 +250,36 @@ mod tests {
         let k = 0.375 / (6.0 * (3.0 * PI).sqrt());
         assert!(rel(c.beta, k * c.alpha.sqrt()) < 1e-12);
         assert_eq!(c.rule, CombineRule::SumSurface);
+    }
+
+    #[test]
+    fn summit_heights_of_a_smooth_partner_add_its_variance_only() {
+        // Surface b has (almost) no summits: the sum's summits are a's, shifted by b's heights
+        // (mean unchanged, variance + σ_b²); σ adds in quadrature.
+        let a = SummitHeights {
+            sigma: 0.5e-9,
+            eta: 300e12,
+            mean: 0.6e-9,
+            std: 0.4e-9,
+        };
+        let b = SummitHeights {
+            sigma: 0.3e-9,
+            eta: 1e-3,
+            mean: 0.2e-9,
+            std: 0.25e-9,
+        };
+        let c = combine_summit_heights(&a, &b).unwrap();
+        assert!(rel(c.mean, 0.6e-9) < 1e-12);
+        assert!(rel(c.std, 0.5e-9) < 1e-12); // √(0.4² + 0.3²)
+        assert!(rel(c.sigma, 0.3e-9f64.hypot(0.5e-9)) < 1e-15);
+        // Symmetric in the two surfaces; equal surfaces: mean kept, variance s² + σ².
+        let c2 = combine_summit_heights(&b, &a).unwrap();
+        assert!(rel(c.std, c2.std) < 1e-12 && rel(c.mean, c2.mean) < 1e-12);
+        let e = combine_summit_heights(&a, &a).unwrap();
+        assert!(rel(e.mean, a.mean) < 1e-15);
+        assert!(rel(e.std, (0.4e-9f64.powi(2) + 0.5e-9f64.powi(2)).sqrt()) < 1e-12);
+        let bad = SummitHeights { std: 0.0, ..a };
+        assert!(combine_summit_heights(&a, &bad).is_err());
     }
 
     #[test]

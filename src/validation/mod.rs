@@ -783,7 +783,7 @@ impl Area {
 #[rustfmt::skip]
 pub const AREAS: &[Area] = &[
     Area::code("dmw", dmw::rows),
-    Area::code("contact", contact::rows),
+    Area::mixed("contact", contact::rows),
     Area::code("mtl", mtl::rows),
     Area::mixed("dynamics", dynamics::rows),
     Area::mixed("three_dof", three_dof::rows),

@@ -130,3 +130,75 @@ fn synthesised(file: &Path) -> bool {
 pub fn open(config: Option<&Path>) -> Option<Cache> {
     config.and_then(|c| Cache::open(c).ok())
 }
+
+/// The summit distribution measured on the pipeline's surfaces (docs/model-form.md, "Summit
+/// heights"): `(σ_s/σ, y_s/σ)` of the source a `[contact.*]` with
+/// `summit_distribution = "measured"` names, else of the first `[interface.*]` of two surfaces
+/// (shipped: `[interface.hdi]`, disk + slider), from their current results.
+pub struct MeasuredSummits {
+    pub sigma_ratio: f64,
+    pub offset_ratio: f64,
+    /// What they were measured on (for a row's `inputs`).
+    pub inputs: String,
+    pub origin: Origin,
+}
+
+/// [`MeasuredSummits`] of the pipeline in `config`; `None` where its surfaces have not run.
+pub fn measured_summits(config: &Path, cache: &Cache) -> Option<MeasuredSummits> {
+    use crate::artefacts::interface::InterfaceSurfaces;
+    use crate::stages::contact::{ContactConfig, SummitOrigin};
+    let file = crate::stages::load(config).ok()?;
+    let interfaces: Vec<(String, InterfaceSurfaces)> = file.instances("interface").ok()?;
+    let named = file
+        .instances::<ContactConfig>("contact")
+        .ok()?
+        .into_iter()
+        .find(|(_, c)| c.summit_distribution.as_deref() == Some("measured"))
+        .and_then(|(_, c)| c.summit_source.or(c.interface));
+    let (source, surfaces) = match named {
+        Some(n) if file.has_instance("surface", &n) => (n.clone(), vec![n]),
+        Some(n) => {
+            let i = interfaces.iter().find(|(name, _)| *name == n)?;
+            (n, i.1.surfaces.clone())
+        }
+        None => interfaces
+            .iter()
+            .find(|(_, i)| i.has_two_surfaces())
+            .map(|(n, i)| (n.clone(), i.surfaces.clone()))?,
+    };
+    let mut heights = Vec::new();
+    let mut keys = Vec::new();
+    for s in &surfaces {
+        let stored = cache.current(s)?;
+        let up = std::collections::BTreeMap::from([(s.clone(), stored.result)]);
+        heights.push((
+            s.clone(),
+            crate::artefacts::surface::upstream_summit_heights(&up, s).ok()?,
+        ));
+        if let Origin::Cache { key, .. } = stored.origin {
+            keys.push(key);
+        }
+    }
+    let origin = SummitOrigin::measured(&source, heights).ok()?;
+    let (sigma_ratio, offset_ratio) = origin.ratios();
+    Some(MeasuredSummits {
+        sigma_ratio,
+        offset_ratio,
+        inputs: format!(
+            "summits measured on {} (σ_s/σ = {sigma_ratio:.4}, y_s/σ = {offset_ratio:.4})",
+            surfaces
+                .iter()
+                .map(|s| format!("[surface.{s}]"))
+                .collect::<Vec<_>>()
+                .join(" + ")
+        ),
+        origin: Origin::Recomputed {
+            instance: surfaces
+                .iter()
+                .map(|s| format!("surface.{s}"))
+                .collect::<Vec<_>>()
+                .join(" + "),
+            key: keys.join("+"),
+        },
+    })
+}

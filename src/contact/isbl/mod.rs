@@ -12,6 +12,7 @@
 
 pub mod asperity;
 mod quadrature;
+pub mod summits;
 
 #[cfg(test)]
 mod tests;
@@ -23,15 +24,26 @@ use asperity::{
 };
 use std::f64::consts::PI;
 
-/// How summit statistics relate to surface statistics (App. A.1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum SummitOffset {
-    /// `d = h`, `σ_s = σ`: what the dissertation evidently used (reproduces its 7.30 μN).
+/// The Gaussian distribution of summit heights: its standard deviation `σ_s` and its mean
+/// plane `y_s` above the mean plane of the surface heights, so that a summit at height `z`
+/// touches at interference `ω = z − d`, `d = h − y_s` (App. A.1; docs/model-form.md,
+/// "Summit heights").
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum SummitDistribution {
+    /// The summits have the surface heights' statistics: `y_s = 0`, `σ_s = σ` (`d = h`). What
+    /// the dissertation evidently used (reproduces its 7.30 μN on a Chapter 2 area).
     #[default]
-    None,
-    /// McCool: `d = h − 0.045944·σ/β`, `σ_s = σ·√(1 − 3.717e-4/β²)`; needs `β > 0.0193`.
+    Surface,
+    /// McCool: `y_s = 0.045944·σ/β`, `σ_s = σ·√(1 − 3.717e-4/β²)`; needs `β > 0.0193`.
     McCool,
+    /// `σ_s = sigma_ratio·σ`, `y_s = offset_ratio·σ`: fitted to Fig. 2.11
+    /// ([`summits::fit_two_point`]) or measured on the surfaces (the contact stage).
+    Given { sigma_ratio: f64, offset_ratio: f64 },
 }
+
+/// Largest `|y_s|/σ` and `σ_s/σ` accepted for a given distribution: beyond, the summits would
+/// lie outside any surface the dissertation or a measured map describes.
+const MAX_GIVEN_SUMMIT_RATIO: f64 = 10.0;
 
 /// Single-summit static-friction law (eq. A.6; docs/contact.md, "Friction"). An enum so that
 /// Kogut & Etsion's own fit, whose constants could not be recovered, can be added.
@@ -99,7 +111,7 @@ pub struct IsblParams {
     /// `t`: total lubricant thickness [m] (lubricant occupies `3σ ≤ h < 3σ + t`).
     pub lubricant_thickness: f64,
     pub surface_energy: SurfaceEnergy,
-    pub summit_offset: SummitOffset,
+    pub summits: SummitDistribution,
     pub friction_law: FrictionLaw,
 }
 
@@ -127,7 +139,7 @@ impl IsblParams {
             lj_spacing: 0.3e-9,
             lubricant_thickness: 1.5e-9,
             surface_energy: SurfaceEnergy::Constant { delta_gamma: 0.06 },
-            summit_offset: SummitOffset::None,
+            summits: SummitDistribution::Surface,
             friction_law: FrictionLaw::JunctionShear,
         }
     }
@@ -221,14 +233,41 @@ impl IsblParams {
                 }
             }
         }
-        if self.summit_offset == SummitOffset::McCool {
-            let beta = self.sigma * self.summit_radius * self.summit_density;
-            if beta.is_nan() || beta <= MCCOOL_MIN_BETA {
-                return Err(ContactError::parameter(
-                    "beta = sigma*R*eta",
-                    beta,
-                    "McCool's summit relations need beta > 0.0193",
-                ));
+        match self.summits {
+            SummitDistribution::Surface => {}
+            SummitDistribution::McCool => {
+                let beta = self.sigma * self.summit_radius * self.summit_density;
+                if beta.is_nan() || beta <= MCCOOL_MIN_BETA {
+                    return Err(ContactError::parameter(
+                        "beta = sigma*R*eta",
+                        beta,
+                        "McCool's summit relations need beta > 0.0193",
+                    ));
+                }
+            }
+            SummitDistribution::Given {
+                sigma_ratio,
+                offset_ratio,
+            } => {
+                if !(sigma_ratio.is_finite()
+                    && sigma_ratio > 0.0
+                    && sigma_ratio <= MAX_GIVEN_SUMMIT_RATIO)
+                {
+                    return Err(ContactError::parameter(
+                        "sigma_s/sigma",
+                        sigma_ratio,
+                        format!("must lie in (0, {MAX_GIVEN_SUMMIT_RATIO}]"),
+                    ));
+                }
+                if !(offset_ratio.is_finite() && offset_ratio.abs() <= MAX_GIVEN_SUMMIT_RATIO) {
+                    return Err(ContactError::parameter(
+                        "y_s/sigma",
+                        offset_ratio,
+                        format!(
+                            "must lie in [-{MAX_GIVEN_SUMMIT_RATIO}, {MAX_GIVEN_SUMMIT_RATIO}]"
+                        ),
+                    ));
+                }
             }
         }
         Ok(())
@@ -278,7 +317,7 @@ pub struct IsblDerived {
     pub plasticity_index: f64,
     /// KE plasticity index `ψ_KE = √(σ/ω_c)`.
     pub plasticity_index_ke: f64,
-    /// `y_s`: summit mean plane above the surface mean plane [m] (0 without McCool).
+    /// `y_s`: summit mean plane above the surface mean plane [m] (0 for `Surface`).
     pub summit_offset: f64,
     /// `σ_s`: standard deviation of summit heights [m].
     pub summit_sigma: f64,
@@ -365,12 +404,16 @@ impl IsblModel {
         let plasticity_index =
             composite_modulus / params.hardness * (params.sigma / params.summit_radius).sqrt();
         let plasticity_index_ke = (params.sigma / critical_interference).sqrt();
-        let (summit_offset, summit_sigma) = match params.summit_offset {
-            SummitOffset::None => (0.0, params.sigma),
-            SummitOffset::McCool => (
+        let (summit_offset, summit_sigma) = match params.summits {
+            SummitDistribution::Surface => (0.0, params.sigma),
+            SummitDistribution::McCool => (
                 0.045944 * params.sigma / beta,
                 params.sigma * (1.0 - 3.717e-4 / (beta * beta)).sqrt(),
             ),
+            SummitDistribution::Given {
+                sigma_ratio,
+                offset_ratio,
+            } => (offset_ratio * params.sigma, sigma_ratio * params.sigma),
         };
         let junction_shear_strength = params.hardness / (2.8 * 3f64.sqrt());
         let (delta_gamma_min, delta_gamma_max) = match params.surface_energy {
@@ -402,12 +445,16 @@ impl IsblModel {
             composite_modulus,
             critical_interference,
             critical_load,
-            summit_offset,
             summit_sigma,
         ]
         .iter()
         .all(|v| v.is_finite() && *v >= 0.0);
-        if !all_finite || critical_interference <= 0.0 || summit_sigma <= 0.0 {
+        // y_s may be negative for a given distribution (summits below the surface mean plane).
+        if !all_finite
+            || !summit_offset.is_finite()
+            || critical_interference <= 0.0
+            || summit_sigma <= 0.0
+        {
             return Err(ContactError::parameter(
                 "derived constants",
                 format!("{derived:?}"),
@@ -480,6 +527,20 @@ impl IsblModel {
             contacts_per_area,
             deep_interference: h / p.sigma < DEEP_INTERFERENCE_H_STAR,
         })
+    }
+
+    /// `P(h)` alone [Pa]: the contact integrals of [`IsblModel::at`] without the adhesion
+    /// ones (for the summit-distribution fits, which evaluate it thousands of times).
+    pub fn contact_pressure(&self, h: f64) -> Result<f64, ContactError> {
+        if !(h.is_finite() && h.abs() <= MAX_SEPARATION_SIGMAS * self.params.sigma) {
+            return Err(ContactError::parameter(
+                "h",
+                h,
+                format!("separation must be finite and within ±{MAX_SEPARATION_SIGMAS:e} σ"),
+            ));
+        }
+        let contact = self.contact_integrals(h - self.derived.summit_offset)?;
+        Ok(self.params.summit_density * self.derived.critical_load * contact[0])
     }
 
     /// One summit at interference `ω` [m] (KE laws, SI units): load [N], contact area [m²]

@@ -569,7 +569,7 @@ fn invalid_inputs_are_errors_not_panics() {
         },
         // β = 0.0145 < 0.0193: McCool's σ_s relation is invalid.
         IsblParams {
-            summit_offset: SummitOffset::McCool,
+            summits: SummitDistribution::McCool,
             summit_density: 38.8e12,
             ..good
         },
@@ -607,7 +607,7 @@ fn mccool_offset_and_summit_sigma_match_spec_section_2() {
     // App. A.1: y_s = 0.99σ for β = 0.046 (initial set), y_s = 1.72σ and σ_s = 0.69σ for
     // β = 0.027 (improved); docs/contact.md: McCool offset gives 81 μN on 62 μm² at h* = 3.
     let initial = IsblModel::new(IsblParams {
-        summit_offset: SummitOffset::McCool,
+        summits: SummitDistribution::McCool,
         ..IsblParams::initial_2dof()
     })
     .unwrap();
@@ -616,7 +616,7 @@ fn mccool_offset_and_summit_sigma_match_spec_section_2() {
     let p3 = initial.at(3.0 * s).unwrap().contact_pressure * 62e-12;
     assert!((p3 / 81e-6 - 1.0).abs() < 0.007, "{p3}");
     let improved = IsblModel::new(IsblParams {
-        summit_offset: SummitOffset::McCool,
+        summits: SummitDistribution::McCool,
         ..IsblParams::improved_2dof()
     })
     .unwrap();
@@ -871,7 +871,7 @@ fn every_configuration_evaluates_across_the_accepted_range() {
         IsblParams::mtl_table_3_2(),
     ];
     configs.push(IsblParams {
-        summit_offset: SummitOffset::McCool,
+        summits: SummitDistribution::McCool,
         friction_law: FrictionLaw::SeedPowerElastic,
         surface_energy: SurfaceEnergy::seed_variable(),
         ..IsblParams::initial_2dof()

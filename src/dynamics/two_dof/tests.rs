@@ -299,13 +299,82 @@ fn static_equilibrium_is_found_across_the_jump_to_contact() {
             let q = case
                 .static_equilibrium()
                 .unwrap_or_else(|e| panic!("Δγ {delta_gamma}, {h} nm: {e}"));
-            let a = case.rest_acceleration(q[0], q[1]).unwrap();
+            let a = case
+                .rest_acceleration(q[0], q[1], case.contact_damping)
+                .unwrap();
             assert!(
                 a[0].abs() * case.model.slider.mass < 1e-9 * case.model.suspension.preload,
                 "Δγ {delta_gamma}, {h} nm: {a:?}"
             );
         }
     }
+}
+
+/// Where the damper-free rest state lies just inside the contact threshold and the frozen DMW
+/// closes the gap, the contact damper's force jumps across zero at the threshold and no rest
+/// state with it exists: the case starts from the damper-free one (such cases failed with
+/// "Newton did not converge" before; docs/model-form.md, "Summit heights").
+#[test]
+fn static_start_falls_back_to_the_damper_free_rest_state_at_the_threshold_jump() {
+    use crate::contact::isbl::{SummitDistribution, SurfaceEnergy};
+    use crate::dynamics::air_bearing::RearStiffening;
+    let isbl = IsblLookup::build_standard_unverified(
+        IsblModel::new(IsblParams {
+            summits: SummitDistribution::McCool,
+            surface_energy: SurfaceEnergy::Constant { delta_gamma: 0.057 },
+            lj_spacing: 0.186e-9,
+            ..IsblParams::improved_2dof()
+        })
+        .unwrap(),
+    )
+    .unwrap();
+    let mut model = improved_2dof();
+    model.air_bearing.stiffening = RearStiffening::Quadratic { beta: 0.376 };
+    model.interface.surface_energy = 0.057;
+    model.interface.equilibrium_spacing = 0.186e-9;
+    model.interface.contact_damping_ratio = 0.33;
+    // The disk rising at 82 µm/s (the synthetic DMW's rate at t = 0 in the failing cases).
+    let (fs, v0) = (4e6, 8.19e-5);
+    let displacement: Vec<f64> = (0..8800).map(|i| v0 * (i as f64 / fs - 1e-4)).collect();
+    let velocity = vec![v0; displacement.len()];
+    let options = SimOptions {
+        static_init: true,
+        ..short(1e-4)
+    };
+    let mut fell_back = 0;
+    for k in 0..=40 {
+        let h = (9.7 + 0.01 * k as f64) * 1e-9;
+        let input = DmwInput {
+            displacement: &displacement,
+            velocity: &velocity,
+            sample_rate: fs,
+        };
+        let case = TwoDofCase::new(&model, h, &isbl, Some(input), options).unwrap();
+        let q = case
+            .static_equilibrium()
+            .unwrap_or_else(|e| panic!("{h:e}: {e}"));
+        let damped_fails = [0.0, -0.5, 0.5, -1.0, 1.0, -2.0, 2.0, -4.0, 4.0]
+            .iter()
+            .all(|dz| {
+                case.static_equilibrium_from([dz * 1e-9, 0.0], case.contact_damping)
+                    .is_err()
+            });
+        if !damped_fails {
+            continue;
+        }
+        fell_back += 1;
+        let scale = case.model.slider.mass / (1e-9 * case.model.suspension.preload);
+        let undamped = case.rest_acceleration(q[0], q[1], 0.0).unwrap();
+        let damped = case
+            .rest_acceleration(q[0], q[1], case.contact_damping)
+            .unwrap();
+        // Balanced without the damper; the damper's jump (c_c|ṡ|) is what is left with it.
+        assert!(undamped[0].abs() * scale < 1.0, "{h:e}: {undamped:?}");
+        assert!(damped[0].abs() * scale > 1e3, "{h:e}: {damped:?}");
+        let clearance = case.clearance_at_rest(q).unwrap();
+        assert!(clearance < 0.0 && clearance > -0.2e-9, "{h:e}: {clearance}");
+    }
+    assert!(fell_back > 0, "no actuation needed the damper-free start");
 }
 
 /// Branch-tracking sweeps (docs/conventions.md): continuation from the neighbouring

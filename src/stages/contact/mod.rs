@@ -7,14 +7,19 @@ pub mod mtl;
 
 use self::mtl::{MtlAnalysis, MtlKeys, MtlSettings};
 use crate::artefacts::contact::ContactInputs;
-use crate::artefacts::interface::upstream_summits;
+use crate::artefacts::interface::{upstream_summits, InterfaceSurfaces};
+use crate::artefacts::surface::upstream_summit_heights;
+use crate::contact::isbl::summits::{
+    fit_two_point, SummitFit, TwoPointTarget, FIG_2_11_NOMINAL_AREA,
+};
 use crate::contact::isbl::{
-    surface_energy_at, FrictionLaw, IsblModel, IsblParams, SummitOffset, SurfaceEnergy,
+    surface_energy_at, FrictionLaw, IsblModel, IsblParams, SummitDistribution, SurfaceEnergy,
 };
 use crate::contact::lookup::{IsblLookup, FORCE_TABLE_GRID};
 use crate::contact::table::{ChannelError, ForceTable};
 use crate::contact::ContactError;
 use crate::core::config::{ConfigError, PipelineFile};
+use crate::surface::combine::{combine_summit_heights, SummitHeights};
 
 use crate::core::store::H5Out;
 use crate::error::Result;
@@ -34,9 +39,6 @@ pub const MODEL_VERSION: &str = "contact-3";
 
 fn default_set() -> String {
     "improved_2dof".into()
-}
-fn default_offset() -> String {
-    "none".into()
 }
 fn default_friction() -> String {
     "junction_shear".into()
@@ -94,9 +96,21 @@ pub struct ContactConfig {
     /// Constant Δγ or `"variable"` (Δγ(s) = c1·exp(−c2·s) + c3).
     #[serde(default)]
     pub surface_energy: Option<SurfaceEnergyConfig>,
-    /// `none` (d = h, σ_s = σ: the dissertation) or `mccool`.
-    #[serde(default = "default_offset")]
-    pub summit_offset: String,
+    /// The older name of `summit_distribution`: `none` (= `surface`) or `mccool`.
+    #[serde(default)]
+    pub summit_offset: Option<String>,
+    /// The Gaussian summit-height distribution (docs/model-form.md, "Summit heights"):
+    /// `surface` (σ_s = σ, y_s = 0: the dissertation; default), `mccool`, `fig_2_11` (σ_s and
+    /// y_s fitted to Fig. 2.11's two numbers) or `measured` (the surfaces' summits).
+    #[serde(default)]
+    pub summit_distribution: Option<String>,
+    /// `fig_2_11`: the nominal area of Fig. 2.11's 7.30 µN (not stated; default 55 µm²).
+    #[serde(default)]
+    pub fig_2_11_nominal_area: Option<Area>,
+    /// `measured`: the `[surface.*]` or `[interface.*]` instance whose summits are taken
+    /// (default: this contact's `interface`).
+    #[serde(default)]
+    pub summit_source: Option<String>,
     /// `junction_shear` (default), `seed_power_elastic` or `ke_static` (docs/contact.md,
     /// "Friction").
     #[serde(default = "default_friction")]
@@ -146,6 +160,77 @@ pub struct ContactParams {
     pub step: f64,
     /// The lubricant model, when `lubricant` is set.
     pub mtl: Option<MtlSettings>,
+    /// How the summit distribution is obtained when it is not one of `params.summits`' fixed
+    /// forms.
+    pub summits: SummitSpec,
+}
+
+/// A summit distribution that needs more than the parameters: a fit or a measurement.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SummitSpec {
+    /// `surface` or `mccool`: `params.summits` is the distribution.
+    Fixed,
+    /// Fitted to Fig. 2.11's two numbers with the force on `nominal_area` [m²].
+    Fig211 { nominal_area: f64 },
+    /// The summits measured on a surface, or on an interface's two surfaces.
+    Measured(SummitSource),
+}
+
+/// Where `measured` summits come from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SummitSource {
+    /// Named in `summit_source`; its kind is known once the pipeline file is read.
+    Unresolved(String),
+    Surface(String),
+    /// An interface instance and its two surfaces.
+    Interface {
+        name: String,
+        surfaces: Vec<String>,
+    },
+}
+
+impl SummitSource {
+    fn name(&self) -> &str {
+        match self {
+            SummitSource::Unresolved(n) | SummitSource::Surface(n) => n,
+            SummitSource::Interface { name, .. } => name,
+        }
+    }
+
+    /// The surface instances whose results hold the summits.
+    fn surfaces(&self) -> Vec<String> {
+        match self {
+            SummitSource::Unresolved(_) => Vec::new(),
+            SummitSource::Surface(n) => vec![n.clone()],
+            SummitSource::Interface { surfaces, .. } => surfaces.clone(),
+        }
+    }
+}
+
+impl SummitSpec {
+    /// The `[contact] summit_distribution` name.
+    pub fn name(&self, fixed: SummitDistribution) -> &'static str {
+        match (self, fixed) {
+            (SummitSpec::Fig211 { .. }, _) => "fig_2_11",
+            (SummitSpec::Measured(_), _) => "measured",
+            (SummitSpec::Fixed, SummitDistribution::McCool) => "mccool",
+            (SummitSpec::Fixed, _) => "surface",
+        }
+    }
+
+    /// Its part of the cache key (`None` for a fixed distribution, which the `inputs` name).
+    fn canonical(&self) -> Option<Value> {
+        match self {
+            SummitSpec::Fixed => None,
+            SummitSpec::Fig211 { nominal_area } => Some(json!({
+                "kind": "fig_2_11", "nominal_area_m2": nominal_area,
+                "h_star": 3.0, "force_N": 7.30e-6, "h_star_ref": 2.5, "ratio": 0.03,
+            })),
+            SummitSpec::Measured(src) => Some(json!({
+                "kind": "measured", "source": src.name(), "surfaces": src.surfaces(),
+            })),
+        }
+    }
 }
 
 /// A dissertation parameter set by name.
@@ -219,11 +304,8 @@ pub fn check(
             Err(e) => return bad("surface_energy", format!("{e}, or \"variable\"")),
         },
     }
-    p.summit_offset = match cfg.summit_offset.as_str() {
-        "none" => SummitOffset::None,
-        "mccool" => SummitOffset::McCool,
-        o => return bad("summit_offset", format!("unknown `{o}` (none, mccool)")),
-    };
+    let (summits, spec) = summit_keys(cfg)?;
+    p.summits = summits;
     p.friction_law = match cfg.friction_law.as_str() {
         "junction_shear" => FrictionLaw::JunctionShear,
         "seed_power_elastic" => FrictionLaw::SeedPowerElastic,
@@ -280,6 +362,88 @@ pub fn check(
         h_star_max: cfg.h_star_max,
         step: cfg.step,
         mtl,
+        summits: spec,
+    })
+}
+
+/// `summit_distribution` (or its older name `summit_offset`) with `fig_2_11_nominal_area` and
+/// `summit_source`: the fixed distribution (`Surface` for a fit or a measurement, which replace
+/// it when the stage runs) and how the others are obtained.
+fn summit_keys(
+    cfg: &ContactConfig,
+) -> std::result::Result<(SummitDistribution, SummitSpec), crate::core::config::KeyError> {
+    let bad = |k: &str, m: String| Err(crate::core::config::KeyError::new(k, m));
+    let legacy = match cfg.summit_offset.as_deref() {
+        None => None,
+        Some("none") => Some("surface"),
+        Some("mccool") => Some("mccool"),
+        Some(o) => return bad("summit_offset", format!("unknown `{o}` (none, mccool)")),
+    };
+    let name = match (cfg.summit_distribution.as_deref(), legacy) {
+        (Some(d), Some(l)) if d != l => {
+            return bad(
+                "summit_offset",
+                format!(
+                    "`summit_offset` is the older name of `summit_distribution` and says `{l}` \
+                     where `summit_distribution` says `{d}`: keep one"
+                ),
+            )
+        }
+        (Some(d), _) => d,
+        (None, Some(l)) => l,
+        (None, None) => "surface",
+    };
+    if cfg.fig_2_11_nominal_area.is_some() && name != "fig_2_11" {
+        return bad(
+            "fig_2_11_nominal_area",
+            format!("only for summit_distribution = \"fig_2_11\" (here `{name}`)"),
+        );
+    }
+    if cfg.summit_source.is_some() && name != "measured" {
+        return bad(
+            "summit_source",
+            format!("only for summit_distribution = \"measured\" (here `{name}`)"),
+        );
+    }
+    Ok(match name {
+        "surface" => (SummitDistribution::Surface, SummitSpec::Fixed),
+        "mccool" => (SummitDistribution::McCool, SummitSpec::Fixed),
+        "fig_2_11" => {
+            let nominal_area = cfg
+                .fig_2_11_nominal_area
+                .map_or(FIG_2_11_NOMINAL_AREA, |Area(a)| a);
+            if !(nominal_area.is_finite() && nominal_area > 0.0) {
+                return bad(
+                    "fig_2_11_nominal_area",
+                    format!("{nominal_area} m² is out of range: must be > 0"),
+                );
+            }
+            (
+                SummitDistribution::Surface,
+                SummitSpec::Fig211 { nominal_area },
+            )
+        }
+        "measured" => match cfg.summit_source.as_ref().or(cfg.interface.as_ref()) {
+            Some(src) => (
+                SummitDistribution::Surface,
+                SummitSpec::Measured(SummitSource::Unresolved(src.clone())),
+            ),
+            None => {
+                return bad(
+                    "summit_distribution",
+                    "\"measured\" needs the [surface.*] or [interface.*] instance whose \
+                     summits it takes (summit_source, or this contact's interface; a pipeline, \
+                     not `hdi contact`)"
+                        .into(),
+                )
+            }
+        },
+        o => {
+            return bad(
+                "summit_distribution",
+                format!("unknown `{o}` (surface, mccool, fig_2_11, measured)"),
+            )
+        }
     })
 }
 
@@ -290,23 +454,148 @@ fn params_json(p: &IsblParams) -> Value {
 
 impl ContactParams {
     pub fn canonical(&self) -> Value {
-        json!({
+        let mut inputs = ContactInputs::from(&self.params).to_json();
+        let mut v = json!({
             "interface": self.interface,
             "parameter_set": self.parameter_set,
             // With an interface, σ/R/η come from upstream (its key is in the fingerprint).
-            "inputs": ContactInputs::from(&self.params).to_json(),
+            "inputs": inputs,
             "h_star_min": self.h_star_min,
             "h_star_max": self.h_star_max,
             "step": self.step,
             "lubricant": self.mtl.map(|m| m.canonical()),
+        });
+        // A fitted or measured distribution: named in the inputs and stated beside them (with
+        // the fixed ones the key is as it was before the switch existed).
+        if let (Some(spec), Value::Object(m)) = (self.summits.canonical(), &mut v) {
+            inputs["summit_offset"] = json!(self.summits.name(self.params.summits));
+            m.insert("inputs".into(), inputs);
+            m.insert("summit_distribution".into(), spec);
+        }
+        v
+    }
+}
+
+/// How a fitted or measured summit distribution was obtained (the result's and contact.h5's
+/// `summit_distribution`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum SummitOrigin {
+    /// Fitted to Fig. 2.11 with the force on `nominal_area` [m²].
+    Fig211 { nominal_area: f64, fit: SummitFit },
+    /// Measured: each surface's summits and their combination (one surface: itself).
+    Measured {
+        source: String,
+        surfaces: Vec<(String, SummitHeights)>,
+        combined: SummitHeights,
+    },
+}
+
+impl SummitOrigin {
+    /// The measured summits of `surfaces` (one, or an interface's two: combined as the sum
+    /// surface's, `surface::combine::combine_summit_heights`).
+    pub fn measured(source: &str, surfaces: Vec<(String, SummitHeights)>) -> Result<Self> {
+        let combined = match surfaces.as_slice() {
+            [(_, one)] => *one,
+            [(_, a), (_, b)] => combine_summit_heights(a, b)?,
+            _ => {
+                return Err(crate::error::Error::Stage(format!(
+                    "measured summits of `{source}`: need one or two surfaces, got {}",
+                    surfaces.len()
+                )))
+            }
+        };
+        Ok(SummitOrigin::Measured {
+            source: source.to_string(),
+            surfaces,
+            combined,
         })
     }
+
+    /// `(σ_s/σ, y_s/σ)`.
+    pub fn ratios(&self) -> (f64, f64) {
+        match self {
+            SummitOrigin::Fig211 { fit, .. } => (fit.sigma_ratio, fit.offset_ratio),
+            SummitOrigin::Measured { combined, .. } => {
+                (combined.std_ratio(), combined.mean_ratio())
+            }
+        }
+    }
+
+    /// The result's `summit_distribution` block (SI, units in the keys).
+    pub fn to_json(&self) -> Value {
+        let (s, y) = self.ratios();
+        let heights = |h: &SummitHeights| {
+            json!({"sigma_m": h.sigma, "eta_per_m2": h.eta, "summit_mean_m": h.mean,
+                   "summit_std_m": h.std, "sigma_s_over_sigma": h.std_ratio(),
+                   "y_s_over_sigma": h.mean_ratio()})
+        };
+        match self {
+            SummitOrigin::Fig211 { nominal_area, fit } => json!({
+                "kind": "fig_2_11",
+                "sigma_s_over_sigma": s, "y_s_over_sigma": y,
+                "nominal_area_m2": nominal_area,
+                "target": {"h_star": 3.0, "force_N": 7.30e-6, "h_star_ref": 2.5, "ratio": 0.03},
+                "fitted": {"force_N": fit.force, "ratio": fit.ratio},
+            }),
+            SummitOrigin::Measured {
+                source,
+                surfaces,
+                combined,
+            } => json!({
+                "kind": "measured",
+                "sigma_s_over_sigma": s, "y_s_over_sigma": y,
+                "source": source,
+                "surfaces": surfaces.iter().map(|(n, h)| {
+                    let mut v = heights(h);
+                    v["surface"] = json!(n);
+                    v
+                }).collect::<Vec<_>>(),
+                "combined": heights(combined),
+                "rule": if surfaces.len() == 2 { "summit_mixture" } else { "single_surface" },
+            }),
+        }
+    }
+}
+
+/// The summit distribution the model uses: `params.summits` for a fixed one, the fit for
+/// `fig_2_11`, the measured one (`measured`, from the stage's upstream) for `measured`.
+pub fn resolve_summits(
+    params: &IsblParams,
+    c: &ContactParams,
+    measured: Option<SummitOrigin>,
+) -> Result<(IsblParams, Option<SummitOrigin>)> {
+    let origin = match (&c.summits, measured) {
+        (SummitSpec::Fixed, _) => return Ok((*params, None)),
+        (SummitSpec::Fig211 { nominal_area }, _) => SummitOrigin::Fig211 {
+            nominal_area: *nominal_area,
+            fit: fit_two_point(params, &TwoPointTarget::fig_2_11(*nominal_area))?,
+        },
+        (SummitSpec::Measured(_), Some(m @ SummitOrigin::Measured { .. })) => m,
+        (SummitSpec::Measured(src), _) => {
+            return Err(crate::error::Error::Stage(format!(
+                "summit_distribution = \"measured\" needs the summits of `{}` from a pipeline \
+                 (`hdi run`); `hdi contact` has none",
+                src.name()
+            )))
+        }
+    };
+    let (sigma_ratio, offset_ratio) = origin.ratios();
+    let resolved = IsblParams {
+        summits: SummitDistribution::Given {
+            sigma_ratio,
+            offset_ratio,
+        },
+        ..*params
+    };
+    Ok((resolved, Some(origin)))
 }
 
 /// The computed stage: model, curves on the output grid, the verified table, and the
 /// lubricant curves when a lubricant is configured.
 pub struct ContactAnalysis {
     pub model: IsblModel,
+    /// How a fitted or measured summit distribution was obtained.
+    pub summit_origin: Option<SummitOrigin>,
     pub h_star: Vec<f64>,
     pub points: Vec<crate::contact::isbl::IsblPoint>,
     pub lookup: Arc<IsblLookup>,
@@ -324,7 +613,14 @@ impl ContactAnalysis {
 
 /// Build the model, the curves and the table (the table covers the range docs/contact.md states
 /// h* ∈ [−4, 3 + t/σ + 10] or the output range, whichever is wider).
-pub fn analyse(params: &IsblParams, c: &ContactParams) -> Result<ContactAnalysis> {
+/// `measured`: the upstream summits of a `measured` distribution.
+pub fn analyse(
+    params: &IsblParams,
+    c: &ContactParams,
+    measured: Option<SummitOrigin>,
+) -> Result<ContactAnalysis> {
+    let (resolved, summit_origin) = resolve_summits(params, c, measured)?;
+    let params = &resolved;
     let model = IsblModel::new(*params)?;
     let n = ((c.h_star_max - c.h_star_min) / c.step).round() as usize + 1;
     let h_star: Vec<f64> = (0..n).map(|i| c.h_star_min + i as f64 * c.step).collect();
@@ -345,6 +641,7 @@ pub fn analyse(params: &IsblParams, c: &ContactParams) -> Result<ContactAnalysis
     };
     Ok(ContactAnalysis {
         model,
+        summit_origin,
         h_star,
         points,
         lookup,
@@ -388,7 +685,7 @@ pub fn summary_row(a: &ContactAnalysis, c: &ContactParams) -> Map<String, Value>
 
 pub fn report_json(a: &ContactAnalysis, c: &ContactParams) -> Value {
     let d = a.model.derived();
-    json!({
+    let mut v = json!({
         "parameter_set": c.parameter_set,
         "interface": c.interface,
         "inputs": params_json(a.model.params()),
@@ -410,7 +707,12 @@ pub fn report_json(a: &ContactAnalysis, c: &ContactParams) -> Value {
             "max_rel_error": a.table_error().iter().map(|e| (e.name.clone(), json!(e.max_rel))).collect::<Map<_, _>>(),
         },
         "mtl": a.mtl.as_ref().map(|m| m.report()),
-    })
+    });
+    // Only a fitted or measured distribution adds the block (the default result is unchanged).
+    if let (Some(o), Value::Object(m)) = (&a.summit_origin, &mut v) {
+        m.insert("summit_distribution".into(), o.to_json());
+    }
+    v
 }
 
 pub fn write_outputs(
@@ -427,6 +729,9 @@ pub fn write_outputs(
     out.attr_str(&entry, "default", "isbl")?;
     write_isbl(&out, a)?;
     write_derived(&out, a)?;
+    if let Some(o) = &a.summit_origin {
+        write_summit_origin(&out, o)?;
+    }
     write_table(&out, a)?;
     out.write_string(&entry, "inputs", &params_json(a.model.params()).to_string())?;
     if let Some(mtl) = &a.mtl {
@@ -576,6 +881,56 @@ fn write_derived(out: &H5Out, a: &ContactAnalysis) -> Result<()> {
     Ok(())
 }
 
+/// `contact/summit_distribution`: a fitted or measured summit distribution and its inputs.
+fn write_summit_origin(out: &H5Out, o: &SummitOrigin) -> Result<()> {
+    let g = out.group("contact/summit_distribution", None)?;
+    let (s, y) = o.ratios();
+    out.write_scalar(&g, "sigma_s_over_sigma", s, "1", "summit height std / σ")?;
+    out.write_scalar(
+        &g,
+        "y_s_over_sigma",
+        y,
+        "1",
+        "summit mean plane above the surface mean plane / σ",
+    )?;
+    match o {
+        SummitOrigin::Fig211 { nominal_area, fit } => {
+            out.write_string(&g, "kind", "fig_2_11")?;
+            out.write_scalar(
+                &g,
+                "nominal_area",
+                *nominal_area,
+                "m^2",
+                "nominal area of Fig. 2.11's force (stated input)",
+            )?;
+            out.write_scalar(&g, "force_at_3sigma", fit.force, "N", "fitted P(3σ)·A_n")?;
+            out.write_scalar(&g, "ratio_3_to_2_5", fit.ratio, "1", "fitted P(3σ)/P(2.5σ)")?;
+        }
+        SummitOrigin::Measured {
+            source, combined, ..
+        } => {
+            out.write_string(&g, "kind", "measured")?;
+            out.write_string(&g, "source", source)?;
+            out.write_scalar(
+                &g,
+                "sigma",
+                combined.sigma,
+                "m",
+                "σ of the measured surface(s)",
+            )?;
+            out.write_scalar(
+                &g,
+                "summit_mean",
+                combined.mean,
+                "m",
+                "mean summit height above the mean plane",
+            )?;
+            out.write_scalar(&g, "summit_std", combined.std, "m", "summit height std")?;
+        }
+    }
+    Ok(())
+}
+
 /// `contact/table`: the force table's range, spacing and interpolation error per channel.
 fn write_table(out: &H5Out, a: &ContactAnalysis) -> Result<()> {
     let g = out.group("contact/table", None)?;
@@ -674,7 +1029,35 @@ impl FromConfig for ContactStage {
         name: &str,
         cfg: &ContactConfig,
     ) -> std::result::Result<Self, ConfigError> {
-        let params = check(cfg).map_err(|e| e.locate(file, "contact", name))?;
+        let mut params = check(cfg).map_err(|e| e.locate(file, "contact", name))?;
+        if let SummitSpec::Measured(SummitSource::Unresolved(src)) = &params.summits {
+            let key = if cfg.summit_source.is_some() {
+                "summit_source"
+            } else {
+                "interface"
+            };
+            let err = |m: String| file.error("contact", name, key, m);
+            let source = if file.has_instance("surface", src) {
+                SummitSource::Surface(src.clone())
+            } else if let Some(i) = InterfaceSurfaces::of(file, src)? {
+                if !i.has_two_surfaces() {
+                    return Err(err(format!(
+                        "[interface.{src}] has no two measured surfaces (rule = \"{}\"): \
+                         measured summits need a [surface.*] or an interface of two",
+                        i.rule
+                    )));
+                }
+                SummitSource::Interface {
+                    name: src.clone(),
+                    surfaces: i.surfaces,
+                }
+            } else {
+                return Err(err(format!(
+                    "no [surface.{src}] or [interface.{src}] in this file for the measured summits"
+                )));
+            };
+            params.summits = SummitSpec::Measured(source);
+        }
         if let Some(i) = &cfg.interface {
             if !file.has_instance("interface", i) {
                 return Err(file.error(
@@ -700,15 +1083,37 @@ impl StageKind for ContactStage {
         self.params.canonical()
     }
     fn upstream(&self) -> Vec<String> {
-        self.params.interface.iter().cloned().collect()
+        let mut up: Vec<String> = self.params.interface.iter().cloned().collect();
+        if let SummitSpec::Measured(src) = &self.params.summits {
+            for s in src.surfaces() {
+                if !up.contains(&s) {
+                    up.push(s);
+                }
+            }
+        }
+        up
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         let mut p = self.params.params;
         if let Some(i) = &self.params.interface {
             [p.sigma, p.summit_radius, p.summit_density] = upstream_summits(&ctx.upstream, i)?;
         }
+        let measured = match &self.params.summits {
+            SummitSpec::Measured(src) => {
+                let surfaces = src
+                    .surfaces()
+                    .into_iter()
+                    .map(|s| {
+                        let h = upstream_summit_heights(&ctx.upstream, &s)?;
+                        Ok((s, h))
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                Some(SummitOrigin::measured(src.name(), surfaces)?)
+            }
+            _ => None,
+        };
         ctx.progress.set_message("ISBL curves and force table");
-        let a = analyse(&p, &self.params)?;
+        let a = analyse(&p, &self.params, measured)?;
         let inputs = serde_json::to_value(&ctx.fingerprint.inputs).unwrap_or(Value::Null);
         write_outputs(
             &a,
@@ -739,7 +1144,7 @@ mod tests {
         // 3σ + t and the table's ends (measured: ≤ 1.1e-8, F_s the worst).
         let cfg = ContactConfig::defaults();
         let c = check(&cfg).unwrap();
-        let a = analyse(&c.params, &c).unwrap();
+        let a = analyse(&c.params, &c, None).unwrap();
         for e in a.table_error() {
             assert!(e.max_rel < 1e-4, "{e:?}");
         }
@@ -771,10 +1176,88 @@ mod tests {
                 params: p,
                 ..check(&ContactConfig::defaults()).unwrap()
             };
-            let result = report_json(&analyse(&p, &c).unwrap(), &c);
+            let result = report_json(&analyse(&p, &c, None).unwrap(), &c);
             let back = ContactInputs::from_json(&result["inputs"]).unwrap();
             assert_eq!(back.params().unwrap(), p);
         }
+    }
+
+    /// The default distribution, spelt either way, keeps the key the contact instance had
+    /// before the switch existed; the others name themselves in it.
+    #[test]
+    fn summit_distribution_keys_and_the_default_key() {
+        let with = |d: Option<&str>, o: Option<&str>| ContactConfig {
+            summit_distribution: d.map(str::to_string),
+            summit_offset: o.map(str::to_string),
+            ..ContactConfig::defaults()
+        };
+        let base = check(&ContactConfig::defaults()).unwrap();
+        let key = base.canonical();
+        assert!(key.get("summit_distribution").is_none());
+        assert_eq!(key["inputs"]["summit_offset"], "none");
+        assert!(key["inputs"].get("summit_ratios").is_none());
+        for (d, o) in [
+            (Some("surface"), None),
+            (None, Some("none")),
+            (Some("surface"), Some("none")),
+        ] {
+            assert_eq!(check(&with(d, o)).unwrap().canonical(), key, "{d:?} {o:?}");
+        }
+        let mccool = check(&with(Some("mccool"), None)).unwrap();
+        assert_eq!(
+            mccool.canonical(),
+            check(&with(None, Some("mccool"))).unwrap().canonical()
+        );
+        assert_eq!(mccool.params.summits, SummitDistribution::McCool);
+        let fig = check(&ContactConfig {
+            fig_2_11_nominal_area: Some(Area(62e-12)),
+            ..with(Some("fig_2_11"), None)
+        })
+        .unwrap();
+        assert_eq!(
+            fig.summits,
+            SummitSpec::Fig211 {
+                nominal_area: 62e-12
+            }
+        );
+        let k = fig.canonical();
+        assert_eq!(k["inputs"]["summit_offset"], "fig_2_11");
+        assert_eq!(k["summit_distribution"]["nominal_area_m2"], 62e-12);
+        // The fit replaces the distribution when the curves are computed.
+        let a = analyse(&fig.params, &fig, None).unwrap();
+        let (s, y) = a.summit_origin.as_ref().unwrap().ratios();
+        assert!(s > 0.3 && s < 0.4 && y > 2.1 && y < 2.3, "{s} {y}");
+        let p3 = a.model.at(3.0 * fig.params.sigma).unwrap().contact_pressure;
+        assert!((p3 * 62e-12 / 7.30e-6 - 1.0).abs() < 1e-9);
+        assert_eq!(report_json(&a, &fig)["inputs"]["summit_offset"], "given");
+        // Conflicts and misplaced keys name themselves; measured without a pipeline is an error.
+        let key_of = |c: &ContactConfig| check(c).unwrap_err().key;
+        assert_eq!(
+            key_of(&with(Some("fig_2_11"), Some("mccool"))),
+            "summit_offset"
+        );
+        assert_eq!(
+            key_of(&with(Some("lognormal"), None)),
+            "summit_distribution"
+        );
+        assert_eq!(key_of(&with(None, Some("surface"))), "summit_offset");
+        assert_eq!(key_of(&with(Some("measured"), None)), "summit_distribution");
+        let misplaced = ContactConfig {
+            fig_2_11_nominal_area: Some(Area(62e-12)),
+            ..with(Some("mccool"), None)
+        };
+        assert_eq!(key_of(&misplaced), "fig_2_11_nominal_area");
+        let source = ContactConfig {
+            summit_source: Some("disk".into()),
+            ..ContactConfig::defaults()
+        };
+        assert_eq!(key_of(&source), "summit_source");
+        let measured = check(&ContactConfig {
+            summit_source: Some("disk".into()),
+            ..with(Some("measured"), None)
+        })
+        .unwrap();
+        assert!(analyse(&measured.params, &measured, None).is_err());
     }
 
     #[test]
