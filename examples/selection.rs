@@ -11,9 +11,11 @@
 //!     [contact_force=interference_tangent|static_curve|integrated_stiffness]
 //!     [lubricant=none|mtl] [surface_energy=constant|variable]
 //!     [friction_law=junction_shear|seed_power_elastic|ke_static]
+//!     [summit_distribution=surface|mccool|fig_2_11] [summits=S,Y]   (σ_s/σ, y_s/σ given)
 //! ```
 
-use hdi::contact::isbl::{FrictionLaw, SurfaceEnergy};
+use hdi::contact::isbl::summits::{fit_two_point, TwoPointTarget, FIG_2_11_NOMINAL_AREA};
+use hdi::contact::isbl::{FrictionLaw, SummitDistribution, SurfaceEnergy};
 use hdi::dynamics::calibration::{Evaluation, TargetSet};
 use hdi::dynamics::two_dof::{ContactForceForm, LubricantForce};
 use std::path::PathBuf;
@@ -88,8 +90,30 @@ fn main() {
                         isbl.friction_law = FrictionLaw::SeedPowerElastic
                     }
                     ("friction_law", "ke_static") => isbl.friction_law = FrictionLaw::KeStatic,
+                    ("summit_distribution", "surface") => {
+                        isbl.summits = SummitDistribution::Surface
+                    }
+                    ("summit_distribution", "mccool") => isbl.summits = SummitDistribution::McCool,
+                    ("summit_distribution", "fig_2_11") => {}
+                    ("summits", r) => {
+                        let (a, b) = r.split_once(',').expect("summits=S,Y");
+                        isbl.summits = SummitDistribution::Given {
+                            sigma_ratio: a.parse().expect("σ_s/σ"),
+                            offset_ratio: b.parse().expect("y_s/σ"),
+                        };
+                    }
                     _ => panic!("unknown switch {k} = {v}"),
                 }
+            }
+            // The Fig. 2.11 fit on the variant's own interface, as `[contact]` resolves it.
+            if switches
+                .iter()
+                .any(|(k, v)| k == "summit_distribution" && v == "fig_2_11")
+            {
+                let target = TwoPointTarget::fig_2_11(FIG_2_11_NOMINAL_AREA);
+                isbl.summits = fit_two_point(isbl, &target)
+                    .expect("Fig. 2.11 fit")
+                    .distribution();
             }
         })
         .unwrap_or_else(|e| panic!("{e}"));
