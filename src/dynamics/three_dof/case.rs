@@ -9,10 +9,11 @@
 //! and interfacial forces; the two AB springs with `k(PT)` and `ΔF_AB(h_TFC)`; the roll spring
 //! against the disk's roll under the slider; the shock; `M q̈ = f − C q̇ − K q`.
 //!
-//! **Roll input (our reading, docs/three-dof.md).** The spec puts the roll spring `k_l` in `K`
-//! acting on `φ` alone. We let it act on the roll *relative to the disk surface* under the two
-//! halves of the ABS, `φ − φ_d` with `φ_d = (z_d,+y − z_d,−y)/(2 y_AB)`, `y_AB = l_w/4` (the
-//! centroid of each half) [assumption]. Without it the ±y tracks could only act through
+//! **Roll input (our reading, docs/three-dof.md).** Eq. 4.3 puts the roll spring `k_l` in `K`
+//! acting on `φ` alone (`RollSpring::Absolute`). By default we let it act on the roll
+//! *relative to the disk surface* under the two halves of the ABS, `φ − φ_d` with
+//! `φ_d = (z_d,+y − z_d,−y)/(2 y_AB)`, `y_AB = l_w/4` (the centroid of each half)
+//! [assumption]. Without it the ±y tracks could only act through
 //! features within 6σ of the disk, and the dissertation's three-track roll excitation (§4.1.7)
 //! would vanish whenever the slider flies.
 
