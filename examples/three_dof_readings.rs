@@ -909,7 +909,10 @@ fn main() {
         if has("zeta") {
             let zv: Vec<String> = variants
                 .iter()
-                .filter(|v| *v == "hdi" || *v == "air_bearing=faithful")
+                .filter(|v| {
+                    let head = v.split('+').next().unwrap_or("");
+                    head == "hdi" || head == "air_bearing=faithful"
+                })
                 .cloned()
                 .collect();
             zeta(&pipeline, &zv, &l, tracks);
