@@ -109,6 +109,16 @@ fn bad_three_dof_keys_name_the_key() {
             "bulge height",
         ),
         (
+            "scenario = \"shock\"",
+            "scenario = \"shock\"\nair_bearing = \"printed\"",
+            "three_dof.shock.air_bearing",
+        ),
+        (
+            "scenario = \"shock\"",
+            "scenario = \"shock\"\nab_roll_spring = \"relative\"",
+            "unknown `relative` (disk_relative, absolute)",
+        ),
+        (
             "[three_dof.shock]                        # S4: 0.25 µN·s over 5 µs at 0.6 ms, 5 nm actuation\ncontact = \"slider3\"",
             "[three_dof.shock]\ncontact = \"slider4\"",
             "three_dof.shock.contact",

@@ -6,7 +6,9 @@
 use crate::contact::mtl::LubricantCase;
 use crate::core::config::KeyError;
 use crate::dynamics::geometry::BulgeDesign;
-use crate::dynamics::three_dof::air_bearing::{PushbackCurve, SpringLaw};
+use crate::dynamics::three_dof::air_bearing::{
+    NominalForce, PushbackCurve, RollSpring, SpringLaw, StiffnessArgument,
+};
 use crate::dynamics::three_dof::case::{Init3Dof, Model3Dof, Options3Dof, TrackAssignment};
 use crate::dynamics::three_dof::inputs::{ActuationProfile, ShockPulse};
 use crate::dynamics::two_dof::ContactForceForm;
@@ -50,12 +52,6 @@ fn default_true() -> bool {
 }
 fn default_word(w: &str) -> String {
     w.to_string()
-}
-fn default_spring_law() -> String {
-    default_word("integrated")
-}
-fn default_init() -> String {
-    default_word("static")
 }
 fn default_tracks() -> String {
     default_word("three")
@@ -105,9 +101,31 @@ pub struct ThreeDofConfig {
     /// Impulse of the shock [N·s] (0.25 µN·s).
     #[serde(default = "default_shock_impulse")]
     pub shock_impulse: f64,
-    /// `integrated` (default, stable) or `linear` (eqs. 4.11–4.14).
-    #[serde(default = "default_spring_law")]
-    pub ab_spring_law: String,
+    /// The air bearing's reading of eqs. 4.8–4.14 as a whole: `hdi` (default: the four
+    /// `ab_*` readings below at their defaults) or `faithful` (all four as printed, and the
+    /// run starting from the nominal state as §4.1.1 prints it). Each `ab_*` key and `init`
+    /// written in the table override the preset.
+    #[serde(default)]
+    pub air_bearing: Option<String>,
+    /// `integrated` (default, stable) or `linear` (eqs. 4.11–4.14 as printed).
+    #[serde(default)]
+    pub ab_spring_law: Option<String>,
+    /// `balanced` (default: F_f,0 + F_r,0 = F with the moment balanced) or `as_printed`
+    /// (eqs. 4.11–4.12: `k_j,nom·FH_nom`).
+    #[serde(default)]
+    pub ab_nominal_force: Option<String>,
+    /// The PT that sets `k(PT)`: `rear_spring_disk` (default: the read element over the disk
+    /// under the rear spring), `pole_tip` (over its own disk, as printed) or `static_pole_tip`
+    /// (the push-back calibration's static PT at the current actuation).
+    #[serde(default)]
+    pub ab_stiffness_argument: Option<String>,
+    /// What the roll spring acts on: `disk_relative` (default: φ − φ_d) or `absolute` (φ, as
+    /// printed).
+    #[serde(default)]
+    pub ab_roll_spring: Option<String>,
+    /// Contact damping ratio ζ_c of every feature (Table 4.1, value not printed; default 0.05).
+    #[serde(default)]
+    pub contact_damping_ratio: Option<f64>,
     /// `linear` (ΔFH = 0.5·h) or `flattened` (above 12 nm, docs/dynamics-3dof-air-bearing.md).
     #[serde(default = "default_pushback")]
     pub pushback_curve: String,
@@ -115,9 +133,10 @@ pub struct ThreeDofConfig {
     /// or `integrated_stiffness` (docs/model-form.md).
     #[serde(default = "default_contact_force")]
     pub contact_force: String,
-    /// `static` (the push-back already in place) or `nominal`.
-    #[serde(default = "default_init")]
-    pub init: String,
+    /// `static` (the push-back already in place; the default) or `nominal` (the nominal state,
+    /// as printed in §4.1.1; the default under `air_bearing = "faithful"`).
+    #[serde(default)]
+    pub init: Option<String>,
     /// Heave offset of the start state, e.g. `"1 nm"` (|z0| ≤ 5 nm; default none): a kick whose
     /// free decay shows the heave/pitch AB modes (App. B's zero excitation; the Table 4.1
     /// initial roll of −10 µrad only rings the roll mode).
@@ -172,8 +191,11 @@ pub struct ThreeDofParams {
     pub cases: Vec<CaseInterface>,
     pub options: Options3Dof,
     pub steady_start: f64,
-    pub spring_law: SpringLaw,
+    /// The air bearing's readings (`air_bearing` preset and the `ab_*` keys).
+    pub readings: AbReadings,
     pub pushback: String,
+    /// ζ_c of every feature's contact damper.
+    pub contact_damping_ratio: f64,
     /// Reading of eq. 2.16 on the features (docs/model-form.md).
     pub contact_force: ContactForceForm,
     /// The `[bulge.*]` instance whose fitted a, w, x_TFC replace Table 4.3's at run time.
@@ -181,6 +203,107 @@ pub struct ThreeDofParams {
     /// That fit, once read from the upstream result (not part of the key: the bulge
     /// instance's key is).
     pub fitted: Option<BulgeDesign>,
+}
+
+/// The contact damping ratio ζ_c the stage has always used (Table 4.1's value is not printed).
+pub const DEFAULT_CONTACT_DAMPING_RATIO: f64 = 0.05;
+
+/// The four readings of eqs. 4.8–4.14 where hdi departs from the printed text
+/// (docs/model-form.md, "Misses 4 and 5").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct AbReadings {
+    pub spring_law: SpringLaw,
+    pub nominal_force: NominalForce,
+    pub stiffness_argument: StiffnessArgument,
+    pub roll_spring: RollSpring,
+}
+
+impl AbReadings {
+    /// `air_bearing = "faithful"`: all four as printed.
+    pub fn faithful() -> Self {
+        AbReadings {
+            spring_law: SpringLaw::Linear,
+            nominal_force: NominalForce::AsPrinted,
+            stiffness_argument: StiffnessArgument::PoleTip,
+            roll_spring: RollSpring::Absolute,
+        }
+    }
+
+    /// Put the readings into the air bearing's parameters.
+    pub fn apply(&self, ab: &mut crate::dynamics::three_dof::air_bearing::ThreeDofAbParams) {
+        ab.spring_law = self.spring_law;
+        ab.nominal_force = self.nominal_force;
+        ab.stiffness_argument = self.stiffness_argument;
+        ab.roll_spring = self.roll_spring;
+    }
+}
+
+/// One `ab_*` key: its value (or the preset's) parsed through `words`.
+fn reading<T: Copy>(
+    key: &str,
+    value: &Option<String>,
+    preset: T,
+    words: &[(&str, T)],
+) -> std::result::Result<T, KeyError> {
+    let Some(v) = value else {
+        return Ok(preset);
+    };
+    words
+        .iter()
+        .find(|(w, _)| w == v)
+        .map(|(_, t)| *t)
+        .ok_or_else(|| {
+            let list: Vec<&str> = words.iter().map(|(w, _)| *w).collect();
+            KeyError::new(key, format!("unknown `{v}` ({})", list.join(", ")))
+        })
+}
+
+/// `air_bearing` (the preset), then each `ab_*` key over it.
+fn check_readings(cfg: &ThreeDofConfig) -> std::result::Result<AbReadings, KeyError> {
+    let preset = match cfg.air_bearing.as_deref() {
+        None | Some("hdi") => AbReadings::default(),
+        Some("faithful") => AbReadings::faithful(),
+        Some(o) => return bad("air_bearing", format!("unknown `{o}` (hdi, faithful)")),
+    };
+    Ok(AbReadings {
+        spring_law: reading(
+            "ab_spring_law",
+            &cfg.ab_spring_law,
+            preset.spring_law,
+            &[
+                ("integrated", SpringLaw::Integrated),
+                ("linear", SpringLaw::Linear),
+            ],
+        )?,
+        nominal_force: reading(
+            "ab_nominal_force",
+            &cfg.ab_nominal_force,
+            preset.nominal_force,
+            &[
+                ("balanced", NominalForce::Balanced),
+                ("as_printed", NominalForce::AsPrinted),
+            ],
+        )?,
+        stiffness_argument: reading(
+            "ab_stiffness_argument",
+            &cfg.ab_stiffness_argument,
+            preset.stiffness_argument,
+            &[
+                ("rear_spring_disk", StiffnessArgument::RearSpringDisk),
+                ("pole_tip", StiffnessArgument::PoleTip),
+                ("static_pole_tip", StiffnessArgument::StaticPoleTip),
+            ],
+        )?,
+        roll_spring: reading(
+            "ab_roll_spring",
+            &cfg.ab_roll_spring,
+            preset.roll_spring,
+            &[
+                ("disk_relative", RollSpring::DiskRelative),
+                ("absolute", RollSpring::Absolute),
+            ],
+        )?,
+    })
 }
 
 /// A failed `[three_dof]` check at `key`.
@@ -305,29 +428,25 @@ fn check_cases(cfg: &ThreeDofConfig) -> std::result::Result<Vec<CaseInterface>, 
     Ok(cases)
 }
 
-/// `ab_spring_law`, `pushback_curve`, then the integrator options (`init`, `tracks`,
-/// `duration`, steps), `steady_start` and the shock pulse's end within `duration`.
+/// `pushback_curve`, then the integrator options (`init`, `tracks`, `duration`, steps),
+/// `steady_start` and the shock pulse's end within `duration`.
 fn check_options(
     cfg: &ThreeDofConfig,
     shock: Option<&ShockPulse>,
-) -> std::result::Result<(Options3Dof, SpringLaw), KeyError> {
-    let spring_law = match cfg.ab_spring_law.as_str() {
-        "integrated" => SpringLaw::Integrated,
-        "linear" => SpringLaw::Linear,
-        o => {
-            return bad(
-                "ab_spring_law",
-                format!("unknown `{o}` (integrated, linear)"),
-            )
-        }
-    };
+) -> std::result::Result<Options3Dof, KeyError> {
     if !matches!(cfg.pushback_curve.as_str(), "linear" | "flattened") {
         return bad(
             "pushback_curve",
             format!("unknown `{}` (linear, flattened)", cfg.pushback_curve),
         );
     }
-    let init = match cfg.init.as_str() {
+    // The printed initial state is the nominal one ("the initial front and rear AB spring FH
+    // are equal to the nominal value", §4.1.1): the faithful preset's default.
+    let preset_init = match cfg.air_bearing.as_deref() {
+        Some("faithful") => "nominal",
+        _ => "static",
+    };
+    let init = match cfg.init.as_deref().unwrap_or(preset_init) {
         "static" => Init3Dof::AirBearingStatic,
         "nominal" => Init3Dof::Nominal,
         o => return bad("init", format!("unknown `{o}` (static, nominal)")),
@@ -365,7 +484,7 @@ fn check_options(
             return bad("shock_start", "the pulse must end before `duration`");
         }
     }
-    Ok((options, spring_law))
+    Ok(options)
 }
 
 /// `contact_force`: the reading of eq. 2.16 on the features.
@@ -388,8 +507,15 @@ impl ThreeDofParams {
         let dmw = (cfg.dmw != "none").then(|| cfg.dmw.clone());
         let (profile, shock) = check_actuation(cfg)?;
         let cases = check_cases(cfg)?;
-        let (options, spring_law) = check_options(cfg, shock.as_ref())?;
+        let readings = check_readings(cfg)?;
+        let options = check_options(cfg, shock.as_ref())?;
         let contact_force = check_contact_force(cfg)?;
+        let contact_damping_ratio = cfg
+            .contact_damping_ratio
+            .unwrap_or(DEFAULT_CONTACT_DAMPING_RATIO);
+        if !(0.0..=10.0).contains(&contact_damping_ratio) {
+            return bad("contact_damping_ratio", "must lie in [0, 10]");
+        }
         let bulge = match &cfg.geometry {
             None => None,
             Some(GeometryConfig::Named(n)) if n == "dissertation" => None,
@@ -410,8 +536,9 @@ impl ThreeDofParams {
             cases,
             options,
             steady_start: cfg.steady_start.0,
-            spring_law,
+            readings,
             pushback: cfg.pushback_curve.clone(),
+            contact_damping_ratio,
             contact_force,
             bulge,
             fitted: None,
@@ -434,7 +561,7 @@ impl ThreeDofParams {
             "dmw_wrap": o.wrap_dmw,
             "tracks": o.tracks,
             "init": o.init,
-            "ab_spring_law": self.spring_law,
+            "ab_spring_law": self.readings.spring_law,
             "pushback_curve": self.pushback,
         });
         // Only instances with a fitted bulge carry the key: the others keep theirs.
@@ -451,13 +578,34 @@ impl ThreeDofParams {
         {
             obj.insert("contact_force".into(), json!(self.contact_force));
         }
+        // Likewise the other readings of eqs. 4.8–4.14 and ζ_c, each only off its default.
+        let r = &self.readings;
+        let d = AbReadings::default();
+        if let Some(obj) = v.as_object_mut() {
+            if r.nominal_force != d.nominal_force {
+                obj.insert("ab_nominal_force".into(), json!(r.nominal_force));
+            }
+            if r.stiffness_argument != d.stiffness_argument {
+                obj.insert("ab_stiffness_argument".into(), json!(r.stiffness_argument));
+            }
+            if r.roll_spring != d.roll_spring {
+                obj.insert("ab_roll_spring".into(), json!(r.roll_spring));
+            }
+            if self.contact_damping_ratio != DEFAULT_CONTACT_DAMPING_RATIO {
+                obj.insert(
+                    "contact_damping_ratio".into(),
+                    json!(self.contact_damping_ratio),
+                );
+            }
+        }
         v
     }
 
-    /// The dissertation's 3-DOF model with this instance's spring law and push-back curve.
+    /// The dissertation's 3-DOF model with this instance's air-bearing readings and push-back
+    /// curve.
     pub fn model(&self) -> Model3Dof {
         let mut m = Model3Dof::dissertation();
-        m.air_bearing.spring_law = self.spring_law;
+        self.readings.apply(&mut m.air_bearing);
         if self.pushback == "flattened" {
             m.pushback = PushbackCurve::flattened();
         }
@@ -556,5 +704,73 @@ mod tests {
         let e = ThreeDofParams::check(&cfg).unwrap_err();
         assert_eq!(e.key, "initial_heave");
         assert!(e.message.contains("5 nm"), "{}", e.message);
+    }
+
+    #[test]
+    fn air_bearing_readings_preset_overrides_and_keys() {
+        let base = "contact = \"c\"\nscenario = \"shock\"\nduration = \"1.5 ms\"";
+        let plain = params(base);
+        assert_eq!(plain.readings, AbReadings::default());
+        assert_eq!(plain.options.init, Init3Dof::AirBearingStatic);
+        assert_eq!(plain.contact_damping_ratio, DEFAULT_CONTACT_DAMPING_RATIO);
+        // `hdi` and the defaults written out leave the instance key as it was.
+        let written = params(&format!(
+            "{base}\nair_bearing = \"hdi\"\nab_spring_law = \"integrated\"\n\
+             ab_nominal_force = \"balanced\"\nab_stiffness_argument = \"rear_spring_disk\"\n\
+             ab_roll_spring = \"disk_relative\"\ncontact_damping_ratio = 0.05\ninit = \"static\""
+        ));
+        assert_eq!(written.canonical(), plain.canonical());
+        // The preset: all four as printed, started from the nominal state.
+        let faithful = params(&format!("{base}\nair_bearing = \"faithful\""));
+        assert_eq!(faithful.readings, AbReadings::faithful());
+        assert_eq!(faithful.options.init, Init3Dof::Nominal);
+        let m = faithful.model();
+        assert_eq!(m.air_bearing.spring_law, SpringLaw::Linear);
+        assert_eq!(m.air_bearing.nominal_force, NominalForce::AsPrinted);
+        assert_eq!(m.air_bearing.stiffness_argument, StiffnessArgument::PoleTip);
+        assert_eq!(m.air_bearing.roll_spring, RollSpring::Absolute);
+        let c = faithful.canonical();
+        assert_eq!(c["ab_spring_law"], "linear");
+        assert_eq!(c["ab_nominal_force"], "as_printed");
+        assert_eq!(c["ab_stiffness_argument"], "pole_tip");
+        assert_eq!(c["ab_roll_spring"], "absolute");
+        assert_eq!(c["init"], "nominal");
+        // A key written in the table overrides the preset.
+        let mixed = params(&format!(
+            "{base}\nair_bearing = \"faithful\"\nab_spring_law = \"integrated\"\ninit = \"static\""
+        ));
+        assert_eq!(mixed.readings.spring_law, SpringLaw::Integrated);
+        assert_eq!(mixed.readings.nominal_force, NominalForce::AsPrinted);
+        assert_eq!(mixed.options.init, Init3Dof::AirBearingStatic);
+        // One switch alone keys only itself.
+        let one = params(&format!("{base}\nab_roll_spring = \"absolute\""));
+        let keys = |v: &Value| -> Vec<String> { v.as_object().unwrap().keys().cloned().collect() };
+        let mut expected = keys(&plain.canonical());
+        expected.push("ab_roll_spring".into());
+        assert_eq!(keys(&one.canonical()), expected);
+        let zeta = params(&format!("{base}\ncontact_damping_ratio = 0.3"));
+        assert_eq!(zeta.canonical()["contact_damping_ratio"], 0.3);
+        // Unknown values are refused at their key, naming the choices.
+        for (key, bad_value) in [
+            ("air_bearing", "\"printed\""),
+            ("ab_spring_law", "\"cubic\""),
+            ("ab_nominal_force", "\"faithful\""),
+            ("ab_stiffness_argument", "\"read_element\""),
+            ("ab_roll_spring", "\"relative\""),
+            ("contact_damping_ratio", "-0.1"),
+        ] {
+            let cfg: ThreeDofConfig =
+                toml::from_str(&format!("{base}\n{key} = {bad_value}")).unwrap();
+            let e = ThreeDofParams::check(&cfg).unwrap_err();
+            assert_eq!(e.key, key, "{key}");
+        }
+        let cfg: ThreeDofConfig =
+            toml::from_str(&format!("{base}\nab_roll_spring = \"relative\"")).unwrap();
+        let e = ThreeDofParams::check(&cfg).unwrap_err();
+        assert!(
+            e.message.contains("disk_relative, absolute"),
+            "{}",
+            e.message
+        );
     }
 }

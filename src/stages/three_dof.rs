@@ -109,7 +109,7 @@ fn run_case(
         isbl,
         law,
         p.contact_force,
-        0.05,
+        p.contact_damping_ratio,
         model.air_bearing.slider.mass,
     )?;
     let inputs = tracks.map(|t| {

@@ -310,15 +310,17 @@ impl AbStiffnessTable {
 }
 
 /// Nominal spring forces `F_j,0` (switch `ab_nominal_force`, §3.3, §11.4).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum NominalForce {
     /// Static balance at the nominal attitude with zero actuation (recommended default):
     /// `F_f,0 + F_r,0 = F`, `d_f F_f,0 − d_r F_r,0 = e F` (+ the suspension torque, zero at the
     /// nominal state because `θ_s = θ0`).
     #[default]
     Balanced,
-    /// Eqs. 4.11–4.12: `F_j,0 = k_j,nom·FH_nom` (12.7 mN in total, not moment-balanced).
-    Faithful,
+    /// Eqs. 4.11–4.12 as printed: `F_j,0 = k_j,nom·FH_nom` (12.7 mN in total, not
+    /// moment-balanced; "balanced by the preload … at slightly smaller FH", §4.1.1).
+    AsPrinted,
 }
 
 /// How a spring force follows from its PT-dependent stiffness (switch `ab_spring_law`;
@@ -346,6 +348,39 @@ pub enum StiffeningPoint {
     TfcCentre,
     /// At the COM, `x_A = 0` (eqs. 4.11–4.14).
     Com,
+}
+
+/// Which pole-tip FH sets `k(PT)` in a running case (switch `ab_stiffness_argument`;
+/// docs/three-dof.md). Without a DMW (static solves) both are the same number.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StiffnessArgument {
+    /// The read element's height over the disk under the rear spring (ours, the default): the
+    /// surface the spring's own deflection is measured from, so a short-wavelength DMW
+    /// component under the read element does not change the spring force by itself.
+    #[default]
+    RearSpringDisk,
+    /// PT as printed (§4.1.4, Fig. 4.2): the read element's spacing over its own disk.
+    PoleTip,
+    /// The PT of the push-back calibration's static state at the current actuation
+    /// ([`DeltaFabTable::pole_tip_at`]): `k` follows the AB's operating point set by the TFC, not
+    /// the slider's instantaneous motion. The spring is then linear in its deflection with
+    /// stiffness `k > 0` under either spring law, and the calibration is unchanged (at a static
+    /// state the two PTs are the same number).
+    StaticPoleTip,
+}
+
+/// What the roll spring `k_l` (and its damper `c_l`) acts on (switch `ab_roll_spring`;
+/// docs/three-dof.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RollSpring {
+    /// `φ − φ_d`, the roll relative to the disk under the two ABS halves (ours, the default):
+    /// the ±y DMW tracks excite roll even when no feature is near the disk.
+    #[default]
+    DiskRelative,
+    /// `φ` as printed (eq. 4.3: "the roll AB moments depend only on the roll angle φ").
+    Absolute,
 }
 
 /// Parameters of the 3-DOF AB (Tables 4.1, 4.3; §11.3).
@@ -387,6 +422,10 @@ pub struct ThreeDofAbParams {
     pub spring_law: SpringLaw,
     /// Switch `ab_stiffening_point`.
     pub stiffening_point: StiffeningPoint,
+    /// Switch `ab_stiffness_argument` (used by the running case; static solves have no DMW).
+    pub stiffness_argument: StiffnessArgument,
+    /// Switch `ab_roll_spring` (used by the running case).
+    pub roll_spring: RollSpring,
     /// `x_TFC`: TFC (ellipsoid) centre from the TE (m).
     pub tfc_offset_from_te: f64,
     /// `a_TFC` (m).
@@ -428,6 +467,8 @@ impl Default for ThreeDofAbParams {
             nominal_force: NominalForce::Balanced,
             spring_law: SpringLaw::Integrated,
             stiffening_point: StiffeningPoint::TfcCentre,
+            stiffness_argument: StiffnessArgument::RearSpringDisk,
+            roll_spring: RollSpring::DiskRelative,
             tfc_offset_from_te: 15.0 * UM,
             bulge_semi_width_x: 5.0 * UM,
             bulge_height: 5.0 * NM,
@@ -683,7 +724,7 @@ impl ThreeDofAirBearing {
                 let ff = (moment - xr * f) / (xf - xr);
                 [ff, f - ff]
             }
-            NominalForce::Faithful => [kf * fh, kr * fh],
+            NominalForce::AsPrinted => [kf * fh, kr * fh],
         };
         let x_a = match p.stiffening_point {
             StiffeningPoint::TfcCentre => -0.5 * p.slider.length + p.tfc_offset_from_te,
@@ -956,6 +997,52 @@ impl ThreeDofAirBearing {
         Ok(f)
     }
 
+    /// Tangent heave–pitch stiffness `K_t = −∂f/∂(z, θ)` of the AB springs with the suspension
+    /// at a static state (same actuation and `ΔF_AB`, roll 0, no DMW), by central differences
+    /// of the force law this AB uses (spring law, nominal forces, stiffening point). With the
+    /// linear spring law it carries the `(FH_nom − ŝ)·dk/dPT` term that
+    /// [`Self::linear_stiffness_matrix`] leaves out; a negative eigenvalue of
+    /// [`Self::heave_pitch_eigenvalues`] means the state diverges (docs/model-form.md).
+    pub fn tangent_stiffness(&self, state: &StaticState) -> nalgebra::Matrix2<f64> {
+        let (dz, dt) = (1e-12, 1e-9);
+        // Under the static-PT argument `k` does not follow the motion.
+        let frozen = (self.params.stiffness_argument == StiffnessArgument::StaticPoleTip)
+            .then_some(state.pole_tip);
+        let r = |z: f64, th: f64| {
+            self.static_state_at(state.actuation, z, th, state.delta_force, false, frozen)
+                .1
+        };
+        let (z, th) = (state.heave, state.pitch);
+        let col_z = (r(z + dz, th) - r(z - dz, th)) / (2.0 * dz);
+        let col_t = (r(z, th + dt) - r(z, th - dt)) / (2.0 * dt);
+        nalgebra::Matrix2::new(-col_z.x, -col_t.x, -col_z.y, -col_t.y)
+    }
+
+    /// Eigenvalues `λ` of `M^{-1} K_t` for the heave–pitch pair at a static state
+    /// ([`Self::tangent_stiffness`]; `K_t` need not be symmetric: `k(PT)` makes the force field
+    /// non-conservative), ordered by real part. Undamped, `M q̈ + K_t q = 0` has solutions
+    /// `exp(s t)` with `s² = −λ`: `λ` real and positive is a mode of `√λ/2π` Hz, real and
+    /// negative a divergence growing as `exp(√−λ t)`, complex a flutter.
+    pub fn heave_pitch_eigenvalues(&self, state: &StaticState) -> [nalgebra::Complex<f64>; 2] {
+        let k = self.tangent_stiffness(state);
+        let p = &self.params;
+        let a = nalgebra::Matrix2::new(
+            k[(0, 0)] / p.slider.mass,
+            k[(0, 1)] / p.slider.mass,
+            k[(1, 0)] / p.slider.pitch_inertia,
+            k[(1, 1)] / p.slider.pitch_inertia,
+        );
+        let (tr, det) = (a.trace(), a.determinant());
+        let disc = nalgebra::Complex::new(0.25 * tr * tr - det, 0.0).sqrt();
+        let half = nalgebra::Complex::new(0.5 * tr, 0.0);
+        let (l1, l2) = (half - disc, half + disc);
+        if l1.re <= l2.re {
+            [l1, l2]
+        } else {
+            [l2, l1]
+        }
+    }
+
     /// Static residual `[heave force, pitch moment, condition]` at unknowns
     /// `(z, θ, ΔF_AB)` (roll 0), and the state.
     fn static_state(
@@ -966,11 +1053,25 @@ impl ThreeDofAirBearing {
         delta_force: f64,
         linear: bool,
     ) -> (StaticState, Vector3<f64>) {
+        self.static_state_at(actuation, heave, pitch, delta_force, linear, None)
+    }
+
+    /// [`Self::static_state`] with `k` taken at `frozen_pole_tip` instead of the state's PT.
+    fn static_state_at(
+        &self,
+        actuation: f64,
+        heave: f64,
+        pitch: f64,
+        delta_force: f64,
+        linear: bool,
+        frozen_pole_tip: Option<f64>,
+    ) -> (StaticState, Vector3<f64>) {
         let att = Attitude::pitch_only(pitch);
         let [pf, pr] = self.spring_points;
         let d_f = self.spacing_increment(&pf, heave, &att);
         let d_r = self.spacing_increment(&pr, heave, &att);
-        let pole_tip = self.static_pole_tip(heave, &att, actuation);
+        let pole_tip =
+            frozen_pole_tip.unwrap_or_else(|| self.static_pole_tip(heave, &att, actuation));
         let sp = SpringSpacings {
             front: self.nominal_spacings[0] + d_f,
             rear: self.nominal_spacings[1] + d_r,
@@ -1269,19 +1370,27 @@ impl DeltaFabTable {
     /// `ΔF_AB(h)` (N), linear between grid points, clamped to the end values outside (check
     /// [`Self::max_actuation`] / [`Self::ab_lost_at`] before running beyond the table).
     pub fn delta_force_at(&self, actuation: f64) -> f64 {
+        self.interpolate(actuation, |s| s.delta_force)
+    }
+
+    /// The static states' pole-tip FH at `h` (m), interpolated like [`Self::delta_force_at`]
+    /// (the argument of `k` under `StiffnessArgument::StaticPoleTip`).
+    pub fn pole_tip_at(&self, actuation: f64) -> f64 {
+        self.interpolate(actuation, |s| s.pole_tip)
+    }
+
+    fn interpolate(&self, actuation: f64, value: impl Fn(&StaticState) -> f64) -> f64 {
         let p = &self.points;
         if actuation.is_nan() || actuation <= p[0].actuation {
-            return p[0].delta_force;
+            return value(&p[0]);
         }
         let last = p.len() - 1;
         if actuation >= p[last].actuation {
-            return p[last].delta_force;
+            return value(&p[last]);
         }
         let i = p.partition_point(|s| s.actuation <= actuation) - 1;
         let (a, b) = (&p[i], &p[i + 1]);
-        a.delta_force
-            + (actuation - a.actuation) / (b.actuation - a.actuation)
-                * (b.delta_force - a.delta_force)
+        value(a) + (actuation - a.actuation) / (b.actuation - a.actuation) * (value(b) - value(a))
     }
 }
 

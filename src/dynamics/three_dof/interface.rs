@@ -40,6 +40,9 @@ pub struct FeatureForces {
     pub friction: f64,
     /// Real contact area of the solid contact [m²].
     pub real_area: f64,
+    /// The contact damper's part of `contact_force`, `−c_c ṡ` [N] (0 when clipped): the
+    /// elastic part is `contact_force − contact_damping`.
+    pub contact_damping: f64,
     /// The contact damper would have pulled (`F_c` clipped to 0).
     pub clipped: bool,
 }
@@ -83,6 +86,9 @@ pub struct FeatureInterface<'a> {
     reference_stiffness: f64,
     mass: f64,
     contact_damping_ratio: f64,
+    /// Upper bound of the solid contact's mean pressure over the nominal area `F_c/A_n` [Pa]
+    /// (none by default; an experiment of docs/model-form.md, not a `pipeline.toml` key).
+    pressure_cap: Option<f64>,
 }
 
 fn numerical(e: crate::contact::ContactError) -> DynamicsError {
@@ -124,7 +130,17 @@ impl<'a> FeatureInterface<'a> {
             reference_stiffness,
             mass,
             contact_damping_ratio,
+            pressure_cap: None,
         })
+    }
+
+    /// Cap the solid contact force at `cap · A_n` (e.g. the hardness: the real area cannot
+    /// exceed the nominal one, which the sparse-asperity ISBL sum does at deep penetration,
+    /// A_r/A_n > 1 below h* ≈ −11). Experiments only (docs/model-form.md).
+    pub fn with_pressure_cap(mut self, cap: f64) -> Result<Self, DynamicsError> {
+        super::super::require_positive("contact pressure cap (Pa)", cap)?;
+        self.pressure_cap = Some(cap);
+        Ok(self)
     }
 
     pub fn sigma(&self) -> f64 {
@@ -175,9 +191,14 @@ impl<'a> FeatureInterface<'a> {
                     area * (at.pressure - self.isbl.at(threshold).map_err(numerical)?.pressure)
                 }
             };
-            let force = elastic - self.contact_damping(area) * spacing_rate;
+            let damper = -(self.contact_damping(area) * spacing_rate);
+            let mut force = elastic + damper;
+            if let Some(cap) = self.pressure_cap {
+                force = force.min(cap * area);
+            }
             if force > 0.0 {
                 f.contact_force = force;
+                f.contact_damping = damper;
                 if let Some(h_star) = self.isbl.separation_for_pressure(force / area) {
                     let q = self.isbl.at(h_star).map_err(numerical)?;
                     f.friction = area * q.friction;

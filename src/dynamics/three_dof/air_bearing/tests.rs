@@ -224,7 +224,7 @@ fn nominal_forces_and_weights_for_both_switches() {
     assert!((wr - 0.988).abs() < 5e-4);
 
     let faithful = ThreeDofAirBearing::new(&ThreeDofAbParams {
-        nominal_force: NominalForce::Faithful,
+        nominal_force: NominalForce::AsPrinted,
         stiffening_point: StiffeningPoint::Com,
         ..Default::default()
     })
@@ -489,7 +489,7 @@ fn faithful_nominal_forces_retrim_before_actuation() {
     };
     let frozen = AbFrequencyTable::new(vec![nominal_row(2.5e-9), nominal_row(20e-9)]).unwrap();
     let frozen = ThreeDofAirBearing::new(&ThreeDofAbParams {
-        nominal_force: NominalForce::Faithful,
+        nominal_force: NominalForce::AsPrinted,
         frequencies: frozen,
         ..linear_params()
     })
@@ -505,7 +505,7 @@ fn faithful_nominal_forces_retrim_before_actuation() {
     assert!((s.te_rise - 3.42e-9).abs() < 0.01e-9, "{:e}", s.te_rise);
 
     let ab = ThreeDofAirBearing::new(&ThreeDofAbParams {
-        nominal_force: NominalForce::Faithful,
+        nominal_force: NominalForce::AsPrinted,
         ..linear_params()
     })
     .unwrap();
@@ -616,4 +616,65 @@ fn integrated_law_agrees_to_first_order_and_keeps_the_pushback_states_stable() {
     eprintln!("heave stiffness at 12 nm: linear {k_lin:.4e}, integrated {k_int:.4e} N/m");
     assert!(k_int > 1e5, "integrated law: heave stiffness {k_int:e} N/m");
     assert!(k_lin < 0.0, "linear law: heave stiffness {k_lin:e} N/m");
+}
+
+#[test]
+fn tangent_stiffness_shows_the_linear_law_diverging_where_the_integrated_law_holds() {
+    // The 12 nm push-back state of each law (docs/dynamics-3dof-air-bearing.md: heave
+    // stiffness of the two springs +1.81e6 N/m integrated, −1.58e5 N/m linear).
+    for (law, expected) in [
+        (SpringLaw::Integrated, 1.815e6),
+        (SpringLaw::Linear, -1.582e5),
+    ] {
+        let ab = ThreeDofAirBearing::new(&ThreeDofAbParams {
+            spring_law: law,
+            ..ThreeDofAbParams::default()
+        })
+        .unwrap();
+        let t = DeltaFabTable::calibrate_default(&ab, &PushbackCurve::default()).unwrap();
+        let s = at(&t, 12.0);
+        let k = ab.tangent_stiffness(&s);
+        let suspension = ab.params().suspension.heave_stiffness;
+        // Independently, in heave every spacing and PT move together (∂PT/∂z = 1):
+        // integrated −∂F/∂ŝ = k(PT); linear k − (FH_nom − ŝ)·dk/dPT.
+        let (kf, kr) = ab.stiffness_at(s.pole_tip);
+        let d = 1e-13;
+        let (kf1, kr1) = ab.stiffness_at(s.pole_tip + d);
+        let (kf0, kr0) = ab.stiffness_at(s.pole_tip - d);
+        let fh = ab.params().nominal_flying_height;
+        let att = crate::dynamics::geometry::Attitude::pitch_only(s.pitch);
+        let [pf, pr] = ab.spring_points();
+        let s_hat = |p: &Vector3<f64>| fh + ab.spacing_increment(p, s.heave, &att);
+        let analytic = match law {
+            SpringLaw::Integrated => kf + kr,
+            SpringLaw::Linear => {
+                kf - (fh - s_hat(&pf)) * (kf1 - kf0) / (2.0 * d) + kr
+                    - (fh - s_hat(&pr)) * (kr1 - kr0) / (2.0 * d)
+            }
+        };
+        let kzz = k[(0, 0)] - suspension;
+        assert!(
+            (kzz / analytic - 1.0).abs() < 1e-4,
+            "{law:?}: {kzz:e} vs {analytic:e}"
+        );
+        assert!(
+            (kzz / expected - 1.0).abs() < 1e-3,
+            "{law:?}: {kzz:e} vs {expected:e}"
+        );
+        let eig = ab.heave_pitch_eigenvalues(&s);
+        match law {
+            SpringLaw::Integrated => {
+                assert!(eig[0].re > 0.0 && eig[0].im == 0.0, "{eig:?}");
+                let f = eig.map(|l| l.re.sqrt() / std::f64::consts::TAU / 1e3);
+                // The 1st pitch mode stays near its 110 kHz.
+                assert!((f[0] - 108.0).abs() < 2.0, "{f:?} kHz");
+            }
+            SpringLaw::Linear => {
+                assert!(eig[0].re < 0.0, "a divergence: {eig:?}");
+                // Growth time 1/√−λ ≈ 1 µs: far inside one DMW period.
+                let tau = 1.0 / (-eig[0].re).sqrt();
+                assert!(tau > 0.5e-6 && tau < 2e-6, "{tau:e} s");
+            }
+        }
+    }
 }

@@ -99,14 +99,14 @@ fn roll_decays_with_one_track_and_not_with_three() {
     let lookup = isbl();
     let model = Model3Dof::dissertation();
     let tracks = sine_tracks([10.7e3, 13.3e3, 17.9e3], 1.0 * NM, 1.2e-3);
-    let run = |assignment: TrackAssignment| {
+    let run_with = |model: &Model3Dof, assignment: TrackAssignment| {
         let options = Options3Dof {
             duration: 1.0e-3,
             tracks: assignment,
             ..Options3Dof::default()
         };
         ThreeDofCase::new(
-            &model,
+            model,
             interface(&lookup),
             ActuationProfile::constant(5.0 * NM).unwrap(),
             None,
@@ -117,6 +117,7 @@ fn roll_decays_with_one_track_and_not_with_three() {
         .run()
         .unwrap()
     };
+    let run = |assignment: TrackAssignment| run_with(&model, assignment);
     let one = run(TrackAssignment::One);
     let three = run(TrackAssignment::Three);
     let late_one = steady(&one.roll, one.dt, 0.7e-3);
@@ -127,6 +128,49 @@ fn roll_decays_with_one_track_and_not_with_three() {
     // … while the disk's roll under the slider, (D2 − D3)/(l_w/2) ≈ 1 nm/175 µm, keeps it going.
     let s3 = std(late_three);
     assert!(s3 > 1e-6, "three tracks: roll std {s3:e} rad");
+    // The roll spring on φ alone (as printed): with every feature far from the disk nothing
+    // carries the ±y tracks' roll to the slider, and the roll decays as with one track.
+    let mut printed = model.clone();
+    printed.air_bearing.roll_spring = RollSpring::Absolute;
+    let absolute = run_with(&printed, TrackAssignment::Three);
+    let late = steady(&absolute.roll, absolute.dt, 0.7e-3);
+    let max_abs = late.iter().map(|r| r.abs()).fold(0.0, f64::max);
+    assert!(
+        max_abs < 0.01e-6,
+        "absolute roll spring: roll {max_abs:e} rad"
+    );
+}
+
+#[test]
+fn printed_nominal_forces_start_from_the_balance_under_the_calibrated_push_back_force() {
+    // Under the printed nominal forces ΔF_AB(h) comes from the balanced twin's calibration and
+    // the start is the static balance under it (delta_force_table, static_start).
+    let mut model = Model3Dof::dissertation();
+    let balanced = delta_force_table(&model).unwrap();
+    model.air_bearing.nominal_force = NominalForce::AsPrinted;
+    let printed = delta_force_table(&model).unwrap();
+    assert_eq!(balanced, printed);
+    let ab = ThreeDofAirBearing::new(&model.air_bearing).unwrap();
+    let s = static_start(&model, &ab, &printed, 12.0 * NM).unwrap();
+    assert!((s.delta_force - printed.delta_force_at(12.0 * NM)).abs() < 1e-15);
+    // A balance: the springs carry the preload plus the suspension's k·z.
+    let u = &model.air_bearing.suspension;
+    let residual = s.front_force + s.rear_force - u.preload - u.heave_stiffness * s.heave;
+    assert!(residual.abs() < 1e-9, "{residual:e} N");
+    // The printed forces (2.05 / 10.67 mN instead of 7.35 / 7.35) pitch the slider nose down:
+    // a different state from the balanced start, PT 7.15 nm instead of 7.79.
+    assert!(
+        (s.pole_tip / NM - 7.15).abs() < 0.05,
+        "PT {}",
+        s.pole_tip / NM
+    );
+    // With the linear law too (the faithful preset), the TE spring reaches FH_lim before the
+    // calibrated ΔF_AB(5 nm) is balanced: no static start, and the error says what to do.
+    model.air_bearing.spring_law = crate::dynamics::three_dof::air_bearing::SpringLaw::Linear;
+    let ab = ThreeDofAirBearing::new(&model.air_bearing).unwrap();
+    let table = delta_force_table(&model).unwrap();
+    let e = static_start(&model, &ab, &table, 5.0 * NM).unwrap_err();
+    assert!(e.to_string().contains("init = \"nominal\""), "{e}");
 }
 
 #[test]
