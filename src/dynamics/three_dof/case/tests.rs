@@ -345,6 +345,49 @@ fn shock_makes_the_pads_touch_and_the_bulge_recovers() {
     );
 }
 
+/// The shock's impact (~0.2 µs) peaks between output samples: the peak over the integrator's
+/// steps is the same whatever the output step, the sampled maximum is not.
+#[test]
+fn the_peak_contact_force_is_resolved_over_the_steps_not_the_samples() {
+    let lookup = isbl();
+    let model = Model3Dof::dissertation();
+    let run = |output_step: f64| {
+        let options = Options3Dof {
+            duration: 0.62e-3,
+            output_step,
+            ..Options3Dof::default()
+        };
+        ThreeDofCase::new(
+            &model,
+            interface(&lookup),
+            ActuationProfile::constant(5.0 * NM).unwrap(),
+            Some(ShockPulse::dissertation()),
+            None,
+            options,
+        )
+        .unwrap()
+        .run()
+        .unwrap()
+    };
+    let (coarse, fine) = (run(1e-6), run(0.25e-6));
+    let sampled = |h: &History3Dof| h.contact_force.iter().cloned().fold(0.0, f64::max);
+    // The samples miss the impact (the output step only picks where the state is seen)…
+    assert!(sampled(&coarse) < 0.5 * coarse.peak_contact_force);
+    // …the steps do not, and the steps do not depend on the output step.
+    assert!(fine.peak_contact_force >= sampled(&fine));
+    assert!(
+        (coarse.peak_contact_force / fine.peak_contact_force - 1.0).abs() < 1e-9,
+        "{} vs {} N",
+        coarse.peak_contact_force,
+        fine.peak_contact_force
+    );
+    assert!(
+        fine.peak_contact_force > 1.0,
+        "{} N",
+        fine.peak_contact_force
+    );
+}
+
 #[test]
 fn bad_inputs_are_clear_errors() {
     let lookup = isbl();
