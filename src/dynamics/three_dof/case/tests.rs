@@ -297,15 +297,16 @@ fn a_heave_kick_rings_the_heave_pitch_modes_of_the_linearised_slider() {
     assert!(bad.validate().is_err());
 }
 
-#[test]
-fn shock_makes_the_pads_touch_and_the_bulge_recovers() {
+/// The S4 shock at 5 nm, no DMW, over `duration` sampled every `output_step`.
+fn shock_case(duration: f64, output_step: f64) -> History3Dof {
     let lookup = isbl();
     let model = Model3Dof::dissertation();
     let options = Options3Dof {
-        duration: 1.5e-3,
+        duration,
+        output_step,
         ..Options3Dof::default()
     };
-    let h = ThreeDofCase::new(
+    ThreeDofCase::new(
         &model,
         interface(&lookup),
         ActuationProfile::constant(5.0 * NM).unwrap(),
@@ -315,7 +316,12 @@ fn shock_makes_the_pads_touch_and_the_bulge_recovers() {
     )
     .unwrap()
     .run()
-    .unwrap();
+    .unwrap()
+}
+
+#[test]
+fn shock_makes_the_pads_touch_and_the_bulge_recovers() {
+    let h = shock_case(1.5e-3, Options3Dof::default().output_step);
     let dt = h.dt;
     let window = |x: &[f64], a: f64, b: f64| -> Vec<f64> {
         x[(a / dt) as usize..(b / dt) as usize].to_vec()
@@ -349,27 +355,7 @@ fn shock_makes_the_pads_touch_and_the_bulge_recovers() {
 /// steps is the same whatever the output step, the sampled maximum is not.
 #[test]
 fn the_peak_contact_force_is_resolved_over_the_steps_not_the_samples() {
-    let lookup = isbl();
-    let model = Model3Dof::dissertation();
-    let run = |output_step: f64| {
-        let options = Options3Dof {
-            duration: 0.62e-3,
-            output_step,
-            ..Options3Dof::default()
-        };
-        ThreeDofCase::new(
-            &model,
-            interface(&lookup),
-            ActuationProfile::constant(5.0 * NM).unwrap(),
-            Some(ShockPulse::dissertation()),
-            None,
-            options,
-        )
-        .unwrap()
-        .run()
-        .unwrap()
-    };
-    let (coarse, fine) = (run(1e-6), run(0.25e-6));
+    let (coarse, fine) = (shock_case(0.62e-3, 1e-6), shock_case(0.62e-3, 0.25e-6));
     let sampled = |h: &History3Dof| h.contact_force.iter().cloned().fold(0.0, f64::max);
     // The samples miss the impact (the output step only picks where the state is seen)…
     assert!(sampled(&coarse) < 0.5 * coarse.peak_contact_force);
