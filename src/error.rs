@@ -82,16 +82,53 @@ pub enum Error {
     /// The pipeline has no `[kind.name]` instance.
     #[error("no [{kind}.{name}] in the pipeline")]
     MissingInstance { kind: &'static str, name: String },
-    /// A distributed case's recipe lacks a field.
-    #[error("{kind} recipe without `{field}`")]
-    RecipeField { kind: &'static str, field: String },
-    /// A distributed case's recipe has a `design_m` that does not parse.
-    #[error("{kind} recipe: bad `design_m`")]
-    RecipeDesign {
+    /// A distributed case's recipe is not a recipe of this hdi (`stages::case_engine`).
+    #[error("{kind} recipe: unreadable")]
+    Recipe {
+        kind: String,
+        #[source]
+        source: serde_json::Error,
+    },
+    /// A distributed case's recipe holds a case that is not one of its kind.
+    #[error("{kind} recipe: bad case")]
+    RecipeCase {
         kind: &'static str,
         #[source]
         source: serde_json::Error,
     },
+    /// A case re-derived on a worker does not arrive at the key the submitter derived: the
+    /// pipeline file or an upstream entry changed since submission.
+    #[error(
+        "{kind} case {case}: the pipeline file now gives key {derived}, the manifest has \
+         {submitted} (the file or its upstream changed since submission; resubmit with \
+         `hdi run --executor slurm`)"
+    )]
+    CaseKeyMismatch {
+        kind: String,
+        case: String,
+        derived: String,
+        submitted: String,
+    },
+    /// A recipe names an instance that is not (or no longer) a stage with cases of its kind.
+    #[error("{kind} recipe: [{section}.{instance}] in {config} {why}")]
+    CaseInstance {
+        kind: String,
+        section: String,
+        instance: String,
+        config: String,
+        why: &'static str,
+    },
+    /// A recipe names a case its instance does not have (the file changed since submission).
+    #[error(
+        "{kind} recipe: the instance has no case `{case}` (the file changed since submission?)"
+    )]
+    UnknownCase { kind: &'static str, case: String },
+    /// A calibration case's metrics do not come back from JSON bit for bit.
+    #[error("calibration case: its metrics do not survive JSON exactly")]
+    CaseMetricsJson,
+    /// A worker thread panicked while holding a shared preparation.
+    #[error("a worker thread panicked")]
+    WorkerPoisoned,
     /// `hdi validate` names no known area.
     #[error("unknown validation area `{0}`")]
     UnknownArea(String),
@@ -217,21 +254,14 @@ mod tests {
             }),
             "no [doe.a] in the pipeline"
         );
-        assert_eq!(
-            s(Error::RecipeField {
-                kind: "doe",
-                field: "config".into()
-            }),
-            "doe recipe without `config`"
-        );
-        let design =
+        let bad =
             || serde_json::from_value::<Option<[f64; 3]>>(serde_json::json!("x")).unwrap_err();
         assert_eq!(
-            s(Error::RecipeDesign {
+            s(Error::RecipeCase {
                 kind: "doe",
-                source: design()
+                source: bad()
             }),
-            format!("doe recipe: bad `design_m`: {}", design())
+            format!("doe recipe: bad case: {}", bad())
         );
         assert_eq!(s(Error::UnknownArea(name())), "unknown validation area `a`");
         let case = crate::core::cases::CaseError::Io {

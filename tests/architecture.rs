@@ -346,13 +346,17 @@ fn library_imports_point_down_only() {
     );
 }
 
-/// Stage kinds: the files and directories of src/stages/ (besides mod.rs).
+/// The stage contract: the registry (`mod.rs`) and the case capability every kind with
+/// cases implements (`case_engine.rs`); every other file or directory of src/stages/ is a kind.
+const STAGE_CONTRACT: &[&str] = &["mod", "case_engine"];
+
+/// Stage kinds: the files and directories of src/stages/ (besides the contract).
 fn stage_kinds() -> Vec<String> {
     let mut kinds = Vec::new();
     for e in std::fs::read_dir(src().join("stages")).unwrap() {
         let p = e.unwrap().path();
         let name = p.file_stem().unwrap().to_str().unwrap().to_string();
-        if name != "mod" {
+        if !STAGE_CONTRACT.contains(&name.as_str()) {
             kinds.push(name);
         }
     }
@@ -381,6 +385,7 @@ fn no_stage_imports_another_stage() {
         if own == "mod" {
             continue;
         }
+        // The contract names no kind either.
         let in_dir = rel.components().count() > 1;
         let code = code_only(&std::fs::read_to_string(f).unwrap());
         for other in &kinds {
@@ -446,6 +451,259 @@ fn the_binary_uses_the_library_only_through_its_public_api() {
             );
         }
     }
+}
+
+#[test]
+fn the_engine_names_no_stage_kind() {
+    // The engine drives stages through the contract (`Stage`, `case_engine`), so adding a
+    // kind never touches it (issue 31).
+    let kinds = stage_kinds();
+    let mut files = Vec::new();
+    rust_files(&src().join("engine"), &mut files);
+    assert!(!files.is_empty());
+    let mut bad = Vec::new();
+    for f in &files {
+        let code = code_only(&std::fs::read_to_string(f).unwrap());
+        for path in module_paths(&code, &["engine".to_string()]) {
+            if path.first().map(String::as_str) == Some("stages")
+                && path.get(1).is_some_and(|k| kinds.contains(k))
+            {
+                bad.push(format!("{}: names `{}`", f.display(), path.join("::")));
+            }
+        }
+    }
+    assert!(bad.is_empty(), "engine → stage kind:\n{}", bad.join("\n"));
+}
+
+/// The module path of a library file (`src/slider/sweep.rs` → `slider::sweep`,
+/// `src/stages/mod.rs` → `stages`).
+fn module_path_of(rel: &Path) -> Vec<String> {
+    let mut parts: Vec<String> = rel
+        .components()
+        .map(|c| c.as_os_str().to_str().unwrap().to_string())
+        .collect();
+    let last = parts.pop().unwrap();
+    let stem = last.strip_suffix(".rs").unwrap_or(&last).to_string();
+    if !matches!(stem.as_str(), "mod" | "lib" | "main") {
+        parts.push(stem);
+    }
+    parts
+}
+
+/// Every path `crate::…`, `super::…` or `self::…` in `code` (use groups expanded), resolved
+/// to an absolute module path from the file's own module path `own`.
+fn module_paths(code: &str, own: &[String]) -> Vec<Vec<String>> {
+    fn expand(prefix: &str, body: &str, out: &mut Vec<String>) {
+        // `a::{b, c::{d, e}}` → a::b, a::c::d, a::c::e
+        let body = body.trim();
+        if let Some(open) = body.find('{') {
+            let head = format!("{prefix}{}", &body[..open]);
+            let inner = &body[open + 1..body.rfind('}').unwrap_or(body.len())];
+            let mut depth = 0;
+            let mut start = 0;
+            for (i, c) in inner.char_indices() {
+                match c {
+                    '{' => depth += 1,
+                    '}' => depth -= 1,
+                    ',' if depth == 0 => {
+                        expand(&head, &inner[start..i], out);
+                        start = i + 1;
+                    }
+                    _ => {}
+                }
+            }
+            expand(&head, &inner[start..], out);
+        } else if !body.is_empty() {
+            out.push(format!("{prefix}{body}"));
+        }
+    }
+    let mut raw = Vec::new();
+    // `use` declarations, with their groups.
+    let mut rest = code;
+    while let Some(at) = rest.find("use ") {
+        let before_ok = at == 0 || {
+            let c = rest.as_bytes()[at - 1];
+            !(c.is_ascii_alphanumeric() || c == b'_')
+        };
+        rest = &rest[at + 4..];
+        if !before_ok {
+            continue;
+        }
+        if let Some(end) = rest.find(';') {
+            expand("", &rest[..end], &mut raw);
+        }
+    }
+    // Paths in expressions and types.
+    let bytes = code.as_bytes();
+    for root in ["crate::", "super::", "self::"] {
+        for (at, _) in code.match_indices(root) {
+            if at > 0 && (bytes[at - 1].is_ascii_alphanumeric() || bytes[at - 1] == b'_') {
+                continue;
+            }
+            let tail: String = code[at..]
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == ':')
+                .collect();
+            // `super::{…}`: a use group, expanded above.
+            if !tail.ends_with("::") {
+                raw.push(tail);
+            }
+        }
+    }
+    let mut paths = Vec::new();
+    for r in raw {
+        let r: String = r.split_whitespace().next().unwrap_or("").to_string();
+        let mut parts: Vec<&str> = r.split("::").filter(|p| !p.is_empty()).collect();
+        let mut base: Vec<String> = match parts.first().copied() {
+            Some("crate") => Vec::new(),
+            Some("self") => own.to_vec(),
+            Some("super") => own.to_vec(),
+            _ => continue,
+        };
+        if parts.first() == Some(&"crate") || parts.first() == Some(&"self") {
+            parts.remove(0);
+        }
+        while parts.first() == Some(&"super") {
+            parts.remove(0);
+            base.pop();
+        }
+        base.extend(parts.iter().map(|p| p.to_string()));
+        paths.push(base);
+    }
+    paths
+}
+
+/// Strongly connected components of more than one node (Tarjan), each sorted.
+fn circles(edges: &BTreeMap<String, BTreeSet<String>>) -> Vec<Vec<String>> {
+    struct T<'a> {
+        edges: &'a BTreeMap<String, BTreeSet<String>>,
+        index: BTreeMap<&'a str, usize>,
+        low: BTreeMap<&'a str, usize>,
+        stack: Vec<&'a str>,
+        on: BTreeSet<&'a str>,
+        out: Vec<Vec<String>>,
+    }
+    fn visit<'a>(t: &mut T<'a>, v: &'a str) {
+        let i = t.index.len();
+        t.index.insert(v, i);
+        t.low.insert(v, i);
+        t.stack.push(v);
+        t.on.insert(v);
+        if let Some(next) = t.edges.get(v) {
+            for w in next {
+                let w = w.as_str();
+                if !t.index.contains_key(w) {
+                    visit(t, w);
+                    let l = t.low[w].min(t.low[v]);
+                    t.low.insert(v, l);
+                } else if t.on.contains(w) {
+                    let l = t.index[w].min(t.low[v]);
+                    t.low.insert(v, l);
+                }
+            }
+        }
+        if t.low[v] == t.index[v] {
+            let mut c = Vec::new();
+            while let Some(w) = t.stack.pop() {
+                t.on.remove(w);
+                c.push(w.to_string());
+                if w == v {
+                    break;
+                }
+            }
+            if c.len() > 1 {
+                c.sort();
+                t.out.push(c);
+            }
+        }
+    }
+    let mut t = T {
+        edges,
+        index: BTreeMap::new(),
+        low: BTreeMap::new(),
+        stack: Vec::new(),
+        on: BTreeSet::new(),
+        out: Vec::new(),
+    };
+    for v in edges.keys() {
+        if !t.index.contains_key(v.as_str()) {
+            visit(&mut t, v);
+        }
+    }
+    t.out
+}
+
+/// The file-level import graph inside the library's modules: an edge from a file to each
+/// other file whose items it names, except to and from its own ancestors (a parent module
+/// declares and re-exports its children; a child implements its parent's contract).
+fn file_graph(root: &Path, files: &[PathBuf]) -> BTreeMap<String, BTreeSet<String>> {
+    let modules: BTreeSet<Vec<String>> = files
+        .iter()
+        .map(|f| module_path_of(f.strip_prefix(root).unwrap()))
+        .collect();
+    let mut edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for f in files {
+        let own = module_path_of(f.strip_prefix(root).unwrap());
+        let code = code_only(&std::fs::read_to_string(f).unwrap());
+        let node = edges.entry(own.join("::")).or_default();
+        for path in module_paths(&code, &own) {
+            // The deepest module the path names.
+            let mut target = path.clone();
+            while !target.is_empty() && !modules.contains(&target) {
+                target.pop();
+            }
+            let related = target.starts_with(&own) || own.starts_with(&target);
+            if target.is_empty() || related {
+                continue;
+            }
+            node.insert(target.join("::"));
+        }
+    }
+    edges
+}
+
+#[test]
+fn no_circle_inside_any_module() {
+    // The top-level test cannot see a circle between two files of one module (issue 31):
+    // `slider::sweep` ↔ `slider::case`, `engine::distributed` ↔ its calibration worker.
+    let root = src();
+    let mut files = Vec::new();
+    rust_files(&root, &mut files);
+    files.retain(|f| module_of(f.strip_prefix(&root).unwrap()).is_some());
+    let mut found = circles(&file_graph(&root, &files));
+    // The binary: src/main.rs and src/cli/ (`cli::run` ↔ `cli::slurm`).
+    let mut binary = vec![root.join("main.rs")];
+    rust_files(&root.join("cli"), &mut binary);
+    found.extend(circles(&file_graph(&root, &binary)));
+    let text: Vec<String> = found.iter().map(|c| c.join(" ↔ ")).collect();
+    assert!(
+        text.is_empty(),
+        "{} circle(s) between files of one module:\n{}",
+        text.len(),
+        text.join("\n")
+    );
+}
+
+#[test]
+fn the_circle_finder_sees_circles() {
+    let code = code_only("use super::{case::X, params};\nfn f() { crate::slider::sweep::g() }\n");
+    let own = vec!["slider".to_string(), "calibration".to_string()];
+    let paths: Vec<String> = module_paths(&code, &own)
+        .into_iter()
+        .map(|p| p.join("::"))
+        .collect();
+    assert_eq!(
+        paths,
+        ["slider::case::X", "slider::params", "slider::sweep::g"]
+    );
+    let mut edges = BTreeMap::new();
+    for (a, b) in [("a", "b"), ("b", "c"), ("c", "a"), ("c", "d")] {
+        edges
+            .entry(a.to_string())
+            .or_insert_with(BTreeSet::new)
+            .insert(b.to_string());
+    }
+    assert_eq!(circles(&edges), vec![vec!["a", "b", "c"]]);
 }
 
 #[test]

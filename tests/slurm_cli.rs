@@ -382,7 +382,7 @@ fn only_submits_exactly_the_named_sweeps_cases() {
             assert_eq!(c["kind"], "simulate", "{c}");
             assert_eq!(c["recipe"]["instance"], "improved_sweep", "{c}");
             assert_eq!(c["status"]["state"], "done", "{c}");
-            c["recipe"]["actuation_m"].as_f64().unwrap() * 1e9
+            c["recipe"]["case"]["actuation_m"].as_f64().unwrap() * 1e9
         })
         .collect();
     actuations_nm.sort_by(f64::total_cmp);

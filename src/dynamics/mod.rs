@@ -20,6 +20,7 @@
 
 pub mod air_bearing;
 pub mod calibration;
+pub mod contact_force;
 pub mod geometry;
 pub mod metrics;
 pub mod params;

@@ -3,7 +3,6 @@
 //! them through the [`Stage`] contract they define.
 pub mod diff;
 pub mod distributed;
-pub mod distributed_calibration;
 pub mod verify;
 
 use crate::core::cache::{Fingerprint, InputRecord, Manifest, Store, UpstreamRecord, Verification};
@@ -13,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::stages::{Stage, StageContext};
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// Per-instance state in a plan.
@@ -498,11 +497,7 @@ fn report(plan: &Plan, store: &Store, settled: Settled) -> Result<RunReport> {
 }
 
 /// A store entry's `result.json`.
-pub fn read_result(dir: &Path) -> Result<Value> {
-    let p = dir.join("result.json");
-    let bytes = std::fs::read(&p).map_err(|e| Error::io(&p, e))?;
-    serde_json::from_slice(&bytes).map_err(|source| Error::ResultJson { path: p, source })
-}
+pub use crate::stages::case_engine::read_result;
 
 /// A finished stage: its result, its manifest and the seconds it took; or why it did not run.
 type Executed = std::result::Result<(Value, Manifest, f64), String>;

@@ -6,7 +6,7 @@
 use crate::artefacts::dmw_tracks::DmwTrack;
 use crate::contact::lookup::IsblLookup;
 use crate::core::store::H5Out;
-use crate::dynamics::metrics::CaseMetrics;
+use crate::dynamics::metrics::{CaseMetrics, Regime, VibrationKind};
 use crate::dynamics::two_dof::{CaseHistory, DmwInput, TwoDofCase};
 use crate::error::{Error, Result};
 use crate::slider::params::SimulateParams;
@@ -59,9 +59,9 @@ pub fn case_json(actuation: f64, h: &CaseHistory, m: &CaseMetrics, c_c: f64) -> 
         "vibration_percent": m.vibration.percent,
         "vibration_extrema_percent": m.vibration_extrema.as_ref().map(|v| v.percent),
         // Explicit names, not Rust debug forms (docs/json.md).
-        "vibration_kind": crate::slider::sweep::vibration_kind_name(m.vibration_kind),
+        "vibration_kind": vibration_kind_name(m.vibration_kind),
         "percent_solid_contact": m.percent_solid_contact,
-        "regime": crate::slider::sweep::regime_name(m.regime),
+        "regime": regime_name(m.regime),
         "contact_force_N": c.map(|c| stats_json(&c.contact_force_n)),
         "friction_N": c.map(|c| stats_json(&c.friction_n)),
         "real_area_m2": c.map(|c| stats_json(&c.real_area_m2)),
@@ -185,4 +185,21 @@ pub fn read_case_history(path: &Path) -> Result<(Vec<f64>, NamedSeries)> {
         out.push((n.to_string(), read(n)?));
     }
     Ok((time, out))
+}
+/// `FHM` (flying-height modulation) or `BV` (bouncing vibration), the labels of eq. 2.1.
+pub fn vibration_kind_name(k: VibrationKind) -> &'static str {
+    match k {
+        VibrationKind::Fhm => "FHM",
+        VibrationKind::Bv => "BV",
+    }
+}
+
+/// The regime of eq. 2.1's classification as named in the tables.
+pub fn regime_name(r: Regime) -> &'static str {
+    match r {
+        Regime::Flying => "flying",
+        Regime::MobileLubricantContact => "mobile lubricant",
+        Regime::BondedLubricantContact => "bonded lubricant",
+        Regime::SolidContact => "solid contact",
+    }
 }

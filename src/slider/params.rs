@@ -203,7 +203,7 @@ pub struct SimulateParams {
     pub efficiency: Option<f64>,
     /// Branch-tracking (continuation) sweeps of `init = "static"`; empty with `init =
     /// "nominal"` (one sweep from the nominal state).
-    pub branches: Vec<crate::slider::sweep::Branch>,
+    pub branches: Vec<Branch>,
     /// Refine the touchdown to 0.02 nm (the convention) with extra cases.
     pub refine_touchdown: bool,
 }
@@ -532,9 +532,8 @@ impl SimulateParams {
             check_actuations(cfg, model.max_actuation)?
         };
         let options = check_options(cfg)?;
-        let branches =
-            crate::slider::sweep::Branch::parse(cfg.branches.as_deref(), options.static_init)
-                .map_err(|m| KeyError::new("branches", m))?;
+        let branches = Branch::parse(cfg.branches.as_deref(), options.static_init)
+            .map_err(|m| KeyError::new("branches", m))?;
         let (geometry, bulge) = match &cfg.geometry {
             GeometryConfig::Named(n) => (n.clone(), None),
             GeometryConfig::Bulge { bulge } => (format!("bulge:{bulge}"), Some(bulge.clone())),
@@ -735,6 +734,44 @@ impl SimulateParams {
         let powers = self.powers.as_ref()?;
         let k = self.actuations.iter().position(|a| *a == actuation)?;
         powers.get(k).copied()
+    }
+}
+
+/// A continuation branch of a static-start sweep (docs/conventions.md): `Up` steps the
+/// static equilibrium along increasing actuation from the nominal state at the lowest one,
+/// `Down` along decreasing actuation from the highest; near the adhesion fold, where there
+/// are several equilibria, the two can differ (hysteresis).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Branch {
+    Up,
+    Down,
+}
+
+impl Branch {
+    pub fn name(self) -> &'static str {
+        match self {
+            Branch::Up => "up",
+            Branch::Down => "down",
+        }
+    }
+
+    /// The `branches` key: `both` (default with static init), `up`, `down`; with the nominal
+    /// start (`static_init` false) there are no branches and the key is an error.
+    pub fn parse(
+        value: Option<&str>,
+        static_init: bool,
+    ) -> std::result::Result<Vec<Branch>, String> {
+        match (value, static_init) {
+            (None, false) => Ok(Vec::new()),
+            (Some(_), false) => Err("only with init = \"static\" (continuation sweeps); \
+                                     init = \"nominal\" is one sweep"
+                .into()),
+            (None | Some("both"), true) => Ok(vec![Branch::Up, Branch::Down]),
+            (Some("up"), true) => Ok(vec![Branch::Up]),
+            (Some("down"), true) => Ok(vec![Branch::Down]),
+            (Some(o), true) => Err(format!("unknown `{o}` (both, up, down)")),
+        }
     }
 }
 

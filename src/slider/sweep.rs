@@ -11,12 +11,14 @@ use crate::contact::lookup::IsblLookup;
 use crate::core::cache::Store;
 use crate::core::cases::{get_or_compute, CaseEntry};
 use crate::core::progress::Progress;
-use crate::dynamics::metrics::{
-    sweep_metrics, Regime, SlopeParams, SweepMetrics, SweepPoint, VibrationKind,
-};
+use crate::dynamics::metrics::{sweep_metrics, Regime, SlopeParams, SweepMetrics, SweepPoint};
 use crate::error::{Error, Result};
 use crate::slider::calibration::{apply_fitted, base_inputs};
 use crate::slider::case::{simulate_case, CASE_FILE, MODEL_VERSION};
+use crate::slider::doe_design::design_params;
+// Named here too, where the sweeps and their tables have always found them.
+pub use crate::slider::case::{regime_name, vibration_kind_name};
+pub use crate::slider::params::Branch;
 use crate::slider::params::SimulateParams;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
@@ -75,79 +77,121 @@ impl PreparedSweep {
         })
     }
 
-    /// The canonical parameters (cache key input) of the case at `actuation`.
-    pub fn case_params(&self, actuation: f64) -> Value {
-        self.params.case_params(
-            actuation,
-            &self.contact_key,
-            self.dmw.as_ref().map(|d| d.1.as_str()),
-        )
+    /// The parameters of `case`: a DOE design point's bulge, or a continuation start, on the
+    /// sweep's parameters (a design point keeps the configured start).
+    fn case_model(&self, case: &SweepCase) -> Result<std::borrow::Cow<'_, SimulateParams>> {
+        use std::borrow::Cow;
+        Ok(match (case.design_m, case.static_start) {
+            (Some(d), _) => Cow::Owned(design_params(&self.params, &d, case.actuation_m)?),
+            (None, Some(s)) => Cow::Owned(with_start(&self.params, Some(s))),
+            (None, None) => Cow::Borrowed(&self.params),
+        })
     }
 
-    /// Simulate the case at `actuation` into `dir` (what the case cache calls, locally or on
-    /// a Slurm worker).
-    pub fn compute_case(&self, actuation: f64, dir: &Path) -> Result<Value> {
+    /// The canonical parameters (cache key input) of `case`: the contact and DMW instances'
+    /// keys are part of them.
+    pub fn case_params(&self, case: &SweepCase) -> Result<Value> {
+        Ok(self.case_model(case)?.case_params(
+            case.actuation_m,
+            &self.contact_key,
+            self.dmw.as_ref().map(|d| d.1.as_str()),
+        ))
+    }
+
+    /// Simulate `case` into `dir` (what the case cache calls, locally or on a Slurm worker).
+    pub fn compute(&self, case: &SweepCase, dir: &Path) -> Result<Value> {
         simulate_case(
-            &self.params,
-            actuation,
+            &*self.case_model(case)?,
+            case.actuation_m,
             &self.isbl,
             self.dmw.as_ref().map(|d| &d.0),
             dir,
         )
     }
-}
 
-/// The case of `p` at `actuation` from the case cache, simulated into it if missing; its key
-/// includes the contact and DMW instances' keys.
-pub fn cached_case(
-    store: &Store,
-    p: &SimulateParams,
-    actuation: f64,
-    isbl: &IsblLookup,
-    contact_key: &str,
-    dmw: Option<(&DmwTrack, &str)>,
-) -> Result<CaseEntry> {
-    let params = p.case_params(actuation, contact_key, dmw.map(|d| d.1));
-    get_or_compute(store, MODEL_VERSION, &params, |dir| {
-        simulate_case(p, actuation, isbl, dmw.map(|d| d.0), dir)
-    })
-}
-
-/// A continuation branch of a static-start sweep (docs/conventions.md): `Up` steps the
-/// static equilibrium along increasing actuation from the nominal state at the lowest one,
-/// `Down` along decreasing actuation from the highest; near the adhesion fold, where there
-/// are several equilibria, the two can differ (hysteresis).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Branch {
-    Up,
-    Down,
-}
-
-impl Branch {
-    pub fn name(self) -> &'static str {
-        match self {
-            Branch::Up => "up",
-            Branch::Down => "down",
-        }
+    /// `case` from the case cache, simulated into it if missing.
+    pub fn cached(&self, store: &Store, case: &SweepCase) -> Result<CaseEntry> {
+        get_or_compute(store, MODEL_VERSION, &self.case_params(case)?, |dir| {
+            self.compute(case, dir)
+        })
     }
 
-    /// The `branches` key: `both` (default with static init), `up`, `down`; with the nominal
-    /// start (`static_init` false) there are no branches and the key is an error.
-    pub fn parse(
-        value: Option<&str>,
-        static_init: bool,
-    ) -> std::result::Result<Vec<Branch>, String> {
-        match (value, static_init) {
-            (None, false) => Ok(Vec::new()),
-            (Some(_), false) => Err("only with init = \"static\" (continuation sweeps); \
-                                     init = \"nominal\" is one sweep"
-                .into()),
-            (None | Some("both"), true) => Ok(vec![Branch::Up, Branch::Down]),
-            (Some("up"), true) => Ok(vec![Branch::Up]),
-            (Some("down"), true) => Ok(vec![Branch::Down]),
-            (Some(o), true) => Err(format!("unknown `{o}` (both, up, down)")),
+    /// The sweep's grid (sorted, without repeats), its branches and their continuation
+    /// starts: what a run computes up front, locally or listed for an executor.
+    pub fn plan(&self) -> Result<SweepPlan> {
+        let p = &self.params;
+        let mut grid = p.actuations.clone();
+        grid.sort_by(|a, b| a.total_cmp(b));
+        grid.dedup();
+        let branches: Vec<Option<Branch>> = if p.branches.is_empty() {
+            vec![None]
+        } else {
+            p.branches.iter().map(|b| Some(*b)).collect()
+        };
+        // Static init: each branch's equilibria by continuation, one after the other (cheap);
+        // the dynamic cases of every branch then run in one parallel batch.
+        let track = self.dmw.as_ref().map(|d| &d.0);
+        let mut starts = Vec::new();
+        for b in &branches {
+            starts.push(match b {
+                Some(b) => Some(continuation_starts(p, &grid, &self.isbl, track, *b)?),
+                None => None,
+            });
         }
+        Ok(SweepPlan {
+            grid,
+            branches,
+            starts,
+        })
+    }
+}
+
+/// One case of a 2-DOF sweep or of a DOE design, as the stages list it and a recipe carries
+/// it (docs/schemas/case-manifest.json, `sweep_case`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepCase {
+    /// TFC actuation [m].
+    pub actuation_m: f64,
+    /// DOE design point (bulge semi-width, full width, offset from the trailing edge) [m];
+    /// `None` for a sweep case.
+    pub design_m: Option<[f64; 3]>,
+    /// Continuation equilibrium `(z, ϑ)` the case starts Newton from (branch-tracking
+    /// sweeps); `None`: as configured.
+    pub static_start: Option<[f64; 2]>,
+}
+
+impl SweepCase {
+    pub fn at(actuation_m: f64, static_start: Option<[f64; 2]>) -> Self {
+        SweepCase {
+            actuation_m,
+            design_m: None,
+            static_start,
+        }
+    }
+}
+
+/// What a sweep computes up front: its grid, branches and each branch's starts.
+pub struct SweepPlan {
+    pub grid: Vec<f64>,
+    /// `[None]` for a one-sweep (nominal-start) instance.
+    pub branches: Vec<Option<Branch>>,
+    /// Per branch, the continuation start of each grid point (`None`: nominal start).
+    pub starts: Vec<Option<Vec<[f64; 2]>>>,
+}
+
+impl SweepPlan {
+    /// Every case, branch by branch, in grid order.
+    pub fn cases(&self) -> Vec<SweepCase> {
+        self.starts
+            .iter()
+            .flat_map(|s| {
+                self.grid
+                    .iter()
+                    .enumerate()
+                    .map(move |(i, &a)| SweepCase::at(a, s.as_ref().map(|s| s[i])))
+            })
+            .collect()
     }
 }
 
@@ -206,8 +250,7 @@ pub enum CaseSink<'a> {
     /// consumed contact and DMW entries are part of each case's key.
     Store {
         store: &'a Store,
-        contact_key: &'a str,
-        dmw_key: Option<&'a str>,
+        prepared: &'a PreparedSweep,
     },
     /// A directory `h_XXX.XXnm/` per case under this one, recomputed every time: `hdi simulate`.
     Directory(&'a Path),
@@ -258,7 +301,7 @@ pub fn run_jobs(
                 }
                 None => p,
             };
-            let entry = run_case(p, sink, a, isbl, dmw, tag).map_err(|e| Error::Case {
+            let entry = run_case(p, sink, a, start, isbl, dmw, tag).map_err(|e| Error::Case {
                 actuation: a,
                 source: Box::new(e),
             });
@@ -285,20 +328,15 @@ fn run_case(
     p: &SimulateParams,
     sink: &CaseSink,
     actuation: f64,
+    start: Option<[f64; 2]>,
     isbl: &IsblLookup,
     dmw: Option<&DmwTrack>,
     tag: &str,
 ) -> Result<CaseEntry> {
     match sink {
-        CaseSink::Store {
-            store,
-            contact_key,
-            dmw_key,
-        } => {
-            let params = p.case_params(actuation, contact_key, *dmw_key);
-            get_or_compute(store, MODEL_VERSION, &params, |dir| {
-                simulate_case(p, actuation, isbl, dmw, dir)
-            })
+        // The stage's prepared sweep computes the case, as a Slurm worker's does.
+        CaseSink::Store { store, prepared } => {
+            prepared.cached(store, &SweepCase::at(actuation, start))
         }
         CaseSink::Directory(root) => {
             let dir = root.join(format!("h_{:06.2}nm{tag}", actuation * 1e9));
@@ -453,14 +491,6 @@ pub fn sweep_analysis(p: &SimulateParams, cases: &[CaseOutcome]) -> Result<Sweep
     .map_err(Error::SweepMetrics)
 }
 
-/// `FHM` (flying-height modulation) or `BV` (bouncing vibration), the labels of eq. 2.1.
-pub fn vibration_kind_name(k: VibrationKind) -> &'static str {
-    match k {
-        VibrationKind::Fhm => "FHM",
-        VibrationKind::Bv => "BV",
-    }
-}
-
 /// A case result's `vibration_kind` as named in the tables and `--json`; cases cached before
 /// docs/json.md hold the debug form (`Fhm`, `Bv`).
 fn vibration_kind_label(v: &Value) -> Value {
@@ -482,15 +512,6 @@ pub fn regime_label(v: &Value) -> Value {
         _ => return v.clone(),
     };
     json!(name)
-}
-
-pub fn regime_name(r: Regime) -> &'static str {
-    match r {
-        Regime::Flying => "flying",
-        Regime::MobileLubricantContact => "mobile lubricant",
-        Regime::BondedLubricantContact => "bonded lubricant",
-        Regime::SolidContact => "solid contact",
-    }
 }
 
 /// One table row per case (unit suffixes in the names).

@@ -3,6 +3,10 @@
 //! only when the base model, its contact set, its DMW record or the calibration settings change.
 //! A `[simulate]` instance with `calibration = "NAME"` then runs with the fitted knobs.
 
+use super::case_engine::{
+    case_value, typed_case, CaseEngine, CaseRecipe, ListedCase, PreparedCases, UpstreamEntries,
+    UpstreamRef,
+};
 use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::calibration::fitted_json;
 use crate::contact::isbl::IsblParams;
@@ -10,9 +14,9 @@ use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::executor::batch::BatchRunner;
 use crate::core::executor::CaseSpec;
 use crate::dynamics::calibration::{
-    apply_knobs, calibrate, default_knobs, held_out_for, in_band, targets_for, CalibrationResult,
-    CalibrationSettings, CaseRound, CaseRounds, Evaluation, Knob, KnobRange, TargetGeometry,
-    TargetOutcome, TargetSet, DEFAULT_MAX_EVALUATIONS,
+    apply_knobs, calibrate, default_knobs, held_out_for, in_band, round_case, targets_for,
+    CalibrationResult, CalibrationSettings, CaseRound, CaseRounds, Evaluation, Knob, KnobRange,
+    TargetGeometry, TargetOutcome, TargetSet, DEFAULT_MAX_EVALUATIONS,
 };
 use crate::dynamics::metrics::CaseMetrics;
 use crate::dynamics::DynamicsError;
@@ -23,6 +27,7 @@ use crate::units::Length;
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 // calibrate-6: the held-out set split into selection and final (outputs only; the fit is
 // calibrate-5's, FIT_VERSION).
@@ -561,6 +566,10 @@ fn knob_rows(stage: &CalibrateStage, r: &CalibrationResult) -> Vec<Map<String, V
 impl StageKind for CalibrateStage {
     const KIND: &'static str = "calibrate";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
+    const CASE_KIND: Option<&'static str> = Some(CALIBRATION_CASE);
+    fn case_engine(&self) -> Option<&dyn CaseEngine> {
+        Some(self)
+    }
 
     fn params(&self) -> Value {
         json!({
@@ -915,7 +924,7 @@ fn residuals_png(path: &std::path::Path, base: &str, r: &CalibrationResult) -> R
 // ------------------------------------------------------------------------------------------
 
 /// Case kind of one calibration case sent to a batch runner (`hdi exec-cases` dispatches on
-/// it; the worker is `engine::distributed_calibration`).
+/// it to [`CaseEngine`] below).
 pub const CALIBRATION_CASE: &str = "calibration";
 
 /// Model version of a calibration case's store entry: its result is the case metrics of
@@ -971,17 +980,6 @@ pub fn knobs_json(knobs: &[(Knob, f64)]) -> Value {
         .collect::<Vec<_>>())
 }
 
-/// The inverse of [`knobs_json`]; `None` for anything else.
-pub fn knobs_from_json(v: &Value) -> Option<Vec<(Knob, f64)>> {
-    v.as_array()?
-        .iter()
-        .map(|pair| {
-            let k = Knob::from_name(pair.get(0)?.as_str()?)?;
-            Some((k, pair.get(1)?.as_f64()?))
-        })
-        .collect()
-}
-
 /// Canonical parameters of one case (its store key).
 pub fn case_params(
     base_params: &Value,
@@ -1014,34 +1012,20 @@ struct StoreRounds<'c> {
     store: &'c crate::core::cache::Store,
     instance: String,
     base_params: Value,
-    /// `[{name, key, dir}]` with `dir` relative to `processed/`: where a worker reads the
-    /// base's contact and DMW entries.
-    upstream: Value,
+    /// Where a worker reads the base's contact and DMW entries.
+    upstream: Vec<UpstreamRef>,
     fatal: std::sync::Mutex<Option<String>>,
     counts: std::sync::Mutex<(usize, usize)>,
 }
 
 impl<'c> StoreRounds<'c> {
     fn new(stage: &CalibrateStage, ctx: &StageContext<'c>, batch: &'c dyn BatchRunner) -> Self {
-        let processed = ctx.store.processed();
-        let upstream: Vec<Value> = stage
-            .base
-            .upstream()
-            .iter()
-            .map(|n| {
-                let dir = ctx
-                    .upstream_dirs
-                    .get(n)
-                    .map(|d| d.strip_prefix(processed).unwrap_or(d).display().to_string());
-                json!({"name": n, "key": ctx.upstream_key(n), "dir": dir})
-            })
-            .collect();
         StoreRounds {
             batch,
             store: ctx.store,
             instance: ctx.name.to_string(),
             base_params: stage.case_base_params(|n| ctx.upstream_key(n)),
-            upstream: json!(upstream),
+            upstream: ctx.upstream_entries().refs(ctx.store.processed()),
             fatal: Default::default(),
             counts: Default::default(),
         }
@@ -1083,15 +1067,20 @@ impl CaseRounds for StoreRounds<'_> {
             .map(|&a| {
                 let params = case_params(&self.base_params, round.knobs, round.geometry, a);
                 let key = crate::core::cases::case_fingerprint(CASE_MODEL_VERSION, &params).key();
-                let recipe = json!({
-                    "instance": self.instance,
-                    "upstream": self.upstream,
-                    "knobs": knobs_json(round.knobs),
-                    "geometry": geometry_name(round.geometry),
-                    "actuation_m": a,
-                    "key": key,
-                });
-                CaseSpec::new(CALIBRATION_CASE, CASE_MODEL_VERSION, params, recipe)
+                let recipe = CaseRecipe {
+                    // The batch runner names the pipeline file.
+                    config: String::new(),
+                    instance: self.instance.clone(),
+                    upstream: self.upstream.clone(),
+                    case: case_value(&CalibrationCase::new(round.knobs, round.geometry, a)),
+                    key,
+                };
+                CaseSpec::new(
+                    CALIBRATION_CASE,
+                    CASE_MODEL_VERSION,
+                    params,
+                    case_value(&recipe),
+                )
             })
             .collect();
         let results = self
@@ -1109,6 +1098,113 @@ impl CaseRounds for StoreRounds<'_> {
             metrics.push(m);
         }
         Ok(metrics)
+    }
+}
+
+/// One calibration case as a recipe carries it: the round's knob values, target geometry
+/// and actuation (docs/schemas/case-manifest.json, `calibration_case`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CalibrationCase {
+    /// `[[name, value], …]` (JSON numbers round-trip f64 exactly: serde_json
+    /// `float_roundtrip`).
+    pub knobs: Vec<(String, f64)>,
+    /// `base` / `optimised`.
+    pub geometry: String,
+    pub actuation_m: f64,
+}
+
+impl CalibrationCase {
+    fn new(knobs: &[(Knob, f64)], geometry: TargetGeometry, actuation_m: f64) -> Self {
+        CalibrationCase {
+            knobs: knobs
+                .iter()
+                .map(|(k, v)| (k.name().to_string(), *v))
+                .collect(),
+            geometry: geometry_name(geometry).to_string(),
+            actuation_m,
+        }
+    }
+
+    /// The knobs and geometry as the fit names them.
+    fn resolve(&self) -> Result<(Vec<(Knob, f64)>, TargetGeometry)> {
+        let bad = |what: &str| {
+            let source = <serde_json::Error as serde::de::Error>::custom(what);
+            crate::error::Error::RecipeCase {
+                kind: CALIBRATION_CASE,
+                source,
+            }
+        };
+        let knobs = self
+            .knobs
+            .iter()
+            .map(|(k, v)| Knob::from_name(k).map(|k| (k, *v)))
+            .collect::<Option<Vec<_>>>()
+            .ok_or_else(|| bad("unknown knob"))?;
+        let geometry = geometry_from_name(&self.geometry).ok_or_else(|| bad("unknown geometry"))?;
+        Ok((knobs, geometry))
+    }
+}
+
+impl CaseEngine for CalibrateStage {
+    /// The base's interface parameters, DMW track and case base parameters, rebuilt from the
+    /// entries the submitting fit read.
+    fn prepare_cases(&self, upstream: &UpstreamEntries) -> Result<Arc<dyn PreparedCases>> {
+        let (isbl, dmw) = base_inputs(&self.base, &upstream.results, &upstream.dirs)?;
+        Ok(Arc::new(CalibrationCases {
+            base: self.base.clone(),
+            isbl,
+            dmw,
+            base_params: self.case_base_params(|n| upstream.key_of(n)),
+        }))
+    }
+    /// The fit submits its rounds itself while it runs.
+    fn listed_up_front(&self) -> bool {
+        false
+    }
+}
+
+/// What every case of one fit shares.
+struct CalibrationCases {
+    base: SimulateParams,
+    isbl: IsblParams,
+    dmw: Option<crate::artefacts::dmw_tracks::DmwTrack>,
+    base_params: Value,
+}
+
+impl PreparedCases for CalibrationCases {
+    fn model_version(&self) -> &'static str {
+        CASE_MODEL_VERSION
+    }
+    fn cases(&self) -> Result<Vec<ListedCase>> {
+        Ok(Vec::new())
+    }
+    fn case_params(&self, case: &Value) -> Result<Value> {
+        let c: CalibrationCase = typed_case(CALIBRATION_CASE, case)?;
+        let (knobs, geometry) = c.resolve()?;
+        Ok(case_params(
+            &self.base_params,
+            &knobs,
+            geometry,
+            c.actuation_m,
+        ))
+    }
+    /// The case through [`round_case`], the function the fit's own rounds run.
+    fn compute(&self, case: &Value, _dir: &std::path::Path) -> Result<Value> {
+        let c: CalibrationCase = typed_case(CALIBRATION_CASE, case)?;
+        let (knobs, geometry) = c.resolve()?;
+        let base = base_of(&self.base, self.isbl, self.dmw.as_ref());
+        let outcome = round_case(&base, &knobs, geometry, c.actuation_m);
+        let result = case_result(&outcome);
+        // The fit compares these numbers: they must come back bit for bit (a non-finite value
+        // would not survive JSON).
+        if let Ok(m) = &outcome {
+            let back = serde_json::from_value(result["metrics"].clone()).ok();
+            if back.as_ref() != Some(m) {
+                return Err(crate::error::Error::CaseMetricsJson);
+            }
+        }
+        Ok(result)
     }
 }
 

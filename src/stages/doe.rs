@@ -5,8 +5,8 @@
 //! residual diagnostics per level; Table 2.7's predictive equations; simulated annealing on ξ
 //! with a sensitivity check; and Table 2.8, the 2-DOF sweep on the initial and optimised designs.
 
+use super::case_engine::{CaseEngine, Listing, PreparedCases, SweepCases, UpstreamEntries};
 use super::{FromConfig, StageContext, StageKind, StageOutput};
-use crate::artefacts::dmw_tracks::DmwTrack;
 use crate::contact::isbl::IsblModel;
 use crate::contact::lookup::IsblLookup;
 use crate::core::cache::Store;
@@ -23,13 +23,14 @@ use crate::numerics::regression::{
 use crate::slider::calibration::base_inputs;
 use crate::slider::doe_design::{self, design_cases, design_params};
 use crate::slider::params::{uncalibrated_base, SimulateParams};
-use crate::slider::sweep::{cached_case, sweep_analysis, CaseOutcome};
+use crate::slider::sweep::{sweep_analysis, CaseOutcome, PreparedSweep, SweepCase};
 use crate::units::Length;
 use rayon::prelude::*;
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
 
 /// Bump when the numbers the stage derives from its cases change (the cases themselves carry
 /// the simulate stage's model version).
@@ -408,10 +409,10 @@ pub fn check(
 /// Runs one 2-DOF case of a given bulge through the 2-DOF case cache (`slider::case`).
 struct CaseRunner<'a> {
     base: &'a SimulateParams,
-    isbl: &'a IsblLookup,
+    /// The base sweep prepared once (`DoeStage::prepare`): it computes every design case, as
+    /// a Slurm worker's does.
+    sweep: &'a PreparedSweep,
     store: &'a Store,
-    contact_key: &'a str,
-    dmw: Option<(&'a DmwTrack, &'a str)>,
 }
 
 /// One finished case of a design: its metrics and ξ.
@@ -430,15 +431,12 @@ impl CaseRunner<'_> {
 
     fn run(&self, design: [f64; 3], actuation: f64) -> Result<DesignCase> {
         let p = design_params(self.base, &design, actuation)?;
-        let entry = cached_case(
-            self.store,
-            &p,
-            actuation,
-            self.isbl,
-            self.contact_key,
-            self.dmw,
-        )
-        .map_err(|e| {
+        let case = SweepCase {
+            actuation_m: actuation,
+            design_m: Some(design),
+            static_start: None,
+        };
+        let entry = self.sweep.cached(self.store, &case).map_err(|e| {
             Error::Stage(format!(
                 "case a = {:.3} um, w = {:.3} um, x = {:.3} um, h_TFC = {:.3} nm: {e}",
                 design[0] / UM,
@@ -1008,6 +1006,10 @@ impl FromConfig for DoeStage {
 impl StageKind for DoeStage {
     const KIND: &'static str = "doe";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
+    const CASE_KIND: Option<&'static str> = Some(DOE_CASE);
+    fn case_engine(&self) -> Option<&dyn CaseEngine> {
+        Some(self)
+    }
 
     fn params(&self) -> Value {
         self.params.canonical()
@@ -1023,17 +1025,14 @@ impl StageKind for DoeStage {
         u
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
-        let mut p = self.params.clone();
-        // A fitted bulge (docs/doe.md): the measured design replaces the base's bulge, so it
-        // is Table 2.8's initial design; the factorial levels stay as configured.
-        if let Some(b) = &p.bulge {
-            let fitted = crate::artefacts::bulge::upstream_bulge(&ctx.upstream, b)?;
-            p.base.powers = None;
-            p.base.apply_bulge(&fitted, b)?;
-        }
+        ctx.progress.set_message("interface table");
+        let (p, sweep) = self.prepare(&ctx.upstream_entries())?;
         let p = &p;
-        let inputs = prepare_inputs(p, ctx)?;
-        let runner = inputs.runner(p, ctx.store);
+        let runner = CaseRunner {
+            base: &p.base,
+            sweep: &sweep,
+            store: ctx.store,
+        };
         // Annealing on simulations needs neither the design nor its fits, and is sequential
         // (each step a slider case): it runs beside the design's parallel cases instead of
         // after them, where it held one core of a 2-core cold run for ~3 s (docs/doe.md).
@@ -1097,38 +1096,55 @@ impl StageKind for DoeStage {
 const CODED_LOWER: [f64; 3] = [-1.0; 3];
 const CODED_UPPER: [f64; 3] = [1.0; 3];
 
-/// The base's upstream inputs: the interface table, the DMW track, and the cache keys of the
-/// instances they come from (part of every case's key).
-struct BaseInputs {
-    isbl: IsblLookup,
-    contact_key: String,
-    dmw: Option<(DmwTrack, String)>,
-}
-
-impl BaseInputs {
-    fn runner<'a>(&'a self, p: &'a DoeParams, store: &'a Store) -> CaseRunner<'a> {
-        CaseRunner {
-            base: &p.base,
-            isbl: &self.isbl,
-            store,
-            contact_key: &self.contact_key,
-            dmw: self.dmw.as_ref().map(|(t, k)| (t, k.as_str())),
+impl DoeStage {
+    /// The parameters with a fitted bulge applied (docs/doe.md: the measured design replaces
+    /// the base's bulge, so it is Table 2.8's initial design; the factorial levels stay as
+    /// configured) and the base sweep every case shares (interface table, DMW track, the keys
+    /// of the instances they come from): the one preparation of a local run and a Slurm
+    /// worker.
+    pub fn prepare(&self, upstream: &UpstreamEntries) -> Result<(DoeParams, PreparedSweep)> {
+        let mut p = self.params.clone();
+        if let Some(b) = &p.bulge {
+            let fitted = crate::artefacts::bulge::upstream_bulge(&upstream.results, b)?;
+            p.base.powers = None;
+            p.base.apply_bulge(&fitted, b)?;
         }
+        let (isbl_params, dmw_track) = base_inputs(&p.base, &upstream.results, &upstream.dirs)?;
+        let isbl = IsblLookup::build_standard_unverified(IsblModel::new(isbl_params)?)?;
+        let sweep = PreparedSweep {
+            contact_key: upstream.key_of(&p.base.contact),
+            dmw: match (&p.base.dmw, dmw_track) {
+                (Some(d), Some(t)) => Some((t, upstream.key_of(d))),
+                _ => None,
+            },
+            params: p.base.clone(),
+            isbl,
+        };
+        Ok((p, sweep))
     }
 }
 
-fn prepare_inputs(p: &DoeParams, ctx: &StageContext) -> Result<BaseInputs> {
-    let (isbl_params, dmw_track) = base_inputs(&p.base, &ctx.upstream, &ctx.upstream_dirs)?;
-    ctx.progress.set_message("interface table");
-    let isbl = IsblLookup::build_standard_unverified(IsblModel::new(isbl_params)?)?;
-    Ok(BaseInputs {
-        isbl,
-        contact_key: ctx.upstream_key(&p.base.contact),
-        dmw: match (&p.base.dmw, dmw_track) {
-            (Some(d), Some(t)) => Some((t, ctx.upstream_key(d))),
-            _ => None,
-        },
-    })
+/// Case kind of a DOE design point (a 2-DOF case of the base sweep with another bulge).
+pub const DOE_CASE: &str = "doe";
+
+impl CaseEngine for DoeStage {
+    /// The design cases, level by level; the annealing is sequential and runs locally.
+    fn prepare_cases(&self, upstream: &UpstreamEntries) -> Result<Arc<dyn PreparedCases>> {
+        let (p, sweep) = self.prepare(upstream)?;
+        let cases = design_cases(&p.levels, &p.actuations)
+            .into_iter()
+            .map(|(d, a)| SweepCase {
+                actuation_m: a,
+                design_m: Some(d),
+                static_start: None,
+            })
+            .collect();
+        Ok(Arc::new(SweepCases {
+            kind: DOE_CASE,
+            sweep,
+            listing: Listing::Cases(cases),
+        }))
+    }
 }
 
 /// The finished design: the coded points, their bulges [m], and every case, level by level.

@@ -7,6 +7,7 @@
 pub mod analysis;
 pub mod bulge;
 pub mod calibrate;
+pub mod case_engine;
 pub mod contact;
 pub mod dmw;
 pub mod doe;
@@ -19,6 +20,7 @@ pub mod three_dof;
 use crate::core::cache::{Fingerprint, Store};
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::error::Result;
+use case_engine::{CaseEngine, UpstreamEntries};
 use serde::de::DeserializeOwned;
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
@@ -40,6 +42,9 @@ pub trait Stage: Send + Sync {
     /// Names of the stage instances this one consumes.
     fn upstream(&self) -> Vec<String>;
     fn run(&self, ctx: &StageContext) -> Result<StageOutput>;
+    /// The kind's case kind and engine when its work splits into independent cases (the
+    /// executors list and compute them through it; [`case_engine`]).
+    fn cases(&self) -> Option<(&'static str, &dyn CaseEngine)>;
 }
 
 /// What a running stage gets.
@@ -85,6 +90,19 @@ impl StageContext<'_> {
             .map(|u| u.key.clone())
             .unwrap_or_default()
     }
+
+    /// The consumed entries as a case engine reads them (what a worker reads from a recipe).
+    pub fn upstream_entries(&self) -> UpstreamEntries {
+        UpstreamEntries {
+            results: self.upstream.clone(),
+            dirs: self.upstream_dirs.clone(),
+            keys: self
+                .upstream
+                .keys()
+                .map(|n| (n.clone(), self.upstream_key(n)))
+                .collect(),
+        }
+    }
 }
 
 /// What a stage returns besides its files.
@@ -126,6 +144,13 @@ pub trait StageKind: FromConfig + Send + Sync + 'static {
         Vec::new()
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput>;
+    /// Its case kind (`hdi exec-cases` dispatches on it) when its work splits into
+    /// independent cases.
+    const CASE_KIND: Option<&'static str> = None;
+    /// The case capability when [`StageKind::CASE_KIND`] is set.
+    fn case_engine(&self) -> Option<&dyn CaseEngine> {
+        None
+    }
 }
 
 /// A named instance of a stage kind: the [`Stage`] the engine drives.
@@ -156,11 +181,16 @@ impl<K: StageKind> Stage for Instance<K> {
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         self.stage.run(ctx)
     }
+    fn cases(&self) -> Option<(&'static str, &dyn CaseEngine)> {
+        K::CASE_KIND.zip(self.stage.case_engine())
+    }
 }
 
 /// A stage kind in the registry: its section name and how its tables are read.
 pub struct Registered {
     pub kind: &'static str,
+    /// Its case kind, when its work splits into cases.
+    pub case_kind: Option<&'static str>,
     read: fn(&PipelineFile) -> std::result::Result<Vec<Unbuilt>, ConfigError>,
 }
 
@@ -173,6 +203,7 @@ type Unbuilt = (
 const fn kind<K: StageKind>() -> Registered {
     Registered {
         kind: K::KIND,
+        case_kind: K::CASE_KIND,
         read: read::<K>,
     }
 }
@@ -210,6 +241,32 @@ pub const KINDS: &[Registered] = &[
 /// The stage sections a pipeline file may hold (besides `[project]`).
 pub fn section_names() -> Vec<&'static str> {
     KINDS.iter().map(|k| k.kind).collect()
+}
+
+/// Every case kind a worker may be asked to compute, with the stage section it belongs to.
+pub fn case_kinds() -> Vec<(&'static str, &'static str)> {
+    KINDS
+        .iter()
+        .filter_map(|k| k.case_kind.map(|c| (c, k.kind)))
+        .collect()
+}
+
+/// The instance `name` of section `kind`, validated alone (a worker needs one instance, not
+/// the whole pipeline); `None` when the file has no such instance.
+pub fn build_instance(
+    file: &PipelineFile,
+    kind: &str,
+    name: &str,
+) -> std::result::Result<Option<Box<dyn Stage>>, ConfigError> {
+    let Some(k) = KINDS.iter().find(|k| k.kind == kind) else {
+        return Ok(None);
+    };
+    for (n, build) in (k.read)(file)? {
+        if n == name {
+            return build(file, &n).map(Some);
+        }
+    }
+    Ok(None)
 }
 
 /// Read and parse a pipeline file with the registered stage sections.

@@ -3,6 +3,7 @@
 //! progress observer; per-case HDF5 time histories, the sweep table, the flyability metrics
 //! of §8 and the dissertation's plots (Figs 2.13–2.14, 2.16–2.19, 2.22).
 
+use super::case_engine::{CaseEngine, Listing, PreparedCases, SweepCases, UpstreamEntries};
 use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::dynamics::metrics::{Regime, SweepMetrics};
@@ -11,12 +12,13 @@ use crate::error::Result;
 use crate::slider::case::{read_case_history, CASE_FILE, MODEL_VERSION};
 use crate::slider::params::SimulateParams;
 use crate::slider::sweep::{
-    case_rows, clearance_curve, continuation_starts, convention_touchdown, hysteresis,
-    link_cases_tagged, regime_name, run_jobs, sweep_analysis, Branch, CaseOutcome, CaseSink,
-    Hysteresis, PreparedSweep, HYSTERESIS_TOLERANCE_M,
+    case_rows, clearance_curve, convention_touchdown, hysteresis, link_cases_tagged, regime_name,
+    run_jobs, sweep_analysis, Branch, CaseOutcome, CaseSink, Hysteresis, PreparedSweep, SweepPlan,
+    HYSTERESIS_TOLERANCE_M,
 };
 use serde_json::{json, Map, Value};
 use std::path::Path;
+use std::sync::Arc;
 
 /// The `[simulate.NAME]` table (checked by `SimulateParams`).
 pub use crate::slider::params::SimulateConfig;
@@ -362,39 +364,28 @@ impl StageKind for SimulateStage {
     fn upstream(&self) -> Vec<String> {
         self.params.upstream()
     }
+    const CASE_KIND: Option<&'static str> = Some(SIMULATE_CASE);
+    fn case_engine(&self) -> Option<&dyn CaseEngine> {
+        Some(self)
+    }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
-        let key_of = |name: &str| ctx.upstream_key(name);
         ctx.progress.set_message("interface table");
-        let prepared =
-            PreparedSweep::prepare(&self.params, &ctx.upstream, &ctx.upstream_dirs, key_of)?;
+        let prepared = self.prepare(&ctx.upstream_entries())?;
         let p = &prepared.params;
         let isbl = &prepared.isbl;
-        let dmw = prepared.dmw.as_ref();
-        let track = dmw.map(|(t, _)| t);
+        let track = prepared.dmw.as_ref().map(|(t, _)| t);
         let sink = CaseSink::Store {
             store: ctx.store,
-            contact_key: &prepared.contact_key,
-            dmw_key: dmw.map(|(_, k)| k.as_str()),
-        };
-        let mut grid = p.actuations.clone();
-        grid.sort_by(|a, b| a.total_cmp(b));
-        grid.dedup();
-        // Static init: each branch's equilibria by continuation, one after the other (cheap);
-        // then every dynamic case of every branch in one parallel batch (docs/conventions.md).
-        let branches: Vec<Option<Branch>> = if p.branches.is_empty() {
-            vec![None]
-        } else {
-            p.branches.iter().map(|b| Some(*b)).collect()
+            prepared: &prepared,
         };
         ctx.progress
             .set_message("static equilibria by continuation");
-        let mut starts: Vec<Option<Vec<[f64; 2]>>> = Vec::new();
-        for b in &branches {
-            starts.push(match b {
-                Some(b) => Some(continuation_starts(p, &grid, isbl, track, *b)?),
-                None => None,
-            });
-        }
+        // The same plan an executor lists (`case_engine`): the grid, each branch's starts.
+        let SweepPlan {
+            grid,
+            branches,
+            starts,
+        } = prepared.plan()?;
         let jobs: Vec<(f64, Option<[f64; 2]>)> = starts
             .iter()
             .flat_map(|s| {
@@ -563,5 +554,32 @@ impl StageKind for SimulateStage {
             result,
             summary_row: Some(row),
         })
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// The sweep's cases through the stage contract's case capability (`case_engine`)
+// ------------------------------------------------------------------------------------------
+
+/// Case kind of a 2-DOF sweep point.
+pub const SIMULATE_CASE: &str = "simulate";
+
+impl SimulateStage {
+    /// The shared inputs of every case (calibrated parameters, interface table, DMW track):
+    /// the one preparation a local run and a Slurm worker both make.
+    pub fn prepare(&self, upstream: &UpstreamEntries) -> Result<PreparedSweep> {
+        PreparedSweep::prepare(&self.params, &upstream.results, &upstream.dirs, |n| {
+            upstream.key_of(n)
+        })
+    }
+}
+
+impl CaseEngine for SimulateStage {
+    fn prepare_cases(&self, upstream: &UpstreamEntries) -> Result<Arc<dyn PreparedCases>> {
+        Ok(Arc::new(SweepCases {
+            kind: SIMULATE_CASE,
+            sweep: self.prepare(upstream)?,
+            listing: Listing::Plan,
+        }))
     }
 }

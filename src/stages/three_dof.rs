@@ -5,6 +5,9 @@
 //! table with one row per case (PT, bulge spacing, BV/FHM overall and per Table 4.4 window,
 //! contact shares, peak forces, the features that touched).
 
+use super::case_engine::{
+    case_value, typed_case, CaseEngine, ListedCase, PreparedCases, UpstreamEntries,
+};
 use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::cases::{self as case_files};
 use crate::artefacts::contact::upstream_isbl_params;
@@ -23,6 +26,7 @@ use crate::error::{Error, Result};
 use crate::slider::three_dof_params::{CaseInterface, ThreeDofParams};
 use serde_json::{json, Map, Value};
 use std::path::Path;
+use std::sync::Arc;
 
 /// The `[three_dof.NAME]` table (checked by `ThreeDofParams`).
 pub use crate::slider::three_dof_params::ThreeDofConfig;
@@ -685,17 +689,17 @@ impl StageKind for ThreeDofStage {
         u.extend(self.params.bulge.iter().cloned());
         u
     }
+    const CASE_KIND: Option<&'static str> = Some(THREE_DOF_CASE);
+    fn case_engine(&self) -> Option<&dyn CaseEngine> {
+        Some(self)
+    }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         use rayon::prelude::*;
-        let prepared = PreparedThreeDof::prepare(
-            &self.params,
-            &ctx.upstream,
-            &ctx.upstream_dirs,
-            |name: &str| ctx.upstream_key(name),
-        )?;
-        let p = &prepared.params;
+        let prepared = self.prepare(&ctx.upstream_entries())?;
         ctx.progress.set_message("interface tables");
-        let solver = prepared.solver()?;
+        // The same preparation and case computation as a Slurm worker's (`case_engine`).
+        let three_dof_cases = ThreeDofCases::new(prepared)?;
+        let (prepared, p) = (&three_dof_cases.prepared, &three_dof_cases.prepared.params);
         ctx.progress.set_message(format!("{} cases", p.cases.len()));
         let outcomes: Vec<Result<(CaseInterface, cases::CaseEntry)>> = p
             .cases
@@ -705,7 +709,7 @@ impl StageKind for ThreeDofStage {
                     ctx.store,
                     MODEL_VERSION,
                     &prepared.case_params(which),
-                    |dir| solver.compute_case(&prepared, which, dir),
+                    |dir| three_dof_cases.compute_case(which, dir),
                 )
                 .map(|e| (which, e))
                 .map_err(|e| Error::Stage(format!("case {}: {e}", which.label())))
@@ -779,5 +783,85 @@ impl StageKind for ThreeDofStage {
             },
             summary_row: Some(row),
         })
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// The instance's cases through the stage contract's case capability (`case_engine`)
+// ------------------------------------------------------------------------------------------
+
+/// Case kind of a `[three_dof]` case (one interface of the instance's scenario).
+pub const THREE_DOF_CASE: &str = "three_dof";
+
+impl ThreeDofStage {
+    /// The instance with its upstream in place: the one preparation of a local run and a
+    /// Slurm worker.
+    pub fn prepare(&self, upstream: &UpstreamEntries) -> Result<PreparedThreeDof> {
+        PreparedThreeDof::prepare(&self.params, &upstream.results, &upstream.dirs, |n| {
+            upstream.key_of(n)
+        })
+    }
+}
+
+impl CaseEngine for ThreeDofStage {
+    fn prepare_cases(&self, upstream: &UpstreamEntries) -> Result<Arc<dyn PreparedCases>> {
+        Ok(Arc::new(ThreeDofCases::new(self.prepare(upstream)?)?))
+    }
+}
+
+/// A prepared instance with the lookup tables and DMW tracks its cases share (built once per
+/// process); a case is named by its interface label (`isbl`, `mtl_…`).
+struct ThreeDofCases {
+    prepared: PreparedThreeDof,
+    solver: ThreeDofSolver,
+}
+
+impl ThreeDofCases {
+    fn new(prepared: PreparedThreeDof) -> Result<Self> {
+        let solver = prepared.solver()?;
+        Ok(ThreeDofCases { prepared, solver })
+    }
+
+    fn compute_case(&self, which: CaseInterface, dir: &Path) -> Result<Value> {
+        self.solver.compute_case(&self.prepared, which, dir)
+    }
+
+    /// The case a recipe's label names.
+    fn case_of(&self, case: &Value) -> Result<CaseInterface> {
+        let label: String = typed_case(THREE_DOF_CASE, case)?;
+        self.prepared
+            .params
+            .cases
+            .iter()
+            .copied()
+            .find(|c| c.label() == label)
+            .ok_or(Error::UnknownCase {
+                kind: THREE_DOF_CASE,
+                case: label,
+            })
+    }
+}
+
+impl PreparedCases for ThreeDofCases {
+    fn model_version(&self) -> &'static str {
+        MODEL_VERSION
+    }
+    fn cases(&self) -> Result<Vec<ListedCase>> {
+        Ok(self
+            .prepared
+            .params
+            .cases
+            .iter()
+            .map(|&which| ListedCase {
+                case: case_value(&which.label()),
+                params: self.prepared.case_params(which),
+            })
+            .collect())
+    }
+    fn case_params(&self, case: &Value) -> Result<Value> {
+        Ok(self.prepared.case_params(self.case_of(case)?))
+    }
+    fn compute(&self, case: &Value, dir: &Path) -> Result<Value> {
+        self.compute_case(self.case_of(case)?, dir)
     }
 }

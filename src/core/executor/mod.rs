@@ -29,8 +29,9 @@ pub use plan::{plan_arrays, task_cases, ArraySubmission};
 /// (`docs/schemas/case-manifest.json`), bumped when it changes so a file of another layout is
 /// refused with both versions named rather than misread. Version 1 is the layout of issue 9
 /// (outcomes and submission records had no version field then: a missing one reads as 1);
-/// version 2 (issue 21) versions all three files and adds `three_dof` cases.
-pub const MANIFEST_SCHEMA_VERSION: u32 = 2;
+/// version 2 (issue 21) versions all three files and adds `three_dof` cases; version 3 (issue 31)
+/// gives every kind one recipe envelope (`stages::case_engine::CaseRecipe`).
+pub const MANIFEST_SCHEMA_VERSION: u32 = 3;
 
 #[derive(Debug, thiserror::Error)]
 pub enum ExecutorError {

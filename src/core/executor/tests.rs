@@ -84,13 +84,13 @@ fn manifests_outcomes_and_job_records_of_other_versions_are_refused_by_name() {
     let path = manifest_path(dir.path(), &m.id());
     m.write(&path).unwrap();
     let text = std::fs::read_to_string(&path).unwrap();
-    assert!(text.starts_with("{\"schema_version\":2,"), "{text}");
+    assert!(text.starts_with("{\"schema_version\":3,"), "{text}");
     let expect_refusal = |e: ExecutorError, file: &Path, found: &str| {
         let msg = e.to_string();
         assert!(
             msg.contains(&file.display().to_string())
                 && msg.contains(&format!("schema version {found}"))
-                && msg.contains("reads schema version 2"),
+                && msg.contains("reads schema version 3"),
             "{msg}"
         );
     };
@@ -102,6 +102,10 @@ fn manifests_outcomes_and_job_records_of_other_versions_are_refused_by_name() {
     v.as_object_mut().unwrap().remove("schema_version");
     let e = CaseManifest::from_json_slice(v.to_string().as_bytes(), &path).unwrap_err();
     expect_refusal(e, &path, "1");
+    // Issue 21's layout (its recipes were per kind).
+    v["schema_version"] = json!(2);
+    let e = CaseManifest::from_json_slice(v.to_string().as_bytes(), &path).unwrap_err();
+    expect_refusal(e, &path, "2");
     v["schema_version"] = json!(2.5);
     let e = CaseManifest::from_json_slice(v.to_string().as_bytes(), &path).unwrap_err();
     assert!(e.to_string().contains("not a version number"), "{e}");
@@ -115,7 +119,7 @@ fn manifests_outcomes_and_job_records_of_other_versions_are_refused_by_name() {
     ] {
         assert!(CaseManifest::from_json_slice(bad, &path).is_err());
     }
-    v["schema_version"] = json!(2);
+    v["schema_version"] = json!(MANIFEST_SCHEMA_VERSION);
     v["cases_per_task"] = json!(0);
     let e = CaseManifest::from_json_slice(v.to_string().as_bytes(), &path).unwrap_err();
     assert!(e.to_string().contains("cases_per_task is 0"), "{e}");
@@ -143,7 +147,7 @@ fn manifests_outcomes_and_job_records_of_other_versions_are_refused_by_name() {
     assert_eq!(merged.merge_outcomes(&path).unwrap(), 1);
     assert_eq!(merged.cases[0].status, CaseStatus::Done);
 
-    // Job records: issue 9 wrote a bare array; version 2 an object with the version.
+    // Job records: issue 9 wrote a bare array; version 2 on an object with the version.
     let jobs = submissions_path(&path);
     let record = SubmissionRecord {
         job_id: 7,
@@ -153,7 +157,7 @@ fn manifests_outcomes_and_job_records_of_other_versions_are_refused_by_name() {
     };
     write_submissions(&path, std::slice::from_ref(&record)).unwrap();
     let written: Value = serde_json::from_slice(&std::fs::read(&jobs).unwrap()).unwrap();
-    assert_eq!(written["schema_version"], json!(2));
+    assert_eq!(written["schema_version"], json!(MANIFEST_SCHEMA_VERSION));
     assert_eq!(read_submissions(&path).unwrap(), vec![record.clone()]);
     std::fs::write(&jobs, json!([record]).to_string()).unwrap();
     let e = read_submissions(&path).unwrap_err();

@@ -13,7 +13,7 @@
 //!   the ISBL solid scaled by the feature's `A_n` (the lubricant law itself is a whole-interface
 //!   law: not scaled by `A_n`, §4.5 decision 1). `Isbl` model: no lubricant force.
 
-use super::super::two_dof::ContactForceForm;
+use super::super::contact_force::ContactForceForm;
 use super::super::DynamicsError;
 use crate::contact::lookup::IsblLookup;
 use crate::contact::mtl::{RoughMtl, SolidContact, SolidResponse};
