@@ -229,7 +229,10 @@ pub fn selection(plan: &Plan, only: &[String]) -> Result<BTreeSet<String>> {
             let hint = crate::core::config::nearest(&n, &names)
                 .map(|c| format!(" (did you mean `{c}`?)"))
                 .unwrap_or_default();
-            Error::Stage(format!("--only: no stage named `{n}`{hint}"))
+            Error::UnknownStage {
+                name: n.clone(),
+                hint,
+            }
         })?;
         if sel.insert(n.clone()) {
             todo.extend(stage.upstream());
@@ -254,9 +257,11 @@ pub fn run(
             let lock = store.processed().join(".hdi").join("lock");
             let msg = format!("{}: {e}", lock.display());
             match crate::core::cache::filesystem_cause(store.processed(), &msg) {
-                Some(cause) => Error::Stage(format!(
-                    "{cause}: cannot take the workspace lock ({msg}); `hdi status` and `hdi verify` only read"
-                )),
+                Some(cause) => Error::LockRefused {
+                    cause,
+                    lock,
+                    error: e,
+                },
                 None => Error::io(lock, e),
             }
         })?)
@@ -272,9 +277,7 @@ pub fn run(
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.jobs.max(1))
         .build()
-        // Kept as text: rayon's I/O error displays as its source, so a typed source would print
-        // it twice.
-        .map_err(|e| Error::Stage(format!("cannot start worker threads: {e}")))?;
+        .map_err(|error| Error::WorkerThreads { error })?;
 
     let to_run: Vec<usize> = (0..plan.planned.len())
         .filter(|&i| {
@@ -473,13 +476,19 @@ fn report(plan: &Plan, store: &Store, settled: Settled) -> Result<RunReport> {
     } = settled;
     for (name, m) in &manifests {
         store.write_ref(m).map_err(|e| {
+            let path = store.processed().join(name);
             let msg = format!(
                 "`{name}` ran, but pointing {} at its result failed: {e}",
-                store.processed().join(name).display()
+                path.display()
             );
             match crate::core::cache::filesystem_cause(store.processed(), &msg) {
-                Some(cause) => Error::Stage(format!("{cause}: {msg}")),
-                None => Error::io(store.processed().join(name), e),
+                Some(cause) => Error::RefNotWritten {
+                    cause,
+                    name: name.clone(),
+                    path,
+                    error: e,
+                },
+                None => Error::io(path, e),
             }
         })?;
     }
