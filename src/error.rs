@@ -420,6 +420,64 @@ mod tests {
             format!("doe recipe: bad `design_m`: {}", design())
         );
         assert_eq!(s(Error::UnknownArea(name())), "unknown validation area `a`");
+        // The variants that replaced `Stage(String)`: the old `format!` beside each.
+        let (design, h) = ([3e-6, 40e-6, 1.5e-6], 2.5e-9);
+        let (um, nm) = (1e-6, 1e-9);
+        assert_eq!(
+            s(Error::NonFiniteXi {
+                design,
+                actuation: h
+            }),
+            format!(
+                "ξ is not finite for design {:?} µm at {:.1} nm (a case without a steady \
+                 clearance or vibration)",
+                design.map(|v| v / um),
+                h / nm
+            )
+        );
+        assert_eq!(
+            s(Error::DoeCase {
+                design,
+                actuation: h,
+                source: Box::new(Error::UnknownArea(name()))
+            }),
+            format!(
+                "case a = {:.3} um, w = {:.3} um, x = {:.3} um, h_TFC = {:.3} nm: {}",
+                design[0] / um,
+                design[1] / um,
+                design[2] / um,
+                h / nm,
+                "unknown validation area `a`"
+            )
+        );
+        let lock = std::path::Path::new("p/.hdi/lock");
+        assert_eq!(
+            s(Error::LockRefused {
+                cause: "p is on a read-only filesystem".into(),
+                lock: lock.into(),
+                error: std::io::Error::other("ro"),
+            }),
+            format!(
+                "p is on a read-only filesystem: cannot take the workspace lock ({}: ro); \
+                 `hdi status` and `hdi verify` only read",
+                lock.display()
+            )
+        );
+        assert_eq!(
+            s(Error::CaseKeyMismatch {
+                kind: "doe",
+                what: "x".into(),
+                key: "k1".into(),
+                manifest: None
+            }),
+            "doe case x: the pipeline file now gives key k1, the manifest has none (the file or \
+             its upstream changed since submission; resubmit with `hdi run --executor slurm`)"
+        );
+        assert_eq!(
+            s(Error::MeasuredSummitsOutsidePipeline { surface: name() }),
+            "summit_distribution = \"measured\" needs the summits of `a` from a pipeline (`hdi \
+             run`); `hdi contact` has none"
+        );
         let case = crate::core::cases::CaseError::Io {
             path: "p".into(),
             source: std::io::Error::other("gone"),

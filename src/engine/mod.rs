@@ -252,7 +252,7 @@ pub fn run(
     let _lock = if opts.dry_run {
         None
     } else {
-        Some(store.lock().map_err(|e| {
+        Some(store.lock(observer).map_err(|e| {
             // A read-only or forbidden processed/ is refused here, before anything runs.
             let lock = store.processed().join(".hdi").join("lock");
             let msg = format!("{}: {e}", lock.display());
@@ -635,11 +635,20 @@ pub fn summary_rows(
 
 /// `hdi gc`: remove store entries and refs not referenced by the current pipeline, and
 /// leftover work dirs. Returns what was (or, with `dry_run`, would be) removed.
-pub fn gc(plan: &Plan, store: &Store, dry_run: bool) -> Result<Vec<PathBuf>> {
+pub fn gc(
+    plan: &Plan,
+    store: &Store,
+    dry_run: bool,
+    observer: &dyn RunObserver,
+) -> Result<Vec<PathBuf>> {
     let _lock = if dry_run {
         None
     } else {
-        Some(store.lock().map_err(|e| Error::io(store.processed(), e))?)
+        Some(
+            store
+                .lock(observer)
+                .map_err(|e| Error::io(store.processed(), e))?,
+        )
     };
     let current: BTreeSet<&str> = plan.planned.iter().map(|p| p.name.as_str()).collect();
     // What `hdi verify` calls referenced: current and last-run entries, the cases they list
