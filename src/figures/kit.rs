@@ -1056,9 +1056,10 @@ mod tests {
             path: PathBuf::from("out/a.png"),
             source: DrawingAreaErrorKind::<std::io::Error>::LayoutError.into(),
         };
+        let source = std::error::Error::source(&e).map(|s| s.to_string());
         assert_eq!(
-            crate::core::chain(&e),
-            "writing out/a.png: plot: Bad layout"
+            (e.to_string(), source.as_deref()),
+            ("writing out/a.png: plot".to_string(), Some("Bad layout"))
         );
     }
 
