@@ -128,13 +128,158 @@ pub enum Error {
     CaseMetricsJson,
     /// A worker thread panicked while holding a shared preparation.
     #[error("a worker thread panicked")]
-    WorkerPoisoned,
+    WorkerPanicked,
     /// `hdi validate` names no known area.
     #[error("unknown validation area `{0}`")]
     UnknownArea(String),
-    /// A stage could not run for a reason that is not one of the above.
-    #[error("{0}")]
-    Stage(String),
+    /// The analysis of a series failed.
+    #[error(transparent)]
+    Analysis(#[from] crate::analysis::AnalysisError),
+    /// The analysis of an upstream's series `file` `dataset` failed.
+    #[error("{file} `{dataset}`")]
+    AnalysisOf {
+        file: String,
+        dataset: String,
+        #[source]
+        source: crate::analysis::AnalysisError,
+    },
+    /// A regression (response surface, predictive equation) failed.
+    #[error(transparent)]
+    Regression(#[from] crate::numerics::regression::RegressionError),
+    /// The DOE's response surface at one actuation could not be fitted.
+    #[error("response surface at {:.1} nm", .actuation / 1e-9)]
+    ResponseSurface {
+        /// The actuation (m).
+        actuation: f64,
+        #[source]
+        source: crate::numerics::regression::RegressionError,
+    },
+    /// A predictive equation (the response surface with one factor fixed) could not be formed.
+    #[error("predictive equation")]
+    PredictiveEquation(#[source] crate::numerics::regression::RegressionError),
+    /// Simulated annealing (or its sensitivity points) refused its input.
+    #[error("annealing")]
+    Annealing(#[from] crate::numerics::annealing::AnnealingError),
+    /// The sensitivity points around the annealing optimum could not be laid out.
+    #[error("sensitivity")]
+    Sensitivity(#[source] crate::numerics::annealing::AnnealingError),
+    /// An ODE integration failed; the right-hand side's error is the dynamics one.
+    #[error(transparent)]
+    Ode(#[from] crate::numerics::ode::OdeError<crate::dynamics::DynamicsError>),
+    /// One DOE case (a design at an actuation) failed.
+    #[error(
+        "case a = {:.3} um, w = {:.3} um, x = {:.3} um, h_TFC = {:.3} nm",
+        .design[0] / 1e-6, .design[1] / 1e-6, .design[2] / 1e-6, .actuation / 1e-9
+    )]
+    DoeCase {
+        /// The design (a, w, x) in m.
+        design: [f64; 3],
+        /// The actuation (m).
+        actuation: f64,
+        #[source]
+        source: Box<Error>,
+    },
+    /// The DOE's objective ξ is not finite for a design of the 3³ grid.
+    #[error(
+        "ξ is not finite for design {:?} µm at {:.1} nm (a case without a steady clearance or \
+         vibration)",
+        .design.map(|v| v / 1e-6), .actuation / 1e-9
+    )]
+    NonFiniteXi {
+        /// The design (a, w, x) in m.
+        design: [f64; 3],
+        /// The actuation (m).
+        actuation: f64,
+    },
+    /// One 3-DOF case (an interface model) failed.
+    #[error("case {case}")]
+    ThreeDofCase {
+        /// The case's label (`isbl`, `mtl_…`).
+        case: String,
+        #[source]
+        source: Box<Error>,
+    },
+    /// A round of calibration cases failed as a whole (`message` is the round's error chain).
+    #[error("{instance}: a round of calibration cases did not come back: {message}")]
+    CalibrationRoundLost { instance: String, message: String },
+    /// Opening an HDF5 file that hdi wrote failed.
+    #[error("{}", path.display())]
+    Hdf5Open {
+        path: PathBuf,
+        #[source]
+        source: hdf5::Error,
+    },
+    /// Reading a dataset or attribute (`what`) of an HDF5 file that hdi wrote failed.
+    #[error("{}: {what}", path.display())]
+    Hdf5Read {
+        path: PathBuf,
+        what: String,
+        #[source]
+        source: hdf5::Error,
+    },
+    /// `--velocity` was given for a table, whose velocity is always derived.
+    #[error(
+        "{}: --velocity names an HDF5 dataset; a table's velocity is computed by central \
+         differences",
+        path.display()
+    )]
+    VelocityOfTable { path: PathBuf },
+    /// The upstream `stage` handed no files to the stage that reads them.
+    #[error("no files from `{stage}`")]
+    NoUpstreamFiles { stage: String },
+    /// The upstream `stage` has no output file `file`.
+    #[error("`{stage}` has no output `{file}`")]
+    MissingOutput { stage: String, file: String },
+    /// An array did not have the shape its dimensions say (`what` names it).
+    #[error("{what} shape")]
+    Shape {
+        what: &'static str,
+        #[source]
+        source: ndarray::ShapeError,
+    },
+    /// Measured summits come from one surface or an interface's two.
+    #[error("measured summits of `{stage}`: need one or two surfaces, got {count}")]
+    SummitSurfaces { stage: String, count: usize },
+    /// Measured summits need the surface stage `surface` of a pipeline.
+    #[error(
+        "summit_distribution = \"measured\" needs the summits of `{surface}` from a pipeline \
+         (`hdi run`); `hdi contact` has none"
+    )]
+    MeasuredSummitsOutsidePipeline { surface: String },
+    /// `--only` names no stage of the pipeline; `hint` is " (did you mean `x`?)" or empty.
+    #[error("--only: no stage named `{name}`{hint}")]
+    UnknownStage { name: String, hint: String },
+    /// The workspace lock could not be taken because of the filesystem (`cause`).
+    #[error(
+        "{cause}: cannot take the workspace lock ({}: {error}); `hdi status` and `hdi verify` \
+         only read",
+        lock.display()
+    )]
+    LockRefused {
+        cause: String,
+        lock: PathBuf,
+        /// Shown inline: the text names the filesystem cause first.
+        error: std::io::Error,
+    },
+    /// The rayon pool for the pipeline's waves could not start.
+    #[error("cannot start worker threads: {error}")]
+    WorkerThreads {
+        /// Shown inline, not as a source: rayon's error displays as its own source, so the
+        /// chain would print it twice.
+        error: rayon::ThreadPoolBuildError,
+    },
+    /// An instance ran, but its human-friendly ref could not be written (`cause` names the
+    /// filesystem's reason).
+    #[error(
+        "{cause}: `{name}` ran, but pointing {} at its result failed: {error}",
+        path.display()
+    )]
+    RefNotWritten {
+        cause: String,
+        name: String,
+        path: PathBuf,
+        error: std::io::Error,
+    },
 }
 
 impl Error {
@@ -264,6 +409,64 @@ mod tests {
             format!("doe recipe: bad case: {}", bad())
         );
         assert_eq!(s(Error::UnknownArea(name())), "unknown validation area `a`");
+        // The variants that replaced `Stage(String)`: the old `format!` beside each.
+        let (design, h) = ([3e-6, 40e-6, 1.5e-6], 2.5e-9);
+        let (um, nm) = (1e-6, 1e-9);
+        assert_eq!(
+            s(Error::NonFiniteXi {
+                design,
+                actuation: h
+            }),
+            format!(
+                "ξ is not finite for design {:?} µm at {:.1} nm (a case without a steady \
+                 clearance or vibration)",
+                design.map(|v| v / um),
+                h / nm
+            )
+        );
+        assert_eq!(
+            s(Error::DoeCase {
+                design,
+                actuation: h,
+                source: Box::new(Error::UnknownArea(name()))
+            }),
+            format!(
+                "case a = {:.3} um, w = {:.3} um, x = {:.3} um, h_TFC = {:.3} nm: {}",
+                design[0] / um,
+                design[1] / um,
+                design[2] / um,
+                h / nm,
+                "unknown validation area `a`"
+            )
+        );
+        let lock = std::path::Path::new("p/.hdi/lock");
+        assert_eq!(
+            s(Error::LockRefused {
+                cause: "p is on a read-only filesystem".into(),
+                lock: lock.into(),
+                error: std::io::Error::other("ro"),
+            }),
+            format!(
+                "p is on a read-only filesystem: cannot take the workspace lock ({}: ro); \
+                 `hdi status` and `hdi verify` only read",
+                lock.display()
+            )
+        );
+        assert_eq!(
+            s(Error::CaseKeyMismatch {
+                kind: "doe".into(),
+                case: "x".into(),
+                derived: "k1".into(),
+                submitted: "k0".into(),
+            }),
+            "doe case x: the pipeline file now gives key k1, the manifest has k0 (the file or \
+             its upstream changed since submission; resubmit with `hdi run --executor slurm`)"
+        );
+        assert_eq!(
+            s(Error::MeasuredSummitsOutsidePipeline { surface: name() }),
+            "summit_distribution = \"measured\" needs the summits of `a` from a pipeline (`hdi \
+             run`); `hdi contact` has none"
+        );
         let case = crate::core::cases::CaseError::Io {
             path: "p".into(),
             source: std::io::Error::other("gone"),

@@ -61,12 +61,21 @@ pub fn read_dmw_tracks(path: &Path) -> Result<[DmwTrack; 3]> {
 
 /// Track `k` (1–3) of a `dmw.h5`: `D{k}`, `V{k}`, without the filter's edge transients.
 fn read_track(path: &Path, k: usize) -> Result<DmwTrack> {
-    let e = |m: String| Error::Stage(format!("{}: {m}", path.display()));
-    let file = hdf5::File::open(path).map_err(|x| e(x.to_string()))?;
+    let e = |what: String| {
+        move |source| Error::Hdf5Read {
+            path: path.to_path_buf(),
+            what,
+            source,
+        }
+    };
+    let file = hdf5::File::open(path).map_err(|source| Error::Hdf5Open {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let read = |name: &str| -> Result<Vec<f64>> {
         file.dataset(&format!("{GROUP}/{name}"))
             .and_then(|d| d.read_raw::<f64>())
-            .map_err(|x| e(format!("{GROUP}/{name}: {x}")))
+            .map_err(e(format!("{GROUP}/{name}")))
     };
     let (d, v) = (read(&displacement_name(k))?, read(&velocity_name(k))?);
     let edge: Vec<u8> = file
@@ -75,13 +84,17 @@ fn read_track(path: &Path, k: usize) -> Result<DmwTrack> {
         .unwrap_or_default();
     let time = file
         .dataset(&format!("{GROUP}/{TIME}"))
-        .map_err(|x| e(format!("{GROUP}/{TIME}: {x}")))?;
+        .map_err(e(format!("{GROUP}/{TIME}")))?;
     let fs = time
         .attr(SAMPLING_RATE)
         .and_then(|a| a.read_scalar::<f64>())
-        .map_err(|x| e(format!("{SAMPLING_RATE} attribute: {x}")))?;
+        .map_err(e(format!("{SAMPLING_RATE} attribute")))?;
     if d.len() != v.len() || d.len() < 2 || fs.is_nan() || fs <= 0.0 {
-        return Err(e("inconsistent track datasets".into()));
+        return Err(crate::dmw::DmwError::Record {
+            path: path.to_path_buf(),
+            message: "inconsistent track datasets".into(),
+        }
+        .into());
     }
     // Keep the samples outside the marked edge transients.
     let first = edge.iter().position(|&b| b == 0).unwrap_or(0);

@@ -6,6 +6,7 @@ use hdi::core::progress::{Progress, RunObserver};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::collections::HashMap;
 use std::io::IsTerminal;
+use std::path::Path;
 use std::sync::{Mutex, OnceLock};
 use std::time::Duration;
 
@@ -89,6 +90,24 @@ impl RunObserver for StageBars {
         if let Some((_, total)) = self.bars.get() {
             total.finish_and_clear();
         }
+    }
+
+    fn waiting_for_lock(&self, holder: &str, lock: &Path) {
+        LockNotice.waiting_for_lock(holder, lock);
+    }
+}
+
+/// Commands without bars that take the workspace lock (`hdi gc`, `hdi verify --repair`):
+/// only say when they wait for another run.
+pub struct LockNotice;
+
+impl RunObserver for LockNotice {
+    fn waiting_for_lock(&self, holder: &str, lock: &Path) {
+        // Always printed (terminal or not): a run that seems to hang says why.
+        eprintln!(
+            "waiting for another hdi run (pid {holder}) holding {}",
+            lock.display()
+        );
     }
 }
 

@@ -241,7 +241,7 @@ pub(super) fn cmd_gc(config: &Path, dry_run: bool) -> Result<()> {
     let (file, stages) = load(config)?;
     let store = Store::open(&file.processed_dir())?;
     let plan = engine::plan(stages, &store, &Default::default())?;
-    let removed = engine::gc(&plan, &store, dry_run)?;
+    let removed = engine::gc(&plan, &store, dry_run, &super::progress::LockNotice)?;
     let verb = if dry_run { "would remove" } else { "removed" };
     for r in &removed {
         println!("{verb} {}", r.display());

@@ -42,7 +42,7 @@ pub(super) fn cmd_verify(
         let (file, _) = super::run::load(config)?;
         let processed = file.processed_dir();
         let store = Store::open_existing(&processed);
-        let q = verify::quarantine_damaged(&store, &first)
+        let q = verify::quarantine_damaged(&store, &first, &super::progress::LockNotice)
             .with_context(|| format!("moving damaged entries aside in {}", processed.display()))?;
         for m in &q.moved {
             eprintln!("moved aside {m}");

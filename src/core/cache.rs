@@ -14,6 +14,7 @@
 //! ```
 
 use crate::core::hash::{hash_file, hash_json};
+use crate::core::progress::RunObserver;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -588,8 +589,9 @@ impl Store {
         v
     }
 
-    /// Take the workspace lock, waiting (with a message) while another run holds it.
-    pub fn lock(&self) -> io::Result<WorkspaceLock> {
+    /// Take the workspace lock, waiting while another run holds it (`observer` hears that it
+    /// waits, and for whom).
+    pub fn lock(&self, observer: &dyn RunObserver) -> io::Result<WorkspaceLock> {
         let path = self.meta.join("lock");
         let mut file = fs::OpenOptions::new()
             .create(true)
@@ -601,11 +603,7 @@ impl Store {
             Ok(()) => {}
             Err(fs::TryLockError::WouldBlock) => {
                 let holder = fs::read_to_string(&path).unwrap_or_default();
-                eprintln!(
-                    "waiting for another hdi run (pid {}) holding {}",
-                    holder.trim(),
-                    path.display()
-                );
+                observer.waiting_for_lock(holder.trim(), &path);
                 file.lock()?;
             }
             Err(fs::TryLockError::Error(e)) => return Err(e),

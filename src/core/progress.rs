@@ -32,6 +32,9 @@ pub trait RunObserver: Sync {
     fn stage_finished(&self, _name: &str, _ok: bool) {}
     /// Every wave has run.
     fn run_finished(&self) {}
+    /// Another hdi run (process `holder`, as its lock file says) holds the workspace lock at
+    /// `lock`; this run waits for it before planning.
+    fn waiting_for_lock(&self, _holder: &str, _lock: &std::path::Path) {}
 }
 
 /// Ignores everything.

@@ -21,6 +21,32 @@ pub enum OutputError {
     },
     #[error("writing {}: {message}", path.display())]
     Write { path: PathBuf, message: String },
+    /// The table library or the filesystem failed writing the summary table `path`.
+    #[error("writing {}", path.display())]
+    Table {
+        path: PathBuf,
+        #[source]
+        source: TableWriteError,
+    },
+}
+
+/// Why a summary table (Parquet, CSV, Arrow IPC) could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum TableWriteError {
+    #[error(transparent)]
+    Polars(#[from] polars_core::error::PolarsError),
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+    /// Shown as its own text only, not as a source: arrow's I/O and external errors already
+    /// repeat their source in it.
+    #[error("{0}")]
+    Arrow(arrow_schema::ArrowError),
+}
+
+impl From<arrow_schema::ArrowError> for TableWriteError {
+    fn from(e: arrow_schema::ArrowError) -> Self {
+        TableWriteError::Arrow(e)
+    }
 }
 
 impl OutputError {
@@ -333,16 +359,13 @@ pub fn write_table(rows: &[serde_json::Map<String, Value>], stem: &Path) -> Resu
         ParquetWriter::new(f)
             .with_compression(ParquetCompression::Zstd(None))
             .with_key_value_metadata(units_kv)
-            .finish(&mut df)
-            .map(|_| ())
-            .map_err(|e| e.to_string())
+            .finish(&mut df)?;
+        Ok(())
     })?;
     let csv = stem.with_extension("csv");
     write_via_temp(&csv, |f| {
-        CsvWriter::new(f)
-            .include_header(true)
-            .finish(&mut df)
-            .map_err(|e| e.to_string())
+        CsvWriter::new(f).include_header(true).finish(&mut df)?;
+        Ok(())
     })?;
     let arrow = stem.with_extension("arrow");
     let batch =
@@ -356,7 +379,7 @@ pub fn write_table(rows: &[serde_json::Map<String, Value>], stem: &Path) -> Resu
 fn write_arrow_ipc(
     f: &mut std::fs::File,
     batch: &arrow_array::RecordBatch,
-) -> std::result::Result<(), String> {
+) -> std::result::Result<(), TableWriteError> {
     use arrow_schema::{Field, Schema};
     use std::collections::HashMap;
     use std::sync::Arc;
@@ -372,17 +395,14 @@ fn write_arrow_ipc(
         })
         .collect();
     let schema = Arc::new(Schema::new(fields));
-    let batch = batch
-        .clone()
-        .with_schema(schema.clone())
-        .map_err(|e| e.to_string())?;
+    let batch = batch.clone().with_schema(schema.clone())?;
     // Default options: format V5, 64-byte alignment, no compression (memory-mappable).
-    let mut w = arrow_ipc::writer::FileWriter::try_new(std::io::BufWriter::new(f), &schema)
-        .map_err(|e| e.to_string())?;
-    w.write(&batch).map_err(|e| e.to_string())?;
-    w.finish().map_err(|e| e.to_string())?;
-    let mut out = w.into_inner().map_err(|e| e.to_string())?;
-    std::io::Write::flush(&mut out).map_err(|e| e.to_string())
+    let mut w = arrow_ipc::writer::FileWriter::try_new(std::io::BufWriter::new(f), &schema)?;
+    w.write(&batch)?;
+    w.finish()?;
+    let mut out = w.into_inner()?;
+    std::io::Write::flush(&mut out)?;
+    Ok(())
 }
 
 /// The unit a column name's suffix states (docs/tables.md, "Units"), as written into the
@@ -446,17 +466,20 @@ pub const UNIT_SUFFIXES: &[(&str, &str)] = &[
 
 fn write_via_temp(
     path: &Path,
-    write: impl FnOnce(&mut std::fs::File) -> std::result::Result<(), String>,
+    write: impl FnOnce(&mut std::fs::File) -> std::result::Result<(), TableWriteError>,
 ) -> Result<()> {
     if let Some(parent) = path.parent() {
         std::fs::create_dir_all(parent).map_err(|e| OutputError::io(parent, e))?;
     }
     let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
     let mut f = std::fs::File::create(&tmp).map_err(|e| OutputError::io(&tmp, e))?;
-    let r = write(&mut f).and_then(|_| f.sync_all().map_err(|e| e.to_string()));
-    if let Err(e) = r {
+    let r = write(&mut f).and_then(|_| Ok(f.sync_all()?));
+    if let Err(source) = r {
         let _ = std::fs::remove_file(&tmp);
-        return Err(OutputError::output(path, e));
+        return Err(OutputError::Table {
+            path: path.to_path_buf(),
+            source,
+        });
     }
     std::fs::rename(&tmp, path).map_err(|e| OutputError::io(path, e))
 }

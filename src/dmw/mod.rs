@@ -84,4 +84,8 @@ pub enum DmwError {
     Processing(String),
     #[error(transparent)]
     Signal(#[from] crate::signal::SignalError),
+    /// A reader run in a child process (`formats::isolated`) failed: only its error's text
+    /// crosses the process boundary.
+    #[error("{0}")]
+    Isolated(String),
 }

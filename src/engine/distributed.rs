@@ -168,7 +168,7 @@ impl CaseWorker {
             recipe.instance.clone(),
             recipe.upstream.iter().map(|u| u.key.clone()).collect(),
         );
-        let mut cache = self.prepared.lock().map_err(|_| Error::WorkerPoisoned)?;
+        let mut cache = self.prepared.lock().map_err(|_| Error::WorkerPanicked)?;
         if let Some(p) = cache.get(&id) {
             return Ok(Arc::clone(p));
         }

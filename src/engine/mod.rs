@@ -228,7 +228,10 @@ pub fn selection(plan: &Plan, only: &[String]) -> Result<BTreeSet<String>> {
             let hint = crate::core::config::nearest(&n, &names)
                 .map(|c| format!(" (did you mean `{c}`?)"))
                 .unwrap_or_default();
-            Error::Stage(format!("--only: no stage named `{n}`{hint}"))
+            Error::UnknownStage {
+                name: n.clone(),
+                hint,
+            }
         })?;
         if sel.insert(n.clone()) {
             todo.extend(stage.upstream());
@@ -248,14 +251,16 @@ pub fn run(
     let _lock = if opts.dry_run {
         None
     } else {
-        Some(store.lock().map_err(|e| {
+        Some(store.lock(observer).map_err(|e| {
             // A read-only or forbidden processed/ is refused here, before anything runs.
             let lock = store.processed().join(".hdi").join("lock");
             let msg = format!("{}: {e}", lock.display());
             match crate::core::cache::filesystem_cause(store.processed(), &msg) {
-                Some(cause) => Error::Stage(format!(
-                    "{cause}: cannot take the workspace lock ({msg}); `hdi status` and `hdi verify` only read"
-                )),
+                Some(cause) => Error::LockRefused {
+                    cause,
+                    lock,
+                    error: e,
+                },
                 None => Error::io(lock, e),
             }
         })?)
@@ -271,9 +276,7 @@ pub fn run(
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.jobs.max(1))
         .build()
-        // Kept as text: rayon's I/O error displays as its source, so a typed source would print
-        // it twice.
-        .map_err(|e| Error::Stage(format!("cannot start worker threads: {e}")))?;
+        .map_err(|error| Error::WorkerThreads { error })?;
 
     let to_run: Vec<usize> = (0..plan.planned.len())
         .filter(|&i| {
@@ -472,13 +475,19 @@ fn report(plan: &Plan, store: &Store, settled: Settled) -> Result<RunReport> {
     } = settled;
     for (name, m) in &manifests {
         store.write_ref(m).map_err(|e| {
+            let path = store.processed().join(name);
             let msg = format!(
                 "`{name}` ran, but pointing {} at its result failed: {e}",
-                store.processed().join(name).display()
+                path.display()
             );
             match crate::core::cache::filesystem_cause(store.processed(), &msg) {
-                Some(cause) => Error::Stage(format!("{cause}: {msg}")),
-                None => Error::io(store.processed().join(name), e),
+                Some(cause) => Error::RefNotWritten {
+                    cause,
+                    name: name.clone(),
+                    path,
+                    error: e,
+                },
+                None => Error::io(path, e),
             }
         })?;
     }
@@ -621,11 +630,20 @@ pub fn summary_rows(
 
 /// `hdi gc`: remove store entries and refs not referenced by the current pipeline, and
 /// leftover work dirs. Returns what was (or, with `dry_run`, would be) removed.
-pub fn gc(plan: &Plan, store: &Store, dry_run: bool) -> Result<Vec<PathBuf>> {
+pub fn gc(
+    plan: &Plan,
+    store: &Store,
+    dry_run: bool,
+    observer: &dyn RunObserver,
+) -> Result<Vec<PathBuf>> {
     let _lock = if dry_run {
         None
     } else {
-        Some(store.lock().map_err(|e| Error::io(store.processed(), e))?)
+        Some(
+            store
+                .lock(observer)
+                .map_err(|e| Error::io(store.processed(), e))?,
+        )
     };
     let current: BTreeSet<&str> = plan.planned.iter().map(|p| p.name.as_str()).collect();
     // What `hdi verify` calls referenced: current and last-run entries, the cases they list

@@ -274,9 +274,14 @@ pub struct Quarantined {
 
 /// Move every damaged entry of `report` out of the store (into `.hdi/tmp/`, which is never
 /// trusted and which `hdi gc` empties) and list the instances to re-run. Takes the workspace
-/// lock while it moves, so no run is reading the entries meanwhile.
-pub fn quarantine_damaged(store: &Store, report: &VerifyReport) -> std::io::Result<Quarantined> {
-    let _lock = store.lock()?;
+/// lock while it moves, so no run is reading the entries meanwhile (`observer` hears if it
+/// waits for it).
+pub fn quarantine_damaged(
+    store: &Store,
+    report: &VerifyReport,
+    observer: &dyn crate::core::progress::RunObserver,
+) -> std::io::Result<Quarantined> {
+    let _lock = store.lock(observer)?;
     let mut q = Quarantined::default();
     let mut rerun = BTreeSet::new();
     for d in &report.damaged {

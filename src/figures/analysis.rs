@@ -313,8 +313,7 @@ fn draw_scalogram_chart(
         .margin_right(15)
         .x_label_area_size(45)
         .y_label_area_size(65)
-        .build_cartesian_2d(x0..x1, (y0..y1).log_scale().with_key_points(y_ticks))
-        .map_err(|e| e.to_string())?;
+        .build_cartesian_2d(x0..x1, (y0..y1).log_scale().with_key_points(y_ticks))?;
     note_layout(&chart, x0..x1, y0..y1, (false, true));
     chart
         .configure_mesh()
@@ -325,20 +324,17 @@ fn draw_scalogram_chart(
         .y_label_formatter(&|v| log_tick_label(*v, decades))
         .label_style(font(14))
         .axis_desc_style(font(15))
-        .draw()
-        .map_err(|e| e.to_string())?;
+        .draw()?;
     let cell_rects = (0..rows).flat_map(|g| (0..cols).map(move |b| (g, b)));
-    chart
-        .draw_series(cell_rects.filter_map(|(g, b)| {
-            let v = grid.cells[g * cols + b];
-            v.is_finite().then(|| {
-                Rectangle::new(
-                    [(col_x[b], row_y[g]), (col_x[b + 1], row_y[g + 1])],
-                    ViridisRGB::get_color_normalized(v, lo, hi).filled(),
-                )
-            })
-        }))
-        .map_err(|e| e.to_string())?;
+    chart.draw_series(cell_rects.filter_map(|(g, b)| {
+        let v = grid.cells[g * cols + b];
+        v.is_finite().then(|| {
+            Rectangle::new(
+                [(col_x[b], row_y[g]), (col_x[b + 1], row_y[g + 1])],
+                ViridisRGB::get_color_normalized(v, lo, hi).filled(),
+            )
+        })
+    }))?;
     if !coi.is_empty() {
         // The cone through the block centres, extended to the plot edges.
         let mut line = Vec::with_capacity(cols + 2);
@@ -350,21 +346,16 @@ fn draw_scalogram_chart(
         let mut region = line.clone();
         region.push((x1, y0));
         region.push((x0, y0));
-        chart
-            .draw_series(std::iter::once(Polygon::new(region, WHITE.mix(0.45))))
-            .map_err(|e| e.to_string())?;
-        chart
-            .draw_series(std::iter::once(PathElement::new(
-                line.clone(),
-                BLACK.stroke_width(4),
-            )))
-            .map_err(|e| e.to_string())?;
+        chart.draw_series(std::iter::once(Polygon::new(region, WHITE.mix(0.45))))?;
+        chart.draw_series(std::iter::once(PathElement::new(
+            line.clone(),
+            BLACK.stroke_width(4),
+        )))?;
         chart
             .draw_series(std::iter::once(PathElement::new(
                 line,
                 WHITE.stroke_width(2),
-            )))
-            .map_err(|e| e.to_string())?
+            )))?
             .label("cone of influence")
             .legend(|(x, y)| {
                 EmptyElement::at((x, y))
@@ -373,12 +364,10 @@ fn draw_scalogram_chart(
             });
     }
     for (k, seg) in ridge_segments.iter().enumerate() {
-        let drawn = chart
-            .draw_series(std::iter::once(PathElement::new(
-                seg.clone(),
-                RED.stroke_width(2),
-            )))
-            .map_err(|e| e.to_string())?;
+        let drawn = chart.draw_series(std::iter::once(PathElement::new(
+            seg.clone(),
+            RED.stroke_width(2),
+        )))?;
         if k == 0 {
             drawn
                 .label("ridge")
@@ -401,8 +390,7 @@ fn draw_colour_bar(bar: &Area, lo: f64, hi: f64, magnitude_unit: &str) -> DrawRe
         .margin_left(4)
         .margin_right(45)
         .y_label_area_size(58)
-        .build_cartesian_2d(0.0..1.0, lo..hi)
-        .map_err(|e| e.to_string())?;
+        .build_cartesian_2d(0.0..1.0, lo..hi)?;
     cb.configure_mesh()
         .disable_mesh()
         .disable_x_axis()
@@ -411,8 +399,7 @@ fn draw_colour_bar(bar: &Area, lo: f64, hi: f64, magnitude_unit: &str) -> DrawRe
         .label_style(font(13))
         .axis_desc_style(font(14))
         .y_desc(with_unit("|W|", magnitude_unit))
-        .draw()
-        .map_err(|e| e.to_string())?;
+        .draw()?;
     let n = 128;
     cb.draw_series((0..n).map(|k| {
         let a = lo + (hi - lo) * k as f64 / n as f64;
@@ -421,8 +408,7 @@ fn draw_colour_bar(bar: &Area, lo: f64, hi: f64, magnitude_unit: &str) -> DrawRe
             [(0.0, a), (1.0, b)],
             ViridisRGB::get_color_normalized(0.5 * (a + b), lo, hi).filled(),
         )
-    }))
-    .map_err(|e| e.to_string())?;
+    }))?;
     Ok(())
 }
 
@@ -474,8 +460,7 @@ pub fn poincare_png(
             .margin_right(25)
             .x_label_area_size(50)
             .y_label_area_size(75)
-            .build_cartesian_2d(lo..hi, lo..hi)
-            .map_err(|e| e.to_string())?;
+            .build_cartesian_2d(lo..hi, lo..hi)?;
         note_layout(&chart, lo..hi, lo..hi, (false, false));
         chart
             .configure_mesh()
@@ -487,20 +472,15 @@ pub fn poincare_png(
             .y_desc(with_unit("xₙ₊₁", unit))
             .label_style(font(14))
             .axis_desc_style(font(15))
-            .draw()
-            .map_err(|e| e.to_string())?;
-        chart
-            .draw_series(std::iter::once(PathElement::new(
-                vec![(lo, lo), (hi, hi)],
-                RGBColor(150, 150, 150).stroke_width(1),
-            )))
-            .map_err(|e| e.to_string())?;
-        chart
-            .draw_series(
-                pts.iter()
-                    .map(|&p| Circle::new(p, radius, TRACE_BLUE.mix(0.75).filled())),
-            )
-            .map_err(|e| e.to_string())?;
+            .draw()?;
+        chart.draw_series(std::iter::once(PathElement::new(
+            vec![(lo, lo), (hi, hi)],
+            RGBColor(150, 150, 150).stroke_width(1),
+        )))?;
+        chart.draw_series(
+            pts.iter()
+                .map(|&p| Circle::new(p, radius, TRACE_BLUE.mix(0.75).filled())),
+        )?;
         let area = chart.plotting_area().strip_coord_spec();
         let (w, h) = area.dim_in_pixel();
         let text = if annotation.trim().is_empty() {
@@ -593,8 +573,7 @@ pub fn phase_portrait_png(
             .margin_right(25)
             .x_label_area_size(50)
             .y_label_area_size(75)
-            .build_cartesian_2d(xr.0..xr.1, vr.0..vr.1)
-            .map_err(|e| e.to_string())?;
+            .build_cartesian_2d(xr.0..xr.1, vr.0..vr.1)?;
         note_layout(&chart, xr.0..xr.1, vr.0..vr.1, (false, false));
         chart
             .configure_mesh()
@@ -606,29 +585,24 @@ pub fn phase_portrait_png(
             .y_desc(with_unit("v", v_unit))
             .label_style(font(14))
             .axis_desc_style(font(15))
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .draw()?;
         let line = TRACE_BLUE.mix(0.6).stroke_width(1);
         for seg in &segments {
-            chart
-                .draw_series(std::iter::once(PathElement::new(seg.clone(), line)))
-                .map_err(|e| e.to_string())?;
+            chart.draw_series(std::iter::once(PathElement::new(seg.clone(), line)))?;
         }
         chart
             .draw_series(std::iter::once(Circle::new(
                 start,
                 6,
                 RGBColor(0, 158, 115).filled(),
-            )))
-            .map_err(|e| e.to_string())?
+            )))?
             .label("start")
             .legend(|(x, y)| Circle::new((x + 8, y), 5, RGBColor(0, 158, 115).filled()));
         chart
             .draw_series(std::iter::once(
                 EmptyElement::at(end)
                     + Rectangle::new([(-5, -5), (5, 5)], RGBColor(213, 30, 0).filled()),
-            ))
-            .map_err(|e| e.to_string())?
+            ))?
             .label("end")
             .legend(|(x, y)| {
                 Rectangle::new(
@@ -786,8 +760,7 @@ fn draw_spectrum(root: &Area, title: &str, unit: &str, plot: &SpectrumPlot) -> D
         .build_cartesian_2d(
             (x_axis.0..x_axis.1).log_scale().with_key_points(x_ticks),
             (y_axis.0..y_axis.1).log_scale().with_key_points(y_ticks),
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
     note_layout(&chart, x_axis.0..x_axis.1, y_axis.0..y_axis.1, (true, true));
     chart
         .configure_mesh()
@@ -798,22 +771,17 @@ fn draw_spectrum(root: &Area, title: &str, unit: &str, plot: &SpectrumPlot) -> D
         .y_desc(with_unit("amplitude", unit))
         .label_style(font(14))
         .axis_desc_style(font(15))
-        .draw()
-        .map_err(|e| e.to_string())?;
-    chart
-        .draw_series(std::iter::once(PathElement::new(
-            plot.pts.clone(),
-            TRACE_BLUE.stroke_width(1),
-        )))
-        .map_err(|e| e.to_string())?;
+        .draw()?;
+    chart.draw_series(std::iter::once(PathElement::new(
+        plot.pts.clone(),
+        TRACE_BLUE.stroke_width(1),
+    )))?;
     if !plot.marks.is_empty() {
-        chart
-            .draw_series(
-                plot.marks
-                    .iter()
-                    .map(|&(f, a)| Circle::new((f, a.max(floor)), 5, RED.stroke_width(2))),
-            )
-            .map_err(|e| e.to_string())?;
+        chart.draw_series(
+            plot.marks
+                .iter()
+                .map(|&(f, a)| Circle::new((f, a.max(floor)), 5, RED.stroke_width(2))),
+        )?;
     }
     let area = chart.plotting_area().strip_coord_spec();
     let base = chart.plotting_area().get_base_pixel();

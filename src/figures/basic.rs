@@ -43,38 +43,34 @@ pub(crate) fn heatmap_overlay_png(
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(50)
-            .build_cartesian_2d(0.0..w_um, 0.0..h_um)
-            .map_err(|e| e.to_string())?;
+            .build_cartesian_2d(0.0..w_um, 0.0..h_um)?;
         chart
             .configure_mesh()
             .disable_mesh()
             .x_desc("x (µm)")
             .y_desc("y (µm)")
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .draw()?;
         let cells = (0..ny)
             .step_by(step)
             .flat_map(|j| (0..nx).step_by(step).map(move |i| (j, i)));
-        chart
-            .draw_series(cells.map(|(j, i)| {
-                let v = z[[j, i]];
-                let c = if v.is_finite() {
-                    ViridisRGB::get_color_normalized(v, lo, lo + span)
-                } else {
-                    RGBColor(255, 255, 255)
-                };
-                // Row 0 is the top of the image.
-                let x0 = i as f64 * dx * 1e6;
-                let y1 = h_um - j as f64 * dy * 1e6;
-                Rectangle::new(
-                    [
-                        (x0, y1),
-                        (x0 + step as f64 * dx * 1e6, y1 - step as f64 * dy * 1e6),
-                    ],
-                    c.filled(),
-                )
-            }))
-            .map_err(|e| e.to_string())?;
+        chart.draw_series(cells.map(|(j, i)| {
+            let v = z[[j, i]];
+            let c = if v.is_finite() {
+                ViridisRGB::get_color_normalized(v, lo, lo + span)
+            } else {
+                RGBColor(255, 255, 255)
+            };
+            // Row 0 is the top of the image.
+            let x0 = i as f64 * dx * 1e6;
+            let y1 = h_um - j as f64 * dy * 1e6;
+            Rectangle::new(
+                [
+                    (x0, y1),
+                    (x0 + step as f64 * dx * 1e6, y1 - step as f64 * dy * 1e6),
+                ],
+                c.filled(),
+            )
+        }))?;
         overlay(&mut chart)?;
         let lo_nm = lo * 1e9;
         let hi_nm = (lo + span) * 1e9;
@@ -84,8 +80,7 @@ pub(crate) fn heatmap_overlay_png(
             .margin_left(10)
             .margin_right(60)
             .y_label_area_size(60)
-            .build_cartesian_2d(0.0..1.0, lo_nm..hi_nm)
-            .map_err(|e| e.to_string())?;
+            .build_cartesian_2d(0.0..1.0, lo_nm..hi_nm)?;
         cb.configure_mesh()
             .disable_mesh()
             .disable_x_axis()
@@ -93,8 +88,7 @@ pub(crate) fn heatmap_overlay_png(
             .label_style(font(14))
             .axis_desc_style(font(14))
             .y_desc("height (nm)")
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .draw()?;
         let n = 100;
         cb.draw_series((0..n).map(|k| {
             let a = lo_nm + (hi_nm - lo_nm) * k as f64 / n as f64;
@@ -103,8 +97,7 @@ pub(crate) fn heatmap_overlay_png(
                 [(0.0, a), (1.0, b)],
                 ViridisRGB::get_color_normalized(a, lo_nm, hi_nm).filled(),
             )
-        }))
-        .map_err(|e| e.to_string())?;
+        }))?;
         Ok(())
     })
 }
@@ -139,8 +132,7 @@ pub fn histogram_png(
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(60)
-            .build_cartesian_2d(x0..x1, 0.0..ymax.max(1e-30))
-            .map_err(|e| e.to_string())?;
+            .build_cartesian_2d(x0..x1, 0.0..ymax.max(1e-30))?;
         chart
             .configure_mesh()
             .x_desc(x_desc)
@@ -149,16 +141,14 @@ pub fn histogram_png(
             } else {
                 "probability density"
             })
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .draw()?;
         chart
             .draw_series(density.iter().enumerate().map(|(k, d)| {
                 Rectangle::new(
                     [(edges[k] * scale, 0.0), (edges[k + 1] * scale, d / scale)],
                     BLUE.mix(0.35).filled(),
                 )
-            }))
-            .map_err(|e| e.to_string())?
+            }))?
             .label("measured")
             .legend(|(x, y)| {
                 Rectangle::new([(x, y - 5), (x + 15, y + 5)], BLUE.mix(0.35).filled())
@@ -171,8 +161,7 @@ pub fn histogram_png(
                         .enumerate()
                         .map(|(k, g)| (0.5 * (edges[k] + edges[k + 1]) * scale, g / scale)),
                     RED.stroke_width(2),
-                ))
-                .map_err(|e| e.to_string())?
+                ))?
                 .label(overlay_label)
                 .legend(line_key(15, RED.stroke_width(2)));
         }
@@ -210,19 +199,16 @@ pub fn lines_png(
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(60)
-            .build_cartesian_2d(padded_abs(xr), padded_abs(yr))
-            .map_err(|e| e.to_string())?;
+            .build_cartesian_2d(padded_abs(xr), padded_abs(yr))?;
         chart
             .configure_mesh()
             .x_desc(x_desc)
             .y_desc(y_desc)
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .draw()?;
         for (k, (label, s)) in series.iter().enumerate() {
             let c = BASIC_PALETTE[k % BASIC_PALETTE.len()];
             chart
-                .draw_series(LineSeries::new(s.iter().copied(), c.stroke_width(2)))
-                .map_err(|e| e.to_string())?
+                .draw_series(LineSeries::new(s.iter().copied(), c.stroke_width(2)))?
                 .label(*label)
                 .legend(line_key(15, c.stroke_width(2)));
         }
@@ -262,15 +248,13 @@ pub fn loglog_png(
             .build_cartesian_2d(
                 log_padded(xr.0, xr.1, 1.3).log_scale(),
                 log_padded(yr.0, yr.1, 1.3).log_scale(),
-            )
-            .map_err(|e| e.to_string())?;
+            )?;
         chart
             .configure_mesh()
             .x_desc(x_desc)
             .y_desc(y_desc)
             .y_label_formatter(&sci_tick_label)
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .draw()?;
         for (k, (label, s)) in series.iter().enumerate() {
             let c = BASIC_PALETTE[k % BASIC_PALETTE.len()];
             let pts: Vec<(f64, f64)> = s
@@ -279,8 +263,7 @@ pub fn loglog_png(
                 .map(|&(x, y)| (x, y.max(y_floor)))
                 .collect();
             chart
-                .draw_series(LineSeries::new(pts, c.stroke_width(1)))
-                .map_err(|e| e.to_string())?
+                .draw_series(LineSeries::new(pts, c.stroke_width(1)))?
                 .label(*label)
                 .legend(line_key(15, c.stroke_width(2)));
         }
@@ -291,8 +274,7 @@ pub fn loglog_png(
                         .iter()
                         .filter(positive)
                         .map(|&(x, y)| Circle::new((x, y), 4, RED.stroke_width(2))),
-                )
-                .map_err(|e| e.to_string())?
+                )?
                 .label("peaks")
                 .legend(|(x, y)| Circle::new((x + 7, y), 4, RED.stroke_width(2)));
         }
@@ -329,15 +311,13 @@ pub fn semilogy_png(
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(70)
-            .build_cartesian_2d(xr.0..xr.1, log_padded(yr.0, yr.1, 1.3).log_scale())
-            .map_err(|e| e.to_string())?;
+            .build_cartesian_2d(xr.0..xr.1, log_padded(yr.0, yr.1, 1.3).log_scale())?;
         chart
             .configure_mesh()
             .x_desc(x_desc)
             .y_desc(y_desc)
             .y_label_formatter(&sci_tick_label)
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .draw()?;
         for (k, (label, s)) in series.iter().enumerate() {
             let c = BASIC_PALETTE[k % BASIC_PALETTE.len()];
             let pts: Vec<(f64, f64)> = s
@@ -348,8 +328,7 @@ pub fn semilogy_png(
                 .copied()
                 .collect();
             chart
-                .draw_series(LineSeries::new(pts, c.stroke_width(1)))
-                .map_err(|e| e.to_string())?
+                .draw_series(LineSeries::new(pts, c.stroke_width(1)))?
                 .label(*label)
                 .legend(line_key(15, c.stroke_width(2)));
         }
@@ -360,8 +339,7 @@ pub fn semilogy_png(
                         .iter()
                         .filter(positive)
                         .map(|&(x, y)| Circle::new((x, y), 4, RED.stroke_width(2))),
-                )
-                .map_err(|e| e.to_string())?
+                )?
                 .label("peaks")
                 .legend(|(x, y)| Circle::new((x + 7, y), 4, RED.stroke_width(2)));
         }
@@ -389,9 +367,7 @@ pub fn stacked_png(
     }
     let height = 140 + 170 * panels.len() as u32;
     render_png(path, (900, height), |root| {
-        let root = root
-            .titled(title, title_font())
-            .map_err(|e| e.to_string())?;
+        let root = root.titled(title, title_font())?;
         let areas = root.split_evenly((panels.len(), 1));
         for (k, ((label, pts), area)) in panels.iter().zip(areas.iter()).enumerate() {
             let mut yr = finite_min_max(pts.iter().map(|p| p.1));
@@ -403,23 +379,18 @@ pub fn stacked_png(
                 .margin(8)
                 .x_label_area_size(if k + 1 == panels.len() { 35 } else { 20 })
                 .y_label_area_size(70)
-                .build_cartesian_2d(xr.0..xr.1, (yr.0 - pad)..(yr.1 + pad))
-                .map_err(|e| e.to_string())?;
+                .build_cartesian_2d(xr.0..xr.1, (yr.0 - pad)..(yr.1 + pad))?;
             let mut mesh = chart.configure_mesh();
             mesh.y_desc(*label);
             if k + 1 == panels.len() {
                 mesh.x_desc(x_desc);
             }
-            mesh.draw().map_err(|e| e.to_string())?;
-            chart
-                .draw_series(shade.iter().map(|&(a, b)| {
-                    Rectangle::new([(a, yr.0 - pad), (b, yr.1 + pad)], BLACK.mix(0.08).filled())
-                }))
-                .map_err(|e| e.to_string())?;
+            mesh.draw()?;
+            chart.draw_series(shade.iter().map(|&(a, b)| {
+                Rectangle::new([(a, yr.0 - pad), (b, yr.1 + pad)], BLACK.mix(0.08).filled())
+            }))?;
             let c = BASIC_PALETTE[k % BASIC_PALETTE.len()];
-            chart
-                .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(1)))
-                .map_err(|e| e.to_string())?;
+            chart.draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(1)))?;
         }
         Ok(())
     })
@@ -454,8 +425,7 @@ pub fn category_dots_png(
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(220)
-            .build_cartesian_2d((lo - pad)..(hi + pad), -0.5f64..(n as f64 - 0.5))
-            .map_err(|e| e.to_string())?;
+            .build_cartesian_2d((lo - pad)..(hi + pad), -0.5f64..(n as f64 - 0.5))?;
         chart
             .configure_mesh()
             .x_desc(x_desc)
@@ -469,14 +439,11 @@ pub fn category_dots_png(
                 }
             })
             .disable_y_mesh()
-            .draw()
-            .map_err(|e| e.to_string())?;
-        chart
-            .draw_series(std::iter::once(Rectangle::new(
-                [(-band, -0.5), (band, n as f64 - 0.5)],
-                GREEN.mix(0.12).filled(),
-            )))
-            .map_err(|e| e.to_string())?;
+            .draw()?;
+        chart.draw_series(std::iter::once(Rectangle::new(
+            [(-band, -0.5), (band, n as f64 - 0.5)],
+            GREEN.mix(0.12).filled(),
+        )))?;
         for (k, (label, values)) in series.iter().enumerate() {
             let c = palette[k % palette.len()];
             // Rows top-down in category order; series offset a little so markers do not hide.
@@ -488,8 +455,7 @@ pub fn category_dots_png(
                         .enumerate()
                         .filter(|(_, v)| v.is_finite())
                         .map(|(i, v)| Circle::new((*v, (n - 1 - i) as f64 + dy), 6, c.filled())),
-                )
-                .map_err(|e| e.to_string())?
+                )?
                 .label(*label)
                 .legend(move |(x, y)| Circle::new((x + 7, y), 5, c.filled()));
         }

@@ -165,9 +165,7 @@ pub fn levelled_map_png(
             draw_polyline(chart, r, BLACK.stroke_width(2))?;
         }
         if let Some(t) = te {
-            chart
-                .draw_series(dashed_line(t))
-                .map_err(|e| e.to_string())?;
+            chart.draw_series(dashed_line(t))?;
         }
         Ok(())
     })

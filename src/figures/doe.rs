@@ -153,8 +153,8 @@ fn draw_design_dot<CT: CoordTranslate>(
         &(EmptyElement::at(at)
             + Circle::new((0, 0), 4, WHITE.filled())
             + Circle::new((0, 0), 3, BLACK.filled())),
-    )
-    .map_err(|e| e.to_string())
+    )?;
+    Ok(())
 }
 
 /// The optimum: a red star with a black outline.
@@ -169,8 +169,8 @@ fn draw_optimum_star<CT: CoordTranslate>(
         &(EmptyElement::at(at)
             + Polygon::new(outline, MARKER_RED.filled())
             + PathElement::new(closed, BLACK.stroke_width(1))),
-    )
-    .map_err(|e| e.to_string())
+    )?;
+    Ok(())
 }
 
 /// The chart of one contour panel, captioned, on the grid's extent (mesh drawn later, over
@@ -187,8 +187,7 @@ fn contour_chart<'a, 'b: 'a>(
         .margin_right(16)
         .x_label_area_size(42)
         .y_label_area_size(58)
-        .build_cartesian_2d(xr.clone(), yr.clone())
-        .map_err(|e| e.to_string())?;
+        .build_cartesian_2d(xr.clone(), yr.clone())?;
     note_layout(&chart, xr, yr, (false, false));
     Ok(chart)
 }
@@ -208,8 +207,8 @@ fn draw_mesh(chart: &mut Chart, x_desc: &str, y_desc: &str) -> DrawResult<()> {
         .y_desc(y_desc)
         .label_style(font(13))
         .axis_desc_style(font(14))
-        .draw()
-        .map_err(|e| e.to_string())
+        .draw()?;
+    Ok(())
 }
 
 /// One contour panel: the banded fill pixel by pixel (bilinear between grid nodes), the
@@ -238,8 +237,7 @@ fn draw_contour_panel(
             for (px, &col) in cols.iter().enumerate() {
                 let value = bilinear(&z, col, row);
                 if value.is_finite() {
-                    plot.draw_pixel((px as i32, py as i32), &scale.colour(value))
-                        .map_err(|e| e.to_string())?;
+                    plot.draw_pixel((px as i32, py as i32), &scale.colour(value))?;
                 }
             }
         }
@@ -293,8 +291,7 @@ fn draw_colour_bar(area: &Area, z_desc: &str, scale: &ColourScale) -> DrawResult
         .margin_left(4)
         .margin_right(40)
         .y_label_area_size(62)
-        .build_cartesian_2d(0.0..1.0, yr.clone())
-        .map_err(|e| e.to_string())?;
+        .build_cartesian_2d(0.0..1.0, yr.clone())?;
     let bands = scale.bands();
     // A constant surface is one band over the padded range.
     let rects: Vec<(f64, f64, RGBColor)> = if scale.hi > scale.lo {
@@ -306,8 +303,7 @@ fn draw_colour_bar(area: &Area, z_desc: &str, scale: &ColourScale) -> DrawResult
         rects
             .into_iter()
             .map(|(a, b, c)| Rectangle::new([(0.0, a), (1.0, b)], c.filled())),
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     cb.draw_series(scale.levels.iter().map(|&l| {
         let style = if l == 0.0 {
             BLACK.stroke_width(3)
@@ -315,8 +311,7 @@ fn draw_colour_bar(area: &Area, z_desc: &str, scale: &ColourScale) -> DrawResult
             BLACK.mix(0.55).stroke_width(1)
         };
         PathElement::new(vec![(0.0, l), (1.0, l)], style)
-    }))
-    .map_err(|e| e.to_string())?;
+    }))?;
     cb.configure_mesh()
         .disable_mesh()
         .disable_x_axis()
@@ -325,8 +320,8 @@ fn draw_colour_bar(area: &Area, z_desc: &str, scale: &ColourScale) -> DrawResult
         .label_style(font(13))
         .axis_desc_style(font(15))
         .y_desc(z_desc)
-        .draw()
-        .map_err(|e| e.to_string())
+        .draw()?;
+    Ok(())
 }
 
 /// Legend for the markers, under the colour bar (the panels stay uncovered).
@@ -336,14 +331,12 @@ fn draw_marker_legend(area: &Area, points: bool, marker: bool) -> DrawResult<()>
     let mut y = h as i32 - 45;
     if points {
         draw_design_dot(area, (14, y))?;
-        area.draw(&Text::new("design points", (28, y), style.clone()))
-            .map_err(|e| e.to_string())?;
+        area.draw(&Text::new("design points", (28, y), style.clone()))?;
         y += 22;
     }
     if marker {
         draw_optimum_star(area, (14, y))?;
-        area.draw(&Text::new("optimum", (28, y), style))
-            .map_err(|e| e.to_string())?;
+        area.draw(&Text::new("optimum", (28, y), style))?;
     }
     Ok(())
 }
@@ -400,9 +393,7 @@ pub fn contour_panels_png(
     let points = panels.iter().any(|p| !p.points.is_empty());
     let marker = panels.iter().any(|p| p.marker.is_some());
     render_png(path, size, |root| {
-        let root = root
-            .titled(title, title_font())
-            .map_err(|e| e.to_string())?;
+        let root = root.titled(title, title_font())?;
         let (grid, bar) = root.split_horizontally(ncol as u32 * PANEL_SIZE.0);
         let areas = grid.split_evenly((nrow, ncol));
         if panels.is_empty() {
@@ -437,9 +428,7 @@ pub fn contour_panels_png(
 /// Scatter of points in PALETTE blue; nothing for an empty slice.
 fn draw_scatter(chart: &mut Chart, pts: &[(f64, f64)]) -> DrawResult<()> {
     let c = PALETTE[0];
-    chart
-        .draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.mix(0.85).filled())))
-        .map_err(|e| e.to_string())?;
+    chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.mix(0.85).filled())))?;
     Ok(())
 }
 
@@ -462,8 +451,7 @@ fn linear_chart<'a, 'b: 'a>(
         .margin_right(18)
         .x_label_area_size(45)
         .y_label_area_size(62)
-        .build_cartesian_2d(xr.clone(), yr.clone())
-        .map_err(|e| e.to_string())?;
+        .build_cartesian_2d(xr.clone(), yr.clone())?;
     note_layout(&chart, xr.clone(), yr.clone(), (false, false));
     let (xs, ys) = (xr.end - xr.start, yr.end - yr.start);
     chart
@@ -476,8 +464,7 @@ fn linear_chart<'a, 'b: 'a>(
         .bold_line_style(BLACK.mix(0.12))
         .label_style(font(13))
         .axis_desc_style(font(14))
-        .draw()
-        .map_err(|e| e.to_string())?;
+        .draw()?;
     Ok(chart)
 }
 
@@ -520,9 +507,7 @@ pub fn residual_panels_png(
     }
     let qr = qe.range(0.05, 0.0, -3.0..3.0);
     render_png(path, (1100, 520), |root| {
-        let root = root
-            .titled(title, title_font())
-            .map_err(|e| e.to_string())?;
+        let root = root.titled(title, title_font())?;
         let (left, right) = root.split_horizontally(550);
         let mut chart = linear_chart(
             &left,
@@ -532,9 +517,7 @@ pub fn residual_panels_png(
             "fitted value",
             "residual",
         )?;
-        chart
-            .draw_series(dashed_line(vec![(xr1.start, 0.0), (xr1.end, 0.0)]))
-            .map_err(|e| e.to_string())?;
+        chart.draw_series(dashed_line(vec![(xr1.start, 0.0), (xr1.end, 0.0)]))?;
         draw_scatter(&mut chart, &fr)?;
         if fr.is_empty() {
             draw_no_data(&mut chart)?;
@@ -552,8 +535,7 @@ pub fn residual_panels_png(
             .draw_series(std::iter::once(PathElement::new(
                 vec![(qr.start, qr.start), (qr.end, qr.end)],
                 c.stroke_width(2),
-            )))
-            .map_err(|e| e.to_string())?
+            )))?
             .label("y = x")
             .legend(line_key(20, c.stroke_width(2)));
         draw_scatter(&mut chart, &nq)?;
@@ -603,9 +585,7 @@ fn draw_objective(
         let mut labelled = false;
         for run in finite_runs(pts) {
             let line = decimate_minmax(run, xr.start, xr.end, ANNEALING_COLUMNS);
-            let drawn = chart
-                .draw_series(polyline_elements(&line, c.stroke_width(width)))
-                .map_err(|e| e.to_string())?;
+            let drawn = chart.draw_series(polyline_elements(&line, c.stroke_width(width)))?;
             if !labelled {
                 labelled = true;
                 drawn
@@ -650,8 +630,7 @@ fn draw_temperature(
         .margin_right(18)
         .x_label_area_size(45)
         .y_label_area_size(62)
-        .build_cartesian_2d(xr.clone(), yr.clone().log_scale())
-        .map_err(|e| e.to_string())?;
+        .build_cartesian_2d(xr.clone(), yr.clone().log_scale())?;
     note_layout(&chart, xr.clone(), yr, (false, true));
     let xs = xr.end - xr.start;
     chart
@@ -664,14 +643,11 @@ fn draw_temperature(
         .bold_line_style(BLACK.mix(0.12))
         .label_style(font(13))
         .axis_desc_style(font(14))
-        .draw()
-        .map_err(|e| e.to_string())?;
+        .draw()?;
     let c = PALETTE[2];
     for run in pts.split(|&p| !positive(p)).filter(|r| !r.is_empty()) {
         let line = decimate_minmax(run, xr.start, xr.end, ANNEALING_COLUMNS);
-        chart
-            .draw_series(LineSeries::new(line, c.stroke_width(1)))
-            .map_err(|e| e.to_string())?;
+        chart.draw_series(LineSeries::new(line, c.stroke_width(1)))?;
     }
     Ok(())
 }
@@ -710,9 +686,7 @@ pub fn annealing_png(
     let xr = xe.range(0.02, 0.0, 0.0..1.0);
     let height = if temperature.is_some() { 760 } else { 540 };
     render_png(path, (900, height), |root| {
-        let root = root
-            .titled(title, title_font())
-            .map_err(|e| e.to_string())?;
+        let root = root.titled(title, title_font())?;
         match temperature {
             None => draw_objective(&root, iterations, xr.clone(), "iteration"),
             Some(t) => {

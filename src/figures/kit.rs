@@ -24,6 +24,13 @@ pub enum FigureError {
     /// The input cannot be drawn, or drawing or encoding the image failed.
     #[error("writing {}: {message}", path.display())]
     Draw { path: PathBuf, message: String },
+    /// Plotters failed to draw or encode the image.
+    #[error("writing {}: plot", path.display())]
+    Plot {
+        path: PathBuf,
+        #[source]
+        source: PlotError,
+    },
     /// Moving the finished image into place failed.
     #[error("{}", path.display())]
     Io {
@@ -35,8 +42,20 @@ pub enum FigureError {
 
 pub type Result<T> = std::result::Result<T, FigureError>;
 
-/// What the drawing closures return: plotters' errors as text (wrapped by [`perr`]).
-pub(crate) type DrawResult<T> = std::result::Result<T, String>;
+/// A plotters drawing error, whatever the backend: the drawing closures return it with `?`
+/// and [`render_png`] wraps it with the figure's path.
+#[derive(Debug, thiserror::Error)]
+#[error(transparent)]
+pub struct PlotError(Box<dyn std::error::Error + Send + Sync>);
+
+impl<E: std::error::Error + Send + Sync + 'static> From<DrawingAreaErrorKind<E>> for PlotError {
+    fn from(e: DrawingAreaErrorKind<E>) -> Self {
+        PlotError(Box::new(e))
+    }
+}
+
+/// What the drawing closures return.
+pub(crate) type DrawResult<T> = std::result::Result<T, PlotError>;
 
 /// The error for figure `path`: "plot: " and the reason.
 pub(crate) fn perr(path: &Path, e: impl std::fmt::Display) -> FigureError {
@@ -102,9 +121,13 @@ pub(crate) fn render_png(
     let tmp = path.with_file_name(format!(".{file_name}.tmp-{}.png", std::process::id()));
     {
         let root = BitMapBackend::new(&tmp, size).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| perr(path, e))?;
-        draw(&root).map_err(|e| perr(path, e))?;
-        root.present().map_err(|e| perr(path, e))?;
+        let plot = |source: PlotError| FigureError::Plot {
+            path: path.to_path_buf(),
+            source,
+        };
+        root.fill(&WHITE).map_err(|e| plot(e.into()))?;
+        draw(&root).map_err(plot)?;
+        root.present().map_err(|e| plot(e.into()))?;
     }
     std::fs::rename(&tmp, path).map_err(|source| FigureError::Io {
         path: path.to_path_buf(),
@@ -483,9 +506,7 @@ pub(crate) fn draw_polyline(
     pts: &[(f64, f64)],
     style: ShapeStyle,
 ) -> DrawResult<()> {
-    chart
-        .draw_series(polyline_elements(pts, style))
-        .map_err(|e| e.to_string())?;
+    chart.draw_series(polyline_elements(pts, style))?;
     Ok(())
 }
 
@@ -523,7 +544,10 @@ impl Legend {
 pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
     chart: &mut ChartContext<'a, DB, CT>,
     legend: Legend,
-) -> DrawResult<()> {
+) -> DrawResult<()>
+where
+    DB::ErrorType: 'static,
+{
     let mut labels = chart.configure_series_labels();
     if let Some(position) = legend.position {
         labels.position(position);
@@ -534,21 +558,19 @@ pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
     labels
         .border_style(BLACK)
         .background_style(WHITE.mix(legend.background))
-        .draw()
-        .map_err(|e| e.to_string())
+        .draw()?;
+    Ok(())
 }
 
 /// "no data" in the middle of an empty chart.
 pub(crate) fn draw_no_data<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> DrawResult<()> {
     let (xr, yr) = (chart.x_range(), chart.y_range());
     let centre = (0.5 * (xr.start + xr.end), 0.5 * (yr.start + yr.end));
-    chart
-        .draw_series(std::iter::once(Text::new(
-            "no data",
-            centre,
-            text_style(18, Pos::new(HPos::Center, VPos::Center)),
-        )))
-        .map_err(|e| e.to_string())?;
+    chart.draw_series(std::iter::once(Text::new(
+        "no data",
+        centre,
+        text_style(18, Pos::new(HPos::Center, VPos::Center)),
+    )))?;
     Ok(())
 }
 
@@ -584,22 +606,17 @@ pub(crate) fn boxed_label<'a, 'b: 'a>(
         return Ok(());
     }
     let style = text_style(13, pos);
-    let (w, h) = chart
-        .plotting_area()
-        .estimate_text_size(label, &style)
-        .map_err(|e| e.to_string())?;
+    let (w, h) = chart.plotting_area().estimate_text_size(label, &style)?;
     let (w, h) = (w as i32, h as i32);
     let (left, top) = anchor_box(offset, (w, h), pos);
-    chart
-        .draw_series(std::iter::once(
-            EmptyElement::at(at)
-                + Rectangle::new(
-                    [(left - 2, top - 1), (left + w + 2, top + h + 1)],
-                    WHITE.mix(0.8).filled(),
-                )
-                + Text::new(label.to_string(), offset, style),
-        ))
-        .map_err(|e| e.to_string())?;
+    chart.draw_series(std::iter::once(
+        EmptyElement::at(at)
+            + Rectangle::new(
+                [(left - 2, top - 1), (left + w + 2, top + h + 1)],
+                WHITE.mix(0.8).filled(),
+            )
+            + Text::new(label.to_string(), offset, style),
+    ))?;
     Ok(())
 }
 
@@ -619,8 +636,7 @@ pub(crate) fn boxed_text(
     area.draw(&Rectangle::new(
         [(rect.0, rect.1), (rect.2, rect.3)],
         WHITE.mix(0.85).filled(),
-    ))
-    .map_err(|e| e.to_string())?;
+    ))?;
     let line_h = if lines.is_empty() {
         0
     } else {
@@ -631,8 +647,7 @@ pub(crate) fn boxed_text(
             line.to_string(),
             (left, top + k as i32 * line_h),
             text_style(size, Pos::new(HPos::Left, VPos::Top)),
-        ))
-        .map_err(|e| e.to_string())?;
+        ))?;
     }
     Ok(rect)
 }
@@ -647,9 +662,7 @@ pub(crate) fn measure_text<'t>(
     let style = text_style(size, Pos::new(HPos::Left, VPos::Top));
     let (mut w, mut h) = (0i32, 0i32);
     for line in &lines {
-        let (lw, _) = area
-            .estimate_text_size(line, &style)
-            .map_err(|e| e.to_string())?;
+        let (lw, _) = area.estimate_text_size(line, &style)?;
         w = w.max(lw as i32);
         // A fixed line height: the estimate of a line without descenders is shorter.
         h += (size as f64 * 1.25).round() as i32;
@@ -1038,6 +1051,16 @@ mod tests {
     fn errors_name_the_figure() {
         let e = perr(Path::new("out/a.png"), "empty map");
         assert_eq!(e.to_string(), "writing out/a.png: plot: empty map");
+        // A plotters error reads as before (path, "plot", plotters' text) through the chain.
+        let e = FigureError::Plot {
+            path: PathBuf::from("out/a.png"),
+            source: DrawingAreaErrorKind::<std::io::Error>::LayoutError.into(),
+        };
+        let source = std::error::Error::source(&e).map(|s| s.to_string());
+        assert_eq!(
+            (e.to_string(), source.as_deref()),
+            ("writing out/a.png: plot".to_string(), Some("Bad layout"))
+        );
     }
 
     #[test]

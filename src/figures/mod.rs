@@ -33,7 +33,7 @@ pub use basic::{
 };
 pub use doe::{annealing_png, contour_panels_png, residual_panels_png, ContourPanel};
 pub use kit::contour::{marching_squares, Polyline};
-pub use kit::{FigureError, Result};
+pub use kit::{FigureError, PlotError, Result};
 pub use sweep::{
     clearance_sweep_png, metric_sweep_png, time_histories_banded_png, time_histories_png, Panel,
     RegimeBand, SweepSeries,

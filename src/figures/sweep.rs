@@ -63,12 +63,10 @@ fn draw_bands<'a, 'b: 'a>(
             continue;
         }
         let fill = BAND_FILLS[k % BAND_FILLS.len()];
-        chart
-            .draw_series(std::iter::once(Rectangle::new(
-                [(a, yr.start), (c, yr.end)],
-                fill.filled(),
-            )))
-            .map_err(|e| e.to_string())?;
+        chart.draw_series(std::iter::once(Rectangle::new(
+            [(a, yr.start), (c, yr.end)],
+            fill.filled(),
+        )))?;
         let Some(size) = label_size else { continue };
         let width_px = (c - a) / (xr.end - xr.start) * plot_w;
         let lines: Vec<&str> = if (b.label.chars().count() as f64) * 7.0 > width_px {
@@ -77,16 +75,14 @@ fn draw_bands<'a, 'b: 'a>(
             vec![b.label]
         };
         let step = size as i32 + 2;
-        chart
-            .draw_series(lines.into_iter().enumerate().map(|(i, line)| {
-                EmptyElement::at((0.5 * (a + c), yr.end))
-                    + Text::new(
-                        line.to_string(),
-                        (0, 4 + step * i as i32),
-                        text_style(size, Pos::new(HPos::Center, VPos::Top)),
-                    )
-            }))
-            .map_err(|e| e.to_string())?;
+        chart.draw_series(lines.into_iter().enumerate().map(|(i, line)| {
+            EmptyElement::at((0.5 * (a + c), yr.end))
+                + Text::new(
+                    line.to_string(),
+                    (0, 4 + step * i as i32),
+                    text_style(size, Pos::new(HPos::Center, VPos::Top)),
+                )
+        }))?;
     }
     Ok(())
 }
@@ -118,9 +114,7 @@ fn draw_line_with_markers<'a, 'b: 'a>(
     pts: &[(f64, f64)],
 ) -> DrawResult<bool> {
     let c = PALETTE[k % PALETTE.len()];
-    let line = chart
-        .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))
-        .map_err(|e| e.to_string())?;
+    let line = chart.draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(2)))?;
     let shape = k % 3;
     if !label.is_empty() {
         line.label(label).legend(move |(x, y)| {
@@ -142,8 +136,7 @@ fn draw_line_with_markers<'a, 'b: 'a>(
                     .map(|&p| EmptyElement::at(p) + Rectangle::new([(-3, -3), (3, 3)], c.filled())),
             )
             .map(|_| ()),
-    }
-    .map_err(|e| e.to_string())?;
+    }?;
     Ok(!label.is_empty())
 }
 
@@ -201,8 +194,7 @@ pub fn clearance_sweep_png(
             .margin(12)
             .x_label_area_size(45)
             .y_label_area_size(65)
-            .build_cartesian_2d(xr.clone(), yr.clone())
-            .map_err(|e| e.to_string())?;
+            .build_cartesian_2d(xr.clone(), yr.clone())?;
         super::kit::note_layout(&chart, xr.clone(), yr.clone(), (false, false));
         // Bands first, under the mesh lines and the data.
         draw_bands(&mut chart, bands, Some(13))?;
@@ -212,15 +204,12 @@ pub fn clearance_sweep_png(
             .y_desc(y_desc)
             .light_line_style(BLACK.mix(0.05))
             .bold_line_style(BLACK.mix(0.12))
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .draw()?;
         for &(y, label) in hlines {
             if !usable(y) {
                 continue;
             }
-            chart
-                .draw_series(dashed_line(vec![(xr.start, y), (xr.end, y)]))
-                .map_err(|e| e.to_string())?;
+            chart.draw_series(dashed_line(vec![(xr.start, y), (xr.end, y)]))?;
             boxed_label(
                 &mut chart,
                 (xr.end, y),
@@ -241,16 +230,12 @@ pub fn clearance_sweep_png(
                     .map(|p| (p.0, p.1 + p.2))
                     .chain(pts.iter().rev().map(|p| (p.0, p.1 - p.2)))
                     .collect();
-                chart
-                    .draw_series(std::iter::once(Polygon::new(poly, c.mix(0.2).filled())))
-                    .map_err(|e| e.to_string())?;
+                chart.draw_series(std::iter::once(Polygon::new(poly, c.mix(0.2).filled())))?;
             } else {
                 // A lone point: its ±std as an error bar.
-                chart
-                    .draw_series(pts.iter().filter(|p| p.2 > 0.0).map(|p| {
-                        PathElement::new(vec![(p.0, p.1 - p.2), (p.0, p.1 + p.2)], c.mix(0.5))
-                    }))
-                    .map_err(|e| e.to_string())?;
+                chart.draw_series(pts.iter().filter(|p| p.2 > 0.0).map(|p| {
+                    PathElement::new(vec![(p.0, p.1 - p.2), (p.0, p.1 + p.2)], c.mix(0.5))
+                }))?;
             }
             let xy: Vec<(f64, f64)> = pts.iter().map(|p| (p.0, p.1)).collect();
             legend |= draw_line_with_markers(&mut chart, k, s.label, &xy)?;
@@ -306,8 +291,7 @@ pub fn metric_sweep_png(
             .margin(12)
             .x_label_area_size(45)
             .y_label_area_size(65)
-            .build_cartesian_2d(xr.clone(), yr.clone())
-            .map_err(|e| e.to_string())?;
+            .build_cartesian_2d(xr.clone(), yr.clone())?;
         super::kit::note_layout(&chart, xr.clone(), yr.clone(), (false, false));
         chart
             .configure_mesh()
@@ -315,15 +299,12 @@ pub fn metric_sweep_png(
             .y_desc(y_desc)
             .light_line_style(BLACK.mix(0.05))
             .bold_line_style(BLACK.mix(0.12))
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .draw()?;
         let mut usable_marks: Vec<(f64, &str)> =
             marks.iter().copied().filter(|m| usable(m.0)).collect();
         usable_marks.sort_by(|a, b| a.0.total_cmp(&b.0));
         for &(x, _) in &usable_marks {
-            chart
-                .draw_series(dashed_line(vec![(x, yr.start), (x, yr.end)]))
-                .map_err(|e| e.to_string())?;
+            chart.draw_series(dashed_line(vec![(x, yr.start), (x, yr.end)]))?;
         }
         // Labels after all lines, on a light box, staggered in x order so that close marks do
         // not print over each other.
@@ -383,9 +364,7 @@ pub fn time_histories_banded_png(
         .map_err(|_| perr(path, "too many panels"))?
         .min(16_000);
     render_png(path, (1000, height), |root| {
-        let root = root
-            .titled(title, title_font())
-            .map_err(|e| e.to_string())?;
+        let root = root.titled(title, title_font())?;
         let areas = root.split_evenly((n_panels, 1));
         let empty = Panel {
             y_desc: "",
@@ -423,8 +402,7 @@ pub fn time_histories_banded_png(
                 .margin_right(16)
                 .x_label_area_size(if last { 40 } else { 22 })
                 .y_label_area_size(75)
-                .build_cartesian_2d(xr.clone(), yr.clone())
-                .map_err(|e| e.to_string())?;
+                .build_cartesian_2d(xr.clone(), yr.clone())?;
             super::kit::note_layout(&chart, xr.clone(), yr.clone(), (false, false));
             draw_bands(&mut chart, bands, (k == 0).then_some(12))?;
             let mut mesh = chart.configure_mesh();
@@ -434,15 +412,14 @@ pub fn time_histories_banded_png(
             if last {
                 mesh.x_desc("time (ms)");
             }
-            mesh.draw().map_err(|e| e.to_string())?;
+            mesh.draw()?;
             let mut legend = false;
             for (j, ((label, _), runs)) in panel.series.iter().zip(&drawn).enumerate() {
                 let c = PALETTE[j % PALETTE.len()];
                 let mut labelled = false;
                 for pts in runs.iter().filter(|r| !r.is_empty()) {
                     let line = chart
-                        .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(1)))
-                        .map_err(|e| e.to_string())?;
+                        .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(1)))?;
                     if label.is_empty() || labelled {
                         continue;
                     }

@@ -166,12 +166,18 @@ pub type NamedSeries = Vec<(String, Vec<f64>)>;
 
 /// Read a case's histories back (for plots of chosen actuations): time and named series.
 pub fn read_case_history(path: &Path) -> Result<(Vec<f64>, NamedSeries)> {
-    let e = |m: String| Error::Stage(format!("{}: {m}", path.display()));
-    let file = hdf5::File::open(path).map_err(|x| e(x.to_string()))?;
+    let file = hdf5::File::open(path).map_err(|source| Error::Hdf5Open {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let read = |name: &str| -> Result<Vec<f64>> {
         file.dataset(&format!("case/history/{name}"))
             .and_then(|d| d.read_raw::<f64>())
-            .map_err(|x| e(format!("{name}: {x}")))
+            .map_err(|source| Error::Hdf5Read {
+                path: path.to_path_buf(),
+                what: name.to_string(),
+                source,
+            })
     };
     let time = read("time")?;
     let mut out = Vec::new();

@@ -10,6 +10,7 @@ use crate::artefacts::cases as case_files;
 use crate::artefacts::dmw_tracks;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::store::H5Out;
+use crate::dmw::DmwError;
 use crate::error::{Error, Result};
 use crate::slider::params::{SimulateConfig, SimulateParams};
 use crate::slider::three_dof_params::{ThreeDofConfig, ThreeDofParams};
@@ -156,8 +157,14 @@ pub struct Series {
     pub rate_source: String,
 }
 
-fn h5err(path: &Path, what: &str, e: impl std::fmt::Display) -> Error {
-    Error::Stage(format!("{}: {what}: {e}", path.display()))
+/// A failure reading `what` of the HDF5 series file `path` (the reader runs in a child
+/// process, so only text comes back: the error is the series reader's text, as the table
+/// readers' are).
+fn h5err(path: &Path, what: &str, e: impl std::fmt::Display) -> DmwError {
+    DmwError::Read {
+        path: path.to_path_buf(),
+        message: format!("{what}: {e}"),
+    }
 }
 
 /// A string attribute (`units`, `unit`, `CLASS`) in any encoding.
@@ -235,16 +242,14 @@ pub fn read_any_series(
     sample_rate: Option<f64>,
 ) -> Result<Series> {
     use crate::dmw::io::{detect_format, series, LdvFormat};
-    let fmt = detect_format(path).map_err(|e| Error::Stage(e.to_string()))?;
+    let fmt = detect_format(path)?;
     if fmt == LdvFormat::Hdf5 {
         return read_series(path, name, velocity, sample_rate);
     }
     if velocity.is_some_and(|v| v != "none") {
-        return Err(Error::Stage(format!(
-            "{}: --velocity names an HDF5 dataset; a table's velocity is computed by central \
-             differences",
-            path.display()
-        )));
+        return Err(Error::VelocityOfTable {
+            path: path.to_path_buf(),
+        });
     }
     let s = series::read_table_series(
         path,
@@ -252,8 +257,7 @@ pub fn read_any_series(
             column: name.map(str::to_string),
             sample_rate,
         },
-    )
-    .map_err(|e| Error::Stage(e.to_string()))?;
+    )?;
     Ok(Series {
         velocity_unit: format!("{}/s", s.unit),
         x: s.values,
@@ -284,12 +288,12 @@ pub fn read_series(
     sample_rate: Option<f64>,
 ) -> Result<Series> {
     use crate::formats::isolated::{self, Reader, Writer};
-    fn send(reply: Result<Series>, w: &mut Writer) -> std::io::Result<()> {
+    fn send(reply: std::result::Result<Series, DmwError>, w: &mut Writer) -> std::io::Result<()> {
         let s = match reply {
             Ok(s) => s,
             Err(e) => {
                 w.bool(false)?;
-                return w.str(&e.to_string());
+                return w.str(&crate::core::chain(&e));
             }
         };
         w.bool(true)?;
@@ -309,9 +313,9 @@ pub fn read_series(
         }
         Ok(())
     }
-    fn receive(r: &mut Reader) -> std::io::Result<Result<Series>> {
+    fn receive(r: &mut Reader) -> std::io::Result<std::result::Result<Series, DmwError>> {
         if !r.bool()? {
-            return Ok(Err(Error::Stage(r.str()?)));
+            return Ok(Err(DmwError::Isolated(r.str()?)));
         }
         let x = r.f64s()?;
         let has_v = r.bool()?;
@@ -339,13 +343,14 @@ pub fn read_series(
         send,
         receive,
     );
-    reply.unwrap_or_else(|failure| {
+    let series = reply.unwrap_or_else(|failure| {
         Err(h5err(
             path,
             "cannot read",
             format!("{failure}; is the file corrupt?"),
         ))
-    })
+    })?;
+    Ok(series)
 }
 
 fn read_series_in_process(
@@ -353,7 +358,7 @@ fn read_series_in_process(
     dataset: Option<&str>,
     velocity: Option<&str>,
     sample_rate: Option<f64>,
-) -> Result<Series> {
+) -> std::result::Result<Series, DmwError> {
     use crate::dmw::io::series::{check_values, rate_from_time, si_unit, RATE_RTOL};
     let file = hdf5::File::open(path).map_err(|e| h5err(path, "cannot open as HDF5", e))?;
     let (dataset, velocity) = match dataset {
@@ -381,24 +386,26 @@ fn read_series_in_process(
                 match data.as_slice() {
                     [one] => (one.to_string(), velocity.map(str::to_string)),
                     _ => {
-                        return Err(Error::Stage(format!(
-                            "{}: {} 1-D datasets; choose one with --dataset ({})",
-                            path.display(),
-                            if data.is_empty() { "no" } else { "several" },
-                            all.join(", ")
-                        )))
+                        return Err(DmwError::Record {
+                            path: path.to_path_buf(),
+                            message: format!(
+                                "{} 1-D datasets; choose one with --dataset ({})",
+                                if data.is_empty() { "no" } else { "several" },
+                                all.join(", ")
+                            ),
+                        })
                     }
                 }
             }
         },
     };
     let velocity = velocity.filter(|v| v != "none");
-    let ds = file.dataset(&dataset).map_err(|_| {
-        Error::Stage(format!(
-            "{}: no dataset `{dataset}` (1-D series in this file: {})",
-            path.display(),
+    let ds = file.dataset(&dataset).map_err(|_| DmwError::Record {
+        path: path.to_path_buf(),
+        message: format!(
+            "no dataset `{dataset}` (1-D series in this file: {})",
             list_series(&file).join(", ")
-        ))
+        ),
     })?;
     if ds.ndim() != 1 {
         return Err(h5err(
@@ -408,7 +415,7 @@ fn read_series_in_process(
         ));
     }
     let raw: Vec<f64> = ds.read_raw().map_err(|e| h5err(path, &dataset, e))?;
-    check_values(path, &dataset, &raw).map_err(|e| Error::Stage(e.to_string()))?;
+    check_values(path, &dataset, &raw)?;
     let stored_unit = read_units(&ds);
     let (unit, factor) = match si_unit(&stored_unit) {
         Some((u, f)) => (u.to_string(), f),
@@ -491,8 +498,7 @@ fn read_series_in_process(
                     format!("attribute `sampling_rate` of `{tname}`"),
                 ),
                 _ => {
-                    let (fs, t0) = rate_from_time(path, &tname, &t)
-                        .map_err(|e| Error::Stage(e.to_string()))?;
+                    let (fs, t0) = rate_from_time(path, &tname, &t)?;
                     let kind = if attr_string(&time, "CLASS").as_deref() == Some("DIMENSION_SCALE")
                     {
                         "dimension scale"
@@ -519,20 +525,23 @@ fn read_series_in_process(
         None => match stated {
             Some((fs, from)) => (fs, 0.0, from),
             None => {
-                return Err(Error::Stage(format!(
-                    "{}: `{dataset}` has no time axis (no `{}` dataset or dimension scale \
-                     beside it and no sampling_rate/sample_rate/fs/dt attribute); pass \
-                     --sample-rate",
-                    path.display(),
-                    sibling("time")
-                )))
+                return Err(DmwError::Record {
+                    path: path.to_path_buf(),
+                    message: format!(
+                        "`{dataset}` has no time axis (no `{}` dataset or dimension scale \
+                         beside it and no sampling_rate/sample_rate/fs/dt attribute); pass \
+                         --sample-rate",
+                        sibling("time")
+                    ),
+                })
             }
         },
     };
     let (v, velocity_unit) = match &velocity {
         Some(vp) => {
-            let vd = file.dataset(vp).map_err(|_| {
-                Error::Stage(format!("{}: no velocity dataset `{vp}`", path.display()))
+            let vd = file.dataset(vp).map_err(|_| DmwError::Record {
+                path: path.to_path_buf(),
+                message: format!("no velocity dataset `{vp}`"),
             })?;
             let v: Vec<f64> = vd.read_raw().map_err(|e| h5err(path, vp, e))?;
             if v.len() != x.len() {
@@ -765,8 +774,13 @@ fn write_scalogram(out: &H5Out, r: &AnalysisReport, s: &Series) -> Result<()> {
     out.attr_str(&g, "wavelet", &sc.wavelet.to_string())?;
     out.attr_str(&g, "normalization", &sc.normalization.to_string())?;
     let nf = sc.frequencies_hz.len();
-    let mag = ndarray::ArrayView2::from_shape((nf, sc.n_time), &sc.magnitude)
-        .map_err(|e| Error::Stage(format!("scalogram shape: {e}")))?;
+    let mag =
+        ndarray::ArrayView2::from_shape((nf, sc.n_time), &sc.magnitude).map_err(|source| {
+            Error::Shape {
+                what: "scalogram",
+                source,
+            }
+        })?;
     out.write_array(
         &g,
         "magnitude",
@@ -1089,13 +1103,15 @@ impl StageKind for AnalysisStage {
         let dir = ctx
             .upstream_dirs
             .get(&self.source)
-            .ok_or_else(|| Error::Stage(format!("no files from `{}`", self.source)))?;
+            .ok_or_else(|| Error::NoUpstreamFiles {
+                stage: self.source.clone(),
+            })?;
         let path = dir.join(&self.series.file);
         if !path.is_file() {
-            return Err(Error::Stage(format!(
-                "`{}` has no output `{}`",
-                self.source, self.series.file
-            )));
+            return Err(Error::MissingOutput {
+                stage: self.source.clone(),
+                file: self.series.file.clone(),
+            });
         }
         ctx.progress.set_message("reading the series");
         let s = read_series(
@@ -1113,11 +1129,10 @@ impl StageKind for AnalysisStage {
             s.t0,
             &self.settings.options(),
         )
-        .map_err(|e| {
-            Error::Stage(format!(
-                "{} `{}`: {e}",
-                self.series.file, self.series.dataset
-            ))
+        .map_err(|source| Error::AnalysisOf {
+            file: self.series.file.clone(),
+            dataset: self.series.dataset.clone(),
+            source,
         })?;
         let label = format!(
             "{} {}",

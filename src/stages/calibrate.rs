@@ -1043,10 +1043,10 @@ impl<'c> StoreRounds<'c> {
         let (rounds, cases) = self.counts.lock().map(|c| *c).unwrap_or_default();
         ctx.log_run("batch_rounds", json!({"rounds": rounds, "cases": cases}));
         match self.fatal.lock().ok().and_then(|f| f.clone()) {
-            Some(m) => Err(crate::error::Error::Stage(format!(
-                "{}: a round of calibration cases did not come back: {m}",
-                self.instance
-            ))),
+            Some(message) => Err(crate::error::Error::CalibrationRoundLost {
+                instance: self.instance.to_string(),
+                message,
+            }),
             None => Ok(()),
         }
     }

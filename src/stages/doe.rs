@@ -436,15 +436,14 @@ impl CaseRunner<'_> {
             design_m: Some(design),
             static_start: None,
         };
-        let entry = self.sweep.cached(self.store, &case).map_err(|e| {
-            Error::Stage(format!(
-                "case a = {:.3} um, w = {:.3} um, x = {:.3} um, h_TFC = {:.3} nm: {e}",
-                design[0] / UM,
-                design[1] / UM,
-                design[2] / UM,
-                actuation / NM
-            ))
-        })?;
+        let entry = self
+            .sweep
+            .cached(self.store, &case)
+            .map_err(|e| Error::DoeCase {
+                design,
+                actuation,
+                source: Box::new(e),
+            })?;
         let xi = xi_of(&entry.result, p.model.nominal_flying_height);
         Ok(DesignCase {
             design,
@@ -485,8 +484,7 @@ fn fit_level(actuation: f64, fixed: usize, points: &[Vec<f64>], xi: &[f64]) -> R
     let fit = |degree: u32| {
         ResponseSurface::fit(&PolynomialBasis::bounded(3, 2, degree), points, xi, &opts)
     };
-    let quartic = fit(4)
-        .map_err(|e| Error::Stage(format!("response surface at {:.1} nm: {e}", actuation / NM)))?;
+    let quartic = fit(4).map_err(|source| Error::ResponseSurface { actuation, source })?;
     Ok(LevelFit {
         actuation,
         fixed,
@@ -602,7 +600,7 @@ fn predictive_rows(p: &DoeParams, fits: &[LevelFit]) -> Result<Vec<Map<String, V
         for level in [-1.0, 0.0, 1.0] {
             let reduced = poly
                 .fix_factor(lf.fixed, level)
-                .map_err(|e| Error::Stage(format!("predictive equation: {e}")))?;
+                .map_err(Error::PredictiveEquation)?;
             let free: Vec<&str> = (0..3)
                 .filter(|f| *f != lf.fixed)
                 .map(|f| FACTORS[f])
@@ -1204,12 +1202,10 @@ fn fit_surfaces(p: &DoeParams, ctx: &StageContext, design: &DesignRun) -> Result
             .map(|c| c.xi)
             .collect();
         if let Some(i) = xi.iter().position(|v| !v.is_finite()) {
-            return Err(Error::Stage(format!(
-                "ξ is not finite for design {:?} µm at {:.1} nm (a case without a steady \
-                 clearance or vibration)",
-                design.designs[i].map(|v| v / UM),
-                h / NM
-            )));
+            return Err(Error::NonFiniteXi {
+                design: design.designs[i],
+                actuation: h,
+            });
         }
         fits.push(fit_level(h, p.fixed[k], &design.coded_points, &xi)?);
     }
@@ -1300,8 +1296,8 @@ struct Annealing {
 fn anneal(p: &DoeParams, ctx: &StageContext, objective: &Objective) -> Result<Annealing> {
     ctx.progress.set_message("simulated annealing");
     let start = p.encode(&p.sa_start);
-    let mut annealer = Annealer::new(&CODED_LOWER, &CODED_UPPER, &start, &p.sa)
-        .map_err(|e| Error::Stage(format!("annealing: {e}")))?;
+    let mut annealer =
+        Annealer::new(&CODED_LOWER, &CODED_UPPER, &start, &p.sa).map_err(Error::Annealing)?;
     let mut case_keys = Vec::new();
     let mut xis = Vec::new();
     while let Some(c) = annealer.ask() {
@@ -1361,7 +1357,7 @@ fn check_sensitivity(
         &CODED_LOWER,
         &CODED_UPPER,
     )
-    .map_err(|e| Error::Stage(format!("sensitivity: {e}")))?;
+    .map_err(Error::Sensitivity)?;
     let values: Vec<Result<Evaluation>> =
         pts.par_iter().map(|s| objective.evaluate(&s.x)).collect();
     let mut case_keys = Vec::new();

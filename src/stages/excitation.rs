@@ -11,7 +11,7 @@ use crate::core::store::H5Out;
 use crate::dmw::excitation_tracks::{
     band_limited_random, quadratic_chirp, sinusoid, synthetic_dmw, zero, Excitation, DMW_LINE_HZ,
 };
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::units::{Frequency, Length, TimeSpan};
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
@@ -200,6 +200,7 @@ pub fn check(cfg: &ExcitationConfig) -> std::result::Result<ExcitationParams, Ke
         ..p.clone()
     };
     if let Err(e) = generate(&trial) {
+        let e = e.to_string();
         let key = match &p.kind {
             ExcitationKind::Sinusoid { .. } if e.contains("freq") => "frequency",
             ExcitationKind::BandLimitedRandom { .. } if e.contains("band") => "band",
@@ -214,26 +215,21 @@ pub fn check(cfg: &ExcitationConfig) -> std::result::Result<ExcitationParams, Ke
 }
 
 /// Generate the track (`duration + margin` long).
-pub fn generate(p: &ExcitationParams) -> std::result::Result<Excitation, String> {
+pub fn generate(p: &ExcitationParams) -> std::result::Result<Excitation, crate::dmw::DmwError> {
     let (fs, record) = (p.sample_rate, p.duration + p.margin);
-    let e = |x: crate::dmw::DmwError| x.to_string();
     match p.kind {
-        ExcitationKind::Sinusoid { frequency, rms } => {
-            sinusoid(record, fs, frequency, rms).map_err(e)
-        }
-        ExcitationKind::Zero => zero(record, fs).map_err(e),
+        ExcitationKind::Sinusoid { frequency, rms } => sinusoid(record, fs, frequency, rms),
+        ExcitationKind::Zero => zero(record, fs),
         ExcitationKind::BandLimitedRandom {
             f_lo,
             f_hi,
             rms,
             seed,
-        } => band_limited_random(record, fs, f_lo, f_hi, rms, seed).map_err(e),
-        ExcitationKind::SyntheticDmw { sigma, seed } => {
-            synthetic_dmw(record, fs, sigma, seed).map_err(e)
-        }
+        } => band_limited_random(record, fs, f_lo, f_hi, rms, seed),
+        ExcitationKind::SyntheticDmw { sigma, seed } => synthetic_dmw(record, fs, sigma, seed),
         ExcitationKind::QuadraticChirp { f0, f1, amplitude } => {
             // The sweep time is `duration`; the margin continues the same phase law.
-            let mut x = quadratic_chirp(p.duration, fs, f0, f1, amplitude).map_err(e)?;
+            let mut x = quadratic_chirp(p.duration, fs, f0, f1, amplitude)?;
             let n = (record * fs * (1.0 + 4.0 * f64::EPSILON)).floor() as usize + 1;
             for i in x.displacement.len()..n {
                 let t = i as f64 / fs;
@@ -341,7 +337,7 @@ impl StageKind for ExcitationStage {
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
         let p = &self.params;
-        let x = generate(p).map_err(Error::Stage)?;
+        let x = generate(p)?;
         write_tracks(&ctx.out_dir.join(dmw_tracks::FILE), ctx.key, p, &x)?;
         let ms: Vec<(f64, f64)> = x
             .displacement

@@ -712,7 +712,10 @@ impl StageKind for ThreeDofStage {
                     |dir| three_dof_cases.compute_case(which, dir),
                 )
                 .map(|e| (which, e))
-                .map_err(|e| Error::Stage(format!("case {}: {e}", which.label())))
+                .map_err(|e| Error::ThreeDofCase {
+                    case: which.label(),
+                    source: Box::new(e),
+                })
             })
             .collect();
         let mut done = Vec::new();

@@ -1886,10 +1886,8 @@ fn chirp_rows(cache: Option<&Cache>) -> Vec<Row> {
 
 // ------------------------------------------------------------------------------------------
 
-fn interface(params: IsblParams) -> Result<IsblLookup, String> {
-    IsblModel::new(params)
-        .and_then(IsblLookup::build_standard_unverified)
-        .map_err(|e| e.to_string())
+fn interface(params: IsblParams) -> Result<IsblLookup, crate::contact::ContactError> {
+    IsblModel::new(params).and_then(IsblLookup::build_standard_unverified)
 }
 
 /// The improved-model grid (nm): 2–8 nm by 0.5 nm for slope A, 8–12.4 nm by 0.2 nm, 8.5 nm.
@@ -1906,8 +1904,9 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
     let inputs = (|| {
         let improved = interface(IsblParams::improved_2dof())?;
         let initial = interface(IsblParams::initial_2dof())?;
-        let track = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1).map_err(|e| e.to_string())?;
-        Ok::<_, String>((improved, initial, track))
+        let track = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1)?;
+        // Display (not the chain) of the crate error is the domain error's own text.
+        Ok::<_, crate::error::Error>((improved, initial, track))
     })();
     let (improved, initial, track) = match inputs {
         Ok(x) => x,

@@ -93,26 +93,24 @@ fn modal_rows(model: &Model3Dof) -> Vec<Row> {
 
 /// A 0.3 ms case at constant 12 nm (ISBL interface, no DMW): pole-tip FH and TE push-back.
 fn twelve_nm_rows(model: &Model3Dof) -> Vec<Row> {
-    let run = || -> Result<(f64, f64), String> {
+    // Display (not the chain) of the crate error is the domain error's own text.
+    let run = || -> crate::error::Result<(f64, f64)> {
         let isbl = IsblModel::new(IsblParams::three_dof())
-            .and_then(IsblLookup::build_standard_unverified)
-            .map_err(|e| e.to_string())?;
+            .and_then(IsblLookup::build_standard_unverified)?;
         let interface = FeatureInterface::new(
             &isbl,
             InterfaceLaw::Isbl,
             ContactForceForm::InterferenceTangent,
             0.05,
             model.air_bearing.slider.mass,
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         let options = Options3Dof {
             duration: 0.3e-3,
             ..Options3Dof::default()
         };
-        let profile = ActuationProfile::constant(12.0 * NM).map_err(|e| e.to_string())?;
-        let case = ThreeDofCase::new(model, interface, profile, None, None, options)
-            .map_err(|e| e.to_string())?;
-        let h = case.run().map_err(|e| e.to_string())?;
+        let profile = ActuationProfile::constant(12.0 * NM)?;
+        let case = ThreeDofCase::new(model, interface, profile, None, None, options)?;
+        let h = case.run()?;
         let k = h.len() - 1;
         let g = &model.geometry;
         let te = g.spacing_of(&g.trailing_edge(), h.heave[k], h.pitch[k], h.roll[k]);
@@ -280,7 +278,7 @@ fn table_4_4_rows() -> Vec<Row> {
 
 /// Runs the four Table 4.4 cases of every model (all in parallel) on the variable-Δγ MTL
 /// interface: per model, the four cases' BVs.
-fn run_table_4_4(models: &[Model3Dof]) -> Result<Vec<Vec<CaseBv>>, String> {
+fn run_table_4_4(models: &[Model3Dof]) -> crate::error::Result<Vec<Vec<CaseBv>>> {
     use crate::contact::isbl::SurfaceEnergy;
     use crate::contact::mtl::{FwmExperiment, RoughFilm, RoughMtl};
     use crate::dmw::excitation_tracks::synthetic_dmw;
@@ -288,10 +286,8 @@ fn run_table_4_4(models: &[Model3Dof]) -> Result<Vec<Vec<CaseBv>>, String> {
     use rayon::prelude::*;
     let mut ip = IsblParams::three_dof();
     ip.surface_energy = SurfaceEnergy::seed_variable();
-    let isbl = IsblModel::new(ip)
-        .and_then(IsblLookup::build_standard_unverified)
-        .map_err(|e| e.to_string())?;
-    let d = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1).map_err(|e| e.to_string())?;
+    let isbl = IsblModel::new(ip).and_then(IsblLookup::build_standard_unverified)?;
+    let d = synthetic_dmw(2.2e-3, 4e6, 1e-9, 1)?;
     let flip = |x: &[f64], sign: f64| x.iter().rev().map(|v| sign * v).collect::<Vec<_>>();
     let (d2, v2) = (flip(&d.displacement, 1.0), flip(&d.velocity, -1.0));
     let (d3, v3) = (flip(&d.displacement, -1.0), flip(&d.velocity, 1.0));
@@ -309,20 +305,17 @@ fn run_table_4_4(models: &[Model3Dof]) -> Result<Vec<Vec<CaseBv>>, String> {
                 case.kappa(),
                 ip.lubricant_thickness,
                 model.disk_speed,
-            )
-            .map_err(|e| e.to_string())?;
-            let exp = FwmExperiment::fukuzawa_z03()
-                .with_limiting_viscosity(case.limiting_viscosity())
-                .map_err(|e| e.to_string())?;
-            let law = RoughMtl::from_experiment(film, &exp).map_err(|e| e.to_string())?;
+            )?;
+            let exp =
+                FwmExperiment::fukuzawa_z03().with_limiting_viscosity(case.limiting_viscosity())?;
+            let law = RoughMtl::from_experiment(film, &exp)?;
             let interface = FeatureInterface::new(
                 &isbl,
                 InterfaceLaw::Mtl(law),
                 ContactForceForm::InterferenceTangent,
                 0.05,
                 model.air_bearing.slider.mass,
-            )
-            .map_err(|e| e.to_string())?;
+            )?;
             let profile = ActuationProfile::variable_default();
             let fs = d.fs;
             let tracks = [
@@ -350,8 +343,7 @@ fn run_table_4_4(models: &[Model3Dof]) -> Result<Vec<Vec<CaseBv>>, String> {
                 Some(tracks),
                 Options3Dof::default(),
             )
-            .and_then(|c| c.run())
-            .map_err(|e| e.to_string())?;
+            .and_then(|c| c.run())?;
             let t = h.table_4_4(&profile, lubricant_surface);
             Ok(CaseBv {
                 jump_to_contact: t.jump_to_contact_bv.unwrap_or(f64::NAN),
@@ -359,7 +351,7 @@ fn run_table_4_4(models: &[Model3Dof]) -> Result<Vec<Vec<CaseBv>>, String> {
                 flying: t.flying_fhm.unwrap_or(f64::NAN),
             })
         })
-        .collect::<Result<_, String>>()?;
+        .collect::<crate::error::Result<_>>()?;
     Ok(done
         .chunks(PUBLISHED.len())
         .map(<[CaseBv]>::to_vec)

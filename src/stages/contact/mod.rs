@@ -498,10 +498,10 @@ impl SummitOrigin {
             [(_, one)] => *one,
             [(_, a), (_, b)] => combine_summit_heights(a, b)?,
             _ => {
-                return Err(crate::error::Error::Stage(format!(
-                    "measured summits of `{source}`: need one or two surfaces, got {}",
-                    surfaces.len()
-                )))
+                return Err(crate::error::Error::SummitSurfaces {
+                    stage: source.to_string(),
+                    count: surfaces.len(),
+                })
             }
         };
         Ok(SummitOrigin::Measured {
@@ -572,11 +572,9 @@ pub fn resolve_summits(
         },
         (SummitSpec::Measured(_), Some(m @ SummitOrigin::Measured { .. })) => m,
         (SummitSpec::Measured(src), _) => {
-            return Err(crate::error::Error::Stage(format!(
-                "summit_distribution = \"measured\" needs the summits of `{}` from a pipeline \
-                 (`hdi run`); `hdi contact` has none",
-                src.name()
-            )))
+            return Err(crate::error::Error::MeasuredSummitsOutsidePipeline {
+                surface: src.name().to_string(),
+            })
         }
     };
     let (sigma_ratio, offset_ratio) = origin.ratios();
