@@ -6,7 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use super::progress::StageBars;
-use hdi::core::cache::Store;
+use hdi::core::cache::{StaleReason, Store};
 use hdi::core::config::PipelineFile;
 use hdi::engine::{self, Outcome, RunOptions, State};
 use hdi::stages;
@@ -64,7 +64,9 @@ pub(super) fn cmd_run(
     if dry_run {
         for (name, o) in &report.outcomes {
             match o {
-                Outcome::WouldRun(why) => println!("would run  {name}: {}", why.join("; ")),
+                Outcome::WouldRun(why) => {
+                    println!("would run  {name}: {}", StaleReason::join(why))
+                }
                 _ => println!("fresh      {name}"),
             }
         }
@@ -178,8 +180,10 @@ pub(super) fn cmd_status(config: &Path, as_json: bool) -> Result<()> {
     for p in &plan.planned {
         let (state, why) = match &p.state {
             State::Fresh => ("fresh", Vec::new()),
-            State::Stale(why) if why.iter().any(|w| w == "never run") => ("missing", why.clone()),
-            State::Stale(why) => ("stale", why.clone()),
+            State::Stale(why) if why.contains(&StaleReason::NeverRun) => {
+                ("missing", StaleReason::phrases(why))
+            }
+            State::Stale(why) => ("stale", StaleReason::phrases(why)),
         };
         if state != "fresh" {
             stale += 1;

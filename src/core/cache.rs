@@ -75,41 +75,143 @@ impl Fingerprint {
         }))
     }
 
-    /// Human-readable differences from an older fingerprint: why a stage is stale.
-    pub fn explain_changes(&self, old: &Fingerprint) -> Vec<String> {
+    /// The differences from an older fingerprint: why a stage is stale.
+    pub fn explain_changes(&self, old: &Fingerprint) -> Vec<StaleReason> {
         let mut why = Vec::new();
         if self.kind != old.kind {
-            why.push(format!("kind {} → {}", old.kind, self.kind));
+            why.push(StaleReason::Kind {
+                old: old.kind.clone(),
+                new: self.kind.clone(),
+            });
         }
         if self.model_version != old.model_version {
-            why.push(format!(
-                "model version {} → {}",
-                old.model_version, self.model_version
-            ));
+            why.push(StaleReason::ModelVersion {
+                old: old.model_version.clone(),
+                new: self.model_version.clone(),
+            });
         }
         diff_values("", &old.params, &self.params, &mut why);
         for new in &self.inputs {
             match old.inputs.iter().find(|o| o.role == new.role) {
-                None => why.push(format!("new input {} ({})", new.role, new.path)),
-                Some(o) if o.blake3 != new.blake3 => {
-                    why.push(format!("input {} changed ({})", new.role, new.path))
-                }
+                None => why.push(StaleReason::NewInput {
+                    role: new.role.clone(),
+                    path: new.path.clone(),
+                }),
+                Some(o) if o.blake3 != new.blake3 => why.push(StaleReason::InputChanged {
+                    role: new.role.clone(),
+                    path: new.path.clone(),
+                }),
                 _ => {}
             }
         }
         for o in &old.inputs {
             if !self.inputs.iter().any(|n| n.role == o.role) {
-                why.push(format!("input {} removed", o.role));
+                why.push(StaleReason::InputRemoved {
+                    role: o.role.clone(),
+                });
             }
         }
         for new in &self.upstream {
             match old.upstream.iter().find(|o| o.name == new.name) {
-                None => why.push(format!("now depends on {}", new.name)),
-                Some(o) if o.key != new.key => why.push(format!("upstream {} changed", new.name)),
+                None => why.push(StaleReason::NewUpstream {
+                    name: new.name.clone(),
+                }),
+                Some(o) if o.key != new.key => why.push(StaleReason::UpstreamChanged {
+                    name: new.name.clone(),
+                }),
                 _ => {}
             }
         }
         why
+    }
+}
+
+/// Why a stage instance must run (`hdi run --dry-run`, `hdi status`, the report, `hdi diff`);
+/// displayed as one short phrase each.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum StaleReason {
+    /// `--force` named it.
+    Forced,
+    /// Its entry exists but does not match its manifest.
+    Damaged(String),
+    /// No entry and no earlier record of the instance.
+    NeverRun,
+    /// The same fingerprint ran before, but its entry is gone.
+    OutputMissing,
+    Kind {
+        old: String,
+        new: String,
+    },
+    ModelVersion {
+        old: String,
+        new: String,
+    },
+    /// A parameter at `path` (dotted) changed; `None` is unset. Values are shortened JSON.
+    Param {
+        path: String,
+        old: Option<String>,
+        new: Option<String>,
+    },
+    NewInput {
+        role: String,
+        path: String,
+    },
+    InputChanged {
+        role: String,
+        path: String,
+    },
+    InputRemoved {
+        role: String,
+    },
+    NewUpstream {
+        name: String,
+    },
+    UpstreamChanged {
+        name: String,
+    },
+}
+
+/// Written as its phrase (the report's key and `hdi diff --json` hold the phrases).
+impl Serialize for StaleReason {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+impl StaleReason {
+    /// The reasons as one line, `; ` between them.
+    pub fn join(why: &[StaleReason]) -> String {
+        why.iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>()
+            .join("; ")
+    }
+
+    /// The reasons as phrases.
+    pub fn phrases(why: &[StaleReason]) -> Vec<String> {
+        why.iter().map(ToString::to_string).collect()
+    }
+}
+
+impl std::fmt::Display for StaleReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let unset = |v: &Option<String>| v.clone().unwrap_or_else(|| "(unset)".into());
+        match self {
+            StaleReason::Forced => write!(f, "forced"),
+            StaleReason::Damaged(why) => write!(f, "cached output damaged: {why}"),
+            StaleReason::NeverRun => write!(f, "never run"),
+            StaleReason::OutputMissing => write!(f, "cached output missing"),
+            StaleReason::Kind { old, new } => write!(f, "kind {old} → {new}"),
+            StaleReason::ModelVersion { old, new } => write!(f, "model version {old} → {new}"),
+            StaleReason::Param { path, old, new } => {
+                write!(f, "{path}: {} → {}", unset(old), unset(new))
+            }
+            StaleReason::NewInput { role, path } => write!(f, "new input {role} ({path})"),
+            StaleReason::InputChanged { role, path } => write!(f, "input {role} changed ({path})"),
+            StaleReason::InputRemoved { role } => write!(f, "input {role} removed"),
+            StaleReason::NewUpstream { name } => write!(f, "now depends on {name}"),
+            StaleReason::UpstreamChanged { name } => write!(f, "upstream {name} changed"),
+        }
     }
 }
 
@@ -122,7 +224,7 @@ fn short(v: &Value) -> String {
     }
 }
 
-fn diff_values(path: &str, old: &Value, new: &Value, out: &mut Vec<String>) {
+fn diff_values(path: &str, old: &Value, new: &Value, out: &mut Vec<StaleReason>) {
     match (old, new) {
         (Value::Object(a), Value::Object(b)) => {
             let keys: std::collections::BTreeSet<&String> = a.keys().chain(b.keys()).collect();
@@ -134,13 +236,25 @@ fn diff_values(path: &str, old: &Value, new: &Value, out: &mut Vec<String>) {
                 };
                 match (a.get(k), b.get(k)) {
                     (Some(x), Some(y)) => diff_values(&p, x, y, out),
-                    (None, Some(y)) => out.push(format!("{p}: (unset) → {}", short(y))),
-                    (Some(x), None) => out.push(format!("{p}: {} → (unset)", short(x))),
+                    (None, Some(y)) => out.push(StaleReason::Param {
+                        path: p,
+                        old: None,
+                        new: Some(short(y)),
+                    }),
+                    (Some(x), None) => out.push(StaleReason::Param {
+                        path: p,
+                        old: Some(short(x)),
+                        new: None,
+                    }),
                     (None, None) => {}
                 }
             }
         }
-        (a, b) if a != b => out.push(format!("{path}: {} → {}", short(a), short(b))),
+        (a, b) if a != b => out.push(StaleReason::Param {
+            path: path.to_string(),
+            old: Some(short(a)),
+            new: Some(short(b)),
+        }),
         _ => {}
     }
 }
@@ -834,8 +948,15 @@ mod tests {
     fn changes_are_explained() {
         let why = fp(2.5e-6, "bb").explain_changes(&fp(5e-6, "aa"));
         assert_eq!(why.len(), 2, "{why:?}");
-        assert!(why[0].starts_with("filter_l: 5e-6 → 2.5e-6"), "{why:?}");
-        assert!(why[1].contains("input file changed"), "{why:?}");
+        assert!(
+            why[0].to_string().starts_with("filter_l: 5e-6 → 2.5e-6"),
+            "{why:?}"
+        );
+        assert!(
+            matches!(&why[1], StaleReason::InputChanged { role, .. } if role == "file"),
+            "{why:?}"
+        );
+        assert!(why[1].to_string().contains("input file changed"), "{why:?}");
     }
 
     #[test]

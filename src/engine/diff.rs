@@ -5,7 +5,7 @@
 //! Loading turns either side into a [`Snapshot`] (per instance: fingerprint, key, metrics);
 //! [`compare`] is pure and knows nothing about where a snapshot came from.
 
-use crate::core::cache::{Fingerprint, Manifest, Store};
+use crate::core::cache::{Fingerprint, Manifest, StaleReason, Store};
 use crate::engine::State;
 use serde::Serialize;
 use serde_json::Value;
@@ -512,7 +512,7 @@ pub fn compare(a: &Snapshot, b: &Snapshot, opts: &Options) -> Result<Diff, DiffE
             (Some(_), None) => (Status::Removed, Vec::new()),
             (Some(o), Some(n)) if o.key != n.key => (
                 Status::Changed,
-                n.fingerprint.explain_changes(&o.fingerprint),
+                StaleReason::phrases(&n.fingerprint.explain_changes(&o.fingerprint)),
             ),
             _ => (Status::Unchanged, Vec::new()),
         };

@@ -5,7 +5,9 @@ pub mod diff;
 pub mod distributed;
 pub mod verify;
 
-use crate::core::cache::{Fingerprint, InputRecord, Manifest, Store, UpstreamRecord, Verification};
+use crate::core::cache::{
+    Fingerprint, InputRecord, Manifest, StaleReason, Store, UpstreamRecord, Verification,
+};
 use crate::core::executor::batch::BatchRunner;
 use crate::core::progress::{Progress, RunObserver};
 use crate::error::{Error, Result};
@@ -21,7 +23,7 @@ pub enum State {
     /// Cached and verified.
     Fresh,
     /// Must run; the reasons say why.
-    Stale(Vec<String>),
+    Stale(Vec<StaleReason>),
 }
 
 pub struct Planned {
@@ -136,18 +138,15 @@ fn plan_inner(
         keys.insert(s.name().to_string(), key.clone());
         let (state, manifest) = match store.verify(s.kind(), &key) {
             Verification::Fresh(m) if !force.contains(s.name()) => (State::Fresh, Some(*m)),
-            Verification::Fresh(m) => (State::Stale(vec!["forced".into()]), Some(*m)),
-            Verification::Damaged(why) => (
-                State::Stale(vec![format!("cached output damaged: {why}")]),
-                None,
-            ),
+            Verification::Fresh(m) => (State::Stale(vec![StaleReason::Forced]), Some(*m)),
+            Verification::Damaged(why) => (State::Stale(vec![StaleReason::Damaged(why)]), None),
             Verification::Missing => {
                 let why = match store.read_ref(s.name()) {
-                    None => vec!["never run".to_string()],
+                    None => vec![StaleReason::NeverRun],
                     Some(old) => {
                         let w = fingerprint.explain_changes(&old.fingerprint);
                         if w.is_empty() {
-                            vec!["cached output missing".to_string()]
+                            vec![StaleReason::OutputMissing]
                         } else {
                             w
                         }
@@ -191,7 +190,7 @@ pub enum Outcome {
     Ran { seconds: f64 },
     Failed(String),
     Skipped(String),
-    WouldRun(Vec<String>),
+    WouldRun(Vec<StaleReason>),
 }
 
 pub struct RunReport {

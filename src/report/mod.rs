@@ -10,7 +10,7 @@
 
 mod html;
 
-use crate::core::cache::{Manifest, Store};
+use crate::core::cache::{Manifest, StaleReason, Store};
 use crate::core::hash::{canonical_json, hash_file};
 use crate::engine::{self, Outcome, RunReport, State};
 use crate::error::{Error, Result};
@@ -60,7 +60,7 @@ impl RunRecord {
                     Outcome::Ran { seconds } => ("ran", Some(*seconds), String::new()),
                     Outcome::Failed(e) => ("failed", None, e.clone()),
                     Outcome::Skipped(e) => ("skipped", None, e.clone()),
-                    Outcome::WouldRun(why) => ("would run", None, why.join("; ")),
+                    Outcome::WouldRun(why) => ("would run", None, StaleReason::join(why)),
                 };
                 RunInstance {
                     name: name.clone(),
@@ -228,8 +228,10 @@ pub fn build(config: &Path, opts: &Options) -> Result<Built> {
         let stage = &plan.stages[p.index];
         let (state, why) = match &p.state {
             State::Fresh => ("fresh".to_string(), Vec::new()),
-            State::Stale(w) if w.iter().any(|w| w == "never run") => ("missing".into(), w.clone()),
-            State::Stale(w) => ("stale".into(), w.clone()),
+            State::Stale(w) if w.contains(&StaleReason::NeverRun) => {
+                ("missing".into(), StaleReason::phrases(w))
+            }
+            State::Stale(w) => ("stale".into(), StaleReason::phrases(w)),
         };
         let last_run = run
             .as_ref()
