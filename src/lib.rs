@@ -9,6 +9,7 @@
 //! the binary target (`src/main.rs`, `src/cli/`, feature `cli`), outside this library.
 pub mod analysis;
 pub mod artefacts;
+pub mod bench;
 pub mod contact;
 pub mod core;
 pub mod dmw;

@@ -62,6 +62,13 @@ const ALLOWED: &[(&str, &[&str])] = &[
         ],
     ),
     (
+        "bench",
+        &[
+            "samples", "stages", "figures", "core", "error", PHYSICS, "signal", "numerics",
+            "formats", "units",
+        ],
+    ),
+    (
         "samples",
         &[
             "stages", "figures", "core", "error", PHYSICS, "signal", "numerics", "formats", "units",

@@ -4,7 +4,6 @@
 mod analyze;
 mod args;
 mod bench;
-mod bench_readers;
 mod bulge;
 mod contact;
 mod diff;
@@ -95,17 +94,19 @@ pub fn main() -> Result<()> {
             readers,
             read_one,
         } => match (read_one, readers.is_empty()) {
-            (Some(file), _) => bench_readers::read_one(&file),
-            (None, false) => bench_readers::bench_readers(&readers),
-            (None, true) => bench::cmd_bench(bench::BenchOptions {
-                config,
-                size,
+            (Some(file), _) => bench::read_one(&file),
+            (None, false) => bench::bench_readers(&readers),
+            (None, true) => bench::cmd_bench(
+                hdi::bench::BenchOptions {
+                    config,
+                    size,
+                    only,
+                    main_job,
+                    input,
+                    repeat,
+                },
                 json,
-                only,
-                main_job,
-                input,
-                repeat,
-            }),
+            ),
         },
         Command::Report {
             config,

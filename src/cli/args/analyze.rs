@@ -1,0 +1,47 @@
+//! `hdi analyze`'s options.
+
+use clap::Args;
+use hdi::units::{Frequency, TimeSpan};
+use std::path::PathBuf;
+
+/// `hdi analyze`.
+#[derive(Args, Debug)]
+pub struct AnalyzeArgs {
+    /// A series file: CSV/TSV, Parquet, Arrow IPC (Feather v2), `.npy`, or HDF5 (an hdi case
+    /// or `dmw.h5`, or any file with a 1-D dataset). The format is detected from the content.
+    pub file: PathBuf,
+    /// HDF5: the dataset to analyse (default: `case/history/heave`, `dmw/tracks/D1`, or the
+    /// file's only 1-D dataset).
+    #[arg(long)]
+    pub dataset: Option<String>,
+    /// Tables: the column to analyse (default: the only numeric column besides time).
+    #[arg(long)]
+    pub column: Option<String>,
+    /// Sample rate, e.g. `--sample-rate "500 kHz"`, when the file has no time axis (must agree
+    /// with one if it has).
+    #[arg(long)]
+    pub sample_rate: Option<Frequency>,
+    /// Its velocity (default: the file's own; `none`: central differences).
+    #[arg(long)]
+    pub velocity: Option<String>,
+    /// Time window, e.g. `--window "0.7 ms" "1.3 ms"`.
+    #[arg(long, num_args = 2)]
+    pub window: Vec<TimeSpan>,
+    #[arg(long, default_value = "5 kHz")]
+    pub f_min: Frequency,
+    #[arg(long, default_value = "1 MHz")]
+    pub f_max: Frequency,
+    /// Log-spaced CWT frequencies.
+    #[arg(long, default_value_t = 100)]
+    pub frequencies: usize,
+    #[arg(long, default_value_t = 5)]
+    pub peaks: usize,
+    #[arg(long)]
+    pub min_peak_frequency: Option<Frequency>,
+    /// Write `analysis.h5` and the PNGs (spectrum, scalogram, Poincaré map, phase portrait)
+    /// into this directory.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[arg(long)]
+    pub json: bool,
+}
