@@ -140,3 +140,24 @@ fn out_parent(out: &Path) -> Result<&Path> {
 fn flag(key: &str) -> String {
     format!("--{}", key.replace('_', "-"))
 }
+
+/// The pipeline file and its validated stage instances (the commands that read a pipeline).
+pub(crate) fn load(
+    config: &Path,
+) -> Result<(
+    hdi::core::config::PipelineFile,
+    Vec<Box<dyn hdi::stages::Stage>>,
+)> {
+    let file = hdi::stages::load(config)?;
+    let stages = hdi::stages::build(&file)?;
+    Ok((file, stages))
+}
+
+/// `--jobs`, or one per core.
+pub(crate) fn jobs_or_cores(jobs: Option<usize>) -> usize {
+    jobs.unwrap_or_else(|| {
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+    })
+}

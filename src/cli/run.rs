@@ -6,25 +6,9 @@ use std::path::Path;
 use std::time::Instant;
 
 use super::progress::StageBars;
+use super::{jobs_or_cores, load};
 use hdi::core::cache::{StaleReason, Store};
-use hdi::core::config::PipelineFile;
 use hdi::engine::{self, Outcome, RunOptions, State};
-use hdi::stages;
-
-pub(super) fn load(config: &Path) -> Result<(PipelineFile, Vec<Box<dyn hdi::stages::Stage>>)> {
-    let file = hdi::stages::load(config)?;
-    let stages = stages::build(&file)?;
-    Ok((file, stages))
-}
-
-/// `--jobs`, or one per core.
-pub(super) fn jobs_or_cores(jobs: Option<usize>) -> usize {
-    jobs.unwrap_or_else(|| {
-        std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-    })
-}
 
 /// Exit status for "something is stale" in `hdi status`.
 pub struct Stale;

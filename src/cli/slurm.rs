@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use super::args::SlurmArgs;
 use super::progress::{task_bar, StageBars};
-use super::run::{jobs_or_cores, load};
+use super::{jobs_or_cores, load};
 use hdi::core::cache::Store;
 use hdi::core::executor::CaseManifest;
 use hdi::engine::{self, RunOptions};

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use super::args::SlurmArgs;
-use super::run::load;
+use super::load;
 use hdi::core::executor::batch::SlurmBatchRunner;
 use hdi::core::executor::slurm::{ScriptOptions, SlurmClient};
 

@@ -22,7 +22,7 @@ impl std::fmt::Display for Damaged {
 impl std::error::Error for Damaged {}
 
 fn check(config: &Path, all: bool) -> Result<verify::VerifyReport> {
-    let (file, stages) = super::run::load(config)?;
+    let (file, stages) = super::load(config)?;
     let store = Store::open_existing(&file.processed_dir());
     // Read-only planning: verify writes nothing (not even the input-hash accelerator).
     let plan = engine::plan_read_only(stages, &store)?;
@@ -39,7 +39,7 @@ pub(super) fn cmd_verify(
     let first = check(config, all)?;
     let mut repaired = None;
     let report = if repair && !first.clean() {
-        let (file, _) = super::run::load(config)?;
+        let (file, _) = super::load(config)?;
         let processed = file.processed_dir();
         let store = Store::open_existing(&processed);
         let q = verify::quarantine_damaged(&store, &first, &super::progress::LockNotice)
