@@ -126,6 +126,12 @@ pub enum Error {
     /// A calibration case's metrics do not come back from JSON bit for bit.
     #[error("calibration case: its metrics do not survive JSON exactly")]
     CaseMetricsJson,
+    /// A 2-DOF case entry's `result.json` is not a case result of this hdi.
+    #[error("2-DOF case result: unreadable")]
+    CaseResult {
+        #[source]
+        source: serde_json::Error,
+    },
     /// A worker thread panicked while holding a shared preparation.
     #[error("a worker thread panicked")]
     WorkerPanicked,

@@ -10,7 +10,8 @@ use crate::dynamics::metrics::{CaseMetrics, Regime, VibrationKind};
 use crate::dynamics::two_dof::{CaseHistory, DmwInput, TwoDofCase};
 use crate::error::{Error, Result};
 use crate::slider::params::SimulateParams;
-use serde_json::{json, Value};
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
 use std::path::Path;
 
 /// Bump when the numbers a case produces change (it keys every 2-DOF case and is the
@@ -42,46 +43,132 @@ pub fn simulate_case(
     Ok(case_json(actuation, &h, &m, case.contact_damping()))
 }
 
-fn stats_json(s: &crate::dynamics::metrics::SeriesStats) -> Value {
-    json!({"mean": s.mean, "std": s.std, "min": s.min, "max": s.max})
+/// Mean, standard deviation and extremes of one steady-window series, SI units.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Stats {
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub mean: f64,
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub std: f64,
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub min: f64,
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub max: f64,
+}
+
+impl From<&crate::dynamics::metrics::SeriesStats> for Stats {
+    fn from(s: &crate::dynamics::metrics::SeriesStats) -> Self {
+        Stats {
+            mean: s.mean,
+            std: s.std,
+            min: s.min,
+            max: s.max,
+        }
+    }
+}
+
+/// A non-finite number is written as JSON `null`; it reads back as NaN.
+fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+/// One 2-DOF case's result (`result.json` of its case-cache entry; docs/json.md), written and
+/// read through this type: field names carry the SI unit; `None`/`null` where the case has
+/// no contact or the quantity is undefined. The field order is the file's.
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SweepCaseResult {
+    pub actuation_m: f64,
+    pub nominal_area_m2: f64,
+    pub contact_damping_N_s_per_m: f64,
+    pub clearance_m: Stats,
+    pub fh_m: Stats,
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub hms_mean_m: f64,
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub vibration_percent: f64,
+    pub vibration_extrema_percent: Option<f64>,
+    /// `FHM` or `BV` (explicit names, not Rust debug forms; docs/json.md).
+    pub vibration_kind: String,
+    #[serde(deserialize_with = "f64_or_nan")]
+    pub percent_solid_contact: f64,
+    pub regime: String,
+    pub contact_force_N: Option<Stats>,
+    pub friction_N: Option<Stats>,
+    pub real_area_m2: Option<Stats>,
+    pub adhesion_N: Option<Stats>,
+    /// Headline ratio of means, the mean of the instantaneous ratio beside it
+    /// (docs/conventions.md); `_ratio_of_means` is kept as an alias of the headline.
+    pub friction_coefficient: Option<f64>,
+    pub friction_coefficient_ratio_of_means: Option<f64>,
+    pub friction_coefficient_mean_inst: Option<f64>,
+    pub mean_pressure_Pa: Option<f64>,
+    pub mean_pressure_Pa_mean_inst: Option<f64>,
+    pub shear_traction_Pa: Option<f64>,
+    pub shear_traction_Pa_mean_inst: Option<f64>,
+    pub clipped_samples: u64,
+    pub steps: u64,
+    pub rejected_steps: u64,
+    pub rhs_evaluations: u64,
+    // No wall time: results are byte-identical for identical inputs; timings are in the store
+    // entry's manifest.json and the run log (docs/architecture.md).
+}
+
+impl SweepCaseResult {
+    pub fn new(actuation: f64, h: &CaseHistory, m: &CaseMetrics, c_c: f64) -> Self {
+        let c = m.contact.as_ref();
+        let opt = |v: Option<f64>| v.filter(|x| x.is_finite());
+        SweepCaseResult {
+            actuation_m: actuation,
+            nominal_area_m2: h.nominal_area,
+            contact_damping_N_s_per_m: c_c,
+            clearance_m: (&m.clearance_m).into(),
+            fh_m: (&m.fh_m).into(),
+            hms_mean_m: m.hms_mean_m,
+            vibration_percent: m.vibration.percent,
+            vibration_extrema_percent: m.vibration_extrema.as_ref().map(|v| v.percent),
+            vibration_kind: vibration_kind_name(m.vibration_kind).to_string(),
+            percent_solid_contact: m.percent_solid_contact,
+            regime: regime_name(m.regime).to_string(),
+            contact_force_N: c.map(|c| (&c.contact_force_n).into()),
+            friction_N: c.map(|c| (&c.friction_n).into()),
+            real_area_m2: c.map(|c| (&c.real_area_m2).into()),
+            adhesion_N: c.and_then(|c| c.adhesion_n.as_ref().map(Stats::from)),
+            friction_coefficient: c.and_then(|c| opt(c.friction_coefficient_ratio_of_means)),
+            friction_coefficient_ratio_of_means: c
+                .and_then(|c| opt(c.friction_coefficient_ratio_of_means)),
+            friction_coefficient_mean_inst: c
+                .and_then(|c| c.friction_coefficient.as_ref().map(|s| s.mean)),
+            mean_pressure_Pa: c.and_then(|c| opt(c.mean_pressure_pa_ratio_of_means)),
+            mean_pressure_Pa_mean_inst: c.and_then(|c| c.mean_pressure_pa.as_ref().map(|s| s.mean)),
+            shear_traction_Pa: c.and_then(|c| opt(c.shear_traction_pa_ratio_of_means)),
+            shear_traction_Pa_mean_inst: c
+                .and_then(|c| c.shear_traction_pa.as_ref().map(|s| s.mean)),
+            clipped_samples: h.clipped_samples as u64,
+            steps: h.stats.accepted_steps,
+            rejected_steps: h.stats.rejected_steps,
+            rhs_evaluations: h.stats.rhs_evaluations,
+        }
+    }
+
+    /// A case entry's `result.json` as this type.
+    pub fn from_json(v: &Value) -> Result<Self> {
+        serde_json::from_value(v.clone()).map_err(|source| Error::CaseResult { source })
+    }
+
+    /// Whether the steady window saw solid contact.
+    pub fn touches(&self) -> bool {
+        self.percent_solid_contact > 0.0
+    }
+
+    /// The result as written (`result.json`).
+    pub fn to_json(&self) -> Value {
+        serde_json::to_value(self).unwrap_or(Value::Null)
+    }
 }
 
 pub fn case_json(actuation: f64, h: &CaseHistory, m: &CaseMetrics, c_c: f64) -> Value {
-    let c = m.contact.as_ref();
-    let opt = |v: Option<f64>| v.filter(|x| x.is_finite());
-    json!({
-        "actuation_m": actuation,
-        "nominal_area_m2": h.nominal_area,
-        "contact_damping_N_s_per_m": c_c,
-        "clearance_m": stats_json(&m.clearance_m),
-        "fh_m": stats_json(&m.fh_m),
-        "hms_mean_m": m.hms_mean_m,
-        "vibration_percent": m.vibration.percent,
-        "vibration_extrema_percent": m.vibration_extrema.as_ref().map(|v| v.percent),
-        // Explicit names, not Rust debug forms (docs/json.md).
-        "vibration_kind": vibration_kind_name(m.vibration_kind),
-        "percent_solid_contact": m.percent_solid_contact,
-        "regime": regime_name(m.regime),
-        "contact_force_N": c.map(|c| stats_json(&c.contact_force_n)),
-        "friction_N": c.map(|c| stats_json(&c.friction_n)),
-        "real_area_m2": c.map(|c| stats_json(&c.real_area_m2)),
-        "adhesion_N": c.and_then(|c| c.adhesion_n.as_ref().map(stats_json)),
-        // Headline ratio of means, mean of the instantaneous ratio beside it
-        // (docs/conventions.md); `_ratio_of_means` is kept as an alias of the headline.
-        "friction_coefficient": c.and_then(|c| opt(c.friction_coefficient_ratio_of_means)),
-        "friction_coefficient_ratio_of_means": c.and_then(|c| opt(c.friction_coefficient_ratio_of_means)),
-        "friction_coefficient_mean_inst": c.and_then(|c| c.friction_coefficient.as_ref().map(|s| s.mean)),
-        "mean_pressure_Pa": c.and_then(|c| opt(c.mean_pressure_pa_ratio_of_means)),
-        "mean_pressure_Pa_mean_inst": c.and_then(|c| c.mean_pressure_pa.as_ref().map(|s| s.mean)),
-        "shear_traction_Pa": c.and_then(|c| opt(c.shear_traction_pa_ratio_of_means)),
-        "shear_traction_Pa_mean_inst": c.and_then(|c| c.shear_traction_pa.as_ref().map(|s| s.mean)),
-        "clipped_samples": h.clipped_samples,
-        "steps": h.stats.accepted_steps,
-        "rejected_steps": h.stats.rejected_steps,
-        "rhs_evaluations": h.stats.rhs_evaluations,
-        // No wall time: results are byte-identical for identical inputs; timings are in the
-        // store entry's manifest.json and the run log (docs/architecture.md).
-    })
+    SweepCaseResult::new(actuation, h, m, c_c).to_json()
 }
 
 pub fn write_case_h5(path: &Path, h: &CaseHistory, actuation: f64, m: &CaseMetrics) -> Result<()> {

@@ -14,7 +14,7 @@ use crate::core::progress::Progress;
 use crate::dynamics::metrics::{sweep_metrics, Regime, SlopeParams, SweepMetrics, SweepPoint};
 use crate::error::{Error, Result};
 use crate::slider::calibration::{apply_fitted, base_inputs};
-use crate::slider::case::{simulate_case, CASE_FILE, MODEL_VERSION};
+use crate::slider::case::{simulate_case, SweepCaseResult, CASE_FILE, MODEL_VERSION};
 use crate::slider::doe_design::design_params;
 // Named here too, where the sweeps and their tables have always found them.
 pub use crate::slider::case::{regime_name, vibration_kind_name};
@@ -24,10 +24,10 @@ use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// One finished case: its actuation, metrics, and where its files are.
+/// One finished case: its actuation, result, and where its files are.
 pub struct CaseOutcome {
     pub actuation: f64,
-    pub metrics: Value,
+    pub metrics: SweepCaseResult,
     pub entry: CaseEntry,
 }
 
@@ -311,7 +311,7 @@ pub fn run_jobs(
             let entry = entry?;
             Ok(CaseOutcome {
                 actuation: a,
-                metrics: entry.result.clone(),
+                metrics: SweepCaseResult::from_json(&entry.result)?,
                 entry,
             })
         })
@@ -402,8 +402,7 @@ pub fn convention_touchdown(
 ) -> Result<(crate::dynamics::touchdown::Touchdown, Vec<CaseOutcome>)> {
     use crate::dynamics::touchdown::{find_touchdown, TouchdownSearch};
     let grid: Vec<f64> = cases.iter().map(|c| c.actuation).collect();
-    let touches =
-        |c: &CaseOutcome| c.metrics["percent_solid_contact"].as_f64().unwrap_or(0.0) > 0.0;
+    let touches = |c: &CaseOutcome| c.metrics.touches();
     let known: Vec<(f64, bool)> = cases.iter().map(|c| (c.actuation, touches(c))).collect();
     // The scan grid is the sweep's own: from its first actuation (0 nm in the shipped
     // sweeps) by its smallest spacing, so a uniform sweep needs no extra scan cases.
@@ -475,11 +474,9 @@ pub fn sweep_analysis(p: &SimulateParams, cases: &[CaseOutcome]) -> Result<Sweep
         .iter()
         .map(|c| SweepPoint {
             actuation_m: c.actuation,
-            mean_clearance_m: c.metrics["clearance_m"]["mean"]
-                .as_f64()
-                .unwrap_or(f64::NAN),
-            any_solid_contact: c.metrics["percent_solid_contact"].as_f64().unwrap_or(0.0) > 0.0,
-            vibration_percent: c.metrics["vibration_percent"].as_f64().unwrap_or(f64::NAN),
+            mean_clearance_m: c.metrics.clearance_m.mean,
+            any_solid_contact: c.metrics.touches(),
+            vibration_percent: c.metrics.vibration_percent,
         })
         .collect();
     let t0 = 0.5 * p.model.interface.lubricant_thickness;
@@ -521,35 +518,33 @@ pub fn case_rows(cases: &[CaseOutcome], sweep: &SweepMetrics) -> Vec<Map<String,
         .enumerate()
         .map(|(i, c)| {
             let m = &c.metrics;
-            let f = |v: &Value, scale: f64| v.as_f64().map(|x| x * scale);
+            // A non-finite value is written as null, as in the case's result.json.
+            let stat = |s: &Option<crate::slider::case::Stats>, scale: f64| {
+                s.as_ref().map(|s| s.mean * scale)
+            };
+            let f = |v: Option<f64>, scale: f64| v.map(|x| x * scale);
             let mut r = Map::new();
             // Rounded to the femtometre: 8.8 nm, not 8.799999999999999.
             r.insert(
                 "actuation_nm".into(),
                 json!((c.actuation * 1e15).round() / 1e6),
             );
-            r.insert(
-                "clearance_mean_nm".into(),
-                json!(f(&m["clearance_m"]["mean"], 1e9)),
-            );
-            r.insert(
-                "clearance_std_nm".into(),
-                json!(f(&m["clearance_m"]["std"], 1e9)),
-            );
-            r.insert("fh_mean_nm".into(), json!(f(&m["fh_m"]["mean"], 1e9)));
-            r.insert("hms_mean_nm".into(), json!(f(&m["hms_mean_m"], 1e9)));
-            r.insert("vibration_percent".into(), m["vibration_percent"].clone());
+            r.insert("clearance_mean_nm".into(), json!(m.clearance_m.mean * 1e9));
+            r.insert("clearance_std_nm".into(), json!(m.clearance_m.std * 1e9));
+            r.insert("fh_mean_nm".into(), json!(m.fh_m.mean * 1e9));
+            r.insert("hms_mean_nm".into(), json!(m.hms_mean_m * 1e9));
+            r.insert("vibration_percent".into(), json!(m.vibration_percent));
             r.insert(
                 "vibration_extrema_percent".into(),
-                m["vibration_extrema_percent"].clone(),
+                json!(m.vibration_extrema_percent),
             );
             r.insert(
                 "vibration_kind".into(),
-                vibration_kind_label(&m["vibration_kind"]),
+                vibration_kind_label(&json!(m.vibration_kind)),
             );
             r.insert(
                 "solid_contact_percent".into(),
-                m["percent_solid_contact"].clone(),
+                json!(m.percent_solid_contact),
             );
             r.insert(
                 "regime".into(),
@@ -557,52 +552,40 @@ pub fn case_rows(cases: &[CaseOutcome], sweep: &SweepMetrics) -> Vec<Map<String,
             );
             r.insert(
                 "contact_force_mean_mN".into(),
-                json!(f(&m["contact_force_N"]["mean"], 1e3)),
+                json!(stat(&m.contact_force_N, 1e3)),
             );
-            r.insert(
-                "friction_mean_mN".into(),
-                json!(f(&m["friction_N"]["mean"], 1e3)),
-            );
-            r.insert(
-                "adhesion_mean_mN".into(),
-                json!(f(&m["adhesion_N"]["mean"], 1e3)),
-            );
+            r.insert("friction_mean_mN".into(), json!(stat(&m.friction_N, 1e3)));
+            r.insert("adhesion_mean_mN".into(), json!(stat(&m.adhesion_N, 1e3)));
             r.insert(
                 "real_area_mean_um2".into(),
-                json!(f(&m["real_area_m2"]["mean"], 1e12)),
+                json!(stat(&m.real_area_m2, 1e12)),
             );
             // Headline ratio of means, `_mean_inst` the mean of the instantaneous ratio over
             // the samples with F_c > 1 µN (docs/conventions.md).
-            r.insert(
-                "friction_coefficient".into(),
-                m["friction_coefficient"].clone(),
-            );
+            r.insert("friction_coefficient".into(), json!(m.friction_coefficient));
             r.insert(
                 "friction_coefficient_mean_inst".into(),
-                m["friction_coefficient_mean_inst"].clone(),
+                json!(m.friction_coefficient_mean_inst),
             );
             r.insert(
                 "mean_pressure_GPa".into(),
-                json!(f(&m["mean_pressure_Pa"], 1e-9)),
+                json!(f(m.mean_pressure_Pa, 1e-9)),
             );
             r.insert(
                 "mean_pressure_GPa_mean_inst".into(),
-                json!(f(&m["mean_pressure_Pa_mean_inst"], 1e-9)),
+                json!(f(m.mean_pressure_Pa_mean_inst, 1e-9)),
             );
             r.insert(
                 "shear_traction_GPa".into(),
-                json!(f(&m["shear_traction_Pa"], 1e-9)),
+                json!(f(m.shear_traction_Pa, 1e-9)),
             );
             r.insert(
                 "shear_traction_GPa_mean_inst".into(),
-                json!(f(&m["shear_traction_Pa_mean_inst"], 1e-9)),
+                json!(f(m.shear_traction_Pa_mean_inst, 1e-9)),
             );
-            r.insert(
-                "nominal_area_um2".into(),
-                json!(f(&m["nominal_area_m2"], 1e12)),
-            );
+            r.insert("nominal_area_um2".into(), json!(m.nominal_area_m2 * 1e12));
             r.insert("flyability".into(), json!(sweep.flyability.get(i)));
-            r.insert("steps".into(), m["steps"].clone());
+            r.insert("steps".into(), json!(m.steps));
             r.insert("case_key".into(), json!(c.entry.key));
             r
         })
@@ -617,14 +600,7 @@ pub const HYSTERESIS_TOLERANCE_M: f64 = 0.05e-9;
 pub fn clearance_curve(cases: &[CaseOutcome]) -> Vec<(f64, f64)> {
     cases
         .iter()
-        .map(|c| {
-            (
-                c.actuation,
-                c.metrics["clearance_m"]["mean"]
-                    .as_f64()
-                    .unwrap_or(f64::NAN),
-            )
-        })
+        .map(|c| (c.actuation, c.metrics.clearance_m.mean))
         .collect()
 }
 

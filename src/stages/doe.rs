@@ -21,6 +21,7 @@ use crate::numerics::regression::{
     coded, decoded, full_factorial, FitOptions, Polynomial, PolynomialBasis, ResponseSurface,
 };
 use crate::slider::calibration::base_inputs;
+use crate::slider::case::SweepCaseResult;
 use crate::slider::doe_design::{self, design_cases, design_params};
 use crate::slider::params::{uncalibrated_base, SimulateParams};
 use crate::slider::sweep::{sweep_analysis, CaseOutcome, PreparedSweep, SweepCase};
@@ -421,6 +422,7 @@ struct DesignCase {
     design: [f64; 3],
     actuation: f64,
     entry: CaseEntry,
+    result: SweepCaseResult,
     xi: f64,
 }
 
@@ -444,21 +446,21 @@ impl CaseRunner<'_> {
                 actuation,
                 source: Box::new(e),
             })?;
-        let xi = xi_of(&entry.result, p.model.nominal_flying_height);
+        let result = SweepCaseResult::from_json(&entry.result)?;
+        let xi = xi_of(&result, p.model.nominal_flying_height);
         Ok(DesignCase {
             design,
             actuation,
             entry,
+            result,
             xi,
         })
     }
 }
 
 /// ξ of a case result (§9): steady mean clearance over FH_nom times FHM/BV in units of 100 %.
-fn xi_of(metrics: &Value, fh_nom: f64) -> f64 {
-    let c = metrics["clearance_m"]["mean"].as_f64().unwrap_or(f64::NAN);
-    let v = metrics["vibration_percent"].as_f64().unwrap_or(f64::NAN);
-    flyability(c, fh_nom, v)
+fn xi_of(result: &SweepCaseResult, fh_nom: f64) -> f64 {
+    flyability(result.clearance_m.mean, fh_nom, result.vibration_percent)
 }
 
 /// The annealing objective of §9: ξ when positive, else `1 + |ξ|` (never preferred).
@@ -723,10 +725,9 @@ fn refined_touchdown(
     cases: &[CaseOutcome],
 ) -> Result<Option<f64>> {
     use crate::dynamics::touchdown::{find_touchdown, TouchdownSearch};
-    let touches = |m: &Value| m["percent_solid_contact"].as_f64().unwrap_or(0.0) > 0.0;
     let known: Vec<(f64, bool)> = cases
         .iter()
-        .map(|c| (c.actuation, touches(&c.metrics)))
+        .map(|c| (c.actuation, c.metrics.touches()))
         .collect();
     let (Some(first), Some(last)) = (cases.first(), cases.last()) else {
         return Ok(None);
@@ -748,7 +749,7 @@ fn refined_touchdown(
         let runs: Vec<Result<DesignCase>> =
             acts.par_iter().map(|&a| runner.run(design, a)).collect();
         runs.into_iter()
-            .map(|r| r.map(|c| touches(&c.entry.result)))
+            .map(|r| r.map(|c| c.result.touches()))
             .collect()
     })?;
     Ok(td.actuation)
@@ -804,23 +805,25 @@ fn comparison_rows(
             },
         );
         let m = idx.map(|i| (&cases[i].metrics, cases[i].actuation));
-        let get = |k: &str| m.and_then(|(m, _)| m[k].as_f64());
+        // As the case's result.json has it: a non-finite value is null there.
+        let get = |of: fn(&SweepCaseResult) -> f64| {
+            m.and_then(|(m, _)| Some(of(m)).filter(|v| v.is_finite()))
+        };
         row.insert(
             "h_tfc_nm".into(),
             m.map_or(Value::Null, |(_, h)| table_value(h / NM)),
         );
         row.insert(
             "clearance_nm".into(),
-            m.and_then(|(m, _)| m["clearance_m"]["mean"].as_f64())
-                .map_or(Value::Null, |v| table_value(v / NM)),
+            get(|m| m.clearance_m.mean).map_or(Value::Null, |v| table_value(v / NM)),
         );
         row.insert(
             "hms_nm".into(),
-            get("hms_mean_m").map_or(Value::Null, |v| table_value(v / NM)),
+            get(|m| m.hms_mean_m).map_or(Value::Null, |v| table_value(v / NM)),
         );
         row.insert(
             "fhm_or_bv_percent".into(),
-            get("vibration_percent").map_or(Value::Null, table_value),
+            get(|m| m.vibration_percent).map_or(Value::Null, table_value),
         );
         rows.push(row);
     }
@@ -950,11 +953,8 @@ fn comparison_png(path: &Path, p: &DoeParams, sweeps: &[DesignSweep]) -> Result<
                 .map(|c| {
                     (
                         c.actuation / NM,
-                        c.metrics["clearance_m"]["mean"]
-                            .as_f64()
-                            .unwrap_or(f64::NAN)
-                            / NM,
-                        c.metrics["clearance_m"]["std"].as_f64().unwrap_or(f64::NAN) / NM,
+                        c.metrics.clearance_m.mean / NM,
+                        c.metrics.clearance_m.std / NM,
                     )
                 })
                 .collect(),
@@ -1447,7 +1447,7 @@ fn compare_designs(
             .iter()
             .map(|c| CaseOutcome {
                 actuation: c.actuation,
-                metrics: c.entry.result.clone(),
+                metrics: c.result.clone(),
                 entry: c.entry.clone(),
             })
             .collect();

@@ -9,7 +9,7 @@ use crate::core::config::{ConfigError, PipelineFile};
 use crate::dynamics::metrics::{Regime, SweepMetrics};
 use crate::dynamics::touchdown::Touchdown;
 use crate::error::Result;
-use crate::slider::case::{read_case_history, CASE_FILE, MODEL_VERSION};
+use crate::slider::case::{read_case_history, SweepCaseResult, CASE_FILE, MODEL_VERSION};
 use crate::slider::params::SimulateParams;
 use crate::slider::sweep::{
     case_rows, clearance_curve, convention_touchdown, hysteresis, link_cases_tagged, regime_name,
@@ -72,8 +72,8 @@ fn touchdown_json(r: &BranchRun) -> Value {
         "grid_touchdown_m": r.sweep.touchdown_actuation_m,
         "extra_cases": r.extra.iter().map(|c| json!({
             "actuation_m": c.actuation,
-            "solid_contact_percent": c.metrics["percent_solid_contact"],
-            "clearance_mean_m": c.metrics["clearance_m"]["mean"],
+            "solid_contact_percent": c.metrics.percent_solid_contact,
+            "clearance_mean_m": c.metrics.clearance_m.mean,
             "case_key": c.entry.key,
         })).collect::<Vec<_>>(),
     })
@@ -163,15 +163,14 @@ fn sweep_figures(dir: &Path, p: &SimulateParams, runs: &[BranchRun], title: &str
         Some(e) => (1e3 / e, "heater power (mW)", "heater power", "heater power"),
         None => (1e9, "TFC actuation (nm)", "actuation", "TFC actuation"),
     };
-    let nm_of = |v: &Value| v.as_f64().unwrap_or(f64::NAN) * 1e9;
     let clearance = |cases: &[CaseOutcome]| -> Vec<(f64, f64, f64)> {
         cases
             .iter()
             .map(|c| {
                 (
                     c.actuation * per_m,
-                    nm_of(&c.metrics["clearance_m"]["mean"]),
-                    nm_of(&c.metrics["clearance_m"]["std"]),
+                    c.metrics.clearance_m.mean * 1e9,
+                    c.metrics.clearance_m.std * 1e9,
                 )
             })
             .collect()
@@ -231,15 +230,10 @@ fn sweep_figures(dir: &Path, p: &SimulateParams, runs: &[BranchRun], title: &str
     if let Some(cp) = &s.slopes.critical_point {
         marks.push((cp.actuation_m * per_m, "critical point"));
     }
-    let series = |key: &str| -> Vec<(f64, f64)> {
+    let series = |of: fn(&SweepCaseResult) -> f64| -> Vec<(f64, f64)> {
         cases
             .iter()
-            .map(|c| {
-                (
-                    c.actuation * per_m,
-                    c.metrics[key].as_f64().unwrap_or(f64::NAN),
-                )
-            })
+            .map(|c| (c.actuation * per_m, of(&c.metrics)))
             .collect()
     };
     metric_sweep_png(
@@ -250,11 +244,11 @@ fn sweep_figures(dir: &Path, p: &SimulateParams, runs: &[BranchRun], title: &str
         &[
             (
                 "eq. 2.1, 5 largest/smallest samples",
-                series("vibration_percent"),
+                series(|m| m.vibration_percent),
             ),
             (
                 "5 largest/smallest local extrema",
-                series("vibration_extrema_percent"),
+                series(|m| m.vibration_extrema_percent.unwrap_or(f64::NAN)),
             ),
         ],
         &marks,
@@ -264,7 +258,7 @@ fn sweep_figures(dir: &Path, p: &SimulateParams, runs: &[BranchRun], title: &str
         &format!("Time in solid contact vs {short} — {title}"),
         axis,
         "solid contact (% of the steady window)",
-        &[("solid contact", series("percent_solid_contact"))],
+        &[("solid contact", series(|m| m.percent_solid_contact))],
         &marks,
     )?;
     Ok(())
