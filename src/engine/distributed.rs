@@ -141,6 +141,9 @@ pub fn stale_cases(
     Ok(specs)
 }
 
+/// A preparation's identity: pipeline file, instance and the upstream entries' keys.
+type PreparationId = (String, String, Vec<String>);
+
 /// Computes any kind of case from its recipe; prepares each instance once per process and
 /// set of upstream entries (a task runs a range of cases of usually one instance, in
 /// parallel).
@@ -148,7 +151,7 @@ struct CaseWorker {
     kind: &'static str,
     /// The `pipeline.toml` section whose instances have cases of this kind.
     section: &'static str,
-    prepared: Mutex<HashMap<(String, String, Vec<String>), Arc<dyn PreparedCases>>>,
+    prepared: Mutex<HashMap<PreparationId, Arc<dyn PreparedCases>>>,
 }
 
 impl CaseWorker {
