@@ -98,7 +98,9 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ),
     (
         "artefacts",
-        &["core", "error", PHYSICS, "signal", "numerics", "units"],
+        &[
+            "core", "error", PHYSICS, "signal", "numerics", "formats", "units",
+        ],
     ),
     ("figures", &[PHYSICS, "signal", "numerics", "units"]),
     (

@@ -8,4 +8,5 @@ pub mod cases;
 pub mod contact;
 pub mod dmw_tracks;
 pub mod interface;
+pub mod series;
 pub mod surface;
