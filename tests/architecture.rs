@@ -64,7 +64,15 @@ const ALLOWED: &[(&str, &[&str])] = &[
     (
         "samples",
         &[
-            "stages", "figures", "core", "error", PHYSICS, "signal", "numerics", "formats", "units",
+            "artefacts",
+            "figures",
+            "core",
+            "error",
+            PHYSICS,
+            "signal",
+            "numerics",
+            "formats",
+            "units",
         ],
     ),
     (

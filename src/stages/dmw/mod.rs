@@ -21,8 +21,7 @@ use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
 
-mod ldv;
-pub use ldv::{write_ldv, write_ldv_hdf5_counts};
+pub use crate::artefacts::ldv::{write_ldv, write_ldv_hdf5_counts};
 
 /// Bump when the numbers this stage produces change.
 pub const MODEL_VERSION: &str = "dmw-2";
