@@ -5,13 +5,12 @@
 
 use super::{FromConfig, StageContext, StageKind, StageOutput};
 use crate::artefacts::calibration::fitted_json;
-use crate::contact::isbl::IsblParams;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::executor::batch::BatchRunner;
 use crate::core::executor::CaseSpec;
 use crate::dynamics::calibration::{
-    apply_knobs, calibrate, default_knobs, held_out_for, targets_for, CalibrationSettings,
-    CaseRound, CaseRounds, Knob, KnobRange, TargetGeometry, DEFAULT_MAX_EVALUATIONS,
+    calibrate, CalibrationSettings, CaseRound, CaseRounds, Knob, TargetGeometry,
+    DEFAULT_MAX_EVALUATIONS,
 };
 use crate::dynamics::metrics::CaseMetrics;
 use crate::dynamics::DynamicsError;
@@ -27,6 +26,9 @@ use crate::units::Length;
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
+
+mod config;
+use config::{chosen_targets, knob_ranges, start_fitted_for, warm_start};
 
 // calibrate-6: the held-out set split into selection and final (outputs only; the fit is
 // calibrate-5's, FIT_VERSION).
@@ -190,138 +192,8 @@ impl FromConfig for CalibrateStage {
                 ),
             ));
         }
-        let variant = base.model.variant;
-        let knobs: Vec<Knob> = match &cfg.knobs {
-            None => default_knobs(variant),
-            Some(names) => names
-                .iter()
-                .map(|n| {
-                    Knob::from_name(n).ok_or_else(|| {
-                        err(
-                            "knobs",
-                            format!(
-                                "unknown knob `{n}` (known: {})",
-                                Knob::ALL.map(|k| k.name()).join(", ")
-                            ),
-                        )
-                    })
-                })
-                .collect::<std::result::Result<_, _>>()?,
-        };
-        let mut ranges = Vec::new();
-        let isbl_probe = IsblParams::improved_2dof();
-        for k in &knobs {
-            if ranges.iter().any(|r: &KnobRange| r.knob == *k) {
-                return Err(err("knobs", format!("knob `{}` listed twice", k.name())));
-            }
-            // The knob must exist in the base model (e.g. no β on the initial model).
-            if !matches!(k, Knob::SurfaceEnergy) {
-                k.base_value(&base.model, &isbl_probe)
-                    .map_err(|e| err("knobs", e.to_string()))?;
-            }
-            if *k == Knob::DmwScale && base.dmw.is_none() {
-                return Err(err(
-                    "knobs",
-                    format!(
-                        "dmw_scale needs a DMW input, but [simulate.{}] has dmw = \"none\"",
-                        cfg.simulate
-                    ),
-                ));
-            }
-            let mut r = KnobRange::new(*k);
-            if let Some([lo, hi]) = cfg.bounds.get(k.name()) {
-                (r.lo, r.hi) = (*lo, *hi);
-                // A box wider than the model accepts would hand the fit points the model
-                // rejects: refuse it here, naming the model's limit.
-                for v in [*lo, *hi] {
-                    let (mut m, mut i) = (base.model, isbl_probe);
-                    apply_knobs(&[(*k, v)], &mut m, &mut i).map_err(|e| {
-                        err(
-                            "bounds",
-                            format!("{} = {v:e} is outside the model's range: {e}", k.name()),
-                        )
-                    })?;
-                }
-            }
-            ranges.push(r);
-        }
-        for b in cfg.bounds.keys() {
-            if !knobs.iter().any(|k| k.name() == b) {
-                return Err(err(
-                    "bounds",
-                    format!("`{b}` is not one of the calibrated knobs"),
-                ));
-            }
-        }
-        let catalogue = targets_for(variant);
-        let mut targets: Vec<_> = match &cfg.targets {
-            None => catalogue,
-            Some(ids) => ids
-                .iter()
-                .map(|id| {
-                    catalogue
-                        .iter()
-                        .find(|t| t.id == id)
-                        .cloned()
-                        .ok_or_else(|| {
-                            err(
-                                "targets",
-                                format!(
-                                    "unknown target `{id}` for {} (known: {})",
-                                    base.model_name,
-                                    catalogue
-                                        .iter()
-                                        .map(|t| t.id)
-                                        .collect::<Vec<_>>()
-                                        .join(", ")
-                                ),
-                            )
-                        })
-                })
-                .collect::<std::result::Result<_, _>>()?,
-        };
-        let held_catalogue = held_out_for(variant);
-        let held_out: Vec<_> = match &cfg.held_out {
-            None => held_catalogue,
-            Some(ids) => ids
-                .iter()
-                .map(|id| {
-                    held_catalogue
-                        .iter()
-                        .find(|t| t.id == id)
-                        .cloned()
-                        .ok_or_else(|| {
-                            err(
-                                "held_out",
-                                format!(
-                                    "unknown held-out target `{id}` for {} (known: {})",
-                                    base.model_name,
-                                    held_catalogue
-                                        .iter()
-                                        .map(|t| t.id)
-                                        .collect::<Vec<_>>()
-                                        .join(", ")
-                                ),
-                            )
-                        })
-                })
-                .collect::<std::result::Result<_, _>>()?,
-        };
-        for (id, w) in &cfg.weights {
-            let Some(t) = targets.iter_mut().find(|t| t.id == id) else {
-                return Err(err(
-                    "weights",
-                    format!("`{id}` is not one of the calibration's fitted targets"),
-                ));
-            };
-            if !(w.is_finite() && *w >= 0.0) {
-                return Err(err("weights", format!("{id} = {w}: must be ≥ 0")));
-            }
-            t.weight = *w;
-        }
-        if !targets.iter().any(|t| t.weight > 0.0) {
-            return Err(err("targets", "no target with a weight > 0 to fit".into()));
-        }
+        let ranges = knob_ranges(cfg, &base, &err)?;
+        let (targets, held_out) = chosen_targets(cfg, &base, &err)?;
         if !(1..=10_000).contains(&cfg.max_evaluations) {
             return Err(err(
                 "max_evaluations",
@@ -357,61 +229,8 @@ impl FromConfig for CalibrateStage {
         for r in &settings.knobs {
             r.check().map_err(|e| err("bounds", e.to_string()))?;
         }
-        for (name, v) in &cfg.start {
-            let Some(r) = settings.knobs.iter().find(|r| r.knob.name() == name) else {
-                return Err(err(
-                    "start",
-                    format!("`{name}` is not one of the calibrated knobs"),
-                ));
-            };
-            if !(v.is_finite() && *v >= r.lo && *v <= r.hi) {
-                return Err(err(
-                    "start",
-                    format!("{name} = {v:e} is outside its box [{:e}, {:e}]", r.lo, r.hi),
-                ));
-            }
-            settings.start.push((r.knob, *v));
-        }
-        // The knobs' order, not the file's: the settings (and the cache key) stay canonical.
-        settings.start.sort_by_key(|(k, _)| {
-            settings
-                .knobs
-                .iter()
-                .position(|r| r.knob == *k)
-                .unwrap_or(usize::MAX)
-        });
-        if let Some(step) = cfg.initial_step {
-            if !(step > 0.0 && step <= 0.5) {
-                return Err(err(
-                    "initial_step",
-                    format!("{step} is out of range: 0 < step ≤ 0.5 (unit box)"),
-                ));
-            }
-            settings.search.initial_step = step;
-        }
-        let start_fitted_for = match &cfg.start_fitted_for {
-            None => None,
-            Some(f) => {
-                let ok = (FIT_INPUTS_DIGITS..=64).contains(&f.len())
-                    && f.chars().all(|c| c.is_ascii_hexdigit());
-                if !ok {
-                    return Err(err(
-                        "start_fitted_for",
-                        format!(
-                            "\"{f}\" is not a fit-inputs fingerprint: {FIT_INPUTS_DIGITS}–64 hex \
-                             digits, as in `convergence.fit_inputs` of the calibration's result.json"
-                        ),
-                    ));
-                }
-                if cfg.start.is_empty() {
-                    return Err(err(
-                        "start_fitted_for",
-                        "guards a warm start, but there is no `start` to guard".into(),
-                    ));
-                }
-                Some(f.to_ascii_lowercase())
-            }
-        };
+        warm_start(cfg, &mut settings, &err)?;
+        let start_fitted_for = start_fitted_for(cfg, &err)?;
         Ok(CalibrateStage {
             name: name.to_string(),
             base_name: cfg.simulate.clone(),

@@ -205,11 +205,10 @@ fn positive(
     }
 }
 
-/// Check a `[dmw]` table (or `hdi dmw`'s options) key by key.
-pub fn check(
+/// The acquisition keys: sample rate, sensitivity, spindle, segments and the trigger.
+fn check_acquisition(
     cfg: &DmwConfig,
-    file: PathBuf,
-) -> std::result::Result<DmwParams, crate::core::config::KeyError> {
+) -> std::result::Result<Polarity, crate::core::config::KeyError> {
     let bad = |k: &str, m: String| Err(crate::core::config::KeyError::new(k, m));
     if let Some(f) = cfg.sample_rate {
         positive("sample_rate", f.0, "a sample rate")?;
@@ -243,10 +242,15 @@ pub fn check(
             ),
         );
     }
-    let averaging: AverageMode = match cfg.averaging.parse() {
-        Ok(m) => m,
-        Err(e) => return bad("averaging", e),
-    };
+    Ok(trigger_polarity)
+}
+
+/// The filter keys: mode, Butterworth orders and cutoffs (below Nyquist when the rate is
+/// given); `(mode, filtered)`.
+fn check_filters(
+    cfg: &DmwConfig,
+) -> std::result::Result<(FilterMode, bool), crate::core::config::KeyError> {
+    let bad = |k: &str, m: String| Err(crate::core::config::KeyError::new(k, m));
     let (filter_mode, filtered) = match cfg.filter.as_str() {
         "none" => (FilterMode::ZeroPhase, false),
         other => match other.parse::<FilterMode>() {
@@ -294,7 +298,13 @@ pub fn check(
             }
         }
     }
-    let padlen = match &cfg.padlen {
+    Ok((filter_mode, filtered))
+}
+
+/// `padlen`: samples, `auto` or `scipy`.
+fn padlen_of(padlen: &PadlenConfig) -> std::result::Result<Padlen, crate::core::config::KeyError> {
+    let bad = |k: &str, m: String| Err(crate::core::config::KeyError::new(k, m));
+    let padlen = match padlen {
         PadlenConfig::Samples(n) if *n >= 0 => Padlen::Samples(*n as usize),
         PadlenConfig::Samples(n) => {
             return bad("padlen", format!("{n} is out of range: must be ≥ 0"))
@@ -308,6 +318,22 @@ pub fn check(
             )
         }
     };
+    Ok(padlen)
+}
+
+/// Check a `[dmw]` table (or `hdi dmw`'s options) key by key.
+pub fn check(
+    cfg: &DmwConfig,
+    file: PathBuf,
+) -> std::result::Result<DmwParams, crate::core::config::KeyError> {
+    let bad = |k: &str, m: String| Err(crate::core::config::KeyError::new(k, m));
+    let trigger_polarity = check_acquisition(cfg)?;
+    let averaging: AverageMode = match cfg.averaging.parse() {
+        Ok(m) => m,
+        Err(e) => return bad("averaging", e),
+    };
+    let (filter_mode, filtered) = check_filters(cfg)?;
+    let padlen = padlen_of(&cfg.padlen)?;
     let order: ChainOrder = match cfg.chain_order.parse() {
         Ok(o) => o,
         Err(e) => return bad("chain_order", e),
