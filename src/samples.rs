@@ -83,10 +83,10 @@ pub fn write_ldv_sample(
     seed: Option<u64>,
     with_index: bool,
 ) -> Result<Vec<PathBuf>> {
+    use crate::artefacts::ldv::{write_ldv, write_ldv_hdf5_counts};
     use crate::dmw::io::LdvFormat;
     use crate::dmw::synthetic_ldv::{generate, truth_displacement, LdvSynthSpec};
     use crate::signal::butterworth::{butterworth_sos, FilterKind};
-    use crate::stages::dmw::{write_ldv, write_ldv_hdf5_counts};
     let defaults = LdvSynthSpec::default();
     let spec = LdvSynthSpec {
         n_revolutions: revolutions.unwrap_or(SHIPPED_LDV_REVOLUTIONS),

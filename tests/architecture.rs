@@ -71,7 +71,15 @@ const ALLOWED: &[(&str, &[&str])] = &[
     (
         "samples",
         &[
-            "stages", "figures", "core", "error", PHYSICS, "signal", "numerics", "formats", "units",
+            "artefacts",
+            "figures",
+            "core",
+            "error",
+            PHYSICS,
+            "signal",
+            "numerics",
+            "formats",
+            "units",
         ],
     ),
     (
@@ -105,7 +113,9 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ),
     (
         "artefacts",
-        &["core", "error", PHYSICS, "signal", "numerics", "units"],
+        &[
+            "core", "error", PHYSICS, "signal", "numerics", "formats", "units",
+        ],
     ),
     ("figures", &[PHYSICS, "signal", "numerics", "units"]),
     (

@@ -2,10 +2,12 @@
 //! string of `contact.h5`): everything a downstream stage needs to rebuild the ISBL model and
 //! its force table (the 2-DOF and 3-DOF cases, the calibration).
 
+use crate::contact::isbl::summits::SummitFit;
 use crate::contact::isbl::{FrictionLaw, IsblParams, SummitDistribution, SurfaceEnergy};
 use crate::error::{Error, Result};
+use crate::surface::combine::{combine_summit_heights, SummitHeights};
 use serde::{Deserialize, Serialize};
-use serde_json::Value;
+use serde_json::{json, Value};
 use std::collections::BTreeMap;
 
 /// The ISBL parameters as the contact stage writes them (SI, unit suffixes in the keys). The
@@ -305,5 +307,86 @@ mod tests {
         );
         let e = upstream_isbl_params(&up, "d").unwrap_err().to_string();
         assert!(e.contains("no result from contact `d`"), "{e}");
+    }
+}
+
+/// How a fitted or measured summit distribution was obtained (the result's and contact.h5's
+/// `summit_distribution`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum SummitOrigin {
+    /// Fitted to Fig. 2.11 with the force on `nominal_area` [m²].
+    Fig211 { nominal_area: f64, fit: SummitFit },
+    /// Measured: each surface's summits and their combination (one surface: itself).
+    Measured {
+        source: String,
+        surfaces: Vec<(String, SummitHeights)>,
+        combined: SummitHeights,
+    },
+}
+
+impl SummitOrigin {
+    /// The measured summits of `surfaces` (one, or an interface's two: combined as the sum
+    /// surface's, `surface::combine::combine_summit_heights`).
+    pub fn measured(source: &str, surfaces: Vec<(String, SummitHeights)>) -> Result<Self> {
+        let combined = match surfaces.as_slice() {
+            [(_, one)] => *one,
+            [(_, a), (_, b)] => combine_summit_heights(a, b)?,
+            _ => {
+                return Err(crate::error::Error::SummitSurfaces {
+                    stage: source.to_string(),
+                    count: surfaces.len(),
+                })
+            }
+        };
+        Ok(SummitOrigin::Measured {
+            source: source.to_string(),
+            surfaces,
+            combined,
+        })
+    }
+
+    /// `(σ_s/σ, y_s/σ)`.
+    pub fn ratios(&self) -> (f64, f64) {
+        match self {
+            SummitOrigin::Fig211 { fit, .. } => (fit.sigma_ratio, fit.offset_ratio),
+            SummitOrigin::Measured { combined, .. } => {
+                (combined.std_ratio(), combined.mean_ratio())
+            }
+        }
+    }
+
+    /// The result's `summit_distribution` block (SI, units in the keys).
+    pub fn to_json(&self) -> Value {
+        let (s, y) = self.ratios();
+        let heights = |h: &SummitHeights| {
+            json!({"sigma_m": h.sigma, "eta_per_m2": h.eta, "summit_mean_m": h.mean,
+                   "summit_std_m": h.std, "sigma_s_over_sigma": h.std_ratio(),
+                   "y_s_over_sigma": h.mean_ratio()})
+        };
+        match self {
+            SummitOrigin::Fig211 { nominal_area, fit } => json!({
+                "kind": "fig_2_11",
+                "sigma_s_over_sigma": s, "y_s_over_sigma": y,
+                "nominal_area_m2": nominal_area,
+                "target": {"h_star": 3.0, "force_N": 7.30e-6, "h_star_ref": 2.5, "ratio": 0.03},
+                "fitted": {"force_N": fit.force, "ratio": fit.ratio},
+            }),
+            SummitOrigin::Measured {
+                source,
+                surfaces,
+                combined,
+            } => json!({
+                "kind": "measured",
+                "sigma_s_over_sigma": s, "y_s_over_sigma": y,
+                "source": source,
+                "surfaces": surfaces.iter().map(|(n, h)| {
+                    let mut v = heights(h);
+                    v["surface"] = json!(n);
+                    v
+                }).collect::<Vec<_>>(),
+                "combined": heights(combined),
+                "rule": if surfaces.len() == 2 { "summit_mixture" } else { "single_surface" },
+            }),
+        }
     }
 }

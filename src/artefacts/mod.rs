@@ -8,4 +8,6 @@ pub mod cases;
 pub mod contact;
 pub mod dmw_tracks;
 pub mod interface;
+pub mod ldv;
+pub mod series;
 pub mod surface;

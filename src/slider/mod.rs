@@ -4,6 +4,7 @@
 //! calibration's inputs, and the DOE's design cases. Below the stages: it names none of them.
 pub mod calibration;
 pub mod case;
+pub mod doe;
 pub mod doe_design;
 pub mod params;
 pub mod sweep;

@@ -14,13 +14,17 @@ use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::executor::batch::BatchRunner;
 use crate::core::executor::CaseSpec;
 use crate::dynamics::calibration::{
-    apply_knobs, calibrate, default_knobs, held_out_for, in_band, round_case, targets_for,
-    CalibrationResult, CalibrationSettings, CaseRound, CaseRounds, Evaluation, Knob, KnobRange,
-    TargetGeometry, TargetOutcome, TargetSet, DEFAULT_MAX_EVALUATIONS,
+    calibrate, round_case, CalibrationSettings, CaseRound, CaseRounds, Knob, TargetGeometry,
+    DEFAULT_MAX_EVALUATIONS,
 };
 use crate::dynamics::metrics::CaseMetrics;
 use crate::dynamics::DynamicsError;
 use crate::error::Result;
+pub use crate::slider::calibration::report::describe_knobs;
+use crate::slider::calibration::report::{
+    evaluation_json, knob_rows, residuals_png, summary_text, table_rows, InBandCounts,
+};
+pub use crate::slider::calibration::WarmStart;
 use crate::slider::calibration::{base_inputs, base_of};
 use crate::slider::params::{uncalibrated_base, SimulateParams};
 use crate::units::Length;
@@ -28,6 +32,9 @@ use serde::Deserialize;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
 use std::sync::Arc;
+
+mod config;
+use config::{chosen_targets, knob_ranges, start_fitted_for, warm_start};
 
 // calibrate-6: the held-out set split into selection and final (outputs only; the fit is
 // calibrate-5's, FIT_VERSION).
@@ -100,30 +107,6 @@ pub struct CalibrateStage {
     pub settings: CalibrationSettings,
     /// `start_fitted_for`, lower case.
     pub start_fitted_for: Option<String>,
-}
-
-/// How the warm start of one run was decided.
-#[derive(Debug, Clone, PartialEq)]
-pub enum WarmStart {
-    /// No `start`: the spec defaults.
-    None,
-    /// `start` without `start_fitted_for`: used as written.
-    Unguarded,
-    /// `start_fitted_for` matches the current fit inputs: used.
-    Matched,
-    /// `start_fitted_for` differs: `start` and `initial_step` dropped, the reason.
-    Ignored(String),
-}
-
-impl WarmStart {
-    fn name(&self) -> &'static str {
-        match self {
-            WarmStart::None => "none",
-            WarmStart::Unguarded => "unguarded",
-            WarmStart::Matched => "matched",
-            WarmStart::Ignored(_) => "ignored",
-        }
-    }
 }
 
 impl CalibrateStage {
@@ -215,138 +198,8 @@ impl FromConfig for CalibrateStage {
                 ),
             ));
         }
-        let variant = base.model.variant;
-        let knobs: Vec<Knob> = match &cfg.knobs {
-            None => default_knobs(variant),
-            Some(names) => names
-                .iter()
-                .map(|n| {
-                    Knob::from_name(n).ok_or_else(|| {
-                        err(
-                            "knobs",
-                            format!(
-                                "unknown knob `{n}` (known: {})",
-                                Knob::ALL.map(|k| k.name()).join(", ")
-                            ),
-                        )
-                    })
-                })
-                .collect::<std::result::Result<_, _>>()?,
-        };
-        let mut ranges = Vec::new();
-        let isbl_probe = IsblParams::improved_2dof();
-        for k in &knobs {
-            if ranges.iter().any(|r: &KnobRange| r.knob == *k) {
-                return Err(err("knobs", format!("knob `{}` listed twice", k.name())));
-            }
-            // The knob must exist in the base model (e.g. no β on the initial model).
-            if !matches!(k, Knob::SurfaceEnergy) {
-                k.base_value(&base.model, &isbl_probe)
-                    .map_err(|e| err("knobs", e.to_string()))?;
-            }
-            if *k == Knob::DmwScale && base.dmw.is_none() {
-                return Err(err(
-                    "knobs",
-                    format!(
-                        "dmw_scale needs a DMW input, but [simulate.{}] has dmw = \"none\"",
-                        cfg.simulate
-                    ),
-                ));
-            }
-            let mut r = KnobRange::new(*k);
-            if let Some([lo, hi]) = cfg.bounds.get(k.name()) {
-                (r.lo, r.hi) = (*lo, *hi);
-                // A box wider than the model accepts would hand the fit points the model
-                // rejects: refuse it here, naming the model's limit.
-                for v in [*lo, *hi] {
-                    let (mut m, mut i) = (base.model, isbl_probe);
-                    apply_knobs(&[(*k, v)], &mut m, &mut i).map_err(|e| {
-                        err(
-                            "bounds",
-                            format!("{} = {v:e} is outside the model's range: {e}", k.name()),
-                        )
-                    })?;
-                }
-            }
-            ranges.push(r);
-        }
-        for b in cfg.bounds.keys() {
-            if !knobs.iter().any(|k| k.name() == b) {
-                return Err(err(
-                    "bounds",
-                    format!("`{b}` is not one of the calibrated knobs"),
-                ));
-            }
-        }
-        let catalogue = targets_for(variant);
-        let mut targets: Vec<_> = match &cfg.targets {
-            None => catalogue,
-            Some(ids) => ids
-                .iter()
-                .map(|id| {
-                    catalogue
-                        .iter()
-                        .find(|t| t.id == id)
-                        .cloned()
-                        .ok_or_else(|| {
-                            err(
-                                "targets",
-                                format!(
-                                    "unknown target `{id}` for {} (known: {})",
-                                    base.model_name,
-                                    catalogue
-                                        .iter()
-                                        .map(|t| t.id)
-                                        .collect::<Vec<_>>()
-                                        .join(", ")
-                                ),
-                            )
-                        })
-                })
-                .collect::<std::result::Result<_, _>>()?,
-        };
-        let held_catalogue = held_out_for(variant);
-        let held_out: Vec<_> = match &cfg.held_out {
-            None => held_catalogue,
-            Some(ids) => ids
-                .iter()
-                .map(|id| {
-                    held_catalogue
-                        .iter()
-                        .find(|t| t.id == id)
-                        .cloned()
-                        .ok_or_else(|| {
-                            err(
-                                "held_out",
-                                format!(
-                                    "unknown held-out target `{id}` for {} (known: {})",
-                                    base.model_name,
-                                    held_catalogue
-                                        .iter()
-                                        .map(|t| t.id)
-                                        .collect::<Vec<_>>()
-                                        .join(", ")
-                                ),
-                            )
-                        })
-                })
-                .collect::<std::result::Result<_, _>>()?,
-        };
-        for (id, w) in &cfg.weights {
-            let Some(t) = targets.iter_mut().find(|t| t.id == id) else {
-                return Err(err(
-                    "weights",
-                    format!("`{id}` is not one of the calibration's fitted targets"),
-                ));
-            };
-            if !(w.is_finite() && *w >= 0.0) {
-                return Err(err("weights", format!("{id} = {w}: must be ≥ 0")));
-            }
-            t.weight = *w;
-        }
-        if !targets.iter().any(|t| t.weight > 0.0) {
-            return Err(err("targets", "no target with a weight > 0 to fit".into()));
-        }
+        let ranges = knob_ranges(cfg, &base, &err)?;
+        let (targets, held_out) = chosen_targets(cfg, &base, &err)?;
         if !(1..=10_000).contains(&cfg.max_evaluations) {
             return Err(err(
                 "max_evaluations",
@@ -382,61 +235,8 @@ impl FromConfig for CalibrateStage {
         for r in &settings.knobs {
             r.check().map_err(|e| err("bounds", e.to_string()))?;
         }
-        for (name, v) in &cfg.start {
-            let Some(r) = settings.knobs.iter().find(|r| r.knob.name() == name) else {
-                return Err(err(
-                    "start",
-                    format!("`{name}` is not one of the calibrated knobs"),
-                ));
-            };
-            if !(v.is_finite() && *v >= r.lo && *v <= r.hi) {
-                return Err(err(
-                    "start",
-                    format!("{name} = {v:e} is outside its box [{:e}, {:e}]", r.lo, r.hi),
-                ));
-            }
-            settings.start.push((r.knob, *v));
-        }
-        // The knobs' order, not the file's: the settings (and the cache key) stay canonical.
-        settings.start.sort_by_key(|(k, _)| {
-            settings
-                .knobs
-                .iter()
-                .position(|r| r.knob == *k)
-                .unwrap_or(usize::MAX)
-        });
-        if let Some(step) = cfg.initial_step {
-            if !(step > 0.0 && step <= 0.5) {
-                return Err(err(
-                    "initial_step",
-                    format!("{step} is out of range: 0 < step ≤ 0.5 (unit box)"),
-                ));
-            }
-            settings.search.initial_step = step;
-        }
-        let start_fitted_for = match &cfg.start_fitted_for {
-            None => None,
-            Some(f) => {
-                let ok = (FIT_INPUTS_DIGITS..=64).contains(&f.len())
-                    && f.chars().all(|c| c.is_ascii_hexdigit());
-                if !ok {
-                    return Err(err(
-                        "start_fitted_for",
-                        format!(
-                            "\"{f}\" is not a fit-inputs fingerprint: {FIT_INPUTS_DIGITS}–64 hex \
-                             digits, as in `convergence.fit_inputs` of the calibration's result.json"
-                        ),
-                    ));
-                }
-                if cfg.start.is_empty() {
-                    return Err(err(
-                        "start_fitted_for",
-                        "guards a warm start, but there is no `start` to guard".into(),
-                    ));
-                }
-                Some(f.to_ascii_lowercase())
-            }
-        };
+        warm_start(cfg, &mut settings, &err)?;
+        let start_fitted_for = start_fitted_for(cfg, &err)?;
         Ok(CalibrateStage {
             name: name.to_string(),
             base_name: cfg.simulate.clone(),
@@ -445,122 +245,6 @@ impl FromConfig for CalibrateStage {
             start_fitted_for,
         })
     }
-}
-
-fn evaluation_json(e: &Evaluation) -> Value {
-    let (inside, total) = in_band(e);
-    json!({
-        "objective": e.objective,
-        "cases": e.cases,
-        "in_band": inside,
-        "targets_total": total,
-        "knobs": e.knobs.iter().map(|(k, v)| json!({"knob": k.name(), "value": v})).collect::<Vec<_>>(),
-        "targets": e.outcomes.iter().map(|o| json!({
-            "id": o.target.id,
-            "set": o.target.set.name(),
-            "class": o.target.class,
-            "value": o.value,
-            "published": o.target.published,
-            "tolerance": o.target.tolerance,
-            "weight": o.target.weight,
-            "normalised_residual": o.normalised_residual,
-            "within_tolerance": o.within_tolerance(),
-        })).collect::<Vec<_>>(),
-    })
-}
-
-/// Describe the knob values compactly in display units (`dmw_scale 2.1, Δγ 52 mN/m, …`).
-pub fn describe_knobs(values: &[(Knob, f64)]) -> String {
-    values
-        .iter()
-        .map(|(k, v)| match k {
-            Knob::SurfaceEnergy => format!("Δγ {:.3} mN/m", v * 1e3),
-            Knob::LjSpacing => format!("ε {:.3} nm", v * 1e9),
-            Knob::AsperityDensity => format!("η {:.1} µm⁻²", v * 1e-12),
-            Knob::KrStiffeningBeta => format!("β {v:.3}"),
-            Knob::ContactDamping => format!("ζ_c {v:.4}"),
-            Knob::DmwScale => format!("dmw_scale {v:.3}"),
-            Knob::TruncationN => format!("n {v:.3}"),
-        })
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
-/// One row per target of both sets: published, tolerance, value before (spec defaults) and
-/// after (fitted knobs), in band before and after.
-fn table_rows(r: &CalibrationResult) -> Vec<Map<String, Value>> {
-    let pairs = |before: &Evaluation, after: &Evaluation| -> Vec<(TargetOutcome, TargetOutcome)> {
-        before
-            .outcomes
-            .iter()
-            .cloned()
-            .zip(after.outcomes.iter().cloned())
-            .collect()
-    };
-    let mut all = pairs(&r.initial, &r.best);
-    if let (Some(b), Some(a)) = (&r.held_out_initial, &r.held_out_best) {
-        all.extend(pairs(b, a));
-    }
-    all.iter()
-        .map(|(i, b)| {
-            let t = &b.target;
-            let s = |v: Option<f64>| json!(v.map(|v| v * t.display_scale));
-            let mut m = Map::new();
-            m.insert("target".into(), json!(t.id));
-            m.insert("set".into(), json!(t.set.name()));
-            m.insert("class".into(), json!(t.class));
-            m.insert(
-                "geometry".into(),
-                json!(match t.geometry {
-                    crate::dynamics::calibration::TargetGeometry::Base => "dissertation",
-                    crate::dynamics::calibration::TargetGeometry::Optimised => "optimised",
-                }),
-            );
-            m.insert(
-                "spec_row".into(),
-                // The id of `hdi validate` (docs/validation.md), e.g. dyn-16.
-                json!(format!("dyn-{}", t.source.trim_start_matches('#'))),
-            );
-            m.insert("unit".into(), json!(t.unit));
-            m.insert("published".into(), json!(t.published * t.display_scale));
-            m.insert("tolerance".into(), json!(t.tolerance * t.display_scale));
-            m.insert("weight".into(), json!(t.weight));
-            m.insert("spec_defaults".into(), s(i.value));
-            m.insert("calibrated".into(), s(b.value));
-            m.insert("residual_defaults".into(), json!(i.normalised_residual));
-            m.insert("residual_calibrated".into(), json!(b.normalised_residual));
-            m.insert("in_band_defaults".into(), json!(i.within_tolerance()));
-            m.insert("in_band_calibrated".into(), json!(b.within_tolerance()));
-            m.insert("within_tolerance".into(), json!(b.within_tolerance()));
-            m
-        })
-        .collect()
-}
-
-fn knob_rows(stage: &CalibrateStage, r: &CalibrationResult) -> Vec<Map<String, Value>> {
-    stage
-        .settings
-        .knobs
-        .iter()
-        .zip(&r.best.knobs)
-        .map(|(range, (k, v))| {
-            let mut m = Map::new();
-            m.insert("knob".into(), json!(k.name()));
-            m.insert("unit".into(), json!(k.unit()));
-            m.insert("lower_bound".into(), json!(range.lo));
-            m.insert("upper_bound".into(), json!(range.hi));
-            m.insert("fitted".into(), json!(v));
-            m.insert(
-                "at_bound".into(),
-                json!(r
-                    .at_bound
-                    .iter()
-                    .find(|(kb, _)| kb == k)
-                    .map(|(_, b)| b.name())),
-            );
-            m
-        })
-        .collect()
 }
 
 impl StageKind for CalibrateStage {
@@ -617,7 +301,10 @@ impl StageKind for CalibrateStage {
         let result = result?;
         let rows = table_rows(&result);
         crate::core::store::write_table(&rows, &ctx.out_dir.join("calibration"))?;
-        crate::core::store::write_table(&knob_rows(self, &result), &ctx.out_dir.join("knobs"))?;
+        crate::core::store::write_table(
+            &knob_rows(&self.settings.knobs, &result),
+            &ctx.out_dir.join("knobs"),
+        )?;
         let current: Vec<(f64, f64)> = result
             .history
             .iter()
@@ -641,7 +328,7 @@ impl StageKind for CalibrateStage {
         )?;
         residuals_png(&ctx.out_dir.join("residuals.png"), &self.base_name, &result)?;
         let counts = InBandCounts::of(&result);
-        let log = summary_text(self, &settings, &fit_inputs, &warm, &result, &counts);
+        let log = summary_text(&self.name, &settings, &fit_inputs, &warm, &result, &counts);
         let log_path = ctx.out_dir.join("calibration.log");
         std::fs::write(&log_path, &log).map_err(|e| crate::error::Error::io(&log_path, e))?;
         ctx.progress
@@ -734,189 +421,6 @@ impl StageKind for CalibrateStage {
             summary_row: Some(row),
         })
     }
-}
-
-/// In-band counts `(spec defaults, calibrated)` of the fitted and the held-out sets, and of the
-/// held-out set's selection and final parts.
-struct InBandCounts {
-    fitted: (usize, usize),
-    fitted_total: usize,
-    held_out: (usize, usize),
-    held_out_total: usize,
-    selection: (usize, usize),
-    selection_total: usize,
-    final_set: (usize, usize),
-    final_total: usize,
-}
-
-impl InBandCounts {
-    fn of(r: &CalibrationResult) -> Self {
-        let (f0, ft) = in_band(&r.initial);
-        let (f1, _) = in_band(&r.best);
-        let (h0, ht) = r.held_out_initial.as_ref().map_or((0, 0), in_band);
-        let (h1, _) = r.held_out_best.as_ref().map_or((0, 0), in_band);
-        // In band / total of the held-out targets of one set.
-        let part = |e: &Option<Evaluation>, set: TargetSet| {
-            e.as_ref().map_or((0, 0), |e| {
-                let of: Vec<_> = e.outcomes.iter().filter(|o| o.target.set == set).collect();
-                (of.iter().filter(|o| o.within_tolerance()).count(), of.len())
-            })
-        };
-        let (s0, st) = part(&r.held_out_initial, TargetSet::Selection);
-        let (s1, _) = part(&r.held_out_best, TargetSet::Selection);
-        let (x0, xt) = part(&r.held_out_initial, TargetSet::Final);
-        let (x1, _) = part(&r.held_out_best, TargetSet::Final);
-        InBandCounts {
-            fitted: (f0, f1),
-            fitted_total: ft,
-            held_out: (h0, h1),
-            held_out_total: ht,
-            selection: (s0, s1),
-            selection_total: st,
-            final_set: (x0, x1),
-            final_total: xt,
-        }
-    }
-}
-
-/// The stage's log: counts, convergence, knobs (with bounds reached), every target.
-fn summary_text(
-    stage: &CalibrateStage,
-    settings: &CalibrationSettings,
-    fit_inputs: &str,
-    warm: &WarmStart,
-    r: &CalibrationResult,
-    c: &InBandCounts,
-) -> String {
-    use std::fmt::Write;
-    let mut s = String::new();
-    if let WarmStart::Ignored(reason) = warm {
-        let _ = writeln!(s, "WARNING: {reason}");
-    }
-    let _ = writeln!(
-        s,
-        "{}: fitted set {}/{} → {}/{} in band, held-out set {}/{} → {}/{} (selection {}/{} → {}/{}, final {}/{} → {}/{}); objective {:.3} → {:.3}; {} after {} evaluations ({} cases)",
-        stage.name,
-        c.fitted.0,
-        c.fitted_total,
-        c.fitted.1,
-        c.fitted_total,
-        c.held_out.0,
-        c.held_out_total,
-        c.held_out.1,
-        c.held_out_total,
-        c.selection.0,
-        c.selection_total,
-        c.selection.1,
-        c.selection_total,
-        c.final_set.0,
-        c.final_total,
-        c.final_set.1,
-        c.final_total,
-        r.initial.objective,
-        r.best.objective,
-        if r.converged {
-            "converged (simplex tolerance)"
-        } else {
-            "NOT converged (evaluation budget)"
-        },
-        r.evaluations,
-        r.cases
-    );
-    let _ = writeln!(
-        s,
-        "simplex: f spread {:.3e} (tolerance {:.1e}), unit-box edge {:.3e} (tolerance {:.1e})",
-        r.final_f_spread,
-        settings.search.f_tolerance,
-        r.final_x_spread,
-        settings.search.x_tolerance
-    );
-    let _ = writeln!(
-        s,
-        "fit inputs: {fit_inputs}; warm start: {}",
-        match warm {
-            WarmStart::None => "none".to_string(),
-            WarmStart::Unguarded => "used as written, unguarded (no start_fitted_for: \
-                 it is not checked against the fit's inputs)"
-                .to_string(),
-            WarmStart::Matched => "used (start_fitted_for matches)".to_string(),
-            WarmStart::Ignored(_) => "ignored (see the warning above)".to_string(),
-        }
-    );
-    let _ = writeln!(
-        s,
-        "search: start simplex edge {} (unit box) at {}; {} trial points rejected early (touchdown search skipped)",
-        settings.search.initial_step,
-        if settings.start.is_empty() {
-            "the spec defaults".to_string()
-        } else {
-            describe_knobs(&settings.start)
-        },
-        r.rejected
-    );
-    let _ = writeln!(s, "knobs: {}", describe_knobs(&r.best.knobs));
-    for (k, b) in &r.at_bound {
-        let _ = writeln!(s, "knob {} ended on its {} bound", k.name(), b.name());
-    }
-    let _ = writeln!(
-        s,
-        "set\ttarget\tpublished\ttolerance\tdefaults\tcalibrated\tin band before/after"
-    );
-    for row in table_rows(r) {
-        let f = |k: &str| {
-            row[k]
-                .as_f64()
-                .map_or("–".to_string(), |v| format!("{v:.4}"))
-        };
-        let _ = writeln!(
-            s,
-            "{}\t{}\t{} {}\t±{}\t{}\t{}\t{}/{}",
-            row["set"].as_str().unwrap_or_default(),
-            row["target"].as_str().unwrap_or_default(),
-            f("published"),
-            row["unit"].as_str().unwrap_or_default(),
-            f("tolerance"),
-            f("spec_defaults"),
-            f("calibrated"),
-            row["in_band_defaults"],
-            row["in_band_calibrated"],
-        );
-    }
-    s
-}
-
-/// Normalised residual per target, spec defaults against calibrated, with the ±1 band.
-fn residuals_png(path: &std::path::Path, base: &str, r: &CalibrationResult) -> Result<()> {
-    let values = |e: &Evaluation| -> Vec<f64> {
-        e.outcomes
-            .iter()
-            .map(|o| o.normalised_residual.clamp(-10.0, 10.0))
-            .collect()
-    };
-    let categories: Vec<String> = r
-        .best
-        .outcomes
-        .iter()
-        .map(|o| {
-            if o.target.weight == 0.0 {
-                format!("{} (reported)", o.target.id)
-            } else {
-                o.target.id.to_string()
-            }
-        })
-        .collect();
-    crate::figures::category_dots_png(
-        path,
-        &format!("Calibration of {base}: residual / tolerance (band ±1)"),
-        "(value − published) / tolerance (clamped to ±10)",
-        &categories,
-        &[
-            ("spec defaults", values(&r.initial)),
-            ("calibrated", values(&r.best)),
-        ],
-        1.0,
-    )?;
-    Ok(())
 }
 
 // ------------------------------------------------------------------------------------------
@@ -1209,182 +713,4 @@ impl PreparedCases for CalibrationCases {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use std::path::Path;
-
-    /// A two-knob calibration of a one-point base (only its parameters matter here).
-    const BASE: &str = "[simulate.s]\nmodel = \"improved_2dof\"\ncontact = \"c\"\ndmw = \"d\"\n\
-                        actuations = [\"8.5 nm\"]\n";
-    const CAL: &str =
-        "\n[calibrate.k]\nsimulate = \"s\"\nknobs = [\"dmw_scale\", \"kr_stiffening_beta\"]\n";
-    const START: &str =
-        "start = { dmw_scale = 1.5, kr_stiffening_beta = 0.4 }\ninitial_step = 1e-3\n";
-
-    fn stage_of(
-        simulate_extra: &str,
-        extra: &str,
-    ) -> std::result::Result<CalibrateStage, ConfigError> {
-        let text = format!("{BASE}{simulate_extra}{CAL}{extra}");
-        let file = PipelineFile::parse(
-            Path::new("pipeline.toml"),
-            text,
-            &crate::stages::section_names(),
-        )?;
-        let cfg = file
-            .instance::<CalibrateConfig>("calibrate", "k")?
-            .expect("[calibrate.k]");
-        CalibrateStage::from_config(&file, "k", &cfg)
-    }
-    fn stage(extra: &str) -> CalibrateStage {
-        stage_of("", extra).unwrap()
-    }
-    fn keys(n: &str) -> String {
-        format!("entry-key-of-{n}")
-    }
-
-    #[test]
-    fn the_fingerprint_ignores_how_the_search_is_run() {
-        let plain = stage("").fit_inputs(keys);
-        assert_eq!(plain.len(), FIT_INPUTS_DIGITS);
-        assert!(plain.chars().all(|c| c.is_ascii_hexdigit()), "{plain}");
-        // Deterministic: a second stage from the same text, keys in another order of calls.
-        assert_eq!(stage("").fit_inputs(keys), plain);
-        for extra in [
-            START.to_string(),
-            "max_evaluations = 17\n".into(),
-            format!("{START}start_fitted_for = \"0123456789abcdef\"\n"),
-            // The held-out set is judged before and after the fit, never inside it.
-            "held_out = []\n".into(),
-        ] {
-            assert_eq!(stage(&extra).fit_inputs(keys), plain, "{extra}");
-        }
-        // …and so does the base's actuation grid (the held-out sweeps' only).
-        let text = BASE.replace("[\"8.5 nm\"]", "[\"8.5 nm\", \"12 nm\"]");
-        let file = PipelineFile::parse(
-            Path::new("pipeline.toml"),
-            format!("{text}{CAL}"),
-            &crate::stages::section_names(),
-        )
-        .unwrap();
-        let cfg = file
-            .instance::<CalibrateConfig>("calibrate", "k")
-            .unwrap()
-            .unwrap();
-        let s = CalibrateStage::from_config(&file, "k", &cfg).unwrap();
-        assert_eq!(s.fit_inputs(keys), plain);
-    }
-
-    #[test]
-    fn the_fingerprint_changes_with_every_input_of_the_fit() {
-        let plain = stage("").fit_inputs(keys);
-        let changed = [
-            (
-                "weight",
-                stage("weights = { \"clearance_8.5nm\" = 2.0 }\n").fit_inputs(keys),
-            ),
-            (
-                "bounds",
-                stage("bounds = { dmw_scale = [0.5, 3.0] }\n").fit_inputs(keys),
-            ),
-            (
-                "targets",
-                stage("targets = [\"clearance_8.5nm\", \"fhm_8.5nm\"]\n").fit_inputs(keys),
-            ),
-            ("knobs", {
-                let t =
-                    format!("{BASE}\n[calibrate.k]\nsimulate = \"s\"\nknobs = [\"dmw_scale\"]\n");
-                let file =
-                    PipelineFile::parse(Path::new("p.toml"), t, &crate::stages::section_names())
-                        .unwrap();
-                let cfg = file
-                    .instance::<CalibrateConfig>("calibrate", "k")
-                    .unwrap()
-                    .unwrap();
-                CalibrateStage::from_config(&file, "k", &cfg)
-                    .unwrap()
-                    .fit_inputs(keys)
-            }),
-            (
-                "touchdown",
-                stage("touchdown_step = \"0.25 nm\"\n").fit_inputs(keys),
-            ),
-            (
-                "base parameter",
-                stage_of("kr_stiffening_beta = 0.5\n", "")
-                    .unwrap()
-                    .fit_inputs(keys),
-            ),
-            (
-                "base option",
-                stage_of("transit_delay = false\n", "")
-                    .unwrap()
-                    .fit_inputs(keys),
-            ),
-            // The contact set's or DMW record's entry (its parameters or raw-file hash).
-            (
-                "upstream key",
-                stage("").fit_inputs(|n| if n == "d" { "other".into() } else { keys(n) }),
-            ),
-        ];
-        for (what, f) in &changed {
-            assert_ne!(f, &plain, "{what}");
-        }
-    }
-
-    #[test]
-    fn a_guarded_start_is_used_only_for_its_own_inputs() {
-        let plain = stage("");
-        let fp = plain.fit_inputs(keys);
-        // Matching (also as a longer or upper-case spelling of the same hash).
-        for given in [fp.clone(), fp.to_ascii_uppercase()] {
-            let s = stage(&format!("{START}start_fitted_for = \"{given}\"\n"));
-            let (used, warm) = s.effective_settings(&s.fit_inputs(keys));
-            assert_eq!(warm, WarmStart::Matched);
-            assert_eq!(used.start.len(), 2);
-            assert_eq!(used.search.initial_step, 1e-3);
-        }
-        // Mismatching: the settings are exactly those of the same block without a start, so
-        // the run is the full fit from the spec defaults with the default simplex.
-        let other = if fp.starts_with('0') { "1" } else { "0" }.repeat(FIT_INPUTS_DIGITS);
-        let s = stage(&format!("{START}start_fitted_for = \"{other}\"\n"));
-        let (used, warm) = s.effective_settings(&s.fit_inputs(keys));
-        let WarmStart::Ignored(reason) = warm else {
-            panic!("{warm:?}")
-        };
-        assert!(reason.contains(&other) && reason.contains(&fp), "{reason}");
-        assert_eq!(used, plain.settings);
-        assert_eq!(used.search.initial_step, 0.2);
-        // Unguarded: used as written; no start: nothing to decide.
-        let s = stage(START);
-        let (used, warm) = s.effective_settings(&s.fit_inputs(keys));
-        assert_eq!((warm, used.start.len()), (WarmStart::Unguarded, 2));
-        assert_eq!(plain.effective_settings(&fp).1, WarmStart::None);
-        // The guard is in the cache key (it decides what runs).
-        assert_ne!(
-            stage(&format!("{START}start_fitted_for = \"{other}\"\n")).params(),
-            stage(START).params()
-        );
-    }
-
-    #[test]
-    fn a_bad_start_fitted_for_names_the_key() {
-        for (extra, says) in [
-            (
-                format!("{START}start_fitted_for = \"not-hex-at-all!!\"\n"),
-                "hex digits",
-            ),
-            (format!("{START}start_fitted_for = \"abc\"\n"), "hex digits"),
-            (
-                "start_fitted_for = \"0123456789abcdef\"\n".into(),
-                "no `start`",
-            ),
-        ] {
-            let msg = stage_of("", &extra).err().expect(&extra).to_string();
-            assert!(
-                msg.contains("start_fitted_for") && msg.contains(says),
-                "{msg}"
-            );
-        }
-    }
-}
+mod tests;

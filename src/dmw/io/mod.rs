@@ -40,7 +40,7 @@
 //! (m/s/V; `mm/s/V` accepted), `rpm`, `t0` (s), `layout` (`continuous` or `averaged`) and
 //! `velocity_unit`. Parquet carries the same keys as file key-value metadata.
 //!
-//! # HDF5 layout (written by `stages::dmw::write_ldv` and `write_ldv_hdf5_counts`)
+//! # HDF5 layout (written by `artefacts::ldv::write_ldv` and `write_ldv_hdf5_counts`)
 //!
 //! ```text
 //! / (NX_class = NXroot, default = "ldv")

@@ -1,8 +1,8 @@
-//! LDV record writers (`hdi synth`, round-trip tests): the HDF5 layout documented in
-//! `dmw::io`, written through the pipeline's HDF5 writer [`H5Out`] (temp file + rename,
-//! `units`/`long_name` on every dataset, shuffle + deflate for large data) — which is why it
-//! sits here above the physics — and the text and Parquet writers of `dmw::io` behind one
-//! function.
+//! LDV record writers (`hdi synth`, round-trip tests): the record files the `[dmw]` stage
+//! reads. The HDF5 layout documented in `dmw::io`, written through the pipeline's HDF5 writer
+//! [`H5Out`] (temp file + rename, `units`/`long_name` on every dataset, shuffle + deflate for
+//! large data) — which is why it sits here above the physics, not in `dmw::io` — and the text
+//! and Parquet writers of `dmw::io` behind one function.
 
 use crate::core::store::H5Out;
 use crate::dmw::io::{

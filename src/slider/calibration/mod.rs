@@ -3,6 +3,8 @@
 //! against the dissertation's class-D landmarks (`docs/calibration.md`), and a fit's knobs
 //! applied to a sweep.
 
+pub mod report;
+
 use crate::artefacts::contact::upstream_isbl_params;
 use crate::artefacts::dmw_tracks::{self, DmwTrack};
 use crate::contact::isbl::IsblParams;
@@ -71,4 +73,28 @@ pub fn apply_fitted(
         .map(|(k, v)| (k.name().to_string(), *v))
         .collect();
     Ok(())
+}
+
+/// How the warm start of one run was decided.
+#[derive(Debug, Clone, PartialEq)]
+pub enum WarmStart {
+    /// No `start`: the spec defaults.
+    None,
+    /// `start` without `start_fitted_for`: used as written.
+    Unguarded,
+    /// `start_fitted_for` matches the current fit inputs: used.
+    Matched,
+    /// `start_fitted_for` differs: `start` and `initial_step` dropped, the reason.
+    Ignored(String),
+}
+
+impl WarmStart {
+    pub fn name(&self) -> &'static str {
+        match self {
+            WarmStart::None => "none",
+            WarmStart::Unguarded => "unguarded",
+            WarmStart::Matched => "matched",
+            WarmStart::Ignored(_) => "ignored",
+        }
+    }
 }

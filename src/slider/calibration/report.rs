@@ -1,0 +1,314 @@
+//! What a calibration reports (docs/calibration.md): every target before and after the fit as
+//! rows, the knobs with their bounds, the log, the residual plot, and the evaluations as
+//! `result.json` values. The `[calibrate]` stage writes them.
+
+use super::WarmStart;
+use crate::dynamics::calibration::{
+    in_band, CalibrationResult, CalibrationSettings, Evaluation, Knob, KnobRange, TargetOutcome,
+    TargetSet,
+};
+use crate::error::Result;
+use serde_json::{json, Map, Value};
+
+/// One evaluation (knobs, objective, every target) for `result.json`.
+pub(crate) fn evaluation_json(e: &Evaluation) -> Value {
+    let (inside, total) = in_band(e);
+    json!({
+        "objective": e.objective,
+        "cases": e.cases,
+        "in_band": inside,
+        "targets_total": total,
+        "knobs": e.knobs.iter().map(|(k, v)| json!({"knob": k.name(), "value": v})).collect::<Vec<_>>(),
+        "targets": e.outcomes.iter().map(|o| json!({
+            "id": o.target.id,
+            "set": o.target.set.name(),
+            "class": o.target.class,
+            "value": o.value,
+            "published": o.target.published,
+            "tolerance": o.target.tolerance,
+            "weight": o.target.weight,
+            "normalised_residual": o.normalised_residual,
+            "within_tolerance": o.within_tolerance(),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// Describe the knob values compactly in display units (`dmw_scale 2.1, Δγ 52 mN/m, …`).
+pub fn describe_knobs(values: &[(Knob, f64)]) -> String {
+    values
+        .iter()
+        .map(|(k, v)| match k {
+            Knob::SurfaceEnergy => format!("Δγ {:.3} mN/m", v * 1e3),
+            Knob::LjSpacing => format!("ε {:.3} nm", v * 1e9),
+            Knob::AsperityDensity => format!("η {:.1} µm⁻²", v * 1e-12),
+            Knob::KrStiffeningBeta => format!("β {v:.3}"),
+            Knob::ContactDamping => format!("ζ_c {v:.4}"),
+            Knob::DmwScale => format!("dmw_scale {v:.3}"),
+            Knob::TruncationN => format!("n {v:.3}"),
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// One row per target of both sets: published, tolerance, value before (spec defaults) and
+/// after (fitted knobs), in band before and after.
+pub(crate) fn table_rows(r: &CalibrationResult) -> Vec<Map<String, Value>> {
+    let pairs = |before: &Evaluation, after: &Evaluation| -> Vec<(TargetOutcome, TargetOutcome)> {
+        before
+            .outcomes
+            .iter()
+            .cloned()
+            .zip(after.outcomes.iter().cloned())
+            .collect()
+    };
+    let mut all = pairs(&r.initial, &r.best);
+    if let (Some(b), Some(a)) = (&r.held_out_initial, &r.held_out_best) {
+        all.extend(pairs(b, a));
+    }
+    all.iter()
+        .map(|(i, b)| {
+            let t = &b.target;
+            let s = |v: Option<f64>| json!(v.map(|v| v * t.display_scale));
+            let mut m = Map::new();
+            m.insert("target".into(), json!(t.id));
+            m.insert("set".into(), json!(t.set.name()));
+            m.insert("class".into(), json!(t.class));
+            m.insert(
+                "geometry".into(),
+                json!(match t.geometry {
+                    crate::dynamics::calibration::TargetGeometry::Base => "dissertation",
+                    crate::dynamics::calibration::TargetGeometry::Optimised => "optimised",
+                }),
+            );
+            m.insert(
+                "spec_row".into(),
+                // The id of `hdi validate` (docs/validation.md), e.g. dyn-16.
+                json!(format!("dyn-{}", t.source.trim_start_matches('#'))),
+            );
+            m.insert("unit".into(), json!(t.unit));
+            m.insert("published".into(), json!(t.published * t.display_scale));
+            m.insert("tolerance".into(), json!(t.tolerance * t.display_scale));
+            m.insert("weight".into(), json!(t.weight));
+            m.insert("spec_defaults".into(), s(i.value));
+            m.insert("calibrated".into(), s(b.value));
+            m.insert("residual_defaults".into(), json!(i.normalised_residual));
+            m.insert("residual_calibrated".into(), json!(b.normalised_residual));
+            m.insert("in_band_defaults".into(), json!(i.within_tolerance()));
+            m.insert("in_band_calibrated".into(), json!(b.within_tolerance()));
+            m.insert("within_tolerance".into(), json!(b.within_tolerance()));
+            m
+        })
+        .collect()
+}
+
+/// One row per knob: its bounds, the fitted value and the bound it ended on.
+pub(crate) fn knob_rows(knobs: &[KnobRange], r: &CalibrationResult) -> Vec<Map<String, Value>> {
+    knobs
+        .iter()
+        .zip(&r.best.knobs)
+        .map(|(range, (k, v))| {
+            let mut m = Map::new();
+            m.insert("knob".into(), json!(k.name()));
+            m.insert("unit".into(), json!(k.unit()));
+            m.insert("lower_bound".into(), json!(range.lo));
+            m.insert("upper_bound".into(), json!(range.hi));
+            m.insert("fitted".into(), json!(v));
+            m.insert(
+                "at_bound".into(),
+                json!(r
+                    .at_bound
+                    .iter()
+                    .find(|(kb, _)| kb == k)
+                    .map(|(_, b)| b.name())),
+            );
+            m
+        })
+        .collect()
+}
+
+/// In-band counts `(spec defaults, calibrated)` of the fitted and the held-out sets, and of the
+/// held-out set's selection and final parts.
+pub(crate) struct InBandCounts {
+    pub(crate) fitted: (usize, usize),
+    pub(crate) fitted_total: usize,
+    pub(crate) held_out: (usize, usize),
+    pub(crate) held_out_total: usize,
+    pub(crate) selection: (usize, usize),
+    pub(crate) selection_total: usize,
+    pub(crate) final_set: (usize, usize),
+    pub(crate) final_total: usize,
+}
+
+impl InBandCounts {
+    pub(crate) fn of(r: &CalibrationResult) -> Self {
+        let (f0, ft) = in_band(&r.initial);
+        let (f1, _) = in_band(&r.best);
+        let (h0, ht) = r.held_out_initial.as_ref().map_or((0, 0), in_band);
+        let (h1, _) = r.held_out_best.as_ref().map_or((0, 0), in_band);
+        // In band / total of the held-out targets of one set.
+        let part = |e: &Option<Evaluation>, set: TargetSet| {
+            e.as_ref().map_or((0, 0), |e| {
+                let of: Vec<_> = e.outcomes.iter().filter(|o| o.target.set == set).collect();
+                (of.iter().filter(|o| o.within_tolerance()).count(), of.len())
+            })
+        };
+        let (s0, st) = part(&r.held_out_initial, TargetSet::Selection);
+        let (s1, _) = part(&r.held_out_best, TargetSet::Selection);
+        let (x0, xt) = part(&r.held_out_initial, TargetSet::Final);
+        let (x1, _) = part(&r.held_out_best, TargetSet::Final);
+        InBandCounts {
+            fitted: (f0, f1),
+            fitted_total: ft,
+            held_out: (h0, h1),
+            held_out_total: ht,
+            selection: (s0, s1),
+            selection_total: st,
+            final_set: (x0, x1),
+            final_total: xt,
+        }
+    }
+}
+
+/// The stage's log: counts, convergence, knobs (with bounds reached), every target.
+pub(crate) fn summary_text(
+    name: &str,
+    settings: &CalibrationSettings,
+    fit_inputs: &str,
+    warm: &WarmStart,
+    r: &CalibrationResult,
+    c: &InBandCounts,
+) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    if let WarmStart::Ignored(reason) = warm {
+        let _ = writeln!(s, "WARNING: {reason}");
+    }
+    let _ = writeln!(
+        s,
+        "{}: fitted set {}/{} → {}/{} in band, held-out set {}/{} → {}/{} (selection {}/{} → {}/{}, final {}/{} → {}/{}); objective {:.3} → {:.3}; {} after {} evaluations ({} cases)",
+        name,
+        c.fitted.0,
+        c.fitted_total,
+        c.fitted.1,
+        c.fitted_total,
+        c.held_out.0,
+        c.held_out_total,
+        c.held_out.1,
+        c.held_out_total,
+        c.selection.0,
+        c.selection_total,
+        c.selection.1,
+        c.selection_total,
+        c.final_set.0,
+        c.final_total,
+        c.final_set.1,
+        c.final_total,
+        r.initial.objective,
+        r.best.objective,
+        if r.converged {
+            "converged (simplex tolerance)"
+        } else {
+            "NOT converged (evaluation budget)"
+        },
+        r.evaluations,
+        r.cases
+    );
+    let _ = writeln!(
+        s,
+        "simplex: f spread {:.3e} (tolerance {:.1e}), unit-box edge {:.3e} (tolerance {:.1e})",
+        r.final_f_spread,
+        settings.search.f_tolerance,
+        r.final_x_spread,
+        settings.search.x_tolerance
+    );
+    let _ = writeln!(
+        s,
+        "fit inputs: {fit_inputs}; warm start: {}",
+        match warm {
+            WarmStart::None => "none".to_string(),
+            WarmStart::Unguarded => "used as written, unguarded (no start_fitted_for: \
+                 it is not checked against the fit's inputs)"
+                .to_string(),
+            WarmStart::Matched => "used (start_fitted_for matches)".to_string(),
+            WarmStart::Ignored(_) => "ignored (see the warning above)".to_string(),
+        }
+    );
+    let _ = writeln!(
+        s,
+        "search: start simplex edge {} (unit box) at {}; {} trial points rejected early (touchdown search skipped)",
+        settings.search.initial_step,
+        if settings.start.is_empty() {
+            "the spec defaults".to_string()
+        } else {
+            describe_knobs(&settings.start)
+        },
+        r.rejected
+    );
+    let _ = writeln!(s, "knobs: {}", describe_knobs(&r.best.knobs));
+    for (k, b) in &r.at_bound {
+        let _ = writeln!(s, "knob {} ended on its {} bound", k.name(), b.name());
+    }
+    let _ = writeln!(
+        s,
+        "set\ttarget\tpublished\ttolerance\tdefaults\tcalibrated\tin band before/after"
+    );
+    for row in table_rows(r) {
+        let f = |k: &str| {
+            row[k]
+                .as_f64()
+                .map_or("–".to_string(), |v| format!("{v:.4}"))
+        };
+        let _ = writeln!(
+            s,
+            "{}\t{}\t{} {}\t±{}\t{}\t{}\t{}/{}",
+            row["set"].as_str().unwrap_or_default(),
+            row["target"].as_str().unwrap_or_default(),
+            f("published"),
+            row["unit"].as_str().unwrap_or_default(),
+            f("tolerance"),
+            f("spec_defaults"),
+            f("calibrated"),
+            row["in_band_defaults"],
+            row["in_band_calibrated"],
+        );
+    }
+    s
+}
+
+/// Normalised residual per target, spec defaults against calibrated, with the ±1 band.
+pub(crate) fn residuals_png(
+    path: &std::path::Path,
+    base: &str,
+    r: &CalibrationResult,
+) -> Result<()> {
+    let values = |e: &Evaluation| -> Vec<f64> {
+        e.outcomes
+            .iter()
+            .map(|o| o.normalised_residual.clamp(-10.0, 10.0))
+            .collect()
+    };
+    let categories: Vec<String> = r
+        .best
+        .outcomes
+        .iter()
+        .map(|o| {
+            if o.target.weight == 0.0 {
+                format!("{} (reported)", o.target.id)
+            } else {
+                o.target.id.to_string()
+            }
+        })
+        .collect();
+    crate::figures::category_dots_png(
+        path,
+        &format!("Calibration of {base}: residual / tolerance (band ±1)"),
+        "(value − published) / tolerance (clamped to ±10)",
+        &categories,
+        &[
+            ("spec defaults", values(&r.initial)),
+            ("calibrated", values(&r.best)),
+        ],
+        1.0,
+    )?;
+    Ok(())
+}
