@@ -5,9 +5,7 @@ use crate::common::*;
 fn run_then_break(
     edit: impl Fn(&Project),
 ) -> (Project, std::process::Output, Vec<(String, String)>) {
-    let p = Project::shipped();
-    let o = p.run(&["run"]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let p = Project::shipped_after_run();
     let before = snapshot(&p.processed());
     edit(&p);
     let o = p.run(&["run"]);

@@ -69,6 +69,23 @@ impl Project {
         std::fs::write(dir.path().join("pipeline.toml"), text).expect("write pipeline.toml");
         Self { dir }
     }
+    /// A copy of [`Project::shipped`] after one cold `hdi run`: the run is made once per test
+    /// process and each caller gets its own copy (files copied, the store's relative links
+    /// kept), so a test that damages or edits it touches nothing shared. For the tests whose
+    /// subject is what happens *after* a completed run (a rerun, a broken input, a damaged
+    /// entry, gc); the cold run itself is covered by the tests that make their own.
+    pub fn shipped_after_run() -> Self {
+        static BASE: std::sync::OnceLock<Project> = std::sync::OnceLock::new();
+        let base = BASE.get_or_init(|| {
+            let p = Project::shipped();
+            let o = p.run(&["run"]);
+            assert!(o.status.success(), "{}", stderr(&o));
+            p
+        });
+        let dir = tempfile::tempdir().expect("tempdir");
+        copy_tree(base.path(), dir.path());
+        Self { dir }
+    }
     pub fn path(&self) -> &Path {
         self.dir.path()
     }
@@ -99,6 +116,24 @@ pub fn copy_dir(from: &Path, to: &Path) {
             copy_dir(&p, &to.join(e.file_name()));
         } else {
             std::fs::copy(&p, to.join(e.file_name())).unwrap();
+        }
+    }
+}
+
+/// `from` copied to `to` with its symbolic links recreated as links (the store's instance
+/// links are relative, so they point into the copy).
+pub fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let (p, dest) = (e.path(), to.join(e.file_name()));
+        let kind = e.file_type().unwrap();
+        if kind.is_symlink() {
+            std::os::unix::fs::symlink(std::fs::read_link(&p).unwrap(), &dest).unwrap();
+        } else if kind.is_dir() {
+            copy_tree(&p, &dest);
+        } else {
+            std::fs::copy(&p, &dest).unwrap();
         }
     }
 }

@@ -95,8 +95,7 @@ print('datasets', n)
 
 #[test]
 fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents() {
-    let p = Project::shipped();
-    assert_ok(&p.run(&["run"]));
+    let p = Project::shipped_after_run();
     let before = snapshot(&p.processed());
 
     let o = p.run(&["run"]);
@@ -156,8 +155,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
 
 #[test]
 fn damaged_or_deleted_cached_outputs_are_recomputed_not_trusted() {
-    let p = Project::shipped();
-    assert_ok(&p.run(&["run"]));
+    let p = Project::shipped_after_run();
     let h5 = std::fs::canonicalize(p.processed().join("disk/surface.h5")).unwrap();
     let good = std::fs::read(&h5).unwrap();
     // Corrupt one byte in the middle.
@@ -187,8 +185,7 @@ fn damaged_or_deleted_cached_outputs_are_recomputed_not_trusted() {
 
 #[test]
 fn gc_removes_what_the_pipeline_no_longer_references() {
-    let p = Project::shipped();
-    assert_ok(&p.run(&["run"]));
+    let p = Project::shipped_after_run();
     // A stale entry: change the slider's summit scheme and run again.
     p.set_config(&p.config().replace(
         "level = [\"rows:median\", \"plane\", \"mean\"]",
@@ -245,8 +242,7 @@ fn only_runs_the_named_instance_and_what_it_needs() {
 
 #[test]
 fn a_leftover_temp_dir_from_a_crash_is_never_trusted_and_gc_cleans_it() {
-    let p = Project::shipped();
-    assert_ok(&p.run(&["run"]));
+    let p = Project::shipped_after_run();
     // Simulate a crash mid-write: a half-written work dir with a partial HDF5.
     let tmp = p.processed().join(".hdi/tmp/disk-deadbeef0000-1-1");
     std::fs::create_dir_all(&tmp).unwrap();
