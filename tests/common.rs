@@ -75,16 +75,22 @@ impl Project {
     /// subject is what happens *after* a completed run (a rerun, a broken input, a damaged
     /// entry, gc); the cold run itself is covered by the tests that make their own.
     pub fn shipped_after_run() -> Self {
-        static BASE: std::sync::OnceLock<Project> = std::sync::OnceLock::new();
-        let base = BASE.get_or_init(|| {
+        Self::shipped_with_cold_run().0
+    }
+
+    /// [`Project::shipped_after_run`] with the output of the shared cold run (`hdi run --jobs
+    /// 2`, made once per test process).
+    pub fn shipped_with_cold_run() -> (Self, Output) {
+        static BASE: std::sync::OnceLock<(Project, Output)> = std::sync::OnceLock::new();
+        let (base, output) = BASE.get_or_init(|| {
             let p = Project::shipped();
-            let o = p.run(&["run"]);
+            let o = p.run(&["run", "--jobs", "2"]);
             assert!(o.status.success(), "{}", stderr(&o));
-            p
+            (p, o)
         });
         let dir = tempfile::tempdir().expect("tempdir");
         copy_tree(base.path(), dir.path());
-        Self { dir }
+        (Self { dir }, output.clone())
     }
     pub fn path(&self) -> &Path {
         self.dir.path()

@@ -5,8 +5,8 @@ use crate::common::*;
 
 #[test]
 fn default_pipeline_writes_hdf5_tables_and_plots_readable_by_others() {
-    let p = Project::shipped();
-    let o = p.run(&["run"]);
+    // The shared cold run of the shipped project (one per test process).
+    let (p, o) = Project::shipped_with_cold_run();
     assert_ok(&o);
     assert!(
         stderr(&o).contains("ran 55, cached 0, failed 0, skipped 0 of 55"),
@@ -260,8 +260,15 @@ fn a_leftover_temp_dir_from_a_crash_is_never_trusted_and_gc_cleans_it() {
 #[test]
 fn two_cold_runs_with_different_thread_counts_write_identical_results() {
     let results = |jobs: &str| {
-        let p = Project::shipped();
-        assert_ok(&p.run(&["run", "--jobs", jobs]));
+        // `--jobs 2`: the shared cold run (`Project::shipped_with_cold_run`); `--jobs 1` cold
+        // here.
+        let p = if jobs == "2" {
+            Project::shipped_after_run()
+        } else {
+            let p = Project::shipped();
+            assert_ok(&p.run(&["run", "--jobs", jobs]));
+            p
+        };
         let all = snapshot(&p.processed());
         let kept: Vec<(String, String)> = all
             .into_iter()
