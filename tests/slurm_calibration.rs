@@ -100,12 +100,14 @@ fn slurm_calibration_rounds_equal_local_and_rerun_from_the_store() {
     assert!(rounds >= 5, "{rounds} rounds");
     // The rounds are case manifests of kind `calibration` beside the sweep's.
     let manifests = remote.processed().join(".hdi/slurm/manifests");
-    let calibration_manifests = std::fs::read_dir(&manifests)
+    let calibration_manifests: Vec<String> = std::fs::read_dir(&manifests)
         .unwrap()
         .filter_map(|e| std::fs::read_to_string(e.unwrap().path()).ok())
         .filter(|t| t.contains("\"kind\":\"calibration\""))
-        .count();
-    assert_eq!(calibration_manifests, rounds);
+        .collect();
+    assert_eq!(calibration_manifests.len(), rounds);
+    // Their recipes are the one envelope with the calibration's own case type.
+    assert_matches_schema("case-manifest", &calibration_manifests[0]);
 
     // A forced rerun finds every case in the store: no submission, the same bytes.
     let o = run_with(
