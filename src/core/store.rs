@@ -300,6 +300,16 @@ pub fn round_significant(x: f64, digits: i32) -> f64 {
 /// Parquet file has them all in its file-level key `units`).
 /// Integers become Int64 columns, other numbers Float64, strings Utf8 (LargeUtf8 in Arrow),
 /// booleans Boolean; a missing key or JSON null is a null. (An all-null column is Float64.)
+/// Typed rows as table rows: each serialised to a JSON object (field order is column order).
+pub fn rows_of<T: serde::Serialize>(rows: &[T]) -> Vec<serde_json::Map<String, Value>> {
+    rows.iter()
+        .map(|r| match serde_json::to_value(r) {
+            Ok(Value::Object(m)) => m,
+            _ => serde_json::Map::new(),
+        })
+        .collect()
+}
+
 pub fn write_table(rows: &[serde_json::Map<String, Value>], stem: &Path) -> Result<()> {
     use polars_core::prelude::*;
     use polars_io::prelude::*;

@@ -490,11 +490,11 @@ pub fn sweep_analysis(p: &SimulateParams, cases: &[CaseOutcome]) -> Result<Sweep
 
 /// A case result's `vibration_kind` as named in the tables and `--json`; cases cached before
 /// docs/json.md hold the debug form (`Fhm`, `Bv`).
-fn vibration_kind_label(v: &Value) -> Value {
-    match v.as_str() {
-        Some("Fhm") => json!("FHM"),
-        Some("Bv") => json!("BV"),
-        _ => v.clone(),
+fn vibration_kind_label(v: &str) -> String {
+    match v {
+        "Fhm" => "FHM".into(),
+        "Bv" => "BV".into(),
+        other => other.into(),
     }
 }
 
@@ -511,85 +511,94 @@ pub fn regime_label(v: &Value) -> Value {
     json!(name)
 }
 
-/// One table row per case (unit suffixes in the names).
-pub fn case_rows(cases: &[CaseOutcome], sweep: &SweepMetrics) -> Vec<Map<String, Value>> {
+/// One row of a sweep's table (`sweep.{parquet,csv,arrow}`, one per case): unit suffixes in
+/// the names; a non-finite value is null, as in the case's result.json. The field order is
+/// the table's column order.
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct SweepRow {
+    /// Rounded to the femtometre: 8.8 nm, not 8.799999999999999.
+    pub actuation_nm: f64,
+    pub clearance_mean_nm: f64,
+    pub clearance_std_nm: f64,
+    pub fh_mean_nm: f64,
+    pub hms_mean_nm: f64,
+    pub vibration_percent: f64,
+    pub vibration_extrema_percent: Option<f64>,
+    pub vibration_kind: String,
+    pub solid_contact_percent: f64,
+    pub regime: Option<&'static str>,
+    pub contact_force_mean_mN: Option<f64>,
+    pub friction_mean_mN: Option<f64>,
+    pub adhesion_mean_mN: Option<f64>,
+    pub real_area_mean_um2: Option<f64>,
+    /// Headline ratio of means, `_mean_inst` the mean of the instantaneous ratio over the
+    /// samples with F_c > 1 µN (docs/conventions.md).
+    pub friction_coefficient: Option<f64>,
+    pub friction_coefficient_mean_inst: Option<f64>,
+    pub mean_pressure_GPa: Option<f64>,
+    pub mean_pressure_GPa_mean_inst: Option<f64>,
+    pub shear_traction_GPa: Option<f64>,
+    pub shear_traction_GPa_mean_inst: Option<f64>,
+    pub nominal_area_um2: f64,
+    pub flyability: Option<f64>,
+    pub steps: u64,
+    pub case_key: String,
+    /// The continuation branch (`[simulate]` stage tables only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub branch: Option<&'static str>,
+    /// A sweep in heater power (docs/bulge.md): each row also names its power (null where
+    /// the actuation has none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub heater_power_mW: Option<Option<f64>>,
+}
+
+/// One typed row per case.
+pub fn sweep_rows(cases: &[CaseOutcome], sweep: &SweepMetrics) -> Vec<SweepRow> {
     cases
         .iter()
         .enumerate()
         .map(|(i, c)| {
             let m = &c.metrics;
-            // A non-finite value is written as null, as in the case's result.json.
             let stat = |s: &Option<crate::slider::case::Stats>, scale: f64| {
                 s.as_ref().map(|s| s.mean * scale)
             };
             let f = |v: Option<f64>, scale: f64| v.map(|x| x * scale);
-            let mut r = Map::new();
-            // Rounded to the femtometre: 8.8 nm, not 8.799999999999999.
-            r.insert(
-                "actuation_nm".into(),
-                json!((c.actuation * 1e15).round() / 1e6),
-            );
-            r.insert("clearance_mean_nm".into(), json!(m.clearance_m.mean * 1e9));
-            r.insert("clearance_std_nm".into(), json!(m.clearance_m.std * 1e9));
-            r.insert("fh_mean_nm".into(), json!(m.fh_m.mean * 1e9));
-            r.insert("hms_mean_nm".into(), json!(m.hms_mean_m * 1e9));
-            r.insert("vibration_percent".into(), json!(m.vibration_percent));
-            r.insert(
-                "vibration_extrema_percent".into(),
-                json!(m.vibration_extrema_percent),
-            );
-            r.insert(
-                "vibration_kind".into(),
-                vibration_kind_label(&json!(m.vibration_kind)),
-            );
-            r.insert(
-                "solid_contact_percent".into(),
-                json!(m.percent_solid_contact),
-            );
-            r.insert(
-                "regime".into(),
-                json!(sweep.regimes.get(i).map(|r| regime_name(*r))),
-            );
-            r.insert(
-                "contact_force_mean_mN".into(),
-                json!(stat(&m.contact_force_N, 1e3)),
-            );
-            r.insert("friction_mean_mN".into(), json!(stat(&m.friction_N, 1e3)));
-            r.insert("adhesion_mean_mN".into(), json!(stat(&m.adhesion_N, 1e3)));
-            r.insert(
-                "real_area_mean_um2".into(),
-                json!(stat(&m.real_area_m2, 1e12)),
-            );
-            // Headline ratio of means, `_mean_inst` the mean of the instantaneous ratio over
-            // the samples with F_c > 1 µN (docs/conventions.md).
-            r.insert("friction_coefficient".into(), json!(m.friction_coefficient));
-            r.insert(
-                "friction_coefficient_mean_inst".into(),
-                json!(m.friction_coefficient_mean_inst),
-            );
-            r.insert(
-                "mean_pressure_GPa".into(),
-                json!(f(m.mean_pressure_Pa, 1e-9)),
-            );
-            r.insert(
-                "mean_pressure_GPa_mean_inst".into(),
-                json!(f(m.mean_pressure_Pa_mean_inst, 1e-9)),
-            );
-            r.insert(
-                "shear_traction_GPa".into(),
-                json!(f(m.shear_traction_Pa, 1e-9)),
-            );
-            r.insert(
-                "shear_traction_GPa_mean_inst".into(),
-                json!(f(m.shear_traction_Pa_mean_inst, 1e-9)),
-            );
-            r.insert("nominal_area_um2".into(), json!(m.nominal_area_m2 * 1e12));
-            r.insert("flyability".into(), json!(sweep.flyability.get(i)));
-            r.insert("steps".into(), json!(m.steps));
-            r.insert("case_key".into(), json!(c.entry.key));
-            r
+            SweepRow {
+                actuation_nm: (c.actuation * 1e15).round() / 1e6,
+                clearance_mean_nm: m.clearance_m.mean * 1e9,
+                clearance_std_nm: m.clearance_m.std * 1e9,
+                fh_mean_nm: m.fh_m.mean * 1e9,
+                hms_mean_nm: m.hms_mean_m * 1e9,
+                vibration_percent: m.vibration_percent,
+                vibration_extrema_percent: m.vibration_extrema_percent,
+                vibration_kind: vibration_kind_label(&m.vibration_kind),
+                solid_contact_percent: m.percent_solid_contact,
+                regime: sweep.regimes.get(i).map(|r| regime_name(*r)),
+                contact_force_mean_mN: stat(&m.contact_force_N, 1e3),
+                friction_mean_mN: stat(&m.friction_N, 1e3),
+                adhesion_mean_mN: stat(&m.adhesion_N, 1e3),
+                real_area_mean_um2: stat(&m.real_area_m2, 1e12),
+                friction_coefficient: m.friction_coefficient,
+                friction_coefficient_mean_inst: m.friction_coefficient_mean_inst,
+                mean_pressure_GPa: f(m.mean_pressure_Pa, 1e-9),
+                mean_pressure_GPa_mean_inst: f(m.mean_pressure_Pa_mean_inst, 1e-9),
+                shear_traction_GPa: f(m.shear_traction_Pa, 1e-9),
+                shear_traction_GPa_mean_inst: f(m.shear_traction_Pa_mean_inst, 1e-9),
+                nominal_area_um2: m.nominal_area_m2 * 1e12,
+                flyability: sweep.flyability.get(i).copied(),
+                steps: m.steps,
+                case_key: c.entry.key.clone(),
+                branch: None,
+                heater_power_mW: None,
+            }
         })
         .collect()
+}
+
+/// [`sweep_rows`] as table rows (`core::store::write_table`).
+pub fn case_rows(cases: &[CaseOutcome], sweep: &SweepMetrics) -> Vec<Map<String, Value>> {
+    crate::core::store::rows_of(&sweep_rows(cases, sweep))
 }
 
 /// Branches whose steady mean clearances differ by more than this (0.05 nm, a quarter of the
@@ -715,9 +724,9 @@ mod tests {
     /// give the tables' names; new results already have them.
     #[test]
     fn legacy_debug_enum_names_read_as_explicit_names() {
-        assert_eq!(vibration_kind_label(&json!("Fhm")), "FHM");
-        assert_eq!(vibration_kind_label(&json!("Bv")), "BV");
-        assert_eq!(vibration_kind_label(&json!("BV")), "BV");
+        assert_eq!(vibration_kind_label("Fhm"), "FHM");
+        assert_eq!(vibration_kind_label("Bv"), "BV");
+        assert_eq!(vibration_kind_label("BV"), "BV");
         assert_eq!(regime_label(&json!("SolidContact")), "solid contact");
         assert_eq!(
             regime_label(&json!("MobileLubricantContact")),

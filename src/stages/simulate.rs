@@ -12,9 +12,9 @@ use crate::error::Result;
 use crate::slider::case::{read_case_history, SweepCaseResult, CASE_FILE, MODEL_VERSION};
 use crate::slider::params::SimulateParams;
 use crate::slider::sweep::{
-    case_rows, clearance_curve, convention_touchdown, hysteresis, link_cases_tagged, regime_name,
-    run_jobs, sweep_analysis, Branch, CaseOutcome, CaseSink, Hysteresis, PreparedSweep, SweepPlan,
-    HYSTERESIS_TOLERANCE_M,
+    clearance_curve, convention_touchdown, hysteresis, link_cases_tagged, regime_name, run_jobs,
+    sweep_analysis, sweep_rows, Branch, CaseOutcome, CaseSink, Hysteresis, PreparedSweep,
+    SweepPlan, HYSTERESIS_TOLERANCE_M,
 };
 use serde_json::{json, Map, Value};
 use std::path::Path;
@@ -421,17 +421,18 @@ impl StageKind for SimulateStage {
         }
         let mut rows = Vec::new();
         for r in &runs {
-            let mut branch_rows = case_rows(&r.cases, &r.sweep);
+            let mut branch_rows = sweep_rows(&r.cases, &r.sweep);
             for (row, c) in branch_rows.iter_mut().zip(&r.cases) {
-                row.insert("branch".into(), json!(branch_name(r.branch)));
+                row.branch = Some(branch_name(r.branch));
                 // A sweep in heater power (docs/bulge.md): each row also names its power.
                 if p.efficiency.is_some() {
-                    let mw = p.power_of(c.actuation).map(|w| (w * 1e12).round() / 1e9);
-                    row.insert("heater_power_mW".into(), json!(mw));
+                    row.heater_power_mW =
+                        Some(p.power_of(c.actuation).map(|w| (w * 1e12).round() / 1e9));
                 }
             }
             rows.extend(branch_rows);
         }
+        let rows = crate::core::store::rows_of(&rows);
         crate::core::store::write_table(&rows, &ctx.out_dir.join("sweep"))?;
         let hysteresis = match (runs.first(), runs.get(1)) {
             (Some(u), Some(d)) => Some(hysteresis(
