@@ -8,4 +8,5 @@ pub mod doe;
 pub mod doe_design;
 pub mod params;
 pub mod sweep;
+pub mod three_dof_case;
 pub mod three_dof_params;
