@@ -10,9 +10,54 @@ use hdi::stages::contact::{self, ContactConfig, SurfaceEnergyConfig};
 
 pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     use hdi::artefacts::dmw_tracks::read_dmw_track;
-    use hdi::slider::params::{SimulateConfig, SimulateParams};
     use hdi::slider::sweep::{case_rows, run_cases, sweep_analysis, CaseSink};
-    use hdi::stages::simulate::plots;
+    let params = simulate_params(&a)?;
+    let isbl = interface_lookup(&a)?;
+    let dmw = match &a.dmw {
+        Some(p) => Some(read_dmw_track(p)?),
+        None => None,
+    };
+    let (root, temporary) = match &a.out {
+        Some(o) => (o.clone(), false),
+        None => (
+            std::env::temp_dir().join(format!("hdi-simulate-{}", std::process::id())),
+            true,
+        ),
+    };
+    std::fs::create_dir_all(root.join("cases"))
+        .with_context(|| format!("creating {}", root.display()))?;
+    let bar = CaseBar::new(params.actuations.len());
+    let started = Instant::now();
+    let cases = run_cases(
+        &params,
+        &CaseSink::Directory(&root.join("cases")),
+        &isbl,
+        dmw.as_ref(),
+        &bar,
+    );
+    bar.finish();
+    let cases = cases?;
+    let wall = started.elapsed().as_secs_f64();
+    let sweep = sweep_analysis(&params, &cases)?;
+    let rows = case_rows(&cases, &sweep);
+    if a.out.is_some() {
+        write_sweep(&root, &params, &cases, &sweep, &rows, &a.model)?;
+    }
+    if temporary {
+        let _ = std::fs::remove_dir_all(&root);
+    }
+    if a.json {
+        print_json(&cases, &sweep, rows, wall);
+        return Ok(());
+    }
+    print_table(&a.model, &params, &cases, &sweep, &rows, wall);
+    Ok(())
+}
+
+/// The case settings of the command line, checked as a `[simulate]` table is; an error names
+/// the flag.
+fn simulate_params(a: &SimulateArgs) -> Result<hdi::slider::params::SimulateParams> {
+    use hdi::slider::params::{SimulateConfig, SimulateParams};
     let mut cfg: SimulateConfig =
         toml::from_str("contact = \"adhoc\"").context("default simulate settings")?;
     cfg.model = a.model.clone();
@@ -46,7 +91,7 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     cfg.kr_stiffening_beta = a.kr_stiffening_beta;
     cfg.bulge_width = a.bulge_width;
     cfg.histories = a.histories.clone();
-    let params = SimulateParams::check(&cfg).map_err(|e| {
+    SimulateParams::check(&cfg).map_err(|e| {
         // The list key is `actuations` in pipeline.toml, `--actuation` on the command line.
         let flag = if e.key == "actuations" {
             "actuation".to_string()
@@ -54,7 +99,12 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
             e.key.replace('_', "-")
         };
         anyhow::anyhow!("--{flag}: {}", e.message)
-    })?;
+    })
+}
+
+/// The interface table of the command line's contact settings, checked as a `[contact]` table
+/// is; an error names the flag.
+fn interface_lookup(a: &SimulateArgs) -> Result<hdi::contact::lookup::IsblLookup> {
     let mut interface = ContactConfig::defaults();
     interface.parameter_set = a.contact_set.clone().unwrap_or_else(|| a.model.clone());
     interface.surface_energy = a.surface_energy.clone().map(SurfaceEnergyConfig::Text);
@@ -75,94 +125,93 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
             anyhow::anyhow!("--{flag}: {}", e.message)
         })?
         .params;
-    let isbl = hdi::contact::lookup::IsblLookup::build_standard(
+    Ok(hdi::contact::lookup::IsblLookup::build_standard(
         hdi::contact::isbl::IsblModel::new(isbl_params)?,
-    )?;
-    let dmw = match &a.dmw {
-        Some(p) => Some(read_dmw_track(p)?),
-        None => None,
+    )?)
+}
+
+/// With `--out`: the sweep table and the sweep's plots beside the case directories.
+fn write_sweep(
+    root: &std::path::Path,
+    params: &hdi::slider::params::SimulateParams,
+    cases: &[hdi::slider::sweep::CaseOutcome],
+    sweep: &hdi::dynamics::metrics::SweepMetrics,
+    rows: &[serde_json::Map<String, serde_json::Value>],
+    model: &str,
+) -> Result<()> {
+    use hdi::slider::sweep::sweep_analysis;
+    use hdi::stages::simulate::plots;
+    hdi::core::store::write_table(rows, &root.join("sweep"))?;
+    // One sweep (the ad hoc command does not track branches; the pipeline's
+    // `[simulate]` does, docs/conventions.md), its grid touchdown.
+    let run = hdi::stages::simulate::BranchRun {
+        branch: None,
+        cases: cases
+            .iter()
+            .map(|c| hdi::slider::sweep::CaseOutcome {
+                actuation: c.actuation,
+                metrics: c.metrics.clone(),
+                entry: c.entry.clone(),
+            })
+            .collect(),
+        touchdown: hdi::dynamics::touchdown::Touchdown {
+            actuation: sweep.touchdown_actuation_m,
+            last_flying: None,
+            cases_run: 0,
+        },
+        sweep: sweep_analysis(params, cases)?,
+        extra: Vec::new(),
     };
-    let (root, temporary) = match &a.out {
-        Some(o) => (o.clone(), false),
-        None => (
-            std::env::temp_dir().join(format!("hdi-simulate-{}", std::process::id())),
-            true,
-        ),
-    };
-    std::fs::create_dir_all(root.join("cases"))
-        .with_context(|| format!("creating {}", root.display()))?;
-    let bar = CaseBar::new(params.actuations.len());
-    let started = Instant::now();
-    let cases = run_cases(
-        &params,
-        &CaseSink::Directory(&root.join("cases")),
-        &isbl,
-        dmw.as_ref(),
-        &bar,
-    );
-    bar.finish();
-    let cases = cases?;
-    let wall = started.elapsed().as_secs_f64();
-    let sweep = sweep_analysis(&params, &cases)?;
-    let rows = case_rows(&cases, &sweep);
-    if a.out.is_some() {
-        hdi::core::store::write_table(&rows, &root.join("sweep"))?;
-        // One sweep (the ad hoc command does not track branches; the pipeline's
-        // `[simulate]` does, docs/conventions.md), its grid touchdown.
-        let run = hdi::stages::simulate::BranchRun {
-            branch: None,
-            cases: cases
-                .iter()
-                .map(|c| hdi::slider::sweep::CaseOutcome {
-                    actuation: c.actuation,
-                    metrics: c.metrics.clone(),
-                    entry: c.entry.clone(),
+    plots(root, params, std::slice::from_ref(&run), model)?;
+    Ok(())
+}
+
+/// `--json` (docs/schemas/simulate.json): one case, or a sweep with its touchdown, critical
+/// point and slopes A–D (dc̄/dh_TFC, m/m) beside the cases.
+fn print_json(
+    cases: &[hdi::slider::sweep::CaseOutcome],
+    sweep: &hdi::dynamics::metrics::SweepMetrics,
+    rows: Vec<serde_json::Map<String, serde_json::Value>>,
+    wall: f64,
+) {
+    let mut out = json!({"cases": rows, "wall_time_s": wall});
+    if cases.len() > 1 {
+        let fit = |l: &Option<hdi::dynamics::metrics::LineFit>| {
+            l.as_ref().map(|l| {
+                json!({
+                    "slope": finite(l.slope),
+                    "intercept_m": finite(l.intercept_m),
+                    "rms_residual_m": finite(l.rms_residual_m),
+                    "n_points": l.indices.len(),
                 })
-                .collect(),
-            touchdown: hdi::dynamics::touchdown::Touchdown {
-                actuation: sweep.touchdown_actuation_m,
-                last_flying: None,
-                cases_run: 0,
-            },
-            sweep: sweep_analysis(&params, &cases)?,
-            extra: Vec::new(),
+            })
         };
-        plots(&root, &params, std::slice::from_ref(&run), &a.model)?;
+        let s = &sweep.slopes;
+        out["sweep"] = json!({
+            "touchdown_actuation_m": sweep.touchdown_actuation_m.and_then(finite),
+            "critical_point": s.critical_point.as_ref().map(|c| json!({
+                "actuation_m": finite(c.actuation_m),
+                "clearance_m": finite(c.clearance_m),
+            })),
+            "slopes": {"A": fit(&s.a), "B": fit(&s.b), "C": fit(&s.c), "D": fit(&s.d)},
+        });
     }
-    if temporary {
-        let _ = std::fs::remove_dir_all(&root);
-    }
-    if a.json {
-        // docs/schemas/simulate.json: one case, or a sweep with its touchdown, critical point
-        // and slopes A–D (dc̄/dh_TFC, m/m) beside the cases.
-        let mut out = json!({"cases": rows, "wall_time_s": wall});
-        if cases.len() > 1 {
-            let fit = |l: &Option<hdi::dynamics::metrics::LineFit>| {
-                l.as_ref().map(|l| {
-                    json!({
-                        "slope": finite(l.slope),
-                        "intercept_m": finite(l.intercept_m),
-                        "rms_residual_m": finite(l.rms_residual_m),
-                        "n_points": l.indices.len(),
-                    })
-                })
-            };
-            let s = &sweep.slopes;
-            out["sweep"] = json!({
-                "touchdown_actuation_m": sweep.touchdown_actuation_m.and_then(finite),
-                "critical_point": s.critical_point.as_ref().map(|c| json!({
-                    "actuation_m": finite(c.actuation_m),
-                    "clearance_m": finite(c.clearance_m),
-                })),
-                "slopes": {"A": fit(&s.a), "B": fit(&s.b), "C": fit(&s.c), "D": fit(&s.d)},
-            });
-        }
-        println!("{out}");
-        return Ok(());
-    }
+    println!("{out}");
+}
+
+/// The human-readable report: one line per case, then the sweep's touchdown, critical point
+/// and slopes.
+fn print_table(
+    model: &str,
+    params: &hdi::slider::params::SimulateParams,
+    cases: &[hdi::slider::sweep::CaseOutcome],
+    sweep: &hdi::dynamics::metrics::SweepMetrics,
+    rows: &[serde_json::Map<String, serde_json::Value>],
+    wall: f64,
+) {
     println!(
         "{} ({}), {} case(s) in {:.2} s",
-        a.model,
+        model,
         params.geometry,
         cases.len(),
         wall
@@ -171,7 +220,7 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         "  {:>8} {:>10} {:>9} {:>9} {:>8} {:>17} {:>10} {:>6} {:>8}",
         "h (nm)", "c̄ (nm)", "std (nm)", "FHM/BV %", "solid %", "regime", "F_c (mN)", "μ", "steps"
     );
-    for r in &rows {
+    for r in rows {
         let g = |k: &str| r.get(k).and_then(|v| v.as_f64());
         let s = |k: &str| g(k).map_or("-".to_string(), |x| format!("{x:.3}"));
         println!(
@@ -208,7 +257,6 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
             }
         }
     }
-    Ok(())
 }
 
 /// A number JSON can hold (`null` for NaN/∞, docs/json.md).

@@ -191,24 +191,7 @@ pub fn build(config: &Path, opts: &Options) -> Result<Built> {
     let run = RunRecord::load(&processed);
     let config_blake3 = hash_file(config).map_err(|e| Error::io(config, e))?;
 
-    // The key: everything the page shows except the dates and the validation numbers' code
-    // (the hdi version stands for that).
-    let key_doc = json!({
-        "schema": REPORT_SCHEMA,
-        "hdi_version": env!("CARGO_PKG_VERSION"),
-        "pipeline_blake3": config_blake3,
-        "validation": opts.validation,
-        "instances": plan.planned.iter().map(|p| json!({
-            "name": p.name,
-            "key": p.key,
-            "state": match &p.state { State::Fresh => Value::Null, State::Stale(w) => json!(w) },
-        })).collect::<Vec<_>>(),
-        "run": run.as_ref().map(|r| serde_json::to_value(r).unwrap_or(Value::Null)),
-        "tables": list_dir(&processed.join("tables")),
-    });
-    let key = blake3::hash(canonical_json(&key_doc).as_bytes())
-        .to_hex()
-        .to_string();
+    let key = report_key(&plan, run.as_ref(), &config_blake3, opts, &processed);
     let key_path = out.join(KEY_FILE);
     if !opts.force
         && out.join("index.html").is_file()
@@ -225,72 +208,15 @@ pub fn build(config: &Path, opts: &Options) -> Result<Built> {
 
     let mut instances = Vec::new();
     for p in &plan.planned {
-        let stage = &plan.stages[p.index];
-        let (state, why) = match &p.state {
-            State::Fresh => ("fresh".to_string(), Vec::new()),
-            State::Stale(w) if w.contains(&StaleReason::NeverRun) => {
-                ("missing".into(), StaleReason::phrases(w))
-            }
-            State::Stale(w) => ("stale".into(), StaleReason::phrases(w)),
-        };
-        let last_run = run
-            .as_ref()
-            .and_then(|r| r.instances.iter().find(|i| i.name == p.name).cloned());
-        let mut inst = Instance {
-            name: p.name.clone(),
-            kind: p.kind.clone(),
-            key: p.key.clone(),
-            model_version: stage.model_version().to_string(),
-            state,
-            why,
-            last_run,
-            manifest: p.manifest.clone(),
-            numbers: Vec::new(),
-            figures: Vec::new(),
-            files: Vec::new(),
-            inputs: p
-                .fingerprint
-                .inputs
-                .iter()
-                .map(|i| (i.role.clone(), i.path.clone(), i.blake3.clone()))
-                .collect(),
-            upstream: p
-                .fingerprint
-                .upstream
-                .iter()
-                .map(|u| (u.name.clone(), u.key.clone()))
-                .collect(),
-        };
-        if let Some(m) = &p.manifest {
-            let entry = store.entry_dir(&p.kind, &p.key);
-            if let Ok(Value::Object(mut r)) = engine::read_result(&entry) {
-                if let Some(Value::Object(row)) = r.remove("summary_row") {
-                    inst.numbers = row.into_iter().collect();
-                }
-            }
-            // Through the human-friendly link when it points at this entry, else the entry.
-            let link_target = PathBuf::from(".hdi")
-                .join("store")
-                .join(&p.kind)
-                .join(&p.key);
-            let base = if std::fs::read_link(processed.join(&p.name)).ok() == Some(link_target) {
-                vec![p.name.clone()]
-            } else {
-                vec![".hdi".into(), "store".into(), p.kind.clone(), p.key.clone()]
-            };
-            let mut outputs: Vec<_> = m.outputs.iter().collect();
-            outputs.sort_by(|a, b| a.path.cmp(&b.path));
-            for o in outputs {
-                let mut segs = base.clone();
-                segs.extend(o.path.split('/').map(str::to_string));
-                let href = format!("{rel}{}", url_path(&segs));
-                if o.path.to_ascii_lowercase().ends_with(".png") {
-                    inst.figures.push((href.clone(), o.path.clone()));
-                }
-                inst.files.push((href, o.path.clone(), o.bytes));
-            }
-        }
-        instances.push(inst);
+        let model_version = plan.stages[p.index].model_version().to_string();
+        instances.push(instance(
+            p,
+            model_version,
+            run.as_ref(),
+            &store,
+            &processed,
+            &rel,
+        ));
     }
 
     let tables = list_dir(&processed.join("tables"))
@@ -336,6 +262,108 @@ pub fn build(config: &Path, opts: &Options) -> Result<Built> {
         &[("index.html", text.as_bytes()), (KEY_FILE, key.as_bytes())],
     )?;
     Ok(Built::Written(out))
+}
+
+/// The report's cache key: everything the page shows except the dates and the validation
+/// numbers' code (the hdi version stands for that).
+fn report_key(
+    plan: &engine::Plan,
+    run: Option<&RunRecord>,
+    config_blake3: &str,
+    opts: &Options,
+    processed: &Path,
+) -> String {
+    let key_doc = json!({
+        "schema": REPORT_SCHEMA,
+        "hdi_version": env!("CARGO_PKG_VERSION"),
+        "pipeline_blake3": config_blake3,
+        "validation": opts.validation,
+        "instances": plan.planned.iter().map(|p| json!({
+            "name": p.name,
+            "key": p.key,
+            "state": match &p.state { State::Fresh => Value::Null, State::Stale(w) => json!(w) },
+        })).collect::<Vec<_>>(),
+        "run": run.map(|r| serde_json::to_value(r).unwrap_or(Value::Null)),
+        "tables": list_dir(&processed.join("tables")),
+    });
+    blake3::hash(canonical_json(&key_doc).as_bytes())
+        .to_hex()
+        .to_string()
+}
+
+/// One instance of the page: its state and why, its last run, its summary numbers, its
+/// figures and files (linked relative to the report directory), inputs and upstream.
+fn instance(
+    p: &engine::Planned,
+    model_version: String,
+    run: Option<&RunRecord>,
+    store: &Store,
+    processed: &Path,
+    rel: &str,
+) -> Instance {
+    let (state, why) = match &p.state {
+        State::Fresh => ("fresh".to_string(), Vec::new()),
+        State::Stale(w) if w.contains(&StaleReason::NeverRun) => {
+            ("missing".into(), StaleReason::phrases(w))
+        }
+        State::Stale(w) => ("stale".into(), StaleReason::phrases(w)),
+    };
+    let last_run = run.and_then(|r| r.instances.iter().find(|i| i.name == p.name).cloned());
+    let mut inst = Instance {
+        name: p.name.clone(),
+        kind: p.kind.clone(),
+        key: p.key.clone(),
+        model_version,
+        state,
+        why,
+        last_run,
+        manifest: p.manifest.clone(),
+        numbers: Vec::new(),
+        figures: Vec::new(),
+        files: Vec::new(),
+        inputs: p
+            .fingerprint
+            .inputs
+            .iter()
+            .map(|i| (i.role.clone(), i.path.clone(), i.blake3.clone()))
+            .collect(),
+        upstream: p
+            .fingerprint
+            .upstream
+            .iter()
+            .map(|u| (u.name.clone(), u.key.clone()))
+            .collect(),
+    };
+    if let Some(m) = &p.manifest {
+        let entry = store.entry_dir(&p.kind, &p.key);
+        if let Ok(Value::Object(mut r)) = engine::read_result(&entry) {
+            if let Some(Value::Object(row)) = r.remove("summary_row") {
+                inst.numbers = row.into_iter().collect();
+            }
+        }
+        // Through the human-friendly link when it points at this entry, else the entry.
+        let link_target = PathBuf::from(".hdi")
+            .join("store")
+            .join(&p.kind)
+            .join(&p.key);
+        let base = if std::fs::read_link(processed.join(&p.name)).ok() == Some(link_target) {
+            vec![p.name.clone()]
+        } else {
+            vec![".hdi".into(), "store".into(), p.kind.clone(), p.key.clone()]
+        };
+        let mut outputs: Vec<_> = m.outputs.iter().collect();
+        outputs.sort_by(|a, b| a.path.cmp(&b.path));
+        for o in outputs {
+            let mut segs = base.clone();
+            segs.extend(o.path.split('/').map(str::to_string));
+            let href = format!("{rel}{}", url_path(&segs));
+            if o.path.to_ascii_lowercase().ends_with(".png") {
+                inst.figures.push((href.clone(), o.path.clone()));
+            }
+            inst.files.push((href, o.path.clone(), o.bytes));
+        }
+    }
+    inst
 }
 
 /// File names in `dir`, sorted (none when it does not exist).

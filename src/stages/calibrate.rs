@@ -14,8 +14,8 @@ use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::executor::batch::BatchRunner;
 use crate::core::executor::CaseSpec;
 use crate::dynamics::calibration::{
-    calibrate, round_case, CalibrationSettings, CaseRound, CaseRounds, Knob, TargetGeometry,
-    DEFAULT_MAX_EVALUATIONS,
+    calibrate, round_case, CalibrationResult, CalibrationSettings, CaseRound, CaseRounds, Knob,
+    TargetGeometry, DEFAULT_MAX_EVALUATIONS,
 };
 use crate::dynamics::metrics::CaseMetrics;
 use crate::dynamics::DynamicsError;
@@ -305,6 +305,24 @@ impl StageKind for CalibrateStage {
             &knob_rows(&self.settings.knobs, &result),
             &ctx.out_dir.join("knobs"),
         )?;
+        self.convergence_png(ctx, &result)?;
+        residuals_png(&ctx.out_dir.join("residuals.png"), &self.base_name, &result)?;
+        let counts = InBandCounts::of(&result);
+        let log = summary_text(&self.name, &settings, &fit_inputs, &warm, &result, &counts);
+        let log_path = ctx.out_dir.join("calibration.log");
+        std::fs::write(&log_path, &log).map_err(|e| crate::error::Error::io(&log_path, e))?;
+        ctx.progress
+            .set_message(log.lines().next().unwrap_or_default());
+        Ok(StageOutput {
+            result: self.result_json(&settings, &fit_inputs, &warm, &result, &counts),
+            summary_row: Some(self.summary_row(&result, &counts)),
+        })
+    }
+}
+
+impl CalibrateStage {
+    /// The objective of every evaluation and the best so far (`convergence.png`).
+    fn convergence_png(&self, ctx: &StageContext, result: &CalibrationResult) -> Result<()> {
         let current: Vec<(f64, f64)> = result
             .history
             .iter()
@@ -326,13 +344,12 @@ impl StageKind for CalibrateStage {
             &[("evaluated", current), ("best so far", best)],
             &[],
         )?;
-        residuals_png(&ctx.out_dir.join("residuals.png"), &self.base_name, &result)?;
-        let counts = InBandCounts::of(&result);
-        let log = summary_text(&self.name, &settings, &fit_inputs, &warm, &result, &counts);
-        let log_path = ctx.out_dir.join("calibration.log");
-        std::fs::write(&log_path, &log).map_err(|e| crate::error::Error::io(&log_path, e))?;
-        ctx.progress
-            .set_message(log.lines().next().unwrap_or_default());
+        Ok(())
+    }
+
+    /// The instance's row of the run's summary table: objective and in-band counts before and
+    /// after the fit, its convergence and the fitted knobs.
+    fn summary_row(&self, result: &CalibrationResult, counts: &InBandCounts) -> Map<String, Value> {
         let mut row = Map::new();
         row.insert("base".into(), json!(self.base_name));
         row.insert("objective_defaults".into(), json!(result.initial.objective));
@@ -361,64 +378,74 @@ impl StageKind for CalibrateStage {
         for (k, v) in &result.best.knobs {
             row.insert(k.name().into(), json!(v));
         }
+        row
+    }
+
+    /// The stage's `result.json`: the fitted knobs, the evaluations at the defaults and at the
+    /// fit, the in-band counts, the convergence and the search's history.
+    fn result_json(
+        &self,
+        settings: &CalibrationSettings,
+        fit_inputs: &str,
+        warm: &WarmStart,
+        result: &CalibrationResult,
+        counts: &InBandCounts,
+    ) -> Value {
         let search = &settings.search;
         let td = &settings.touchdown;
-        Ok(StageOutput {
-            result: json!({
-                "base": self.base_name,
-                "model": self.base.model_name,
-                "fitted": fitted_json(&result.best.knobs),
-                "fitted_description": describe_knobs(&result.best.knobs),
-                "defaults": evaluation_json(&result.initial),
-                "calibrated": evaluation_json(&result.best),
-                "held_out": {
-                    "defaults": result.held_out_initial.as_ref().map(evaluation_json),
-                    "calibrated": result.held_out_best.as_ref().map(evaluation_json),
-                    "sweep_grid_nm": self.settings.sweep_grid.iter().map(|a| a * 1e9).collect::<Vec<_>>(),
-                },
-                "in_band": {
-                    "fitted": {"targets": counts.fitted_total, "defaults": counts.fitted.0, "calibrated": counts.fitted.1},
-                    "held_out": {"targets": counts.held_out_total, "defaults": counts.held_out.0, "calibrated": counts.held_out.1},
-                    "selection": {"targets": counts.selection_total, "defaults": counts.selection.0, "calibrated": counts.selection.1},
-                    "final": {"targets": counts.final_total, "defaults": counts.final_set.0, "calibrated": counts.final_set.1},
-                },
+        json!({
+            "base": self.base_name,
+            "model": self.base.model_name,
+            "fitted": fitted_json(&result.best.knobs),
+            "fitted_description": describe_knobs(&result.best.knobs),
+            "defaults": evaluation_json(&result.initial),
+            "calibrated": evaluation_json(&result.best),
+            "held_out": {
+                "defaults": result.held_out_initial.as_ref().map(evaluation_json),
+                "calibrated": result.held_out_best.as_ref().map(evaluation_json),
+                "sweep_grid_nm": self.settings.sweep_grid.iter().map(|a| a * 1e9).collect::<Vec<_>>(),
+            },
+            "in_band": {
+                "fitted": {"targets": counts.fitted_total, "defaults": counts.fitted.0, "calibrated": counts.fitted.1},
+                "held_out": {"targets": counts.held_out_total, "defaults": counts.held_out.0, "calibrated": counts.held_out.1},
+                "selection": {"targets": counts.selection_total, "defaults": counts.selection.0, "calibrated": counts.selection.1},
+                "final": {"targets": counts.final_total, "defaults": counts.final_set.0, "calibrated": counts.final_set.1},
+            },
+            "converged": result.converged,
+            "convergence": {
                 "converged": result.converged,
-                "convergence": {
-                    "converged": result.converged,
-                    "reason": result.stop.name(),
-                    "f_tolerance": search.f_tolerance,
-                    "x_tolerance": search.x_tolerance,
-                    "final_f_spread": result.final_f_spread,
-                    "final_x_spread": result.final_x_spread,
-                    "max_evaluations": search.max_evaluations,
-                    "initial_step": search.initial_step,
-                    "start": fitted_json(&settings.start),
-                    "fit_inputs": fit_inputs,
-                    "start_fitted_for": self.start_fitted_for,
-                    "warm_start": warm.name(),
-                    "start_ignored": match &warm {
-                        WarmStart::Ignored(reason) => Some(reason.as_str()),
-                        _ => None,
-                    },
+                "reason": result.stop.name(),
+                "f_tolerance": search.f_tolerance,
+                "x_tolerance": search.x_tolerance,
+                "final_f_spread": result.final_f_spread,
+                "final_x_spread": result.final_x_spread,
+                "max_evaluations": search.max_evaluations,
+                "initial_step": search.initial_step,
+                "start": fitted_json(&settings.start),
+                "fit_inputs": fit_inputs,
+                "start_fitted_for": self.start_fitted_for,
+                "warm_start": warm.name(),
+                "start_ignored": match warm {
+                    WarmStart::Ignored(reason) => Some(reason.as_str()),
+                    _ => None,
                 },
-                "at_bound": result.at_bound.iter().map(|(k, b)| json!({
-                    "knob": k.name(), "bound": b.name(),
-                })).collect::<Vec<_>>(),
-                "touchdown_search": {
-                    "start_nm": td.start * 1e9, "stop_nm": td.stop * 1e9, "step_nm": td.step * 1e9,
-                    "resolution_nm": td.resolution * 1e9, "batch": td.batch,
-                },
-                "evaluations": result.evaluations,
-                "cases": result.cases,
-                "failures": result.failures.iter().map(|(k, e)| json!({
-                    "knobs": describe_knobs(k), "error": e,
-                })).collect::<Vec<_>>(),
-                "history": result.history.iter().map(|(i, f, b, exact)| json!([i, f, b, exact])).collect::<Vec<_>>(),
-                "rejected_early": result.rejected,
-                "table": "calibration.parquet",
-                "log": "calibration.log",
-            }),
-            summary_row: Some(row),
+            },
+            "at_bound": result.at_bound.iter().map(|(k, b)| json!({
+                "knob": k.name(), "bound": b.name(),
+            })).collect::<Vec<_>>(),
+            "touchdown_search": {
+                "start_nm": td.start * 1e9, "stop_nm": td.stop * 1e9, "step_nm": td.step * 1e9,
+                "resolution_nm": td.resolution * 1e9, "batch": td.batch,
+            },
+            "evaluations": result.evaluations,
+            "cases": result.cases,
+            "failures": result.failures.iter().map(|(k, e)| json!({
+                "knobs": describe_knobs(k), "error": e,
+            })).collect::<Vec<_>>(),
+            "history": result.history.iter().map(|(i, f, b, exact)| json!([i, f, b, exact])).collect::<Vec<_>>(),
+            "rejected_early": result.rejected,
+            "table": "calibration.parquet",
+            "log": "calibration.log",
         })
     }
 }

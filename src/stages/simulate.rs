@@ -14,7 +14,7 @@ use crate::slider::params::SimulateParams;
 use crate::slider::sweep::{
     clearance_curve, convention_touchdown, hysteresis, link_cases_tagged, regime_name, run_jobs,
     sweep_analysis, sweep_rows, Branch, CaseOutcome, CaseSink, Hysteresis, PreparedSweep,
-    SweepPlan, HYSTERESIS_TOLERANCE_M,
+    SweepPlan, SweepRow, HYSTERESIS_TOLERANCE_M,
 };
 use serde_json::{json, Map, Value};
 use std::path::Path;
@@ -380,14 +380,7 @@ impl StageKind for SimulateStage {
             branches,
             starts,
         } = prepared.plan()?;
-        let jobs: Vec<(f64, Option<[f64; 2]>)> = starts
-            .iter()
-            .flat_map(|s| {
-                grid.iter()
-                    .enumerate()
-                    .map(move |(i, &a)| (a, s.as_ref().map(|s| s[i])))
-            })
-            .collect();
+        let jobs = plan_jobs(&grid, &starts);
         ctx.progress.set_message(format!("{} cases", jobs.len()));
         let all = run_jobs(p, &sink, isbl, track, ctx.progress, &jobs, "")?;
         ctx.progress
@@ -399,40 +392,13 @@ impl StageKind for SimulateStage {
             "cases_cached",
             json!(all.iter().filter(|c| c.entry.cached).count()),
         );
-        let mut all = all.into_iter();
-        let mut runs: Vec<BranchRun> = Vec::new();
-        for (branch, start) in branches.iter().zip(&starts) {
-            let cases: Vec<CaseOutcome> = all.by_ref().take(grid.len()).collect();
-            let sweep = sweep_analysis(p, &cases)?;
-            let (touchdown, extra) =
-                convention_touchdown(p, &sink, isbl, track, &cases, start.as_deref().zip(*branch))?;
-            runs.push(BranchRun {
-                branch: *branch,
-                cases,
-                sweep,
-                touchdown,
-                extra,
-            });
-        }
+        let runs = branch_runs(&prepared, &sink, all, &branches, &starts, grid.len())?;
         let mut files: Vec<Vec<String>> = Vec::new();
         for (k, r) in runs.iter().enumerate() {
             let sub = (k > 0).then(|| branch_name(r.branch));
             files.push(link_cases_tagged(ctx.out_dir, &r.cases, sub)?);
         }
-        let mut rows = Vec::new();
-        for r in &runs {
-            let mut branch_rows = sweep_rows(&r.cases, &r.sweep);
-            for (row, c) in branch_rows.iter_mut().zip(&r.cases) {
-                row.branch = Some(branch_name(r.branch));
-                // A sweep in heater power (docs/bulge.md): each row also names its power.
-                if p.efficiency.is_some() {
-                    row.heater_power_mW =
-                        Some(p.power_of(c.actuation).map(|w| (w * 1e12).round() / 1e9));
-                }
-            }
-            rows.extend(branch_rows);
-        }
-        let rows = crate::core::store::rows_of(&rows);
+        let rows = crate::core::store::rows_of(&branch_rows(p, &runs));
         crate::core::store::write_table(&rows, &ctx.out_dir.join("sweep"))?;
         let hysteresis = match (runs.first(), runs.get(1)) {
             (Some(u), Some(d)) => Some(hysteresis(
@@ -443,113 +409,213 @@ impl StageKind for SimulateStage {
             _ => None,
         };
         plots(ctx.out_dir, p, &runs, &self.name)?;
-        let first = &runs[0];
-        let (cases, sweep) = (&first.cases, &first.sweep);
-        let mut summary = sweep_json(cases, sweep);
-        let branch_json = |r: &BranchRun| {
-            let mut v = sweep_json(&r.cases, &r.sweep);
-            if let Some(o) = v.as_object_mut() {
-                o.insert("touchdown_convention".into(), touchdown_json(r));
-            }
-            v
-        };
         let touchdown_power = p
             .efficiency
-            .and_then(|e| sweep.touchdown_actuation_m.map(|td| td / e));
-        if let Some(obj) = summary.as_object_mut() {
-            obj.insert("branch".into(), json!(branch_name(first.branch)));
-            obj.insert("touchdown_convention".into(), touchdown_json(first));
-            if let Some(e) = p.efficiency {
-                obj.insert("efficiency_m_per_W".into(), json!(e));
-                obj.insert("touchdown_power_W".into(), json!(touchdown_power));
-            }
-        }
-        // Femtometre-rounded nm: 10.2, not 10.200000000000001.
-        let nm = |x: f64| (x * 1e15).round() / 1e6;
-        let mut row = Map::new();
-        row.insert("model".into(), json!(p.model_name));
-        row.insert("geometry".into(), json!(p.geometry));
-        row.insert("calibration".into(), json!(p.calibration));
-        row.insert("cases".into(), json!(jobs.len()));
-        for r in &runs {
-            // The first branch keeps the plain names; a second one adds its name.
-            let sfx = if std::ptr::eq(r, first) {
-                String::new()
-            } else {
-                format!("_{}", branch_name(r.branch))
-            };
-            row.insert(
-                format!("touchdown{sfx}_nm"),
-                json!(r.sweep.touchdown_actuation_m.map(nm)),
-            );
-            row.insert(
-                format!("touchdown_refined{sfx}_nm"),
-                json!(r.touchdown.actuation.map(nm)),
-            );
-            if let Some(cp) = &r.sweep.slopes.critical_point {
-                row.insert(
-                    format!("critical_point{sfx}_nm"),
-                    json!(cp.actuation_m * 1e9),
-                );
-                row.insert(
-                    format!("critical_clearance{sfx}_nm"),
-                    json!(cp.clearance_m * 1e9),
-                );
-            }
-        }
-        for (k, l) in [
-            ("slope_A", &sweep.slopes.a),
-            ("slope_B", &sweep.slopes.b),
-            ("slope_C", &sweep.slopes.c),
-            ("slope_D", &sweep.slopes.d),
-        ] {
-            row.insert(k.into(), json!(l.as_ref().map(|l| l.slope)));
-        }
-        if p.efficiency.is_some() {
-            row.insert(
-                "touchdown_power_mW".into(),
-                json!(touchdown_power.map(|w| (w * 1e9).round() / 1e6)),
-            );
-        }
-        row.insert(
-            "optimum_nm".into(),
-            json!(sweep.optimum_index.map(|i| nm(cases[i].actuation))),
+            .and_then(|e| runs[0].sweep.touchdown_actuation_m.map(|td| td / e));
+        let row = summary_row(p, &runs, jobs.len(), touchdown_power, hysteresis.as_ref());
+        let result = stage_result(
+            p,
+            &runs,
+            &files,
+            case_keys,
+            touchdown_power,
+            hysteresis.as_ref(),
         );
-        if let Some(h) = &hysteresis {
-            row.insert("hysteresis_from_nm".into(), json!(h.from_m.map(nm)));
-            row.insert("hysteresis_to_nm".into(), json!(h.to_m.map(nm)));
-            row.insert(
-                "hysteresis_max_nm".into(),
-                json!((h.max_difference_m * 1e15).round() / 1e6),
-            );
-        }
-        let mut result = json!({
-            "sweep": summary,
-            "cases": runs.iter().zip(&files).flat_map(|(r, f)| r.cases.iter().zip(f).map(|(c, f)| json!({
-                "actuation_m": c.actuation, "branch": branch_name(r.branch), "h5": f, "metrics": c.metrics,
-            }))).collect::<Vec<_>>(),
-            "case_keys": case_keys,
-            "calibration": p.calibration,
-            "calibrated_knobs": p.calibrated_knobs.iter().map(|(k, v)| json!({"knob": k, "value": v})).collect::<Vec<_>>(),
-            "table": "sweep.parquet",
-        });
-        if let Some(obj) = result.as_object_mut() {
-            if runs.iter().any(|r| r.branch.is_some()) {
-                let mut b = Map::new();
-                for r in &runs {
-                    b.insert(branch_name(r.branch).into(), branch_json(r));
-                }
-                obj.insert("branches".into(), Value::Object(b));
-            }
-            if let Some(h) = &hysteresis {
-                obj.insert("hysteresis".into(), hysteresis_json(h, &runs));
-            }
-        }
         Ok(StageOutput {
             result,
             summary_row: Some(row),
         })
     }
+}
+
+/// The sweep's jobs, branch by branch in grid order: each actuation with its continuation
+/// start (`None`: nominal start).
+fn plan_jobs(grid: &[f64], starts: &[Option<Vec<[f64; 2]>>]) -> Vec<(f64, Option<[f64; 2]>)> {
+    starts
+        .iter()
+        .flat_map(|s| {
+            grid.iter()
+                .enumerate()
+                .map(move |(i, &a)| (a, s.as_ref().map(|s| s[i])))
+        })
+        .collect()
+}
+
+/// Split the cases run (branch by branch, `grid_len` each) into branches, each with its sweep
+/// metrics and its touchdown by the convention (which may run extra cases).
+fn branch_runs(
+    prepared: &PreparedSweep,
+    sink: &CaseSink,
+    all: Vec<CaseOutcome>,
+    branches: &[Option<Branch>],
+    starts: &[Option<Vec<[f64; 2]>>],
+    grid_len: usize,
+) -> Result<Vec<BranchRun>> {
+    let p = &prepared.params;
+    let isbl = &prepared.isbl;
+    let track = prepared.dmw.as_ref().map(|(t, _)| t);
+    let mut all = all.into_iter();
+    let mut runs: Vec<BranchRun> = Vec::new();
+    for (branch, start) in branches.iter().zip(starts) {
+        let cases: Vec<CaseOutcome> = all.by_ref().take(grid_len).collect();
+        let sweep = sweep_analysis(p, &cases)?;
+        let (touchdown, extra) =
+            convention_touchdown(p, sink, isbl, track, &cases, start.as_deref().zip(*branch))?;
+        runs.push(BranchRun {
+            branch: *branch,
+            cases,
+            sweep,
+            touchdown,
+            extra,
+        });
+    }
+    Ok(runs)
+}
+
+/// The sweep table's rows: every branch's cases, each row naming its branch (and its heater
+/// power in a sweep stated in power, docs/bulge.md).
+fn branch_rows(p: &SimulateParams, runs: &[BranchRun]) -> Vec<SweepRow> {
+    let mut rows = Vec::new();
+    for r in runs {
+        let mut branch_rows = sweep_rows(&r.cases, &r.sweep);
+        for (row, c) in branch_rows.iter_mut().zip(&r.cases) {
+            row.branch = Some(branch_name(r.branch));
+            if p.efficiency.is_some() {
+                row.heater_power_mW =
+                    Some(p.power_of(c.actuation).map(|w| (w * 1e12).round() / 1e9));
+            }
+        }
+        rows.extend(branch_rows);
+    }
+    rows
+}
+
+/// Femtometre-rounded nm: 10.2, not 10.200000000000001.
+fn nm(x: f64) -> f64 {
+    (x * 1e15).round() / 1e6
+}
+
+/// The instance's row of the run's summary table: touchdown, critical point, slopes, optimum
+/// and hysteresis of the sweep (a second branch adds its touchdown and critical point).
+fn summary_row(
+    p: &SimulateParams,
+    runs: &[BranchRun],
+    n_cases: usize,
+    touchdown_power: Option<f64>,
+    hysteresis: Option<&Hysteresis>,
+) -> Map<String, Value> {
+    let first = &runs[0];
+    let (cases, sweep) = (&first.cases, &first.sweep);
+    let mut row = Map::new();
+    row.insert("model".into(), json!(p.model_name));
+    row.insert("geometry".into(), json!(p.geometry));
+    row.insert("calibration".into(), json!(p.calibration));
+    row.insert("cases".into(), json!(n_cases));
+    for r in runs {
+        // The first branch keeps the plain names; a second one adds its name.
+        let sfx = if std::ptr::eq(r, first) {
+            String::new()
+        } else {
+            format!("_{}", branch_name(r.branch))
+        };
+        row.insert(
+            format!("touchdown{sfx}_nm"),
+            json!(r.sweep.touchdown_actuation_m.map(nm)),
+        );
+        row.insert(
+            format!("touchdown_refined{sfx}_nm"),
+            json!(r.touchdown.actuation.map(nm)),
+        );
+        if let Some(cp) = &r.sweep.slopes.critical_point {
+            row.insert(
+                format!("critical_point{sfx}_nm"),
+                json!(cp.actuation_m * 1e9),
+            );
+            row.insert(
+                format!("critical_clearance{sfx}_nm"),
+                json!(cp.clearance_m * 1e9),
+            );
+        }
+    }
+    for (k, l) in [
+        ("slope_A", &sweep.slopes.a),
+        ("slope_B", &sweep.slopes.b),
+        ("slope_C", &sweep.slopes.c),
+        ("slope_D", &sweep.slopes.d),
+    ] {
+        row.insert(k.into(), json!(l.as_ref().map(|l| l.slope)));
+    }
+    if p.efficiency.is_some() {
+        row.insert(
+            "touchdown_power_mW".into(),
+            json!(touchdown_power.map(|w| (w * 1e9).round() / 1e6)),
+        );
+    }
+    row.insert(
+        "optimum_nm".into(),
+        json!(sweep.optimum_index.map(|i| nm(cases[i].actuation))),
+    );
+    if let Some(h) = hysteresis {
+        row.insert("hysteresis_from_nm".into(), json!(h.from_m.map(nm)));
+        row.insert("hysteresis_to_nm".into(), json!(h.to_m.map(nm)));
+        row.insert(
+            "hysteresis_max_nm".into(),
+            json!((h.max_difference_m * 1e15).round() / 1e6),
+        );
+    }
+    row
+}
+
+/// The stage's `result.json`: the first branch's sweep, every case with its HDF5 file, the case
+/// keys, the calibration, and (with two branches) each branch and their hysteresis.
+fn stage_result(
+    p: &SimulateParams,
+    runs: &[BranchRun],
+    files: &[Vec<String>],
+    case_keys: Vec<String>,
+    touchdown_power: Option<f64>,
+    hysteresis: Option<&Hysteresis>,
+) -> Value {
+    let first = &runs[0];
+    let mut summary = sweep_json(&first.cases, &first.sweep);
+    let branch_json = |r: &BranchRun| {
+        let mut v = sweep_json(&r.cases, &r.sweep);
+        if let Some(o) = v.as_object_mut() {
+            o.insert("touchdown_convention".into(), touchdown_json(r));
+        }
+        v
+    };
+    if let Some(obj) = summary.as_object_mut() {
+        obj.insert("branch".into(), json!(branch_name(first.branch)));
+        obj.insert("touchdown_convention".into(), touchdown_json(first));
+        if let Some(e) = p.efficiency {
+            obj.insert("efficiency_m_per_W".into(), json!(e));
+            obj.insert("touchdown_power_W".into(), json!(touchdown_power));
+        }
+    }
+    let mut result = json!({
+        "sweep": summary,
+        "cases": runs.iter().zip(files).flat_map(|(r, f)| r.cases.iter().zip(f).map(|(c, f)| json!({
+            "actuation_m": c.actuation, "branch": branch_name(r.branch), "h5": f, "metrics": c.metrics,
+        }))).collect::<Vec<_>>(),
+        "case_keys": case_keys,
+        "calibration": p.calibration,
+        "calibrated_knobs": p.calibrated_knobs.iter().map(|(k, v)| json!({"knob": k, "value": v})).collect::<Vec<_>>(),
+        "table": "sweep.parquet",
+    });
+    if let Some(obj) = result.as_object_mut() {
+        if runs.iter().any(|r| r.branch.is_some()) {
+            let mut b = Map::new();
+            for r in runs {
+                b.insert(branch_name(r.branch).into(), branch_json(r));
+            }
+            obj.insert("branches".into(), Value::Object(b));
+        }
+        if let Some(h) = hysteresis {
+            obj.insert("hysteresis".into(), hysteresis_json(h, runs));
+        }
+    }
+    result
 }
 
 // ------------------------------------------------------------------------------------------

@@ -1280,15 +1280,45 @@ fn with_2dof_ordering(row: Row, name: &str, o: Option<(Ordering, Origin)>) -> Ro
 
 fn app_b_rows(cache: Option<&Cache>) -> Vec<Row> {
     let mut rows = Vec::new();
-    let tol = Tolerance::Relative(0.1);
-    let b2 = "dissertation App. B, Fig. B.2";
     let get = |name: &str| Analysed::read(cache, name);
     let (dmw, dmw2) = (get("dmw_response"), get("dmw_response_2dof"));
     let (still, still2) = (get("still_response"), get("still_response_2dof"));
-    let pitch_springs = "the AB springs are inverted from the 1st pitch mode: 110 kHz at every PT \
-                         of the 3-DOF frequency table (docs/dynamics-3dof-air-bearing.md) and of \
-                         the 2-DOF AB (docs/dynamics-geometry.md)";
+    rows.extend(dmw_line_rows(&dmw, &dmw2));
+    rows.extend(free_decay_rows(&still, &still2));
+    rows.extend(normal_mode_rows(&dmw, &dmw2, &still));
+    rows.extend(roll_mode_rows(cache, &dmw));
+    rows.extend(excitation_rows(cache));
+    rows.extend(chirp_rows(cache));
+    rows
+}
 
+/// The three bands' strongest lines of a response: DMW, pitch/roll, normal.
+fn band_lines(a: &Analysed) -> [Option<Peak>; 3] {
+    [&DMW_BAND, &PITCH_ROLL_BAND, &NORMAL_BAND].map(|b| a.line(b))
+}
+
+/// That the DMW-band line dominates the strongest lines of the pitch/roll and normal bands.
+fn dmw_dominance(a: &Analysed) -> Ordering {
+    let [d, p, n] = band_lines(a);
+    Ordering::new(
+        Relation::Dominates {
+            split: 1,
+            factor: 1.0,
+        },
+        &[
+            ("DMW-band line (nm)", amp_nm(d)),
+            ("pitch/roll-band line", amp_nm(p)),
+            ("normal-band line", amp_nm(n)),
+        ],
+    )
+}
+
+/// App. B #36 (Fig. B.2(b, c)): the DMW line of the flying response, its frequency and its
+/// dominance over the AB bands.
+fn dmw_line_rows(dmw: &Option<Analysed>, dmw2: &Option<Analysed>) -> Vec<Row> {
+    let mut rows = Vec::new();
+    let tol = Tolerance::Relative(0.1);
+    let b2 = "dissertation App. B, Fig. B.2";
     // #36: the DMW line dominates the flying response (Fig. B.2(b, c)). Its frequency is the
     // synthetic record's (C); that it dominates the AB bands is the model's (Q).
     let q = "strongest DMW-band line of the flying response to the DMW record";
@@ -1320,27 +1350,12 @@ fn app_b_rows(cache: Option<&Cache>) -> Vec<Row> {
         .reference(b2)
         .by_construction(record),
     });
-    let bands = |a: &Analysed| [&DMW_BAND, &PITCH_ROLL_BAND, &NORMAL_BAND].map(|b| a.line(b));
-    let dominates = |a: &Analysed| {
-        let [d, p, n] = bands(a);
-        Ordering::new(
-            Relation::Dominates {
-                split: 1,
-                factor: 1.0,
-            },
-            &[
-                ("DMW-band line (nm)", amp_nm(d)),
-                ("pitch/roll-band line", amp_nm(p)),
-                ("normal-band line", amp_nm(n)),
-            ],
-        )
-    };
     let q = "flying response to the DMW record: the DMW line dominates (stronger than the \
              strongest line of the pitch/roll and normal-mode bands)";
     rows.push(match &dmw {
         Some(a) => {
-            let [d, p, n] = bands(a);
-            let row = Row::ordering("dyn-36.dominates", q, dominates(a))
+            let [d, p, n] = band_lines(a);
+            let row = Row::ordering("dyn-36.dominates", q, dmw_dominance(a))
                 .published("dissertation App. B, Fig. B.2(b, c)")
                 .variant(&format!(
                     "{APP_B_3DOF}; bands {} / {} / {} ({}, {}, {})",
@@ -1362,13 +1377,22 @@ fn app_b_rows(cache: Option<&Cache>) -> Vec<Row> {
             with_2dof_ordering(
                 row,
                 "dmw_response_2dof",
-                dmw2.as_ref().map(|a| (dominates(a), a.origin.clone())),
+                dmw2.as_ref().map(|a| (dmw_dominance(a), a.origin.clone())),
             )
         }
         None => not_run_ordering("dyn-36.dominates", q, "`analysis.dmw_response`")
             .published("dissertation App. B, Fig. B.2(b, c)"),
     });
+    rows
+}
 
+/// App. B (Fig. B.6): the 1st pitch mode in the kicked zero-excitation response.
+fn free_decay_rows(still: &Option<Analysed>, still2: &Option<Analysed>) -> Vec<Row> {
+    let mut rows = Vec::new();
+    let tol = Tolerance::Relative(0.1);
+    let pitch_springs = "the AB springs are inverted from the 1st pitch mode: 110 kHz at every PT \
+                         of the 3-DOF frequency table (docs/dynamics-3dof-air-bearing.md) and of \
+                         the 2-DOF AB (docs/dynamics-geometry.md)";
     // The 1st pitch mode in the kicked zero-excitation response (Fig. B.6): its frequency is
     // the one the springs were inverted from (C); that it dominates the transient is a model
     // outcome (Q).
@@ -1436,7 +1460,18 @@ fn app_b_rows(cache: Option<&Cache>) -> Vec<Row> {
         None => not_run_ordering("dyn-36.transient", q, "`analysis.still_response`")
             .published("dissertation App. B, Fig. B.6"),
     });
+    rows
+}
 
+/// App. B (Fig. B.2(b, f)): the normal-mode line of the flying response, weaker than the
+/// 1st pitch.
+fn normal_mode_rows(
+    dmw: &Option<Analysed>,
+    dmw2: &Option<Analysed>,
+    still: &Option<Analysed>,
+) -> Vec<Row> {
+    let mut rows = Vec::new();
+    let tol = Tolerance::Relative(0.1);
     // The normal mode "around the 275 kHz peak" and weaker than the 1st pitch (Fig. B.2(b, f)).
     let q = "normal-mode line in the flying response to the DMW record";
     let record275 = "the synthetic record's line at harmonic 3041 of 5 425 rpm = 274.95 kHz, \
@@ -1521,7 +1556,13 @@ fn app_b_rows(cache: Option<&Cache>) -> Vec<Row> {
         None => not_run_ordering("dyn-36.amplitudes", q, "`analysis.dmw_response`")
             .published("dissertation App. B, Fig. B.2(b, f)"),
     });
+    rows
+}
 
+/// App. B (Fig. B.2(f)): the roll mode as a smaller line left of the 1st pitch mode.
+fn roll_mode_rows(cache: Option<&Cache>, dmw: &Option<Analysed>) -> Vec<Row> {
+    let mut rows = Vec::new();
+    let get = |name: &str| Analysed::read(cache, name);
     // The roll mode "shows up as a smaller peak to the left of the 1st pitch mode" (Fig.
     // B.2(f)). Roll is its own DOF: its line is the roll history's strongest in the pitch/roll
     // band; the heave is then read at that frequency (±2 bins), not at a target.
@@ -1589,7 +1630,14 @@ fn app_b_rows(cache: Option<&Cache>) -> Vec<Row> {
         )
         .published("dissertation App. B, Fig. B.2(f)"),
     });
+    rows
+}
 
+/// App. B #37: the nature of the excitation shows in the response, flying and in steady
+/// lubricant contact.
+fn excitation_rows(cache: Option<&Cache>) -> Vec<Row> {
+    let mut rows = Vec::new();
+    let get = |name: &str| Analysed::read(cache, name);
     // #37: the nature of the excitation shows in the response, flying and in steady lubricant
     // contact.
     for (id, what, names, published, variant) in [
@@ -1668,7 +1716,6 @@ fn app_b_rows(cache: Option<&Cache>) -> Vec<Row> {
             .published(published),
         });
     }
-    rows.extend(chirp_rows(cache));
     rows
 }
 

@@ -608,12 +608,26 @@ fn needs(id: &str, quantity: &str, instance: &str) -> Row {
 /// the stage outputs are too slow to recompute here (2 ms cases with every feature and track).
 fn cached_rows(cache: Option<&Cache>) -> Vec<Row> {
     let mut rows = Vec::new();
-    let flag = |b: bool| f64::from(b);
     let record = cache
         .and_then(|c| c.record_label("lubricant_cases"))
         .unwrap_or_else(|| "the pipeline's DMW record".into());
     let inputs = &format!("{record} (tracks D1–D3), static start, no calibration");
     // S3: constant 12 nm.
+    rows.extend(constant_12nm_rows(cache, inputs));
+    // S4: operational shock.
+    rows.extend(shock_contact_rows(cache, inputs));
+    // S4: the AB modes and the DMW line in the shock response, each the strongest line of a
+    // band stated on physical grounds (validation::spectral), never the line nearest a target.
+    rows.extend(shock_mode_rows(cache, inputs));
+    // S5: variable actuation, ISBL vs MTL.
+    rows.extend(variable_actuation_rows(cache, inputs));
+    rows
+}
+
+/// S3 (§4.2, Figs. 4.9–4.11): constant 12 nm actuation, ISBL vs MTL.
+fn constant_12nm_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
+    let flag = |b: bool| f64::from(b);
+    let mut rows = Vec::new();
     match cached_cases(cache, "constant_12nm") {
         Some((cases, origin)) => {
             let isbl = case_of(&cases, "isbl");
@@ -683,7 +697,14 @@ fn cached_rows(cache: Option<&Cache>) -> Vec<Row> {
             "three_dof.constant_12nm",
         )),
     }
-    // S4: operational shock.
+    rows
+}
+
+/// S4 (§4.2, Fig. 4.12): the features an operational shock brings into contact, and the
+/// peak contact force.
+fn shock_contact_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
+    let flag = |b: bool| f64::from(b);
+    let mut rows = Vec::new();
     match cached_cases(cache, "shock") {
         Some((cases, origin)) => {
             let c = case_of(&cases, "isbl").or(cases.first());
@@ -723,10 +744,13 @@ fn cached_rows(cache: Option<&Cache>) -> Vec<Row> {
         }
         None => rows.push(needs("dyn-32", "S4 shock contact set", "three_dof.shock")),
     }
-    // S4: the AB modes and the DMW line in the shock response, each the strongest line of a
-    // band stated on physical grounds (validation::spectral), never the line nearest a target.
-    rows.extend(shock_mode_rows(cache, inputs));
-    // S5: variable actuation, ISBL vs MTL.
+    rows
+}
+
+/// S5 (§4.3, Fig. 4.13): variable actuation 5 → 18 → 5 nm, ISBL vs MTL.
+fn variable_actuation_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
+    let flag = |b: bool| f64::from(b);
+    let mut rows = Vec::new();
     match cached_cases(cache, "lubricant_cases") {
         Some((cases, origin)) => {
             let isbl = case_of(&cases, "isbl");
@@ -847,24 +871,15 @@ fn cached_rows(cache: Option<&Cache>) -> Vec<Row> {
 /// is the synthetic record's, so those rows are consistency checks (class C); whether the
 /// shock rings the normal mode depends on the dropped AB damping (class D).
 fn shock_mode_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
-    use super::spectral::{
-        describe, record_line, StoredSpectrum, DMW_BAND, NORMAL_BAND, PITCH_ROLL_BAND,
-    };
+    use super::spectral::{describe, record_line, DMW_BAND, NORMAL_BAND, PITCH_ROLL_BAND};
     let r = "dissertation §4.2 (S4, Fig. 4.12)";
     let tol = Tolerance::Relative(0.1);
-    let read = |name: &str| {
-        let a = cache.and_then(|c| c.current(name))?;
-        Some((StoredSpectrum::read(&a)?, a.origin))
-    };
-    let khz = |p: Option<crate::signal::spectrum::Peak>| p.map_or(f64::NAN, |p| p.frequency / 1e3);
     let pitch_springs = "the AB springs are inverted from the 1st pitch mode, 110 kHz at every \
                          PT of the frequency table (docs/dynamics-3dof-air-bearing.md)";
-    let roll_spring = "the roll spring is inverted from the roll mode, 100 kHz at every PT of the \
-                       frequency table (docs/dynamics-3dof-air-bearing.md)";
     let record = "the synthetic record's dominant line, harmonic 118 of 5 425 rpm = 10.67 kHz \
                   (raw/ldv/README.md; §4.2 prints 12 kHz, App. B 10.7 kHz for the same line)";
     let mut rows = Vec::new();
-    let heave = read("shock_response");
+    let heave = stored_spectrum(cache, "shock_response");
     match &heave {
         Some((s, origin)) => {
             let (pitch, dmw, normal) = (
@@ -976,11 +991,23 @@ fn shock_mode_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
             );
         }
     }
+    rows.push(shock_roll_row(cache, inputs));
+    rows
+}
+
+/// S4: the roll mode under the shock (§4.2, Fig. 4.12; class C, the roll spring being inverted
+/// from it).
+fn shock_roll_row(cache: Option<&Cache>, inputs: &str) -> Row {
+    use super::spectral::{describe, PITCH_ROLL_BAND};
+    let r = "dissertation §4.2 (S4, Fig. 4.12)";
+    let tol = Tolerance::Relative(0.1);
+    let roll_spring = "the roll spring is inverted from the roll mode, 100 kHz at every PT of the \
+                       frequency table (docs/dynamics-3dof-air-bearing.md)";
     // Roll is its own DOF (decoupled from heave and pitch in M, C, K of eqs. 4.1–4.3; coupled
     // only through features touching the disk): its mode is read from the roll history.
-    let roll = read("shock_roll_response");
+    let roll = stored_spectrum(cache, "shock_roll_response");
     let q = "S4 shock: roll mode in the roll";
-    rows.push(match &roll {
+    match &roll {
         Some((s, origin)) => {
             let p = s.strongest(&PITCH_ROLL_BAND);
             Row::new("dyn-33.roll", Class::C, q, "kHz", 100.0, khz(p), tol)
@@ -1005,8 +1032,22 @@ fn shock_mode_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
         )
         .reference(r)
         .by_construction(roll_spring),
-    });
-    rows
+    }
+}
+
+/// The stored spectrum of an analysis instance of the pipeline, with its origin (`None` when
+/// it has not run).
+fn stored_spectrum(
+    cache: Option<&Cache>,
+    name: &str,
+) -> Option<(super::spectral::StoredSpectrum, Origin)> {
+    let a = cache.and_then(|c| c.current(name))?;
+    Some((super::spectral::StoredSpectrum::read(&a)?, a.origin))
+}
+
+/// A spectral line's frequency in kHz (NaN when there is none).
+fn khz(p: Option<crate::signal::spectrum::Peak>) -> f64 {
+    p.map_or(f64::NAN, |p| p.frequency / 1e3)
 }
 
 /// A kHz row whose pipeline result is missing (the shared not-run marking of `dynamics`).

@@ -209,12 +209,10 @@ fn bad<T>(
     Err(crate::core::config::KeyError::new(key, m))
 }
 
+type KeyResult<T> = std::result::Result<T, crate::core::config::KeyError>;
+
 /// Check `[doe]` keys against the base instance; failures name the key.
-pub fn check(
-    cfg: &DoeConfig,
-    base: SimulateParams,
-    base_name: &str,
-) -> std::result::Result<DoeParams, crate::core::config::KeyError> {
+pub fn check(cfg: &DoeConfig, base: SimulateParams, base_name: &str) -> KeyResult<DoeParams> {
     let bulge = match &cfg.geometry {
         None => base.bulge.clone(),
         Some(crate::slider::params::GeometryConfig::Bulge { bulge }) => Some(bulge.clone()),
@@ -227,114 +225,14 @@ pub fn check(
             )
         }
     };
-    let levels = [cfg.a_tfc, cfg.w_tfc, cfg.x_tfc].map(|l| l.map(|v| v.0));
-    for (f, l) in levels.iter().enumerate() {
-        if !(l.iter().all(|v| v.is_finite() && *v > 0.0) && l[0] < l[1] && l[1] < l[2]) {
-            return bad(FACTORS[f], "three positive, increasing levels (−1, 0, +1)");
-        }
-        // The DOE codes the middle level as 0: it must be the midpoint.
-        let mid = 0.5 * (l[0] + l[2]);
-        if (l[1] - mid).abs() > 1e-9 * mid {
-            return bad(
-                FACTORS[f],
-                format!(
-                    "the middle level must be the midpoint ({:.4} um) for coded levels −1, 0, +1",
-                    mid / UM
-                ),
-            );
-        }
-    }
-    if levels[0][2] > levels[2][0] {
-        return bad(
-            "a_tfc",
-            "the largest a_tfc exceeds the smallest x_tfc: that bulge would overhang the trailing edge",
-        );
-    }
+    let levels = checked_levels(cfg)?;
     // The 2-DOF range is 0–15 nm [seed §2.1.1], but §2.3's fully contacting level is 16 nm:
     // DOE cases may run up to 20 nm, extrapolating the rear-stiffening law (docs/doe.md).
     let max_h = base.model.max_actuation.max(DOE_MAX_ACTUATION);
-    let in_range = |h: f64| h.is_finite() && (0.0..=max_h).contains(&h);
-    if cfg.actuations.is_empty() || !cfg.actuations.iter().all(|h| in_range(h.0)) {
-        return bad(
-            "actuations",
-            format!("one or more actuations within 0–{:.1} nm", max_h / NM),
-        );
-    }
-    let actuations: Vec<f64> = cfg.actuations.iter().map(|h| h.0).collect();
-    if actuations.windows(2).any(|w| w[1] <= w[0]) {
-        return bad("actuations", "increasing, without repeats");
-    }
-    let fixed = match &cfg.fixed_factors {
-        Some(list) => {
-            if list.len() != actuations.len() {
-                return bad(
-                    "fixed_factors",
-                    format!("one factor per actuation level ({})", actuations.len()),
-                );
-            }
-            list.iter()
-                .map(|n| {
-                    FACTORS.iter().position(|f| f == n).ok_or_else(|| {
-                        crate::core::config::KeyError::new(
-                            "fixed_factors",
-                            format!("unknown factor `{n}` ({})", FACTORS.join(", ")),
-                        )
-                    })
-                })
-                .collect::<std::result::Result<Vec<_>, _>>()?
-        }
-        // §2.3.2: a_TFC fixed at the flying (5) and contacting (16 nm) levels, x_TFC in between.
-        None => actuations
-            .iter()
-            .map(|h| {
-                if (7.0 * NM..14.0 * NM).contains(h) {
-                    2
-                } else {
-                    0
-                }
-            })
-            .collect(),
-    };
-    let sa_objective = match cfg.sa_objective.as_str() {
-        "simulation" => SaObjective::Simulation,
-        "surrogate" => SaObjective::Surrogate,
-        o => {
-            return bad(
-                "sa_objective",
-                format!("unknown `{o}` (simulation, surrogate)"),
-            )
-        }
-    };
-    let sa_actuation = cfg.sa_actuation.0;
-    if !in_range(sa_actuation) {
-        return bad("sa_actuation", format!("within 0–{:.1} nm", max_h / NM));
-    }
-    if sa_objective == SaObjective::Surrogate
-        && !(actuations[0] <= sa_actuation && sa_actuation <= actuations[actuations.len() - 1])
-    {
-        return bad(
-            "sa_actuation",
-            "the surrogate interpolates between the DOE's actuation levels: stay within them",
-        );
-    }
-    let sa_start = cfg.sa_start.map(|v| v.0);
-    for f in 0..3 {
-        if !(levels[f][0] <= sa_start[f] && sa_start[f] <= levels[f][2]) {
-            return bad(
-                "sa_start",
-                format!("{} must lie within the design box", FACTORS[f]),
-            );
-        }
-    }
-    if cfg.sa_max_evaluations == 0 || cfg.sa_max_evaluations > 1_000_000 {
-        return bad("sa_max_evaluations", "1 to 1 000 000");
-    }
-    if !(cfg.sa_initial_temperature.is_finite() && cfg.sa_initial_temperature > 0.0) {
-        return bad("sa_initial_temperature", "positive");
-    }
-    if cfg.sa_reanneal_interval == 0 {
-        return bad("sa_reanneal_interval", "at least 1");
-    }
+    let actuations = checked_actuations(cfg, max_h)?;
+    let fixed = fixed_factors(cfg, &actuations)?;
+    let (sa_objective, sa_actuation, sa_start) =
+        checked_annealing(cfg, &levels, &actuations, max_h)?;
     let sensitivity_step = cfg.sensitivity_step.0;
     if !(sensitivity_step.is_finite() && sensitivity_step > 0.0) {
         return bad("sensitivity_step", "positive");
@@ -377,6 +275,146 @@ pub fn check(
         compare_actuations,
         bulge,
     })
+}
+
+/// The −1/0/+1 levels of each factor: positive, increasing, the middle one the midpoint, and
+/// no bulge overhanging the trailing edge.
+fn checked_levels(cfg: &DoeConfig) -> KeyResult<[[f64; 3]; 3]> {
+    let levels = [cfg.a_tfc, cfg.w_tfc, cfg.x_tfc].map(|l| l.map(|v| v.0));
+    for (f, l) in levels.iter().enumerate() {
+        if !(l.iter().all(|v| v.is_finite() && *v > 0.0) && l[0] < l[1] && l[1] < l[2]) {
+            return bad(FACTORS[f], "three positive, increasing levels (−1, 0, +1)");
+        }
+        // The DOE codes the middle level as 0: it must be the midpoint.
+        let mid = 0.5 * (l[0] + l[2]);
+        if (l[1] - mid).abs() > 1e-9 * mid {
+            return bad(
+                FACTORS[f],
+                format!(
+                    "the middle level must be the midpoint ({:.4} um) for coded levels −1, 0, +1",
+                    mid / UM
+                ),
+            );
+        }
+    }
+    if levels[0][2] > levels[2][0] {
+        return bad(
+            "a_tfc",
+            "the largest a_tfc exceeds the smallest x_tfc: that bulge would overhang the trailing edge",
+        );
+    }
+    Ok(levels)
+}
+
+/// Whether an actuation lies within the DOE's range 0–`max_h`.
+fn in_actuation_range(h: f64, max_h: f64) -> bool {
+    h.is_finite() && (0.0..=max_h).contains(&h)
+}
+
+/// The DOE's actuation levels: at least one, within 0–`max_h`, increasing.
+fn checked_actuations(cfg: &DoeConfig, max_h: f64) -> KeyResult<Vec<f64>> {
+    if cfg.actuations.is_empty()
+        || !cfg
+            .actuations
+            .iter()
+            .all(|h| in_actuation_range(h.0, max_h))
+    {
+        return bad(
+            "actuations",
+            format!("one or more actuations within 0–{:.1} nm", max_h / NM),
+        );
+    }
+    let actuations: Vec<f64> = cfg.actuations.iter().map(|h| h.0).collect();
+    if actuations.windows(2).any(|w| w[1] <= w[0]) {
+        return bad("actuations", "increasing, without repeats");
+    }
+    Ok(actuations)
+}
+
+/// The factor held fixed at each actuation level (Table 2.7), as written or §2.3.2's default.
+fn fixed_factors(cfg: &DoeConfig, actuations: &[f64]) -> KeyResult<Vec<usize>> {
+    Ok(match &cfg.fixed_factors {
+        Some(list) => {
+            if list.len() != actuations.len() {
+                return bad(
+                    "fixed_factors",
+                    format!("one factor per actuation level ({})", actuations.len()),
+                );
+            }
+            list.iter()
+                .map(|n| {
+                    FACTORS.iter().position(|f| f == n).ok_or_else(|| {
+                        crate::core::config::KeyError::new(
+                            "fixed_factors",
+                            format!("unknown factor `{n}` ({})", FACTORS.join(", ")),
+                        )
+                    })
+                })
+                .collect::<std::result::Result<Vec<_>, _>>()?
+        }
+        // §2.3.2: a_TFC fixed at the flying (5) and contacting (16 nm) levels, x_TFC in between.
+        None => actuations
+            .iter()
+            .map(|h| {
+                if (7.0 * NM..14.0 * NM).contains(h) {
+                    2
+                } else {
+                    0
+                }
+            })
+            .collect(),
+    })
+}
+
+/// The simulated-annealing settings: its objective, the actuation it optimises at, its start
+/// within the design box, and its budget, temperature and re-annealing interval.
+fn checked_annealing(
+    cfg: &DoeConfig,
+    levels: &[[f64; 3]; 3],
+    actuations: &[f64],
+    max_h: f64,
+) -> KeyResult<(SaObjective, f64, [f64; 3])> {
+    let sa_objective = match cfg.sa_objective.as_str() {
+        "simulation" => SaObjective::Simulation,
+        "surrogate" => SaObjective::Surrogate,
+        o => {
+            return bad(
+                "sa_objective",
+                format!("unknown `{o}` (simulation, surrogate)"),
+            )
+        }
+    };
+    let sa_actuation = cfg.sa_actuation.0;
+    if !in_actuation_range(sa_actuation, max_h) {
+        return bad("sa_actuation", format!("within 0–{:.1} nm", max_h / NM));
+    }
+    if sa_objective == SaObjective::Surrogate
+        && !(actuations[0] <= sa_actuation && sa_actuation <= actuations[actuations.len() - 1])
+    {
+        return bad(
+            "sa_actuation",
+            "the surrogate interpolates between the DOE's actuation levels: stay within them",
+        );
+    }
+    let sa_start = cfg.sa_start.map(|v| v.0);
+    for f in 0..3 {
+        if !(levels[f][0] <= sa_start[f] && sa_start[f] <= levels[f][2]) {
+            return bad(
+                "sa_start",
+                format!("{} must lie within the design box", FACTORS[f]),
+            );
+        }
+    }
+    if cfg.sa_max_evaluations == 0 || cfg.sa_max_evaluations > 1_000_000 {
+        return bad("sa_max_evaluations", "1 to 1 000 000");
+    }
+    if !(cfg.sa_initial_temperature.is_finite() && cfg.sa_initial_temperature > 0.0) {
+        return bad("sa_initial_temperature", "positive");
+    }
+    if cfg.sa_reanneal_interval == 0 {
+        return bad("sa_reanneal_interval", "at least 1");
+    }
+    Ok((sa_objective, sa_actuation, sa_start))
 }
 
 #[cfg(test)]
