@@ -1945,6 +1945,147 @@ fn improved_grid() -> Vec<f64> {
 }
 
 /// Every 2-DOF row. `config`: the pipeline whose calibrated sweeps and spectra are read.
+/// The rows' computed cases in the pipeline's case store (when it has run), keyed by the
+/// synthetic record's content.
+struct CaseStores<'s> {
+    store: Option<&'s Store>,
+    dmw_blake3: String,
+}
+
+impl<'s> CaseStores<'s> {
+    fn new(store: Option<&'s Store>, track: &Excitation) -> Self {
+        let mut h = blake3::Hasher::new();
+        h.update(&track.fs.to_le_bytes());
+        for x in track.displacement.iter().chain(&track.velocity) {
+            h.update(&x.to_le_bytes());
+        }
+        CaseStores {
+            store,
+            dmw_blake3: h.finalize().to_hex().to_string(),
+        }
+    }
+
+    /// Where the cases of `model` on `interface` are cached.
+    fn of(&self, model: &Model2Dof, interface: IsblParams) -> Option<CaseStore<'s>> {
+        self.store.map(|store| CaseStore {
+            store,
+            inputs: json!({
+                "model_parameters": model,
+                // The contact stage's key form of the ISBL parameters (SI, unit suffixes).
+                "interface": crate::artefacts::contact::ContactInputs::from(&interface),
+                "dmw_blake3": self.dmw_blake3,
+                "case_params": CaseParams::improved_2dof(),
+            }),
+        })
+    }
+}
+
+/// The friction rows' cases under the other friction laws (improved, initial and optimised
+/// models; a few actuations each).
+fn friction_law_sweeps(
+    improved_model: &Model2Dof,
+    optimised_model: Option<&Model2Dof>,
+    track: &Excitation,
+    stores: &CaseStores,
+    synth: &str,
+) -> (Vec<LawSweep>, Vec<LawSweep>, Vec<LawSweep>) {
+    let law_sweeps: Vec<(LawSweep, LawSweep, Option<LawSweep>)> = OTHER_FRICTION_LAWS
+        .par_iter()
+        .filter_map(|&law| {
+            let with_law = |p: IsblParams| IsblParams {
+                friction_law: law,
+                ..p
+            };
+            let (improved_p, initial_p) = (
+                with_law(IsblParams::improved_2dof()),
+                with_law(IsblParams::initial_2dof()),
+            );
+            let (improved_l, initial_l) = (interface(improved_p).ok()?, interface(initial_p).ok()?);
+            let name = crate::artefacts::contact::friction_law_name(law);
+            let variant = format!("friction_law = {name}");
+            let cases = |model: &Model2Dof, isbl: &IsblLookup, p: IsblParams, grid: &[f64]| {
+                let store = stores.of(model, p);
+                let pts: Vec<Pt> = grid
+                    .par_iter()
+                    .filter_map(|&h| run_case(model, isbl, h * NM, track, true, store.as_ref()))
+                    .collect();
+                let listed = grid
+                    .iter()
+                    .map(|h| format!("{h}"))
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                LawSweep {
+                    variant: variant.clone(),
+                    sweep: Sweep::new(
+                        pts,
+                        None,
+                        format!("{synth}, static start; cases at {listed} nm only"),
+                        Origin::Computed,
+                    ),
+                }
+            };
+            let improved_s = cases(
+                improved_model,
+                &improved_l,
+                improved_p,
+                &FRICTION_IMPROVED_NM,
+            );
+            let initial_s = cases(&initial_2dof(), &initial_l, initial_p, &FRICTION_INITIAL_NM);
+            let optimised_s =
+                optimised_model.map(|m| cases(m, &improved_l, improved_p, &FRICTION_OPTIMISED_NM));
+            Some((improved_s, initial_s, optimised_s))
+        })
+        .collect();
+    let mut improved_laws = Vec::new();
+    let mut initial_laws = Vec::new();
+    let mut optimised_laws = Vec::new();
+    for (a, b, c) in law_sweeps {
+        improved_laws.push(a);
+        initial_laws.push(b);
+        optimised_laws.extend(c);
+    }
+    (improved_laws, initial_laws, optimised_laws)
+}
+
+/// The summit-distribution variants of dyn-19 and dyn-24: 3 cases each (9 with measured
+/// surfaces), on the same synthetic DMW and case store as the rows' own.
+fn summit_variant_sweeps(
+    improved_model: &Model2Dof,
+    track: &Excitation,
+    stores: &CaseStores,
+    synth: &str,
+    measured: Option<&pipeline::MeasuredSummits>,
+) -> Vec<SummitSweep> {
+    super::contact::summit_variants(&IsblParams::improved_2dof(), measured)
+        .into_par_iter()
+        .map(|v| {
+            let inputs = format!("{synth}, static start; {}", v.inputs);
+            let pts = match v.params.map(|p| (p, interface(p))) {
+                Some((p, Ok(lookup))) => {
+                    let cases = stores.of(improved_model, p);
+                    SUMMIT_VARIANT_ACTUATIONS
+                        .par_iter()
+                        .filter_map(|&h| {
+                            run_case(improved_model, &lookup, h * NM, track, true, cases.as_ref())
+                        })
+                        .collect()
+                }
+                _ => Vec::new(),
+            };
+            let origin = match v.origin {
+                Origin::Computed => Origin::Computed,
+                Origin::Cache { instance, key } | Origin::Recomputed { instance, key } => {
+                    Origin::Recomputed { instance, key }
+                }
+            };
+            SummitSweep {
+                name: v.name,
+                sweep: Sweep::new(pts, None, inputs, origin),
+            }
+        })
+        .collect()
+}
+
 pub fn rows(config: Option<&Path>) -> Vec<Row> {
     let mut rows = geometry_rows();
     let cache = pipeline::open(config);
@@ -1991,26 +2132,8 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
         .as_ref()
         .map(|c| c.store())
         .filter(|s| s.processed().join(".hdi").is_dir());
-    let dmw_blake3 = {
-        let mut h = blake3::Hasher::new();
-        h.update(&track.fs.to_le_bytes());
-        for x in track.displacement.iter().chain(&track.velocity) {
-            h.update(&x.to_le_bytes());
-        }
-        h.finalize().to_hex().to_string()
-    };
-    let case_store = |model: &Model2Dof, interface: IsblParams| {
-        store.map(|store| CaseStore {
-            store,
-            inputs: json!({
-                "model_parameters": model,
-                // The contact stage's key form of the ISBL parameters (SI, unit suffixes).
-                "interface": crate::artefacts::contact::ContactInputs::from(&interface),
-                "dmw_blake3": dmw_blake3,
-                "case_params": CaseParams::improved_2dof(),
-            }),
-        })
-    };
+    let stores = CaseStores::new(store, &track);
+    let case_store = |model: &Model2Dof, interface: IsblParams| stores.of(model, interface);
     let improved_cases = case_store(&improved_model, IsblParams::improved_2dof());
     let initial_cases = case_store(&initial_2dof(), IsblParams::initial_2dof());
     let optimised_cases = optimised_model
@@ -2062,105 +2185,21 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
         },
     );
     // The friction rows under the other laws: the same models, DMW and start, a few cases each.
-    let law_sweeps: Vec<(LawSweep, LawSweep, Option<LawSweep>)> = OTHER_FRICTION_LAWS
-        .par_iter()
-        .filter_map(|&law| {
-            let with_law = |p: IsblParams| IsblParams {
-                friction_law: law,
-                ..p
-            };
-            let (improved_p, initial_p) = (
-                with_law(IsblParams::improved_2dof()),
-                with_law(IsblParams::initial_2dof()),
-            );
-            let (improved_l, initial_l) = (interface(improved_p).ok()?, interface(initial_p).ok()?);
-            let name = crate::artefacts::contact::friction_law_name(law);
-            let variant = format!("friction_law = {name}");
-            let cases = |model: &Model2Dof, isbl: &IsblLookup, p: IsblParams, grid: &[f64]| {
-                let store = case_store(model, p);
-                let pts: Vec<Pt> = grid
-                    .par_iter()
-                    .filter_map(|&h| run_case(model, isbl, h * NM, &track, true, store.as_ref()))
-                    .collect();
-                let listed = grid
-                    .iter()
-                    .map(|h| format!("{h}"))
-                    .collect::<Vec<_>>()
-                    .join(", ");
-                LawSweep {
-                    variant: variant.clone(),
-                    sweep: Sweep::new(
-                        pts,
-                        None,
-                        format!("{synth}, static start; cases at {listed} nm only"),
-                        Origin::Computed,
-                    ),
-                }
-            };
-            let improved_s = cases(
-                &improved_model,
-                &improved_l,
-                improved_p,
-                &FRICTION_IMPROVED_NM,
-            );
-            let initial_s = cases(&initial_2dof(), &initial_l, initial_p, &FRICTION_INITIAL_NM);
-            let optimised_s = optimised_model
-                .as_ref()
-                .ok()
-                .map(|m| cases(m, &improved_l, improved_p, &FRICTION_OPTIMISED_NM));
-            Some((improved_s, initial_s, optimised_s))
-        })
-        .collect();
-    let mut improved_laws = Vec::new();
-    let mut initial_laws = Vec::new();
-    let mut optimised_laws = Vec::new();
-    for (a, b, c) in law_sweeps {
-        improved_laws.push(a);
-        initial_laws.push(b);
-        optimised_laws.extend(c);
-    }
+    let (improved_laws, initial_laws, optimised_laws) = friction_law_sweeps(
+        &improved_model,
+        optimised_model.as_ref().ok(),
+        &track,
+        &stores,
+        synth,
+    );
     // The summit-distribution variants of dyn-19 and dyn-24: 3 cases each (9 with measured
     // surfaces), on the same synthetic DMW and case store as the rows' own.
     let measured = cache
         .as_ref()
         .zip(config)
         .and_then(|(c, path)| pipeline::measured_summits(path, c));
-    let summit_sweeps: Vec<SummitSweep> =
-        super::contact::summit_variants(&IsblParams::improved_2dof(), measured.as_ref())
-            .into_par_iter()
-            .map(|v| {
-                let inputs = format!("{synth}, static start; {}", v.inputs);
-                let pts = match v.params.map(|p| (p, interface(p))) {
-                    Some((p, Ok(lookup))) => {
-                        let cases = case_store(&improved_model, p);
-                        SUMMIT_VARIANT_ACTUATIONS
-                            .par_iter()
-                            .filter_map(|&h| {
-                                run_case(
-                                    &improved_model,
-                                    &lookup,
-                                    h * NM,
-                                    &track,
-                                    true,
-                                    cases.as_ref(),
-                                )
-                            })
-                            .collect()
-                    }
-                    _ => Vec::new(),
-                };
-                let origin = match v.origin {
-                    Origin::Computed => Origin::Computed,
-                    Origin::Cache { instance, key } | Origin::Recomputed { instance, key } => {
-                        Origin::Recomputed { instance, key }
-                    }
-                };
-                SummitSweep {
-                    name: v.name,
-                    sweep: Sweep::new(pts, None, inputs, origin),
-                }
-            })
-            .collect();
+    let summit_sweeps =
+        summit_variant_sweeps(&improved_model, &track, &stores, synth, measured.as_ref());
     let sweep = |name: &str| cache.as_ref().and_then(|c| cached_sweep(c, name));
     let (rec_improved, cal_improved) = (sweep("improved_sweep"), sweep("improved_calibrated"));
     let (rec_optimised, cal_optimised) = (sweep("optimised_sweep"), sweep("optimised_calibrated"));
