@@ -638,10 +638,10 @@ fn rate_from_time_column(
     locate: &dyn Fn(usize) -> String,
 ) -> Result<(f64, f64, &'static str), DmwError> {
     // Steps are reported in the column's own unit.
-    let unit = match kind {
-        TimeKind::Seconds(f) if f == 1e-3 => "ms",
-        TimeKind::Seconds(f) if f == 1e-6 => "µs",
-        TimeKind::Seconds(f) if f == 1e-9 => "ns",
+    let unit = match &kind {
+        TimeKind::Seconds(f) if *f == 1e-3 => "ms",
+        TimeKind::Seconds(f) if *f == 1e-6 => "µs",
+        TimeKind::Seconds(f) if *f == 1e-9 => "ns",
         TimeKind::Seconds(_) => "s",
         TimeKind::Samples => "samples",
     };
