@@ -226,9 +226,108 @@ fn read_series_in_process(
     velocity: Option<&str>,
     sample_rate: Option<f64>,
 ) -> std::result::Result<Series, DmwError> {
-    use crate::dmw::io::series::{check_values, rate_from_time, si_unit, RATE_RTOL};
+    use crate::dmw::io::series::{check_values, si_unit};
     let file = hdf5::File::open(path).map_err(|e| h5err(path, "cannot open as HDF5", e))?;
-    let (dataset, velocity) = match dataset {
+    let (dataset, velocity) = choose_dataset(path, &file, dataset, velocity)?;
+    let velocity = velocity.filter(|v| v != "none");
+    let ds = file.dataset(&dataset).map_err(|_| DmwError::Record {
+        path: path.to_path_buf(),
+        message: format!(
+            "no dataset `{dataset}` (1-D series in this file: {})",
+            list_series(&file).join(", ")
+        ),
+    })?;
+    if ds.ndim() != 1 {
+        return Err(h5err(
+            path,
+            &dataset,
+            format!("is {}-D, not a time series", ds.ndim()),
+        ));
+    }
+    let raw: Vec<f64> = ds.read_raw().map_err(|e| h5err(path, &dataset, e))?;
+    check_values(path, &dataset, &raw)?;
+    let stored_unit = read_units(&ds);
+    let (unit, factor) = match si_unit(&stored_unit) {
+        Some((u, f)) => (u.to_string(), f),
+        None => (stored_unit, 1.0),
+    };
+    let x: Vec<f64> = raw.iter().map(|v| v * factor).collect();
+    let parent = dataset.rsplit_once('/').map_or("", |(p, _)| p);
+    let group_name = if parent.is_empty() { "/" } else { parent };
+    let stated = match sample_rate {
+        Some(fs) => Some((fs, "--sample-rate".to_string())),
+        None => stated_rate(&ds, &dataset).or_else(|| {
+            file.group(group_name)
+                .ok()
+                .and_then(|g| stated_rate(&g, group_name))
+        }),
+    };
+    if let Some((fs, from)) = &stated {
+        if !(fs.is_finite() && *fs > 0.0) {
+            return Err(h5err(
+                path,
+                from,
+                format!("sample rate {fs} Hz must be > 0"),
+            ));
+        }
+    }
+    let (fs, t0, rate_source) = match find_time_axis(&file, &dataset, parent, x.len()) {
+        Some(time) => rate_from_time_axis(path, &dataset, time, x.len(), &stated)?,
+        None => match stated {
+            Some((fs, from)) => (fs, 0.0, from),
+            None => {
+                return Err(DmwError::Record {
+                    path: path.to_path_buf(),
+                    message: format!(
+                        "`{dataset}` has no time axis (no `{}` dataset or dimension scale \
+                         beside it and no sampling_rate/sample_rate/fs/dt attribute); pass \
+                         --sample-rate",
+                        sibling(parent, "time")
+                    ),
+                })
+            }
+        },
+    };
+    let (v, velocity_unit) = match &velocity {
+        Some(vp) => {
+            let (v, unit) = read_velocity(path, &file, vp, x.len())?;
+            (Some(v), unit)
+        }
+        None => (None, format!("{unit}/s")),
+    };
+    let (a, b) = edge_window(&file, parent, x.len());
+    Ok(Series {
+        x: x[a..b].to_vec(),
+        v: v.map(|v| v[a..b].to_vec()),
+        sample_rate: fs,
+        t0: t0 + a as f64 / fs,
+        unit,
+        velocity_unit,
+        name: dataset,
+        format: "hdf5".into(),
+        rate_source,
+    })
+}
+
+/// The dataset `name` beside the series (in its group `parent`, "" for the root).
+fn sibling(parent: &str, name: &str) -> String {
+    if parent.is_empty() {
+        name.to_string()
+    } else {
+        format!("{parent}/{name}")
+    }
+}
+
+/// The series and velocity dataset paths: as given, else hdi's own layouts
+/// (`DEFAULT_SERIES`), else the file's only 1-D data dataset (time axes, edge masks and
+/// dimension scales are not data).
+fn choose_dataset(
+    path: &Path,
+    file: &hdf5::File,
+    dataset: Option<&str>,
+    velocity: Option<&str>,
+) -> std::result::Result<(String, Option<String>), DmwError> {
+    Ok(match dataset {
         Some(d) => (d.to_string(), velocity.map(str::to_string)),
         None => match DEFAULT_SERIES.iter().find(|(d, _)| file.dataset(d).is_ok()) {
             Some((d, v)) => (
@@ -236,7 +335,7 @@ fn read_series_in_process(
                 velocity.map_or(Some(v.to_string()), |v| Some(v.to_string())),
             ),
             None => {
-                let all = list_series(&file);
+                let all = list_series(file);
                 let data: Vec<&String> = all
                     .iter()
                     .filter(|d| {
@@ -265,72 +364,36 @@ fn read_series_in_process(
                 }
             }
         },
-    };
-    let velocity = velocity.filter(|v| v != "none");
-    let ds = file.dataset(&dataset).map_err(|_| DmwError::Record {
-        path: path.to_path_buf(),
-        message: format!(
-            "no dataset `{dataset}` (1-D series in this file: {})",
-            list_series(&file).join(", ")
-        ),
-    })?;
-    if ds.ndim() != 1 {
-        return Err(h5err(
-            path,
-            &dataset,
-            format!("is {}-D, not a time series", ds.ndim()),
-        ));
-    }
-    let raw: Vec<f64> = ds.read_raw().map_err(|e| h5err(path, &dataset, e))?;
-    check_values(path, &dataset, &raw)?;
-    let stored_unit = read_units(&ds);
-    let (unit, factor) = match si_unit(&stored_unit) {
-        Some((u, f)) => (u.to_string(), f),
-        None => (stored_unit, 1.0),
-    };
-    let x: Vec<f64> = raw.iter().map(|v| v * factor).collect();
-    let parent = dataset.rsplit_once('/').map_or("", |(p, _)| p);
-    let sibling = |name: &str| {
-        if parent.is_empty() {
-            name.to_string()
-        } else {
-            format!("{parent}/{name}")
-        }
-    };
+    })
+}
+
+/// A time axis beside the series: by name, else the one dimension scale (h5py `make_scale`:
+/// attribute CLASS = "DIMENSION_SCALE") of the series' length `len` in its group.
+fn find_time_axis(
+    file: &hdf5::File,
+    dataset: &str,
+    parent: &str,
+    len: usize,
+) -> Option<(String, hdf5::Dataset)> {
     let group_name = if parent.is_empty() { "/" } else { parent };
-    let stated = match sample_rate {
-        Some(fs) => Some((fs, "--sample-rate".to_string())),
-        None => stated_rate(&ds, &dataset).or_else(|| {
-            file.group(group_name)
-                .ok()
-                .and_then(|g| stated_rate(&g, group_name))
-        }),
-    };
-    if let Some((fs, from)) = &stated {
-        if !(fs.is_finite() && *fs > 0.0) {
-            return Err(h5err(
-                path,
-                from,
-                format!("sample rate {fs} Hz must be > 0"),
-            ));
-        }
-    }
-    // A time axis beside the series: by name, else the one dimension scale (h5py
-    // `make_scale`: attribute CLASS = "DIMENSION_SCALE") of the series' length in its group.
-    let time = TIME_NAMES
+    TIME_NAMES
         .iter()
-        .find_map(|n| file.dataset(&sibling(n)).ok().map(|d| (sibling(n), d)))
+        .find_map(|n| {
+            file.dataset(&sibling(parent, n))
+                .ok()
+                .map(|d| (sibling(parent, n), d))
+        })
         .or_else(|| {
             let g = file.group(group_name).ok()?;
             let scales: Vec<(String, hdf5::Dataset)> = g
                 .member_names()
                 .unwrap_or_default()
                 .into_iter()
-                .filter_map(|n| g.dataset(&n).ok().map(|d| (sibling(&n), d)))
+                .filter_map(|n| g.dataset(&n).ok().map(|d| (sibling(parent, &n), d)))
                 .filter(|(n, d)| {
                     *n != dataset
                         && d.ndim() == 1
-                        && d.size() == x.len()
+                        && d.size() == len
                         && attr_string(d, "CLASS").as_deref() == Some("DIMENSION_SCALE")
                 })
                 .collect();
@@ -338,121 +401,111 @@ fn read_series_in_process(
                 Ok([one]) => Some(one),
                 Err(_) => None,
             }
-        });
-    let (fs, t0, rate_source) = match time {
-        Some((tname, time)) => {
-            let t: Vec<f64> = time.read_raw().map_err(|e| h5err(path, &tname, e))?;
-            if t.len() != x.len() {
-                return Err(h5err(
-                    path,
-                    &dataset,
-                    format!(
-                        "{} samples but its time axis `{tname}` has {}",
-                        x.len(),
-                        t.len()
-                    ),
-                ));
-            }
-            let scale = si_unit(&read_units(&time))
-                .filter(|(u, _)| *u == "s")
-                .map_or(1.0, |(_, f)| f);
-            let t: Vec<f64> = t.iter().map(|v| v * scale).collect();
-            // hdi's own files state the exact rate on the time axis; others are measured.
-            let (fs, t0, from) = match attr_f64(&time, "sampling_rate") {
-                Some(fs) if fs.is_finite() && fs > 0.0 => (
-                    fs,
-                    t.first().copied().unwrap_or(0.0),
-                    format!("attribute `sampling_rate` of `{tname}`"),
-                ),
-                _ => {
-                    let (fs, t0) = rate_from_time(path, &tname, &t)?;
-                    let kind = if attr_string(&time, "CLASS").as_deref() == Some("DIMENSION_SCALE")
-                    {
-                        "dimension scale"
-                    } else {
-                        "time dataset"
-                    };
-                    (fs, t0, format!("{kind} `{tname}`"))
-                }
+        })
+}
+
+/// (sample rate, t0, source) from the time axis `tname` of a series of `len` samples; a rate
+/// stated elsewhere must agree with it.
+fn rate_from_time_axis(
+    path: &Path,
+    dataset: &str,
+    (tname, time): (String, hdf5::Dataset),
+    len: usize,
+    stated: &Option<(f64, String)>,
+) -> std::result::Result<(f64, f64, String), DmwError> {
+    use crate::dmw::io::series::{rate_from_time, si_unit, RATE_RTOL};
+    let t: Vec<f64> = time.read_raw().map_err(|e| h5err(path, &tname, e))?;
+    if t.len() != len {
+        return Err(h5err(
+            path,
+            dataset,
+            format!(
+                "{} samples but its time axis `{tname}` has {}",
+                len,
+                t.len()
+            ),
+        ));
+    }
+    let scale = si_unit(&read_units(&time))
+        .filter(|(u, _)| *u == "s")
+        .map_or(1.0, |(_, f)| f);
+    let t: Vec<f64> = t.iter().map(|v| v * scale).collect();
+    // hdi's own files state the exact rate on the time axis; others are measured.
+    let (fs, t0, from) = match attr_f64(&time, "sampling_rate") {
+        Some(fs) if fs.is_finite() && fs > 0.0 => (
+            fs,
+            t.first().copied().unwrap_or(0.0),
+            format!("attribute `sampling_rate` of `{tname}`"),
+        ),
+        _ => {
+            let (fs, t0) = rate_from_time(path, &tname, &t)?;
+            let kind = if attr_string(&time, "CLASS").as_deref() == Some("DIMENSION_SCALE") {
+                "dimension scale"
+            } else {
+                "time dataset"
             };
-            if let Some((s, sfrom)) = &stated {
-                if ((s - fs) / fs).abs() > RATE_RTOL {
-                    return Err(h5err(
-                        path,
-                        &dataset,
-                        format!(
-                            "{from} gives {fs} Hz but {sfrom} says {s} Hz; drop one or make \
-                             them agree"
-                        ),
-                    ));
-                }
-            }
-            (fs, t0, from)
+            (fs, t0, format!("{kind} `{tname}`"))
         }
-        None => match stated {
-            Some((fs, from)) => (fs, 0.0, from),
-            None => {
-                return Err(DmwError::Record {
-                    path: path.to_path_buf(),
-                    message: format!(
-                        "`{dataset}` has no time axis (no `{}` dataset or dimension scale \
-                         beside it and no sampling_rate/sample_rate/fs/dt attribute); pass \
-                         --sample-rate",
-                        sibling("time")
-                    ),
-                })
-            }
-        },
     };
-    let (v, velocity_unit) = match &velocity {
-        Some(vp) => {
-            let vd = file.dataset(vp).map_err(|_| DmwError::Record {
-                path: path.to_path_buf(),
-                message: format!("no velocity dataset `{vp}`"),
-            })?;
-            let v: Vec<f64> = vd.read_raw().map_err(|e| h5err(path, vp, e))?;
-            if v.len() != x.len() {
-                return Err(h5err(
-                    path,
-                    vp,
-                    format!("{} samples, the series has {}", v.len(), x.len()),
-                ));
-            }
-            let stored = read_units(&vd);
-            match si_unit(&stored) {
-                Some((u, f)) => (Some(v.iter().map(|x| x * f).collect()), u.to_string()),
-                None => (Some(v), stored),
-            }
+    if let Some((s, sfrom)) = stated {
+        if ((s - fs) / fs).abs() > RATE_RTOL {
+            return Err(h5err(
+                path,
+                dataset,
+                format!(
+                    "{from} gives {fs} Hz but {sfrom} says {s} Hz; drop one or make \
+                     them agree"
+                ),
+            ));
         }
-        None => (None, format!("{unit}/s")),
-    };
+    }
+    Ok((fs, t0, from))
+}
+
+/// The velocity dataset `vp` in SI units (when its unit is known) and its unit; it must have
+/// the series' `len` samples.
+fn read_velocity(
+    path: &Path,
+    file: &hdf5::File,
+    vp: &str,
+    len: usize,
+) -> std::result::Result<(Vec<f64>, String), DmwError> {
+    use crate::dmw::io::series::si_unit;
+    let vd = file.dataset(vp).map_err(|_| DmwError::Record {
+        path: path.to_path_buf(),
+        message: format!("no velocity dataset `{vp}`"),
+    })?;
+    let v: Vec<f64> = vd.read_raw().map_err(|e| h5err(path, vp, e))?;
+    if v.len() != len {
+        return Err(h5err(
+            path,
+            vp,
+            format!("{} samples, the series has {}", v.len(), len),
+        ));
+    }
+    let stored = read_units(&vd);
+    Ok(match si_unit(&stored) {
+        Some((u, f)) => (v.iter().map(|x| x * f).collect(), u.to_string()),
+        None => (v, stored),
+    })
+}
+
+/// The samples kept, `a..b`: those outside the `edge_transient` mask beside the series (the
+/// first to the last unmasked sample), or all when there is no usable mask.
+fn edge_window(file: &hdf5::File, parent: &str, len: usize) -> (usize, usize) {
     let edge: Vec<u8> = file
-        .dataset(&sibling("edge_transient"))
+        .dataset(&sibling(parent, "edge_transient"))
         .and_then(|d| d.read_raw::<u8>())
         .unwrap_or_default();
-    let (a, b) = if edge.len() == x.len() {
+    if edge.len() == len {
         let a = edge.iter().position(|&e| e == 0).unwrap_or(0);
-        let b = edge
-            .iter()
-            .rposition(|&e| e == 0)
-            .map_or(x.len(), |i| i + 1);
+        let b = edge.iter().rposition(|&e| e == 0).map_or(len, |i| i + 1);
         if b > a + 1 {
             (a, b)
         } else {
-            (0, x.len())
+            (0, len)
         }
     } else {
-        (0, x.len())
-    };
-    Ok(Series {
-        x: x[a..b].to_vec(),
-        v: v.map(|v| v[a..b].to_vec()),
-        sample_rate: fs,
-        t0: t0 + a as f64 / fs,
-        unit,
-        velocity_unit,
-        name: dataset,
-        format: "hdf5".into(),
-        rate_source,
-    })
+        (0, len)
+    }
 }

@@ -4,7 +4,7 @@
 
 use super::names::{self, parse_unit, Meta, TimeKind, Unit};
 use super::stream::{Col, Stream, TimeAcc};
-use super::{finish, no_panic, read_err, record_err, velocity_unit, Raw, ReadOptions, F};
+use super::{finish, no_panic, read_err, record_err, velocity_unit, Raw, ReadOptions, VelUnit, F};
 use crate::dmw::{DmwError, Layout, LdvRecord, VelocityUnit};
 use crate::formats::isolated;
 use hdf5::types::{FixedAscii, FixedUnicode, TypeDescriptor, VarLenAscii, VarLenUnicode};
@@ -254,17 +254,7 @@ fn receive(path: &Path, r: &mut isolated::Reader) -> std::io::Result<Result<LdvR
 fn read_inner(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
     let file = hdf5::File::open(path).map_err(|e| h5err(path, e))?;
     let root = file.as_group().map_err(|e| h5err(path, e))?;
-    let (group, gname) = if root.link_exists("ldv") {
-        let g = root.group("ldv").map_err(|_| {
-            record_err(
-                path,
-                "'/ldv' is not a group; expected the layout of the docs",
-            )
-        })?;
-        (g, "/ldv")
-    } else {
-        (root.clone(), "/")
-    };
+    let (group, gname) = record_group(path, &root)?;
     let names: Vec<String> = group
         .member_names()
         .map_err(|e| h5err(path, e))?
@@ -282,14 +272,103 @@ fn read_inner(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
     let ids = chosen.index.map(open).transpose()?;
     let tds = chosen.time.map(|(k, _)| open(k)).transpose()?;
 
-    // Metadata: root, then group, then the velocity dataset (the most specific wins).
+    let meta = read_meta(path, &root, &group, gname, &vds)?;
+    let unit = resolve_unit(path, opts, &vds, &chosen, &meta)?;
+
+    let shape = vds.shape();
+    let vname = names[chosen.velocity].clone();
+    let averaged = meta.layout.as_deref() == Some("averaged");
+    let (layout, n_rows, row_len) = velocity_layout(path, &shape, averaged, &vname)?;
+    let samples_per_axis = if shape.len() == 1 { n_rows } else { row_len };
+    if let (Some(ids), Some(k)) = (&ids, chosen.index) {
+        if ids.shape() != shape {
+            return Err(record_err(
+                path,
+                format!(
+                    "index dataset '{}' has shape {:?}, velocity {shape:?}",
+                    names[k],
+                    ids.shape()
+                ),
+            ));
+        }
+    }
+    let time = chosen.time.map(|(k, kind)| (names[k].clone(), kind));
+    let time = time_axis(path, tds.as_ref(), time, samples_per_axis)?;
+
+    let vso = scale_offset(&vds);
+    let rows = RowShape {
+        n_rows,
+        row_len,
+        segmented: shape.len() == 2,
+    };
+    let stream = stream_datasets(
+        path,
+        (&vds, vso),
+        ids.as_ref(),
+        tds.as_ref(),
+        unit.scale,
+        rows,
+    )?;
+    let mut provenance = vec![("group".to_string(), gname.to_string())];
+    if vso != (1.0, 0.0) {
+        provenance.push((
+            "velocity_scale_offset".to_string(),
+            format!("{} {}", vso.0, vso.1),
+        ));
+    }
+    let raw = Raw {
+        format: "hdf5",
+        stream,
+        velocity_name: vname,
+        index_name: chosen.index.map(|k| names[k].clone()),
+        time,
+        unit,
+        layout,
+        meta,
+        meta_hint: "a 'sampling_rate' attribute",
+        provenance,
+    };
+    let segmented = rows.segmented;
+    let locate = move |row: usize| {
+        if segmented {
+            format!("segment {}, sample {}", row / row_len, row % row_len)
+        } else {
+            format!("sample {row}")
+        }
+    };
+    finish(path, raw, opts, &locate)
+}
+
+/// The group holding the record: `/ldv` if the file has one, else the root.
+fn record_group(path: &Path, root: &hdf5::Group) -> Result<(hdf5::Group, &'static str), DmwError> {
+    if root.link_exists("ldv") {
+        let g = root.group("ldv").map_err(|_| {
+            record_err(
+                path,
+                "'/ldv' is not a group; expected the layout of the docs",
+            )
+        })?;
+        Ok((g, "/ldv"))
+    } else {
+        Ok((root.clone(), "/"))
+    }
+}
+
+/// Metadata attributes: root, then group, then the velocity dataset (the most specific wins).
+fn read_meta(
+    path: &Path,
+    root: &hdf5::Group,
+    group: &hdf5::Group,
+    gname: &str,
+    vds: &hdf5::Dataset,
+) -> Result<Meta, DmwError> {
     let mut meta = Meta::default();
     let mut sources: Vec<&hdf5::Location> = vec![];
     if gname != "/" {
-        sources.push(&root);
+        sources.push(root);
     }
-    sources.push(&group);
-    sources.push(&vds);
+    sources.push(group);
+    sources.push(vds);
     for loc in sources {
         for key in [
             "sampling_rate",
@@ -306,7 +385,19 @@ fn read_inner(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
             }
         }
     }
-    let units = attr_string(&vds, "units");
+    Ok(meta)
+}
+
+/// The velocity unit: the dataset's `units` attribute, else its name, then the options and
+/// metadata as `velocity_unit` ranks them.
+fn resolve_unit(
+    path: &Path,
+    opts: &ReadOptions,
+    vds: &hdf5::Dataset,
+    chosen: &names::Chosen,
+    meta: &Meta,
+) -> Result<VelUnit, DmwError> {
+    let units = attr_string(vds, "units");
     let (name_unit, unknown) = match &units {
         Some(u) => match parse_unit(u) {
             Some(unit) => (Some(unit), None),
@@ -319,19 +410,24 @@ fn read_inner(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
     } else {
         "dataset name"
     };
-    let unit = velocity_unit(
+    velocity_unit(
         path,
         opts,
         name_unit,
         unknown.as_deref(),
         meta.velocity_unit,
         unit_source,
-    )?;
+    )
+}
 
-    let shape = vds.shape();
-    let vname = names[chosen.velocity].clone();
-    let averaged = meta.layout.as_deref() == Some("averaged");
-    let (layout, n_rows, row_len) = match shape.as_slice() {
+/// (layout, rows, samples per row) of a velocity dataset of shape [n] or [segments, n].
+fn velocity_layout(
+    path: &Path,
+    shape: &[usize],
+    averaged: bool,
+    vname: &str,
+) -> Result<(Layout, usize, usize), DmwError> {
+    Ok(match shape {
         [n] => (
             if averaged {
                 Layout::Averaged
@@ -356,22 +452,17 @@ fn read_inner(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
                 format!("dataset '{vname}' has shape {shape:?}; expected [n] or [segments, n]"),
             ))
         }
-    };
-    let samples_per_axis = if shape.len() == 1 { n_rows } else { row_len };
-    if let (Some(ids), Some(k)) = (&ids, chosen.index) {
-        if ids.shape() != shape {
-            return Err(record_err(
-                path,
-                format!(
-                    "index dataset '{}' has shape {:?}, velocity {shape:?}",
-                    names[k],
-                    ids.shape()
-                ),
-            ));
-        }
-    }
-    let mut time = chosen.time.map(|(k, kind)| (names[k].clone(), kind));
-    if let (Some(tds), Some((tname, kind))) = (&tds, &mut time) {
+    })
+}
+
+/// Checks the time dataset's length and takes its kind from its `units` attribute.
+fn time_axis(
+    path: &Path,
+    tds: Option<&hdf5::Dataset>,
+    mut time: Option<(String, TimeKind)>,
+    samples_per_axis: usize,
+) -> Result<Option<(String, TimeKind)>, DmwError> {
+    if let (Some(tds), Some((tname, kind))) = (tds, &mut time) {
         if tds.shape() != [samples_per_axis] {
             return Err(record_err(
                 path,
@@ -387,29 +478,47 @@ fn read_inner(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
             _ => {}
         }
     }
+    Ok(time)
+}
 
-    let vso = scale_offset(&vds);
-    let iso = ids.as_ref().map(scale_offset).unwrap_or((1.0, 0.0));
-    let tso = tds.as_ref().map(scale_offset).unwrap_or((1.0, 0.0));
+/// Rows of the velocity dataset (1-D: samples; 2-D: segments) and their length.
+#[derive(Clone, Copy)]
+struct RowShape {
+    n_rows: usize,
+    row_len: usize,
+    segmented: bool,
+}
+
+/// Streams velocity, index and (1-D) time in hyperslabs of about [`CHUNK`] samples; a
+/// segmented record's time axis is shared by all segments and read once.
+fn stream_datasets(
+    path: &Path,
+    (vds, vso): (&hdf5::Dataset, (f64, f64)),
+    ids: Option<&hdf5::Dataset>,
+    tds: Option<&hdf5::Dataset>,
+    vel_scale: f64,
+    rows: RowShape,
+) -> Result<Stream, DmwError> {
+    let RowShape {
+        n_rows,
+        row_len,
+        segmented,
+    } = rows;
+    let iso = ids.map(scale_offset).unwrap_or((1.0, 0.0));
+    let tso = tds.map(scale_offset).unwrap_or((1.0, 0.0));
     let total = n_rows * row_len;
-    let segmented = shape.len() == 2;
-    let mut stream = Stream::new(
-        unit.scale,
-        ids.is_some(),
-        tds.is_some() && !segmented,
-        total,
-    );
+    let mut stream = Stream::new(vel_scale, ids.is_some(), tds.is_some() && !segmented, total);
     // Rows (1-D: samples; 2-D: segments) per hyperslab.
     let step = (CHUNK / row_len.max(1)).max(1);
     let mut a = 0;
     let (mut v, mut i, mut t) = (Vec::new(), Vec::new(), Vec::new());
     while a < n_rows && !stream.done() {
         let b = (a + step).min(n_rows);
-        read_part(path, &vds, vso, a, b, &mut v)?;
-        if let Some(d) = &ids {
+        read_part(path, vds, vso, a, b, &mut v)?;
+        if let Some(d) = ids {
             read_part(path, d, iso, a, b, &mut i)?;
         }
-        let has_t = match &tds {
+        let has_t = match tds {
             Some(d) if !segmented => {
                 read_part(path, d, tso, a, b, &mut t)?;
                 true
@@ -419,11 +528,11 @@ fn read_inner(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
         stream.push(
             has_t.then(|| Col::new(&t)),
             Col::new(&v),
-            ids.as_ref().map(|_| Col::new(&i)),
+            ids.map(|_| Col::new(&i)),
         );
         a = b;
     }
-    if let (true, Some(d)) = (segmented, &tds) {
+    if let (true, Some(d)) = (segmented, tds) {
         // One time axis shared by all segments.
         let mut acc = TimeAcc::default();
         let mut a = 0;
@@ -436,31 +545,5 @@ fn read_inner(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwError> {
         }
         stream.time = Some(acc);
     }
-    let mut provenance = vec![("group".to_string(), gname.to_string())];
-    if vso != (1.0, 0.0) {
-        provenance.push((
-            "velocity_scale_offset".to_string(),
-            format!("{} {}", vso.0, vso.1),
-        ));
-    }
-    let raw = Raw {
-        format: "hdf5",
-        stream,
-        velocity_name: vname,
-        index_name: chosen.index.map(|k| names[k].clone()),
-        time,
-        unit,
-        layout,
-        meta,
-        meta_hint: "a 'sampling_rate' attribute",
-        provenance,
-    };
-    let locate = move |row: usize| {
-        if segmented {
-            format!("segment {}, sample {}", row / row_len, row % row_len)
-        } else {
-            format!("sample {row}")
-        }
-    };
-    finish(path, raw, opts, &locate)
+    Ok(stream)
 }

@@ -105,7 +105,7 @@ mod uff;
 mod wav;
 
 use names::{Meta, TimeKind, Unit};
-use stream::{BadRun, Channel, Stream, TimeFault};
+use stream::{BadRun, Channel, Stream, TimeFault, TimeStats};
 
 /// How to read a record; everything defaults to detection from the file.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -528,8 +528,36 @@ fn finish(
     opts: &ReadOptions,
     locate: &dyn Fn(usize) -> String,
 ) -> Result<LdvRecord, DmwError> {
+    check_stream(path, &raw, locate)?;
+    let meta = &raw.meta;
+    let stated = positive(path, "sample_rate", meta.sample_rate)?;
+    let sensitivity = positive(path, "sensitivity", meta.sensitivity)?;
+    let rpm = positive(path, "rpm", meta.rpm)?;
+    if let Some(t0) = meta.t0.filter(|t| !t.is_finite()) {
+        return Err(record_err(path, format!("t0 = {t0} in the file")));
+    }
+    let (sample_rate, t0, rate_source) = resolve_rate(path, &raw, opts, stated, locate)?;
+    let provenance = record_provenance(&mut raw, rate_source);
+    Ok(LdvRecord {
+        source: path.to_path_buf(),
+        format: raw.format,
+        sample_rate,
+        t0,
+        velocity: raw.stream.velocity,
+        velocity_unit: raw.unit.unit,
+        index: raw.stream.index,
+        layout: raw.layout,
+        sensitivity,
+        rpm,
+        provenance,
+    })
+}
+
+/// The stream's own faults, in the order they are reported: a bad run, a time fault, fewer
+/// than 2 samples.
+fn check_stream(path: &Path, raw: &Raw, locate: &dyn Fn(usize) -> String) -> Result<(), DmwError> {
     if let Some(run) = &raw.stream.run {
-        return Err(record_err(path, run_message(&raw, run, locate)));
+        return Err(record_err(path, run_message(raw, run, locate)));
     }
     let time_name = raw.time.as_ref().map(|t| t.0.clone()).unwrap_or_default();
     if let Some(fault) = raw.stream.time.as_ref().and_then(|t| t.fault) {
@@ -545,89 +573,45 @@ fn finish(
     if n < 2 {
         return Err(record_err(path, "only 1 sample; a record needs at least 2"));
     }
-    let meta = &raw.meta;
-    let stated = positive(path, "sample_rate", meta.sample_rate)?;
-    let sensitivity = positive(path, "sensitivity", meta.sensitivity)?;
-    let rpm = positive(path, "rpm", meta.rpm)?;
-    if let Some(t0) = meta.t0.filter(|t| !t.is_finite()) {
-        return Err(record_err(path, format!("t0 = {t0} in the file")));
-    }
+    Ok(())
+}
 
-    // The rate the option or the file states, which must agree when both exist.
-    let stated_rate = || -> Result<Option<(f64, &'static str)>, DmwError> {
-        match (opts.sample_rate, stated) {
-            (Some(o), Some(s)) if !agree(o, s) => Err(record_err(
-                path,
-                format!(
-                    "the sample_rate option ({o} Hz) and the file's sample rate ({s} Hz) \
-                     disagree; drop the option or fix the file"
-                ),
-            )),
-            (Some(o), _) => Ok(Some((o, "option"))),
-            (None, Some(s)) => Ok(Some((s, "file metadata"))),
-            (None, None) => Ok(None),
-        }
-    };
+/// The rate the option or the file states, which must agree when both exist.
+fn stated_rate(
+    path: &Path,
+    opts: &ReadOptions,
+    stated: Option<f64>,
+) -> Result<Option<(f64, &'static str)>, DmwError> {
+    match (opts.sample_rate, stated) {
+        (Some(o), Some(s)) if !agree(o, s) => Err(record_err(
+            path,
+            format!(
+                "the sample_rate option ({o} Hz) and the file's sample rate ({s} Hz) \
+                 disagree; drop the option or fix the file"
+            ),
+        )),
+        (Some(o), _) => Ok(Some((o, "option"))),
+        (None, Some(s)) => Ok(Some((s, "file metadata"))),
+        (None, None) => Ok(None),
+    }
+}
+
+/// (sample rate, t0, source of the rate): from the time column when there is one, else the
+/// rate the option or the file states.
+fn resolve_rate(
+    path: &Path,
+    raw: &Raw,
+    opts: &ReadOptions,
+    stated: Option<f64>,
+    locate: &dyn Fn(usize) -> String,
+) -> Result<(f64, f64, &'static str), DmwError> {
     let time_stats = raw.stream.time.as_ref().and_then(|t| t.stats());
-    let (sample_rate, t0, rate_source) = match (&raw.time, time_stats) {
+    match (&raw.time, time_stats) {
         (Some((name, kind)), Some(st)) => {
-            // Steps are reported in the column's own unit.
-            let unit = match kind {
-                TimeKind::Seconds(f) if *f == 1e-3 => "ms",
-                TimeKind::Seconds(f) if *f == 1e-6 => "µs",
-                TimeKind::Seconds(f) if *f == 1e-9 => "ns",
-                TimeKind::Seconds(_) => "s",
-                TimeKind::Samples => "samples",
-            };
-            let (row, dt) = st.worst;
-            if (dt - st.mean_dt).abs() > UNIFORM_RTOL * st.mean_dt {
-                return Err(record_err(
-                    path,
-                    format!(
-                        "time column '{name}' is not uniformly sampled: the step to {} is {dt} \
-                         {unit}, the mean step {} {unit} (tolerance 0.1 %); resample the record \
-                         to a uniform rate",
-                        locate(row),
-                        st.mean_dt
-                    ),
-                ));
-            }
-            match kind {
-                TimeKind::Seconds(f) => {
-                    let fs = 1.0 / (st.mean_dt * f);
-                    for (other, what) in [
-                        (opts.sample_rate, "the sample_rate option"),
-                        (stated, "the file's sample rate"),
-                    ] {
-                        if let Some(o) = other.filter(|o| !agree(*o, fs)) {
-                            return Err(record_err(
-                                path,
-                                format!(
-                                    "sample rate from time column '{name}' ({fs} Hz) and \
-                                     {what} ({o} Hz) disagree; fix one of them"
-                                ),
-                            ));
-                        }
-                    }
-                    (fs, st.first * f, "time column")
-                }
-                TimeKind::Samples => {
-                    let Some((fs_count, source)) = stated_rate()? else {
-                        return Err(record_err(
-                            path,
-                            format!(
-                                "'{name}' counts samples but no sample rate is given: set the \
-                                 sample_rate option (Hz) or add {}",
-                                raw.meta_hint
-                            ),
-                        ));
-                    };
-                    (fs_count / st.mean_dt, st.first / fs_count, source)
-                }
-            }
+            rate_from_time_column(path, raw, (name, *kind), &st, opts, stated, locate)
         }
         _ => {
-            let Some((fs, source)) = stated_rate()? else {
+            let Some((fs, source)) = stated_rate(path, opts, stated)? else {
                 return Err(record_err(
                     path,
                     format!(
@@ -637,10 +621,81 @@ fn finish(
                     ),
                 ));
             };
-            (fs, meta.t0.unwrap_or(0.0), source)
+            Ok((fs, raw.meta.t0.unwrap_or(0.0), source))
         }
-    };
+    }
+}
 
+/// The rate and t0 a time column gives: it must be uniformly sampled; in seconds it must
+/// agree with any stated rate, as sample numbers it needs one.
+fn rate_from_time_column(
+    path: &Path,
+    raw: &Raw,
+    (name, kind): (&str, TimeKind),
+    st: &TimeStats,
+    opts: &ReadOptions,
+    stated: Option<f64>,
+    locate: &dyn Fn(usize) -> String,
+) -> Result<(f64, f64, &'static str), DmwError> {
+    // Steps are reported in the column's own unit.
+    let unit = match &kind {
+        TimeKind::Seconds(f) if *f == 1e-3 => "ms",
+        TimeKind::Seconds(f) if *f == 1e-6 => "µs",
+        TimeKind::Seconds(f) if *f == 1e-9 => "ns",
+        TimeKind::Seconds(_) => "s",
+        TimeKind::Samples => "samples",
+    };
+    let (row, dt) = st.worst;
+    if (dt - st.mean_dt).abs() > UNIFORM_RTOL * st.mean_dt {
+        return Err(record_err(
+            path,
+            format!(
+                "time column '{name}' is not uniformly sampled: the step to {} is {dt} \
+                 {unit}, the mean step {} {unit} (tolerance 0.1 %); resample the record \
+                 to a uniform rate",
+                locate(row),
+                st.mean_dt
+            ),
+        ));
+    }
+    match kind {
+        TimeKind::Seconds(f) => {
+            let fs = 1.0 / (st.mean_dt * f);
+            for (other, what) in [
+                (opts.sample_rate, "the sample_rate option"),
+                (stated, "the file's sample rate"),
+            ] {
+                if let Some(o) = other.filter(|o| !agree(*o, fs)) {
+                    return Err(record_err(
+                        path,
+                        format!(
+                            "sample rate from time column '{name}' ({fs} Hz) and \
+                             {what} ({o} Hz) disagree; fix one of them"
+                        ),
+                    ));
+                }
+            }
+            Ok((fs, st.first * f, "time column"))
+        }
+        TimeKind::Samples => {
+            let Some((fs_count, source)) = stated_rate(path, opts, stated)? else {
+                return Err(record_err(
+                    path,
+                    format!(
+                        "'{name}' counts samples but no sample rate is given: set the \
+                         sample_rate option (Hz) or add {}",
+                        raw.meta_hint
+                    ),
+                ));
+            };
+            Ok((fs_count / st.mean_dt, st.first / fs_count, source))
+        }
+    }
+}
+
+/// The record's provenance: how it was read, then the reader's own entries, then the file's
+/// other metadata.
+fn record_provenance(raw: &mut Raw, rate_source: &str) -> Vec<(String, String)> {
     let mut provenance = vec![
         ("format".to_string(), raw.format.to_string()),
         ("velocity".to_string(), raw.velocity_name.clone()),
@@ -674,19 +729,7 @@ fn finish(
     for (k, v) in &raw.meta.other {
         provenance.push((format!("meta.{k}"), v.clone()));
     }
-    Ok(LdvRecord {
-        source: path.to_path_buf(),
-        format: raw.format,
-        sample_rate,
-        t0,
-        velocity: raw.stream.velocity,
-        velocity_unit: raw.unit.unit,
-        index: raw.stream.index,
-        layout: raw.layout,
-        sensitivity,
-        rpm,
-        provenance,
-    })
+    provenance
 }
 
 /// `layout` metadata of the single-axis formats.

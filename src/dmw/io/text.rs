@@ -168,82 +168,16 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
     )?;
     let layout = flat_layout(path, &sn.meta)?;
 
-    let c = |k: usize| format!("c{k}");
-    let mut schema = Schema::default();
-    let used = chosen.used();
-    for k in 0..sn.names.len() {
-        let dtype = if used.contains(&k) {
-            DataType::Float64
-        } else {
-            DataType::String
-        };
-        schema.insert(c(k).into(), dtype);
-    }
-    let mut select = vec![(chosen.velocity, V)];
-    if let Some(k) = chosen.index {
-        select.push((k, I));
-    }
-    if let Some((k, _)) = chosen.time {
-        select.push((k, T));
-    }
-    let projection: Arc<[PlSmallStr]> = used.iter().map(|&k| c(k).into()).collect();
-    let schema = Arc::new(schema);
+    let plan = CsvPlan::new(&sn, &chosen);
     // The data are parsed in parts of about PART bytes cut at line ends, each by polars'
     // multi-threaded eager reader: only one part's text and columns are in memory beside the
     // output channels, and the time column is reduced, never kept.
-    let mut reader = BufReader::new(File::open(path).map_err(|e| read_err(path, e))?);
-    let mut line = Vec::new();
-    for _ in 0..=sn.header_index {
-        line.clear();
-        reader
-            .read_until(b'\n', &mut line)
-            .map_err(|e| read_err(path, e))?;
-    }
-    let mut carry = reader.buffer().to_vec();
-    let mut file = reader.into_inner();
-    let mut at_end = false;
+    let mut parts = Parts::after_header(path, sn.header_index)?;
     let next = || -> Result<Option<DataFrame>, DmwError> {
-        let mut buf = std::mem::take(&mut carry);
-        while !at_end {
-            let got = Read::by_ref(&mut file)
-                .take(PART as u64)
-                .read_to_end(&mut buf)
-                .map_err(|e| read_err(path, e))?;
-            if got == 0 {
-                at_end = true;
-            } else if let Some(k) = buf.iter().rposition(|&b| b == b'\n') {
-                // The unfinished last line goes to the next part.
-                carry = buf.split_off(k + 1);
-                break;
-            }
+        match parts.next(path)? {
+            Some(buf) => plan.parse(path, buf).map(Some),
+            None => Ok(None),
         }
-        if buf.is_empty() {
-            return Ok(None);
-        }
-        let read = CsvReadOptions::default()
-            .with_has_header(false)
-            .with_schema(Some(schema.clone()))
-            .with_columns(Some(projection.clone()))
-            .with_ignore_errors(true)
-            .with_raise_if_empty(false)
-            .map_parse_options(|o| {
-                o.with_separator(sn.sep)
-                    .with_decimal_comma(sn.decimal_comma)
-            })
-            .into_reader_with_file_handle(std::io::Cursor::new(buf))
-            .finish()
-            .map_err(|e| read_err(path, format!("CSV reader: {e}")))?;
-        let columns = select
-            .iter()
-            .map(|(k, alias)| {
-                read.column(c(*k).as_str())
-                    .map(|col| col.clone().with_name((*alias).into()))
-            })
-            .collect::<PolarsResult<Vec<Column>>>()
-            .map_err(|e| read_err(path, format!("CSV reader: {e}")))?;
-        DataFrame::new(read.height(), columns)
-            .map(Some)
-            .map_err(|e| read_err(path, format!("CSV reader: {e}")))
     };
     // Room for the rows the file size suggests (with 25 % slack for shorter rows): the big
     // channel buffers are then allocated once, on huge pages (numerics::buffer).
@@ -263,18 +197,7 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
     let mut stream = scan::feed(path, next, stream, "CSV reader")?;
 
     let (trailing_blank, last_fields) = tail(path, sn.sep)?;
-    let mut provenance = vec![(
-        "delimiter".to_string(),
-        match sn.sep {
-            b'\t' => "tab",
-            b';' => "semicolon",
-            _ => "comma",
-        }
-        .to_string(),
-    )];
-    if sn.decimal_comma {
-        provenance.push(("decimal_comma".to_string(), "true".to_string()));
-    }
+    let provenance = text_provenance(&sn);
     // Blank lines at the end of the file are rows of nulls to polars, not a gap.
     if let Some(run) = &stream.run {
         if !run.ended && run.all_missing && run.len == trailing_blank {
@@ -315,6 +238,142 @@ pub(super) fn read(path: &Path, opts: &ReadOptions) -> Result<LdvRecord, DmwErro
         }
     }
     finish(path, raw, opts, &locate)
+}
+
+/// Polars' name for column `k` (the file's own header is not used).
+fn column_name(k: usize) -> String {
+    format!("c{k}")
+}
+
+/// How each part is parsed: used columns as numbers, the others as strings (never
+/// projected), and the velocity, index and time columns renamed to the stream's aliases.
+struct CsvPlan {
+    schema: Arc<Schema>,
+    projection: Arc<[PlSmallStr]>,
+    /// (column, alias) of velocity, index and time, in that order.
+    select: Vec<(usize, &'static str)>,
+    sep: u8,
+    decimal_comma: bool,
+}
+
+impl CsvPlan {
+    fn new(sn: &Sniff, chosen: &names::Chosen) -> Self {
+        let mut schema = Schema::default();
+        let used = chosen.used();
+        for k in 0..sn.names.len() {
+            let dtype = if used.contains(&k) {
+                DataType::Float64
+            } else {
+                DataType::String
+            };
+            schema.insert(column_name(k).into(), dtype);
+        }
+        let mut select = vec![(chosen.velocity, V)];
+        if let Some(k) = chosen.index {
+            select.push((k, I));
+        }
+        if let Some((k, _)) = chosen.time {
+            select.push((k, T));
+        }
+        let projection: Arc<[PlSmallStr]> = used.iter().map(|&k| column_name(k).into()).collect();
+        CsvPlan {
+            schema: Arc::new(schema),
+            projection,
+            select,
+            sep: sn.sep,
+            decimal_comma: sn.decimal_comma,
+        }
+    }
+
+    /// One part of text (whole lines) as a frame of the selected columns.
+    fn parse(&self, path: &Path, buf: Vec<u8>) -> Result<DataFrame, DmwError> {
+        let read = CsvReadOptions::default()
+            .with_has_header(false)
+            .with_schema(Some(self.schema.clone()))
+            .with_columns(Some(self.projection.clone()))
+            .with_ignore_errors(true)
+            .with_raise_if_empty(false)
+            .map_parse_options(|o| {
+                o.with_separator(self.sep)
+                    .with_decimal_comma(self.decimal_comma)
+            })
+            .into_reader_with_file_handle(std::io::Cursor::new(buf))
+            .finish()
+            .map_err(|e| read_err(path, format!("CSV reader: {e}")))?;
+        let columns = self
+            .select
+            .iter()
+            .map(|(k, alias)| {
+                read.column(column_name(*k).as_str())
+                    .map(|col| col.clone().with_name((*alias).into()))
+            })
+            .collect::<PolarsResult<Vec<Column>>>()
+            .map_err(|e| read_err(path, format!("CSV reader: {e}")))?;
+        DataFrame::new(read.height(), columns)
+            .map_err(|e| read_err(path, format!("CSV reader: {e}")))
+    }
+}
+
+/// The data text after the header, in parts of about [`PART`] bytes cut at line ends.
+struct Parts {
+    file: File,
+    /// What was read past the last line end (the start of the next part).
+    carry: Vec<u8>,
+    at_end: bool,
+}
+
+impl Parts {
+    fn after_header(path: &Path, header_index: usize) -> Result<Self, DmwError> {
+        let mut reader = BufReader::new(File::open(path).map_err(|e| read_err(path, e))?);
+        let mut line = Vec::new();
+        for _ in 0..=header_index {
+            line.clear();
+            reader
+                .read_until(b'\n', &mut line)
+                .map_err(|e| read_err(path, e))?;
+        }
+        let carry = reader.buffer().to_vec();
+        Ok(Parts {
+            file: reader.into_inner(),
+            carry,
+            at_end: false,
+        })
+    }
+
+    /// The next part, `None` when the text is used up.
+    fn next(&mut self, path: &Path) -> Result<Option<Vec<u8>>, DmwError> {
+        let mut buf = std::mem::take(&mut self.carry);
+        while !self.at_end {
+            let got = Read::by_ref(&mut self.file)
+                .take(PART as u64)
+                .read_to_end(&mut buf)
+                .map_err(|e| read_err(path, e))?;
+            if got == 0 {
+                self.at_end = true;
+            } else if let Some(k) = buf.iter().rposition(|&b| b == b'\n') {
+                // The unfinished last line goes to the next part.
+                self.carry = buf.split_off(k + 1);
+                break;
+            }
+        }
+        Ok((!buf.is_empty()).then_some(buf))
+    }
+}
+
+fn text_provenance(sn: &Sniff) -> Vec<(String, String)> {
+    let mut provenance = vec![(
+        "delimiter".to_string(),
+        match sn.sep {
+            b'\t' => "tab",
+            b';' => "semicolon",
+            _ => "comma",
+        }
+        .to_string(),
+    )];
+    if sn.decimal_comma {
+        provenance.push(("decimal_comma".to_string(), "true".to_string()));
+    }
+    provenance
 }
 
 /// Message for the first bad run: names the offending cell when it is not a number or the row

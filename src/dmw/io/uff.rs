@@ -272,32 +272,8 @@ fn parse<'a>(path: &Path, b: &'a [u8]) -> Result<Vec<Function<'a>>, DmwError> {
     };
     let mut out = Vec::new();
     loop {
-        // Opening delimiter (blank lines between datasets are tolerated).
-        let open = loop {
-            match lines.next() {
-                None => return Ok(out),
-                Some(l) if l.trim_ascii().is_empty() => continue,
-                Some(l) => break l,
-            }
-        };
-        if open.trim_ascii() != b"-1" {
-            return Err(record_err(
-                path,
-                format!(
-                    "line {}: expected the '    -1' dataset delimiter, found '{}'",
-                    lines.line,
-                    String::from_utf8_lossy(&open[..open.len().min(40)]).trim()
-                ),
-            ));
-        }
-        let Some(id) = lines.next().filter(|l| !l.trim_ascii().is_empty()) else {
-            return Err(record_err(
-                path,
-                format!(
-                    "line {}: the file ends after a '    -1' delimiter; is it cut?",
-                    lines.line
-                ),
-            ));
+        let Some(id) = open_dataset(path, &mut lines)? else {
+            return Ok(out);
         };
         let id_line = lines.line;
         let id_text = String::from_utf8_lossy(id).to_string();
@@ -310,237 +286,357 @@ fn parse<'a>(path: &Path, b: &'a [u8]) -> Result<Vec<Function<'a>>, DmwError> {
         if number != "58" {
             // Another dataset: skip to its closing delimiter (binary datasets other than 58b
             // are not expected in time-record exports).
-            loop {
-                match lines.next() {
-                    None => return Ok(out),
-                    Some(l) if l.trim_ascii() == b"-1" => break,
-                    Some(_) => {}
-                }
+            if !skip_dataset(&mut lines) {
+                return Ok(out);
             }
             continue;
         }
-        let bad = |line: usize, what: String| record_err(path, format!("line {line}: {what}"));
-        let mut rec: Vec<&[u8]> = Vec::with_capacity(11);
-        for _ in 0..11 {
-            match lines.next() {
-                Some(l) => rec.push(l),
-                None => {
-                    return Err(bad(
-                        lines.line,
-                        format!(
-                            "dataset 58 from line {id_line} ends inside its 11 header records; \
-                             is the file cut?"
-                        ),
-                    ))
-                }
-            }
-        }
-        let name = String::from_utf8_lossy(rec[0]).trim().to_string();
-        let r6 = rec[5];
-        let node = field(r6, 41, 51);
-        let dir = field(r6, 51, 55);
-        let alias = format!("{node}:{dir}");
-        let name = label(name).unwrap_or_else(|| alias.clone());
-        let r7 = String::from_utf8_lossy(rec[6]).to_string();
-        let r7_line = id_line + 7;
-        let t: Vec<&str> = r7.split_whitespace().collect();
-        if t.len() < 5 {
-            return Err(bad(
-                r7_line,
-                format!("record 7 of '{name}' has {} fields, expected 6", t.len()),
-            ));
-        }
-        let int = |s: &str, what: &str| {
-            s.parse::<i64>()
-                .map_err(|_| bad(r7_line, format!("record 7 {what} '{s}' is not an integer")))
-        };
-        let real = |s: &str, what: &str| {
-            s.replace(['D', 'd'], "E")
-                .parse::<f64>()
-                .map_err(|_| bad(r7_line, format!("record 7 {what} '{s}' is not a number")))
-        };
-        let ord = int(t[0], "ordinate data type")?;
-        let n = int(t[1], "number of points")?;
-        let even = int(t[2], "abscissa spacing")? == 1;
-        let x0 = real(t[3], "abscissa start")?;
-        let dx = real(t[4], "abscissa increment")?;
-        let single = match ord {
-            2 => true,
-            4 => false,
-            5 | 6 => {
-                return Err(bad(
-                    r7_line,
-                    format!(
-                        "'{name}' holds complex data (ordinate type {ord}); an LDV record is a \
-                         real time signal"
-                    ),
-                ))
-            }
-            _ => {
-                return Err(bad(
-                    r7_line,
-                    format!("'{name}': unknown ordinate data type {ord} (2, 4, 5 or 6)"),
-                ))
-            }
-        };
-        let n = usize::try_from(n).map_err(|_| bad(r7_line, format!("'{name}' has {n} points")))?;
-        let per = if even { 1 } else { 2 };
-        let x_unit = field(rec[7], 47, 67);
-        let y_unit = label(field(rec[8], 47, 67));
-        let spec_type = field(rec[8], 0, 10).parse::<i64>().unwrap_or(0);
+        let rec = header_records(path, &mut lines, id_line)?;
+        let h = parse_header(path, &rec, id_line)?;
         let data = if binary {
-            let w: Vec<&str> = id_text.split_whitespace().collect();
-            let order = w.get(1).and_then(|s| s.parse::<i64>().ok()).unwrap_or(1);
-            let n_bytes = w
-                .get(4)
-                .and_then(|s| s.parse::<u64>().ok())
-                .ok_or_else(|| {
-                    bad(
-                        id_line,
-                        "the 58b line has no byte count (field 6)".to_string(),
-                    )
-                })?;
-            let size = if single { 4 } else { 8 };
-            // The byte count must match the points (checked against the file below before
-            // anything is read).
-            let need = (n as u64).checked_mul((per * size) as u64);
-            if need != Some(n_bytes) {
-                return Err(bad(
-                    id_line,
-                    format!(
-                        "'{name}': the 58b block has {n_bytes} bytes but {n} points of \
-                         {size}-byte values{} need {}",
-                        if even { "" } else { " with abscissa" },
-                        need.map_or("more".to_string(), |x| x.to_string())
-                    ),
-                ));
-            }
-            let start = lines.pos;
-            let end = usize::try_from(n_bytes)
-                .ok()
-                .and_then(|k| start.checked_add(k))
-                .filter(|&e| e <= b.len())
-                .ok_or_else(|| {
-                    bad(
-                        lines.line,
-                        format!(
-                            "'{name}': the 58b block of {n_bytes} bytes runs past the end of the \
-                             file; is it cut?"
-                        ),
-                    )
-                })?;
-            lines.pos = end;
-            let close = lines.next().unwrap_or(b"");
-            let close = if close.trim_ascii().is_empty() {
-                lines.next().unwrap_or(b"")
-            } else {
-                close
-            };
-            if close.trim_ascii() != b"-1" {
-                return Err(bad(
-                    lines.line,
-                    format!("'{name}': no '    -1' after the 58b block; is the file corrupt?"),
-                ));
-            }
-            Data::Binary {
-                bytes: &b[start..end],
-                num: if single { Num::F32 } else { Num::F64 },
-                big_endian: order == 2,
-            }
+            read_binary_block(path, &mut lines, &id_text, id_line, &h)?
         } else {
-            let width: &[usize] = match (single, even) {
-                (true, _) => &[13],
-                (false, true) => &[20],
-                (false, false) => &[13, 20],
-            };
-            // Capacity from the header only up to what the rest of the file can hold
-            // (a value takes at least 2 bytes).
-            let cap = n.min((b.len() - lines.pos.min(b.len())) / 2);
-            let mut x = Vec::with_capacity(if even { 0 } else { cap });
-            let mut y = crate::numerics::buffer::sample_buffer(cap);
-            let mut k = 0usize;
-            let mut vals: Vec<f64> = Vec::with_capacity(8);
-            loop {
-                let Some(l) = lines.next() else {
-                    return Err(bad(
-                        lines.line,
-                        format!(
-                            "'{name}' ends without its '    -1' delimiter after {} of {n} \
-                             values; is the file cut?",
-                            k / per
-                        ),
-                    ));
-                };
-                if l.trim_ascii() == b"-1" {
-                    break;
-                }
-                lines.release();
-                let text = std::str::from_utf8(l)
-                    .map_err(|_| bad(lines.line, format!("'{name}': data is not text")))?;
-                // Whitespace-separated fields first; touching fixed-width fields (a 3-digit
-                // exponent fills E13.5) are re-read by width.
-                vals.clear();
-                let spaced = text.split_whitespace().all(|tok| match fortran_real(tok) {
-                    Some(v) => {
-                        vals.push(v);
-                        true
-                    }
-                    None => false,
-                });
-                if !spaced {
-                    vals.clear();
-                    let mut at = 0;
-                    let mut j = 0;
-                    while at < text.len() {
-                        let w = width[j % width.len()];
-                        let cell = text.get(at..(at + w).min(text.len())).unwrap_or("");
-                        let v = fortran_real(cell.trim()).ok_or_else(|| {
-                            bad(
-                                lines.line,
-                                format!("'{name}': '{}' is not a number", cell.trim()),
-                            )
-                        })?;
-                        vals.push(v);
-                        at += w;
-                        j += 1;
-                    }
-                }
-                for &v in &vals {
-                    if k / per < n {
-                        if !even && k.is_multiple_of(2) {
-                            x.push(v);
-                        } else {
-                            y.push(v);
-                        }
-                    }
-                    k += 1;
-                }
-            }
-            if k != n * per {
-                return Err(bad(
-                    lines.line,
-                    format!(
-                        "'{name}' declares {n} points but has {} values{}; is the file cut or \
-                         corrupt?",
-                        k,
-                        if even { "" } else { " (x, y pairs)" }
-                    ),
-                ));
-            }
-            Data::Ascii { x, y }
+            read_ascii_values(path, &mut lines, &h)?
         };
         out.push(Function {
-            name,
-            alias,
-            n,
-            even,
-            x0,
-            dx,
-            x_unit,
-            y_unit,
-            spec_type,
+            name: h.name,
+            alias: h.alias,
+            n: h.n,
+            even: h.even,
+            x0: h.x0,
+            dx: h.dx,
+            x_unit: h.x_unit,
+            y_unit: h.y_unit,
+            spec_type: h.spec_type,
             data,
             line: id_line,
         });
     }
+}
+
+fn line_err(path: &Path, line: usize, what: String) -> DmwError {
+    record_err(path, format!("line {line}: {what}"))
+}
+
+/// The dataset number line after an opening `-1` delimiter (blank lines between datasets
+/// are tolerated); `None` at the end of the file.
+fn open_dataset<'a>(path: &Path, lines: &mut Lines<'a>) -> Result<Option<&'a [u8]>, DmwError> {
+    let open = loop {
+        match lines.next() {
+            None => return Ok(None),
+            Some(l) if l.trim_ascii().is_empty() => continue,
+            Some(l) => break l,
+        }
+    };
+    if open.trim_ascii() != b"-1" {
+        return Err(record_err(
+            path,
+            format!(
+                "line {}: expected the '    -1' dataset delimiter, found '{}'",
+                lines.line,
+                String::from_utf8_lossy(&open[..open.len().min(40)]).trim()
+            ),
+        ));
+    }
+    let Some(id) = lines.next().filter(|l| !l.trim_ascii().is_empty()) else {
+        return Err(record_err(
+            path,
+            format!(
+                "line {}: the file ends after a '    -1' delimiter; is it cut?",
+                lines.line
+            ),
+        ));
+    };
+    Ok(Some(id))
+}
+
+/// Moves past the closing delimiter of a dataset; false if the file ends first.
+fn skip_dataset(lines: &mut Lines<'_>) -> bool {
+    loop {
+        match lines.next() {
+            None => return false,
+            Some(l) if l.trim_ascii() == b"-1" => return true,
+            Some(_) => {}
+        }
+    }
+}
+
+/// The 11 header records of the dataset 58 whose number line is `id_line`.
+fn header_records<'a>(
+    path: &Path,
+    lines: &mut Lines<'a>,
+    id_line: usize,
+) -> Result<Vec<&'a [u8]>, DmwError> {
+    let mut rec: Vec<&[u8]> = Vec::with_capacity(11);
+    for _ in 0..11 {
+        match lines.next() {
+            Some(l) => rec.push(l),
+            None => {
+                return Err(line_err(
+                    path,
+                    lines.line,
+                    format!(
+                        "dataset 58 from line {id_line} ends inside its 11 header records; \
+                         is the file cut?"
+                    ),
+                ))
+            }
+        }
+    }
+    Ok(rec)
+}
+
+/// What the header records of one dataset 58 say about its data.
+struct Header58 {
+    name: String,
+    alias: String,
+    /// Ordinate in single (4-byte) rather than double precision.
+    single: bool,
+    n: usize,
+    even: bool,
+    x0: f64,
+    dx: f64,
+    x_unit: String,
+    y_unit: Option<String>,
+    spec_type: i64,
+}
+
+impl Header58 {
+    /// Values per point: y alone on an even abscissa, x and y otherwise.
+    fn per(&self) -> usize {
+        if self.even {
+            1
+        } else {
+            2
+        }
+    }
+}
+
+/// Records 1 (name), 6 (node and direction), 7 (data type, points, abscissa) and 8–9 (units).
+fn parse_header(path: &Path, rec: &[&[u8]], id_line: usize) -> Result<Header58, DmwError> {
+    let name = String::from_utf8_lossy(rec[0]).trim().to_string();
+    let r6 = rec[5];
+    let node = field(r6, 41, 51);
+    let dir = field(r6, 51, 55);
+    let alias = format!("{node}:{dir}");
+    let name = label(name).unwrap_or_else(|| alias.clone());
+    let r7 = String::from_utf8_lossy(rec[6]).to_string();
+    let r7_line = id_line + 7;
+    let bad = |what: String| line_err(path, r7_line, what);
+    let t: Vec<&str> = r7.split_whitespace().collect();
+    if t.len() < 5 {
+        return Err(bad(format!(
+            "record 7 of '{name}' has {} fields, expected 6",
+            t.len()
+        )));
+    }
+    let int = |s: &str, what: &str| {
+        s.parse::<i64>()
+            .map_err(|_| bad(format!("record 7 {what} '{s}' is not an integer")))
+    };
+    let real = |s: &str, what: &str| {
+        s.replace(['D', 'd'], "E")
+            .parse::<f64>()
+            .map_err(|_| bad(format!("record 7 {what} '{s}' is not a number")))
+    };
+    let ord = int(t[0], "ordinate data type")?;
+    let n = int(t[1], "number of points")?;
+    let even = int(t[2], "abscissa spacing")? == 1;
+    let x0 = real(t[3], "abscissa start")?;
+    let dx = real(t[4], "abscissa increment")?;
+    let single = match ord {
+        2 => true,
+        4 => false,
+        5 | 6 => {
+            return Err(bad(format!(
+                "'{name}' holds complex data (ordinate type {ord}); an LDV record is a \
+                 real time signal"
+            )))
+        }
+        _ => {
+            return Err(bad(format!(
+                "'{name}': unknown ordinate data type {ord} (2, 4, 5 or 6)"
+            )))
+        }
+    };
+    let n = usize::try_from(n).map_err(|_| bad(format!("'{name}' has {n} points")))?;
+    Ok(Header58 {
+        name,
+        alias,
+        single,
+        n,
+        even,
+        x0,
+        dx,
+        x_unit: field(rec[7], 47, 67),
+        y_unit: label(field(rec[8], 47, 67)),
+        spec_type: field(rec[8], 0, 10).parse::<i64>().unwrap_or(0),
+    })
+}
+
+/// The binary block of a `58b` dataset, left in the file: its byte count must match the
+/// points and fit in the file, and a `-1` must follow it.
+fn read_binary_block<'a>(
+    path: &Path,
+    lines: &mut Lines<'a>,
+    id_text: &str,
+    id_line: usize,
+    h: &Header58,
+) -> Result<Data<'a>, DmwError> {
+    let (name, n, even, single) = (&h.name, h.n, h.even, h.single);
+    let w: Vec<&str> = id_text.split_whitespace().collect();
+    let order = w.get(1).and_then(|s| s.parse::<i64>().ok()).unwrap_or(1);
+    let n_bytes = w
+        .get(4)
+        .and_then(|s| s.parse::<u64>().ok())
+        .ok_or_else(|| {
+            line_err(
+                path,
+                id_line,
+                "the 58b line has no byte count (field 6)".to_string(),
+            )
+        })?;
+    let size = if single { 4 } else { 8 };
+    // The byte count must match the points (checked against the file below before
+    // anything is read).
+    let need = (n as u64).checked_mul((h.per() * size) as u64);
+    if need != Some(n_bytes) {
+        return Err(line_err(
+            path,
+            id_line,
+            format!(
+                "'{name}': the 58b block has {n_bytes} bytes but {n} points of \
+                 {size}-byte values{} need {}",
+                if even { "" } else { " with abscissa" },
+                need.map_or("more".to_string(), |x| x.to_string())
+            ),
+        ));
+    }
+    let b = lines.b;
+    let start = lines.pos;
+    let end = usize::try_from(n_bytes)
+        .ok()
+        .and_then(|k| start.checked_add(k))
+        .filter(|&e| e <= b.len())
+        .ok_or_else(|| {
+            line_err(
+                path,
+                lines.line,
+                format!(
+                    "'{name}': the 58b block of {n_bytes} bytes runs past the end of the \
+                     file; is it cut?"
+                ),
+            )
+        })?;
+    lines.pos = end;
+    let close = lines.next().unwrap_or(b"");
+    let close = if close.trim_ascii().is_empty() {
+        lines.next().unwrap_or(b"")
+    } else {
+        close
+    };
+    if close.trim_ascii() != b"-1" {
+        return Err(line_err(
+            path,
+            lines.line,
+            format!("'{name}': no '    -1' after the 58b block; is the file corrupt?"),
+        ));
+    }
+    Ok(Data::Binary {
+        bytes: &b[start..end],
+        num: if single { Num::F32 } else { Num::F64 },
+        big_endian: order == 2,
+    })
+}
+
+/// Parses the ASCII values of a dataset up to its closing `-1`: y values, or interleaved
+/// x, y pairs on an uneven abscissa.
+fn read_ascii_values<'a>(
+    path: &Path,
+    lines: &mut Lines<'a>,
+    h: &Header58,
+) -> Result<Data<'a>, DmwError> {
+    let (name, n, even, per) = (&h.name, h.n, h.even, h.per());
+    let bad = |line: usize, what: String| line_err(path, line, what);
+    let width: &[usize] = match (h.single, even) {
+        (true, _) => &[13],
+        (false, true) => &[20],
+        (false, false) => &[13, 20],
+    };
+    // Capacity from the header only up to what the rest of the file can hold
+    // (a value takes at least 2 bytes).
+    let b = lines.b;
+    let cap = n.min((b.len() - lines.pos.min(b.len())) / 2);
+    let mut x = Vec::with_capacity(if even { 0 } else { cap });
+    let mut y = crate::numerics::buffer::sample_buffer(cap);
+    let mut k = 0usize;
+    let mut vals: Vec<f64> = Vec::with_capacity(8);
+    loop {
+        let Some(l) = lines.next() else {
+            return Err(bad(
+                lines.line,
+                format!(
+                    "'{name}' ends without its '    -1' delimiter after {} of {n} \
+                     values; is the file cut?",
+                    k / per
+                ),
+            ));
+        };
+        if l.trim_ascii() == b"-1" {
+            break;
+        }
+        lines.release();
+        let text = std::str::from_utf8(l)
+            .map_err(|_| bad(lines.line, format!("'{name}': data is not text")))?;
+        // Whitespace-separated fields first; touching fixed-width fields (a 3-digit
+        // exponent fills E13.5) are re-read by width.
+        vals.clear();
+        let spaced = text.split_whitespace().all(|tok| match fortran_real(tok) {
+            Some(v) => {
+                vals.push(v);
+                true
+            }
+            None => false,
+        });
+        if !spaced {
+            vals.clear();
+            let mut at = 0;
+            let mut j = 0;
+            while at < text.len() {
+                let w = width[j % width.len()];
+                let cell = text.get(at..(at + w).min(text.len())).unwrap_or("");
+                let v = fortran_real(cell.trim()).ok_or_else(|| {
+                    bad(
+                        lines.line,
+                        format!("'{name}': '{}' is not a number", cell.trim()),
+                    )
+                })?;
+                vals.push(v);
+                at += w;
+                j += 1;
+            }
+        }
+        for &v in &vals {
+            if k / per < n {
+                if !even && k.is_multiple_of(2) {
+                    x.push(v);
+                } else {
+                    y.push(v);
+                }
+            }
+            k += 1;
+        }
+    }
+    if k != n * per {
+        return Err(bad(
+            lines.line,
+            format!(
+                "'{name}' declares {n} points but has {} values{}; is the file cut or \
+                 corrupt?",
+                k,
+                if even { "" } else { " (x, y pairs)" }
+            ),
+        ));
+    }
+    Ok(Data::Ascii { x, y })
 }

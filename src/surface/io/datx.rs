@@ -390,9 +390,77 @@ fn receive(path: &Path, r: &mut isolated::Reader) -> std::io::Result<Result<RawM
 }
 
 fn read_inner(path: &Path, file_len: usize, opts: &ReadOptions) -> Result<RawMap> {
-    let fail = |reason: String| format_error(path, reason);
-    let h5 = |e: hdf5::Error| fail(format!("HDF5: {}", one_line(&e.to_string())));
-    let file = hdf5::File::open(path).map_err(h5)?;
+    let file = hdf5::File::open(path).map_err(|e| h5_error(path, e))?;
+    let (surface_path, intensity_path) = measurement_paths(path, &file, file_len)?;
+    let channel = choose_channel(path, opts, intensity_path.is_some())?;
+    let open = |p: &str, what: &str| {
+        file.dataset(p).map_err(|_| {
+            format_error(
+                path,
+                format!(".datx /MetaData gives the {what} path `{p}`, which names no dataset"),
+            )
+        })
+    };
+    let surface = open(&surface_path, "surface")?;
+    let ds = match (&intensity_path, channel) {
+        (Some(p), 1) => open(p, "intensity")?,
+        _ => surface.clone(),
+    };
+    let ds_path = if channel == 0 {
+        surface_path.clone()
+    } else {
+        intensity_path.clone().unwrap_or_default()
+    };
+    let dataset = Dataset {
+        path,
+        ds: &ds,
+        ds_path: &ds_path,
+    };
+
+    // Lateral spacing: the dataset's own converters, for intensity falling back to the surface's.
+    let dx = dataset.lateral_spacing(&surface, channel, "X Converter")?;
+    let dy = dataset.lateral_spacing(&surface, channel, "Y Converter")?;
+
+    let unit_attr = ds.attr("Unit").ok().and_then(|a| attr_string(&a));
+    let mut header = BTreeMap::new();
+    let scale = if channel == 0 {
+        dataset.height_scale(unit_attr.as_deref(), &mut header)?
+    } else {
+        1.0 // intensities are counts, not lengths
+    };
+    if let Some(u) = &unit_attr {
+        header.insert("unit".to_string(), u.clone());
+    }
+    header.insert("path".to_string(), ds_path.clone());
+
+    let (z, no_data) = dataset.read_values(file_len, scale)?;
+    if let Some(nd) = no_data {
+        header.insert("no_data".to_string(), nd.to_string());
+    }
+    find_instrument(&file, &surface_path, &mut header);
+    Ok(RawMap {
+        z,
+        dx,
+        dy,
+        x0: 0.0,
+        y0: 0.0,
+        channel: if channel == 0 { "height" } else { "intensity" }.to_string(),
+        format: "datx",
+        header,
+    })
+}
+
+fn h5_error(path: &Path, e: hdf5::Error) -> SurfaceError {
+    format_error(path, format!("HDF5: {}", one_line(&e.to_string())))
+}
+
+/// The surface dataset's path and, if the file has one, the intensity dataset's, from the
+/// /MetaData table: Root → Measurement → <channel> → Path.
+fn measurement_paths(
+    path: &Path,
+    file: &hdf5::File,
+    file_len: usize,
+) -> Result<(String, Option<String>)> {
     let meta = match file.dataset("MetaData") {
         Ok(ds) => ds,
         Err(_) => {
@@ -404,19 +472,24 @@ fn read_inner(path: &Path, file_len: usize, opts: &ReadOptions) -> Result<RawMap
         }
     };
     if meta.size() > file_len / MIN_META_ROW_BYTES {
-        return Err(fail(format!(
-            ".datx /MetaData claims {} rows, more than a file of {file_len} bytes can hold",
-            meta.size()
-        )));
+        return Err(format_error(
+            path,
+            format!(
+                ".datx /MetaData claims {} rows, more than a file of {file_len} bytes can hold",
+                meta.size()
+            ),
+        ));
     }
     let rows = meta_rows(&meta).ok_or_else(|| {
-        fail(".datx /MetaData is not a table of (Source, Link, Destination) strings".into())
+        format_error(
+            path,
+            ".datx /MetaData is not a table of (Source, Link, Destination) strings",
+        )
     })?;
     let mut table: HashMap<&str, HashMap<&str, &str>> = HashMap::new();
     for [s, l, d] in &rows {
         table.entry(s.as_str()).or_default().insert(l, d);
     }
-    // Root → Measurement → <channel> → Path.
     let lookup = |what: &str| -> std::result::Result<String, String> {
         let mut node = "Root";
         for key in ["Measurement", what] {
@@ -437,19 +510,22 @@ fn read_inner(path: &Path, file_len: usize, opts: &ReadOptions) -> Result<RawMap
             .map(|p| p.to_string())
             .ok_or_else(|| format!("/MetaData has no `Path` for the {what}"))
     };
-    let surface_path = lookup("Surface").map_err(|m| fail(format!(".datx {m}")))?;
-    let intensity_path = lookup("Intensity").ok();
+    let surface_path = lookup("Surface").map_err(|m| format_error(path, format!(".datx {m}")))?;
+    Ok((surface_path, lookup("Intensity").ok()))
+}
 
+/// 0 = height (the default), 1 = intensity (only when the file has one).
+fn choose_channel(path: &Path, opts: &ReadOptions, has_intensity: bool) -> Result<usize> {
     let names = vec![
         vec!["height".to_string(), "surface".to_string()],
         vec!["intensity".to_string()],
     ];
-    let channel = match opts.channel.as_deref() {
+    Ok(match opts.channel.as_deref() {
         None => 0,
         Some(req) => find_channel(req, &names)
-            .filter(|&k| k == 0 || intensity_path.is_some())
+            .filter(|&k| k == 0 || has_intensity)
             .ok_or_else(|| {
-                let list = if intensity_path.is_some() {
+                let list = if has_intensity {
                     "height (surface), intensity"
                 } else {
                     "height (surface)"
@@ -459,137 +535,119 @@ fn read_inner(path: &Path, file_len: usize, opts: &ReadOptions) -> Result<RawMap
                     format!(".datx file has no channel `{req}`; channels: {list}"),
                 )
             })?,
-    };
-    let open = |p: &str, what: &str| {
-        file.dataset(p).map_err(|_| {
-            fail(format!(
-                ".datx /MetaData gives the {what} path `{p}`, which names no dataset"
-            ))
-        })
-    };
-    let surface = open(&surface_path, "surface")?;
-    let ds = match (&intensity_path, channel) {
-        (Some(p), 1) => open(p, "intensity")?,
-        _ => surface.clone(),
-    };
-    let ds_path = if channel == 0 {
-        surface_path.clone()
-    } else {
-        intensity_path.clone().unwrap_or_default()
-    };
-    let at = |m: String| fail(format!(".datx dataset `{ds_path}`: {m}"));
+    })
+}
 
-    // Lateral spacing: the dataset's own converters, for intensity falling back to the surface's.
-    let lateral = |name: &str| -> Result<f64> {
-        let conv = match converter(&ds, name) {
-            Err(_) if channel == 1 => converter(&surface, name),
+/// The dataset being read, with what its errors name.
+struct Dataset<'a> {
+    path: &'a Path,
+    ds: &'a hdf5::Dataset,
+    ds_path: &'a str,
+}
+
+impl Dataset<'_> {
+    fn error(&self, m: String) -> SurfaceError {
+        format_error(self.path, format!(".datx dataset `{}`: {m}", self.ds_path))
+    }
+
+    /// Pixel spacing (m) from converter `name`; for intensity (channel 1) the surface's
+    /// converter stands in for a missing one.
+    fn lateral_spacing(&self, surface: &hdf5::Dataset, channel: usize, name: &str) -> Result<f64> {
+        let conv = match converter(self.ds, name) {
+            Err(_) if channel == 1 => converter(surface, name),
             r => r,
         }
-        .map_err(|m| at(m.clone()))?;
+        .map_err(|m| self.error(m.clone()))?;
         if conv.category != "LateralCat" {
-            return Err(at(format!(
+            return Err(self.error(format!(
                 "`{name}` has category `{}`, expected `LateralCat`",
                 conv.category
             )));
         }
         match conv.parameters.get(1) {
             Some(&d) if d.is_finite() && d > 0.0 => Ok(d),
-            Some(d) => Err(at(format!(
+            Some(d) => Err(self.error(format!(
                 "`{name}` pixel spacing Parameters[1] = {d} m is not a positive length"
             ))),
-            None => Err(at(format!(
-                "`{name}` Parameters has no element [1] (spacing)"
-            ))),
+            None => Err(self.error(format!("`{name}` Parameters has no element [1] (spacing)"))),
         }
-    };
-    let dx = lateral("X Converter")?;
-    let dy = lateral("Y Converter")?;
+    }
 
-    let unit_attr = ds.attr("Unit").ok().and_then(|a| attr_string(&a));
-    let mut header = BTreeMap::new();
-    let scale = if channel == 0 {
-        let z = converter(&ds, "Z Converter").map_err(at)?;
+    /// Metres per stored height value: the `Unit` attribute and the Z converter's base unit
+    /// must agree where both are lengths.
+    fn height_scale(
+        &self,
+        unit_attr: Option<&str>,
+        header: &mut BTreeMap<String, String>,
+    ) -> Result<f64> {
+        let z = converter(self.ds, "Z Converter").map_err(|m| self.error(m))?;
         if z.category != "HeightCat" {
-            return Err(at(format!(
+            return Err(self.error(format!(
                 "`Z Converter` has category `{}`, expected `HeightCat`",
                 z.category
             )));
         }
-        let from_attr = unit_attr.as_deref().and_then(units::length_factor);
+        let from_attr = unit_attr.and_then(units::length_factor);
         let from_conv = base_unit_factor(&z.base_unit);
         header.insert("z_base_unit".to_string(), z.base_unit.clone());
         match (from_attr, from_conv) {
-            (Some(a), Some(c)) if (a / c - 1.0).abs() > 1e-9 => {
-                return Err(at(format!(
-                    "conflicting height units: `Unit` = `{}`, `Z Converter` BaseUnit = `{}`",
+            (Some(a), Some(c)) if (a / c - 1.0).abs() > 1e-9 => Err(self.error(format!(
+                "conflicting height units: `Unit` = `{}`, `Z Converter` BaseUnit = `{}`",
+                unit_attr.unwrap_or_default(),
+                z.base_unit
+            ))),
+            (Some(f), _) | (None, Some(f)) => Ok(f),
+            (None, None) => Err(unsupported(
+                self.path,
+                format!(
+                    ".datx height unit `{}` (Z Converter BaseUnit `{}`) is not a length \
+                     hdi can convert",
                     unit_attr.unwrap_or_default(),
                     z.base_unit
-                )))
-            }
-            (Some(f), _) | (None, Some(f)) => f,
-            (None, None) => {
-                return Err(unsupported(
-                    path,
-                    format!(
-                        ".datx height unit `{}` (Z Converter BaseUnit `{}`) is not a length \
-                         hdi can convert",
-                        unit_attr.unwrap_or_default(),
-                        z.base_unit
-                    ),
-                ))
-            }
+                ),
+            )),
         }
-    } else {
-        1.0 // intensities are counts, not lengths
-    };
-    if let Some(u) = &unit_attr {
-        header.insert("unit".to_string(), u.clone());
     }
-    header.insert("path".to_string(), ds_path.clone());
 
-    let shape = ds.shape();
-    let (ny, nx) = match shape.as_slice() {
-        [ny, nx] => (*ny, *nx),
-        _ => return Err(at(format!("shape {shape:?} is not 2-D"))),
-    };
-    let is_f32 = match ds.dtype().and_then(|t| t.to_descriptor()).map_err(h5)? {
-        TypeDescriptor::Float(s) => s == hdf5::types::FloatSize::U4,
-        TypeDescriptor::Integer(_) | TypeDescriptor::Unsigned(_) => false,
-        other => return Err(at(format!("holds {other}, not numbers"))),
-    };
-    let n = ny.saturating_mul(nx);
-    if n > file_len.saturating_mul(MAX_VALUES_PER_FILE_BYTE) {
-        return Err(at(format!(
-            "{nx}×{ny} pixels is too large for a file of {file_len} bytes"
-        )));
-    }
-    let no_data = ds.attr("No Data").ok().and_then(|a| attr_number(&a));
-    let raw: Array2<f64> = ds.read_2d::<f64>().map_err(h5)?;
-    let is_no_data = |v: f64| match no_data {
-        Some(nd) => v == nd || (is_f32 && (v as f32) == (nd as f32)),
-        None => false,
-    };
-    let z = raw.mapv(|v| {
-        if is_no_data(v) || !v.is_finite() {
-            f64::NAN
-        } else {
-            v * scale
+    /// The 2-D values times `scale`, no-data and non-finite values as NaN; and the no-data
+    /// value, if the dataset declares one.
+    fn read_values(&self, file_len: usize, scale: f64) -> Result<(Array2<f64>, Option<f64>)> {
+        let ds = self.ds;
+        let shape = ds.shape();
+        let (ny, nx) = match shape.as_slice() {
+            [ny, nx] => (*ny, *nx),
+            _ => return Err(self.error(format!("shape {shape:?} is not 2-D"))),
+        };
+        let is_f32 = match ds
+            .dtype()
+            .and_then(|t| t.to_descriptor())
+            .map_err(|e| h5_error(self.path, e))?
+        {
+            TypeDescriptor::Float(s) => s == hdf5::types::FloatSize::U4,
+            TypeDescriptor::Integer(_) | TypeDescriptor::Unsigned(_) => false,
+            other => return Err(self.error(format!("holds {other}, not numbers"))),
+        };
+        let n = ny.saturating_mul(nx);
+        if n > file_len.saturating_mul(MAX_VALUES_PER_FILE_BYTE) {
+            return Err(self.error(format!(
+                "{nx}×{ny} pixels is too large for a file of {file_len} bytes"
+            )));
         }
-    });
-    if let Some(nd) = no_data {
-        header.insert("no_data".to_string(), nd.to_string());
+        let no_data = ds.attr("No Data").ok().and_then(|a| attr_number(&a));
+        let raw: Array2<f64> = ds.read_2d::<f64>().map_err(|e| h5_error(self.path, e))?;
+        let is_no_data = |v: f64| match no_data {
+            Some(nd) => v == nd || (is_f32 && (v as f32) == (nd as f32)),
+            None => false,
+        };
+        let z = raw.mapv(|v| {
+            if is_no_data(v) || !v.is_finite() {
+                f64::NAN
+            } else {
+                v * scale
+            }
+        });
+        Ok((z, no_data))
     }
-    find_instrument(&file, &surface_path, &mut header);
-    Ok(RawMap {
-        z,
-        dx,
-        dy,
-        x0: 0.0,
-        y0: 0.0,
-        channel: if channel == 0 { "height" } else { "intensity" }.to_string(),
-        format: "datx",
-        header,
-    })
 }
 
 /// `System Serial Number` / `System Type` from the surface dataset, its parent groups, then

@@ -11,7 +11,7 @@
 //! upwards (line 0 at the bottom), so line `ny − 1 − j` becomes hdi row `j` (row 0 = top).
 use super::units::{decode_text, length_factor};
 use super::{find_channel, format_error, unsupported, RawMap, ReadOptions};
-use crate::surface::Result;
+use crate::surface::{Result, SurfaceError};
 use ndarray::Array2;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -157,34 +157,129 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
         ));
     }
     let r = Bytes { b: bytes, le };
-    let truncated = |what: &str| {
+    if bytes.len() < BIN_HEADER + WAVE_HEADER {
+        return Err(truncated(path, bytes, "wave header"));
+    }
+    let sizes = read_section_sizes(path, &r)?;
+    let mut wave = read_wave_header(path, &r, sizes.wfm)?;
+    let (note, layer_labels) = read_trailing_sections(path, bytes, &sizes, &mut wave)?;
+    let names = layer_names(&layer_labels, wave.n_layers);
+
+    let mut header = note_header(&note);
+    header.insert("igor_version".into(), version.to_string());
+    header.insert("channels".into(), names.join(", "));
+    header.insert("wave_name".into(), wave.name.clone());
+
+    let layer = choose_layer(path, opts, &names)?;
+    let (nx, ny) = (wave.nx, wave.ny);
+    let dx = lateral_spacing(path, &wave, 0, opts.size_x)?;
+    let dy = lateral_spacing(path, &wave, 1, opts.size_y)?;
+    let offset = |d: usize| length_factor(&wave.dim_units[d]).map_or(0.0, |f| wave.sf_b[d] * f);
+    let z_unit = if wave.data_units.is_empty() {
+        opts.z_unit
+            .clone()
+            .ok_or_else(|| format_error(path, "Igor wave has no data unit; give z_unit"))?
+    } else {
+        wave.data_units.clone()
+    };
+    let z_factor = length_factor(&z_unit).ok_or_else(|| {
         format_error(
             path,
             format!(
-                "truncated Igor binary wave: {what} missing ({} bytes)",
-                bytes.len()
+                "Igor data unit `{z_unit}` of channel `{}` is not a length",
+                names[layer]
             ),
         )
-    };
-    if bytes.len() < BIN_HEADER + WAVE_HEADER {
-        return Err(truncated("wave header"));
-    }
+    })?;
+    header.insert("z_unit".into(), z_unit);
+
+    let elem = wave.elem;
+    let data_start = BIN_HEADER + WAVE_HEADER;
+    let layer_start = data_start + layer * nx * ny * elem;
+    debug_assert!(layer_start + nx * ny * elem <= data_start + wave.data_bytes);
+    let z = Array2::from_shape_fn((ny, nx), |(row, col)| {
+        let j = ny - 1 - row;
+        r.value(wave.code, layer_start + (j * nx + col) * elem)
+            .map_or(f64::NAN, |v| v * z_factor)
+    });
+    Ok(RawMap {
+        z,
+        dx,
+        dy,
+        x0: offset(0),
+        y0: offset(1),
+        channel: names[layer].clone(),
+        format: "ibw",
+        header,
+    })
+}
+
+fn truncated(path: &Path, bytes: &[u8], what: &str) -> SurfaceError {
+    format_error(
+        path,
+        format!(
+            "truncated Igor binary wave: {what} missing ({} bytes)",
+            bytes.len()
+        ),
+    )
+}
+
+/// Section sizes of `BinHeader5`, in bytes.
+struct SectionSizes {
+    /// The wave: header plus data.
+    wfm: usize,
+    formula: usize,
+    note: usize,
+    data_eunits: usize,
+    dim_eunits: [usize; 4],
+    dim_labels: [usize; 4],
+}
+
+fn read_section_sizes(path: &Path, r: &Bytes<'_>) -> Result<SectionSizes> {
     let size = |at: usize, what: &str| -> Result<usize> {
-        let v = r.i32(at).ok_or_else(|| truncated(what))?;
+        let v = r.i32(at).ok_or_else(|| truncated(path, r.b, what))?;
         usize::try_from(v)
             .map_err(|_| format_error(path, format!("Igor {what} size {v} is negative")))
     };
-    let wfm_size = size(4, "wave")?;
-    let formula_size = size(8, "formula")?;
-    let note_size = size(12, "note")?;
-    let data_eunits_size = size(16, "data units")?;
-    let mut dim_eunits_size = [0usize; 4];
-    let mut dim_labels_size = [0usize; 4];
+    let wfm = size(4, "wave")?;
+    let formula = size(8, "formula")?;
+    let note = size(12, "note")?;
+    let data_eunits = size(16, "data units")?;
+    let mut dim_eunits = [0usize; 4];
+    let mut dim_labels = [0usize; 4];
     for d in 0..4 {
-        dim_eunits_size[d] = size(20 + 4 * d, "dimension units")?;
-        dim_labels_size[d] = size(36 + 4 * d, "dimension labels")?;
+        dim_eunits[d] = size(20 + 4 * d, "dimension units")?;
+        dim_labels[d] = size(36 + 4 * d, "dimension labels")?;
     }
+    Ok(SectionSizes {
+        wfm,
+        formula,
+        note,
+        data_eunits,
+        dim_eunits,
+        dim_labels,
+    })
+}
 
+/// The fields of `WaveHeader5` the reader uses; the units may be replaced by the extended
+/// units of the trailing sections.
+struct WaveHeader {
+    code: u16,
+    elem: usize,
+    nx: usize,
+    ny: usize,
+    n_layers: usize,
+    data_bytes: usize,
+    sf_a: [f64; 2],
+    sf_b: [f64; 2],
+    data_units: String,
+    dim_units: Vec<String>,
+    name: String,
+}
+
+fn read_wave_header(path: &Path, r: &Bytes<'_>, wfm_size: usize) -> Result<WaveHeader> {
+    let bytes = r.b;
+    let truncated = |what: &str| truncated(path, bytes, what);
     let w = BIN_HEADER;
     let code = r.u16(w + 16).ok_or_else(|| truncated("wave type"))?;
     let elem = element_size(code).ok_or_else(|| {
@@ -238,46 +333,71 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
     for (d, v) in sf_b.iter_mut().enumerate() {
         *v = r.f64(w + 116 + 8 * d).ok_or_else(|| truncated("sfB"))?;
     }
-    let mut data_units = c_string(&bytes[w + 148..w + 152]);
-    let mut dim_units: Vec<String> = (0..4)
-        .map(|d| c_string(&bytes[w + 152 + 4 * d..w + 156 + 4 * d]))
-        .collect();
+    Ok(WaveHeader {
+        code,
+        elem,
+        nx,
+        ny,
+        n_layers,
+        data_bytes,
+        sf_a,
+        sf_b,
+        data_units: c_string(&bytes[w + 148..w + 152]),
+        dim_units: (0..4)
+            .map(|d| c_string(&bytes[w + 152 + 4 * d..w + 156 + 4 * d]))
+            .collect(),
+        name: c_string(&bytes[w + 28..w + 60]),
+    })
+}
 
-    // Sections after the data, in file order (PTN003): the wave (header + data, wfmSize
-    // bytes), formula, note, extended data units, extended dimension units, dimension labels.
+/// Reads the sections after the data, in file order (PTN003): the wave (header + data,
+/// wfmSize bytes), formula, note, extended data units, extended dimension units, dimension
+/// labels. Extended units replace the wave header's; returns the note and the labels of
+/// dimension 2 (one per layer).
+fn read_trailing_sections(
+    path: &Path,
+    bytes: &[u8],
+    sizes: &SectionSizes,
+    wave: &mut WaveHeader,
+) -> Result<(String, Vec<String>)> {
     let mut at = BIN_HEADER
-        .checked_add(wfm_size)
-        .ok_or_else(|| truncated("wave"))?;
+        .checked_add(sizes.wfm)
+        .ok_or_else(|| truncated(path, bytes, "wave"))?;
     let mut section = |len: usize, what: &str| -> Result<&[u8]> {
         let end = at
             .checked_add(len)
             .filter(|&e| e <= bytes.len())
-            .ok_or_else(|| truncated(what))?;
+            .ok_or_else(|| truncated(path, bytes, what))?;
         let s = &bytes[at..end];
         at = end;
         Ok(s)
     };
-    section(formula_size, "formula")?;
-    let note = decode_text(section(note_size, "note")?);
-    let eunits = section(data_eunits_size, "extended data units")?;
+    section(sizes.formula, "formula")?;
+    let note = decode_text(section(sizes.note, "note")?);
+    let eunits = section(sizes.data_eunits, "extended data units")?;
     if !eunits.is_empty() {
-        data_units = c_string(eunits);
+        wave.data_units = c_string(eunits);
     }
-    for (d, unit) in dim_units.iter_mut().enumerate() {
-        let s = section(dim_eunits_size[d], "extended dimension units")?;
+    for (d, unit) in wave.dim_units.iter_mut().enumerate() {
+        let s = section(sizes.dim_eunits[d], "extended dimension units")?;
         if !s.is_empty() {
             *unit = c_string(s);
         }
     }
     // Labels of dimension 2: the first is the dimension's own label, then one per layer.
     let mut layer_labels = Vec::new();
-    for (d, &len) in dim_labels_size.iter().enumerate() {
+    for (d, &len) in sizes.dim_labels.iter().enumerate() {
         let s = section(len, "dimension labels")?;
         if d == 2 {
             layer_labels = s.chunks(LABEL_BYTES).skip(1).map(c_string).collect();
         }
     }
-    let names: Vec<String> = (0..n_layers)
+    Ok((note, layer_labels))
+}
+
+/// One name per layer: its label, or `layer k` where it has none.
+fn layer_names(layer_labels: &[String], n_layers: usize) -> Vec<String> {
+    (0..n_layers)
         .map(|k| {
             layer_labels
                 .get(k)
@@ -285,10 +405,12 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
                 .cloned()
                 .unwrap_or_else(|| format!("layer {k}"))
         })
-        .collect();
+        .collect()
+}
 
+/// Asylum's note: `Key: Value` lines separated by CR.
+fn note_header(note: &str) -> BTreeMap<String, String> {
     let mut header = BTreeMap::new();
-    // Asylum's note: `Key: Value` lines separated by CR.
     for line in note.split(['\r', '\n']) {
         if let Some((key, value)) = line.split_once(':') {
             let key = key.trim();
@@ -297,11 +419,11 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
             }
         }
     }
-    header.insert("igor_version".into(), version.to_string());
-    header.insert("channels".into(), names.join(", "));
-    header.insert("wave_name".into(), c_string(&bytes[w + 28..w + 60]));
+    header
+}
 
-    let layer = match &opts.channel {
+fn choose_layer(path: &Path, opts: &ReadOptions, names: &[String]) -> Result<usize> {
+    Ok(match &opts.channel {
         Some(wanted) => {
             let options: Vec<Vec<String>> = names.iter().map(|n| vec![n.clone()]).collect();
             find_channel(wanted, &options).ok_or_else(|| {
@@ -316,65 +438,30 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
             .iter()
             .position(|n| n.to_lowercase().starts_with("height"))
             .unwrap_or(0),
-    };
+    })
+}
 
-    let lateral = |d: usize, given: Option<f64>, n: usize| -> Result<f64> {
-        let unit = &dim_units[d];
-        if unit.is_empty() {
-            let axis = ["x", "y"][d];
-            return given.map(|size| size / n as f64).ok_or_else(|| {
-                format_error(
-                    path,
-                    format!("Igor wave has no {axis} unit; give size_{axis}"),
-                )
-            });
-        }
-        let factor = length_factor(unit).ok_or_else(|| {
+/// Spacing along dimension `d` (0 = x, 1 = y) in metres: sfA in the dimension's unit, or the
+/// user's size over the point count when the wave has no unit.
+fn lateral_spacing(path: &Path, wave: &WaveHeader, d: usize, given: Option<f64>) -> Result<f64> {
+    let n = [wave.nx, wave.ny][d];
+    let unit = &wave.dim_units[d];
+    if unit.is_empty() {
+        let axis = ["x", "y"][d];
+        return given.map(|size| size / n as f64).ok_or_else(|| {
             format_error(
                 path,
-                format!("Igor dimension {d} unit `{unit}` is not a length"),
+                format!("Igor wave has no {axis} unit; give size_{axis}"),
             )
-        })?;
-        Ok(sf_a[d].abs() * factor)
-    };
-    let dx = lateral(0, opts.size_x, nx)?;
-    let dy = lateral(1, opts.size_y, ny)?;
-    let offset = |d: usize| length_factor(&dim_units[d]).map_or(0.0, |f| sf_b[d] * f);
-    let z_unit = if data_units.is_empty() {
-        opts.z_unit
-            .clone()
-            .ok_or_else(|| format_error(path, "Igor wave has no data unit; give z_unit"))?
-    } else {
-        data_units.clone()
-    };
-    let z_factor = length_factor(&z_unit).ok_or_else(|| {
+        });
+    }
+    let factor = length_factor(unit).ok_or_else(|| {
         format_error(
             path,
-            format!(
-                "Igor data unit `{z_unit}` of channel `{}` is not a length",
-                names[layer]
-            ),
+            format!("Igor dimension {d} unit `{unit}` is not a length"),
         )
     })?;
-    header.insert("z_unit".into(), z_unit);
-
-    let layer_start = data_start + layer * nx * ny * elem;
-    debug_assert!(layer_start + nx * ny * elem <= data_start + data_bytes);
-    let z = Array2::from_shape_fn((ny, nx), |(row, col)| {
-        let j = ny - 1 - row;
-        r.value(code, layer_start + (j * nx + col) * elem)
-            .map_or(f64::NAN, |v| v * z_factor)
-    });
-    Ok(RawMap {
-        z,
-        dx,
-        dy,
-        x0: offset(0),
-        y0: offset(1),
-        channel: names[layer].clone(),
-        format: "ibw",
-        header,
-    })
+    Ok(wave.sf_a[d].abs() * factor)
 }
 
 #[cfg(test)]

@@ -54,8 +54,48 @@ pub(crate) fn read(path: &Path, bytes: &[u8], _opts: &ReadOptions) -> Result<Raw
         .map_err(|e| fail(format!("x3p: {e}")))?;
     let xml =
         std::str::from_utf8(&xml).map_err(|e| fail(format!("x3p main.xml is not UTF-8 ({e})")))?;
-    let h = parse_header(xml).map_err(|e| fail(format!("x3p main.xml: {e}")))?;
+    let mut h = parse_header(xml).map_err(|e| fail(format!("x3p main.xml: {e}")))?;
 
+    check_areal_matrix(path, &h)?;
+    let axes = read_axes(path, &h)?;
+    let (data_type, width) = height_data_type(path, &h.axes[2])?;
+    let (nx, ny, n) = matrix_size(path, &h)?;
+
+    let mut values: Vec<f64> = if let Some(list) = h.data_list.take() {
+        if list.len() != n {
+            return Err(fail(format!(
+                "x3p DataList has {} Datum values, the matrix is {nx}×{ny} = {n}",
+                list.len()
+            )));
+        }
+        list
+    } else {
+        read_point_member(path, &zip, &h, data_type, width, (nx, ny))?
+    };
+    for v in values.iter_mut() {
+        *v = axes.z_off + axes.z_inc * *v;
+    }
+    if let Some(link) = h.valid_link.as_deref().map(str::trim) {
+        apply_validity_mask(path, &zip, link, &mut values)?;
+    }
+    let z = Array2::from_shape_vec((ny, nx), values)
+        .map_err(|e| fail(format!("x3p data shape: {e}")))?;
+    let mut header = h.info;
+    header.insert("CZ/DataType".into(), data_type.to_string());
+    Ok(RawMap {
+        z,
+        dx: axes.dx,
+        dy: axes.dy,
+        x0: axes.x0,
+        y0: axes.y0,
+        channel: "height".into(),
+        format: "x3p",
+        header,
+    })
+}
+
+/// Only areal surfaces stored as a matrix are height maps; profiles and point lists are not.
+fn check_areal_matrix(path: &Path, h: &Header) -> Result<()> {
     match h.feature_type.as_deref().map(str::trim) {
         Some("SUR") => {}
         Some(other) => {
@@ -64,7 +104,12 @@ pub(crate) fn read(path: &Path, bytes: &[u8], _opts: &ReadOptions) -> Result<Raw
                 format!("x3p FeatureType `{other}`; only areal surfaces (SUR) are height maps"),
             ))
         }
-        None => return Err(fail("x3p main.xml has no Record1/FeatureType".into())),
+        None => {
+            return Err(format_error(
+                path,
+                "x3p main.xml has no Record1/FeatureType",
+            ))
+        }
     }
     if h.list_dimension {
         return Err(unsupported(
@@ -72,16 +117,39 @@ pub(crate) fn read(path: &Path, bytes: &[u8], _opts: &ReadOptions) -> Result<Raw
             "x3p point list (ListDimension); only matrix data (MatrixDimension) is read",
         ));
     }
-    let num = |what: &str, text: &Option<String>, default: Option<f64>| -> Result<f64> {
-        match text.as_deref().map(str::trim) {
-            None => default.ok_or_else(|| fail(format!("x3p main.xml lacks {what}"))),
-            Some(t) => t
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| fail(format!("x3p {what} = `{t}` is not a number"))),
-        }
-    };
+    Ok(())
+}
+
+/// The sampling of the map and the linear height scale z = offset + increment·value.
+struct Axes {
+    dx: f64,
+    dy: f64,
+    x0: f64,
+    y0: f64,
+    z_inc: f64,
+    z_off: f64,
+}
+
+/// A finite number from the header, or `default` when the element is absent.
+fn header_number(
+    path: &Path,
+    what: &str,
+    text: &Option<String>,
+    default: Option<f64>,
+) -> Result<f64> {
+    match text.as_deref().map(str::trim) {
+        None => default.ok_or_else(|| format_error(path, format!("x3p main.xml lacks {what}"))),
+        Some(t) => t
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format_error(path, format!("x3p {what} = `{t}` is not a number"))),
+    }
+}
+
+/// CX/CY must be incremental axes; CZ, when typed, absolute. The checks run in the order the
+/// reader has always reported them (axis types, then numbers, then the CZ type).
+fn read_axes(path: &Path, h: &Header) -> Result<Axes> {
     for (k, name) in ["CX", "CY"].iter().enumerate() {
         match h.axes[k].axis_type.as_deref().map(str::trim) {
             Some("I") => {}
@@ -91,15 +159,22 @@ pub(crate) fn read(path: &Path, bytes: &[u8], _opts: &ReadOptions) -> Result<Raw
                     format!("x3p {name} AxisType `{t}`; only incremental (I) x/y axes are read"),
                 ))
             }
-            None => return Err(fail(format!("x3p main.xml lacks {name}/AxisType"))),
+            None => {
+                return Err(format_error(
+                    path,
+                    format!("x3p main.xml lacks {name}/AxisType"),
+                ))
+            }
         }
     }
-    let dx = num("CX/Increment", &h.axes[0].increment, None)?;
-    let dy = num("CY/Increment", &h.axes[1].increment, None)?;
-    let x0 = num("CX/Offset", &h.axes[0].offset, Some(0.0))?;
-    let y0 = num("CY/Offset", &h.axes[1].offset, Some(0.0))?;
-    let z_inc = num("CZ/Increment", &h.axes[2].increment, Some(1.0))?;
-    let z_off = num("CZ/Offset", &h.axes[2].offset, Some(0.0))?;
+    let axes = Axes {
+        dx: header_number(path, "CX/Increment", &h.axes[0].increment, None)?,
+        dy: header_number(path, "CY/Increment", &h.axes[1].increment, None)?,
+        x0: header_number(path, "CX/Offset", &h.axes[0].offset, Some(0.0))?,
+        y0: header_number(path, "CY/Offset", &h.axes[1].offset, Some(0.0))?,
+        z_inc: header_number(path, "CZ/Increment", &h.axes[2].increment, Some(1.0))?,
+        z_off: header_number(path, "CZ/Offset", &h.axes[2].offset, Some(0.0))?,
+    };
     if let Some(t) = h.axes[2].axis_type.as_deref().map(str::trim) {
         if t != "A" {
             return Err(unsupported(
@@ -108,30 +183,42 @@ pub(crate) fn read(path: &Path, bytes: &[u8], _opts: &ReadOptions) -> Result<Raw
             ));
         }
     }
-    let data_type = h.axes[2]
+    Ok(axes)
+}
+
+/// The CZ DataType code and its width in bytes.
+fn height_data_type<'h>(path: &Path, cz: &'h Axis) -> Result<(&'h str, usize)> {
+    let data_type = cz
         .data_type
         .as_deref()
         .map(str::trim)
-        .ok_or_else(|| fail("x3p main.xml lacks CZ/DataType".into()))?;
+        .ok_or_else(|| format_error(path, "x3p main.xml lacks CZ/DataType"))?;
     let width = match data_type {
         "I" => 2,
         "L" | "F" => 4,
         "D" => 8,
         other => {
-            return Err(fail(format!(
-                "x3p CZ DataType `{other}` is not I, L, F or D"
-            )))
+            return Err(format_error(
+                path,
+                format!("x3p CZ DataType `{other}` is not I, L, F or D"),
+            ))
         }
     };
+    Ok((data_type, width))
+}
+
+/// (SizeX, SizeY, SizeX·SizeY) of a single-layer matrix.
+fn matrix_size(path: &Path, h: &Header) -> Result<(usize, usize, usize)> {
     let dim = |k: usize, name: &str| -> Result<usize> {
-        let t = h.size[k]
-            .as_deref()
-            .map(str::trim)
-            .ok_or_else(|| fail(format!("x3p main.xml lacks MatrixDimension/{name}")))?;
-        t.parse::<usize>()
-            .ok()
-            .filter(|&n| n > 0)
-            .ok_or_else(|| fail(format!("x3p {name} = `{t}` is not a positive integer")))
+        let t = h.size[k].as_deref().map(str::trim).ok_or_else(|| {
+            format_error(path, format!("x3p main.xml lacks MatrixDimension/{name}"))
+        })?;
+        t.parse::<usize>().ok().filter(|&n| n > 0).ok_or_else(|| {
+            format_error(
+                path,
+                format!("x3p {name} = `{t}` is not a positive integer"),
+            )
+        })
     };
     let (nx, ny, nz) = (dim(0, "SizeX")?, dim(1, "SizeY")?, dim(2, "SizeZ")?);
     if nz != 1 {
@@ -142,90 +229,86 @@ pub(crate) fn read(path: &Path, bytes: &[u8], _opts: &ReadOptions) -> Result<Raw
     }
     let n = nx
         .checked_mul(ny)
-        .ok_or_else(|| fail(format!("x3p matrix {nx}×{ny} is too large")))?;
+        .ok_or_else(|| format_error(path, format!("x3p matrix {nx}×{ny} is too large")))?;
+    Ok((nx, ny, n))
+}
 
-    let mut values: Vec<f64> = if let Some(list) = h.data_list {
-        if list.len() != n {
+/// The raw heights from the `PointDataLink` member, size- and MD5-checked.
+fn read_point_member(
+    path: &Path,
+    zip: &ZipArchive<'_>,
+    h: &Header,
+    data_type: &str,
+    width: usize,
+    (nx, ny): (usize, usize),
+) -> Result<Vec<f64>> {
+    let fail = |reason: String| format_error(path, reason);
+    let n = nx * ny;
+    let link = h
+        .point_link
+        .as_deref()
+        .map(str::trim)
+        .ok_or_else(|| fail("x3p Record3 has neither DataLink nor DataList".into()))?;
+    let entry = zip.find(link).ok_or_else(|| {
+        fail(format!(
+            "x3p data member `{link}` (PointDataLink) is not in the archive"
+        ))
+    })?;
+    let needed = n.checked_mul(width).map(|b| b as u64);
+    match needed {
+        Some(needed) if needed <= entry.size => {}
+        _ => {
             return Err(fail(format!(
-                "x3p DataList has {} Datum values, the matrix is {nx}×{ny} = {n}",
-                list.len()
-            )));
-        }
-        list
-    } else {
-        let link = h
-            .point_link
-            .as_deref()
-            .map(str::trim)
-            .ok_or_else(|| fail("x3p Record3 has neither DataLink nor DataList".into()))?;
-        let entry = zip.find(link).ok_or_else(|| {
-            fail(format!(
-                "x3p data member `{link}` (PointDataLink) is not in the archive"
-            ))
-        })?;
-        let needed = n.checked_mul(width).map(|b| b as u64);
-        match needed {
-            Some(needed) if needed <= entry.size => {}
-            _ => {
-                return Err(fail(format!(
-                    "truncated x3p data: {nx}×{ny} values of type {data_type} need {} bytes, \
-                     `{link}` has {}",
-                    needed.map_or("more than addressable".into(), |b| b.to_string()),
-                    entry.size
-                )))
-            }
-        }
-        let data = zip
-            .read(entry, entry.size)
-            .map_err(|e| fail(format!("x3p: {e}")))?;
-        if let Some(want) = h.point_md5.as_deref().map(str::trim) {
-            let got = md5_hex(&data);
-            if !got.eq_ignore_ascii_case(want) {
-                return Err(fail(format!(
-                    "x3p `{link}` fails its MD5 checksum (main.xml says {want}, data is {got})"
-                )));
-            }
-        }
-        decode(&data[..n * width], data_type)
-    };
-    for v in values.iter_mut() {
-        *v = z_off + z_inc * *v;
-    }
-    if let Some(link) = h.valid_link.as_deref().map(str::trim) {
-        let entry = zip.find(link).ok_or_else(|| {
-            fail(format!(
-                "x3p validity member `{link}` (ValidPointsLink) is not in the archive"
-            ))
-        })?;
-        let bits = zip
-            .read(entry, entry.size)
-            .map_err(|e| fail(format!("x3p: {e}")))?;
-        if (bits.len() as u64) < (n as u64).div_ceil(8) {
-            return Err(fail(format!(
-                "truncated x3p validity mask `{link}`: {} bytes for {n} points",
-                bits.len()
-            )));
-        }
-        for (k, v) in values.iter_mut().enumerate() {
-            if bits[k / 8] & (1 << (k % 8)) == 0 {
-                *v = f64::NAN;
-            }
+                "truncated x3p data: {nx}×{ny} values of type {data_type} need {} bytes, \
+                 `{link}` has {}",
+                needed.map_or("more than addressable".into(), |b| b.to_string()),
+                entry.size
+            )))
         }
     }
-    let z = Array2::from_shape_vec((ny, nx), values)
-        .map_err(|e| fail(format!("x3p data shape: {e}")))?;
-    let mut header = h.info;
-    header.insert("CZ/DataType".into(), data_type.to_string());
-    Ok(RawMap {
-        z,
-        dx,
-        dy,
-        x0,
-        y0,
-        channel: "height".into(),
-        format: "x3p",
-        header,
-    })
+    let data = zip
+        .read(entry, entry.size)
+        .map_err(|e| fail(format!("x3p: {e}")))?;
+    if let Some(want) = h.point_md5.as_deref().map(str::trim) {
+        let got = md5_hex(&data);
+        if !got.eq_ignore_ascii_case(want) {
+            return Err(fail(format!(
+                "x3p `{link}` fails its MD5 checksum (main.xml says {want}, data is {got})"
+            )));
+        }
+    }
+    Ok(decode(&data[..n * width], data_type))
+}
+
+/// Marks the points whose bit in the `ValidPointsLink` member is 0 as NaN.
+fn apply_validity_mask(
+    path: &Path,
+    zip: &ZipArchive<'_>,
+    link: &str,
+    values: &mut [f64],
+) -> Result<()> {
+    let fail = |reason: String| format_error(path, reason);
+    let n = values.len();
+    let entry = zip.find(link).ok_or_else(|| {
+        fail(format!(
+            "x3p validity member `{link}` (ValidPointsLink) is not in the archive"
+        ))
+    })?;
+    let bits = zip
+        .read(entry, entry.size)
+        .map_err(|e| fail(format!("x3p: {e}")))?;
+    if (bits.len() as u64) < (n as u64).div_ceil(8) {
+        return Err(fail(format!(
+            "truncated x3p validity mask `{link}`: {} bytes for {n} points",
+            bits.len()
+        )));
+    }
+    for (k, v) in values.iter_mut().enumerate() {
+        if bits[k / 8] & (1 << (k % 8)) == 0 {
+            *v = f64::NAN;
+        }
+    }
+    Ok(())
 }
 
 /// Little-endian values of one ISO 5436-2 data type as f64.
