@@ -79,9 +79,6 @@ pub enum Error {
     /// The stages' upstream links form a cycle.
     #[error("dependency cycle through stage `{0}`")]
     DependencyCycle(String),
-    /// The pipeline has no `[kind.name]` instance.
-    #[error("no [{kind}.{name}] in the pipeline")]
-    MissingInstance { kind: &'static str, name: String },
     /// A distributed case's recipe is not a recipe of this hdi (`stages::case_engine`).
     #[error("{kind} recipe: unreadable")]
     Recipe {
@@ -397,13 +394,6 @@ mod tests {
         assert_eq!(
             s(Error::DependencyCycle(name())),
             "dependency cycle through stage `a`"
-        );
-        assert_eq!(
-            s(Error::MissingInstance {
-                kind: "doe",
-                name: name()
-            }),
-            "no [doe.a] in the pipeline"
         );
         let bad =
             || serde_json::from_value::<Option<[f64; 3]>>(serde_json::json!("x")).unwrap_err();

@@ -89,7 +89,7 @@ impl Project {
             (p, o)
         });
         let dir = tempfile::tempdir().expect("tempdir");
-        copy_tree(base.path(), dir.path());
+        copy_dir(base.path(), dir.path());
         (Self { dir }, output.clone())
     }
     pub fn path(&self) -> &Path {
@@ -113,22 +113,9 @@ impl Project {
     }
 }
 
-pub fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let e = e.unwrap();
-        let p = e.path();
-        if p.is_dir() {
-            copy_dir(&p, &to.join(e.file_name()));
-        } else {
-            std::fs::copy(&p, to.join(e.file_name())).unwrap();
-        }
-    }
-}
-
 /// `from` copied to `to` with its symbolic links recreated as links (the store's instance
 /// links are relative, so they point into the copy).
-pub fn copy_tree(from: &Path, to: &Path) {
+pub fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for e in std::fs::read_dir(from).unwrap() {
         let e = e.unwrap();
@@ -137,7 +124,7 @@ pub fn copy_tree(from: &Path, to: &Path) {
         if kind.is_symlink() {
             std::os::unix::fs::symlink(std::fs::read_link(&p).unwrap(), &dest).unwrap();
         } else if kind.is_dir() {
-            copy_tree(&p, &dest);
+            copy_dir(&p, &dest);
         } else {
             std::fs::copy(&p, &dest).unwrap();
         }

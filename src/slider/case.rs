@@ -40,7 +40,7 @@ pub fn simulate_case(
     let h = case.run()?;
     let m = h.metrics(&p.case_metric_params())?;
     write_case_h5(&dir.join(CASE_FILE), &h, actuation, &m)?;
-    Ok(case_json(actuation, &h, &m, case.contact_damping()))
+    Ok(SweepCaseResult::new(actuation, &h, &m, case.contact_damping()).to_json())
 }
 
 /// Mean, standard deviation and extremes of one steady-window series, SI units.
@@ -165,10 +165,6 @@ impl SweepCaseResult {
     pub fn to_json(&self) -> Value {
         serde_json::to_value(self).unwrap_or(Value::Null)
     }
-}
-
-pub fn case_json(actuation: f64, h: &CaseHistory, m: &CaseMetrics, c_c: f64) -> Value {
-    SweepCaseResult::new(actuation, h, m, c_c).to_json()
 }
 
 pub fn write_case_h5(path: &Path, h: &CaseHistory, actuation: f64, m: &CaseMetrics) -> Result<()> {

@@ -6,7 +6,7 @@
 use crate::artefacts::calibration::upstream_fitted_knobs;
 use crate::artefacts::cases;
 use crate::artefacts::dmw_tracks::DmwTrack;
-use crate::contact::isbl::IsblModel;
+use crate::contact::isbl::{IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
 use crate::core::cache::Store;
 use crate::core::cases::{get_or_compute, CaseEntry};
@@ -64,14 +64,25 @@ impl PreparedSweep {
             let fitted = crate::artefacts::bulge::upstream_bulge(upstream, b)?;
             calibrated.apply_bulge(&fitted, b)?;
         }
+        Self::assemble(calibrated, isbl_params, dmw_track, key_of)
+    }
+
+    /// The shared inputs of `params` as they stand (calibrated, bulge in place): its interface
+    /// table from `isbl_params`, and the keys of the contact and DMW instances.
+    pub fn assemble(
+        params: SimulateParams,
+        isbl_params: IsblParams,
+        dmw_track: Option<DmwTrack>,
+        key_of: impl Fn(&str) -> String,
+    ) -> Result<PreparedSweep> {
         let isbl = IsblLookup::build_standard_unverified(IsblModel::new(isbl_params)?)?;
-        let dmw = match (&calibrated.dmw, dmw_track) {
+        let dmw = match (&params.dmw, dmw_track) {
             (Some(d), Some(t)) => Some((t, key_of(d))),
             _ => None,
         };
         Ok(PreparedSweep {
-            contact_key: key_of(&calibrated.contact),
-            params: calibrated,
+            contact_key: key_of(&params.contact),
+            params,
             isbl,
             dmw,
         })
@@ -293,14 +304,6 @@ pub fn run_jobs(
     let outcomes: Vec<Result<CaseOutcome>> = jobs
         .par_iter()
         .map(|&(a, start)| {
-            let pa;
-            let p = match start {
-                Some(_) => {
-                    pa = with_start(p, start);
-                    &pa
-                }
-                None => p,
-            };
             let entry = run_case(p, sink, a, start, isbl, dmw, tag).map_err(|e| Error::Case {
                 actuation: a,
                 source: Box::new(e),
@@ -341,7 +344,10 @@ fn run_case(
         CaseSink::Directory(root) => {
             let dir = root.join(format!("h_{:06.2}nm{tag}", actuation * 1e9));
             std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-            let result = simulate_case(p, actuation, isbl, dmw, &dir)?;
+            let result = match start {
+                Some(_) => simulate_case(&with_start(p, start), actuation, isbl, dmw, &dir)?,
+                None => simulate_case(p, actuation, isbl, dmw, &dir)?,
+            };
             Ok(CaseEntry {
                 key: String::new(),
                 dir,

@@ -7,8 +7,6 @@
 
 use super::case_engine::{CaseEngine, Listing, PreparedCases, SweepCases, UpstreamEntries};
 use super::{FromConfig, StageContext, StageKind, StageOutput};
-use crate::contact::isbl::IsblModel;
-use crate::contact::lookup::IsblLookup;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::error::Result;
 use crate::numerics::annealing::StopReason;
@@ -172,16 +170,9 @@ impl DoeStage {
             p.base.apply_bulge(&fitted, b)?;
         }
         let (isbl_params, dmw_track) = base_inputs(&p.base, &upstream.results, &upstream.dirs)?;
-        let isbl = IsblLookup::build_standard_unverified(IsblModel::new(isbl_params)?)?;
-        let sweep = PreparedSweep {
-            contact_key: upstream.key_of(&p.base.contact),
-            dmw: match (&p.base.dmw, dmw_track) {
-                (Some(d), Some(t)) => Some((t, upstream.key_of(d))),
-                _ => None,
-            },
-            params: p.base.clone(),
-            isbl,
-        };
+        let sweep = PreparedSweep::assemble(p.base.clone(), isbl_params, dmw_track, |n| {
+            upstream.key_of(n)
+        })?;
         Ok((p, sweep))
     }
 }
