@@ -55,6 +55,13 @@ pub enum Error {
         name: String,
         what: String,
     },
+    /// A stage's typed output could not be written as JSON (a map key that is not a string).
+    #[error("{kind} {what}: {message}")]
+    Encode {
+        kind: &'static str,
+        what: String,
+        message: String,
+    },
     /// A store entry's `result.json` does not parse.
     #[error("{}", path.display())]
     ResultJson {

@@ -11,3 +11,23 @@ pub mod interface;
 pub mod ldv;
 pub mod series;
 pub mod surface;
+
+/// The result of the upstream `kind` instance `name`, read through `T`, the type that kind
+/// writes; a missing instance or a result that does not parse as `T` is an error naming it.
+pub fn upstream_result<T: serde::de::DeserializeOwned>(
+    upstream: &std::collections::BTreeMap<String, serde_json::Value>,
+    kind: &'static str,
+    name: &str,
+) -> crate::error::Result<T> {
+    let result = upstream
+        .get(name)
+        .ok_or_else(|| crate::error::Error::MissingUpstream {
+            kind,
+            name: name.to_string(),
+        })?;
+    T::deserialize(result).map_err(|e| crate::error::Error::UpstreamField {
+        kind,
+        name: name.to_string(),
+        what: format!("readable result ({e})"),
+    })
+}

@@ -11,6 +11,7 @@ mod dmw;
 mod progress;
 mod report;
 mod run;
+mod schema;
 mod simulate;
 mod slurm;
 mod slurm_batch;
@@ -116,6 +117,9 @@ pub fn main() -> Result<()> {
             force,
         } => report::cmd_report(&config, out, no_validation, validation, force),
         Command::Diff(args) => diff::cmd_diff(*args),
+        Command::Schema { name, write, check } => {
+            schema::cmd_schema(name, write.as_deref(), check.as_deref())
+        }
         Command::Verify {
             config,
             all,

@@ -1,7 +1,8 @@
 //! `hdi run`, `status`, `gc` and `exec-cases`: the pipeline commands.
 
 use anyhow::{bail, Context, Result};
-use serde_json::{json, Value};
+use schemars::JsonSchema;
+use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
 
@@ -155,6 +156,47 @@ pub(super) fn cmd_exec_cases(manifest: &Path, task: usize) -> Result<()> {
     Ok(())
 }
 
+/// One object per stage instance of the pipeline, in pipeline order: whether its cached
+/// result is current. Exit status 1 when any is stale or missing. Schema version 1
+/// (docs/json.md): existing keys keep their name, unit and type; renaming or removing one
+/// makes version 2.
+#[derive(Debug, Serialize, JsonSchema)]
+pub(super) struct InstanceStatus {
+    /// Instance name: the NAME of its `[kind.NAME]` table in pipeline.toml (e.g. `disk`).
+    #[schemars(length(min = 1))]
+    name: String,
+    /// Stage kind: the `kind` of `[kind.NAME]` (e.g. `surface`, `dmw`, `simulate`).
+    #[schemars(regex(pattern = r"^[a-z][a-z0-9_]*$"))]
+    kind: String,
+    /// `fresh`: the cache holds the current result; `stale`: inputs, parameters or upstream
+    /// changed (see `why`); `missing`: never run.
+    state: Freshness,
+    /// Reasons it is stale or missing (e.g. `filter_l_m: null → 2.5e-7`, `upstream disk
+    /// changed`, `never run`); empty when fresh.
+    why: Vec<String>,
+    /// Cache key the instance has now: blake3 hex of its fingerprint (docs/architecture.md).
+    #[schemars(regex(pattern = r"^[0-9a-f]{16,64}$"))]
+    key: String,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub(super) enum Freshness {
+    Fresh,
+    Stale,
+    Missing,
+}
+
+impl Freshness {
+    fn word(self) -> &'static str {
+        match self {
+            Freshness::Fresh => "fresh",
+            Freshness::Stale => "stale",
+            Freshness::Missing => "missing",
+        }
+    }
+}
+
 pub(super) fn cmd_status(config: &Path, as_json: bool) -> Result<()> {
     let (file, stages) = load(config)?;
     let store = Store::open_existing(&file.processed_dir());
@@ -163,28 +205,32 @@ pub(super) fn cmd_status(config: &Path, as_json: bool) -> Result<()> {
     let mut rows = Vec::new();
     for p in &plan.planned {
         let (state, why) = match &p.state {
-            State::Fresh => ("fresh", Vec::new()),
+            State::Fresh => (Freshness::Fresh, Vec::new()),
             State::Stale(why) if why.contains(&StaleReason::NeverRun) => {
-                ("missing", StaleReason::phrases(why))
+                (Freshness::Missing, StaleReason::phrases(why))
             }
-            State::Stale(why) => ("stale", StaleReason::phrases(why)),
+            State::Stale(why) => (Freshness::Stale, StaleReason::phrases(why)),
         };
-        if state != "fresh" {
+        if state != Freshness::Fresh {
             stale += 1;
         }
         if !as_json {
             if why.is_empty() {
-                println!("{state:<8} {}", p.name);
+                println!("{:<8} {}", state.word(), p.name);
             } else {
-                println!("{state:<8} {}: {}", p.name, why.join("; "));
+                println!("{:<8} {}: {}", state.word(), p.name, why.join("; "));
             }
         }
-        rows.push(
-            json!({"name": p.name, "kind": p.kind, "state": state, "why": why, "key": p.key}),
-        );
+        rows.push(InstanceStatus {
+            name: p.name.clone(),
+            kind: p.kind.to_string(),
+            state,
+            why,
+            key: p.key.clone(),
+        });
     }
     if as_json {
-        println!("{}", Value::Array(rows));
+        println!("{}", serde_json::to_string(&rows)?);
     } else {
         // Cases that failed on Slurm and are still missing from the cache.
         use hdi::core::executor::{list_manifests, CaseManifest};

@@ -626,6 +626,8 @@ impl FromConfig for AnalysisStage {
 impl StageKind for AnalysisStage {
     const KIND: &'static str = "analysis";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
+    type Result = serde_json::Value;
+    type Row = serde_json::Map<String, serde_json::Value>;
 
     fn params(&self) -> Value {
         let st = &self.settings;

@@ -466,6 +466,8 @@ impl FromConfig for BulgeStage {
 impl StageKind for BulgeStage {
     const KIND: &'static str = "bulge";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
+    type Result = serde_json::Value;
+    type Row = serde_json::Map<String, serde_json::Value>;
 
     fn params(&self) -> Value {
         let p = &self.params;

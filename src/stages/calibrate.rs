@@ -250,6 +250,8 @@ impl FromConfig for CalibrateStage {
 impl StageKind for CalibrateStage {
     const KIND: &'static str = "calibrate";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
+    type Result = serde_json::Value;
+    type Row = serde_json::Map<String, serde_json::Value>;
     const CASE_KIND: Option<&'static str> = Some(CALIBRATION_CASE);
     fn case_engine(&self) -> Option<&dyn CaseEngine> {
         Some(self)

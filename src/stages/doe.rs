@@ -70,6 +70,8 @@ impl FromConfig for DoeStage {
 impl StageKind for DoeStage {
     const KIND: &'static str = "doe";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
+    type Result = serde_json::Value;
+    type Row = serde_json::Map<String, serde_json::Value>;
     const CASE_KIND: Option<&'static str> = Some(DOE_CASE);
     fn case_engine(&self) -> Option<&dyn CaseEngine> {
         Some(self)

@@ -331,6 +331,8 @@ fn rms(x: &[f64]) -> f64 {
 impl StageKind for ExcitationStage {
     const KIND: &'static str = "excitation";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
+    type Result = serde_json::Value;
+    type Row = serde_json::Map<String, serde_json::Value>;
 
     fn params(&self) -> Value {
         json!({ "excitation": self.params })

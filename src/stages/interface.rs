@@ -126,6 +126,8 @@ pub fn interface_json(st: &InterfaceStats) -> Value {
 impl StageKind for InterfaceStage {
     const KIND: &'static str = "interface";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
+    type Result = serde_json::Value;
+    type Row = serde_json::Map<String, serde_json::Value>;
 
     fn params(&self) -> Value {
         let explicit = match self.rule {

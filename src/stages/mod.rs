@@ -22,6 +22,7 @@ use crate::core::config::{ConfigError, PipelineFile};
 use crate::error::Result;
 use case_engine::{CaseEngine, UpstreamEntries};
 use serde::de::DeserializeOwned;
+use serde::Serialize;
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -91,6 +92,13 @@ impl StageContext<'_> {
             .unwrap_or_default()
     }
 
+    /// The result of the consumed `kind` instance `name`, read through its type (the type
+    /// the upstream kind writes, in `crate::artefacts`): a missing instance or a result
+    /// that does not parse as `T` is an error naming it.
+    pub fn upstream_as<T: DeserializeOwned>(&self, kind: &'static str, name: &str) -> Result<T> {
+        crate::artefacts::upstream_result(&self.upstream, kind, name)
+    }
+
     /// The consumed entries as a case engine reads them (what a worker reads from a recipe).
     pub fn upstream_entries(&self) -> UpstreamEntries {
         UpstreamEntries {
@@ -105,12 +113,46 @@ impl StageContext<'_> {
     }
 }
 
-/// What a stage returns besides its files.
-pub struct StageOutput {
+/// What a stage returns besides its files: typed by the kind ([`StageKind::Result`],
+/// [`StageKind::Row`]), as JSON once the engine has it ([`StageOutput`]).
+pub struct Output<R, W> {
     /// Machine-readable result for downstream stages and tables; written as `result.json`.
-    pub result: Value,
+    pub result: R,
     /// One row for the kind's tidy summary table (column names with unit suffixes).
-    pub summary_row: Option<serde_json::Map<String, Value>>,
+    pub summary_row: Option<W>,
+}
+
+/// A stage's output as the engine stores it.
+pub type StageOutput = Output<Value, serde_json::Map<String, Value>>;
+
+impl<R: Serialize, W: Serialize> Output<R, W> {
+    /// The JSON the engine writes: the result as serde writes the type (field order is key
+    /// order), the row as one JSON object.
+    pub fn into_json(self, kind: &'static str) -> Result<StageOutput> {
+        let encode = |what: &str, e: serde_json::Error| crate::error::Error::Encode {
+            kind,
+            what: what.to_string(),
+            message: e.to_string(),
+        };
+        let result = serde_json::to_value(&self.result).map_err(|e| encode("result", e))?;
+        let summary_row = match self.summary_row {
+            None => None,
+            Some(row) => match serde_json::to_value(&row).map_err(|e| encode("summary row", e))? {
+                Value::Object(m) => Some(m),
+                other => {
+                    return Err(crate::error::Error::Encode {
+                        kind,
+                        what: "summary row".into(),
+                        message: format!("not a JSON object: {other}"),
+                    })
+                }
+            },
+        };
+        Ok(Output {
+            result,
+            summary_row,
+        })
+    }
 }
 
 /// How a stage kind reads one `[KIND.NAME]` table: the table as written, then validation
@@ -143,7 +185,12 @@ pub trait StageKind: FromConfig + Send + Sync + 'static {
     fn upstream(&self) -> Vec<String> {
         Vec::new()
     }
-    fn run(&self, ctx: &StageContext) -> Result<StageOutput>;
+    /// Its `result.json` as a type: downstream stages read it through the same type
+    /// (`crate::artefacts`), `docs/schemas/` is generated from it.
+    type Result: Serialize;
+    /// One row of its tidy summary table (column names with unit suffixes).
+    type Row: Serialize;
+    fn run(&self, ctx: &StageContext) -> Result<Output<Self::Result, Self::Row>>;
     /// Its case kind (`hdi exec-cases` dispatches on it) when its work splits into
     /// independent cases.
     const CASE_KIND: Option<&'static str> = None;
@@ -179,7 +226,7 @@ impl<K: StageKind> Stage for Instance<K> {
         self.stage.upstream()
     }
     fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
-        self.stage.run(ctx)
+        self.stage.run(ctx)?.into_json(K::KIND)
     }
     fn cases(&self) -> Option<(&'static str, &dyn CaseEngine)> {
         K::CASE_KIND.zip(self.stage.case_engine())

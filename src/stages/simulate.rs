@@ -351,6 +351,8 @@ impl FromConfig for SimulateStage {
 impl StageKind for SimulateStage {
     const KIND: &'static str = "simulate";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
+    type Result = serde_json::Value;
+    type Row = serde_json::Map<String, serde_json::Value>;
 
     fn params(&self) -> Value {
         self.params.canonical()

@@ -579,6 +579,8 @@ impl FromConfig for SurfaceStage {
 impl StageKind for SurfaceStage {
     const KIND: &'static str = "surface";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
+    type Result = serde_json::Value;
+    type Row = serde_json::Map<String, serde_json::Value>;
 
     fn params(&self) -> Value {
         self.params.canonical()

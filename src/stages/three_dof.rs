@@ -79,6 +79,8 @@ impl FromConfig for ThreeDofStage {
 impl StageKind for ThreeDofStage {
     const KIND: &'static str = "three_dof";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
+    type Result = serde_json::Value;
+    type Row = serde_json::Map<String, serde_json::Value>;
 
     fn params(&self) -> Value {
         self.params.canonical()

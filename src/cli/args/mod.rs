@@ -131,6 +131,18 @@ pub enum Command {
         #[arg(long, default_value = "pipeline.toml")]
         config: PathBuf,
     },
+    /// The JSON Schema of a `--json` output, generated from the type it prints
+    /// (docs/json.md); without NAME, the list.
+    Schema {
+        name: Option<String>,
+        /// Write every schema into DIR (`docs/schemas`).
+        #[arg(long, conflicts_with_all = ["name", "check"])]
+        write: Option<PathBuf>,
+        /// Exit 1 unless every schema in DIR is what the types give, and every file there
+        /// is generated.
+        #[arg(long, conflicts_with = "name")]
+        check: Option<PathBuf>,
+    },
     /// Generate the shipped synthetic sample data (deterministic).
     Synth {
         /// What to generate: `afm` (height maps), `ldv` (an LDV record) or `profilometer`

@@ -691,6 +691,8 @@ impl FromConfig for ContactStage {
 impl StageKind for ContactStage {
     const KIND: &'static str = "contact";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
+    type Result = serde_json::Value;
+    type Row = serde_json::Map<String, serde_json::Value>;
 
     fn params(&self) -> Value {
         self.params.canonical()

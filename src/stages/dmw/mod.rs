@@ -575,6 +575,8 @@ impl FromConfig for DmwStage {
 impl StageKind for DmwStage {
     const KIND: &'static str = "dmw";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
+    type Result = serde_json::Value;
+    type Row = serde_json::Map<String, serde_json::Value>;
 
     fn params(&self) -> Value {
         self.params.canonical()
