@@ -360,118 +360,33 @@ where
     C: FnMut(f64, &[f64; N]) -> f64,
     O: FnMut(f64, &[f64; N]),
 {
-    opts.validate::<E>(t0, t_end)?;
-    if let Sampling::Uniform { dt } = sampling {
-        if !(dt.is_finite() && dt > 0.0) {
-            return Err(OdeError::InvalidInput(format!(
-                "output step must be finite and > 0, got {dt}"
-            )));
-        }
-    }
-    if let Some(i) = first_non_finite(&y0) {
-        return Err(OdeError::NonFinite {
-            t: t0,
-            component: i,
-        });
-    }
+    check_inputs(opts, t0, &y0, t_end, sampling)?;
     let stops = sorted_stops(&opts.stop_times, t0, t_end);
     let mut next_stop = 0usize;
-
     let mut stats = OdeStats::default();
-    let mut call = |t: f64, y: &[f64; N], dy: &mut [f64; N], stats: &mut OdeStats| {
-        stats.rhs_evaluations += 1;
-        rhs(t, y, dy).map_err(|source| OdeError::Rhs { t, source })?;
-        match first_non_finite(dy) {
-            Some(i) => Err(OdeError::NonFinite { t, component: i }),
-            None => Ok(()),
-        }
-    };
-
-    // Output bookkeeping.
-    let n_out: u64 = match sampling {
-        Sampling::Uniform { dt } => ((t_end - t0) / dt * (1.0 + 4.0 * f64::EPSILON)).floor() as u64,
-        _ => 0,
-    };
-    let mut next_out: u64 = 0; // index of the next uniform sample
-    let out_time = |k: u64| match sampling {
-        Sampling::Uniform { dt } => (t0 + k as f64 * dt).min(t_end),
-        _ => f64::NAN,
-    };
-    if !matches!(sampling, Sampling::None) {
-        observer(t0, &y0);
-        stats.samples += 1;
-        next_out = 1;
-    }
+    let mut samples = Samples::new(sampling, t0, t_end);
+    samples.first(t0, &y0, &mut observer, &mut stats);
 
     let mut t = t0;
     let mut y = y0;
-    let mut k1 = [0.0; N];
+    let mut st = Stages::new();
     if t_end == t0 {
         return Ok(OdeSolution { t, y, stats });
     }
-    call(t, &y, &mut k1, &mut stats)?;
+    evaluate(&mut rhs, &mut stats, t, &y, &mut st.k1)?;
 
     let (fixed_h, max_step) = match opts.mode {
         StepMode::Fixed(h) => (Some(h), f64::INFINITY),
         StepMode::Adaptive => (None, opts.max_step),
     };
-    let scale = |y0: &[f64; N], y1: &[f64; N], i: usize| {
-        opts.atol[i] + opts.rtol * y0[i].abs().max(y1[i].abs())
-    };
-
     let mut h = match (fixed_h, opts.h_init) {
         (Some(h), _) => h,
         (None, Some(h)) => h.min(max_step),
-        (None, None) => {
-            // Hairer's starting step: h0 = 0.01·‖y‖/‖f‖, one Euler probe, h1 from the second
-            // derivative estimate; h = min(100 h0, h1).
-            let mut d0 = 0.0;
-            let mut d1 = 0.0;
-            for i in 0..N {
-                let sc = scale(&y, &y, i);
-                d0 += (y[i] / sc).powi(2);
-                d1 += (k1[i] / sc).powi(2);
-            }
-            let (d0, d1) = ((d0 / N as f64).sqrt(), (d1 / N as f64).sqrt());
-            let mut h0 = if d0 < 1e-5 || d1 < 1e-5 {
-                1e-6
-            } else {
-                0.01 * d0 / d1
-            };
-            h0 = h0.min(max_step).min(t_end - t0);
-            let mut y1 = [0.0; N];
-            for i in 0..N {
-                y1[i] = y[i] + h0 * k1[i];
-            }
-            let mut f1 = [0.0; N];
-            call(t + h0, &y1, &mut f1, &mut stats)?;
-            let mut d2 = 0.0;
-            for i in 0..N {
-                d2 += ((f1[i] - k1[i]) / scale(&y, &y, i)).powi(2);
-            }
-            let d2 = (d2 / N as f64).sqrt() / h0;
-            let h1 = if d1.max(d2) <= 1e-15 {
-                (h0 * 1e-3).max(1e-6)
-            } else {
-                (0.01 / d1.max(d2)).powf(0.2)
-            };
-            (100.0 * h0).min(h1).min(max_step)
-        }
+        (None, None) => starting_step(&mut rhs, &mut stats, opts, t, t_end, &y, &st.k1, max_step)?,
     };
-
-    let alpha = 0.2 - 0.75 * opts.beta;
-    // Below this error the PI factor is ≤ 1 whatever err_prev (≥ 1e-4) is: the step cannot
-    // shrink, so at the max_step cap the controller has nothing to decide.
-    let err_cap = (opts.safety * 1e-4f64.powf(opts.beta)).powf(1.0 / alpha);
-    let mut err_prev: f64 = 1e-4;
-    let mut last_rejected = false;
+    let mut control = Controller::new(opts);
     let mut pending_non_finite: Option<usize> = None;
     let mut k_grid: u64 = 0; // fixed mode: index of the current grid point
-    let (mut k2, mut k3, mut k4, mut k5, mut k6, mut k7) =
-        ([0.0; N], [0.0; N], [0.0; N], [0.0; N], [0.0; N], [0.0; N]);
-    let mut ys = [0.0; N];
-    let mut y_new = [0.0; N];
-    let mut buf = [0.0; N];
 
     while t < t_end {
         if stats.accepted_steps + stats.rejected_steps >= opts.max_steps {
@@ -482,42 +397,18 @@ where
         }
         // Target of this step: the controller's h, clipped to the next stop / t_end / grid.
         let target_limit = stops.get(next_stop).copied().unwrap_or(t_end);
-        let mut t_new;
-        if let Some(hf) = fixed_h {
-            // Next grid point strictly after t.
-            let mut g = t0 + (k_grid + 1) as f64 * hf;
-            while g <= t {
-                k_grid += 1;
-                g = t0 + (k_grid + 1) as f64 * hf;
+        let t_new = match fixed_h {
+            Some(hf) => fixed_step_end(t0, hf, t, target_limit, &mut k_grid),
+            None => {
+                let cap = step_cap(t, &y);
+                adaptive_step_end(&mut h, cap, max_step, opts.min_step, t, target_limit).map_err(
+                    |underflow| match pending_non_finite {
+                        Some(component) => OdeError::NonFinite { t, component },
+                        None => underflow,
+                    },
+                )?
             }
-            t_new = g.min(target_limit);
-            // Avoid a sliver step when the grid point lands within rounding of the limit.
-            if target_limit - t_new < 1e-9 * hf {
-                t_new = target_limit;
-            }
-        } else {
-            // A non-positive or NaN cap from the caller means "no extra limit".
-            let cap = step_cap(t, &y);
-            let cap = if cap > 0.0 {
-                cap.min(max_step)
-            } else {
-                max_step
-            };
-            h = h.min(cap);
-            if h < opts.min_step || h <= 8.0 * f64::EPSILON * t.abs().max(f64::MIN_POSITIVE) {
-                if let Some(component) = pending_non_finite {
-                    return Err(OdeError::NonFinite { t, component });
-                }
-                return Err(OdeError::StepUnderflow { t, h });
-            }
-            t_new = t + h;
-            // Stretch by ≤ 1 % (never beyond max_step) rather than leave a sliver step before
-            // the limit.
-            if t_new >= target_limit || (target_limit - t_new < 0.01 * h && target_limit - t <= cap)
-            {
-                t_new = target_limit;
-            }
-        }
+        };
         let hs = t_new - t;
         // A step ending on a stop time sees the left limit of the right-hand side there: its
         // c = 1 stages are evaluated at the float just below the stop.
@@ -527,162 +418,502 @@ where
             t_new
         };
 
-        // Stages. In adaptive mode a non-finite stage or result rejects the step (it may just
-        // be too long); the error is reported only if the controller cannot shrink further.
+        // In adaptive mode a non-finite stage or result rejects the step (it may just be too
+        // long); the error is reported only if the controller cannot shrink further.
         let adaptive = fixed_h.is_none();
-        let mut bad: Option<usize> = None;
-        macro_rules! stage {
-            ($l:lifetime, $e:expr) => {
-                match $e {
-                    Ok(()) => {}
-                    Err(OdeError::NonFinite { component, .. }) if adaptive => {
-                        bad = Some(component);
-                        break $l;
-                    }
-                    Err(e) => return Err(e),
-                }
-            };
-        }
-        'stages: {
-            for i in 0..N {
-                ys[i] = y[i] + hs * A21 * k1[i];
-            }
-            stage!('stages, call(t + C2 * hs, &ys, &mut k2, &mut stats));
-            for i in 0..N {
-                ys[i] = y[i] + hs * (A31 * k1[i] + A32 * k2[i]);
-            }
-            stage!('stages, call(t + C3 * hs, &ys, &mut k3, &mut stats));
-            for i in 0..N {
-                ys[i] = y[i] + hs * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i]);
-            }
-            stage!('stages, call(t + C4 * hs, &ys, &mut k4, &mut stats));
-            for i in 0..N {
-                ys[i] = y[i] + hs * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i]);
-            }
-            stage!('stages, call(t + C5 * hs, &ys, &mut k5, &mut stats));
-            for i in 0..N {
-                ys[i] = y[i]
-                    + hs * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i]);
-            }
-            stage!('stages, call(t_right, &ys, &mut k6, &mut stats));
-            for i in 0..N {
-                y_new[i] =
-                    y[i] + hs * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i]);
-            }
-            if let Some(i) = first_non_finite(&y_new) {
-                stage!('stages, Err(OdeError::NonFinite { t, component: i }));
-            }
-            stage!('stages, call(t_right, &y_new, &mut k7, &mut stats));
-        }
-        if let Some(component) = bad {
+        if let Some(component) = st.attempt(&mut rhs, &mut stats, t, &y, hs, t_right, adaptive)? {
             pending_non_finite = Some(component);
             h = hs * opts.min_factor;
-            last_rejected = true;
+            control.last_rejected = true;
             stats.rejected_steps += 1;
             continue;
         }
         pending_non_finite = None;
 
-        if fixed_h.is_none() {
-            let mut err = 0.0;
-            for i in 0..N {
-                let e = hs
-                    * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
-                err += (e / scale(&y, &y_new, i)).powi(2);
-            }
-            let err = (err / N as f64).sqrt();
+        if adaptive {
+            let err = st.error_norm(opts, &y, hs);
             if !err.is_finite() {
                 // Finite states and stages with a non-finite error norm: the terms overflowed.
                 return Err(OdeError::NonFinite { t, component: 0 });
             }
-            if err <= err_cap && h >= max_step {
-                // Capped by max_step and the controller would not shrink: skip the two powf
-                // (exact: the new step would be clamped to max_step anyway).
-                err_prev = err.max(1e-4);
-                last_rejected = false;
-            } else if err <= 1.0 {
-                let fac_i = err.powf(alpha);
-                let mut fac = fac_i / err_prev.powf(opts.beta) / opts.safety;
-                fac = fac.clamp(1.0 / opts.max_factor, 1.0 / opts.min_factor);
-                let mut h_next = hs / fac;
-                if last_rejected {
-                    h_next = h_next.min(hs);
+            let at_limit = t_new == target_limit;
+            match control.judge(err, h, hs, max_step, at_limit) {
+                Verdict::Accept { h: next } => h = next,
+                Verdict::Reject { h: retry } => {
+                    h = retry;
+                    stats.rejected_steps += 1;
+                    continue;
                 }
-                // A step shortened to hit a limit does not shrink the controller's step.
-                if t_new == target_limit && hs < h {
-                    h_next = h_next.max(h);
-                }
-                err_prev = err.max(1e-4);
-                h = h_next;
-                last_rejected = false;
-            } else {
-                let fac = (err.powf(alpha) / opts.safety).min(1.0 / opts.min_factor);
-                h = hs / fac;
-                last_rejected = true;
-                stats.rejected_steps += 1;
-                continue;
             }
         }
 
-        // Accepted: emit samples in (t, t_new].
         stats.accepted_steps += 1;
-        match sampling {
-            Sampling::Uniform { .. } => {
-                if next_out <= n_out && out_time(next_out) <= t_new {
-                    let mut dense = Dense {
-                        t,
-                        h: hs,
-                        r: [[0.0; N]; 5],
-                    };
-                    for i in 0..N {
-                        let ydiff = y_new[i] - y[i];
-                        let bspl = hs * k1[i] - ydiff;
-                        dense.r[0][i] = y[i];
-                        dense.r[1][i] = ydiff;
-                        dense.r[2][i] = bspl;
-                        dense.r[3][i] = ydiff - hs * k7[i] - bspl;
-                        dense.r[4][i] = hs
-                            * (D1 * k1[i]
-                                + D3 * k3[i]
-                                + D4 * k4[i]
-                                + D5 * k5[i]
-                                + D6 * k6[i]
-                                + D7 * k7[i]);
+        samples.after_step(&st, t, &y, hs, t_new, &mut observer, &mut stats);
+        t = t_new;
+        y = st.y_new;
+        if next_stop < stops.len() && t >= stops[next_stop] {
+            next_stop += 1;
+            // Discontinuity: the derivative after the stop is re-evaluated, not carried over.
+            evaluate(&mut rhs, &mut stats, t, &y, &mut st.k1)?;
+        } else {
+            st.k1 = st.k7;
+        }
+    }
+    Ok(OdeSolution { t, y, stats })
+}
+
+/// The options, the output step and the initial state, checked before any evaluation.
+fn check_inputs<const N: usize, E>(
+    opts: &OdeOptions<N>,
+    t0: f64,
+    y0: &[f64; N],
+    t_end: f64,
+    sampling: Sampling,
+) -> Result<(), OdeError<E>> {
+    opts.validate::<E>(t0, t_end)?;
+    if let Sampling::Uniform { dt } = sampling {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(OdeError::InvalidInput(format!(
+                "output step must be finite and > 0, got {dt}"
+            )));
+        }
+    }
+    match first_non_finite(y0) {
+        Some(i) => Err(OdeError::NonFinite {
+            t: t0,
+            component: i,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// One right-hand-side evaluation as the integrator counts and checks it: a non-finite
+/// derivative is an error.
+#[inline(always)]
+fn evaluate<const N: usize, E, F>(
+    rhs: &mut F,
+    stats: &mut OdeStats,
+    t: f64,
+    y: &[f64; N],
+    dy: &mut [f64; N],
+) -> Result<(), OdeError<E>>
+where
+    F: FnMut(f64, &[f64; N], &mut [f64; N]) -> Result<(), E>,
+{
+    stats.rhs_evaluations += 1;
+    rhs(t, y, dy).map_err(|source| OdeError::Rhs { t, source })?;
+    match first_non_finite(dy) {
+        Some(i) => Err(OdeError::NonFinite { t, component: i }),
+        None => Ok(()),
+    }
+}
+
+/// The error scale of component `i` between two states: `atol_i + rtol·max(|y0_i|, |y1_i|)`.
+#[inline(always)]
+fn error_scale<const N: usize>(
+    opts: &OdeOptions<N>,
+    y0: &[f64; N],
+    y1: &[f64; N],
+    i: usize,
+) -> f64 {
+    opts.atol[i] + opts.rtol * y0[i].abs().max(y1[i].abs())
+}
+
+/// Hairer's starting step: h0 = 0.01·‖y‖/‖f‖, one Euler probe, h1 from the second-derivative
+/// estimate; h = min(100 h0, h1), within `max_step`.
+#[allow(clippy::too_many_arguments)]
+fn starting_step<const N: usize, E, F>(
+    rhs: &mut F,
+    stats: &mut OdeStats,
+    opts: &OdeOptions<N>,
+    t: f64,
+    t_end: f64,
+    y: &[f64; N],
+    k1: &[f64; N],
+    max_step: f64,
+) -> Result<f64, OdeError<E>>
+where
+    F: FnMut(f64, &[f64; N], &mut [f64; N]) -> Result<(), E>,
+{
+    let mut d0 = 0.0;
+    let mut d1 = 0.0;
+    for i in 0..N {
+        let sc = error_scale(opts, y, y, i);
+        d0 += (y[i] / sc).powi(2);
+        d1 += (k1[i] / sc).powi(2);
+    }
+    let (d0, d1) = ((d0 / N as f64).sqrt(), (d1 / N as f64).sqrt());
+    let mut h0 = if d0 < 1e-5 || d1 < 1e-5 {
+        1e-6
+    } else {
+        0.01 * d0 / d1
+    };
+    h0 = h0.min(max_step).min(t_end - t);
+    let mut y1 = [0.0; N];
+    for i in 0..N {
+        y1[i] = y[i] + h0 * k1[i];
+    }
+    let mut f1 = [0.0; N];
+    evaluate(rhs, stats, t + h0, &y1, &mut f1)?;
+    let mut d2 = 0.0;
+    for i in 0..N {
+        d2 += ((f1[i] - k1[i]) / error_scale(opts, y, y, i)).powi(2);
+    }
+    let d2 = (d2 / N as f64).sqrt() / h0;
+    let h1 = if d1.max(d2) <= 1e-15 {
+        (h0 * 1e-3).max(1e-6)
+    } else {
+        (0.01 / d1.max(d2)).powf(0.2)
+    };
+    Ok((100.0 * h0).min(h1).min(max_step))
+}
+
+/// Fixed mode: the next grid point strictly after `t`, clipped to the limit (a grid point
+/// within rounding of the limit is moved onto it rather than leave a sliver step).
+#[inline(always)]
+fn fixed_step_end(t0: f64, hf: f64, t: f64, target_limit: f64, k_grid: &mut u64) -> f64 {
+    let mut g = t0 + (*k_grid + 1) as f64 * hf;
+    while g <= t {
+        *k_grid += 1;
+        g = t0 + (*k_grid + 1) as f64 * hf;
+    }
+    let t_new = g.min(target_limit);
+    if target_limit - t_new < 1e-9 * hf {
+        target_limit
+    } else {
+        t_new
+    }
+}
+
+/// Adaptive mode: the controller's step `h` bounded by the caller's cap (a non-positive or
+/// NaN cap means "no extra limit") and `max_step`, and stretched by ≤ 1 % (never beyond the
+/// cap) rather than leave a sliver step before the limit. A step below `min_step` or the
+/// resolution of `t` is [`OdeError::StepUnderflow`].
+#[inline(always)]
+fn adaptive_step_end<E>(
+    h: &mut f64,
+    cap: f64,
+    max_step: f64,
+    min_step: f64,
+    t: f64,
+    target_limit: f64,
+) -> Result<f64, OdeError<E>> {
+    let cap = if cap > 0.0 {
+        cap.min(max_step)
+    } else {
+        max_step
+    };
+    *h = h.min(cap);
+    if *h < min_step || *h <= 8.0 * f64::EPSILON * t.abs().max(f64::MIN_POSITIVE) {
+        return Err(OdeError::StepUnderflow { t, h: *h });
+    }
+    let t_new = t + *h;
+    if t_new >= target_limit || (target_limit - t_new < 0.01 * *h && target_limit - t <= cap) {
+        Ok(target_limit)
+    } else {
+        Ok(t_new)
+    }
+}
+
+/// The stage derivatives of one Dormand–Prince step (k1 carried over by FSAL) and its result.
+struct Stages<const N: usize> {
+    k1: [f64; N],
+    k2: [f64; N],
+    k3: [f64; N],
+    k4: [f64; N],
+    k5: [f64; N],
+    k6: [f64; N],
+    k7: [f64; N],
+    ys: [f64; N],
+    y_new: [f64; N],
+}
+
+impl<const N: usize> Stages<N> {
+    fn new() -> Self {
+        Stages {
+            k1: [0.0; N],
+            k2: [0.0; N],
+            k3: [0.0; N],
+            k4: [0.0; N],
+            k5: [0.0; N],
+            k6: [0.0; N],
+            k7: [0.0; N],
+            ys: [0.0; N],
+            y_new: [0.0; N],
+        }
+    }
+
+    /// One step of length `hs` from `(t, y)`: k2…k7 and `y_new`. In adaptive mode a
+    /// non-finite stage or result is `Ok(Some(component))` (the step is rejected), otherwise
+    /// an error.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn attempt<E, F>(
+        &mut self,
+        rhs: &mut F,
+        stats: &mut OdeStats,
+        t: f64,
+        y: &[f64; N],
+        hs: f64,
+        t_right: f64,
+        adaptive: bool,
+    ) -> Result<Option<usize>, OdeError<E>>
+    where
+        F: FnMut(f64, &[f64; N], &mut [f64; N]) -> Result<(), E>,
+    {
+        macro_rules! stage {
+            ($e:expr) => {
+                match $e {
+                    Ok(()) => {}
+                    Err(OdeError::NonFinite { component, .. }) if adaptive => {
+                        return Ok(Some(component))
                     }
-                    while next_out <= n_out {
-                        let to = out_time(next_out);
+                    Err(e) => return Err(e),
+                }
+            };
+        }
+        let Stages {
+            k1,
+            k2,
+            k3,
+            k4,
+            k5,
+            k6,
+            k7,
+            ys,
+            y_new,
+        } = self;
+        for i in 0..N {
+            ys[i] = y[i] + hs * A21 * k1[i];
+        }
+        stage!(evaluate(rhs, stats, t + C2 * hs, ys, k2));
+        for i in 0..N {
+            ys[i] = y[i] + hs * (A31 * k1[i] + A32 * k2[i]);
+        }
+        stage!(evaluate(rhs, stats, t + C3 * hs, ys, k3));
+        for i in 0..N {
+            ys[i] = y[i] + hs * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i]);
+        }
+        stage!(evaluate(rhs, stats, t + C4 * hs, ys, k4));
+        for i in 0..N {
+            ys[i] = y[i] + hs * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i]);
+        }
+        stage!(evaluate(rhs, stats, t + C5 * hs, ys, k5));
+        for i in 0..N {
+            ys[i] =
+                y[i] + hs * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i]);
+        }
+        stage!(evaluate(rhs, stats, t_right, ys, k6));
+        for i in 0..N {
+            y_new[i] = y[i] + hs * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i]);
+        }
+        if let Some(i) = first_non_finite(y_new) {
+            stage!(Err(OdeError::NonFinite { t, component: i }));
+        }
+        stage!(evaluate(rhs, stats, t_right, y_new, k7));
+        Ok(None)
+    }
+
+    /// The RMS of the embedded error estimate in units of the error scale.
+    #[inline(always)]
+    fn error_norm(&self, opts: &OdeOptions<N>, y: &[f64; N], hs: f64) -> f64 {
+        let mut err = 0.0;
+        for i in 0..N {
+            let e = hs
+                * (E1 * self.k1[i]
+                    + E3 * self.k3[i]
+                    + E4 * self.k4[i]
+                    + E5 * self.k5[i]
+                    + E6 * self.k6[i]
+                    + E7 * self.k7[i]);
+            err += (e / error_scale(opts, y, &self.y_new, i)).powi(2);
+        }
+        (err / N as f64).sqrt()
+    }
+
+    /// The order-4 continuous extension of the step `[t, t + hs]` just taken from `y`.
+    fn dense(&self, t: f64, y: &[f64; N], hs: f64) -> Dense<N> {
+        let mut dense = Dense {
+            t,
+            h: hs,
+            r: [[0.0; N]; 5],
+        };
+        let (k1, k3, k4, k5, k6, k7) = (&self.k1, &self.k3, &self.k4, &self.k5, &self.k6, &self.k7);
+        for i in 0..N {
+            let ydiff = self.y_new[i] - y[i];
+            let bspl = hs * k1[i] - ydiff;
+            dense.r[0][i] = y[i];
+            dense.r[1][i] = ydiff;
+            dense.r[2][i] = bspl;
+            dense.r[3][i] = ydiff - hs * k7[i] - bspl;
+            dense.r[4][i] =
+                hs * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] + D7 * k7[i]);
+        }
+        dense
+    }
+}
+
+/// What the PI controller decides about a step.
+enum Verdict {
+    /// Keep the step; the controller's next step.
+    Accept { h: f64 },
+    /// Retry from the same state with this step.
+    Reject { h: f64 },
+}
+
+/// The PI step-size controller (Hairer, Nørsett & Wanner §II.4; docs/integrator.md).
+struct Controller {
+    alpha: f64,
+    beta: f64,
+    safety: f64,
+    min_factor: f64,
+    max_factor: f64,
+    /// Below this error the PI factor is ≤ 1 whatever err_prev (≥ 1e-4) is: the step cannot
+    /// shrink, so at the max_step cap the controller has nothing to decide.
+    err_cap: f64,
+    err_prev: f64,
+    last_rejected: bool,
+}
+
+impl Controller {
+    fn new<const N: usize>(opts: &OdeOptions<N>) -> Self {
+        let alpha = 0.2 - 0.75 * opts.beta;
+        Controller {
+            alpha,
+            beta: opts.beta,
+            safety: opts.safety,
+            min_factor: opts.min_factor,
+            max_factor: opts.max_factor,
+            err_cap: (opts.safety * 1e-4f64.powf(opts.beta)).powf(1.0 / alpha),
+            err_prev: 1e-4,
+            last_rejected: false,
+        }
+    }
+
+    /// The verdict on a step of length `hs` (the controller had asked for `h`) with error
+    /// norm `err`; `at_limit`: the step was shortened to end on a stop time or `t_end`.
+    #[inline(always)]
+    fn judge(&mut self, err: f64, h: f64, hs: f64, max_step: f64, at_limit: bool) -> Verdict {
+        if err <= self.err_cap && h >= max_step {
+            // Capped by max_step and the controller would not shrink: skip the two powf
+            // (exact: the new step would be clamped to max_step anyway).
+            self.err_prev = err.max(1e-4);
+            self.last_rejected = false;
+            Verdict::Accept { h }
+        } else if err <= 1.0 {
+            let fac_i = err.powf(self.alpha);
+            let mut fac = fac_i / self.err_prev.powf(self.beta) / self.safety;
+            fac = fac.clamp(1.0 / self.max_factor, 1.0 / self.min_factor);
+            let mut h_next = hs / fac;
+            if self.last_rejected {
+                h_next = h_next.min(hs);
+            }
+            // A step shortened to hit a limit does not shrink the controller's step.
+            if at_limit && hs < h {
+                h_next = h_next.max(h);
+            }
+            self.err_prev = err.max(1e-4);
+            self.last_rejected = false;
+            Verdict::Accept { h: h_next }
+        } else {
+            let fac = (err.powf(self.alpha) / self.safety).min(1.0 / self.min_factor);
+            self.last_rejected = true;
+            Verdict::Reject { h: hs / fac }
+        }
+    }
+}
+
+/// Where the observer is called, and how many calls are left of a uniform grid.
+struct Samples {
+    sampling: Sampling,
+    t0: f64,
+    t_end: f64,
+    /// Last index of the uniform grid.
+    n_out: u64,
+    /// Index of the next uniform sample.
+    next_out: u64,
+}
+
+impl Samples {
+    fn new(sampling: Sampling, t0: f64, t_end: f64) -> Self {
+        let n_out = match sampling {
+            Sampling::Uniform { dt } => {
+                ((t_end - t0) / dt * (1.0 + 4.0 * f64::EPSILON)).floor() as u64
+            }
+            _ => 0,
+        };
+        Samples {
+            sampling,
+            t0,
+            t_end,
+            n_out,
+            next_out: 0,
+        }
+    }
+
+    fn out_time(&self, k: u64) -> f64 {
+        match self.sampling {
+            Sampling::Uniform { dt } => (self.t0 + k as f64 * dt).min(self.t_end),
+            _ => f64::NAN,
+        }
+    }
+
+    /// The sample at `t0` (every mode but [`Sampling::None`]).
+    fn first<const N: usize, O: FnMut(f64, &[f64; N])>(
+        &mut self,
+        t0: f64,
+        y0: &[f64; N],
+        observer: &mut O,
+        stats: &mut OdeStats,
+    ) {
+        if !matches!(self.sampling, Sampling::None) {
+            observer(t0, y0);
+            stats.samples += 1;
+            self.next_out = 1;
+        }
+    }
+
+    /// The samples in `(t, t + hs]` of the accepted step `st` from `y`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn after_step<const N: usize, O: FnMut(f64, &[f64; N])>(
+        &mut self,
+        st: &Stages<N>,
+        t: f64,
+        y: &[f64; N],
+        hs: f64,
+        t_new: f64,
+        observer: &mut O,
+        stats: &mut OdeStats,
+    ) {
+        match self.sampling {
+            Sampling::Uniform { .. } => {
+                if self.next_out <= self.n_out && self.out_time(self.next_out) <= t_new {
+                    let dense = st.dense(t, y, hs);
+                    let mut buf = [0.0; N];
+                    while self.next_out <= self.n_out {
+                        let to = self.out_time(self.next_out);
                         if to > t_new {
                             break;
                         }
                         if to == t_new {
-                            observer(to, &y_new);
+                            observer(to, &st.y_new);
                         } else {
                             dense.eval(to, &mut buf);
                             observer(to, &buf);
                         }
                         stats.samples += 1;
-                        next_out += 1;
+                        self.next_out += 1;
                     }
                 }
             }
             Sampling::Steps => {
-                observer(t_new, &y_new);
+                observer(t_new, &st.y_new);
                 stats.samples += 1;
             }
             Sampling::None => {}
         }
-
-        t = t_new;
-        y = y_new;
-        if next_stop < stops.len() && t >= stops[next_stop] {
-            next_stop += 1;
-            // Discontinuity: the derivative after the stop is re-evaluated, not carried over.
-            call(t, &y, &mut k1, &mut stats)?;
-        } else {
-            k1 = k7;
-        }
     }
-    Ok(OdeSolution { t, y, stats })
 }
 
 #[cfg(test)]
