@@ -330,6 +330,24 @@ fn a_schema_rejects_an_extra_key_a_wrong_type_and_a_debug_string() {
     assert!(rejected(&debug), "a Rust debug enum name passed");
 }
 
+/// `docs/schemas/` is what the printed types give (docs/json.md): a field added, renamed or
+/// re-documented in a type without regenerating fails here, and so does a schema file written
+/// by hand (one no type generates).
+#[test]
+fn schemas_are_generated_from_the_types() {
+    let dir = root().join("docs").join("schemas");
+    let o = hdi()
+        .args(["schema", "--check"])
+        .arg(&dir)
+        .output()
+        .expect("run hdi");
+    assert_ok(&o);
+    // The listing names every generated schema, one per file.
+    let listed = stdout(&hdi().arg("schema").output().expect("run hdi"));
+    let files = std::fs::read_dir(&dir).unwrap().count();
+    assert_eq!(listed.lines().count(), files, "{listed}");
+}
+
 /// Every file in `docs/schemas/` is a valid Draft 2020-12 schema with a title, a versioned
 /// `$id` (docs/json.md: `urn:hdi:json-schema:v1:<command>`) and `additionalProperties: false` on every object it declares (so undocumented keys
 /// fail), and every command whose `--help` offers `--json` has one.
