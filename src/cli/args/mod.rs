@@ -131,7 +131,7 @@ pub enum Command {
         #[arg(long, default_value = "pipeline.toml")]
         config: PathBuf,
     },
-    /// The JSON Schema of a `--json` output, generated from the type it prints
+    /// The JSON Schema of a command's JSON output, generated from the type it prints
     /// (docs/json.md); without NAME, the list.
     Schema {
         name: Option<String>,
