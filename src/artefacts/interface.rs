@@ -54,7 +54,11 @@ pub fn upstream_summits(upstream: &BTreeMap<String, Value>, name: &str) -> Resul
             what: format!("`{k}`"),
         })
     };
-    Ok([get(r.sigma, "sigma_m")?, get(r.r, "R_m")?, get(r.eta, "eta_per_m2")?])
+    Ok([
+        get(r.sigma, "sigma_m")?,
+        get(r.r, "R_m")?,
+        get(r.eta, "eta_per_m2")?,
+    ])
 }
 
 /// What an `[interface.NAME]` table says about its surfaces, read leniently (the interface

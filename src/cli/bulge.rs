@@ -27,7 +27,12 @@ pub(super) fn cmd_bulge(a: BulgeArgs) -> Result<()> {
     let analysis = bulge::analyse(&params)?;
     if let Some(dir) = &a.out {
         std::fs::create_dir_all(dir)?;
-        bulge::write_outputs(&analysis, &serde_json::Value::Object(Default::default()), "", dir)?;
+        bulge::write_outputs(
+            &analysis,
+            &serde_json::Value::Object(Default::default()),
+            "",
+            dir,
+        )?;
         bulge::write_figures(&analysis, &params.options, dir)?;
     }
     if a.json {

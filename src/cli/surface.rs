@@ -55,10 +55,7 @@ pub(super) fn cmd_surface(a: SurfaceArgs) -> Result<()> {
             analysis.final_map().ny(),
             analysis.final_map().dx * 1e9
         );
-        println!(
-            "  levelling  {}",
-            serde_json::to_string(&report.levelling)?
-        );
+        println!("  levelling  {}", serde_json::to_string(&report.levelling)?);
         println!("  filter     {}", surfaces::filter_text(&params));
         println!(
             "  σ          {:.4} nm   (Sa {:.4} nm, Ssk {:.3}, Sku {:.3})",

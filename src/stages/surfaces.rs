@@ -5,8 +5,8 @@
 use super::{FromConfig, Output, StageContext, StageKind};
 use crate::artefacts::finite;
 use crate::artefacts::surface::{
-    AreaQuantities, AreasSummary, BootstrapSettings, NayakReport, SummitStats, SurfaceReport,
-    SurfaceResult, Spread,
+    AreaQuantities, AreasSummary, BootstrapSettings, NayakReport, Spread, SummitStats,
+    SurfaceReport, SurfaceResult,
 };
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::store::H5Out;
@@ -29,8 +29,8 @@ use std::path::PathBuf;
 mod output;
 mod rows;
 pub use output::write_outputs;
-pub use rows::{AreaColumns, AreaRow, SurfaceRow, SurfaceSummaryRow};
 use output::{write_areas_plot, write_figures, write_h5_body};
+pub use rows::{AreaColumns, AreaRow, SurfaceRow, SurfaceSummaryRow};
 
 /// Bump when the numbers this stage produces change.
 pub const MODEL_VERSION: &str = "surface-1";
