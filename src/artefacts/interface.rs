@@ -2,6 +2,7 @@
 //! σ, R, η of the equivalent rough surface against a flat, with β, the spectral moments and
 //! the Nayak bandwidth α.
 
+use super::finite;
 use crate::error::{Error, Result};
 use crate::surface::combine::InterfaceStats;
 use serde::{Deserialize, Serialize};
@@ -9,59 +10,55 @@ use serde_json::Value;
 use std::collections::BTreeMap;
 
 /// The interface result as written (SI, unit suffixes in the keys; the field order is the
-/// key order).
+/// key order); a value that is not finite (the moments of explicit values) is `null`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct InterfaceRoughness {
     /// `sum_surface`, `harmonic_r` or `explicit`.
     pub rule: String,
     #[serde(rename = "sigma_m")]
-    pub sigma: f64,
+    pub sigma: Option<f64>,
     #[serde(rename = "R_m")]
-    pub r: f64,
+    pub r: Option<f64>,
     #[serde(rename = "eta_per_m2")]
-    pub eta: f64,
-    pub beta: f64,
-    pub m2: f64,
+    pub eta: Option<f64>,
+    pub beta: Option<f64>,
+    pub m2: Option<f64>,
     #[serde(rename = "m4_per_m2")]
-    pub m4: f64,
-    pub alpha: f64,
+    pub m4: Option<f64>,
+    pub alpha: Option<f64>,
 }
 
 impl InterfaceRoughness {
     pub fn new(st: &InterfaceStats, rule: &str) -> Self {
         InterfaceRoughness {
             rule: rule.to_string(),
-            sigma: st.sigma,
-            r: st.r,
-            eta: st.eta,
-            beta: st.beta,
-            m2: st.m2,
-            m4: st.m4,
-            alpha: st.alpha,
+            sigma: finite(st.sigma),
+            r: finite(st.r),
+            eta: finite(st.eta),
+            beta: finite(st.beta),
+            m2: finite(st.m2),
+            m4: finite(st.m4),
+            alpha: finite(st.alpha),
         }
-    }
-
-    /// The JSON the interface stage writes as its result.
-    pub fn to_json(&self) -> Value {
-        serde_json::to_value(self).unwrap_or(Value::Null)
     }
 }
 
 /// σ, R, η [m, m, 1/m²] of the upstream interface instance `name`; a missing value is an
 /// error naming its key.
 pub fn upstream_summits(upstream: &BTreeMap<String, Value>, name: &str) -> Result<[f64; 3]> {
-    let r = upstream.get(name).ok_or_else(|| Error::MissingUpstream {
-        kind: "interface",
-        name: name.to_string(),
-    })?;
-    let get = |k: &str| {
-        r[k].as_f64().ok_or_else(|| Error::UpstreamField {
+    let r: InterfaceRoughness = super::upstream_result(upstream, "interface", name)?;
+    let get = |v: Option<f64>, k: &str| {
+        v.ok_or_else(|| Error::UpstreamField {
             kind: "interface",
             name: name.to_string(),
             what: format!("`{k}`"),
         })
     };
-    Ok([get("sigma_m")?, get("R_m")?, get("eta_per_m2")?])
+    Ok([
+        get(r.sigma, "sigma_m")?,
+        get(r.r, "R_m")?,
+        get(r.eta, "eta_per_m2")?,
+    ])
 }
 
 /// What an `[interface.NAME]` table says about its surfaces, read leniently (the interface
@@ -100,27 +97,33 @@ mod tests {
 
     #[test]
     fn written_json_is_unchanged_and_reads_back() {
-        let w = InterfaceRoughness {
+        let (sigma, r, eta, beta, m2, m4, alpha) =
+            (0.5e-9, 0.43e-6, 124e12, 0.0267, 1.5e-3, f64::NAN, 2.0);
+        let mut w = InterfaceRoughness {
             rule: "sum_surface".into(),
-            sigma: 0.5e-9,
-            r: 0.43e-6,
-            eta: 124e12,
-            beta: 0.0267,
-            m2: 1.5e-3,
-            m4: f64::NAN,
-            alpha: 2.0,
+            sigma: finite(sigma),
+            r: finite(r),
+            eta: finite(eta),
+            beta: finite(beta),
+            m2: finite(m2),
+            m4: finite(m4),
+            alpha: finite(alpha),
         };
         // As the interface stage wrote it before the struct existed.
         let before = json!({
             "rule": w.rule,
-            "sigma_m": w.sigma, "R_m": w.r, "eta_per_m2": w.eta, "beta": w.beta,
-            "m2": w.m2, "m4_per_m2": w.m4, "alpha": w.alpha,
+            "sigma_m": sigma, "R_m": r, "eta_per_m2": eta, "beta": beta,
+            "m2": m2, "m4_per_m2": m4, "alpha": alpha,
         });
-        assert_eq!(w.to_json().to_string(), before.to_string());
-        let up = BTreeMap::from([("i".to_string(), w.to_json())]);
-        assert_eq!(upstream_summits(&up, "i").unwrap(), [w.sigma, w.r, w.eta]);
-        let up = BTreeMap::from([("i".to_string(), json!({"sigma_m": 1.0}))]);
+        let written = serde_json::to_value(&w).unwrap();
+        assert_eq!(written.to_string(), before.to_string());
+        let up = BTreeMap::from([("i".to_string(), written)]);
+        assert_eq!(upstream_summits(&up, "i").unwrap(), [sigma, r, eta]);
+        w.r = None;
+        let up = BTreeMap::from([("i".to_string(), serde_json::to_value(&w).unwrap())]);
         let e = upstream_summits(&up, "i").unwrap_err().to_string();
         assert_eq!(e, "interface `i` result has no `R_m`");
+        let e = upstream_summits(&BTreeMap::new(), "i").unwrap_err();
+        assert_eq!(e.to_string(), "no result from interface `i`");
     }
 }

@@ -31,3 +31,9 @@ pub fn upstream_result<T: serde::de::DeserializeOwned>(
         what: format!("readable result ({e})"),
     })
 }
+
+/// A value a result may leave undefined (no summits, a flat map): `None` unless finite, so it
+/// is written as `null` (JSON has no NaN; docs/json.md) and reads back as `None`.
+pub fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}

@@ -27,11 +27,16 @@ pub(super) fn cmd_bulge(a: BulgeArgs) -> Result<()> {
     let analysis = bulge::analyse(&params)?;
     if let Some(dir) = &a.out {
         std::fs::create_dir_all(dir)?;
-        bulge::write_outputs(&analysis, &serde_json::json!({}), "", dir)?;
+        bulge::write_outputs(
+            &analysis,
+            &serde_json::Value::Object(Default::default()),
+            "",
+            dir,
+        )?;
         bulge::write_figures(&analysis, &params.options, dir)?;
     }
     if a.json {
-        println!("{}", bulge::report_json(&analysis));
+        println!("{}", serde_json::to_string(&bulge::report(&analysis))?);
         return Ok(());
     }
     println!(

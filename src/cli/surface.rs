@@ -1,7 +1,6 @@
 //! `hdi surface FILE`: one height map's roughness parameters.
 
 use anyhow::Result;
-use serde_json::json;
 
 use super::args::SurfaceArgs;
 use super::{flag, out_parent};
@@ -39,12 +38,12 @@ pub(super) fn cmd_surface(a: SurfaceArgs) -> Result<()> {
             out,
             Some(dir),
             "",
-            &json!([a.file.to_string_lossy()]),
+            &serde_json::Value::from(vec![a.file.to_string_lossy().into_owned()]),
         )?;
     }
-    let report = surfaces::report_json(&analysis, &params);
+    let report = surfaces::report(&analysis, &params);
     if a.json {
-        println!("{report}");
+        println!("{}", serde_json::to_string(&report)?);
     } else {
         let r = &analysis.report;
         println!(
@@ -56,7 +55,7 @@ pub(super) fn cmd_surface(a: SurfaceArgs) -> Result<()> {
             analysis.final_map().ny(),
             analysis.final_map().dx * 1e9
         );
-        println!("  levelling  {}", report["levelling"]);
+        println!("  levelling  {}", serde_json::to_string(&report.levelling)?);
         println!("  filter     {}", surfaces::filter_text(&params));
         println!(
             "  σ          {:.4} nm   (Sa {:.4} nm, Ssk {:.3}, Sku {:.3})",

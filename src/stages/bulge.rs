@@ -2,8 +2,9 @@
 //! geometry (a, w, x_TFC) and efficiency (m/W) for the slider stages (App. C.2; docs/bulge.md).
 //! The same analysis backs `hdi bulge FILE…`.
 
-use super::{FromConfig, StageContext, StageKind, StageOutput};
-use crate::artefacts::bulge::FittedBulge;
+use super::{FromConfig, Output, StageContext, StageKind};
+use crate::artefacts::bulge::{BulgeReport, BulgeScan, FittedBulge};
+use crate::artefacts::finite;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::store::{write_table, H5Out};
 use crate::error::Result;
@@ -13,7 +14,7 @@ use crate::surface::bulge::{
 use crate::surface::io::{read_height_map, ReadOptions};
 use crate::surface::SurfaceError;
 use crate::units::{Length, Power};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
 
@@ -209,45 +210,66 @@ pub fn analyse(params: &BulgeParams) -> Result<BulgeAnalysis> {
     })
 }
 
-fn num(v: f64) -> Value {
-    if v.is_finite() {
-        json!(v)
-    } else {
-        Value::Null
+/// One scan as the `hdi bulge --json` and `scans.csv` keys have it (SI units named in the
+/// keys). x_TFC's standard error is that of the centre: the edge position is taken as exact
+/// (it is known to ±dx/2).
+pub fn scan(s: &ScanResult) -> BulgeScan {
+    let f = &s.fit;
+    BulgeScan {
+        file: s
+            .file
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        heater_power_mw: s.power.map(|p| p * 1e3),
+        height_m: finite(f.height),
+        height_se_m: finite(f.height_se),
+        a_tfc_m: finite(f.a),
+        a_tfc_se_m: finite(f.a_se),
+        w_tfc_m: finite(f.w),
+        w_tfc_se_m: finite(f.w_se),
+        x_tfc_m: f.x_tfc.and_then(finite),
+        x_tfc_se_m: f.x_tfc.and_then(|_| finite(f.xc_se)),
+        x_c_m: finite(f.xc),
+        y_c_m: finite(f.yc),
+        y_c_se_m: finite(f.yc_se),
+        trailing_edge_x_m: f.trailing_edge.and_then(|t| finite(t.x)),
+        residual_rms_m: finite(f.residual_rms),
+        n_pixels: f.n_pixels,
     }
 }
 
-/// One scan as a JSON object (the `hdi bulge --json` and `scans.csv` keys; SI units named in
-/// the keys). x_TFC's standard error is that of the centre: the edge position is taken as
-/// exact (it is known to ±dx/2).
-pub fn scan_row(s: &ScanResult) -> Map<String, Value> {
-    let f = &s.fit;
-    let v = json!({
-        "file": s.file.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
-        "heater_power_mW": s.power.map(|p| p * 1e3),
-        "height_m": num(f.height), "height_se_m": num(f.height_se),
-        "a_tfc_m": num(f.a), "a_tfc_se_m": num(f.a_se),
-        "w_tfc_m": num(f.w), "w_tfc_se_m": num(f.w_se),
-        "x_tfc_m": f.x_tfc.map(num), "x_tfc_se_m": f.x_tfc.map(|_| num(f.xc_se)),
-        "x_c_m": num(f.xc), "y_c_m": num(f.yc), "y_c_se_m": num(f.yc_se),
-        "trailing_edge_x_m": f.trailing_edge.map(|t| num(t.x)),
-        "residual_rms_m": num(f.residual_rms),
-        "n_pixels": f.n_pixels,
-    });
-    v.as_object().cloned().unwrap_or_default()
+/// The full report: scans, efficiency fit and the geometry handed on.
+pub fn report(a: &BulgeAnalysis) -> BulgeReport {
+    let e = a.efficiency;
+    BulgeReport {
+        scans: a.scans.iter().map(scan).collect(),
+        efficiency_m_per_w: e.and_then(|e| finite(e.efficiency)),
+        efficiency_se_m_per_w: e.and_then(|e| finite(e.efficiency_se)),
+        intercept_m: e.and_then(|e| finite(e.intercept)),
+        intercept_se_m: e.and_then(|e| finite(e.intercept_se)),
+        tfc: a.tfc,
+    }
 }
 
-/// The full report: scans, efficiency fit and the geometry handed on.
-pub fn report_json(a: &BulgeAnalysis) -> Value {
-    let e = a.efficiency;
-    json!({
-        "scans": a.scans.iter().map(|s| Value::Object(scan_row(s))).collect::<Vec<_>>(),
-        "efficiency_m_per_W": e.map(|e| num(e.efficiency)),
-        "efficiency_se_m_per_W": e.map(|e| num(e.efficiency_se)),
-        "intercept_m": e.map(|e| num(e.intercept)),
-        "intercept_se_m": e.map(|e| num(e.intercept_se)),
-        "tfc": a.tfc.to_json(),
-    })
+/// One row of the bulge summary table (table units, 6 significant digits).
+#[derive(Debug, Clone, Serialize)]
+pub struct BulgeRow {
+    pub scans: usize,
+    pub a_tfc_um: f64,
+    pub w_tfc_um: f64,
+    pub x_tfc_um: Option<f64>,
+    #[serde(rename = "efficiency_nm_per_mW")]
+    pub efficiency_nm_per_mw: Option<f64>,
+    pub intercept_nm: Option<f64>,
+}
+
+fn encode(message: String) -> crate::error::Error {
+    crate::error::Error::Encode {
+        kind: "bulge",
+        what: "scan row".into(),
+        message,
+    }
 }
 
 /// `bulge.h5` (per-scan values with units as attributes, the levelled maps) and the tidy
@@ -259,7 +281,7 @@ pub fn write_outputs(a: &BulgeAnalysis, params: &Value, key: &str, dir: &Path) -
         .iter()
         .map(|s| s.file.to_string_lossy().into_owned())
         .collect();
-    out.root_attributes("bulge", key, params, &json!(files), "bulge")?;
+    out.root_attributes("bulge", key, params, &Value::from(files.clone()), "bulge")?;
     let g = out.group("bulge", Some("NXentry"))?;
     let col = |f: &dyn Fn(&ScanResult) -> f64| a.scans.iter().map(f).collect::<Vec<f64>>();
     let nan = f64::NAN;
@@ -365,7 +387,15 @@ pub fn write_outputs(a: &BulgeAnalysis, params: &Value, key: &str, dir: &Path) -
         out.write_scalar(&sg, "dy", s.fit.levelled.dy, "m", "pixel spacing along y")?;
     }
     out.finish()?;
-    let rows: Vec<Map<String, Value>> = a.scans.iter().map(scan_row).collect();
+    let rows = a
+        .scans
+        .iter()
+        .map(|s| match serde_json::to_value(scan(s)) {
+            Ok(Value::Object(m)) => Ok(m),
+            Ok(other) => Err(encode(format!("not a JSON object: {other}"))),
+            Err(e) => Err(encode(e.to_string())),
+        })
+        .collect::<Result<Vec<Map<String, Value>>>>()?;
     write_table(&rows, &dir.join("scans"))?;
     Ok(())
 }
@@ -466,8 +496,8 @@ impl FromConfig for BulgeStage {
 impl StageKind for BulgeStage {
     const KIND: &'static str = "bulge";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
-    type Result = serde_json::Value;
-    type Row = serde_json::Map<String, serde_json::Value>;
+    type Result = BulgeReport;
+    type Row = BulgeRow;
 
     fn params(&self) -> Value {
         let p = &self.params;
@@ -487,22 +517,22 @@ impl StageKind for BulgeStage {
             .map(|(k, f)| (format!("files[{k}]"), f.clone()))
             .collect()
     }
-    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+    fn run(&self, ctx: &StageContext) -> Result<Output<BulgeReport, BulgeRow>> {
         let a = analyse(&self.params)?;
         write_outputs(&a, &self.params(), ctx.key, ctx.out_dir)?;
         write_figures(&a, &self.params.options, ctx.out_dir)?;
         let r = |v: f64| crate::core::store::round_significant(v, 6);
-        let row = json!({
-            "scans": a.scans.len(),
-            "a_tfc_um": r(a.tfc.a_tfc_m * 1e6),
-            "w_tfc_um": r(a.tfc.w_tfc_m * 1e6),
-            "x_tfc_um": a.tfc.x_tfc_m.map(|x| r(x * 1e6)),
-            "efficiency_nm_per_mW": a.tfc.efficiency_m_per_w.map(|e| r(e * 1e6)),
-            "intercept_nm": a.tfc.intercept_m.map(|h| r(h * 1e9)),
-        });
-        Ok(StageOutput {
-            result: report_json(&a),
-            summary_row: row.as_object().cloned(),
+        let row = BulgeRow {
+            scans: a.scans.len(),
+            a_tfc_um: r(a.tfc.a_tfc_m * 1e6),
+            w_tfc_um: r(a.tfc.w_tfc_m * 1e6),
+            x_tfc_um: a.tfc.x_tfc_m.map(|x| r(x * 1e6)),
+            efficiency_nm_per_mw: a.tfc.efficiency_m_per_w.map(|e| r(e * 1e6)),
+            intercept_nm: a.tfc.intercept_m.map(|h| r(h * 1e9)),
+        };
+        Ok(Output {
+            result: report(&a),
+            summary_row: Some(row),
         })
     }
 }

@@ -1,15 +1,15 @@
 //! Interface stage: two measured surfaces (or explicit values) → the equivalent rough surface
 //! against a smooth flat (σ, R, η, β) that the contact models use (Table 2.2; docs/surfaces.md).
 
-use super::{FromConfig, StageContext, StageKind, StageOutput};
+use super::{FromConfig, Output, StageContext, StageKind};
 use crate::artefacts::interface::InterfaceRoughness;
 use crate::artefacts::surface::upstream_surface_stats;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::store::H5Out;
 use crate::error::Result;
-use crate::surface::combine::{combine, CombineRule, InterfaceStats, SurfaceStats};
+use crate::surface::combine::{combine, CombineRule, SurfaceStats};
 use crate::units::{Length, PerArea};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 pub const MODEL_VERSION: &str = "interface-1";
@@ -119,15 +119,25 @@ impl FromConfig for InterfaceStage {
     }
 }
 
-pub fn interface_json(st: &InterfaceStats) -> Value {
-    InterfaceRoughness::new(st, rule_name(&st.rule)).to_json()
+/// One row of the interface summary table (table units).
+#[derive(Debug, Clone, Serialize)]
+pub struct InterfaceRow {
+    pub rule: &'static str,
+    /// The two surfaces, ` + `-joined (empty for explicit values).
+    pub surfaces: String,
+    pub sigma_nm: f64,
+    #[serde(rename = "R_um")]
+    pub r_um: f64,
+    pub eta_per_um2: f64,
+    pub beta: f64,
+    pub alpha: f64,
 }
 
 impl StageKind for InterfaceStage {
     const KIND: &'static str = "interface";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
-    type Result = serde_json::Value;
-    type Row = serde_json::Map<String, serde_json::Value>;
+    type Result = InterfaceRoughness;
+    type Row = InterfaceRow;
 
     fn params(&self) -> Value {
         let explicit = match self.rule {
@@ -145,7 +155,7 @@ impl StageKind for InterfaceStage {
             self.surfaces.clone()
         }
     }
-    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+    fn run(&self, ctx: &StageContext) -> Result<Output<InterfaceRoughness, InterfaceRow>> {
         let (a, b) = match self.rule {
             CombineRule::Explicit { sigma, r, eta } => {
                 let s = SurfaceStats {
@@ -168,7 +178,7 @@ impl StageKind for InterfaceStage {
             "interface",
             ctx.key,
             &self.params(),
-            &json!(self.surfaces),
+            &Value::from(self.surfaces.clone()),
             "interface",
         )?;
         let g = out.group("interface", Some("NXentry"))?;
@@ -181,15 +191,18 @@ impl StageKind for InterfaceStage {
         out.write_scalar(&g, "m4", st.m4, "m^-2", "combined fourth spectral moment")?;
         out.write_scalar(&g, "alpha", st.alpha, "1", "Nayak bandwidth parameter")?;
         out.finish()?;
-        let row = json!({
-            "rule": rule_name(&st.rule),
-            "surfaces": self.surfaces.join(" + "),
-            "sigma_nm": st.sigma * 1e9, "R_um": st.r * 1e6, "eta_per_um2": st.eta * 1e-12,
-            "beta": st.beta, "alpha": st.alpha,
-        });
-        Ok(StageOutput {
-            result: interface_json(&st),
-            summary_row: row.as_object().cloned(),
+        let row = InterfaceRow {
+            rule: rule_name(&st.rule),
+            surfaces: self.surfaces.join(" + "),
+            sigma_nm: st.sigma * 1e9,
+            r_um: st.r * 1e6,
+            eta_per_um2: st.eta * 1e-12,
+            beta: st.beta,
+            alpha: st.alpha,
+        };
+        Ok(Output {
+            result: InterfaceRoughness::new(&st, rule_name(&st.rule)),
+            summary_row: Some(row),
         })
     }
 }

@@ -2,8 +2,12 @@
 //! summit list, histograms, scale sweep), as HDF5 + PNG + a summary row. The same function
 //! serves the pipeline and `hdi surface FILE`.
 
-use super::{FromConfig, StageContext, StageKind, StageOutput};
-use crate::artefacts::surface::SummitStats;
+use super::{FromConfig, Output, StageContext, StageKind};
+use crate::artefacts::finite;
+use crate::artefacts::surface::{
+    AreaQuantities, AreasSummary, BootstrapSettings, NayakReport, Spread, SummitStats,
+    SurfaceReport, SurfaceResult,
+};
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::store::H5Out;
 use crate::error::Result;
@@ -23,8 +27,10 @@ use serde_json::{json, Map, Value};
 use std::path::PathBuf;
 
 mod output;
+mod rows;
 pub use output::write_outputs;
 use output::{write_areas_plot, write_figures, write_h5_body};
+pub use rows::{AreaColumns, AreaRow, SurfaceRow, SurfaceSummaryRow};
 
 /// Bump when the numbers this stage produces change.
 pub const MODEL_VERSION: &str = "surface-1";
@@ -475,63 +481,49 @@ pub fn filter_text(p: &SurfaceParams) -> String {
 
 /// The `--json` object of `hdi surface` (docs/surfaces.md, docs/schemas/surface.json), SI units
 /// named in the keys; a statistic the map does not define (no summits, a flat map) is `null`.
-pub fn report_json(a: &SurfaceAnalysis, p: &SurfaceParams) -> Value {
+pub fn report(a: &SurfaceAnalysis, p: &SurfaceParams) -> SurfaceReport {
     let r = &a.report;
     let m = a.final_map();
-    json!({
-        "file": p.file.to_string_lossy(),
-        "format": a.raw.source.format,
-        "channel": a.raw.channel,
-        "nx": m.nx(), "ny": m.ny(), "dx_m": m.dx, "dy_m": m.dy,
-        "sigma_m": r.sigma, "Sa_m": r.sa, "Ssk": r.ssk, "Sku": r.sku,
-        "m2": r.m2, "m4_per_m2": r.m4, "alpha": r.alpha,
-        "moments_method": r.moments_method.to_string(),
-        "eta_per_m2": r.eta, "R_m": r.r, "R_definition": r.r_definition.to_string(),
-        "R_mean_of_inverse_m": r.r_mean_of_inverse,
-        "R_median_of_inverse_m": r.r_median_of_inverse,
-        "beta": r.beta, "sigma_s_m": r.sigma_s, "mean_summit_height_m": r.mean_summit_height,
-        "n_summits": r.n_summits, "summit_scheme": r.summit_scheme.to_string(),
-        "sampling_interval_m": r.sampling_interval,
-        "nayak": {"eta_per_m2": r.nayak.eta, "R_m": r.nayak.r, "beta": r.nayak.beta,
-                  "sigma_s_m": r.nayak.sigma_s},
-        "levelling": p.level.iter().map(|l| l.to_string()).collect::<Vec<_>>(),
-        "crop_m": p.crop.map(|c| [c.x0, c.y0, c.width, c.height]),
+    SurfaceReport {
+        file: p.file.to_string_lossy().into_owned(),
+        format: a.raw.source.format.clone(),
+        channel: a.raw.channel.clone(),
+        nx: m.nx(),
+        ny: m.ny(),
+        dx_m: m.dx,
+        dy_m: m.dy,
+        sigma_m: r.sigma,
+        sa_m: r.sa,
+        ssk: finite(r.ssk),
+        sku: finite(r.sku),
+        m2: finite(r.m2),
+        m4_per_m2: finite(r.m4),
+        alpha: finite(r.alpha),
+        moments_method: r.moments_method.to_string(),
+        eta_per_m2: finite(r.eta),
+        r_m: finite(r.r),
+        r_definition: r.r_definition.to_string(),
+        r_mean_of_inverse_m: finite(r.r_mean_of_inverse),
+        r_median_of_inverse_m: finite(r.r_median_of_inverse),
+        beta: finite(r.beta),
+        sigma_s_m: finite(r.sigma_s),
+        mean_summit_height_m: finite(r.mean_summit_height),
+        n_summits: r.n_summits,
+        summit_scheme: r.summit_scheme.to_string(),
+        sampling_interval_m: r.sampling_interval,
+        nayak: NayakReport {
+            eta_per_m2: finite(r.nayak.eta),
+            r_m: finite(r.nayak.r),
+            beta: finite(r.nayak.beta),
+            sigma_s_m: finite(r.nayak.sigma_s),
+        },
+        levelling: p.level.iter().map(|l| l.to_string()).collect(),
+        crop_m: p.crop.map(|c| [c.x0, c.y0, c.width, c.height]),
         // The S/L-filter cutoffs as numbers (null: that filter is off), not a text with units.
-        "filter_s_m": p.filter_s,
-        "filter_l_m": p.filter_l,
-        "masked_fraction": m.masked_fraction(),
-        "warnings": r.warnings,
-    })
-}
-
-/// One tidy row (unit suffixes in the column names).
-pub fn summary_row(a: &SurfaceAnalysis, p: &SurfaceParams) -> Map<String, Value> {
-    let r = &a.report;
-    let m = a.final_map();
-    let row = json!({
-        "file": p.file.file_name().map(|f| f.to_string_lossy().to_string()).unwrap_or_default(),
-        "format": a.raw.source.format,
-        "channel": a.raw.channel,
-        "nx": m.nx(), "ny": m.ny(),
-        "dx_nm": m.dx * 1e9, "dy_nm": m.dy * 1e9,
-        "sigma_nm": r.sigma * 1e9, "Sa_nm": r.sa * 1e9, "Ssk": r.ssk, "Sku": r.sku,
-        "R_um": r.r * 1e6, "eta_per_um2": r.eta * 1e-12, "beta": r.beta,
-        "sigma_s_nm": r.sigma_s * 1e9, "n_summits": r.n_summits,
-        "alpha": r.alpha,
-        "nayak_R_um": r.nayak.r * 1e6, "nayak_eta_per_um2": r.nayak.eta * 1e-12,
-        "nayak_beta": r.nayak.beta,
-        "summit_scheme": r.summit_scheme.to_string(),
-        "R_definition": r.r_definition.to_string(),
-        "levelling": p.level.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(" "),
-        "crop_um": p.crop.map(|c| format!("{} {} {} {}", c.x0 * 1e6, c.y0 * 1e6, c.width * 1e6, c.height * 1e6)),
-        "filter_s_um": p.filter_s.map(|v| v * 1e6),
-        "filter_l_um": p.filter_l.map(|v| v * 1e6),
-        "masked_pct": m.masked_fraction() * 100.0,
-        "warnings": r.warnings.join("; "),
-    });
-    match row {
-        Value::Object(m) => m,
-        _ => Map::new(),
+        filter_s_m: p.filter_s,
+        filter_l_m: p.filter_l,
+        masked_fraction: m.masked_fraction(),
+        warnings: r.warnings.clone(),
     }
 }
 
@@ -579,8 +571,8 @@ impl FromConfig for SurfaceStage {
 impl StageKind for SurfaceStage {
     const KIND: &'static str = "surface";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
-    type Result = serde_json::Value;
-    type Row = serde_json::Map<String, serde_json::Value>;
+    type Result = SurfaceResult;
+    type Row = SurfaceSummaryRow;
 
     fn params(&self) -> Value {
         self.params.canonical()
@@ -600,7 +592,7 @@ impl StageKind for SurfaceStage {
             })
             .collect()
     }
-    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+    fn run(&self, ctx: &StageContext) -> Result<Output<SurfaceResult, SurfaceSummaryRow>> {
         if self.params.areas.len() > 1 {
             return run_areas(&self.params, ctx);
         }
@@ -617,21 +609,24 @@ impl StageKind for SurfaceStage {
             &inputs,
         )?;
         let r = &a.report;
-        let mut result = report_json(&a, &self.params);
-        if let Value::Object(m) = &mut result {
-            // What the interface stage combines.
-            let stats = SummitStats {
-                sigma: r.sigma,
-                r: r.r,
-                eta: r.eta,
-                m2: Some(r.m2),
-                m4: Some(r.m4),
-            };
-            m.insert("stats".into(), stats.to_json());
-        }
-        Ok(StageOutput {
-            result,
-            summary_row: Some(summary_row(&a, &self.params)),
+        // What the interface stage combines.
+        let stats = SummitStats {
+            sigma: finite(r.sigma),
+            r: finite(r.r),
+            eta: finite(r.eta),
+            m2: finite(r.m2),
+            m4: finite(r.m4),
+        };
+        Ok(Output {
+            result: SurfaceResult {
+                report: report(&a, &self.params),
+                stats,
+                areas: None,
+            },
+            summary_row: Some(SurfaceSummaryRow {
+                row: SurfaceRow::new(&a, &self.params),
+                areas: None,
+            }),
         })
     }
 }
@@ -660,15 +655,23 @@ pub fn area_summaries(reports: &[&RoughnessReport]) -> Vec<(&'static str, &'stat
         .collect()
 }
 
-fn summary_json(s: &Summary) -> Value {
-    let f = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
-    json!({"mean": f(s.mean), "std": f(s.std), "ci95": [f(s.ci_low), f(s.ci_high)], "n": s.n})
+/// One quantity's spread as the result writes it (non-finite values as `null`).
+fn spread(s: &Summary) -> Spread {
+    Spread {
+        mean: finite(s.mean),
+        std: finite(s.std),
+        ci95: [finite(s.ci_low), finite(s.ci_high)],
+        n: s.n,
+    }
 }
 
 /// Several (file × crop) areas: each analysed as a single scan; `surface.h5` holds the first
 /// area's maps as today plus `/surface/areas` (per-area values, mean, std, bootstrap CI);
 /// `areas.{csv,parquet}` one row per area; `areas.png`; the interface gets the means.
-fn run_areas(p: &SurfaceParams, ctx: &StageContext) -> Result<StageOutput> {
+fn run_areas(
+    p: &SurfaceParams,
+    ctx: &StageContext,
+) -> Result<Output<SurfaceResult, SurfaceSummaryRow>> {
     let n = p.areas.len();
     let mut analyses = Vec::with_capacity(n);
     for k in 0..n {
@@ -716,73 +719,79 @@ fn run_areas(p: &SurfaceParams, ctx: &StageContext) -> Result<StageOutput> {
     out.finish()?;
     write_figures(&analyses[0], ctx.out_dir)?;
 
-    let rows: Vec<Map<String, Value>> = analyses
+    let rows: Vec<AreaRow> = analyses
         .iter()
         .enumerate()
-        .map(|(k, a)| {
-            let mut row = Map::new();
-            row.insert("area".into(), json!(k as i64));
-            row.extend(summary_row(a, &p.area(k)));
-            row
+        .map(|(k, a)| AreaRow {
+            area: k as i64,
+            row: SurfaceRow::new(a, &p.area(k)),
         })
         .collect();
-    crate::core::store::write_table(&rows, &ctx.out_dir.join("areas"))?;
+    crate::core::store::write_table(&table_rows(&rows)?, &ctx.out_dir.join("areas"))?;
     write_areas_plot(&ctx.out_dir.join("areas.png"), &reports, &summaries)?;
 
-    let mut result = report_json(&analyses[0], &first);
-    let mean = |name: &str| {
-        summaries
-            .iter()
-            .find(|s| s.0 == name)
-            .map(|s| s.2.mean)
-            .unwrap_or(f64::NAN)
+    // AREA_QUANTITIES order: sigma, R, eta, beta, m2, m4.
+    let s: Vec<Summary> = summaries.iter().map(|s| s.2).collect();
+    let scaled = |k: usize| (s[k], AREA_QUANTITIES[k].2);
+    let row = SurfaceSummaryRow {
+        row: SurfaceRow::new(&analyses[0], &first),
+        areas: Some(AreaColumns::new(
+            n,
+            [scaled(0), scaled(1), scaled(2), scaled(3)],
+        )),
     };
-    let mut row = summary_row(&analyses[0], &first);
-    row.insert("n_areas".into(), json!(n as i64));
-    for (name, _, scale, _) in AREA_QUANTITIES.iter().take(4) {
-        let s = &summaries.iter().find(|s| s.0 == *name).map(|s| s.2);
-        if let Some(s) = s {
-            let col = match *name {
-                "sigma" => "sigma_nm",
-                "R" => "R_um",
-                "eta" => "eta_per_um2",
-                _ => "beta",
-            };
-            row.insert(format!("{col}_mean"), json!(s.mean * scale));
-            row.insert(format!("{col}_std"), json!(s.std * scale));
-            row.insert(format!("{col}_ci95_low"), json!(s.ci_low * scale));
-            row.insert(format!("{col}_ci95_high"), json!(s.ci_high * scale));
-        }
-    }
-    if let Value::Object(m) = &mut result {
-        // The interface combines the means over areas; the spread travels beside them.
-        let stats = SummitStats {
-            sigma: mean("sigma"),
-            r: mean("R"),
-            eta: mean("eta"),
-            m2: Some(mean("m2")),
-            m4: Some(mean("m4")),
-        };
-        m.insert("stats".into(), stats.to_json());
-        let per: Map<String, Value> = summaries
-            .iter()
-            .map(|(name, _, s)| (name.to_string(), summary_json(s)))
-            .collect();
-        m.insert(
-            "areas".into(),
-            json!({
-                "n": n,
-                "summary": per,
-                "bootstrap": {"resamples": bootstrap::RESAMPLES, "level": 0.95,
-                              "seed": bootstrap::SEED},
-                "table": "areas.csv",
-            }),
-        );
-    }
-    Ok(StageOutput {
-        result,
+    // The interface combines the means over areas; the spread travels beside them.
+    let stats = SummitStats {
+        sigma: finite(s[0].mean),
+        r: finite(s[1].mean),
+        eta: finite(s[2].mean),
+        m2: finite(s[4].mean),
+        m4: finite(s[5].mean),
+    };
+    let areas = AreasSummary {
+        n,
+        summary: AreaQuantities {
+            sigma: spread(&s[0]),
+            r: spread(&s[1]),
+            eta: spread(&s[2]),
+            beta: spread(&s[3]),
+            m2: spread(&s[4]),
+            m4: spread(&s[5]),
+        },
+        bootstrap: BootstrapSettings {
+            resamples: bootstrap::RESAMPLES,
+            level: 0.95,
+            seed: bootstrap::SEED,
+        },
+        table: "areas.csv".into(),
+    };
+    Ok(Output {
+        result: SurfaceResult {
+            report: report(&analyses[0], &first),
+            stats,
+            areas: Some(areas),
+        },
         summary_row: Some(row),
     })
+}
+
+/// Typed rows as the table writer takes them (one JSON object each).
+fn table_rows<T: serde::Serialize>(rows: &[T]) -> Result<Vec<Map<String, Value>>> {
+    rows.iter()
+        .map(|r| match serde_json::to_value(r) {
+            Ok(Value::Object(m)) => Ok(m),
+            Ok(other) => Err(crate::error::Error::Encode {
+                kind: "surface",
+                what: "area row".into(),
+                message: format!("not a JSON object: {other}"),
+            }),
+            Err(e) => Err(crate::error::Error::Encode {
+                kind: "surface",
+                what: "area row".into(),
+                message: e.to_string(),
+            }),
+        })
+        .collect()
 }
 
 #[cfg(test)]
