@@ -66,6 +66,7 @@ pub struct ContactInputs {
     /// Only with summit_offset = given.
     // Absent (not written) otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schemars(with = "SummitRatios")]
     pub summit_ratios: Option<SummitRatios>,
 }
 
@@ -506,6 +507,7 @@ pub struct SummitHeightsReport {
     pub y_s_over_sigma: f64,
     /// The [surface.*] instance (per-surface entries only).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(with = "String")]
     pub surface: Option<String>,
 }
 

@@ -39,6 +39,7 @@ pub struct ContactReport {
     /// absent for `surface` and `mccool` (docs/model-form.md, "Summit heights").
     // Only a fitted or measured distribution adds the block (the default result is unchanged).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(with = "SummitDistributionReport")]
     pub summit_distribution: Option<SummitDistributionReport>,
 }
 
