@@ -234,8 +234,8 @@ pub fn upstream_isbl_params(
         name: contact.to_string(),
         what: "usable `inputs`".into(),
     };
-    let result: ContactResult =
-        crate::artefacts::upstream_result(upstream, "contact", contact).map_err(|e| match e {
+    let result: ContactResult = crate::artefacts::upstream_result(upstream, "contact", contact)
+        .map_err(|e| match e {
             Error::UpstreamField { .. } => unusable(),
             other => other,
         })?;

@@ -27,8 +27,8 @@ use std::sync::Arc;
 mod output;
 pub use crate::artefacts::contact::SummitOrigin;
 pub use output::{
-    write_outputs, ContactReport, ContactRow, ContactStageResult, ForceTableReport,
-    IsblCurvePoint, IsblDerived, LubricantColumns, PerChannel,
+    write_outputs, ContactReport, ContactRow, ContactStageResult, ForceTableReport, IsblCurvePoint,
+    IsblDerived, LubricantColumns, PerChannel,
 };
 
 /// Bump when the numbers this stage produces change. contact-3: the key's `inputs` name the

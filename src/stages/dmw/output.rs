@@ -139,7 +139,8 @@ pub struct SpectralLine {
 }
 
 /// How D2 and D3 relate to D1 (`tracks.note`).
-pub const TRACKS_NOTE: &str = "D2 and D3 are time-flipped copies of D1: same std and amplitude spectrum";
+pub const TRACKS_NOTE: &str =
+    "D2 and D3 are time-flipped copies of D1: same std and amplitude spectrum";
 
 /// Per-track statistics.
 #[allow(non_snake_case)]
