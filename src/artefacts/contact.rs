@@ -6,55 +6,76 @@ use crate::contact::isbl::summits::SummitFit;
 use crate::contact::isbl::{FrictionLaw, IsblParams, SummitDistribution, SurfaceEnergy};
 use crate::error::{Error, Result};
 use crate::surface::combine::{combine_summit_heights, SummitHeights};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
-use serde_json::{json, Value};
+use serde_json::Value;
 use std::collections::BTreeMap;
 
 /// The ISBL parameters as the contact stage writes them (SI, unit suffixes in the keys). The
 /// field order is the key order of the written JSON, which is also part of the contact
 /// instance's cache key: do not reorder.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ContactInputs {
+    /// Combined RMS roughness σ, m.
     #[serde(rename = "sigma_m")]
     pub sigma: f64,
+    /// Mean summit radius R, m.
     #[serde(rename = "R_m")]
     pub summit_radius: f64,
+    /// Summit density η, 1/m².
     #[serde(rename = "eta_per_m2")]
     pub summit_density: f64,
+    /// Slider Young's modulus, Pa.
     #[serde(rename = "E1_Pa")]
     pub slider_modulus: f64,
+    /// Slider Poisson ratio.
     #[serde(rename = "nu1")]
     pub slider_poisson: f64,
+    /// Disk Young's modulus, Pa.
     #[serde(rename = "E2_Pa")]
     pub disk_modulus: f64,
+    /// Disk Poisson ratio.
     #[serde(rename = "nu2")]
     pub disk_poisson: f64,
+    /// Poisson ratio of the yielding body.
     #[serde(rename = "nu_yielding")]
     pub yielding_poisson: f64,
+    /// Hardness of the yielding body, Pa.
     #[serde(rename = "H_Pa")]
     pub hardness: f64,
+    /// Lennard-Jones equilibrium spacing ε, m.
     #[serde(rename = "epsilon_m")]
     pub lj_spacing: f64,
+    /// Total lubricant thickness t, m.
     #[serde(rename = "t_m")]
     pub lubricant_thickness: f64,
+    /// Surface energy Δγ: constant or the variable law.
     pub surface_energy: SurfaceEnergyInput,
-    /// The summit distribution: `none` (the surface heights' statistics), `mccool`, or
-    /// `given` with `summit_ratios` (the legacy `None`/`McCool` of results written before
-    /// docs/json.md are still read). The key keeps its old name so that results and cache
-    /// keys of the default are unchanged.
+    /// Summit distribution as the model uses it: `none` (the surface heights' statistics;
+    /// `[contact] summit_distribution = "surface"`), `mccool`, or `given` with
+    /// `summit_ratios` (fitted to Fig. 2.11 or measured; the top-level `summit_distribution`
+    /// says how).
+    // The legacy `None`/`McCool` of results written before docs/json.md are still read. The
+    // key keeps its old name so that results and cache keys of the default are unchanged.
+    #[schemars(extend("enum" = ["none", "mccool", "given"]))]
     pub summit_offset: String,
-    /// `junction_shear`, `seed_power_elastic` or `ke_static` (legacy `JunctionShear`/
-    /// `SeedPowerElastic`).
+    /// Friction law (the `[contact] friction_law` values).
+    // Legacy `JunctionShear`/`SeedPowerElastic` are still read.
+    #[schemars(extend("enum" = ["junction_shear", "seed_power_elastic", "ke_static"]))]
     pub friction_law: String,
-    /// `σ_s/σ` and `y_s/σ` of a `given` distribution; absent (not written) otherwise.
+    /// Only with summit_offset = given.
+    // Absent (not written) otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schemars(with = "SummitRatios")]
     pub summit_ratios: Option<SummitRatios>,
 }
 
 /// A given summit distribution in units of σ.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct SummitRatios {
+    /// σ_s/σ: standard deviation of the summit heights over σ.
     pub sigma_s_over_sigma: f64,
+    /// y_s/σ: mean plane of the summits above the surface mean plane, over σ.
     pub y_s_over_sigma: f64,
 }
 
@@ -77,25 +98,30 @@ pub fn friction_law_name(f: FrictionLaw) -> &'static str {
 }
 
 /// Δγ: `{"constant_N_per_m": …}` or `{"variable": {"c1_N_per_m", "c2_per_m", "c3_N_per_m"}}`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(untagged)]
 pub enum SurfaceEnergyInput {
     Constant {
+        /// Constant Δγ, N/m.
         #[serde(rename = "constant_N_per_m")]
         delta_gamma: f64,
     },
     Variable {
+        /// Δγ(s) = c1·exp(−c2·s) + c3.
         variable: VariableSurfaceEnergy,
     },
 }
 
 /// The coefficients of `Δγ(s) = c1·exp(−c2·s) + c3`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct VariableSurfaceEnergy {
+    /// c1, N/m.
     #[serde(rename = "c1_N_per_m")]
     pub c1: f64,
+    /// c2, 1/m.
     #[serde(rename = "c2_per_m")]
     pub c2: f64,
+    /// c3, N/m.
     #[serde(rename = "c3_N_per_m")]
     pub c3: f64,
 }
@@ -191,24 +217,29 @@ impl ContactInputs {
     }
 }
 
+/// What downstream stages read of a contact instance's `result.json` (the stage writes more,
+/// `stages::contact::ContactReport`; serde skips the rest): the interface parameters.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+pub struct ContactResult {
+    pub inputs: ContactInputs,
+}
+
 /// The ISBL parameters of the contact instance `contact` from the upstream results.
 pub fn upstream_isbl_params(
     upstream: &BTreeMap<String, Value>,
     contact: &str,
 ) -> Result<IsblParams> {
-    let result = upstream
-        .get(contact)
-        .ok_or_else(|| Error::MissingUpstream {
-            kind: "contact",
-            name: contact.to_string(),
+    let unusable = || Error::UpstreamField {
+        kind: "contact",
+        name: contact.to_string(),
+        what: "usable `inputs`".into(),
+    };
+    let result: ContactResult = crate::artefacts::upstream_result(upstream, "contact", contact)
+        .map_err(|e| match e {
+            Error::UpstreamField { .. } => unusable(),
+            other => other,
         })?;
-    ContactInputs::from_json(&result["inputs"])
-        .and_then(|i| i.params())
-        .ok_or_else(|| Error::UpstreamField {
-            kind: "contact",
-            name: contact.to_string(),
-            what: "usable `inputs`".into(),
-        })
+    result.inputs.params().ok_or_else(unusable)
 }
 
 #[cfg(test)]
@@ -356,37 +387,140 @@ impl SummitOrigin {
     }
 
     /// The result's `summit_distribution` block (SI, units in the keys).
-    pub fn to_json(&self) -> Value {
-        let (s, y) = self.ratios();
-        let heights = |h: &SummitHeights| {
-            json!({"sigma_m": h.sigma, "eta_per_m2": h.eta, "summit_mean_m": h.mean,
-                   "summit_std_m": h.std, "sigma_s_over_sigma": h.std_ratio(),
-                   "y_s_over_sigma": h.mean_ratio()})
-        };
+    pub fn report(&self) -> SummitDistributionReport {
+        let (sigma_s_over_sigma, y_s_over_sigma) = self.ratios();
         match self {
-            SummitOrigin::Fig211 { nominal_area, fit } => json!({
-                "kind": "fig_2_11",
-                "sigma_s_over_sigma": s, "y_s_over_sigma": y,
-                "nominal_area_m2": nominal_area,
-                "target": {"h_star": 3.0, "force_N": 7.30e-6, "h_star_ref": 2.5, "ratio": 0.03},
-                "fitted": {"force_N": fit.force, "ratio": fit.ratio},
-            }),
+            SummitOrigin::Fig211 { nominal_area, fit } => SummitDistributionReport::Fig211 {
+                sigma_s_over_sigma,
+                y_s_over_sigma,
+                nominal_area_m2: *nominal_area,
+                target: Fig211Target {
+                    h_star: 3.0,
+                    force_N: 7.30e-6,
+                    h_star_ref: 2.5,
+                    ratio: 0.03,
+                },
+                fitted: Fig211Fitted {
+                    force_N: fit.force,
+                    ratio: fit.ratio,
+                },
+            },
             SummitOrigin::Measured {
                 source,
                 surfaces,
                 combined,
-            } => json!({
-                "kind": "measured",
-                "sigma_s_over_sigma": s, "y_s_over_sigma": y,
-                "source": source,
-                "surfaces": surfaces.iter().map(|(n, h)| {
-                    let mut v = heights(h);
-                    v["surface"] = json!(n);
-                    v
-                }).collect::<Vec<_>>(),
-                "combined": heights(combined),
-                "rule": if surfaces.len() == 2 { "summit_mixture" } else { "single_surface" },
-            }),
+            } => SummitDistributionReport::Measured {
+                sigma_s_over_sigma,
+                y_s_over_sigma,
+                source: source.clone(),
+                surfaces: surfaces
+                    .iter()
+                    .map(|(n, h)| SummitHeightsReport::of(h, Some(n.clone())))
+                    .collect(),
+                combined: SummitHeightsReport::of(combined, None),
+                rule: if surfaces.len() == 2 {
+                    "summit_mixture"
+                } else {
+                    "single_surface"
+                },
+            },
+        }
+    }
+}
+
+/// How a fitted (`fig_2_11`) or measured (`measured`) summit distribution was obtained; absent
+/// for `surface` and `mccool` (docs/model-form.md, "Summit heights").
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[serde(tag = "kind")]
+pub enum SummitDistributionReport {
+    /// Fitted to Fig. 2.11's two numbers.
+    #[serde(rename = "fig_2_11")]
+    Fig211 {
+        /// σ_s/σ the model uses.
+        sigma_s_over_sigma: f64,
+        /// y_s/σ the model uses.
+        y_s_over_sigma: f64,
+        /// The nominal area of Fig. 2.11's force (a stated input), m².
+        nominal_area_m2: f64,
+        /// The two numbers fitted (h* = 3: 7.30 µN; P(3)/P(2.5) = 0.03).
+        target: Fig211Target,
+        /// What the fitted model gives at the two points.
+        fitted: Fig211Fitted,
+    },
+    /// Measured on a surface, or on an interface's two surfaces.
+    #[serde(rename = "measured")]
+    Measured {
+        /// σ_s/σ the model uses.
+        sigma_s_over_sigma: f64,
+        /// y_s/σ the model uses.
+        y_s_over_sigma: f64,
+        /// The [surface.*] or [interface.*] instance.
+        source: String,
+        /// Each surface's summits.
+        surfaces: Vec<SummitHeightsReport>,
+        /// The summits the model uses (one surface: itself).
+        combined: SummitHeightsReport,
+        /// How two surfaces' summits combine (surface::combine::combine_summit_heights).
+        #[schemars(extend("enum" = ["summit_mixture", "single_surface"]))]
+        rule: &'static str,
+    },
+}
+
+/// The two numbers of Fig. 2.11 a `fig_2_11` distribution is fitted to.
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct Fig211Target {
+    /// h/σ of the force, dimensionless.
+    pub h_star: f64,
+    /// P(h_star)·A_n, N.
+    pub force_N: f64,
+    /// h/σ of the ratio's denominator, dimensionless.
+    pub h_star_ref: f64,
+    /// P(h_star)/P(h_star_ref), dimensionless.
+    pub ratio: f64,
+}
+
+/// What the fitted model gives at Fig. 2.11's two points.
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct Fig211Fitted {
+    /// P(3σ)·A_n, N.
+    pub force_N: f64,
+    /// P(3σ)/P(2.5σ), dimensionless.
+    pub ratio: f64,
+}
+
+/// A surface's (or the combined) summit heights.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct SummitHeightsReport {
+    /// RMS of the surface heights, m (combined: in quadrature).
+    pub sigma_m: f64,
+    /// Summit density, 1/m² (combined: η1 + η2, the mixture's weights).
+    pub eta_per_m2: f64,
+    /// Mean summit height above the mean plane, m.
+    pub summit_mean_m: f64,
+    /// Standard deviation of the summit heights, m.
+    pub summit_std_m: f64,
+    /// σ_s/σ, dimensionless.
+    pub sigma_s_over_sigma: f64,
+    /// y_s/σ, dimensionless.
+    pub y_s_over_sigma: f64,
+    /// The [surface.*] instance (per-surface entries only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(with = "String")]
+    pub surface: Option<String>,
+}
+
+impl SummitHeightsReport {
+    fn of(h: &SummitHeights, surface: Option<String>) -> Self {
+        SummitHeightsReport {
+            sigma_m: h.sigma,
+            eta_per_m2: h.eta,
+            summit_mean_m: h.mean,
+            summit_std_m: h.std,
+            sigma_s_over_sigma: h.std_ratio(),
+            y_s_over_sigma: h.mean_ratio(),
+            surface,
         }
     }
 }

@@ -49,7 +49,10 @@ pub(super) fn cmd_contact(a: ContactArgs) -> Result<()> {
         contact::write_outputs(&analysis, &params, out, Some(dir), "", &json!([]))?;
     }
     if a.json {
-        println!("{}", contact::report_json(&analysis, &params));
+        println!(
+            "{}",
+            serde_json::to_string(&contact::report_json(&analysis, &params))?
+        );
         return Ok(());
     }
     let p = analysis.model.params();
@@ -115,10 +118,9 @@ pub(super) fn cmd_contact(a: ContactArgs) -> Result<()> {
     );
     if let Some(m) = &analysis.mtl {
         let l = m.landmarks();
-        let g = |k: &str| l[k].as_f64().unwrap_or(f64::NAN);
         println!(
             "MTL lubricant ({}): μ0 = {} Pa·s, κ = {} nm, U = {} m/s, A_n = {} µm²",
-            l["lubricant"].as_str().unwrap_or("?"),
+            l.lubricant,
             m.settings.limiting_viscosity,
             m.settings.kappa * 1e9,
             m.settings.speed,
@@ -126,20 +128,15 @@ pub(super) fn cmd_contact(a: ContactArgs) -> Result<()> {
         );
         println!(
             "  k_P,max = {:.4e} N/m at h/σ = {:.4}; k_Q,max = {:.2} N/m",
-            g("k_P_max_N_per_m"),
-            g("h_star_max_stiffness"),
-            g("k_Q_max_N_per_m")
+            l.k_P_max_N_per_m, l.h_star_max_stiffness, l.k_Q_max_N_per_m
         );
         println!(
             "  total stiffness there: normal {:.4e} N/m, lateral {:.4e} N/m",
-            g("k_normal_total_at_peak_N_per_m"),
-            g("k_lateral_total_at_peak_N_per_m")
+            l.k_normal_total_at_peak_N_per_m, l.k_lateral_total_at_peak_N_per_m
         );
         println!(
             "  lubricant bearing force: {:.4} mN at 3σ + 2κ, {:.4} mN at 3σ; Q_lub {:.4} µN",
-            g("P_lub_transition_end_mN"),
-            g("P_lub_onset_mN"),
-            g("Q_lub_transition_end_uN")
+            l.P_lub_transition_end_mN, l.P_lub_onset_mN, l.Q_lub_transition_end_uN
         );
     }
     Ok(())

@@ -81,7 +81,7 @@ pub(super) fn cmd_dmw(a: DmwArgs) -> Result<()> {
     }
     let report = dmw::report_json(&rec, &res, &params);
     if a.json {
-        println!("{report}");
+        println!("{}", serde_json::to_string(&report)?);
         return Ok(());
     }
     let q = &res.qa;

@@ -27,6 +27,8 @@ const fn doc<T: JsonSchema>(name: &'static str, title: &'static str) -> Document
 /// Every `--json` output with a schema, in file-name order.
 const DOCUMENTED: &[Documented] = &[
     doc::<hdi::artefacts::bulge::BulgeReport>("bulge", "hdi bulge FILE… --json"),
+    doc::<hdi::stages::contact::ContactReport>("contact", "hdi contact --json"),
+    doc::<hdi::stages::dmw::DmwReport>("dmw", "hdi dmw FILE --json"),
     doc::<Vec<super::run::InstanceStatus>>("status", "hdi status --json"),
     doc::<hdi::artefacts::surface::SurfaceReport>("surface", "hdi surface FILE --json"),
 ];

@@ -4,7 +4,7 @@
 //! takes it as its `dmw`. The record runs `margin` beyond `duration` so the leading edge's
 //! transit delay (~62 µs) stays inside it.
 
-use super::{FromConfig, StageContext, StageKind, StageOutput};
+use super::{FromConfig, Output, StageContext, StageKind};
 use crate::artefacts::dmw_tracks;
 use crate::core::config::{ConfigError, KeyError, PipelineFile};
 use crate::core::store::H5Out;
@@ -14,7 +14,8 @@ use crate::dmw::excitation_tracks::{
 use crate::error::Result;
 use crate::units::{Frequency, Length, TimeSpan};
 use serde::Deserialize;
-use serde_json::{json, Map, Value};
+use serde::Serialize;
+use serde_json::{json, Value};
 use std::path::Path;
 
 // excitation-2: the key holds the excitation as plain JSON, not a Debug string (same numbers).
@@ -68,7 +69,7 @@ pub struct ExcitationConfig {
 }
 
 /// What to generate, validated.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ExcitationKind {
     Sinusoid {
@@ -93,7 +94,7 @@ pub enum ExcitationKind {
     },
 }
 
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ExcitationParams {
     pub kind: ExcitationKind,
     pub duration: f64,
@@ -241,6 +242,31 @@ pub fn generate(p: &ExcitationParams) -> std::result::Result<Excitation, crate::
     }
 }
 
+/// The excitation stage's `result.json`.
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ExcitationResult {
+    /// The generator (`sinusoid`, `zero`, …).
+    pub kind: &'static str,
+    /// Its parameters (SI).
+    pub params: ExcitationKind,
+    pub sample_rate_Hz: f64,
+    pub samples: usize,
+    /// RMS of the displacement track, m.
+    pub rms_m: f64,
+    /// The tracks file in the entry (`dmw.h5`).
+    pub file: &'static str,
+}
+
+/// One row of the tidy excitation table.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ExcitationRow {
+    pub kind: &'static str,
+    pub duration_ms: f64,
+    pub samples: usize,
+    pub rms_nm: f64,
+}
+
 pub struct ExcitationStage {
     pub name: String,
     pub params: ExcitationParams,
@@ -331,13 +357,13 @@ fn rms(x: &[f64]) -> f64 {
 impl StageKind for ExcitationStage {
     const KIND: &'static str = "excitation";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
-    type Result = serde_json::Value;
-    type Row = serde_json::Map<String, serde_json::Value>;
+    type Result = ExcitationResult;
+    type Row = ExcitationRow;
 
     fn params(&self) -> Value {
         json!({ "excitation": self.params })
     }
-    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+    fn run(&self, ctx: &StageContext) -> Result<Output<ExcitationResult, ExcitationRow>> {
         let p = &self.params;
         let x = generate(p)?;
         write_tracks(&ctx.out_dir.join(dmw_tracks::FILE), ctx.key, p, &x)?;
@@ -356,21 +382,21 @@ impl StageKind for ExcitationStage {
             &[("D1", ms)],
         )?;
         let sigma = rms(&x.displacement);
-        let mut row = Map::new();
-        row.insert("kind".into(), json!(p.label()));
-        row.insert("duration_ms".into(), json!(p.duration * 1e3));
-        row.insert("samples".into(), json!(x.displacement.len()));
-        row.insert("rms_nm".into(), json!(sigma * 1e9));
-        Ok(StageOutput {
-            result: json!({
-                "kind": p.label(),
-                "params": p.kind,
-                "sample_rate_Hz": x.fs,
-                "samples": x.displacement.len(),
-                "rms_m": sigma,
-                "file": dmw_tracks::FILE,
+        Ok(Output {
+            result: ExcitationResult {
+                kind: p.label(),
+                params: p.kind.clone(),
+                sample_rate_Hz: x.fs,
+                samples: x.displacement.len(),
+                rms_m: sigma,
+                file: dmw_tracks::FILE,
+            },
+            summary_row: Some(ExcitationRow {
+                kind: p.label(),
+                duration_ms: p.duration * 1e3,
+                samples: x.displacement.len(),
+                rms_nm: sigma * 1e9,
             }),
-            summary_row: Some(row),
         })
     }
 }

@@ -2,7 +2,7 @@
 //! the ISBL curves per unit nominal area against the solid separation h and h/σ, and the
 //! verified force table the dynamics interpolate. HDF5 + PNG + a summary row.
 
-use super::{FromConfig, StageContext, StageKind, StageOutput};
+use super::{FromConfig, Output, StageContext, StageKind};
 pub mod mtl;
 
 use self::mtl::{MtlAnalysis, MtlKeys, MtlSettings};
@@ -21,12 +21,15 @@ use crate::units::{
     parse_quantity, Area, Dimension, Length, PerArea, Pressure, Velocity, Viscosity,
 };
 use serde::Deserialize;
-use serde_json::{json, Map, Value};
+use serde_json::{json, Value};
 use std::sync::Arc;
 
 mod output;
 pub use crate::artefacts::contact::SummitOrigin;
-pub use output::write_outputs;
+pub use output::{
+    write_outputs, ContactReport, ContactRow, ContactStageResult, ForceTableReport, IsblCurvePoint,
+    IsblDerived, LubricantColumns, PerChannel,
+};
 
 /// Bump when the numbers this stage produces change. contact-3: the key's `inputs` name the
 /// summit offset and friction law as in the results (`none`, `junction_shear`), not in their
@@ -443,11 +446,6 @@ fn summit_keys(
     })
 }
 
-/// The interface parameters as downstream stages read them (`inputs` in the result).
-fn params_json(p: &IsblParams) -> Value {
-    ContactInputs::from(p).to_json()
-}
-
 impl ContactParams {
     pub fn canonical(&self) -> Value {
         let mut inputs = ContactInputs::from(&self.params).to_json();
@@ -562,70 +560,83 @@ pub fn analyse(
     })
 }
 
-pub fn summary_row(a: &ContactAnalysis, c: &ContactParams) -> Map<String, Value> {
+/// One row of the tidy contact table (unit suffixes in the names).
+pub fn summary_row(a: &ContactAnalysis, c: &ContactParams) -> ContactRow {
     let p = a.model.params();
     let d = a.model.derived();
     let at3 = a.model.at(3.0 * p.sigma).ok();
-    let mut m = Map::new();
-    m.insert("parameter_set".into(), json!(c.parameter_set));
-    m.insert("interface".into(), json!(c.interface));
-    m.insert("sigma_nm".into(), json!(p.sigma * 1e9));
-    m.insert("R_um".into(), json!(p.summit_radius * 1e6));
-    m.insert("eta_per_um2".into(), json!(p.summit_density * 1e-12));
-    m.insert("beta".into(), json!(d.beta));
-    m.insert("E_star_GPa".into(), json!(d.composite_modulus / 1e9));
-    m.insert("omega_c_nm".into(), json!(d.critical_interference * 1e9));
-    m.insert("psi".into(), json!(d.plasticity_index));
-    m.insert(
-        "P_at_3sigma_Pa".into(),
-        json!(at3.map(|q| q.contact_pressure)),
-    );
-    m.insert("F_s_at_3sigma_Pa".into(), json!(at3.map(|q| q.adhesion)));
     let worst = a
         .table_error()
         .iter()
         .map(|e| e.max_rel)
         .fold(0.0, f64::max);
-    m.insert("table_max_rel_error".into(), json!(worst));
-    match &a.mtl {
-        Some(mtl) => m.extend(mtl.landmarks()),
-        None => {
-            m.insert("lubricant".into(), Value::Null);
-        }
+    ContactRow {
+        parameter_set: c.parameter_set.clone(),
+        interface: c.interface.clone(),
+        sigma_nm: p.sigma * 1e9,
+        R_um: p.summit_radius * 1e6,
+        eta_per_um2: p.summit_density * 1e-12,
+        beta: d.beta,
+        E_star_GPa: d.composite_modulus / 1e9,
+        omega_c_nm: d.critical_interference * 1e9,
+        psi: d.plasticity_index,
+        P_at_3sigma_Pa: at3.map(|q| q.contact_pressure),
+        F_s_at_3sigma_Pa: at3.map(|q| q.adhesion),
+        table_max_rel_error: worst,
+        lubricant: match &a.mtl {
+            Some(mtl) => LubricantColumns::Landmarks(mtl.landmarks()),
+            None => LubricantColumns::None { lubricant: None },
+        },
     }
-    m
 }
 
-pub fn report_json(a: &ContactAnalysis, c: &ContactParams) -> Value {
+/// What `hdi contact --json` prints and the stage's `result.json` holds (without its `h5`).
+pub fn report_json(a: &ContactAnalysis, c: &ContactParams) -> ContactReport {
     let d = a.model.derived();
-    let mut v = json!({
-        "parameter_set": c.parameter_set,
-        "interface": c.interface,
-        "inputs": params_json(a.model.params()),
-        // Units in the key names (docs/json.md); the curves are per unit nominal area.
-        "derived": {
-            "E_star_Pa": d.composite_modulus, "K": d.k_factor,
-            "omega_c_m": d.critical_interference, "L_c_N": d.critical_load,
-            "A_c_m2": d.critical_area, "beta": d.beta,
-            "psi": d.plasticity_index, "psi_KE": d.plasticity_index_ke,
-            "y_s_m": d.summit_offset, "sigma_s_m": d.summit_sigma,
+    ContactReport {
+        parameter_set: c.parameter_set.clone(),
+        interface: c.interface.clone(),
+        inputs: ContactInputs::from(a.model.params()),
+        derived: IsblDerived {
+            E_star_Pa: d.composite_modulus,
+            K: d.k_factor,
+            omega_c_m: d.critical_interference,
+            L_c_N: d.critical_load,
+            A_c_m2: d.critical_area,
+            beta: d.beta,
+            psi: d.plasticity_index,
+            psi_KE: d.plasticity_index_ke,
+            y_s_m: d.summit_offset,
+            sigma_s_m: d.summit_sigma,
         },
-        "curves": a.h_star.iter().zip(&a.points).map(|(x, p)| json!({
-            "h_star": x, "h_m": p.separation, "P_Pa": p.contact_pressure,
-            "k_c_Pa_per_m": p.contact_stiffness, "A_r_fraction": p.real_area_fraction,
-            "Q_Pa": p.friction_stress, "F_s_Pa": p.adhesion, "n_c_per_m2": p.contacts_per_area,
-        })).collect::<Vec<_>>(),
-        "table": {
-            "h_star_range": a.table().range(), "h_star_step": a.table().step(),
-            "max_rel_error": a.table_error().iter().map(|e| (e.name.clone(), json!(e.max_rel))).collect::<Map<_, _>>(),
+        curves: a
+            .h_star
+            .iter()
+            .zip(&a.points)
+            .map(|(x, p)| IsblCurvePoint {
+                h_star: *x,
+                h_m: p.separation,
+                P_Pa: p.contact_pressure,
+                k_c_Pa_per_m: p.contact_stiffness,
+                A_r_fraction: p.real_area_fraction,
+                Q_Pa: p.friction_stress,
+                F_s_Pa: p.adhesion,
+                n_c_per_m2: p.contacts_per_area,
+            })
+            .collect(),
+        table: ForceTableReport {
+            h_star_range: a.table().range(),
+            h_star_step: a.table().step(),
+            max_rel_error: PerChannel(
+                a.table_error()
+                    .iter()
+                    .map(|e| (e.name.clone(), e.max_rel))
+                    .collect(),
+            ),
         },
-        "mtl": a.mtl.as_ref().map(|m| m.report()),
-    });
-    // Only a fitted or measured distribution adds the block (the default result is unchanged).
-    if let (Some(o), Value::Object(m)) = (&a.summit_origin, &mut v) {
-        m.insert("summit_distribution".into(), o.to_json());
+        mtl: a.mtl.as_ref().map(|m| m.report()),
+        summit_distribution: a.summit_origin.as_ref().map(SummitOrigin::report),
     }
-    v
 }
 
 /// A `[contact.NAME]` instance.
@@ -691,8 +702,8 @@ impl FromConfig for ContactStage {
 impl StageKind for ContactStage {
     const KIND: &'static str = "contact";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
-    type Result = serde_json::Value;
-    type Row = serde_json::Map<String, serde_json::Value>;
+    type Result = ContactStageResult;
+    type Row = ContactRow;
 
     fn params(&self) -> Value {
         self.params.canonical()
@@ -708,7 +719,7 @@ impl StageKind for ContactStage {
         }
         up
     }
-    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+    fn run(&self, ctx: &StageContext) -> Result<Output<ContactStageResult, ContactRow>> {
         let mut p = self.params.params;
         if let Some(i) = &self.params.interface {
             [p.sigma, p.summit_radius, p.summit_density] = upstream_summits(&ctx.upstream, i)?;
@@ -738,12 +749,11 @@ impl StageKind for ContactStage {
             ctx.key,
             &inputs,
         )?;
-        let mut result = report_json(&a, &self.params);
-        if let Value::Object(m) = &mut result {
-            m.insert("h5".into(), json!("contact.h5"));
-        }
-        Ok(StageOutput {
-            result,
+        Ok(Output {
+            result: ContactStageResult {
+                report: report_json(&a, &self.params),
+                h5: "contact.h5",
+            },
             summary_row: Some(summary_row(&a, &self.params)),
         })
     }

@@ -14,7 +14,9 @@ use crate::core::store::H5Out;
 use crate::error::Result;
 use crate::figures;
 use crate::units::{Area, Length, Velocity, Viscosity};
-use serde_json::{json, Map, Value};
+use schemars::JsonSchema;
+use serde::Serialize;
+use serde_json::Value;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -146,15 +148,37 @@ pub fn resolve(
     Ok(Some(s))
 }
 
+/// The lubricant settings as the result and the cache key state them.
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct MtlSettingsReport {
+    /// MTL lubricant case.
+    #[schemars(extend("enum" = ["reference", "humidity_temperature", "more_bonding", "larger_gyration_radius"]))]
+    pub lubricant: &'static str,
+    /// Nominal area A_n, m².
+    pub nominal_area_m2: f64,
+    /// Sliding speed U, m/s.
+    pub speed_m_per_s: f64,
+    /// Limiting viscosity μ0, Pa·s.
+    pub mu0_Pa_s: f64,
+    /// Minimum liquid gap κ, m.
+    pub kappa_m: f64,
+}
+
 impl MtlSettings {
+    pub fn report(&self) -> MtlSettingsReport {
+        MtlSettingsReport {
+            lubricant: case_name(self.case),
+            nominal_area_m2: self.nominal_area,
+            speed_m_per_s: self.speed,
+            mu0_Pa_s: self.limiting_viscosity,
+            kappa_m: self.kappa,
+        }
+    }
+
+    /// Its part of the contact instance's cache key.
     pub fn canonical(&self) -> Value {
-        json!({
-            "lubricant": case_name(self.case),
-            "nominal_area_m2": self.nominal_area,
-            "speed_m_per_s": self.speed,
-            "mu0_Pa_s": self.limiting_viscosity,
-            "kappa_m": self.kappa,
-        })
+        serde_json::to_value(self.report()).unwrap_or(Value::Null)
     }
 
     /// The MTL law on the film of `isbl` (σ, t) with these settings' μ0, κ, U.
@@ -233,58 +257,136 @@ pub fn analyse(settings: &MtlSettings, isbl: &Arc<IsblLookup>) -> Result<MtlAnal
     })
 }
 
+/// The MTL lubricant law (with --lubricant).
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct MtlReport {
+    pub settings: MtlSettingsReport,
+    /// Landmarks of Figs 3.19–3.22 (docs/contact.md).
+    pub landmarks: MtlLandmarks,
+    /// The MTL law against separation.
+    pub curves: Vec<MtlCurvePoint>,
+}
+
+/// Landmarks of the reference discussion (Figs 3.19–3.22; docs/contact.md).
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct MtlLandmarks {
+    /// MTL lubricant case.
+    #[schemars(extend("enum" = ["reference", "humidity_temperature", "more_bonding", "larger_gyration_radius"]))]
+    pub lubricant: &'static str,
+    /// h/σ of the maximum lubricant stiffness (3σ + 2κ), dimensionless.
+    pub h_star_max_stiffness: f64,
+    /// Maximum lubricant normal stiffness, N/m.
+    pub k_P_max_N_per_m: f64,
+    /// Maximum lubricant shear stiffness, N/m.
+    pub k_Q_max_N_per_m: f64,
+    /// Total normal stiffness there, N/m.
+    pub k_normal_total_at_peak_N_per_m: f64,
+    /// Total lateral stiffness there, N/m.
+    pub k_lateral_total_at_peak_N_per_m: f64,
+    /// Lubricant bearing force at 3σ + 2κ, mN.
+    pub P_lub_transition_end_mN: f64,
+    /// Lubricant bearing force at 3σ, mN.
+    pub P_lub_onset_mN: f64,
+    /// Lubricant friction at 3σ + 2κ, µN.
+    pub Q_lub_transition_end_uN: f64,
+}
+
+impl MtlLandmarks {
+    /// The numbers by name (`contact/mtl/landmarks` in contact.h5), in key order.
+    fn scalars(&self) -> [(&'static str, f64); 8] {
+        [
+            ("h_star_max_stiffness", self.h_star_max_stiffness),
+            ("k_P_max_N_per_m", self.k_P_max_N_per_m),
+            ("k_Q_max_N_per_m", self.k_Q_max_N_per_m),
+            (
+                "k_normal_total_at_peak_N_per_m",
+                self.k_normal_total_at_peak_N_per_m,
+            ),
+            (
+                "k_lateral_total_at_peak_N_per_m",
+                self.k_lateral_total_at_peak_N_per_m,
+            ),
+            ("P_lub_transition_end_mN", self.P_lub_transition_end_mN),
+            ("P_lub_onset_mN", self.P_lub_onset_mN),
+            ("Q_lub_transition_end_uN", self.Q_lub_transition_end_uN),
+        ]
+    }
+}
+
+/// One point of the MTL curves.
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct MtlCurvePoint {
+    /// Mean-plane separation h, m.
+    pub h_m: f64,
+    /// h/σ, dimensionless.
+    pub h_star: f64,
+    /// Penetration ω = 3σ − h, m.
+    pub penetration_m: f64,
+    /// Lubricant normal force, N.
+    pub P_lub_N: f64,
+    /// Lubricant friction force, N.
+    pub Q_lub_N: f64,
+    /// Total normal force, N.
+    pub P_total_N: f64,
+    /// Total friction force, N.
+    pub Q_total_N: f64,
+    /// Total normal stiffness, N/m.
+    pub k_normal_total_N_per_m: f64,
+    /// Total lateral stiffness, N/m.
+    pub k_lateral_total_N_per_m: f64,
+    /// Adhesion force over the nominal area, N.
+    pub F_s_N: f64,
+}
+
 impl MtlAnalysis {
     /// Landmarks of the reference discussion (Figs 3.19–3.22; docs/contact.md): maximum lubricant
     /// stiffnesses, the total stiffnesses at `3σ + 2κ` and the lubricant bearing force there
     /// and at `3σ`.
-    pub fn landmarks(&self) -> Map<String, Value> {
+    pub fn landmarks(&self) -> MtlLandmarks {
         let m = self.interface.model();
         let end = m.transition_end();
         // Just outside the transition, where the dissertation quotes the stiffnesses ("the
         // lubricant dominates the normal, the solid the lateral stiffness"): k_c + k_P,max.
         let peak = self.interface.evaluate(end * (1.0 + 1e-12)).total;
-        let mut out = Map::new();
-        out.insert("lubricant".into(), json!(case_name(self.settings.case)));
-        out.insert("h_star_max_stiffness".into(), json!(end / m.film().sigma));
-        out.insert("k_P_max_N_per_m".into(), json!(m.max_normal_stiffness()));
-        out.insert("k_Q_max_N_per_m".into(), json!(m.max_shear_stiffness()));
-        out.insert(
-            "k_normal_total_at_peak_N_per_m".into(),
-            json!(peak.normal_stiffness),
-        );
-        out.insert(
-            "k_lateral_total_at_peak_N_per_m".into(),
-            json!(peak.friction_stiffness),
-        );
-        out.insert(
-            "P_lub_transition_end_mN".into(),
-            json!(self.interface.lubricant(end).normal * 1e3),
-        );
-        out.insert(
-            "P_lub_onset_mN".into(),
-            json!(self.interface.held_lubricant_forces().normal * 1e3),
-        );
-        out.insert(
-            "Q_lub_transition_end_uN".into(),
-            json!(self.interface.lubricant(end).friction * 1e6),
-        );
-        out
+        MtlLandmarks {
+            lubricant: case_name(self.settings.case),
+            h_star_max_stiffness: end / m.film().sigma,
+            k_P_max_N_per_m: m.max_normal_stiffness(),
+            k_Q_max_N_per_m: m.max_shear_stiffness(),
+            k_normal_total_at_peak_N_per_m: peak.normal_stiffness,
+            k_lateral_total_at_peak_N_per_m: peak.friction_stiffness,
+            P_lub_transition_end_mN: self.interface.lubricant(end).normal * 1e3,
+            P_lub_onset_mN: self.interface.held_lubricant_forces().normal * 1e3,
+            Q_lub_transition_end_uN: self.interface.lubricant(end).friction * 1e6,
+        }
     }
 
-    pub fn report(&self) -> Value {
+    pub fn report(&self) -> MtlReport {
         let sigma = self.interface.model().film().sigma;
-        json!({
-            "settings": self.settings.canonical(),
-            "landmarks": self.landmarks(),
-            "curves": self.h.iter().zip(&self.response).zip(&self.adhesion).map(|((h, r), fs)| json!({
-                "h_m": h, "h_star": h / sigma, "penetration_m": 3.0 * sigma - h,
-                "P_lub_N": r.lubricant.normal, "Q_lub_N": r.lubricant.friction,
-                "P_total_N": r.total.normal, "Q_total_N": r.total.friction,
-                "k_normal_total_N_per_m": r.total.normal_stiffness,
-                "k_lateral_total_N_per_m": r.total.friction_stiffness,
-                "F_s_N": fs,
-            })).collect::<Vec<_>>(),
-        })
+        MtlReport {
+            settings: self.settings.report(),
+            landmarks: self.landmarks(),
+            curves: self
+                .h
+                .iter()
+                .zip(&self.response)
+                .zip(&self.adhesion)
+                .map(|((h, r), fs)| MtlCurvePoint {
+                    h_m: *h,
+                    h_star: h / sigma,
+                    penetration_m: 3.0 * sigma - h,
+                    P_lub_N: r.lubricant.normal,
+                    Q_lub_N: r.lubricant.friction,
+                    P_total_N: r.total.normal,
+                    Q_total_N: r.total.friction,
+                    k_normal_total_N_per_m: r.total.normal_stiffness,
+                    k_lateral_total_N_per_m: r.total.friction_stiffness,
+                    F_s_N: *fs,
+                })
+                .collect(),
+        }
     }
 
     pub fn write_hdf5(&self, out: &H5Out) -> Result<()> {
@@ -368,9 +470,10 @@ impl MtlAnalysis {
             )?;
         }
         let a = out.group("contact/mtl/landmarks", None)?;
-        for (k, v) in self.landmarks() {
-            if let Some(x) = v.as_f64() {
-                out.write_scalar(&a, &k, x, "see name", "MTL landmark (docs/contact.md)")?;
+        for (k, x) in self.landmarks().scalars() {
+            // A non-finite landmark is null in the JSON and not written here.
+            if x.is_finite() {
+                out.write_scalar(&a, k, x, "see name", "MTL landmark (docs/contact.md)")?;
             }
         }
         Ok(())
@@ -507,12 +610,11 @@ mod tests {
             .unwrap();
         let a = analyse(&s, &lookup()).unwrap();
         let l = a.landmarks();
-        let get = |k: &str| l[k].as_f64().unwrap();
-        assert!((get("k_P_max_N_per_m") / 1.2690e7 - 1.0).abs() < 1e-4);
-        assert!((get("h_star_max_stiffness") - 3.7317).abs() < 1e-4);
-        assert!((get("P_lub_transition_end_mN") - 3.807).abs() < 1e-3);
-        assert!((get("Q_lub_transition_end_uN") - 0.088).abs() < 1e-3);
-        let onset = get("P_lub_onset_mN");
+        assert!((l.k_P_max_N_per_m / 1.2690e7 - 1.0).abs() < 1e-4);
+        assert!((l.h_star_max_stiffness - 3.7317).abs() < 1e-4);
+        assert!((l.P_lub_transition_end_mN - 3.807).abs() < 1e-3);
+        assert!((l.Q_lub_transition_end_uN - 0.088).abs() < 1e-3);
+        let onset = l.P_lub_onset_mN;
         assert!(onset > 7.614 && onset < 7.614 * 1.05, "{onset}");
         // Fig. 3.22 ordering at 3σ (penetration 0): case 2 < 1 < 4 < 3.
         let i =

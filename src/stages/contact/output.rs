@@ -1,13 +1,174 @@
 //! The contact stage's outputs: `contact.h5` (the ISBL curves, derived quantities, summit
 //! origin and force table; docs/hdf5.md) and the PNGs.
 
-use super::{params_json, ContactAnalysis, ContactParams, SummitOrigin};
+use super::mtl::{MtlLandmarks, MtlReport};
+use super::{ContactAnalysis, ContactParams, SummitOrigin};
+use crate::artefacts::contact::{ContactInputs, SummitDistributionReport};
 use crate::contact::isbl::{surface_energy_at, SurfaceEnergy};
 use crate::core::store::H5Out;
 use crate::error::Result;
 use crate::figures;
+use schemars::{json_schema, JsonSchema, Schema, SchemaGenerator};
+use serde::ser::SerializeMap;
+use serde::{Serialize, Serializer};
 use serde_json::Value;
+use std::borrow::Cow;
 use std::path::Path;
+
+/// ISBL contact curves of one interface and, with --lubricant, the MTL law (docs/contact.md);
+/// SI units named in the keys. Schema version 1 (docs/json.md): existing keys keep their
+/// name, unit and type; renaming or removing one makes version 2.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct ContactReport {
+    /// Dissertation parameter set the interface starts from.
+    #[schemars(extend("enum" = ["initial_2dof", "improved_2dof", "three_dof", "mtl_table_3_2"]))]
+    pub parameter_set: String,
+    /// Upstream interface instance (pipeline only); null for `hdi contact`.
+    pub interface: Option<String>,
+    /// The ISBL parameters used (also `inputs` in the contact stage's result.json).
+    pub inputs: ContactInputs,
+    /// Derived interface quantities (docs/contact.md).
+    pub derived: IsblDerived,
+    /// ISBL curves on the h/σ grid.
+    pub curves: Vec<IsblCurvePoint>,
+    /// The verified force table the slider cases interpolate.
+    pub table: ForceTableReport,
+    /// The MTL lubricant law (with --lubricant).
+    pub mtl: Option<MtlReport>,
+    /// How a fitted (`fig_2_11`) or measured (`measured`) summit distribution was obtained;
+    /// absent for `surface` and `mccool` (docs/model-form.md, "Summit heights").
+    // Only a fitted or measured distribution adds the block (the default result is unchanged).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(with = "SummitDistributionReport")]
+    pub summit_distribution: Option<SummitDistributionReport>,
+}
+
+/// The contact stage's `result.json`: the report and where the curves and table are.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ContactStageResult {
+    #[serde(flatten)]
+    pub report: ContactReport,
+    /// `contact.h5` in the entry.
+    pub h5: &'static str,
+}
+
+/// Derived interface quantities (docs/contact.md).
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct IsblDerived {
+    /// Composite modulus E*, Pa.
+    pub E_star_Pa: f64,
+    /// Hardness coefficient K, dimensionless.
+    pub K: f64,
+    /// Critical interference ω_c, m.
+    pub omega_c_m: f64,
+    /// Critical load L_c, N.
+    pub L_c_N: f64,
+    /// Critical contact area A_c, m².
+    pub A_c_m2: f64,
+    /// β = σRη, dimensionless.
+    pub beta: f64,
+    /// Plasticity index ψ, dimensionless.
+    pub psi: f64,
+    /// Plasticity index of the Kogut–Etsion model, dimensionless.
+    pub psi_KE: f64,
+    /// Summit-height offset y_s (McCool; 0 without), m.
+    pub y_s_m: f64,
+    /// Summit-height standard deviation, m.
+    pub sigma_s_m: f64,
+}
+
+/// One point of the ISBL curves (per unit nominal area).
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct IsblCurvePoint {
+    /// Separation h/σ, dimensionless.
+    pub h_star: f64,
+    /// Solid separation h, m.
+    pub h_m: f64,
+    /// Contact force per unit nominal area, Pa.
+    pub P_Pa: f64,
+    /// Contact stiffness −dP/dh per unit nominal area, Pa/m.
+    pub k_c_Pa_per_m: f64,
+    /// Real-to-nominal area ratio A_r/A_n, dimensionless.
+    pub A_r_fraction: f64,
+    /// Friction force per unit nominal area, Pa.
+    pub Q_Pa: f64,
+    /// Adhesion force per unit nominal area, Pa.
+    pub F_s_Pa: f64,
+    /// Contacting summits per unit nominal area, 1/m².
+    pub n_c_per_m2: f64,
+}
+
+/// The verified force table the slider cases interpolate.
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct ForceTableReport {
+    /// Force-table range [min, max] of h/σ, dimensionless.
+    pub h_star_range: (f64, f64),
+    /// Force-table step in h/σ, dimensionless.
+    pub h_star_step: f64,
+    /// Largest relative error of the interpolated table against the direct ISBL integrals,
+    /// per quantity.
+    pub max_rel_error: PerChannel,
+}
+
+/// A number per force-table channel, as a JSON object in the table's channel order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PerChannel(pub Vec<(String, f64)>);
+
+impl Serialize for PerChannel {
+    fn serialize<S: Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
+        let mut m = serializer.serialize_map(Some(self.0.len()))?;
+        for (name, v) in &self.0 {
+            m.serialize_entry(name, v)?;
+        }
+        m.end()
+    }
+}
+
+impl JsonSchema for PerChannel {
+    fn schema_name() -> Cow<'static, str> {
+        "PerChannel".into()
+    }
+    fn json_schema(_: &mut SchemaGenerator) -> Schema {
+        json_schema!({
+            "type": "object",
+            "additionalProperties": {
+                "type": "number",
+                "description": "Relative error, dimensionless."
+            },
+            "propertyNames": { "enum": ["P", "k_c", "A_r", "Q", "F_s"] }
+        })
+    }
+}
+
+/// One row of the tidy contact table (unit suffixes in the names).
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ContactRow {
+    pub parameter_set: String,
+    pub interface: Option<String>,
+    pub sigma_nm: f64,
+    pub R_um: f64,
+    pub eta_per_um2: f64,
+    pub beta: f64,
+    pub E_star_GPa: f64,
+    pub omega_c_nm: f64,
+    pub psi: f64,
+    pub P_at_3sigma_Pa: Option<f64>,
+    pub F_s_at_3sigma_Pa: Option<f64>,
+    pub table_max_rel_error: f64,
+    #[serde(flatten)]
+    pub lubricant: LubricantColumns,
+}
+
+/// The row's lubricant columns: the MTL landmarks, or `lubricant` null without one.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum LubricantColumns {
+    Landmarks(MtlLandmarks),
+    None { lubricant: Option<&'static str> },
+}
 
 pub fn write_outputs(
     a: &ContactAnalysis,
@@ -27,7 +188,8 @@ pub fn write_outputs(
         write_summit_origin(&out, o)?;
     }
     write_table(&out, a)?;
-    out.write_string(&entry, "inputs", &params_json(a.model.params()).to_string())?;
+    let isbl_inputs = ContactInputs::from(a.model.params()).to_json();
+    out.write_string(&entry, "inputs", &isbl_inputs.to_string())?;
     if let Some(mtl) = &a.mtl {
         mtl.write_hdf5(&out)?;
     }

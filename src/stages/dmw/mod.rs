@@ -2,7 +2,7 @@
 //! the three tracks, as HDF5 + PNG + a summary row. The same function serves the pipeline and
 //! `hdi dmw FILE`.
 
-use super::{FromConfig, StageContext, StageKind, StageOutput};
+use super::{FromConfig, Output, StageContext, StageKind};
 use crate::artefacts::dmw_tracks;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::dmw::average::AverageMode;
@@ -16,13 +16,15 @@ use crate::error::Result;
 use crate::signal::integrate::Detrend;
 use crate::units::{Frequency, Sensitivity, TimeSpan};
 use serde::Deserialize;
-use serde_json::{json, Map, Value};
+use serde_json::{json, Value};
 use std::path::PathBuf;
 
 pub use crate::artefacts::ldv::{write_ldv, write_ldv_hdf5_counts};
 
 mod output;
-pub use output::write_outputs;
+pub use output::{
+    write_outputs, DmwReport, DmwRow, DmwStageResult, SpectralLine, TrackStd, TRACKS_NOTE,
+};
 
 /// Bump when the numbers this stage produces change.
 pub const MODEL_VERSION: &str = "dmw-2";
@@ -451,102 +453,96 @@ pub fn analyse(p: &DmwParams) -> Result<(LdvRecord, DmwResult)> {
     Ok((rec, res))
 }
 
+/// `Some(v)` for a finite value, `None` (JSON `null`) for what the record does not define.
+fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
 /// The QA block and statistics, as printed by `hdi dmw --json` (and the stage's `result.json`):
 /// SI units named in the keys, `null` for what the record does not define (no index channel,
 /// too few revolutions), documented in `docs/json.md` and `docs/schemas/dmw.json`.
-pub fn report_json(rec: &LdvRecord, r: &DmwResult, p: &DmwParams) -> Value {
+pub fn report_json(rec: &LdvRecord, r: &DmwResult, p: &DmwParams) -> DmwReport {
     let q = &r.qa;
     let s = &r.stats;
-    let finite = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
-    let peaks: Vec<Value> = s
-        .peaks
-        .iter()
-        .map(
-            |pk| json!({"frequency_Hz": finite(pk.frequency), "amplitude_m": finite(pk.amplitude)}),
-        )
-        .collect();
-    json!({
-        "file": p.file.display().to_string(),
-        "format": rec.format,
-        "layout": q.layout,
-        "segmentation": q.segmentation,
-        "sample_rate_Hz": r.sample_rate,
-        "record_sample_rate_Hz": rec.sample_rate,
-        "n_samples": r.tracks.d[0].len(),
-        "duration_s": r.tracks.d[0].len() as f64 / r.sample_rate,
-        "velocity_unit": rec.velocity_unit.symbol(),
-        "sensitivity_m_per_s_per_V": p.chain.sensitivity,
-        "n_triggers": q.n_triggers,
-        "n_avg": q.n_avg,
-        "n_dropped": q.n_dropped,
-        "trigger_level_V": finite(q.trigger_level),
-        "trigger_polarity": q.trigger_polarity,
-        "duty_cycle": finite(q.duty_cycle),
-        "n_debounced": q.n_debounced,
-        "missing_pulse_times_s": q.missing_pulses.iter().map(|m| finite(m.time)).collect::<Vec<_>>(),
-        "extra_pulse_times_s": q.extra_pulses.iter().map(|&t| finite(t)).collect::<Vec<_>>(),
-        "n_dropped_missing_pulse": q.n_gap_dropped,
-        "period_mean_s": finite(q.period_mean),
-        "period_relstd": finite(q.period_relstd),
-        "rpm_measured": finite(60.0 / q.period_mean),
-        "phase_wander_275kHz_rad": finite(q.phase_wander_275khz),
-        "noise_floor_m_per_s": finite(q.noise_floor),
-        "residual_std_m_per_s": finite(q.residual_std),
-        "velocity_offset_m_per_s": finite(q.velocity_offset),
-        "drift_m_per_s": finite(q.drift),
-        "integration_gain_275kHz": finite(q.integration_gain_275khz),
-        "edge_samples": q.edge_samples,
-        "dmw_std_m": finite(s.std),
-        "dmw_peak_to_peak_m": finite(s.peak_to_peak),
-        "velocity_std_m_per_s": finite(s.velocity_std),
-        "dominant_frequency_Hz": s.peaks.first().map(|p| finite(p.frequency)),
-        "peaks": peaks,
-        "tracks": {
-            "D1_std_m": finite(s.std), "D2_std_m": finite(s.std), "D3_std_m": finite(s.std),
-            "note": "D2 and D3 are time-flipped copies of D1: same std and amplitude spectrum",
+    DmwReport {
+        file: p.file.display().to_string(),
+        format: rec.format,
+        layout: q.layout,
+        segmentation: q.segmentation,
+        sample_rate_Hz: r.sample_rate,
+        record_sample_rate_Hz: rec.sample_rate,
+        n_samples: r.tracks.d[0].len(),
+        duration_s: r.tracks.d[0].len() as f64 / r.sample_rate,
+        velocity_unit: rec.velocity_unit.symbol(),
+        sensitivity_m_per_s_per_V: p.chain.sensitivity,
+        n_triggers: q.n_triggers,
+        n_avg: q.n_avg,
+        n_dropped: q.n_dropped,
+        trigger_level_V: finite(q.trigger_level),
+        trigger_polarity: q.trigger_polarity,
+        duty_cycle: finite(q.duty_cycle),
+        n_debounced: q.n_debounced,
+        missing_pulse_times_s: q.missing_pulses.iter().map(|m| finite(m.time)).collect(),
+        extra_pulse_times_s: q.extra_pulses.iter().map(|&t| finite(t)).collect(),
+        n_dropped_missing_pulse: q.n_gap_dropped,
+        period_mean_s: finite(q.period_mean),
+        period_relstd: finite(q.period_relstd),
+        rpm_measured: finite(60.0 / q.period_mean),
+        phase_wander_275kHz_rad: finite(q.phase_wander_275khz),
+        noise_floor_m_per_s: finite(q.noise_floor),
+        residual_std_m_per_s: finite(q.residual_std),
+        velocity_offset_m_per_s: finite(q.velocity_offset),
+        drift_m_per_s: finite(q.drift),
+        integration_gain_275kHz: finite(q.integration_gain_275khz),
+        edge_samples: q.edge_samples,
+        dmw_std_m: finite(s.std),
+        dmw_peak_to_peak_m: finite(s.peak_to_peak),
+        velocity_std_m_per_s: finite(s.velocity_std),
+        dominant_frequency_Hz: s.peaks.first().and_then(|p| finite(p.frequency)),
+        peaks: s
+            .peaks
+            .iter()
+            .map(|pk| SpectralLine {
+                frequency_Hz: finite(pk.frequency),
+                amplitude_m: finite(pk.amplitude),
+            })
+            .collect(),
+        tracks: TrackStd {
+            D1_std_m: finite(s.std),
+            D2_std_m: finite(s.std),
+            D3_std_m: finite(s.std),
+            note: TRACKS_NOTE,
         },
-        "chain_order": p.chain.order.to_string(),
-        "averaging": p.chain.averaging.to_string(),
-        "warnings": q.warnings,
-    })
+        chain_order: p.chain.order.to_string(),
+        averaging: p.chain.averaging.to_string(),
+        warnings: q.warnings.clone(),
+    }
 }
 
 /// One row of the tidy DMW table (unit suffixes in the names).
-pub fn summary_row(rec: &LdvRecord, r: &DmwResult, p: &DmwParams) -> Map<String, Value> {
+pub fn summary_row(rec: &LdvRecord, r: &DmwResult, p: &DmwParams) -> DmwRow {
     let q = &r.qa;
     let s = &r.stats;
-    let mut m = Map::new();
-    let mut put = |k: &str, v: Value| {
-        m.insert(k.into(), v);
-    };
-    put("file", json!(p.file.display().to_string()));
-    put("format", json!(rec.format));
-    put("n_avg", json!(q.n_avg as i64));
-    put("n_missing_pulses", json!(q.missing_pulses.len() as i64));
-    put("n_extra_pulses", json!(q.extra_pulses.len() as i64));
-    put("period_mean_ms", json!(q.period_mean * 1e3));
-    put("period_relstd", json!(q.period_relstd));
-    put("noise_floor_um_s", json!(q.noise_floor * 1e6));
-    put("dmw_std_nm", json!(s.std * 1e9));
-    put("dmw_peak_to_peak_nm", json!(s.peak_to_peak * 1e9));
-    put("velocity_std_mm_s", json!(s.velocity_std * 1e3));
-    put(
-        "dominant_frequency_kHz",
-        json!(s.peaks.first().map(|p| p.frequency / 1e3)),
-    );
-    put(
-        "dominant_amplitude_nm",
-        json!(s.peaks.first().map(|p| p.amplitude * 1e9)),
-    );
-    put(
-        "highpass_kHz",
-        json!(p.chain.highpass.map(|b| b.cutoff / 1e3)),
-    );
-    put("averaging", json!(p.chain.averaging.to_string()));
-    put("chain_order", json!(p.chain.order.to_string()));
-    put("n_samples", json!(r.tracks.d[0].len() as i64));
-    put("sample_rate_MHz", json!(r.sample_rate / 1e6));
-    m
+    DmwRow {
+        file: p.file.display().to_string(),
+        format: rec.format,
+        n_avg: q.n_avg as i64,
+        n_missing_pulses: q.missing_pulses.len() as i64,
+        n_extra_pulses: q.extra_pulses.len() as i64,
+        period_mean_ms: q.period_mean * 1e3,
+        period_relstd: q.period_relstd,
+        noise_floor_um_s: q.noise_floor * 1e6,
+        dmw_std_nm: s.std * 1e9,
+        dmw_peak_to_peak_nm: s.peak_to_peak * 1e9,
+        velocity_std_mm_s: s.velocity_std * 1e3,
+        dominant_frequency_kHz: s.peaks.first().map(|p| p.frequency / 1e3),
+        dominant_amplitude_nm: s.peaks.first().map(|p| p.amplitude * 1e9),
+        highpass_kHz: p.chain.highpass.map(|b| b.cutoff / 1e3),
+        averaging: p.chain.averaging.to_string(),
+        chain_order: p.chain.order.to_string(),
+        n_samples: r.tracks.d[0].len() as i64,
+        sample_rate_MHz: r.sample_rate / 1e6,
+    }
 }
 
 /// A `[dmw.NAME]` instance.
@@ -575,8 +571,8 @@ impl FromConfig for DmwStage {
 impl StageKind for DmwStage {
     const KIND: &'static str = "dmw";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
-    type Result = serde_json::Value;
-    type Row = serde_json::Map<String, serde_json::Value>;
+    type Result = DmwStageResult;
+    type Row = DmwRow;
 
     fn params(&self) -> Value {
         self.params.canonical()
@@ -584,7 +580,7 @@ impl StageKind for DmwStage {
     fn inputs(&self) -> Vec<(String, PathBuf)> {
         vec![("file".into(), self.params.file.clone())]
     }
-    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+    fn run(&self, ctx: &StageContext) -> Result<Output<DmwStageResult, DmwRow>> {
         ctx.progress.set_message("reading, averaging, filtering");
         let (rec, res) = analyse(&self.params)?;
         ctx.progress.set_message("writing HDF5 and plots");
@@ -598,13 +594,11 @@ impl StageKind for DmwStage {
             ctx.key,
             &inputs,
         )?;
-        let mut result = report_json(&rec, &res, &self.params);
-        if let Value::Object(m) = &mut result {
-            // Where the simulations find the tracks.
-            m.insert("h5".into(), json!(dmw_tracks::FILE));
-        }
-        Ok(StageOutput {
-            result,
+        Ok(Output {
+            result: DmwStageResult {
+                report: report_json(&rec, &res, &self.params),
+                h5: dmw_tracks::FILE,
+            },
             summary_row: Some(summary_row(&rec, &res, &self.params)),
         })
     }

@@ -8,8 +8,177 @@ use crate::dmw::chain::DmwResult;
 use crate::dmw::{LdvRecord, VelocityUnit};
 use crate::error::Result;
 use crate::figures;
-use serde_json::{json, Map, Value};
+use schemars::JsonSchema;
+use serde::Serialize;
+use serde_json::{Map, Value};
 use std::path::Path;
+
+/// QA and statistics of one LDV record's disk-waviness (DMW) tracks (docs/dmw.md); SI units
+/// named in the keys; null where the record does not define a value (no index channel, too
+/// few revolutions). Schema version 1 (docs/json.md): existing keys keep their name, unit and
+/// type; renaming or removing one makes version 2.
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct DmwReport {
+    /// The record as given.
+    pub file: String,
+    /// Detected format (e.g. `hdf5`, `csv`, `parquet`, `arrow`, `uff58`, `npy`, `wav`).
+    pub format: &'static str,
+    /// Record layout (docs/dmw.md).
+    #[schemars(extend("enum" = ["continuous", "segments", "averaged"]))]
+    pub layout: &'static str,
+    /// How revolutions were found: `index channel`, `spindle speed`, `pre-segmented` or
+    /// `pre-averaged`.
+    pub segmentation: &'static str,
+    /// Sample rate of the output tracks, Hz.
+    pub sample_rate_Hz: f64,
+    /// Sample rate of the record, Hz.
+    pub record_sample_rate_Hz: f64,
+    /// Samples per output track.
+    pub n_samples: usize,
+    /// Track duration, s.
+    pub duration_s: f64,
+    /// Unit of the velocity channel in the record.
+    #[schemars(extend("enum" = ["V", "m/s"]))]
+    pub velocity_unit: &'static str,
+    /// Decoder sensitivity, m/s per V (used for a channel in V).
+    pub sensitivity_m_per_s_per_V: f64,
+    /// Index triggers found.
+    pub n_triggers: usize,
+    /// Revolutions averaged.
+    pub n_avg: usize,
+    /// Revolutions not averaged (incomplete).
+    pub n_dropped: usize,
+    /// Index trigger level, V; null without an index channel. `null` when not defined for
+    /// this input (docs/json.md).
+    pub trigger_level_V: Option<f64>,
+    /// Index edge used; empty without an index channel.
+    #[schemars(extend("enum" = ["rising", "falling", ""]))]
+    pub trigger_polarity: &'static str,
+    /// Fraction of time the index channel is in the pulse state, 0–1. `null` when not defined
+    /// for this input (docs/json.md).
+    pub duty_cycle: Option<f64>,
+    /// Index edges merged by debouncing.
+    pub n_debounced: usize,
+    /// Expected times of index pulses the channel did not show, s.
+    pub missing_pulse_times_s: Vec<Option<f64>>,
+    /// Times of index pulses off the period grid (ignored), s.
+    pub extra_pulse_times_s: Vec<Option<f64>>,
+    /// Revolutions dropped because a missing pulse falls in them.
+    pub n_dropped_missing_pulse: usize,
+    /// Mean revolution period, s. `null` when not defined for this input (docs/json.md).
+    pub period_mean_s: Option<f64>,
+    /// Relative standard deviation of the period, dimensionless. `null` when not defined for
+    /// this input (docs/json.md).
+    pub period_relstd: Option<f64>,
+    /// Spindle speed from the mean period, revolutions per minute. `null` when not defined for
+    /// this input (docs/json.md).
+    pub rpm_measured: Option<f64>,
+    /// Phase error of a 275 kHz line at the segment end from the period wander, rad. `null`
+    /// when not defined for this input (docs/json.md).
+    pub phase_wander_275kHz_rad: Option<f64>,
+    /// Non-repeating velocity left in the average, m/s. `null` when not defined for this
+    /// input (docs/json.md).
+    pub noise_floor_m_per_s: Option<f64>,
+    /// Non-repeating velocity per revolution, m/s. `null` when not defined for this input
+    /// (docs/json.md).
+    pub residual_std_m_per_s: Option<f64>,
+    /// Velocity offset removed before integration, m/s. `null` when not defined for this
+    /// input (docs/json.md).
+    pub velocity_offset_m_per_s: Option<f64>,
+    /// Slope of the displacement line removed after integration, m/s. `null` when not defined
+    /// for this input (docs/json.md).
+    pub drift_m_per_s: Option<f64>,
+    /// Trapezoid integration gain at 275 kHz relative to ideal, dimensionless. `null` when not
+    /// defined for this input (docs/json.md).
+    pub integration_gain_275kHz: Option<f64>,
+    /// Samples at each end inside the filter transients (excluded from the statistics).
+    pub edge_samples: usize,
+    /// DMW standard deviation, m. `null` when not defined for this input (docs/json.md).
+    pub dmw_std_m: Option<f64>,
+    /// DMW peak-to-peak, m. `null` when not defined for this input (docs/json.md).
+    pub dmw_peak_to_peak_m: Option<f64>,
+    /// Standard deviation of the averaged velocity, m/s. `null` when not defined for this
+    /// input (docs/json.md).
+    pub velocity_std_m_per_s: Option<f64>,
+    /// Frequency of the largest spectral line, Hz; null without lines. `null` when not
+    /// defined for this input (docs/json.md).
+    pub dominant_frequency_Hz: Option<f64>,
+    /// Largest spectral lines of D1 (Hann window, interpolated), largest first.
+    pub peaks: Vec<SpectralLine>,
+    /// Per-track statistics.
+    pub tracks: TrackStd,
+    /// Processing order.
+    #[schemars(extend("enum" = ["filter_then_integrate", "integrate_then_filter"]))]
+    pub chain_order: String,
+    /// Revolution averaging.
+    #[schemars(extend("enum" = ["angular", "subsample", "integer"]))]
+    pub averaging: String,
+    /// Warnings in words.
+    pub warnings: Vec<String>,
+}
+
+/// The DMW stage's `result.json`: the report and where the tracks are.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DmwStageResult {
+    #[serde(flatten)]
+    pub report: DmwReport,
+    /// Where the simulations find the tracks (`dmw.h5` in the entry).
+    pub h5: &'static str,
+}
+
+/// One spectral line of D1.
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct SpectralLine {
+    /// Line frequency, Hz. `null` when not defined for this input (docs/json.md).
+    pub frequency_Hz: Option<f64>,
+    /// Line amplitude (displacement), m. `null` when not defined for this input
+    /// (docs/json.md).
+    pub amplitude_m: Option<f64>,
+}
+
+/// How D2 and D3 relate to D1 (`tracks.note`).
+pub const TRACKS_NOTE: &str =
+    "D2 and D3 are time-flipped copies of D1: same std and amplitude spectrum";
+
+/// Per-track statistics.
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+pub struct TrackStd {
+    /// Std of track D1, m. `null` when not defined for this input (docs/json.md).
+    pub D1_std_m: Option<f64>,
+    /// Std of track D2, m. `null` when not defined for this input (docs/json.md).
+    pub D2_std_m: Option<f64>,
+    /// Std of track D3, m. `null` when not defined for this input (docs/json.md).
+    pub D3_std_m: Option<f64>,
+    /// How D2 and D3 relate to D1.
+    pub note: &'static str,
+}
+
+/// One row of the tidy DMW table (unit suffixes in the names).
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DmwRow {
+    pub file: String,
+    pub format: &'static str,
+    pub n_avg: i64,
+    pub n_missing_pulses: i64,
+    pub n_extra_pulses: i64,
+    pub period_mean_ms: f64,
+    pub period_relstd: f64,
+    pub noise_floor_um_s: f64,
+    pub dmw_std_nm: f64,
+    pub dmw_peak_to_peak_nm: f64,
+    pub velocity_std_mm_s: f64,
+    pub dominant_frequency_kHz: Option<f64>,
+    pub dominant_amplitude_nm: Option<f64>,
+    pub highpass_kHz: Option<f64>,
+    pub averaging: String,
+    pub chain_order: String,
+    pub n_samples: i64,
+    pub sample_rate_MHz: f64,
+}
 
 /// HDF5 (layout in docs/hdf5.md) and PNGs into `plot_dir`.
 pub fn write_outputs(
@@ -279,7 +448,7 @@ pub(super) fn write_process(
     let prov: Map<String, Value> = rec
         .provenance
         .iter()
-        .map(|(k, v)| (k.clone(), json!(v)))
+        .map(|(k, v)| (k.clone(), Value::from(v.as_str())))
         .collect();
     out.write_string(&g, "source", &Value::Object(prov).to_string())?;
     let sos = |s: &[[f64; 6]]| -> ndarray::Array2<f64> {
