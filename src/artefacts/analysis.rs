@@ -420,7 +420,10 @@ mod tests {
         let one = Amplitudes::new("1", f64::NAN);
         let text = serde_json::to_string(&one).unwrap();
         assert_eq!(text, r#"{"amplitude":null}"#);
-        assert!(serde_json::from_str::<Amplitudes>(&text).unwrap().get("amplitude").is_nan());
+        assert!(serde_json::from_str::<Amplitudes>(&text)
+            .unwrap()
+            .get("amplitude")
+            .is_nan());
     }
 
     #[test]

@@ -6,12 +6,12 @@
 use super::{FromConfig, Output, StageContext, StageKind};
 use crate::analysis::cwt::FrequencyGrid;
 use crate::analysis::report::{analyze, AnalysisReport, AnalyzeOptions};
-use crate::artefacts::analysis::{
-    display_unit, AnalysedSeries, FILE as ANALYSIS_FILE, AnalysisResult, AnalysisRow, AnalysisSummary, Amplitudes,
-    Evidence, PeakColumns, PeriodicityClass, SectionStatistics, SpectralLine, SpectralLines,
-    SpectralPeak,
-};
 pub use crate::artefacts::analysis::amplitude_key;
+use crate::artefacts::analysis::{
+    display_unit, Amplitudes, AnalysedSeries, AnalysisResult, AnalysisRow, AnalysisSummary,
+    Evidence, PeakColumns, PeriodicityClass, SectionStatistics, SpectralLine, SpectralLines,
+    SpectralPeak, FILE as ANALYSIS_FILE,
+};
 use crate::artefacts::cases as case_files;
 use crate::artefacts::dmw_tracks;
 pub use crate::artefacts::series::{read_any_series, read_series, Series, DEFAULT_SERIES};
@@ -281,7 +281,13 @@ pub fn write_outputs(
     s: &Series,
 ) -> Result<()> {
     let out = H5Out::create(&dir.join(ANALYSIS_FILE))?;
-    out.root_attributes("analysis", key, source, &Value::Object(Default::default()), "analysis")?;
+    out.root_attributes(
+        "analysis",
+        key,
+        source,
+        &Value::Object(Default::default()),
+        "analysis",
+    )?;
     let entry = out.group("analysis", Some("NXentry"))?;
     out.attr_str(&entry, "default", "spectrum")?;
     out.attr_str(&entry, "class", &r.class_label())?;
