@@ -156,7 +156,8 @@ fn finite(x: f64) -> Option<f64> {
     Some(x).filter(|x| x.is_finite())
 }
 
-/// The class as a stable word (the period is a separate key).
+/// The periodicity class of a report, as `summary.class` states it (the period is a separate
+/// key).
 pub fn class_name(r: &AnalysisReport) -> PeriodicityClass {
     use crate::analysis::classify::Class;
     match &r.classification {
