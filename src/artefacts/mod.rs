@@ -2,6 +2,7 @@
 //! artefact a producing stage writes (its `result.json` or an HDF5 file in its outputs) and a
 //! consuming stage reads from its upstream results. Producer and consumer share the struct,
 //! the dataset names and the file names, so neither imports the other's stage file.
+pub mod analysis;
 pub mod bulge;
 pub mod calibration;
 pub mod cases;

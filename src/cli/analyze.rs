@@ -1,10 +1,44 @@
 //! `hdi analyze FILE`: spectrum, wavelet ridge and Poincaré class of one series.
 
 use anyhow::{bail, Context, Result};
-use serde_json::json;
+use hdi::artefacts::analysis::AnalysisSummary;
+use schemars::JsonSchema;
+use serde::Serialize;
 use std::time::Instant;
 
 use super::args::AnalyzeArgs;
+
+/// One series' spectrum peaks, wavelet ridge and periodicity class with its evidence
+/// (docs/analysis.md). Units are in the key names.
+#[derive(Debug, Serialize, JsonSchema)]
+pub(super) struct AnalyzeOutput {
+    input: AnalyzedInput,
+    summary: AnalysisSummary,
+}
+
+/// The file and the series read from it.
+#[derive(Debug, Serialize, JsonSchema)]
+struct AnalyzedInput {
+    /// the file as given on the command line
+    file: String,
+    /// format detected from the content
+    #[schemars(extend("enum" = ["hdf5", "csv", "parquet", "arrow-file", "arrow-stream", "npy"]))]
+    format: String,
+    /// the column or dataset analysed
+    series: String,
+    /// SI unit of the series after conversion
+    unit: String,
+    /// where the sample rate came from (time column/dataset, attribute, metadata or
+    /// --sample-rate)
+    sample_rate_source: String,
+}
+
+/// The `source` attribute of the `analysis.h5` that `--out` writes.
+#[derive(Serialize)]
+struct AnalysedFile<'a> {
+    file: String,
+    series: &'a str,
+}
 
 pub(super) fn cmd_analyze(a: AnalyzeArgs) -> Result<()> {
     use hdi::stages::analysis::{read_any_series, summary, write_outputs, AnalysisSettings};
@@ -56,23 +90,26 @@ pub(super) fn cmd_analyze(a: AnalyzeArgs) -> Result<()> {
             dir,
             "",
             &label,
-            &json!({"file": a.file.display().to_string(), "series": s.name}),
+            &serde_json::to_value(AnalysedFile {
+                file: a.file.display().to_string(),
+                series: &s.name,
+            })?,
             &r,
             &s,
         )?;
     }
     if a.json {
-        let out = json!({
-            "input": {
-                "file": a.file.display().to_string(),
-                "format": s.format,
-                "series": s.name,
-                "unit": s.unit,
-                "sample_rate_source": s.rate_source,
+        let out = AnalyzeOutput {
+            input: AnalyzedInput {
+                file: a.file.display().to_string(),
+                format: s.format.clone(),
+                series: s.name.clone(),
+                unit: s.unit.clone(),
+                sample_rate_source: s.rate_source.clone(),
             },
-            "summary": sum,
-        });
-        println!("{out}");
+            summary: sum,
+        };
+        println!("{}", serde_json::to_string(&out)?);
         return Ok(());
     }
     let (du, k) = match s.unit.as_str() {

@@ -26,6 +26,11 @@ const fn doc<T: JsonSchema>(name: &'static str, title: &'static str) -> Document
 
 /// Every `--json` output with a schema, in file-name order.
 const DOCUMENTED: &[Documented] = &[
+    doc::<hdi::artefacts::analysis::StoredAnalysisResult>(
+        "analysis-result",
+        "analysis stage result.json",
+    ),
+    doc::<super::analyze::AnalyzeOutput>("analyze", "hdi analyze --json"),
     doc::<hdi::artefacts::bulge::BulgeReport>("bulge", "hdi bulge FILE… --json"),
     doc::<hdi::stages::contact::ContactReport>("contact", "hdi contact --json"),
     doc::<hdi::stages::dmw::DmwReport>("dmw", "hdi dmw FILE --json"),

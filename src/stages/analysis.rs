@@ -3,9 +3,15 @@
 //! amplitude spectrum and peaks, CWT scalogram with ridge and cone of influence, Poincaré
 //! section with a periodicity class, phase space. `hdi analyze FILE` runs the same on any file.
 
-use super::{FromConfig, StageContext, StageKind, StageOutput};
+use super::{FromConfig, Output, StageContext, StageKind};
 use crate::analysis::cwt::FrequencyGrid;
 use crate::analysis::report::{analyze, AnalysisReport, AnalyzeOptions};
+pub use crate::artefacts::analysis::amplitude_key;
+use crate::artefacts::analysis::{
+    display_unit, Amplitudes, AnalysedSeries, AnalysisResult, AnalysisRow, AnalysisSummary,
+    Evidence, PeakColumns, PeriodicityClass, SectionStatistics, SpectralLine, SpectralLines,
+    SpectralPeak, FILE as ANALYSIS_FILE,
+};
 use crate::artefacts::cases as case_files;
 use crate::artefacts::dmw_tracks;
 pub use crate::artefacts::series::{read_any_series, read_series, Series, DEFAULT_SERIES};
@@ -16,7 +22,7 @@ use crate::slider::params::{SimulateConfig, SimulateParams};
 use crate::slider::three_dof_params::{ThreeDofConfig, ThreeDofParams};
 use crate::units::{Frequency, Length, TimeSpan};
 use serde::Deserialize;
-use serde_json::{json, Map, Value};
+use serde_json::{json, Value};
 use std::path::Path;
 
 /// 2: periodicity from the spectral lines too (issue 19), JSON evidence instead of a debug
@@ -140,132 +146,130 @@ impl AnalysisSettings {
     }
 }
 
-/// Display unit and factor for a stored unit (m → nm, N → mN, m/s → mm/s).
-fn display(unit: &str) -> (&str, f64) {
-    match unit {
-        "m" => ("nm", 1e9),
-        "N" => ("mN", 1e3),
-        "m/s" => ("mm/s", 1e3),
-        u => (u, 1.0),
-    }
-}
-
 /// Six significant digits for the summary table; the HDF5 keeps full precision.
 fn sig6(x: f64) -> f64 {
     crate::core::store::round_significant(x, 6)
 }
 
-/// The unit as a key suffix: `amplitude_m`, `amplitude_nm`, `amplitude_m_s` (m/s); a
-/// dimensionless series ("1") has plain `amplitude`.
-pub fn amplitude_key(unit: &str) -> String {
-    let u: String = unit
-        .chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-        .collect();
-    match u.as_str() {
-        "1" | "" => "amplitude".into(),
-        _ => format!("amplitude_{u}"),
-    }
+/// A ratio as the JSON states it: null when it could not be computed (not finite).
+fn finite(x: f64) -> Option<f64> {
+    Some(x).filter(|x| x.is_finite())
 }
 
-/// `{amplitude_<SI unit>: a, amplitude_<display unit>: a·k}` (one key when they coincide).
-fn amplitudes(unit: &str, a: f64) -> Map<String, Value> {
-    let (du, k) = display(unit);
-    let mut m = Map::new();
-    m.insert(amplitude_key(unit), json!(a));
-    m.insert(amplitude_key(du), json!(a * k));
-    m
-}
-
-/// The class as a stable word: "fixed point", "periodic", "quasi-periodic", "irregular" or
-/// "unclassified" (the period is a separate key).
-pub fn class_name(r: &AnalysisReport) -> &'static str {
+/// The periodicity class of a report, as `summary.class` states it (the period is a separate
+/// key).
+pub fn class_name(r: &AnalysisReport) -> PeriodicityClass {
     use crate::analysis::classify::Class;
     match &r.classification {
         Ok(c) => match c.class {
-            Class::FixedPoint => "fixed point",
-            Class::Periodic { .. } => "periodic",
-            Class::QuasiPeriodic => "quasi-periodic",
-            Class::Irregular => "irregular",
+            Class::FixedPoint => PeriodicityClass::FixedPoint,
+            Class::Periodic { .. } => PeriodicityClass::Periodic,
+            Class::QuasiPeriodic => PeriodicityClass::QuasiPeriodic,
+            Class::Irregular => PeriodicityClass::Irregular,
         },
-        Err(_) => "unclassified",
+        Err(_) => PeriodicityClass::Unclassified,
     }
 }
 
 /// The evidence behind the class (docs/analysis.md; `docs/schemas/analyze.json`).
-fn evidence(c: &crate::analysis::classify::Classification, unit: &str) -> Value {
+fn evidence(c: &crate::analysis::classify::Classification, unit: &str) -> Evidence {
     let d = &c.diagnostics;
-    let mut section = amplitudes(unit, d.amplitude);
-    for (k, v) in [
-        ("maxima", json!(d.n_maxima)),
-        ("spread", json!(d.spread)),
-        ("final_to_initial", json!(d.final_to_initial)),
-        ("decay_ratio", json!(d.decay_ratio)),
-        ("decreasing_fraction", json!(d.decreasing_fraction)),
-        ("best_period_sections", json!(d.best_period)),
-        ("period_residual", json!(d.period_residual)),
-        ("distinct_values", json!(d.distinct_values)),
-        ("distinct_fraction", json!(d.distinct_fraction)),
-        ("ring_coverage", json!(d.coverage)),
-        ("ring_hole", json!(d.hole)),
-        ("neighbour_cosine", json!(d.neighbour_cosine)),
-    ] {
-        section.insert(k.into(), v);
-    }
-    let lines = d.lines.as_ref().map(|e| {
-        json!({
-            "line_power_fraction": e.line_power_fraction,
-            "fundamental_Hz": e.fundamental_hz,
-            "lowest_harmonic": e.lowest_harmonic,
-            "max_denominator": e.max_denominator,
-            "recurrence_residual": e.recurrence_residual,
-            "resolution_Hz": e.resolution_hz,
-            "lines": e.lines.iter().map(|l| {
-                let mut m = amplitudes(unit, l.amplitude);
-                m.insert("frequency_Hz".into(), json!(l.frequency_hz));
-                m.insert("ratio".into(), json!(l.ratio));
-                m.insert("numerator".into(), json!(l.numerator));
-                m.insert("denominator".into(), json!(l.denominator));
-                m.insert("mismatch_Hz".into(), json!(l.mismatch_hz));
-                m.insert("tolerance_Hz".into(), json!(l.tolerance_hz));
-                Value::Object(m)
-            }).collect::<Vec<_>>(),
-        })
+    let section = SectionStatistics {
+        amplitude: Amplitudes::new(unit, d.amplitude),
+        maxima: d.n_maxima,
+        spread: finite(d.spread),
+        final_to_initial: finite(d.final_to_initial),
+        decay_ratio: finite(d.decay_ratio),
+        decreasing_fraction: finite(d.decreasing_fraction),
+        best_period_sections: d.best_period,
+        period_residual: finite(d.period_residual),
+        distinct_values: d.distinct_values,
+        distinct_fraction: finite(d.distinct_fraction),
+        ring_coverage: finite(d.coverage),
+        ring_hole: finite(d.hole),
+        neighbour_cosine: finite(d.neighbour_cosine),
+    };
+    let spectral_lines = d.lines.as_ref().map(|e| SpectralLines {
+        line_power_fraction: finite(e.line_power_fraction),
+        fundamental_hz: e.fundamental_hz,
+        lowest_harmonic: e.lowest_harmonic,
+        max_denominator: e.max_denominator,
+        recurrence_residual: e.recurrence_residual,
+        resolution_hz: e.resolution_hz,
+        lines: e
+            .lines
+            .iter()
+            .map(|l| SpectralLine {
+                amplitude: Amplitudes::new(unit, l.amplitude),
+                frequency_hz: l.frequency_hz,
+                ratio: l.ratio,
+                numerator: l.numerator,
+                denominator: l.denominator,
+                mismatch_hz: l.mismatch_hz,
+                tolerance_hz: l.tolerance_hz,
+            })
+            .collect(),
     });
-    json!({
-        "decided_by": d.decided_by,
-        "section": section,
-        "spectral_lines": lines,
-    })
+    Evidence {
+        decided_by: d.decided_by.to_string(),
+        section,
+        spectral_lines,
+    }
 }
 
-/// The summary of a report (JSON for `--json`, `result.json` and the table row); keys carry
-/// their units (docs/schemas/analyze.json).
-pub fn summary(r: &AnalysisReport, unit: &str) -> Value {
+/// The summary of a report (`--json`, `result.json`); keys carry their units
+/// (docs/schemas/analyze.json).
+pub fn summary(r: &AnalysisReport, unit: &str) -> AnalysisSummary {
     use crate::analysis::classify::Class;
     let c = r.classification.as_ref().ok();
     let period_sections = c.and_then(|c| match c.class {
         Class::Periodic { period } => Some(period),
         _ => None,
     });
-    json!({
-        "window_s": [r.t0_s, r.t0_s + r.samples as f64 / r.sample_rate_hz],
-        "samples": r.samples,
-        "sample_rate_Hz": r.sample_rate_hz,
-        "unit": unit,
-        "peaks": r.peaks.iter().map(|p| {
-            let mut m = amplitudes(unit, p.amplitude);
-            m.insert("frequency_Hz".into(), json!(p.frequency));
-            Value::Object(m)
-        }).collect::<Vec<_>>(),
-        "ridge_median_Hz": r.median_trusted_ridge_hz(),
-        "class": class_name(r),
-        "period_sections": period_sections,
-        "period_s": c.and_then(|c| c.diagnostics.period_s),
-        "unclassified_reason": r.classification.as_ref().err().map(|e| e.to_string()),
-        "poincare_maxima": r.section.maxima.len(),
-        "evidence": c.map(|c| evidence(c, unit)),
-    })
+    AnalysisSummary {
+        window_s: [r.t0_s, r.t0_s + r.samples as f64 / r.sample_rate_hz],
+        samples: r.samples,
+        sample_rate_hz: r.sample_rate_hz,
+        unit: unit.to_string(),
+        peaks: r
+            .peaks
+            .iter()
+            .map(|p| SpectralPeak {
+                amplitude: Amplitudes::new(unit, p.amplitude),
+                frequency_hz: p.frequency,
+            })
+            .collect(),
+        ridge_median_hz: r.median_trusted_ridge_hz(),
+        class: class_name(r),
+        period_sections,
+        period_s: c.and_then(|c| c.diagnostics.period_s),
+        unclassified_reason: r.classification.as_ref().err().map(|e| e.to_string()),
+        poincare_maxima: r.section.maxima.len(),
+        evidence: c.map(|c| evidence(c, unit)),
+    }
+}
+
+/// The instance's summary-table row: six significant digits, the three strongest lines.
+fn summary_row(source: &str, dataset: &str, r: &AnalysisReport, unit: &str) -> AnalysisRow {
+    let (du, k) = display_unit(unit);
+    AnalysisRow {
+        source: source.to_string(),
+        dataset: dataset.to_string(),
+        window_start_ms: sig6(r.t0_s * 1e3),
+        window_end_ms: sig6((r.t0_s + r.samples as f64 / r.sample_rate_hz) * 1e3),
+        peaks: PeakColumns {
+            unit: du.to_string(),
+            peaks: r
+                .peaks
+                .iter()
+                .take(3)
+                .map(|p| (sig6(p.frequency / 1e3), sig6(p.amplitude * k)))
+                .collect(),
+        },
+        ridge_median_khz: r.median_trusted_ridge_hz().map(|f| sig6(f / 1e3)),
+        class: r.class_label(),
+        poincare_maxima: r.section.maxima.len(),
+    }
 }
 
 /// Write `analysis.h5` and the four PNGs into `dir`; `label` titles the plots.
@@ -277,8 +281,14 @@ pub fn write_outputs(
     r: &AnalysisReport,
     s: &Series,
 ) -> Result<()> {
-    let out = H5Out::create(&dir.join("analysis.h5"))?;
-    out.root_attributes("analysis", key, source, &json!({}), "analysis")?;
+    let out = H5Out::create(&dir.join(ANALYSIS_FILE))?;
+    out.root_attributes(
+        "analysis",
+        key,
+        source,
+        &Value::Object(Default::default()),
+        "analysis",
+    )?;
     let entry = out.group("analysis", Some("NXentry"))?;
     out.attr_str(&entry, "default", "spectrum")?;
     out.attr_str(&entry, "class", &r.class_label())?;
@@ -402,8 +412,8 @@ fn write_phase_space(out: &H5Out, r: &AnalysisReport, s: &Series) -> Result<()> 
 
 /// Spectrum, scalogram, Poincaré map and phase portrait PNGs, in display units.
 fn write_figures(dir: &Path, label: &str, r: &AnalysisReport, s: &Series) -> Result<()> {
-    let (du, k) = display(&s.unit);
-    let (vu, kv) = display(&s.velocity_unit);
+    let (du, k) = display_unit(&s.unit);
+    let (vu, kv) = display_unit(&s.velocity_unit);
     use crate::figures;
     let peaks: Vec<(f64, f64)> = r
         .peaks
@@ -626,8 +636,8 @@ impl FromConfig for AnalysisStage {
 impl StageKind for AnalysisStage {
     const KIND: &'static str = "analysis";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
-    type Result = serde_json::Value;
-    type Row = serde_json::Map<String, serde_json::Value>;
+    type Result = AnalysisResult;
+    type Row = AnalysisRow;
 
     fn params(&self) -> Value {
         let st = &self.settings;
@@ -651,7 +661,7 @@ impl StageKind for AnalysisStage {
     fn upstream(&self) -> Vec<String> {
         vec![self.source.clone()]
     }
-    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+    fn run(&self, ctx: &StageContext) -> Result<Output<AnalysisResult, AnalysisRow>> {
         let dir = ctx
             .upstream_dirs
             .get(&self.source)
@@ -691,32 +701,27 @@ impl StageKind for AnalysisStage {
             self.source,
             self.series.dataset.rsplit('/').next().unwrap_or("")
         );
-        let source = json!({"source": self.source, "file": self.series.file, "dataset": self.series.dataset, "velocity": self.series.velocity});
+        let series = AnalysedSeries {
+            source: self.source.clone(),
+            file: self.series.file.clone(),
+            dataset: self.series.dataset.clone(),
+            velocity: self.series.velocity.clone(),
+        };
+        let source = serde_json::to_value(&series).map_err(|e| Error::Encode {
+            kind: Self::KIND,
+            what: "series".into(),
+            message: e.to_string(),
+        })?;
         ctx.progress.set_message("HDF5 and plots");
         write_outputs(ctx.out_dir, ctx.key, &label, &source, &r, &s)?;
-        let sum = summary(&r, &s.unit);
-        let (du, k) = display(&s.unit);
-        let mut row = Map::new();
-        row.insert("source".into(), json!(self.source));
-        row.insert("dataset".into(), json!(self.series.dataset));
-        row.insert("window_start_ms".into(), json!(sig6(r.t0_s * 1e3)));
-        row.insert(
-            "window_end_ms".into(),
-            json!(sig6((r.t0_s + r.samples as f64 / r.sample_rate_hz) * 1e3)),
-        );
-        for (i, p) in r.peaks.iter().take(3).enumerate() {
-            row.insert(format!("peak{}_kHz", i + 1), json!(sig6(p.frequency / 1e3)));
-            row.insert(format!("peak{}_{du}", i + 1), json!(sig6(p.amplitude * k)));
-        }
-        row.insert(
-            "ridge_median_kHz".into(),
-            json!(r.median_trusted_ridge_hz().map(|f| sig6(f / 1e3))),
-        );
-        row.insert("class".into(), json!(r.class_label()));
-        row.insert("poincare_maxima".into(), json!(r.section.maxima.len()));
-        Ok(StageOutput {
-            result: json!({"series": source, "summary": sum, "file": "analysis.h5"}),
-            summary_row: Some(row),
+        let summary_row = summary_row(&self.source, &self.series.dataset, &r, &s.unit);
+        Ok(Output {
+            result: AnalysisResult {
+                series,
+                summary: summary(&r, &s.unit),
+                file: ANALYSIS_FILE.to_string(),
+            },
+            summary_row: Some(summary_row),
         })
     }
 }

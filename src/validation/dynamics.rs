@@ -21,6 +21,7 @@ use super::spectral::{
     PITCH_ROLL_BAND,
 };
 use super::{Basis, Calibrated, Class, Ordering, Origin, Relation, Row, Tolerance};
+use crate::artefacts::analysis::AnalysisResult;
 use crate::contact::isbl::{FrictionLaw, IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
 use crate::core::cache::Store;
@@ -36,6 +37,7 @@ use crate::dynamics::touchdown::{find_touchdown, TouchdownSearch};
 use crate::dynamics::two_dof::{DmwInput, SimOptions, TwoDofCase};
 use crate::signal::spectrum::Peak;
 use rayon::prelude::*;
+use serde::Deserialize;
 use serde_json::{json, Value};
 use std::path::Path;
 use std::sync::Mutex;
@@ -1199,10 +1201,8 @@ impl Analysed {
         let a = cache?.current(name)?;
         Some(Analysed {
             spectrum: StoredSpectrum::read(&a),
-            class: a.result["summary"]["class"]
-                .as_str()
-                .unwrap_or("")
-                .to_string(),
+            class: AnalysisResult::deserialize(&a.result)
+                .map_or_else(|_| String::new(), |r| r.summary.class.word().to_string()),
             origin: a.origin,
         })
     }

@@ -83,7 +83,7 @@ pub struct StoredSpectrum {
 
 impl StoredSpectrum {
     pub fn read(a: &Stored) -> Option<StoredSpectrum> {
-        let path = a.dir.join("analysis.h5");
+        let path = a.dir.join(crate::artefacts::analysis::FILE);
         Some(StoredSpectrum {
             frequency: read_1d(&path, "analysis/spectrum/frequency")?,
             amplitude: read_1d(&path, "analysis/spectrum/amplitude")?,
