@@ -25,10 +25,13 @@ const fn doc<T: JsonSchema>(name: &'static str, title: &'static str) -> Document
 }
 
 /// Every `--json` output with a schema, in file-name order.
-const DOCUMENTED: &[Documented] = &[doc::<Vec<super::run::InstanceStatus>>(
-    "status",
-    "hdi status --json",
-)];
+const DOCUMENTED: &[Documented] = &[
+    doc::<hdi::bench::BenchDocument>("bench", "hdi bench --json"),
+    doc::<hdi::engine::diff::Diff>("diff", "hdi diff --json"),
+    doc::<Vec<super::run::InstanceStatus>>("status", "hdi status --json"),
+    doc::<hdi::validation::document::ValidateDocument>("validate", "hdi validate --json"),
+    doc::<super::verify::VerifyDocument>("verify", "hdi verify --json"),
+];
 
 /// The schema of `T` as the output writes it (serialisation contract: a key always written
 /// is required), subschemas inline, every object closed (`additionalProperties: false`, so
