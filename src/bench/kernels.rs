@@ -1,7 +1,7 @@
 //! The surfaces stage and the signal and roughness kernels.
 
 use super::main_job::ScratchDir;
-use super::{details, time_best, BenchError, Figure, Figures, Result, FS};
+use super::{time_best, BenchError, Details, Figure, Figures, Group, Result, Unit, FS};
 use crate::surface::io::encode_gwy;
 use crate::surface::synth::{gaussian_acf_surface, GaussianSurfaceSpec};
 use crate::surface::HeightMap;
@@ -44,14 +44,17 @@ pub(super) fn surfaces(out: &mut Figures, size: usize, repeats: usize) -> Result
     .map_err(BenchError::io("writing", &file))?;
     let cfg: SurfaceConfig = toml::from_str(&format!("file = {:?}", file.to_string_lossy()))?;
     let params = check(&cfg, file.clone())?;
-    let pixels = || details(&[("pixels", json!(size * size))]);
+    let pixels = || Details {
+        pixels: Some(size * size),
+        ..Details::default()
+    };
     let (times, _) = time_best(repeats, || Ok(analyse(&params)?))?;
     out.push(Figure::best(
-        "surfaces",
+        Group::Surfaces,
         "surfaces_stage_analyse",
         format!("surfaces stage, {size}² map (read+level+roughness+scale sweep)"),
         times,
-        "s",
+        Unit::Seconds,
         repeats,
         pixels(),
     ));
@@ -68,11 +71,11 @@ pub(super) fn surfaces(out: &mut Figures, size: usize, repeats: usize) -> Result
         Ok(())
     })?;
     out.push(Figure::best(
-        "surfaces",
+        Group::Surfaces,
         "surfaces_stage_with_outputs",
         format!("surfaces stage, {size}² map incl. HDF5 + PNG outputs"),
         times,
-        "s",
+        Unit::Seconds,
         repeats,
         pixels(),
     ));
@@ -95,16 +98,20 @@ pub(super) fn cwt(out: &mut Figures, x: &[f64], repeats: usize) -> Result<()> {
         Ok(cwt_morlet(x, FS, &opts)?.frequencies_hz.len())
     })?;
     out.push(Figure::best(
-        "cwt",
+        Group::Cwt,
         "cwt_morlet_100_frequencies",
         format!(
             "CWT, {} samples × {rows} frequencies (5 kHz–1 MHz, f32)",
             x.len()
         ),
         times,
-        "s",
+        Unit::Seconds,
         repeats,
-        details(&[("samples", json!(x.len())), ("frequencies", json!(rows))]),
+        Details {
+            samples: Some(x.len()),
+            frequencies: Some(rows),
+            ..Details::default()
+        },
     ));
     Ok(())
 }
@@ -115,13 +122,16 @@ pub(super) fn fft(out: &mut Figures, x: &[f64], repeats: usize) -> Result<()> {
     use crate::signal::spectrum::Window;
     let (times, _) = time_best(repeats, || Ok(spectrum(x, FS, Window::Hann)?))?;
     out.push(Figure::best(
-        "fft",
+        Group::Fft,
         "hann_amplitude_spectrum",
         format!("Hann amplitude spectrum, {} samples", x.len()),
         times,
-        "s",
+        Unit::Seconds,
         repeats,
-        details(&[("samples", json!(x.len()))]),
+        Details {
+            samples: Some(x.len()),
+            ..Details::default()
+        },
     ));
     Ok(())
 }
@@ -139,7 +149,7 @@ pub(super) fn roughness(out: &mut Figures, map: &HeightMap, repeats: usize) -> R
         Ok(roughness(&m, &RoughnessOptions::default())?)
     })?;
     out.push(Figure::best(
-        "roughness",
+        Group::Roughness,
         "roughness_default",
         format!(
             "roughness, {}×{} map (plane level + default evaluation)",
@@ -147,9 +157,12 @@ pub(super) fn roughness(out: &mut Figures, map: &HeightMap, repeats: usize) -> R
             map.nx()
         ),
         times,
-        "s",
+        Unit::Seconds,
         repeats,
-        details(&[("pixels", json!(map.ny() * map.nx()))]),
+        Details {
+            pixels: Some(map.ny() * map.nx()),
+            ..Details::default()
+        },
     ));
     Ok(())
 }

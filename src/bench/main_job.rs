@@ -1,7 +1,8 @@
 //! The pipeline figures: the no-op cached rerun and the main job run cold in a temp dir.
 
-use super::{details, time_best, BenchError, Figure, Figures, Result};
-use serde_json::{json, Map, Value};
+use super::{
+    time_best, BenchError, Details, Figure, Figures, Group, Result, StageWalls, Statistic, Unit,
+};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -9,13 +10,13 @@ use std::time::Instant;
 pub(super) fn noop(out: &mut Figures, config: &Path, repeats: usize) -> Result<()> {
     let (times, _) = time_best(repeats, || out.host.run_pipeline(config).map(|_| ()))?;
     out.push(Figure::best(
-        "noop",
+        Group::Noop,
         "noop_cached_rerun",
         format!("no-op cached rerun of {}", config.display()),
         times,
-        "s",
+        Unit::Seconds,
         repeats,
-        Map::new(),
+        Details::default(),
     ));
     Ok(())
 }
@@ -45,46 +46,45 @@ pub(super) fn cold(out: &mut Figures, config: &Path, repeats: usize) -> Result<(
     let log = out.host.run_pipeline(&cfg)?;
     let secs = t.elapsed().as_secs_f64();
     let stages = stage_walls(&log);
-    let stage_details: Map<String, Value> =
-        stages.iter().map(|(n, t)| (n.clone(), json!(t))).collect();
     out.push(Figure {
-        group: "main-job",
+        group: Group::MainJob,
         name: "main_job_cold".into(),
         label: format!("main job cold ({}, fresh temp dir)", config.display()),
         value: secs,
-        unit: "s",
-        statistic: "single",
+        unit: Unit::Seconds,
+        statistic: Statistic::Single,
         repeats: 1,
         median: None,
-        details: details(&[
-            ("stages_ran", json!(stages.len())),
-            ("stage_wall_s", Value::Object(stage_details)),
-        ]),
+        details: Details {
+            stages_ran: Some(stages.len()),
+            stage_wall_s: Some(StageWalls(stages.clone())),
+            ..Details::default()
+        },
     });
     let mut sorted = stages;
     sorted.sort_by(|a, b| b.1.total_cmp(&a.1));
     for (name, t) in sorted {
         out.push(Figure {
-            group: "main-job",
+            group: Group::MainJob,
             name: format!("main_job_stage_{name}"),
             label: format!("  stage {name}"),
             value: t,
-            unit: "s",
-            statistic: "single",
+            unit: Unit::Seconds,
+            statistic: Statistic::Single,
             repeats: 1,
             median: None,
-            details: Map::new(),
+            details: Details::default(),
         });
     }
     let (times, _) = time_best(repeats, || out.host.run_pipeline(&cfg).map(|_| ()))?;
     out.push(Figure::best(
-        "main-job",
+        Group::MainJob,
         "main_job_noop_rerun",
         "main job, no-op cached rerun",
         times,
-        "s",
+        Unit::Seconds,
         repeats,
-        Map::new(),
+        Details::default(),
     ));
     Ok(())
 }

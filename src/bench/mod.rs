@@ -15,8 +15,8 @@ mod npy;
 pub mod readers;
 mod slider;
 
+use schemars::JsonSchema;
 use serde::Serialize;
-use serde_json::{Map, Value};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -134,31 +134,200 @@ pub trait BenchHost {
 }
 
 /// One measured figure.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct Figure {
-    pub group: &'static str,
+    /// The `--only` group that produced the figure.
+    pub group: Group,
+    /// Stable identifier of the figure (e.g. `two_dof_8.5nm_us_per_step`,
+    /// `main_job_stage_NAME`).
+    #[schemars(length(min = 1))]
     pub name: String,
+    /// What was timed, as printed in the text table.
+    #[schemars(length(min = 1))]
     pub label: String,
+    /// The figure, in `unit`: the best of `repeats` timed runs after one untimed warm-up
+    /// (`statistic` best), or one cold run (`statistic` single).
+    #[schemars(range(min = 0))]
     pub value: f64,
-    pub unit: &'static str,
-    /// "best" (of `repeats`, after a warm-up) or "single" (one cold run).
-    pub statistic: &'static str,
+    /// Unit of `value` and `median`.
+    pub unit: Unit,
+    /// best: minimum over `repeats` timed runs after a warm-up; single: one run (the cold
+    /// main job).
+    pub statistic: Statistic,
+    /// Number of timed runs behind `value` (`--repeat`).
+    #[schemars(range(min = 1))]
     pub repeats: usize,
+    /// Median of the timed runs, in `unit`; null for a single run.
+    #[schemars(range(min = 0))]
     pub median: Option<f64>,
-    /// The counts behind the figure (steps, RHS evaluations, ms per case, …).
-    pub details: Map<String, Value>,
+    /// Counts behind the figure (keys with unit suffixes where they have units).
+    pub details: Details,
+}
+
+/// A figure group ([`GROUPS`], in the same words).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum Group {
+    Surfaces,
+    TwoDof,
+    Sweep,
+    ThreeDof,
+    Cwt,
+    Fft,
+    Roughness,
+    Noop,
+    MainJob,
+}
+
+/// The unit of a figure.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
+pub enum Unit {
+    #[serde(rename = "s")]
+    Seconds,
+    #[serde(rename = "ms")]
+    Milliseconds,
+    #[serde(rename = "µs/step")]
+    MicrosecondsPerStep,
+}
+
+impl Unit {
+    fn as_str(self) -> &'static str {
+        match self {
+            Unit::Seconds => "s",
+            Unit::Milliseconds => "ms",
+            Unit::MicrosecondsPerStep => "µs/step",
+        }
+    }
+}
+
+/// How `value` was obtained.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum Statistic {
+    Best,
+    Single,
+}
+
+/// The counts behind a figure; each figure writes its own few, in this order.
+#[derive(Debug, Clone, Default, Serialize, JsonSchema)]
+pub struct Details {
+    /// Map pixels (surfaces, roughness).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 1))]
+    pub pixels: Option<usize>,
+    /// Signal samples (cwt, fft).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 1))]
+    pub samples: Option<usize>,
+    /// CWT rows.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 1))]
+    pub frequencies: Option<usize>,
+    /// Slider cases of the sweep.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 1))]
+    pub cases: Option<usize>,
+    /// Accepted integrator steps (one case; the sweep: all cases).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub accepted_steps: Option<u64>,
+    /// Threads the sweep ran on.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 1))]
+    pub threads: Option<usize>,
+    /// Rejected integrator steps of the case.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rejected_steps: Option<u64>,
+    /// Right-hand-side evaluations of the case.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rhs_evaluations: Option<u64>,
+    /// Wall time of one case (the best run), ms.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 0))]
+    pub case_ms: Option<f64>,
+    /// Best case wall time per right-hand-side evaluation, µs.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 0))]
+    pub us_per_rhs_evaluation: Option<f64>,
+    /// Best case wall time per accepted step, µs.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 0))]
+    pub us_per_step: Option<f64>,
+    /// Stage instances the cold main job ran.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stages_ran: Option<usize>,
+    /// Wall time of every stage instance the cold run ran, s, as `hdi run` logs it (`ran NAME
+    /// (S s)`); stages run concurrently, so they need not sum to `value`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stage_wall_s: Option<StageWalls>,
+}
+
+impl Details {
+    /// The numeric details as `name value` (integers as they are, floats to four digits).
+    fn counts(&self) -> Vec<String> {
+        let n = |v: Option<usize>| v.map(|v| v as u64);
+        let ints = [
+            ("pixels", n(self.pixels)),
+            ("samples", n(self.samples)),
+            ("frequencies", n(self.frequencies)),
+            ("cases", n(self.cases)),
+            ("accepted_steps", self.accepted_steps),
+            ("threads", n(self.threads)),
+            ("rejected_steps", self.rejected_steps),
+            ("rhs_evaluations", self.rhs_evaluations),
+        ];
+        let floats = [
+            ("case_ms", self.case_ms),
+            ("us_per_rhs_evaluation", self.us_per_rhs_evaluation),
+            ("us_per_step", self.us_per_step),
+        ];
+        let mut out: Vec<String> = ints
+            .iter()
+            .filter_map(|(k, v)| v.map(|v| format!("{k} {v}")))
+            .collect();
+        out.extend(
+            floats
+                .iter()
+                .filter_map(|(k, v)| v.map(|v| format!("{k} {}", fmt(v)))),
+        );
+        if let Some(n) = self.stages_ran {
+            out.push(format!("stages_ran {n}"));
+        }
+        out
+    }
+}
+
+/// Stage name → wall time (s), in log order; written as one object.
+#[derive(Debug, Clone, Default)]
+pub struct StageWalls(pub Vec<(String, f64)>);
+
+impl Serialize for StageWalls {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.collect_map(self.0.iter().map(|(k, v)| (k, v)))
+    }
+}
+
+impl JsonSchema for StageWalls {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "StageWalls".into()
+    }
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "type": "object",
+            "additionalProperties": { "type": "number", "minimum": 0 }
+        })
+    }
 }
 
 impl Figure {
     /// A best-of-`repeats` figure with its median.
     fn best(
-        group: &'static str,
+        group: Group,
         name: impl Into<String>,
         label: impl Into<String>,
         (value, median): (f64, f64),
-        unit: &'static str,
+        unit: Unit,
         repeats: usize,
-        details: Map<String, Value>,
+        details: Details,
     ) -> Self {
         Figure {
             group,
@@ -166,7 +335,7 @@ impl Figure {
             label: label.into(),
             value,
             unit,
-            statistic: "best",
+            statistic: Statistic::Best,
             repeats,
             median: Some(median),
             details,
@@ -176,19 +345,13 @@ impl Figure {
     /// The printed line: label, value, unit, statistic and the numeric details.
     pub fn table_line(&self) -> String {
         let stat = match (self.statistic, self.median) {
-            ("best", Some(m)) => format!("best of {} (median {})", self.repeats, fmt(m)),
-            ("best", None) => format!("best of {}", self.repeats),
+            (Statistic::Best, Some(m)) => {
+                format!("best of {} (median {})", self.repeats, fmt(m))
+            }
+            (Statistic::Best, None) => format!("best of {}", self.repeats),
             _ => "single run".to_string(),
         };
-        let counts: Vec<String> = self
-            .details
-            .iter()
-            .filter_map(|(k, v)| match v {
-                Value::Number(x) if x.is_f64() => Some(format!("{k} {}", fmt(x.as_f64()?))),
-                Value::Number(x) => Some(format!("{k} {x}")),
-                _ => None,
-            })
-            .collect();
+        let counts = self.details.counts();
         let counts = if counts.is_empty() {
             String::new()
         } else {
@@ -198,17 +361,27 @@ impl Figure {
             "{:<62} {:>10} {:<8} {stat}{counts}",
             self.label,
             fmt(self.value),
-            self.unit
+            self.unit.as_str()
         )
     }
 }
 
-/// `hdi bench --json` (docs/schemas/bench.json).
-#[derive(Debug, Serialize)]
+/// Timing figures of `hdi bench` (docs/performance.md, bench/README.md): one object per
+/// figure, in the order they ran. Wall times of this machine and moment: not a result file,
+/// not deterministic. Schema version 1 (docs/json.md): existing keys keep their name, unit and
+/// type; renaming or removing one makes version 2.
+#[derive(Debug, Serialize, JsonSchema)]
 pub struct BenchDocument {
+    /// Version of the hdi binary that timed the figures.
+    #[schemars(length(min = 1))]
     pub hdi_version: &'static str,
+    /// Threads of the rayon pool (what the parallel figures, e.g. the sweep, ran on).
+    #[schemars(range(min = 1))]
     pub threads: usize,
+    /// The `--input FILE.npy` the one selected kernel was timed on; null when the built-in
+    /// inputs were used.
     pub input: Option<String>,
+    /// The figures, in the order they ran.
     pub figures: Vec<Figure>,
 }
 
@@ -341,13 +514,6 @@ fn time_best<T>(repeats: usize, mut f: impl FnMut() -> Result<T>) -> Result<((f6
         0.5 * (times[times.len() / 2 - 1] + times[times.len() / 2])
     };
     Ok(((times[0], median), last))
-}
-
-fn details(pairs: &[(&str, Value)]) -> Map<String, Value> {
-    pairs
-        .iter()
-        .map(|(k, v)| (k.to_string(), v.clone()))
-        .collect()
 }
 
 #[cfg(test)]

@@ -1,11 +1,10 @@
 //! The slider figures: 2-DOF cases per accepted step, the 76-case sweep, one 3-DOF case.
 
-use super::{details, time_best, Figure, Figures, Result};
+use super::{time_best, Details, Figure, Figures, Group, Result, Unit};
 use crate::contact::isbl::{IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
 use crate::dmw::excitation_tracks::synthetic_dmw;
 use crate::dynamics::two_dof::DmwInput;
-use serde_json::json;
 
 /// The 2-DOF slider figures: one 2 ms case at 8.5 and 12 nm (µs per accepted step) and the
 /// 76-case sweep 0–15 nm on all threads; improved model, spec defaults, the spec's synthetic
@@ -44,25 +43,23 @@ pub(super) fn two_dof(
             let ((best, median), stats) = time_best(repeats, || run(h))?;
             let steps = stats.accepted_steps.max(1) as f64;
             out.push(Figure::best(
-                "two-dof",
+                Group::TwoDof,
                 format!("two_dof_{}nm_us_per_step", fmt_nm(h)),
                 format!(
                     "2-DOF, one 2 ms case at {} nm: time per accepted step",
                     fmt_nm(h)
                 ),
                 (best / steps * 1e6, median / steps * 1e6),
-                "µs/step",
+                Unit::MicrosecondsPerStep,
                 repeats,
-                details(&[
-                    ("accepted_steps", json!(stats.accepted_steps)),
-                    ("rejected_steps", json!(stats.rejected_steps)),
-                    ("rhs_evaluations", json!(stats.rhs_evaluations)),
-                    ("case_ms", json!(best * 1e3)),
-                    (
-                        "us_per_rhs_evaluation",
-                        json!(best / stats.rhs_evaluations.max(1) as f64 * 1e6),
-                    ),
-                ]),
+                Details {
+                    accepted_steps: Some(stats.accepted_steps),
+                    rejected_steps: Some(stats.rejected_steps),
+                    rhs_evaluations: Some(stats.rhs_evaluations),
+                    case_ms: Some(best * 1e3),
+                    us_per_rhs_evaluation: Some(best / stats.rhs_evaluations.max(1) as f64 * 1e6),
+                    ..Details::default()
+                },
             ));
         }
     }
@@ -79,20 +76,21 @@ pub(super) fn two_dof(
             Ok(steps)
         })?;
         out.push(Figure::best(
-            "sweep",
+            Group::Sweep,
             "two_dof_sweep_76_cases",
             format!(
                 "2-DOF, 76-case sweep 0–15 nm on {} threads",
                 rayon::current_num_threads()
             ),
             times,
-            "s",
+            Unit::Seconds,
             sweep_repeats,
-            details(&[
-                ("cases", json!(76)),
-                ("accepted_steps", json!(steps)),
-                ("threads", json!(rayon::current_num_threads())),
-            ]),
+            Details {
+                cases: Some(76),
+                accepted_steps: Some(steps),
+                threads: Some(rayon::current_num_threads()),
+                ..Details::default()
+            },
         ));
     }
     Ok(())
@@ -156,18 +154,19 @@ pub(super) fn three_dof(out: &mut Figures, repeats: usize) -> Result<()> {
     })?;
     let steps = stats.accepted_steps.max(1) as f64;
     out.push(Figure::best(
-        "three-dof",
+        Group::ThreeDof,
         "three_dof_12nm_case",
         "3-DOF, one 2 ms case at 12 nm (ISBL, synthetic DMW)",
         (best * 1e3, median * 1e3),
-        "ms",
+        Unit::Milliseconds,
         repeats,
-        details(&[
-            ("accepted_steps", json!(stats.accepted_steps)),
-            ("rejected_steps", json!(stats.rejected_steps)),
-            ("rhs_evaluations", json!(stats.rhs_evaluations)),
-            ("us_per_step", json!(best / steps * 1e6)),
-        ]),
+        Details {
+            accepted_steps: Some(stats.accepted_steps),
+            rejected_steps: Some(stats.rejected_steps),
+            rhs_evaluations: Some(stats.rhs_evaluations),
+            us_per_step: Some(best / steps * 1e6),
+            ..Details::default()
+        },
     ));
     Ok(())
 }

@@ -31,11 +31,15 @@ const DOCUMENTED: &[Documented] = &[
         "analysis stage result.json",
     ),
     doc::<super::analyze::AnalyzeOutput>("analyze", "hdi analyze --json"),
+    doc::<hdi::bench::BenchDocument>("bench", "hdi bench --json"),
     doc::<hdi::artefacts::bulge::BulgeReport>("bulge", "hdi bulge FILE… --json"),
     doc::<hdi::stages::contact::ContactReport>("contact", "hdi contact --json"),
+    doc::<hdi::engine::diff::Diff>("diff", "hdi diff --json"),
     doc::<hdi::stages::dmw::DmwReport>("dmw", "hdi dmw FILE --json"),
     doc::<Vec<super::run::InstanceStatus>>("status", "hdi status --json"),
     doc::<hdi::artefacts::surface::SurfaceReport>("surface", "hdi surface FILE --json"),
+    doc::<hdi::validation::document::ValidateDocument>("validate", "hdi validate --json"),
+    doc::<super::verify::VerifyDocument>("verify", "hdi verify --json"),
 ];
 
 /// The schema of `T` as the output writes it (serialisation contract: a key always written

@@ -3,8 +3,8 @@
 //! says so (calibrated values, the DOE optimum, the 3-DOF stage outputs, the spectra).
 
 use anyhow::{bail, Context, Result};
+use hdi::validation::document::ValidateDocument;
 use hdi::validation::{class_counts, gate, ledger, Class, Row};
-use serde_json::{json, Value};
 use std::path::Path;
 
 /// Six significant digits, scientific for very small or large magnitudes; `–` for none.
@@ -110,30 +110,8 @@ pub(super) fn cmd_validate(
     let all: Vec<&Row> = areas.iter().flat_map(|(_, r)| r.iter().copied()).collect();
     let failed = gate(all.iter().copied(), &classes);
     if as_json {
-        let out: serde_json::Map<String, Value> = areas
-            .iter()
-            .map(|(a, rows)| {
-                (
-                    a.to_string(),
-                    Value::Array(rows.iter().map(|r| r.to_json()).collect()),
-                )
-            })
-            .collect();
-        let per_class: serde_json::Map<String, Value> = class_counts(all.iter().copied())
-            .into_iter()
-            .map(|(c, n, p)| (c.label().to_string(), json!({"rows": n, "pass": p})))
-            .collect();
-        println!(
-            "{}",
-            json!({
-                "areas": out,
-                "rows": all.len(),
-                "classes": per_class,
-                "failed": failed.len(),
-                "failed_ids": failed.iter().map(|r| r.id.clone()).collect::<Vec<_>>(),
-                "ledger": ledger(all.iter().copied()).to_json(),
-            })
-        );
+        let doc = ValidateDocument::new(&areas, &failed);
+        println!("{}", serde_json::to_string(&doc)?);
     } else {
         print_table(&areas);
         for line in ledger(all.iter().copied()).lines() {

@@ -2,6 +2,8 @@
 //! (`engine::verify`, docs/reliability.md).
 
 use anyhow::{Context, Result};
+use schemars::JsonSchema;
+use serde::Serialize;
 use std::path::Path;
 
 use hdi::core::cache::Store;
@@ -59,17 +61,16 @@ pub(super) fn cmd_verify(
         first
     };
     if json {
-        let mut v = serde_json::to_value(&report)?;
-        v["clean"] = report.clean().into();
-        v["repair"] = match &repaired {
-            None => serde_json::Value::Null,
-            Some((before, q)) => serde_json::json!({
-                "damaged_before": before.damaged,
-                "moved": q.moved,
-                "rerun": q.rerun,
+        let doc = VerifyDocument {
+            clean: report.clean(),
+            report: &report,
+            repair: repaired.as_ref().map(|(before, q)| Repair {
+                damaged_before: &before.damaged,
+                moved: &q.moved,
+                rerun: &q.rerun,
             }),
         };
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        println!("{}", serde_json::to_string_pretty(&doc)?);
     } else {
         print_text(&report, repaired.as_ref().map(|(b, _)| b));
     }
@@ -78,6 +79,33 @@ pub(super) fn cmd_verify(
     } else {
         Err(Damaged.into())
     }
+}
+
+/// The store under processed/.hdi/store/ checked against the per-file blake3 hashes and sizes
+/// its manifests record (docs/reliability.md, `hdi verify`). With --repair, the state after
+/// the repair, and what was repaired under `repair`. Exit status 0 when `clean`, 1 when
+/// damaged entries remain, 2 on error. Schema version 1 (docs/json.md): existing keys keep
+/// their name, unit and type; renaming or removing one makes version 2.
+#[derive(Serialize, JsonSchema)]
+pub(super) struct VerifyDocument<'a> {
+    #[serde(flatten)]
+    report: &'a verify::VerifyReport,
+    /// No damaged entry (after the repair, with --repair).
+    clean: bool,
+    /// null without --repair or when nothing was damaged; otherwise what the repair did.
+    repair: Option<Repair<'a>>,
+}
+
+/// What `--repair` did.
+#[derive(Serialize, JsonSchema)]
+struct Repair<'a> {
+    /// The damaged entries found before the repair.
+    damaged_before: &'a [verify::DamagedEntry],
+    /// Where each damaged entry was moved (relative to processed/, under .hdi/tmp/: never
+    /// trusted, removed by `hdi gc`).
+    moved: &'a [String],
+    /// The instances re-run (forced) so the engine recomputed what was moved.
+    rerun: &'a [String],
 }
 
 fn print_text(r: &verify::VerifyReport, before: Option<&verify::VerifyReport>) {
@@ -135,7 +163,7 @@ fn print_text(r: &verify::VerifyReport, before: Option<&verify::VerifyReport>) {
         count(r.entries_checked, "entry", "entries"),
         count(r.files_checked, "file", "files"),
         r.bytes_checked as f64 / 1e6,
-        if r.scope == "all" {
+        if r.scope == verify::Scope::All {
             "every entry"
         } else {
             "entries the pipeline references"

@@ -306,11 +306,16 @@ pub struct EntryCheck {
 }
 
 /// One file of an entry that does not match its manifest.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct FileProblem {
-    /// Path relative to the entry directory.
+    /// File relative to the entry directory (`manifest.json` for the manifest itself, `.` for
+    /// the whole entry directory).
     pub file: String,
+    /// `changed`: size or blake3 differs from the manifest; `missing`: listed in the manifest
+    /// (or the entry, or the manifest itself) but absent; `extra`: present but not listed;
+    /// `unreadable`: cannot be read, or the manifest does not parse.
     pub problem: ProblemKind,
+    /// The same in words (sizes when they differ).
     pub detail: String,
 }
 
@@ -324,7 +329,8 @@ impl FileProblem {
     }
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+/// What is wrong with one file of an entry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ProblemKind {
     /// Present, but its size or blake3 differs from the manifest's.

@@ -295,7 +295,7 @@ pub enum TargetGeometry {
 /// fitted set; the held-out sets judge the fit on numbers it never saw. Of those, the
 /// *selection* set is what model-form switches are chosen on (docs/model-form.md), and the
 /// *final* set is evaluated once per adopted configuration and never tuned on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum TargetSet {
     Fitted,

@@ -7,6 +7,7 @@
 
 use crate::core::cache::{Fingerprint, Manifest, StaleReason, Store};
 use crate::engine::State;
+use schemars::JsonSchema;
 use serde::Serialize;
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
@@ -33,8 +34,9 @@ pub enum DiffError {
     BadRtol(f64),
 }
 
-/// Where a snapshot came from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+/// Where a snapshot came from: `processed`, a processed directory (its last runs);
+/// `pipeline`, a pipeline file (keys planned, nothing run).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum SourceKind {
     /// A `processed/` directory: the last successful run of every instance (`.hdi/refs/`).
@@ -402,7 +404,8 @@ impl Options {
     }
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+/// How an instance differs between A and B.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Status {
     Added,
@@ -422,70 +425,143 @@ impl Status {
     }
 }
 
-#[derive(Debug, Clone, Serialize)]
+/// One stage instance added, removed, changed (or, with --all, unchanged).
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct InstanceDiff {
+    /// Instance name.
     pub name: String,
+    /// Stage kind (surface, simulate, …).
     pub kind: String,
+    /// `added`: only in B; `removed`: only in A; `changed`: the cache key differs;
+    /// `unchanged`: the same key.
     pub status: Status,
+    /// Cache key in A (null: not in A).
     pub key_a: Option<String>,
+    /// Cache key in B (null: not in B).
     pub key_b: Option<String>,
-    /// Why the key differs (params, inputs, upstream, model version), as `hdi status` says it.
+    /// For a changed instance: what in its fingerprint differs (parameter, input file,
+    /// upstream key, model version), as `hdi status` words it.
     pub why: Vec<String>,
 }
 
-#[derive(Debug, Clone, Serialize)]
+/// One parameter that differs, of an instance present in both A and B.
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct ParamDiff {
+    /// Instance name.
     pub instance: String,
-    /// `<kind>.<name>.<param>`: the canonical (SI, defaults filled in) parameter the key
-    /// is computed from.
+    /// `<kind>.<name>.<parameter>` (dotted for nested tables): the validated parameter in SI
+    /// units with defaults filled in, as the cache key uses it (e.g.
+    /// `simulate.improved_sweep.actuation_step_m`).
     pub key: String,
+    /// Value in A (null: not set).
+    #[schemars(with = "AnyValue")]
     pub old: Value,
+    /// Value in B (null: not set).
+    #[schemars(with = "AnyValue")]
     pub new: Value,
 }
 
-#[derive(Debug, Clone, Serialize)]
+/// Any JSON value (a parameter: number, text, list, table or null). Schema only.
+struct AnyValue;
+
+impl JsonSchema for AnyValue {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "AnyValue".into()
+    }
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::Schema::default()
+    }
+}
+
+/// A table cell or result.json scalar (number, text, boolean) or null. Schema only.
+struct Scalar;
+
+impl JsonSchema for Scalar {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "Scalar".into()
+    }
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({ "type": ["number", "string", "boolean", "null"] })
+    }
+}
+
+/// One metric compared, of an instance present in both A and B.
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct MetricDiff {
+    /// Instance name.
     pub instance: String,
-    /// The table file (`surfaces.csv`) or `result.json`.
+    /// The summary table the value comes from (`surfaces.csv`, …) or `result.json`.
     pub source: String,
+    /// Column name (unit suffix kept, e.g. `sigma_nm`) or dotted result.json key.
     pub metric: String,
+    /// The value in A: a table cell or result.json scalar; null when missing in A.
+    #[schemars(with = "Scalar")]
     pub old: Value,
+    /// The value in B: a table cell or result.json scalar; null when missing in B.
+    #[schemars(with = "Scalar")]
     pub new: Value,
-    /// new − old, in the metric's unit (numbers only).
+    /// new − old in the metric's unit; null unless both are numbers.
     pub delta: Option<f64>,
-    /// (new − old) / |old| (numbers only, old ≠ 0).
+    /// (new − old) / |old|; null unless both are numbers and old ≠ 0.
     pub rel_delta: Option<f64>,
+    /// Differs beyond `rtol` (text and booleans: differs at all).
     pub changed: bool,
 }
 
-#[derive(Debug, Clone, Default, Serialize)]
+/// The counts of the comparison.
+#[derive(Debug, Clone, Default, Serialize, JsonSchema)]
 pub struct Summary {
+    /// Instances only in B.
     pub added: usize,
+    /// Instances only in A.
     pub removed: usize,
+    /// Instances in both whose cache key differs.
     pub changed: usize,
+    /// Instances in both with the same cache key.
     pub unchanged: usize,
+    /// Entries in `params`.
     pub params_changed: usize,
+    /// Metrics that differ (beyond rtol).
     pub metrics_changed: usize,
+    /// Metrics compared over the instances in both A and B.
     pub metrics_compared: usize,
 }
 
-#[derive(Debug, Clone, Serialize)]
+/// One side of the comparison.
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct Side {
+    /// The path as given on the command line.
     pub path: String,
+    /// processed: a processed directory (its last runs); pipeline: a pipeline file (keys
+    /// planned, nothing run).
     pub source: SourceKind,
+    /// Stage instances on this side.
     pub instances: usize,
 }
 
-/// The whole comparison; serialised as `hdi diff --json` (docs/schemas/diff.json).
-#[derive(Debug, Clone, Serialize)]
+/// What differs between two processed directories or pipeline files (docs/diff.md). A is the
+/// old side, B the new one. Schema version 1 (docs/json.md): existing keys keep their name,
+/// unit and type; renaming or removing one makes version 2.
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct Diff {
+    /// The old side.
     pub a: Side,
+    /// The new side.
     pub b: Side,
+    /// No instance added, removed or changed and no metric differs (exit status 0);
+    /// otherwise exit status 1.
     pub identical: bool,
+    /// Relative tolerance for numeric metrics (0: exact comparison).
+    #[schemars(range(min = 0))]
     pub rtol: f64,
+    /// The counts.
     pub summary: Summary,
+    /// Added, removed and changed instances by name (with --all also the unchanged ones).
     pub instances: Vec<InstanceDiff>,
+    /// Parameters that differ, per instance present in both A and B.
     pub params: Vec<ParamDiff>,
+    /// Metrics that differ (with --all every compared metric), per instance present in both
+    /// A and B.
     pub metrics: Vec<MetricDiff>,
 }
 

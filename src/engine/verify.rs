@@ -10,6 +10,7 @@
 use crate::core::cache::{FileProblem, ProblemKind, Store};
 use crate::core::cases::CASE_KIND;
 use crate::engine::Plan;
+use schemars::JsonSchema;
 use serde::Serialize;
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
@@ -111,15 +112,25 @@ pub fn references(plan: &Plan, store: &Store) -> BTreeMap<EntryId, BTreeSet<By>>
     refs
 }
 
-/// One damaged entry.
-#[derive(Debug, Clone, Serialize)]
+/// One damaged entry: its files do not match its manifest, or something points at it and it
+/// is gone.
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct DamagedEntry {
+    /// Store kind: a stage kind (`surface`, `simulate`, …) or `case` (one slider case, DOE run
+    /// or 3-DOF case).
+    #[schemars(regex(pattern = r"^[a-z][a-z0-9_]*$"))]
     pub kind: String,
+    /// Cache key of the entry (blake3 hex of its fingerprint).
+    #[schemars(regex(pattern = r"^[0-9a-f]{16,64}$"))]
     pub key: String,
-    /// Relative to `processed/`.
+    /// The entry directory relative to processed/: `.hdi/store/<kind>/<key>`.
     pub path: String,
-    /// Who references it (empty for an orphan checked with `--all`).
+    /// Who references the entry: an instance name (its current key), `NAME (last run)` (what
+    /// processed/NAME points at), `case of NAME` (listed under case_keys of NAME's entry),
+    /// `Slurm manifest FILE`. Empty for an unreferenced entry checked with --all.
     pub referenced_by: Vec<String>,
+    /// What is wrong, file by file.
+    #[schemars(length(min = 1))]
     pub problems: Vec<FileProblem>,
     /// The instances whose run recomputes it (empty: nothing in the pipeline does).
     #[serde(skip)]
@@ -127,28 +138,52 @@ pub struct DamagedEntry {
 }
 
 /// An entry the pipeline does not reference (what `hdi gc` would remove).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct OrphanEntry {
+    /// Store kind.
+    #[schemars(regex(pattern = r"^[a-z][a-z0-9_]*$"))]
     pub kind: String,
+    /// Cache key.
+    #[schemars(regex(pattern = r"^[0-9a-f]{16,64}$"))]
     pub key: String,
+    /// Relative to processed/.
     pub path: String,
 }
 
+/// Which entries [`verify`] re-hashes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum Scope {
+    // Plain comments: variant doc comments would make the schema a `oneOf`, not an `enum`.
+    // The entries the pipeline references.
+    Pipeline,
+    // Every entry in the store (`--all`).
+    All,
+}
+
 /// What [`verify`] found.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct VerifyReport {
-    /// `pipeline` (the referenced entries) or `all` (every entry in the store).
-    pub scope: &'static str,
+    /// `pipeline`: the entries the pipeline references were re-hashed; `all` (--all): every
+    /// entry in the store.
+    pub scope: Scope,
+    /// Entries whose files were re-hashed.
     pub entries_checked: usize,
+    /// Files re-hashed (the manifests' outputs).
     pub files_checked: usize,
+    /// Bytes re-hashed.
     pub bytes_checked: u64,
+    /// Entries whose files do not match their manifest, or that something points at and that
+    /// are gone.
     pub damaged: Vec<DamagedEntry>,
+    /// Entries in the store the pipeline does not reference (what `hdi gc` removes). Only
+    /// reported; hashed only with --all.
     pub orphans: Vec<OrphanEntry>,
-    /// Instances whose current key has no entry yet (never run or stale: `hdi status` says
+    /// Instances whose current key has no entry yet (never run, or stale: `hdi status` says
     /// why). Not damage.
     pub not_run: Vec<String>,
-    /// Dirs under `.hdi/tmp/`: work dirs of interrupted runs and quarantined entries (never
-    /// trusted; `hdi gc` removes them).
+    /// Directories under processed/.hdi/tmp/: work directories of interrupted runs and entries
+    /// quarantined by --repair (never trusted; `hdi gc` removes them).
     pub leftover_work_dirs: usize,
 }
 
@@ -172,7 +207,7 @@ pub fn verify(plan: &Plan, store: &Store, all: bool) -> VerifyReport {
         .map(|(kind, key, _)| (kind, key))
         .collect();
     let mut report = VerifyReport {
-        scope: if all { "all" } else { "pipeline" },
+        scope: if all { Scope::All } else { Scope::Pipeline },
         entries_checked: 0,
         files_checked: 0,
         bytes_checked: 0,

@@ -12,11 +12,12 @@
 
 use crate::dynamics::calibration::TargetSet;
 use crate::error::{Error, Result};
-use serde_json::{json, Value};
+use schemars::JsonSchema;
+use serde::Serialize;
 use std::path::Path;
 
 /// What kind of target a row checks (dissertation Chapter 2–4 numbers; docs/validation.md).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, JsonSchema)]
 pub enum Class {
     /// Geometry or closed form: only the dissertation's rounding can differ. Must pass.
     G,
@@ -85,18 +86,6 @@ impl Tolerance {
         }
     }
 
-    pub fn to_json(&self) -> Value {
-        match *self {
-            Tolerance::Relative(t) => json!({"kind": "relative", "value": t}),
-            Tolerance::Absolute(t) => json!({"kind": "absolute", "value": t}),
-            Tolerance::Range { lo, hi } => json!({
-                "kind": "range",
-                "lo": if lo.is_finite() { json!(lo) } else { Value::Null },
-                "hi": if hi.is_finite() { json!(hi) } else { Value::Null },
-            }),
-        }
-    }
-
     /// Short text form: `±1%`, `±0.2`, `[1, 1.6]`, `≥ 20`.
     pub fn short(&self) -> String {
         let s = |x: f64| {
@@ -117,15 +106,24 @@ impl Tolerance {
 }
 
 /// The relation a Q row asserts between its listed values.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
+#[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Relation {
     /// Strictly increasing in the listed order (`a < b < c`).
     Ascending,
     /// Every one of the first `split` values is at least `factor` times every other one
     /// ("cases 1 and 3 ≫ cases 0 and 2").
-    Dominates { split: usize, factor: f64 },
+    Dominates {
+        /// The first `split` items…
+        split: usize,
+        /// …are at least this factor above every other one.
+        factor: f64,
+    },
     /// All values within `tol` of each other (max − min ≤ tol).
-    Close { tol: f64 },
+    Close {
+        /// All items within this of each other, in the row's `unit`.
+        tol: f64,
+    },
     /// Every value is a true fact (1 = true, 0 = false).
     AllTrue,
 }
@@ -201,25 +199,6 @@ impl Ordering {
                 .join("; "),
         }
     }
-
-    pub fn to_json(&self) -> Value {
-        let relation = match self.relation {
-            Relation::Ascending => json!({"kind": "ascending"}),
-            Relation::Dominates { split, factor } => {
-                json!({"kind": "dominates", "split": split, "factor": factor})
-            }
-            Relation::Close { tol } => json!({"kind": "close", "tol": tol}),
-            Relation::AllTrue => json!({"kind": "all_true"}),
-        };
-        json!({
-            "relation": relation,
-            "items": self.items.iter().map(|(l, v)| json!({
-                "label": l,
-                "value": if v.is_finite() { json!(v) } else { Value::Null },
-            })).collect::<Vec<_>>(),
-            "holds": self.holds(),
-        })
-    }
 }
 
 /// Four significant digits for the text forms.
@@ -237,29 +216,28 @@ pub(crate) fn sig(x: f64) -> String {
 }
 
 /// Where a row's number comes from.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Origin {
     /// Computed now by the library.
     Computed,
     /// Read from the pipeline's cache: the stage instance (`kind.name`) and its cache key.
-    Cache { instance: String, key: String },
+    Cache {
+        /// Stage instance (`kind.name`).
+        instance: String,
+        /// Its cache key.
+        key: String,
+    },
     /// Computed now from values read from the cache (e.g. a fit's knobs).
-    Recomputed { instance: String, key: String },
+    Recomputed {
+        /// Stage instance (`kind.name`).
+        instance: String,
+        /// Its cache key.
+        key: String,
+    },
 }
 
 impl Origin {
-    pub fn to_json(&self) -> Value {
-        match self {
-            Origin::Computed => json!({"kind": "computed"}),
-            Origin::Cache { instance, key } => {
-                json!({"kind": "cache", "instance": instance, "key": key})
-            }
-            Origin::Recomputed { instance, key } => {
-                json!({"kind": "recomputed", "instance": instance, "key": key})
-            }
-        }
-    }
-
     pub fn short(&self) -> String {
         match self {
             Origin::Computed => "computed".into(),
@@ -314,10 +292,6 @@ impl Basis {
             Basis::ByConstruction { what } => what,
             Basis::Unstated => "",
         }
-    }
-
-    pub fn to_json(&self) -> Value {
-        json!({"kind": self.kind(), "detail": self.detail()})
     }
 }
 
@@ -650,46 +624,9 @@ impl Row {
             .map(|c| self.tolerance.holds(self.target, c.value))
     }
 
-    pub fn to_json(&self) -> Value {
-        let num = |x: f64| if x.is_finite() { json!(x) } else { Value::Null };
-        let alternative = |c: &Calibrated| {
-            json!({
-                "value": num(c.value),
-                "pass": self.tolerance.holds(self.target, c.value),
-                "inputs": c.inputs,
-                "origin": c.origin.to_json(),
-            })
-        };
-        json!({
-            "id": self.id,
-            "class": self.class.label(),
-            "reference": self.reference,
-            "quantity": self.quantity,
-            "unit": self.unit,
-            "target": num(self.target),
-            "value": num(self.value),
-            "tolerance": self.tolerance.to_json(),
-            "ordering": self.ordering.as_ref().map(Ordering::to_json),
-            "pass": self.pass(),
-            "status": self.status(),
-            "needs": self.needs,
-            "calibration_set": self.calibration_set.map(TargetSet::name),
-            "uncalibrated_record": self.record.as_ref().map(alternative),
-            "calibrated": self.calibrated.as_ref().map(alternative),
-            "variant": self.variant,
-            "inputs": self.inputs,
-            "origin": self.origin.to_json(),
-            "note": self.note,
-            "basis": self.basis.to_json(),
-            "variants": self.variants.iter().map(|v| json!({
-                "variant": v.variant,
-                "value": num(v.value),
-                "ordering": v.ordering.as_ref().map(Ordering::to_json),
-                "pass": v.pass(self),
-                "inputs": v.inputs,
-                "origin": v.origin.to_json(),
-            })).collect::<Vec<_>>(),
-        })
+    /// The row as `hdi validate --json` writes it ([`document::RowJson`]).
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::to_value(document::RowJson::new(self)).unwrap_or_default()
     }
 }
 
@@ -716,6 +653,7 @@ pub fn assign_ids(prefix: &str, rows: &mut [Row]) {
 pub mod calibration;
 pub mod contact;
 pub mod dmw;
+pub mod document;
 pub mod dynamics;
 pub mod mtl;
 pub mod optimisation;
@@ -833,10 +771,13 @@ pub fn gate<'a>(rows: impl IntoIterator<Item = &'a Row>, selected: &[Class]) -> 
 }
 
 /// Passes out of rows; rows that have not run are counted apart (in `rows`, not in `pass`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, JsonSchema)]
 pub struct Tally {
+    /// Rows counted.
     pub rows: usize,
+    /// Of which in tolerance (Q: the ordering holds).
     pub pass: usize,
+    /// Of which not run (neither pass nor fail).
     pub not_run: usize,
 }
 
@@ -857,10 +798,6 @@ impl Tally {
         } else {
             format!("{}/{}", self.pass, self.rows)
         }
-    }
-
-    pub fn to_json(&self) -> Value {
-        json!({"rows": self.rows, "pass": self.pass, "not_run": self.not_run})
     }
 }
 
@@ -994,26 +931,6 @@ impl Ledger {
             out.push(format!("{} row(s) state no basis", self.unstated));
         }
         out
-    }
-
-    pub fn to_json(&self) -> Value {
-        json!({
-            "published": self.published.to_json(),
-            "published_by_class": self.published_by_class.iter()
-                .map(|(c, t)| (c.label().to_string(), t.to_json()))
-                .collect::<serde_json::Map<String, Value>>(),
-            "derived": self.derived.to_json(),
-            "by_construction": self.by_construction.to_json(),
-            "d_in_band": {
-                "default_inputs": self.d_default.to_json(),
-                "synthetic_record": self.d_record.to_json(),
-                "calibrated_selection": self.d_calibrated_selection.to_json(),
-                "calibrated_final": self.d_calibrated_final.to_json(),
-                "calibrated_fitted": self.d_calibrated_fitted.to_json(),
-            },
-            "q_orderings": self.q.to_json(),
-            "unstated": self.unstated,
-        })
     }
 }
 
