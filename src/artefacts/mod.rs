@@ -10,6 +10,7 @@ pub mod dmw_tracks;
 pub mod interface;
 pub mod ldv;
 pub mod series;
+pub mod simulate;
 pub mod surface;
 
 /// The result of the upstream `kind` instance `name`, read through `T`, the type that kind
