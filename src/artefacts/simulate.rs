@@ -3,6 +3,7 @@
 //! and with two continuation branches each branch and their hysteresis. Field order is the
 //! file's key order.
 
+use super::ordered::OrderedMap;
 use crate::slider::case::SweepCaseResult;
 use serde::{Deserialize, Serialize};
 
@@ -71,50 +72,8 @@ pub struct BranchSweep {
     pub touchdown_convention: TouchdownConvention,
 }
 
-/// The branches by name, in run order (a JSON object whose key order is the run order).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct Branches(pub Vec<(String, BranchSweep)>);
-
-impl Branches {
-    /// The branch named `name`.
-    pub fn get(&self, name: &str) -> Option<&BranchSweep> {
-        self.0.iter().find(|(n, _)| n == name).map(|(_, b)| b)
-    }
-}
-
-impl Serialize for Branches {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut m = s.serialize_map(Some(self.0.len()))?;
-        for (k, v) in &self.0 {
-            m.serialize_entry(k, v)?;
-        }
-        m.end()
-    }
-}
-
-impl<'de> Deserialize<'de> for Branches {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct Visit;
-        impl<'de> serde::de::Visitor<'de> for Visit {
-            type Value = Branches;
-            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("branches by name")
-            }
-            fn visit_map<A: serde::de::MapAccess<'de>>(
-                self,
-                mut a: A,
-            ) -> Result<Branches, A::Error> {
-                let mut out = Vec::new();
-                while let Some((k, v)) = a.next_entry::<String, BranchSweep>()? {
-                    out.push((k, v));
-                }
-                Ok(Branches(out))
-            }
-        }
-        d.deserialize_map(Visit)
-    }
-}
+/// The branches by name (`up`, `down`), in run order.
+pub type Branches = OrderedMap<BranchSweep>;
 
 /// Intersection of slopes A and B (§8).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

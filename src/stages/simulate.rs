@@ -5,8 +5,9 @@
 
 use super::case_engine::{CaseEngine, Listing, PreparedCases, SweepCases, UpstreamEntries};
 use super::{FromConfig, Output, StageContext, StageKind};
+use crate::artefacts::ordered::OrderedMap;
 use crate::artefacts::simulate::{
-    BranchSweep, Branches, CalibratedKnob, CaseRegime, CriticalPoint, ExtraCase,
+    BranchSweep, CalibratedKnob, CaseRegime, CriticalPoint, ExtraCase,
     HysteresisResult, SimulateCase, SimulateResult, SimulateSweep, SlopeFit, SweepSummary,
     TouchdownConvention,
 };
@@ -672,7 +673,7 @@ fn stage_result(
         })
         .collect();
     let branches = runs.iter().any(|r| r.branch.is_some()).then(|| {
-        Branches(
+        OrderedMap(
             runs.iter()
                 .map(|r| {
                     let b = BranchSweep {
