@@ -7,6 +7,7 @@ pub mod calibration;
 pub mod cases;
 pub mod contact;
 pub mod dmw_tracks;
+pub mod doe;
 pub mod interface;
 pub mod ldv;
 pub mod ordered;

@@ -65,13 +65,24 @@ pub struct ThreeDofCaseResult {
 }
 
 /// Table 4.4 of one case: first lubricant contact (ms) and the bulge vibration of each
-/// window, %.
+/// window, %. Each key is required when reading (null is a value), so a case without the
+/// keys reads as no Table 4.4.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Table44Columns {
+    #[serde(deserialize_with = "required")]
     pub first_lubricant_contact_ms: Option<f64>,
+    #[serde(deserialize_with = "required")]
     pub flying_fhm_percent: Option<f64>,
+    #[serde(deserialize_with = "required")]
     pub jump_to_contact_bv_percent: Option<f64>,
+    #[serde(deserialize_with = "required")]
     pub steady_contact_bv_percent: Option<f64>,
+}
+
+/// A key that must be present, its value a number or null (serde's derive treats a missing
+/// `Option` as `None` unless the field has its own deserializer).
+fn required<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    Option::<f64>::deserialize(d)
 }
 
 /// The result of one `[three_dof]` instance.
@@ -149,5 +160,27 @@ impl<'de> Deserialize<'de> for MinSpacings {
             }
         }
         d.deserialize_map(Visit)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A case result reads back and writes the same bytes, with and without the Table 4.4
+    /// and severity keys.
+    #[test]
+    fn a_case_result_round_trips_byte_for_byte() {
+        let base = r#"{"pole_tip_mean_nm":1.5,"pole_tip_std_nm":0.1,"bulge_spacing_mean_nm":2.0,"bulge_spacing_std_nm":0.2,"bulge_vibration_percent":null,"roll_std_urad":0.3,"solid_contact_percent":0.0,"lubricant_contact_percent":0.0,"peak_contact_force_mN":0.0,"peak_lubricant_force_mN":0.0,"mean_contact_force_mN":0.0,"mean_friction_mN":0.0,"features_in_solid_contact":"","ab_lost_samples":0,"min_spacing_bulge_nm":3.5,"min_spacing_pad_plus_y_nm":null"#;
+        let variants = [
+            format!(r#"{base},"case":"isbl","steps":12}}"#),
+            format!(
+                r#"{base},"friction_coefficient":0.2,"first_lubricant_contact_ms":null,"flying_fhm_percent":1.0,"jump_to_contact_bv_percent":null,"steady_contact_bv_percent":2.0,"case":"mtl_reference","steps":7}}"#
+            ),
+        ];
+        for text in variants {
+            let r: ThreeDofCaseResult = serde_json::from_str(&text).unwrap();
+            assert_eq!(serde_json::to_string(&r).unwrap(), text);
+        }
     }
 }
