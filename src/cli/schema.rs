@@ -25,10 +25,10 @@ const fn doc<T: JsonSchema>(name: &'static str, title: &'static str) -> Document
 }
 
 /// Every `--json` output with a schema, in file-name order.
-const DOCUMENTED: &[Documented] = &[doc::<Vec<super::run::InstanceStatus>>(
-    "status",
-    "hdi status --json",
-)];
+const DOCUMENTED: &[Documented] = &[
+    doc::<super::simulate::SimulateOutput>("simulate", "hdi simulate --json"),
+    doc::<Vec<super::run::InstanceStatus>>("status", "hdi status --json"),
+];
 
 /// The schema of `T` as the output writes it (serialisation contract: a key always written
 /// is required), subschemas inline, every object closed (`additionalProperties: false`, so

@@ -68,7 +68,9 @@ impl From<&crate::dynamics::metrics::SeriesStats> for Stats {
 }
 
 /// A non-finite number is written as JSON `null`; it reads back as NaN.
-pub(crate) fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+pub(crate) fn f64_or_nan<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<f64, D::Error> {
     Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 

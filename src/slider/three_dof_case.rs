@@ -5,6 +5,7 @@
 
 use crate::artefacts::contact::upstream_isbl_params;
 use crate::artefacts::dmw_tracks::{self, read_dmw_tracks, DmwTrack};
+use crate::artefacts::three_dof::{MinSpacings, Table44Columns, ThreeDofCaseResult};
 use crate::contact::isbl::{IsblModel, SurfaceEnergy};
 use crate::contact::lookup::IsblLookup;
 use crate::contact::mtl::{FwmExperiment, LubricantCase, RoughFilm, RoughMtl};
@@ -15,7 +16,6 @@ use crate::dynamics::three_dof::interface::{FeatureInterface, InterfaceLaw};
 use crate::dynamics::two_dof::DmwInput;
 use crate::error::{Error, Result};
 use crate::slider::three_dof_params::{CaseInterface, ThreeDofParams};
-use crate::artefacts::three_dof::{MinSpacings, Table44Columns, ThreeDofCaseResult};
 use serde_json::{json, Value};
 use std::path::Path;
 

@@ -8,8 +8,8 @@
 use super::case_engine::{CaseEngine, Listing, PreparedCases, SweepCases, UpstreamEntries};
 use super::{FromConfig, Output, StageContext, StageKind};
 use crate::artefacts::doe::{DesignM, DesignSpread, DoeOptimum, DoeResult};
-use crate::core::store::rows_of;
 use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::store::rows_of;
 use crate::error::Result;
 use crate::numerics::annealing::StopReason;
 use crate::numerics::regression::full_factorial;
@@ -259,7 +259,10 @@ fn fit_surfaces(p: &DoeParams, ctx: &StageContext, design: &DesignRun) -> Result
         .iter()
         .map(|f| model_selection(f).2.to_string())
         .collect();
-    crate::core::store::write_table(&rows_of(&coefficient_rows(&fits)), &ctx.out_dir.join("coefficients"))?;
+    crate::core::store::write_table(
+        &rows_of(&coefficient_rows(&fits)),
+        &ctx.out_dir.join("coefficients"),
+    )?;
     crate::core::store::write_table(&rows_of(&anova_rows(&fits)), &ctx.out_dir.join("anova"))?;
     crate::core::store::write_table(
         &rows_of(&predictive_rows(p, &fits)?),
@@ -312,7 +315,10 @@ fn check_sensitivity(
     annealing: &Annealing,
 ) -> Result<Sensitivity> {
     let sensitivity = optimise::check_sensitivity(p, ctx.progress, objective, annealing)?;
-    crate::core::store::write_table(&rows_of(&sensitivity.rows), &ctx.out_dir.join("sensitivity"))?;
+    crate::core::store::write_table(
+        &rows_of(&sensitivity.rows),
+        &ctx.out_dir.join("sensitivity"),
+    )?;
     Ok(sensitivity)
 }
 

@@ -7,9 +7,8 @@ use super::case_engine::{CaseEngine, Listing, PreparedCases, SweepCases, Upstrea
 use super::{FromConfig, Output, StageContext, StageKind};
 use crate::artefacts::ordered::OrderedMap;
 use crate::artefacts::simulate::{
-    BranchSweep, CalibratedKnob, CaseRegime, CriticalPoint, ExtraCase,
-    HysteresisResult, SimulateCase, SimulateResult, SimulateSweep, SlopeFit, SweepSummary,
-    TouchdownConvention,
+    BranchSweep, CalibratedKnob, CaseRegime, CriticalPoint, ExtraCase, HysteresisResult,
+    SimulateCase, SimulateResult, SimulateSweep, SlopeFit, SweepSummary, TouchdownConvention,
 };
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::dynamics::metrics::{Regime, SweepMetrics};
@@ -579,7 +578,10 @@ impl Serialize for OtherBranches {
         for b in &self.0 {
             let sfx = b.branch;
             m.serialize_entry(&format!("touchdown_{sfx}_nm"), &b.touchdown_nm)?;
-            m.serialize_entry(&format!("touchdown_refined_{sfx}_nm"), &b.touchdown_refined_nm)?;
+            m.serialize_entry(
+                &format!("touchdown_refined_{sfx}_nm"),
+                &b.touchdown_refined_nm,
+            )?;
             if let Some((actuation, clearance)) = b.critical {
                 m.serialize_entry(&format!("critical_point_{sfx}_nm"), &actuation)?;
                 m.serialize_entry(&format!("critical_clearance_{sfx}_nm"), &clearance)?;

@@ -6,12 +6,12 @@ use super::cases::{refined_touchdown, CaseRunner, DesignCase};
 use super::params::{DoeParams, SaObjective, FACTORS, NM, UM};
 use super::surface::{surrogate_xi, LevelFit};
 use super::tables::{comparison_rows, table_value};
+use crate::artefacts::doe::ComparisonRow;
 use crate::core::progress::Progress;
 use crate::error::{Error, Result};
 use crate::numerics::annealing::{sensitivity_points, Annealer, AnnealingRecord, StopReason};
 use crate::slider::sweep::CaseOutcome;
 use rayon::prelude::*;
-use crate::artefacts::doe::ComparisonRow;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// The annealing's box, in coded units.

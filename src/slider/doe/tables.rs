@@ -4,6 +4,7 @@
 use super::cases::DesignCase;
 use super::params::{DoeParams, FACTORS, NM, UM};
 use super::surface::{model_selection, LevelFit};
+use crate::artefacts::doe::{ComparisonRow, DegreeTest, LevelFitSummary, SurfaceFitSummary};
 use crate::dynamics::metrics::Regime;
 use crate::error::{Error, Result};
 use crate::numerics::annealing::AnnealingRecord;
@@ -11,7 +12,6 @@ use crate::numerics::regression::{decoded, Polynomial, ResponseSurface};
 use crate::slider::case::SweepCaseResult;
 use crate::slider::params::SimulateParams;
 use crate::slider::sweep::{sweep_analysis, CaseOutcome};
-use crate::artefacts::doe::{ComparisonRow, DegreeTest, LevelFitSummary, SurfaceFitSummary};
 use serde::Serialize;
 use serde_json::Value;
 
@@ -23,7 +23,9 @@ pub(crate) fn table_value(v: f64) -> Option<f64> {
 
 /// A table value of a quantity a case's result.json may hold as null (non-finite).
 fn finite_value(v: f64, scale: f64) -> Option<f64> {
-    Some(v).filter(|v| v.is_finite()).and_then(|v| table_value(v / scale))
+    Some(v)
+        .filter(|v| v.is_finite())
+        .and_then(|v| table_value(v / scale))
 }
 
 /// One row of the design table: a case, its coded point and bulge, and its response.
