@@ -3,8 +3,8 @@
 //! and with two continuation branches each branch and their hysteresis. Field order is the
 //! file's key order.
 
+use super::cases::SweepCaseResult;
 use super::ordered::OrderedMap;
-use crate::slider::case::SweepCaseResult;
 use serde::{Deserialize, Serialize};
 
 /// The result of one `[simulate]` instance.

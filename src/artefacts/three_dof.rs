@@ -2,7 +2,7 @@
 //! `result.json` (also a row of the instance's `cases` table) and the instance's
 //! `result.json`. Field order is the file's key order.
 
-use crate::slider::case::f64_or_nan;
+use super::cases::f64_or_nan;
 use serde::{Deserialize, Serialize};
 
 /// One 3-DOF case: steady-window statistics (nm, %, mN), the features that touched, each
