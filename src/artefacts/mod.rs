@@ -8,10 +8,14 @@ pub mod calibration;
 pub mod cases;
 pub mod contact;
 pub mod dmw_tracks;
+pub mod doe;
 pub mod interface;
 pub mod ldv;
+pub mod ordered;
 pub mod series;
+pub mod simulate;
 pub mod surface;
+pub mod three_dof;
 
 /// The result of the upstream `kind` instance `name`, read through `T`, the type that kind
 /// writes; a missing instance or a result that does not parse as `T` is an error naming it.

@@ -36,6 +36,7 @@ const DOCUMENTED: &[Documented] = &[
     doc::<hdi::stages::contact::ContactReport>("contact", "hdi contact --json"),
     doc::<hdi::engine::diff::Diff>("diff", "hdi diff --json"),
     doc::<hdi::stages::dmw::DmwReport>("dmw", "hdi dmw FILE --json"),
+    doc::<super::simulate::SimulateOutput>("simulate", "hdi simulate --json"),
     doc::<Vec<super::run::InstanceStatus>>("status", "hdi status --json"),
     doc::<hdi::artefacts::surface::SurfaceReport>("surface", "hdi surface FILE --json"),
     doc::<hdi::validation::document::ValidateDocument>("validate", "hdi validate --json"),

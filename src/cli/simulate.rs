@@ -1,7 +1,9 @@
 //! `hdi simulate`: ad-hoc 2-DOF slider cases through the library's sweep runner.
 
 use anyhow::{Context, Result};
-use serde_json::json;
+use hdi::slider::sweep::SweepRow;
+use schemars::JsonSchema;
+use serde::Serialize;
 use std::time::Instant;
 
 use super::args::SimulateArgs;
@@ -10,7 +12,7 @@ use hdi::stages::contact::{self, ContactConfig, SurfaceEnergyConfig};
 
 pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     use hdi::artefacts::dmw_tracks::read_dmw_track;
-    use hdi::slider::sweep::{case_rows, run_cases, sweep_analysis, CaseSink};
+    use hdi::slider::sweep::{run_cases, sweep_analysis, sweep_rows, CaseSink};
     let params = simulate_params(&a)?;
     let isbl = interface_lookup(&a)?;
     let dmw = match &a.dmw {
@@ -39,7 +41,7 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
     let cases = cases?;
     let wall = started.elapsed().as_secs_f64();
     let sweep = sweep_analysis(&params, &cases)?;
-    let rows = case_rows(&cases, &sweep);
+    let rows = sweep_rows(&cases, &sweep);
     if a.out.is_some() {
         write_sweep(&root, &params, &cases, &sweep, &rows, &a.model)?;
     }
@@ -47,8 +49,7 @@ pub(super) fn cmd_simulate(a: SimulateArgs) -> Result<()> {
         let _ = std::fs::remove_dir_all(&root);
     }
     if a.json {
-        print_json(&cases, &sweep, rows, wall);
-        return Ok(());
+        return print_json(&cases, &sweep, rows, wall);
     }
     print_table(&a.model, &params, &cases, &sweep, &rows, wall);
     Ok(())
@@ -136,12 +137,12 @@ fn write_sweep(
     params: &hdi::slider::params::SimulateParams,
     cases: &[hdi::slider::sweep::CaseOutcome],
     sweep: &hdi::dynamics::metrics::SweepMetrics,
-    rows: &[serde_json::Map<String, serde_json::Value>],
+    rows: &[SweepRow],
     model: &str,
 ) -> Result<()> {
     use hdi::slider::sweep::sweep_analysis;
     use hdi::stages::simulate::plots;
-    hdi::core::store::write_table(rows, &root.join("sweep"))?;
+    hdi::core::store::write_table(&hdi::core::store::rows_of(rows), &root.join("sweep"))?;
     // One sweep (the ad hoc command does not track branches; the pipeline's
     // `[simulate]` does, docs/conventions.md), its grid touchdown.
     let run = hdi::stages::simulate::BranchRun {
@@ -166,37 +167,108 @@ fn write_sweep(
     Ok(())
 }
 
+/// 2-DOF slider cases (docs/simulation.md): one case, or a sweep (two or more actuations)
+/// with its touchdown, critical point and slopes. Schema version 1 (docs/json.md): existing
+/// keys keep their name, unit and type; renaming or removing one makes version 2.
+#[derive(Debug, Serialize, JsonSchema)]
+pub(super) struct SimulateOutput {
+    /// One row per actuation, in increasing actuation (the one case of a single actuation).
+    #[schemars(length(min = 1))]
+    cases: Vec<SweepRow>,
+    /// Wall time of the cases, s (the only timing; it is printed, never written to a result
+    /// file).
+    wall_time_s: f64,
+    /// Sweep analysis of c̄(h_TFC); only for a sweep (two or more actuations).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sweep: Option<SweepAnalysis>,
+}
+
+/// Sweep analysis of c̄(h_TFC).
+#[derive(Debug, Serialize, JsonSchema)]
+struct SweepAnalysis {
+    /// Touchdown actuation (first case in solid contact), m; null: none reached. `null` when
+    /// not defined for this input (docs/json.md).
+    touchdown_actuation_m: Option<f64>,
+    /// Intersection of slopes A and B (§8); null when either is missing.
+    critical_point: Option<CriticalPoint>,
+    /// Slopes A (approach), B (jump to contact), C (lubricant contact), D (solid contact) of
+    /// §8.
+    slopes: Slopes,
+}
+
+/// Intersection of slopes A and B (§8).
+#[derive(Debug, Serialize, JsonSchema)]
+struct CriticalPoint {
+    /// h_TFC,cr, m. `null` when not defined for this input (docs/json.md).
+    actuation_m: Option<f64>,
+    /// c_cr, m. `null` when not defined for this input (docs/json.md).
+    clearance_m: Option<f64>,
+}
+
+/// Slopes A (approach), B (jump to contact), C (lubricant contact), D (solid contact) of §8.
+#[allow(non_snake_case)]
+#[derive(Debug, Serialize, JsonSchema)]
+struct Slopes {
+    /// Least-squares line of the approach; null when the sweep does not reach it.
+    A: Option<Slope>,
+    /// Least-squares line of the jump to contact; null when the sweep does not reach it.
+    B: Option<Slope>,
+    /// Least-squares line of the lubricant contact; null when the sweep does not reach it.
+    C: Option<Slope>,
+    /// Least-squares line of the solid contact; null when the sweep does not reach it.
+    D: Option<Slope>,
+}
+
+/// Least-squares line of one segment.
+#[derive(Debug, Serialize, JsonSchema)]
+struct Slope {
+    /// dc̄/dh_TFC, m/m (= nm/nm). `null` when not defined for this input (docs/json.md).
+    slope: Option<f64>,
+    /// Intercept of the line c̄ = slope·h_TFC + intercept, m. `null` when not defined for this
+    /// input (docs/json.md).
+    intercept_m: Option<f64>,
+    /// RMS residual of the fit, m. `null` when not defined for this input (docs/json.md).
+    rms_residual_m: Option<f64>,
+    /// Sweep points fitted.
+    n_points: usize,
+}
+
 /// `--json` (docs/schemas/simulate.json): one case, or a sweep with its touchdown, critical
 /// point and slopes A–D (dc̄/dh_TFC, m/m) beside the cases.
 fn print_json(
     cases: &[hdi::slider::sweep::CaseOutcome],
     sweep: &hdi::dynamics::metrics::SweepMetrics,
-    rows: Vec<serde_json::Map<String, serde_json::Value>>,
+    rows: Vec<SweepRow>,
     wall: f64,
-) {
-    let mut out = json!({"cases": rows, "wall_time_s": wall});
-    if cases.len() > 1 {
-        let fit = |l: &Option<hdi::dynamics::metrics::LineFit>| {
-            l.as_ref().map(|l| {
-                json!({
-                    "slope": finite(l.slope),
-                    "intercept_m": finite(l.intercept_m),
-                    "rms_residual_m": finite(l.rms_residual_m),
-                    "n_points": l.indices.len(),
-                })
-            })
-        };
-        let s = &sweep.slopes;
-        out["sweep"] = json!({
-            "touchdown_actuation_m": sweep.touchdown_actuation_m.and_then(finite),
-            "critical_point": s.critical_point.as_ref().map(|c| json!({
-                "actuation_m": finite(c.actuation_m),
-                "clearance_m": finite(c.clearance_m),
-            })),
-            "slopes": {"A": fit(&s.a), "B": fit(&s.b), "C": fit(&s.c), "D": fit(&s.d)},
-        });
-    }
-    println!("{out}");
+) -> Result<()> {
+    let fit = |l: &Option<hdi::dynamics::metrics::LineFit>| {
+        l.as_ref().map(|l| Slope {
+            slope: finite(l.slope),
+            intercept_m: finite(l.intercept_m),
+            rms_residual_m: finite(l.rms_residual_m),
+            n_points: l.indices.len(),
+        })
+    };
+    let s = &sweep.slopes;
+    let out = SimulateOutput {
+        cases: rows,
+        wall_time_s: wall,
+        sweep: (cases.len() > 1).then(|| SweepAnalysis {
+            touchdown_actuation_m: sweep.touchdown_actuation_m.and_then(finite),
+            critical_point: s.critical_point.as_ref().map(|c| CriticalPoint {
+                actuation_m: finite(c.actuation_m),
+                clearance_m: finite(c.clearance_m),
+            }),
+            slopes: Slopes {
+                A: fit(&s.a),
+                B: fit(&s.b),
+                C: fit(&s.c),
+                D: fit(&s.d),
+            },
+        }),
+    };
+    println!("{}", serde_json::to_string(&out)?);
+    Ok(())
 }
 
 /// The human-readable report: one line per case, then the sweep's touchdown, critical point
@@ -206,7 +278,7 @@ fn print_table(
     params: &hdi::slider::params::SimulateParams,
     cases: &[hdi::slider::sweep::CaseOutcome],
     sweep: &hdi::dynamics::metrics::SweepMetrics,
-    rows: &[serde_json::Map<String, serde_json::Value>],
+    rows: &[SweepRow],
     wall: f64,
 ) {
     println!(
@@ -221,19 +293,18 @@ fn print_table(
         "h (nm)", "c̄ (nm)", "std (nm)", "FHM/BV %", "solid %", "regime", "F_c (mN)", "μ", "steps"
     );
     for r in rows {
-        let g = |k: &str| r.get(k).and_then(|v| v.as_f64());
-        let s = |k: &str| g(k).map_or("-".to_string(), |x| format!("{x:.3}"));
+        let s = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.3}"));
         println!(
             "  {:>8.2} {:>10.4} {:>9.4} {:>9.2} {:>8.2} {:>17} {:>10} {:>6} {:>8}",
-            g("actuation_nm").unwrap_or(f64::NAN),
-            g("clearance_mean_nm").unwrap_or(f64::NAN),
-            g("clearance_std_nm").unwrap_or(f64::NAN),
-            g("vibration_percent").unwrap_or(f64::NAN),
-            g("solid_contact_percent").unwrap_or(f64::NAN),
-            r.get("regime").and_then(|v| v.as_str()).unwrap_or("-"),
-            s("contact_force_mean_mN"),
-            s("friction_coefficient"),
-            g("steps").unwrap_or(f64::NAN)
+            r.actuation_nm,
+            r.clearance_mean_nm,
+            r.clearance_std_nm,
+            r.vibration_percent,
+            r.solid_contact_percent,
+            r.regime.unwrap_or("-"),
+            s(r.contact_force_mean_mN),
+            s(r.friction_coefficient),
+            r.steps as f64
         );
     }
     if cases.len() > 1 {

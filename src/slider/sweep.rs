@@ -517,44 +517,88 @@ pub fn regime_label(v: &Value) -> Value {
     json!(name)
 }
 
-/// One row of a sweep's table (`sweep.{parquet,csv,arrow}`, one per case): unit suffixes in
-/// the names; a non-finite value is null, as in the case's result.json. The field order is
-/// the table's column order.
+/// One case: a row of the sweep table (`sweep.{parquet,csv,arrow}`; units in the column
+/// names, docs/conventions.md); a non-finite value is null, as in the case's result.json. The
+/// field order is the table's column order.
 #[allow(non_snake_case)]
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct SweepRow {
-    /// Rounded to the femtometre: 8.8 nm, not 8.799999999999999.
+    /// TFC actuation h_TFC, nm (rounded to the femtometre: 8.8 nm, not 8.799999999999999).
     pub actuation_nm: f64,
+    /// Steady mean clearance c̄, nm. `null` when not defined for this input (docs/json.md).
+    #[schemars(with = "Option<f64>")]
     pub clearance_mean_nm: f64,
+    /// Standard deviation of the clearance, nm. `null` when not defined for this input
+    /// (docs/json.md).
+    #[schemars(with = "Option<f64>")]
     pub clearance_std_nm: f64,
+    /// Mean flying height, nm. `null` when not defined for this input (docs/json.md).
+    #[schemars(with = "Option<f64>")]
     pub fh_mean_nm: f64,
+    /// Mean head-media spacing, nm. `null` when not defined for this input (docs/json.md).
+    #[schemars(with = "Option<f64>")]
     pub hms_mean_nm: f64,
+    /// FHM/BV of eq. 2.1 over the steady window, %. `null` when not defined for this input
+    /// (docs/json.md).
+    #[schemars(with = "Option<f64>")]
     pub vibration_percent: f64,
+    /// The same from the extrema, %. `null` when not defined for this input (docs/json.md).
     pub vibration_extrema_percent: Option<f64>,
+    /// `FHM` (flying-height modulation: the case flies) or `BV` (bouncing vibration: it
+    /// contacts).
+    #[schemars(extend("enum" = ["FHM", "BV"]))]
     pub vibration_kind: String,
+    /// Share of the steady window in solid contact, %. `null` when not defined for this input
+    /// (docs/json.md).
+    #[schemars(with = "Option<f64>")]
     pub solid_contact_percent: f64,
+    /// Operating regime from c̄ (§1.2).
+    #[schemars(extend("enum" = ["flying", "mobile lubricant", "bonded lubricant", "solid contact", null]))]
     pub regime: Option<&'static str>,
+    /// Mean contact force, mN; null without a contact model. `null` when not defined for this
+    /// input (docs/json.md).
     pub contact_force_mean_mN: Option<f64>,
+    /// Mean friction force, mN. `null` when not defined for this input (docs/json.md).
     pub friction_mean_mN: Option<f64>,
+    /// Mean adhesion force, mN. `null` when not defined for this input (docs/json.md).
     pub adhesion_mean_mN: Option<f64>,
+    /// Mean real contact area, µm². `null` when not defined for this input (docs/json.md).
     pub real_area_mean_um2: Option<f64>,
-    /// Headline ratio of means, `_mean_inst` the mean of the instantaneous ratio over the
-    /// samples with F_c > 1 µN (docs/conventions.md).
+    /// Mean friction / mean contact force (ratio of means; the headline, docs/conventions.md),
+    /// dimensionless; null without contact force. `null` when not defined for this input
+    /// (docs/json.md).
     pub friction_coefficient: Option<f64>,
+    /// Mean of the instantaneous ratio over samples with F_c > 1 µN, dimensionless. `null`
+    /// when not defined for this input (docs/json.md).
     pub friction_coefficient_mean_inst: Option<f64>,
+    /// Mean contact pressure (ratio of means), GPa. `null` when not defined for this input
+    /// (docs/json.md).
     pub mean_pressure_GPa: Option<f64>,
+    /// Mean of the instantaneous contact pressure, GPa. `null` when not defined for this
+    /// input (docs/json.md).
     pub mean_pressure_GPa_mean_inst: Option<f64>,
+    /// Mean shear traction (ratio of means), GPa. `null` when not defined for this input
+    /// (docs/json.md).
     pub shear_traction_GPa: Option<f64>,
+    /// Mean of the instantaneous shear traction, GPa. `null` when not defined for this input
+    /// (docs/json.md).
     pub shear_traction_GPa_mean_inst: Option<f64>,
+    /// Nominal contact area of the bulge, µm². `null` when not defined for this input
+    /// (docs/json.md).
+    #[schemars(with = "Option<f64>")]
     pub nominal_area_um2: f64,
+    /// Flyability ξ (§9), dimensionless. `null` when not defined for this input
+    /// (docs/json.md).
     pub flyability: Option<f64>,
+    /// Accepted integrator steps.
     pub steps: u64,
+    /// Case-cache key; empty outside the pipeline (`hdi simulate` caches nothing).
     pub case_key: String,
     /// The continuation branch (`[simulate]` stage tables only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub branch: Option<&'static str>,
-    /// A sweep in heater power (docs/bulge.md): each row also names its power (null where
-    /// the actuation has none).
+    /// A sweep in heater power (docs/bulge.md): each row also names its power, mW (null where
+    /// the actuation has none; `[simulate]` stage tables only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub heater_power_mW: Option<Option<f64>>,
 }

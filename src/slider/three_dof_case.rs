@@ -5,6 +5,7 @@
 
 use crate::artefacts::contact::upstream_isbl_params;
 use crate::artefacts::dmw_tracks::{self, read_dmw_tracks, DmwTrack};
+use crate::artefacts::three_dof::{MinSpacings, Table44Columns, ThreeDofCaseResult};
 use crate::contact::isbl::{IsblModel, SurfaceEnergy};
 use crate::contact::lookup::IsblLookup;
 use crate::contact::mtl::{FwmExperiment, LubricantCase, RoughFilm, RoughMtl};
@@ -15,7 +16,7 @@ use crate::dynamics::three_dof::interface::{FeatureInterface, InterfaceLaw};
 use crate::dynamics::two_dof::DmwInput;
 use crate::error::{Error, Result};
 use crate::slider::three_dof_params::{CaseInterface, ThreeDofParams};
-use serde_json::{json, Map, Value};
+use serde_json::{json, Value};
 use std::path::Path;
 
 /// The MTL law of a Table 4.4 case on the interface's film (σ, t) at the disk speed.
@@ -69,17 +70,18 @@ fn run_case(
     )?;
     let h = case.run()?;
     let sigma = ip.sigma;
-    let metrics = case_metrics(p, &h, 3.0 * sigma, 3.0 * sigma + ip.lubricant_thickness)?;
+    let levels = (3.0 * sigma, 3.0 * sigma + ip.lubricant_thickness);
+    let result = case_result(p, &h, levels, which.label());
     write_case_h5(&dir.join("case.h5"), &h)?;
     history_png(&dir.join("history.png"), &h, &which.label())?;
     if !p.profile.is_constant() {
-        let levels = (3.0 * sigma, 3.0 * sigma + ip.lubricant_thickness);
         variable_actuation_pngs(dir, &h, &p.profile, levels, &which.label())?;
     }
-    let mut m = metrics;
-    m.insert("case".into(), json!(which.label()));
-    m.insert("steps".into(), json!(h.stats.accepted_steps));
-    Ok(Value::Object(m))
+    serde_json::to_value(&result).map_err(|e| Error::Encode {
+        kind: "three_dof",
+        what: "case result".into(),
+        message: e.to_string(),
+    })
 }
 
 fn window(x: &[f64], dt: f64, (a, b): (f64, f64)) -> &[f64] {
@@ -98,56 +100,27 @@ fn std(x: &[f64]) -> f64 {
     (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / x.len().max(1) as f64).sqrt()
 }
 
-fn case_metrics(
+/// The case's result: its steady-window statistics, features in contact, closest approaches,
+/// contact severity and (variable profile) Table 4.4; `levels` are the solid and lubricant
+/// contact spacings.
+fn case_result(
     p: &ThreeDofParams,
     h: &History3Dof,
-    solid: f64,
-    lubricant: f64,
-) -> Result<Map<String, Value>> {
+    (solid, lubricant): (f64, f64),
+    case: String,
+) -> ThreeDofCaseResult {
     let dt = h.dt;
     let end = (h.len() - 1) as f64 * dt;
     let steady = (p.steady_start, end + dt);
-    let mut m = Map::new();
     let nm = |x: f64| x * 1e9;
     let pt = window(&h.pole_tip, dt, steady);
     let bulge = window(&h.bulge_spacing, dt, steady);
-    m.insert("pole_tip_mean_nm".into(), json!(nm(mean(pt))));
-    m.insert("pole_tip_std_nm".into(), json!(nm(std(pt))));
-    m.insert("bulge_spacing_mean_nm".into(), json!(nm(mean(bulge))));
-    m.insert("bulge_spacing_std_nm".into(), json!(nm(std(bulge))));
-    m.insert(
-        "bulge_vibration_percent".into(),
-        json!(h.bulge_vibration(steady)),
-    );
     let roll = window(&h.roll, dt, steady);
-    m.insert("roll_std_urad".into(), json!(std(roll) * 1e6));
     let n = bulge.len().max(1) as f64;
     let i0 = ((steady.0 / dt).round() as usize).min(h.len());
     let any_below = |k: usize, level: f64| h.feature_spacing.iter().any(|s| s[k] < level);
     let solid_share = (i0..h.len()).filter(|&k| any_below(k, solid)).count() as f64 / n;
     let lube_share = (i0..h.len()).filter(|&k| any_below(k, lubricant)).count() as f64 / n;
-    m.insert("solid_contact_percent".into(), json!(100.0 * solid_share));
-    m.insert(
-        "lubricant_contact_percent".into(),
-        json!(100.0 * lube_share),
-    );
-    // Over the integrator's steps, not only the samples (an impact can fall between them).
-    m.insert(
-        "peak_contact_force_mN".into(),
-        json!(h.peak_contact_force * 1e3),
-    );
-    m.insert(
-        "peak_lubricant_force_mN".into(),
-        json!(h.peak_lubricant_force * 1e3),
-    );
-    m.insert(
-        "mean_contact_force_mN".into(),
-        json!(mean(window(&h.contact_force, dt, steady)) * 1e3),
-    );
-    m.insert(
-        "mean_friction_mN".into(),
-        json!(mean(window(&h.friction, dt, steady)) * 1e3),
-    );
     let touched: Vec<String> = h
         .features
         .iter()
@@ -155,20 +128,20 @@ fn case_metrics(
         .filter(|(_, s)| s.iter().any(|v| *v < solid))
         .map(|(f, _)| format!("{f:?}"))
         .collect();
-    m.insert("features_in_solid_contact".into(), json!(touched.join(" ")));
-    m.insert("ab_lost_samples".into(), json!(h.ab_lost_samples));
     // Closest approach of every feature over the whole run (which ones came near the disk).
-    for (f, sp) in h.features.iter().zip(&h.feature_spacing) {
-        let min = sp
-            .iter()
-            .copied()
-            .filter(|v| v.is_finite())
-            .fold(f64::INFINITY, f64::min);
-        m.insert(
-            format!("min_spacing_{}_nm", feature_column(f)),
-            json!(min.is_finite().then(|| nm(min))),
-        );
-    }
+    let min_spacing = h
+        .features
+        .iter()
+        .zip(&h.feature_spacing)
+        .map(|(f, sp)| {
+            let min = sp
+                .iter()
+                .copied()
+                .filter(|v| v.is_finite())
+                .fold(f64::INFINITY, f64::min);
+            (feature_column(f), min.is_finite().then(|| nm(min)))
+        })
+        .collect();
     // Contact severity over the steady window, one definition for every area
     // (docs/conventions.md): headline ratio of means μ = Q̄/F̄_c, P_m = F̄_c/Ā_r, τ = Q̄/Ā_r,
     // the mean of the instantaneous ratio (samples with F_c > 1 µN) beside it.
@@ -180,63 +153,51 @@ fn case_metrics(
             adhesion_n: None,
         },
         crate::dynamics::metrics::FORCE_THRESHOLD_N,
-    );
-    if let Ok(c) = severity {
-        let put = |m: &mut Map<String, Value>, k: &str, v: Option<f64>| {
-            if let Some(v) = v.filter(|v| v.is_finite()) {
-                m.insert(k.into(), json!(v));
-            }
-        };
-        let gpa = |v: Option<f64>| v.map(|x| x * 1e-9);
-        put(
-            &mut m,
-            "friction_coefficient",
-            c.friction_coefficient_ratio_of_means,
-        );
-        put(
-            &mut m,
-            "friction_coefficient_mean_inst",
-            c.friction_coefficient.map(|s| s.mean),
-        );
-        put(
-            &mut m,
-            "mean_pressure_GPa",
-            gpa(c.mean_pressure_pa_ratio_of_means),
-        );
-        put(
-            &mut m,
-            "mean_pressure_GPa_mean_inst",
-            gpa(c.mean_pressure_pa.map(|s| s.mean)),
-        );
-        put(
-            &mut m,
-            "shear_traction_GPa",
-            gpa(c.shear_traction_pa_ratio_of_means),
-        );
-        put(
-            &mut m,
-            "shear_traction_GPa_mean_inst",
-            gpa(c.shear_traction_pa.map(|s| s.mean)),
-        );
-    }
+    )
+    .ok();
+    let finite = |v: Option<f64>| v.filter(|v| v.is_finite());
+    let gpa = |v: Option<f64>| finite(v.map(|x| x * 1e-9));
+    let c = severity.as_ref();
     // Table 4.4 windows of a variable profile.
-    if !p.profile.is_constant() {
+    let table_4_4 = (!p.profile.is_constant()).then(|| {
         let t = h.table_4_4(&p.profile, lubricant);
-        m.insert(
-            "first_lubricant_contact_ms".into(),
-            json!(t.first_lubricant_contact.map(|t| t * 1e3)),
-        );
-        m.insert("flying_fhm_percent".into(), json!(t.flying_fhm));
-        m.insert(
-            "jump_to_contact_bv_percent".into(),
-            json!(t.jump_to_contact_bv),
-        );
-        m.insert(
-            "steady_contact_bv_percent".into(),
-            json!(t.steady_contact_bv),
-        );
+        Table44Columns {
+            first_lubricant_contact_ms: t.first_lubricant_contact.map(|t| t * 1e3),
+            flying_fhm_percent: t.flying_fhm,
+            jump_to_contact_bv_percent: t.jump_to_contact_bv,
+            steady_contact_bv_percent: t.steady_contact_bv,
+        }
+    });
+    ThreeDofCaseResult {
+        pole_tip_mean_nm: nm(mean(pt)),
+        pole_tip_std_nm: nm(std(pt)),
+        bulge_spacing_mean_nm: nm(mean(bulge)),
+        bulge_spacing_std_nm: nm(std(bulge)),
+        bulge_vibration_percent: h.bulge_vibration(steady),
+        roll_std_urad: std(roll) * 1e6,
+        solid_contact_percent: 100.0 * solid_share,
+        lubricant_contact_percent: 100.0 * lube_share,
+        // Over the integrator's steps, not only the samples (an impact can fall between them).
+        peak_contact_force_mN: h.peak_contact_force * 1e3,
+        peak_lubricant_force_mN: h.peak_lubricant_force * 1e3,
+        mean_contact_force_mN: mean(window(&h.contact_force, dt, steady)) * 1e3,
+        mean_friction_mN: mean(window(&h.friction, dt, steady)) * 1e3,
+        features_in_solid_contact: touched.join(" "),
+        ab_lost_samples: h.ab_lost_samples,
+        min_spacing_nm: MinSpacings(min_spacing),
+        friction_coefficient: c.and_then(|c| finite(c.friction_coefficient_ratio_of_means)),
+        friction_coefficient_mean_inst: c
+            .and_then(|c| finite(c.friction_coefficient.as_ref().map(|s| s.mean))),
+        mean_pressure_GPa: c.and_then(|c| gpa(c.mean_pressure_pa_ratio_of_means)),
+        mean_pressure_GPa_mean_inst: c
+            .and_then(|c| gpa(c.mean_pressure_pa.as_ref().map(|s| s.mean))),
+        shear_traction_GPa: c.and_then(|c| gpa(c.shear_traction_pa_ratio_of_means)),
+        shear_traction_GPa_mean_inst: c
+            .and_then(|c| gpa(c.shear_traction_pa.as_ref().map(|s| s.mean))),
+        table_4_4,
+        case,
+        steps: h.stats.accepted_steps,
     }
-    Ok(m)
 }
 
 /// `Pad(PlusY)` → `pad_plus_y`: a column-friendly feature name.

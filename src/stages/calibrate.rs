@@ -7,8 +7,9 @@ use super::case_engine::{
     case_value, typed_case, CaseEngine, CaseRecipe, ListedCase, PreparedCases, UpstreamEntries,
     UpstreamRef,
 };
-use super::{FromConfig, StageContext, StageKind, StageOutput};
+use super::{FromConfig, Output, StageContext, StageKind};
 use crate::artefacts::calibration::fitted_json;
+use crate::artefacts::ordered::OrderedMap;
 use crate::contact::isbl::IsblParams;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::executor::batch::BatchRunner;
@@ -29,7 +30,7 @@ use crate::slider::calibration::{base_inputs, base_of};
 use crate::slider::params::{uncalibrated_base, SimulateParams};
 use crate::units::Length;
 use serde::Deserialize;
-use serde_json::{json, Map, Value};
+use serde_json::{json, Value};
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
@@ -251,7 +252,7 @@ impl StageKind for CalibrateStage {
     const KIND: &'static str = "calibrate";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
     type Result = serde_json::Value;
-    type Row = serde_json::Map<String, serde_json::Value>;
+    type Row = CalibrateRow;
     const CASE_KIND: Option<&'static str> = Some(CALIBRATION_CASE);
     fn case_engine(&self) -> Option<&dyn CaseEngine> {
         Some(self)
@@ -269,7 +270,7 @@ impl StageKind for CalibrateStage {
         // The base is uncalibrated: its contact and DMW instances.
         self.base.upstream()
     }
-    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+    fn run(&self, ctx: &StageContext) -> Result<Output<Value, CalibrateRow>> {
         let (isbl, dmw) = base_inputs(&self.base, &ctx.upstream, &ctx.upstream_dirs)?;
         // Under a batch runner (`hdi run --executor slurm`) the rounds of cases go to it; the
         // search stays here (docs/slurm.md, "Calibration on Slurm").
@@ -315,11 +316,39 @@ impl StageKind for CalibrateStage {
         std::fs::write(&log_path, &log).map_err(|e| crate::error::Error::io(&log_path, e))?;
         ctx.progress
             .set_message(log.lines().next().unwrap_or_default());
-        Ok(StageOutput {
+        Ok(Output {
             result: self.result_json(&settings, &fit_inputs, &warm, &result, &counts),
             summary_row: Some(self.summary_row(&result, &counts)),
         })
     }
+}
+
+/// The instance's row of the run's summary table: the objective and the in-band counts
+/// (fitted, held-out and its selection and final sets) at the defaults and calibrated, the
+/// convergence, and each fitted knob under its `pipeline.toml` name (SI units).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct CalibrateRow {
+    pub base: String,
+    pub objective_defaults: f64,
+    pub objective_calibrated: f64,
+    pub targets: usize,
+    pub within_tolerance: usize,
+    pub fitted_in_band_defaults: usize,
+    pub fitted_in_band_calibrated: usize,
+    pub held_out_targets: usize,
+    pub held_out_in_band_defaults: usize,
+    pub held_out_in_band_calibrated: usize,
+    pub selection_targets: usize,
+    pub selection_in_band_defaults: usize,
+    pub selection_in_band_calibrated: usize,
+    pub final_targets: usize,
+    pub final_in_band_defaults: usize,
+    pub final_in_band_calibrated: usize,
+    pub converged: bool,
+    pub evaluations: usize,
+    pub cases: usize,
+    #[serde(flatten)]
+    pub knobs: OrderedMap<f64>,
 }
 
 impl CalibrateStage {
@@ -351,36 +380,36 @@ impl CalibrateStage {
 
     /// The instance's row of the run's summary table: objective and in-band counts before and
     /// after the fit, its convergence and the fitted knobs.
-    fn summary_row(&self, result: &CalibrationResult, counts: &InBandCounts) -> Map<String, Value> {
-        let mut row = Map::new();
-        row.insert("base".into(), json!(self.base_name));
-        row.insert("objective_defaults".into(), json!(result.initial.objective));
-        row.insert("objective_calibrated".into(), json!(result.best.objective));
-        row.insert("targets".into(), json!(result.best.outcomes.len()));
-        row.insert("within_tolerance".into(), json!(counts.fitted.1));
-        row.insert("fitted_in_band_defaults".into(), json!(counts.fitted.0));
-        row.insert("fitted_in_band_calibrated".into(), json!(counts.fitted.1));
-        row.insert("held_out_targets".into(), json!(counts.held_out_total));
-        row.insert("held_out_in_band_defaults".into(), json!(counts.held_out.0));
-        row.insert(
-            "held_out_in_band_calibrated".into(),
-            json!(counts.held_out.1),
-        );
-        for (name, (d, c), total) in [
-            ("selection", counts.selection, counts.selection_total),
-            ("final", counts.final_set, counts.final_total),
-        ] {
-            row.insert(format!("{name}_targets"), json!(total));
-            row.insert(format!("{name}_in_band_defaults"), json!(d));
-            row.insert(format!("{name}_in_band_calibrated"), json!(c));
+    fn summary_row(&self, result: &CalibrationResult, counts: &InBandCounts) -> CalibrateRow {
+        CalibrateRow {
+            base: self.base_name.clone(),
+            objective_defaults: result.initial.objective,
+            objective_calibrated: result.best.objective,
+            targets: result.best.outcomes.len(),
+            within_tolerance: counts.fitted.1,
+            fitted_in_band_defaults: counts.fitted.0,
+            fitted_in_band_calibrated: counts.fitted.1,
+            held_out_targets: counts.held_out_total,
+            held_out_in_band_defaults: counts.held_out.0,
+            held_out_in_band_calibrated: counts.held_out.1,
+            selection_targets: counts.selection_total,
+            selection_in_band_defaults: counts.selection.0,
+            selection_in_band_calibrated: counts.selection.1,
+            final_targets: counts.final_total,
+            final_in_band_defaults: counts.final_set.0,
+            final_in_band_calibrated: counts.final_set.1,
+            converged: result.converged,
+            evaluations: result.evaluations,
+            cases: result.cases,
+            knobs: OrderedMap(
+                result
+                    .best
+                    .knobs
+                    .iter()
+                    .map(|(k, v)| (k.name().to_string(), *v))
+                    .collect(),
+            ),
         }
-        row.insert("converged".into(), json!(result.converged));
-        row.insert("evaluations".into(), json!(result.evaluations));
-        row.insert("cases".into(), json!(result.cases));
-        for (k, v) in &result.best.knobs {
-            row.insert(k.name().into(), json!(v));
-        }
-        row
     }
 
     /// The stage's `result.json`: the fitted knobs, the evaluations at the defaults and at the

@@ -6,8 +6,10 @@
 //! with a sensitivity check; and Table 2.8, the 2-DOF sweep on the initial and optimised designs.
 
 use super::case_engine::{CaseEngine, Listing, PreparedCases, SweepCases, UpstreamEntries};
-use super::{FromConfig, StageContext, StageKind, StageOutput};
+use super::{FromConfig, Output, StageContext, StageKind};
+use crate::artefacts::doe::{DesignM, DesignSpread, DoeOptimum, DoeResult};
 use crate::core::config::{ConfigError, PipelineFile};
+use crate::core::store::rows_of;
 use crate::error::Result;
 use crate::numerics::annealing::StopReason;
 use crate::numerics::regression::full_factorial;
@@ -27,7 +29,8 @@ use crate::slider::doe_design::design_cases;
 use crate::slider::params::uncalibrated_base;
 use crate::slider::sweep::{PreparedSweep, SweepCase};
 use rayon::prelude::*;
-use serde_json::{json, Map, Value};
+use serde::Serialize;
+use serde_json::Value;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
@@ -70,8 +73,8 @@ impl FromConfig for DoeStage {
 impl StageKind for DoeStage {
     const KIND: &'static str = "doe";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
-    type Result = serde_json::Value;
-    type Row = serde_json::Map<String, serde_json::Value>;
+    type Result = DoeResult;
+    type Row = DoeRow;
     const CASE_KIND: Option<&'static str> = Some(DOE_CASE);
     fn case_engine(&self) -> Option<&dyn CaseEngine> {
         Some(self)
@@ -90,7 +93,7 @@ impl StageKind for DoeStage {
         }
         u
     }
-    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+    fn run(&self, ctx: &StageContext) -> Result<Output<DoeResult, DoeRow>> {
         ctx.progress.set_message("interface table");
         let (p, sweep) = self.prepare(&ctx.upstream_entries())?;
         let p = &p;
@@ -150,7 +153,7 @@ impl StageKind for DoeStage {
         // A fact of this run, not a result (it depends on what the store held): manifest only.
         ctx.log_run(
             "cases_cached",
-            json!(design.cases.iter().filter(|c| c.entry.cached).count()),
+            Value::from(design.cases.iter().filter(|c| c.entry.cached).count()),
         );
         Ok(assemble_output(p, &design, &surfaces, optimum))
     }
@@ -232,7 +235,7 @@ fn run_design(p: &DoeParams, ctx: &StageContext, runner: &CaseRunner) -> Result<
         cases.push(o?);
     }
     crate::core::store::write_table(
-        &design_rows(&coded_points, designs.len(), &cases),
+        &rows_of(&design_rows(&coded_points, designs.len(), &cases)),
         &ctx.out_dir.join("design"),
     )?;
     Ok(DesignRun {
@@ -256,10 +259,13 @@ fn fit_surfaces(p: &DoeParams, ctx: &StageContext, design: &DesignRun) -> Result
         .iter()
         .map(|f| model_selection(f).2.to_string())
         .collect();
-    crate::core::store::write_table(&coefficient_rows(&fits), &ctx.out_dir.join("coefficients"))?;
-    crate::core::store::write_table(&anova_rows(&fits), &ctx.out_dir.join("anova"))?;
     crate::core::store::write_table(
-        &predictive_rows(p, &fits)?,
+        &rows_of(&coefficient_rows(&fits)),
+        &ctx.out_dir.join("coefficients"),
+    )?;
+    crate::core::store::write_table(&rows_of(&anova_rows(&fits)), &ctx.out_dir.join("anova"))?;
+    crate::core::store::write_table(
+        &rows_of(&predictive_rows(p, &fits)?),
         &ctx.out_dir.join("predictive_equations"),
     )?;
     Ok(SurfaceFits {
@@ -294,7 +300,7 @@ fn draw_fit_figures(
 fn anneal(p: &DoeParams, ctx: &StageContext, objective: &Objective) -> Result<Annealing> {
     let annealing = optimise::anneal(p, ctx.progress, objective)?;
     crate::core::store::write_table(
-        &annealing_rows(p, &annealing.history, &annealing.xis),
+        &rows_of(&annealing_rows(p, &annealing.history, &annealing.xis)),
         &ctx.out_dir.join("annealing"),
     )?;
     annealing_convergence_png(&ctx.out_dir.join("annealing.png"), p, &annealing.history)?;
@@ -309,7 +315,10 @@ fn check_sensitivity(
     annealing: &Annealing,
 ) -> Result<Sensitivity> {
     let sensitivity = optimise::check_sensitivity(p, ctx.progress, objective, annealing)?;
-    crate::core::store::write_table(&sensitivity.rows, &ctx.out_dir.join("sensitivity"))?;
+    crate::core::store::write_table(
+        &rows_of(&sensitivity.rows),
+        &ctx.out_dir.join("sensitivity"),
+    )?;
     Ok(sensitivity)
 }
 
@@ -321,7 +330,7 @@ fn compare_designs(
     best: [f64; 3],
 ) -> Result<Comparison> {
     let comparison = optimise::compare_designs(p, ctx.progress, runner, best)?;
-    crate::core::store::write_table(&comparison.rows, &ctx.out_dir.join("comparison"))?;
+    crate::core::store::write_table(&rows_of(&comparison.rows), &ctx.out_dir.join("comparison"))?;
     comparison_png(&ctx.out_dir.join("comparison.png"), p, &comparison.sweeps)?;
     Ok(comparison)
 }
@@ -333,35 +342,67 @@ struct Optimum {
     comparison: Option<Comparison>,
 }
 
-/// The result JSON and the summary row.
+/// The instance's row of the run's summary table.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DoeRow {
+    /// The `[simulate]` instance the design varies.
+    pub simulate: String,
+    pub cases: usize,
+    /// The degree each actuation level selects, space-separated.
+    pub selected_degrees: String,
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub optimum: Option<OptimumColumns>,
+}
+
+/// The annealing's optimum (µm, seven significant digits) when the instance optimised.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OptimumColumns {
+    pub optimum_a_um: Option<f64>,
+    pub optimum_w_um: Option<f64>,
+    pub optimum_x_um: Option<f64>,
+    pub optimum_xi: Option<f64>,
+    pub sa_evaluations: usize,
+    pub most_sensitive: Option<&'static str>,
+}
+
+/// Every table the stage may write, as its result lists them.
+const TABLES: [&str; 7] = [
+    "design",
+    "coefficients",
+    "anova",
+    "predictive_equations",
+    "annealing",
+    "sensitivity",
+    "comparison",
+];
+
+/// The result and the summary row.
 fn assemble_output(
     p: &DoeParams,
     design: &DesignRun,
     surfaces: &SurfaceFits,
     optimum: Option<Optimum>,
-) -> StageOutput {
+) -> Output<DoeResult, DoeRow> {
     let total = design.cases.len();
     // Every case this instance used, so `hdi gc` keeps them with it.
     let mut case_keys: Vec<String> = design.cases.iter().map(|c| c.entry.key.clone()).collect();
-    let mut result = json!({
-        "cases": total,
-        "fits": surfaces.fits.iter().map(fit_summary).collect::<Vec<_>>(),
-        "tables": ["design", "coefficients", "anova", "predictive_equations"],
-    });
-    if p.bulge.is_some() {
-        // The fitted (measured) bulge: Table 2.8's initial design.
+    // The fitted (measured) bulge: Table 2.8's initial design.
+    let initial_design_m = p.bulge.is_some().then(|| {
         let b = p.base.model.bulge;
-        result["initial_design_m"] = json!({
-            "a_tfc": b.semi_width_x, "w_tfc": b.full_width_y, "x_tfc": b.offset_from_te,
-        });
-    }
-    let mut row = Map::new();
-    row.insert("simulate".into(), json!(p.base_name));
-    row.insert("cases".into(), json!(total));
-    row.insert(
-        "selected_degrees".into(),
-        json!(surfaces.selected_degrees.join(" ")),
-    );
+        DesignM {
+            a_tfc: b.semi_width_x,
+            w_tfc: b.full_width_y,
+            x_tfc: b.offset_from_te,
+        }
+    });
+    let mut row = DoeRow {
+        simulate: p.base_name.clone(),
+        cases: total,
+        selected_degrees: surfaces.selected_degrees.join(" "),
+        optimum: None,
+    };
+    let mut result_optimum = None;
+    let mut result_comparison = None;
     if let Some(Optimum {
         annealing: a,
         sensitivity: s,
@@ -372,44 +413,51 @@ fn assemble_output(
         case_keys.extend(s.case_keys);
         let best = a.best;
         let spread = s.spread;
-        let optimum = json!({
-            "a_m": best[0], "w_m": best[1], "x_m": best[2],
-            "xi": a.best_xi,
-            "objective": format!("{:?}", p.sa_objective).to_lowercase(),
-            "evaluations": a.evaluations,
-            "reanneals": a.reanneals,
-            "stop": match a.stop {
+        result_optimum = Some(DoeOptimum {
+            a_m: best[0],
+            w_m: best[1],
+            x_m: best[2],
+            xi: a.best_xi,
+            objective: format!("{:?}", p.sa_objective).to_lowercase(),
+            evaluations: a.evaluations,
+            reanneals: a.reanneals,
+            stop: match a.stop {
                 StopReason::Stalled => "converged (stalled)",
                 StopReason::MaxEvaluations => "evaluation budget",
+            }
+            .to_string(),
+            sensitivity_one_step: DesignSpread {
+                a_tfc: spread[0],
+                w_tfc: spread[1],
+                x_tfc: spread[2],
             },
-            "sensitivity_one_step": {"a_tfc": spread[0], "w_tfc": spread[1], "x_tfc": spread[2]},
-            "most_sensitive": s.most_sensitive,
+            most_sensitive: s.most_sensitive.map(str::to_string),
         });
-        row.insert("optimum_a_um".into(), table_value(best[0] / UM));
-        row.insert("optimum_w_um".into(), table_value(best[1] / UM));
-        row.insert("optimum_x_um".into(), table_value(best[2] / UM));
-        row.insert("optimum_xi".into(), table_value(a.best_xi));
-        row.insert("sa_evaluations".into(), json!(a.evaluations));
-        row.insert("most_sensitive".into(), json!(s.most_sensitive));
-        result["optimum"] = optimum;
+        row.optimum = Some(OptimumColumns {
+            optimum_a_um: table_value(best[0] / UM),
+            optimum_w_um: table_value(best[1] / UM),
+            optimum_x_um: table_value(best[2] / UM),
+            optimum_xi: table_value(a.best_xi),
+            sa_evaluations: a.evaluations,
+            most_sensitive: s.most_sensitive,
+        });
         if let Some(c) = comparison {
             case_keys.extend(c.case_keys);
-            result["comparison"] = json!(c.rows);
+            result_comparison = Some(c.rows);
         }
     }
     case_keys.sort();
     case_keys.dedup();
-    result["case_keys"] = json!(case_keys);
-    result["tables"] = json!([
-        "design",
-        "coefficients",
-        "anova",
-        "predictive_equations",
-        "annealing",
-        "sensitivity",
-        "comparison"
-    ]);
-    StageOutput {
+    let result = DoeResult {
+        cases: total,
+        fits: surfaces.fits.iter().map(fit_summary).collect(),
+        tables: TABLES.iter().map(|t| t.to_string()).collect(),
+        initial_design_m,
+        optimum: result_optimum,
+        comparison: result_comparison,
+        case_keys,
+    };
+    Output {
         result,
         summary_row: Some(row),
     }

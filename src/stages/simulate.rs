@@ -4,7 +4,12 @@
 //! of §8 and the dissertation's plots (Figs 2.13–2.14, 2.16–2.19, 2.22).
 
 use super::case_engine::{CaseEngine, Listing, PreparedCases, SweepCases, UpstreamEntries};
-use super::{FromConfig, StageContext, StageKind, StageOutput};
+use super::{FromConfig, Output, StageContext, StageKind};
+use crate::artefacts::ordered::OrderedMap;
+use crate::artefacts::simulate::{
+    BranchSweep, CalibratedKnob, CaseRegime, CriticalPoint, ExtraCase, HysteresisResult,
+    SimulateCase, SimulateResult, SimulateSweep, SlopeFit, SweepSummary, TouchdownConvention,
+};
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::dynamics::metrics::{Regime, SweepMetrics};
 use crate::dynamics::touchdown::Touchdown;
@@ -16,36 +21,44 @@ use crate::slider::sweep::{
     sweep_analysis, sweep_rows, Branch, CaseOutcome, CaseSink, Hysteresis, PreparedSweep,
     SweepPlan, SweepRow, HYSTERESIS_TOLERANCE_M,
 };
-use serde_json::{json, Map, Value};
+use serde::Serialize;
+use serde_json::Value;
 use std::path::Path;
 use std::sync::Arc;
 
 /// The `[simulate.NAME]` table (checked by `SimulateParams`).
 pub use crate::slider::params::SimulateConfig;
 
-fn sweep_json(cases: &[CaseOutcome], s: &SweepMetrics) -> Value {
+/// One branch's sweep metrics as the result writes them.
+fn sweep_summary(cases: &[CaseOutcome], s: &SweepMetrics) -> SweepSummary {
     let line = |l: &Option<crate::dynamics::metrics::LineFit>| {
-        l.as_ref().map(|l| {
-            json!({
-                "slope": l.slope, "intercept_m": l.intercept_m, "rms_residual_m": l.rms_residual_m,
-                "actuations_m": l.indices.iter().map(|&i| cases[i].actuation).collect::<Vec<_>>(),
-            })
+        l.as_ref().map(|l| SlopeFit {
+            slope: l.slope,
+            intercept_m: l.intercept_m,
+            rms_residual_m: l.rms_residual_m,
+            actuations_m: l.indices.iter().map(|&i| cases[i].actuation).collect(),
         })
     };
-    json!({
-        "touchdown_m": s.touchdown_actuation_m,
-        "critical_point": s.slopes.critical_point.as_ref().map(|c| json!({
-            "actuation_m": c.actuation_m, "clearance_m": c.clearance_m,
-        })),
-        "slope_A": line(&s.slopes.a),
-        "slope_B": line(&s.slopes.b),
-        "slope_C": line(&s.slopes.c),
-        "slope_D": line(&s.slopes.d),
-        "optimum_m": s.optimum_index.map(|i| cases[i].actuation),
-        "regimes": cases.iter().zip(&s.regimes).map(|(c, r)| json!({
-            "actuation_m": c.actuation, "regime": regime_name(*r),
-        })).collect::<Vec<_>>(),
-    })
+    SweepSummary {
+        touchdown_m: s.touchdown_actuation_m,
+        critical_point: s.slopes.critical_point.as_ref().map(|c| CriticalPoint {
+            actuation_m: c.actuation_m,
+            clearance_m: c.clearance_m,
+        }),
+        slope_A: line(&s.slopes.a),
+        slope_B: line(&s.slopes.b),
+        slope_C: line(&s.slopes.c),
+        slope_D: line(&s.slopes.d),
+        optimum_m: s.optimum_index.map(|i| cases[i].actuation),
+        regimes: cases
+            .iter()
+            .zip(&s.regimes)
+            .map(|(c, r)| CaseRegime {
+                actuation_m: c.actuation,
+                regime: regime_name(*r).to_string(),
+            })
+            .collect(),
+    }
 }
 
 /// One branch of a sweep (or the only sweep, `branch` `None`, with the nominal start): its
@@ -64,24 +77,29 @@ fn branch_name(b: Option<Branch>) -> &'static str {
 }
 
 /// The convention's touchdown of one branch (docs/conventions.md) with the cases it added.
-fn touchdown_json(r: &BranchRun) -> Value {
-    json!({
-        "actuation_m": r.touchdown.actuation,
-        "last_flying_m": r.touchdown.last_flying,
-        "resolution_m": crate::dynamics::touchdown::TouchdownSearch::convention(1.0, 1.0, 1).resolution,
-        "grid_touchdown_m": r.sweep.touchdown_actuation_m,
-        "extra_cases": r.extra.iter().map(|c| json!({
-            "actuation_m": c.actuation,
-            "solid_contact_percent": c.metrics.percent_solid_contact,
-            "clearance_mean_m": c.metrics.clearance_m.mean,
-            "case_key": c.entry.key,
-        })).collect::<Vec<_>>(),
-    })
+fn touchdown_convention(r: &BranchRun) -> TouchdownConvention {
+    TouchdownConvention {
+        actuation_m: r.touchdown.actuation,
+        last_flying_m: r.touchdown.last_flying,
+        resolution_m: crate::dynamics::touchdown::TouchdownSearch::convention(1.0, 1.0, 1)
+            .resolution,
+        grid_touchdown_m: r.sweep.touchdown_actuation_m,
+        extra_cases: r
+            .extra
+            .iter()
+            .map(|c| ExtraCase {
+                actuation_m: c.actuation,
+                solid_contact_percent: c.metrics.percent_solid_contact,
+                clearance_mean_m: c.metrics.clearance_m.mean,
+                case_key: c.entry.key.clone(),
+            })
+            .collect(),
+    }
 }
 
 /// Where the up and down branches' steady clearances differ, and whether their touchdowns
 /// and critical points coincide.
-fn hysteresis_json(h: &Hysteresis, runs: &[BranchRun]) -> Value {
+fn hysteresis_result(h: &Hysteresis, runs: &[BranchRun]) -> HysteresisResult {
     let cp = |r: &BranchRun| {
         r.sweep
             .slopes
@@ -96,16 +114,20 @@ fn hysteresis_json(h: &Hysteresis, runs: &[BranchRun]) -> Value {
         (None, None) => true,
         _ => false,
     };
-    json!({
-        "tolerance_m": h.tolerance_m,
-        "from_m": h.from_m,
-        "to_m": h.to_m,
-        "max_difference_m": h.max_difference_m,
-        "max_difference_at_m": h.max_at_m,
-        "differing_actuations_m": h.actuations_m,
-        "touchdown_coincides": same(u.touchdown.actuation, d.touchdown.actuation, res * (1.0 + 1e-9)),
-        "critical_point_coincides": same(cp(u), cp(d), 1e-12),
-    })
+    HysteresisResult {
+        tolerance_m: h.tolerance_m,
+        from_m: h.from_m,
+        to_m: h.to_m,
+        max_difference_m: h.max_difference_m,
+        max_difference_at_m: h.max_at_m,
+        differing_actuations_m: h.actuations_m.clone(),
+        touchdown_coincides: same(
+            u.touchdown.actuation,
+            d.touchdown.actuation,
+            res * (1.0 + 1e-9),
+        ),
+        critical_point_coincides: same(cp(u), cp(d), 1e-12),
+    }
 }
 
 /// Contiguous runs of the same regime as (x0, x1, regime) bands, x in nm, edges halfway
@@ -351,8 +373,8 @@ impl FromConfig for SimulateStage {
 impl StageKind for SimulateStage {
     const KIND: &'static str = "simulate";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
-    type Result = serde_json::Value;
-    type Row = serde_json::Map<String, serde_json::Value>;
+    type Result = SimulateResult;
+    type Row = SimulateRow;
 
     fn params(&self) -> Value {
         self.params.canonical()
@@ -364,7 +386,7 @@ impl StageKind for SimulateStage {
     fn case_engine(&self) -> Option<&dyn CaseEngine> {
         Some(self)
     }
-    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+    fn run(&self, ctx: &StageContext) -> Result<Output<SimulateResult, SimulateRow>> {
         ctx.progress.set_message("interface table");
         let prepared = self.prepare(&ctx.upstream_entries())?;
         let p = &prepared.params;
@@ -392,7 +414,7 @@ impl StageKind for SimulateStage {
         // what ran before and, for cases two branches share, on timing): manifest only.
         ctx.log_run(
             "cases_cached",
-            json!(all.iter().filter(|c| c.entry.cached).count()),
+            Value::from(all.iter().filter(|c| c.entry.cached).count()),
         );
         let runs = branch_runs(&prepared, &sink, all, &branches, &starts, grid.len())?;
         let mut files: Vec<Vec<String>> = Vec::new();
@@ -423,7 +445,7 @@ impl StageKind for SimulateStage {
             touchdown_power,
             hysteresis.as_ref(),
         );
-        Ok(StageOutput {
+        Ok(Output {
             result,
             summary_row: Some(row),
         })
@@ -497,75 +519,129 @@ fn nm(x: f64) -> f64 {
     (x * 1e15).round() / 1e6
 }
 
-/// The instance's row of the run's summary table: touchdown, critical point, slopes, optimum
-/// and hysteresis of the sweep (a second branch adds its touchdown and critical point).
+/// The instance's row of the run's summary table (lengths in nm, femtometre-rounded where
+/// they are actuations): touchdown, critical point, slopes, optimum and hysteresis of the
+/// sweep. The field order is the table's column order.
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SimulateRow {
+    pub model: String,
+    pub geometry: String,
+    pub calibration: Option<String>,
+    /// Grid cases run, every branch.
+    pub cases: usize,
+    /// The first branch's grid touchdown, the convention's refined one and critical point.
+    pub touchdown_nm: Option<f64>,
+    pub touchdown_refined_nm: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub critical_point_nm: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub critical_clearance_nm: Option<f64>,
+    /// The same columns of every further branch, its name in them (`touchdown_down_nm`).
+    #[serde(flatten)]
+    pub other_branches: OtherBranches,
+    pub slope_A: Option<f64>,
+    pub slope_B: Option<f64>,
+    pub slope_C: Option<f64>,
+    pub slope_D: Option<f64>,
+    /// A sweep stated in heater power only (docs/bulge.md).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub touchdown_power_mW: Option<Option<f64>>,
+    pub optimum_nm: Option<f64>,
+    /// Two branches only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hysteresis_from_nm: Option<Option<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hysteresis_to_nm: Option<Option<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hysteresis_max_nm: Option<f64>,
+}
+
+/// Touchdown and critical point columns of one branch after the first.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BranchColumns {
+    pub branch: &'static str,
+    pub touchdown_nm: Option<f64>,
+    pub touchdown_refined_nm: Option<f64>,
+    /// Critical point actuation and clearance, nm.
+    pub critical: Option<(f64, f64)>,
+}
+
+/// The columns of the branches after the first, each column named with its branch.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct OtherBranches(pub Vec<BranchColumns>);
+
+impl Serialize for OtherBranches {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(None)?;
+        for b in &self.0 {
+            let sfx = b.branch;
+            m.serialize_entry(&format!("touchdown_{sfx}_nm"), &b.touchdown_nm)?;
+            m.serialize_entry(
+                &format!("touchdown_refined_{sfx}_nm"),
+                &b.touchdown_refined_nm,
+            )?;
+            if let Some((actuation, clearance)) = b.critical {
+                m.serialize_entry(&format!("critical_point_{sfx}_nm"), &actuation)?;
+                m.serialize_entry(&format!("critical_clearance_{sfx}_nm"), &clearance)?;
+            }
+        }
+        m.end()
+    }
+}
+
+/// The instance's row of the run's summary table (a second branch adds its touchdown and
+/// critical point).
 fn summary_row(
     p: &SimulateParams,
     runs: &[BranchRun],
     n_cases: usize,
     touchdown_power: Option<f64>,
     hysteresis: Option<&Hysteresis>,
-) -> Map<String, Value> {
+) -> SimulateRow {
     let first = &runs[0];
     let (cases, sweep) = (&first.cases, &first.sweep);
-    let mut row = Map::new();
-    row.insert("model".into(), json!(p.model_name));
-    row.insert("geometry".into(), json!(p.geometry));
-    row.insert("calibration".into(), json!(p.calibration));
-    row.insert("cases".into(), json!(n_cases));
-    for r in runs {
-        // The first branch keeps the plain names; a second one adds its name.
-        let sfx = if std::ptr::eq(r, first) {
-            String::new()
-        } else {
-            format!("_{}", branch_name(r.branch))
-        };
-        row.insert(
-            format!("touchdown{sfx}_nm"),
-            json!(r.sweep.touchdown_actuation_m.map(nm)),
-        );
-        row.insert(
-            format!("touchdown_refined{sfx}_nm"),
-            json!(r.touchdown.actuation.map(nm)),
-        );
-        if let Some(cp) = &r.sweep.slopes.critical_point {
-            row.insert(
-                format!("critical_point{sfx}_nm"),
-                json!(cp.actuation_m * 1e9),
-            );
-            row.insert(
-                format!("critical_clearance{sfx}_nm"),
-                json!(cp.clearance_m * 1e9),
-            );
-        }
+    let critical = |r: &BranchRun| {
+        r.sweep
+            .slopes
+            .critical_point
+            .as_ref()
+            .map(|cp| (cp.actuation_m * 1e9, cp.clearance_m * 1e9))
+    };
+    let slope = |l: &Option<crate::dynamics::metrics::LineFit>| l.as_ref().map(|l| l.slope);
+    SimulateRow {
+        model: p.model_name.clone(),
+        geometry: p.geometry.clone(),
+        calibration: p.calibration.clone(),
+        cases: n_cases,
+        touchdown_nm: sweep.touchdown_actuation_m.map(nm),
+        touchdown_refined_nm: first.touchdown.actuation.map(nm),
+        critical_point_nm: critical(first).map(|c| c.0),
+        critical_clearance_nm: critical(first).map(|c| c.1),
+        other_branches: OtherBranches(
+            runs[1..]
+                .iter()
+                .map(|r| BranchColumns {
+                    branch: branch_name(r.branch),
+                    touchdown_nm: r.sweep.touchdown_actuation_m.map(nm),
+                    touchdown_refined_nm: r.touchdown.actuation.map(nm),
+                    critical: critical(r),
+                })
+                .collect(),
+        ),
+        slope_A: slope(&sweep.slopes.a),
+        slope_B: slope(&sweep.slopes.b),
+        slope_C: slope(&sweep.slopes.c),
+        slope_D: slope(&sweep.slopes.d),
+        touchdown_power_mW: p
+            .efficiency
+            .map(|_| touchdown_power.map(|w| (w * 1e9).round() / 1e6)),
+        optimum_nm: sweep.optimum_index.map(|i| nm(cases[i].actuation)),
+        hysteresis_from_nm: hysteresis.map(|h| h.from_m.map(nm)),
+        hysteresis_to_nm: hysteresis.map(|h| h.to_m.map(nm)),
+        hysteresis_max_nm: hysteresis.map(|h| (h.max_difference_m * 1e15).round() / 1e6),
     }
-    for (k, l) in [
-        ("slope_A", &sweep.slopes.a),
-        ("slope_B", &sweep.slopes.b),
-        ("slope_C", &sweep.slopes.c),
-        ("slope_D", &sweep.slopes.d),
-    ] {
-        row.insert(k.into(), json!(l.as_ref().map(|l| l.slope)));
-    }
-    if p.efficiency.is_some() {
-        row.insert(
-            "touchdown_power_mW".into(),
-            json!(touchdown_power.map(|w| (w * 1e9).round() / 1e6)),
-        );
-    }
-    row.insert(
-        "optimum_nm".into(),
-        json!(sweep.optimum_index.map(|i| nm(cases[i].actuation))),
-    );
-    if let Some(h) = hysteresis {
-        row.insert("hysteresis_from_nm".into(), json!(h.from_m.map(nm)));
-        row.insert("hysteresis_to_nm".into(), json!(h.to_m.map(nm)));
-        row.insert(
-            "hysteresis_max_nm".into(),
-            json!((h.max_difference_m * 1e15).round() / 1e6),
-        );
-    }
-    row
 }
 
 /// The stage's `result.json`: the first branch's sweep, every case with its HDF5 file, the case
@@ -577,47 +653,57 @@ fn stage_result(
     case_keys: Vec<String>,
     touchdown_power: Option<f64>,
     hysteresis: Option<&Hysteresis>,
-) -> Value {
+) -> SimulateResult {
     let first = &runs[0];
-    let mut summary = sweep_json(&first.cases, &first.sweep);
-    let branch_json = |r: &BranchRun| {
-        let mut v = sweep_json(&r.cases, &r.sweep);
-        if let Some(o) = v.as_object_mut() {
-            o.insert("touchdown_convention".into(), touchdown_json(r));
-        }
-        v
+    let sweep = SimulateSweep {
+        metrics: sweep_summary(&first.cases, &first.sweep),
+        branch: branch_name(first.branch).to_string(),
+        touchdown_convention: touchdown_convention(first),
+        efficiency_m_per_W: p.efficiency,
+        touchdown_power_W: p.efficiency.map(|_| touchdown_power),
     };
-    if let Some(obj) = summary.as_object_mut() {
-        obj.insert("branch".into(), json!(branch_name(first.branch)));
-        obj.insert("touchdown_convention".into(), touchdown_json(first));
-        if let Some(e) = p.efficiency {
-            obj.insert("efficiency_m_per_W".into(), json!(e));
-            obj.insert("touchdown_power_W".into(), json!(touchdown_power));
-        }
-    }
-    let mut result = json!({
-        "sweep": summary,
-        "cases": runs.iter().zip(files).flat_map(|(r, f)| r.cases.iter().zip(f).map(|(c, f)| json!({
-            "actuation_m": c.actuation, "branch": branch_name(r.branch), "h5": f, "metrics": c.metrics,
-        }))).collect::<Vec<_>>(),
-        "case_keys": case_keys,
-        "calibration": p.calibration,
-        "calibrated_knobs": p.calibrated_knobs.iter().map(|(k, v)| json!({"knob": k, "value": v})).collect::<Vec<_>>(),
-        "table": "sweep.parquet",
+    let cases = runs
+        .iter()
+        .zip(files)
+        .flat_map(|(r, f)| {
+            r.cases.iter().zip(f).map(|(c, f)| SimulateCase {
+                actuation_m: c.actuation,
+                branch: branch_name(r.branch).to_string(),
+                h5: f.clone(),
+                metrics: c.metrics.clone(),
+            })
+        })
+        .collect();
+    let branches = runs.iter().any(|r| r.branch.is_some()).then(|| {
+        OrderedMap(
+            runs.iter()
+                .map(|r| {
+                    let b = BranchSweep {
+                        metrics: sweep_summary(&r.cases, &r.sweep),
+                        touchdown_convention: touchdown_convention(r),
+                    };
+                    (branch_name(r.branch).to_string(), b)
+                })
+                .collect(),
+        )
     });
-    if let Some(obj) = result.as_object_mut() {
-        if runs.iter().any(|r| r.branch.is_some()) {
-            let mut b = Map::new();
-            for r in runs {
-                b.insert(branch_name(r.branch).into(), branch_json(r));
-            }
-            obj.insert("branches".into(), Value::Object(b));
-        }
-        if let Some(h) = hysteresis {
-            obj.insert("hysteresis".into(), hysteresis_json(h, runs));
-        }
+    SimulateResult {
+        sweep,
+        cases,
+        case_keys,
+        calibration: p.calibration.clone(),
+        calibrated_knobs: p
+            .calibrated_knobs
+            .iter()
+            .map(|(k, v)| CalibratedKnob {
+                knob: k.clone(),
+                value: *v,
+            })
+            .collect(),
+        table: "sweep.parquet".to_string(),
+        branches,
+        hysteresis: hysteresis.map(|h| hysteresis_result(h, runs)),
     }
-    result
 }
 
 // ------------------------------------------------------------------------------------------

@@ -8,14 +8,16 @@
 use super::case_engine::{
     case_value, typed_case, CaseEngine, ListedCase, PreparedCases, UpstreamEntries,
 };
-use super::{FromConfig, StageContext, StageKind, StageOutput};
+use super::{FromConfig, Output, StageContext, StageKind};
 use crate::artefacts::cases::{self as case_files};
+use crate::artefacts::three_dof::{FittedBulge, ThreeDofCaseResult, ThreeDofResult};
 use crate::core::cases;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::error::{Error, Result};
 use crate::slider::three_dof_case::{PreparedThreeDof, ThreeDofSolver};
 use crate::slider::three_dof_params::{CaseInterface, ThreeDofParams};
-use serde_json::{json, Map, Value};
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -79,8 +81,8 @@ impl FromConfig for ThreeDofStage {
 impl StageKind for ThreeDofStage {
     const KIND: &'static str = "three_dof";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
-    type Result = serde_json::Value;
-    type Row = serde_json::Map<String, serde_json::Value>;
+    type Result = ThreeDofResult;
+    type Row = ThreeDofRow;
 
     fn params(&self) -> Value {
         self.params.canonical()
@@ -95,7 +97,7 @@ impl StageKind for ThreeDofStage {
     fn case_engine(&self) -> Option<&dyn CaseEngine> {
         Some(self)
     }
-    fn run(&self, ctx: &StageContext) -> Result<StageOutput> {
+    fn run(&self, ctx: &StageContext) -> Result<Output<ThreeDofResult, ThreeDofRow>> {
         use rayon::prelude::*;
         let prepared = self.prepare(&ctx.upstream_entries())?;
         ctx.progress.set_message("interface tables");
@@ -127,11 +129,11 @@ impl StageKind for ThreeDofStage {
         // How many cases came from the store (Slurm tasks, earlier runs): a run fact.
         ctx.log_run(
             "cases_cached",
-            json!(done.iter().filter(|(_, e)| e.cached).count()),
+            Value::from(done.iter().filter(|(_, e)| e.cached).count()),
         );
         let dir = ctx.out_dir.join(case_files::DIR);
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-        let mut rows = Vec::new();
+        let mut cases_done = Vec::new();
         for (which, entry) in &done {
             for (file, suffix) in [
                 ("case.h5", ".h5"),
@@ -150,44 +152,91 @@ impl StageKind for ThreeDofStage {
                     std::fs::copy(&from, &to).map_err(|e| Error::io(&to, e))?;
                 }
             }
-            if let Value::Object(m) = &entry.result {
-                rows.push(m.clone());
-            }
-        }
-        crate::core::store::write_table(&rows, &ctx.out_dir.join("cases"))?;
-        let mut row = Map::new();
-        row.insert("scenario".into(), json!(p.scenario));
-        row.insert("cases".into(), json!(done.len()));
-        if let Some(first) = rows.first() {
-            for k in [
-                "pole_tip_mean_nm",
-                "bulge_vibration_percent",
-                "peak_contact_force_mN",
-            ] {
-                row.insert(
-                    format!("{}_{k}", first["case"].as_str().unwrap_or("case")),
-                    first[k].clone(),
-                );
-            }
-        }
-        Ok(StageOutput {
-            result: {
-                let mut r = json!({
-                    "cases": rows,
-                    "case_keys": done.iter().map(|(_, e)| e.key.clone()).collect::<Vec<_>>(),
-                    "table": "cases.parquet",
-                });
-                // The bulge the cases ran with, when it came from a fit (docs/bulge.md).
-                if let (Some(d), Some(obj)) = (p.fitted, r.as_object_mut()) {
-                    obj.insert(
-                        "fitted_bulge".into(),
-                        json!({"a_tfc_m": d.semi_width_x, "w_tfc_m": d.full_width_y, "x_tfc_m": d.offset_from_te}),
-                    );
+            cases_done.push(ThreeDofCaseResult::deserialize(&entry.result).map_err(|e| {
+                Error::ThreeDofCase {
+                    case: which.label(),
+                    source: Box::new(Error::Encode {
+                        kind: "three_dof",
+                        what: "case result".into(),
+                        message: e.to_string(),
+                    }),
                 }
-                r
-            },
+            })?);
+        }
+        crate::core::store::write_table(
+            &crate::core::store::rows_of(&cases_done),
+            &ctx.out_dir.join("cases"),
+        )?;
+        let row = ThreeDofRow {
+            scenario: p.scenario.clone(),
+            cases: done.len(),
+            first_case: cases_done.first().map(FirstCaseColumns::of),
+        };
+        let result = ThreeDofResult {
+            cases: cases_done,
+            case_keys: done.iter().map(|(_, e)| e.key.clone()).collect(),
+            table: "cases.parquet".to_string(),
+            // The bulge the cases ran with, when it came from a fit (docs/bulge.md).
+            fitted_bulge: p.fitted.map(|d| FittedBulge {
+                a_tfc_m: d.semi_width_x,
+                w_tfc_m: d.full_width_y,
+                x_tfc_m: d.offset_from_te,
+            }),
+        };
+        Ok(Output {
+            result,
             summary_row: Some(row),
         })
+    }
+}
+
+/// The instance's row of the run's summary table: its scenario, how many cases, and the
+/// headline numbers of its first case.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ThreeDofRow {
+    pub scenario: String,
+    pub cases: usize,
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub first_case: Option<FirstCaseColumns>,
+}
+
+/// Pole-tip mean, bulge vibration and peak contact force of the first case, each column
+/// named with its case label (`isbl_pole_tip_mean_nm`).
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq)]
+pub struct FirstCaseColumns {
+    pub case: String,
+    pub pole_tip_mean_nm: f64,
+    pub bulge_vibration_percent: Option<f64>,
+    pub peak_contact_force_mN: f64,
+}
+
+impl FirstCaseColumns {
+    fn of(c: &ThreeDofCaseResult) -> Self {
+        FirstCaseColumns {
+            case: c.case.clone(),
+            pole_tip_mean_nm: c.pole_tip_mean_nm,
+            bulge_vibration_percent: c.bulge_vibration_percent,
+            peak_contact_force_mN: c.peak_contact_force_mN,
+        }
+    }
+}
+
+impl Serialize for FirstCaseColumns {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(3))?;
+        let case = &self.case;
+        m.serialize_entry(&format!("{case}_pole_tip_mean_nm"), &self.pole_tip_mean_nm)?;
+        m.serialize_entry(
+            &format!("{case}_bulge_vibration_percent"),
+            &self.bulge_vibration_percent,
+        )?;
+        m.serialize_entry(
+            &format!("{case}_peak_contact_force_mN"),
+            &self.peak_contact_force_mN,
+        )?;
+        m.end()
     }
 }
 

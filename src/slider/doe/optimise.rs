@@ -6,12 +6,12 @@ use super::cases::{refined_touchdown, CaseRunner, DesignCase};
 use super::params::{DoeParams, SaObjective, FACTORS, NM, UM};
 use super::surface::{surrogate_xi, LevelFit};
 use super::tables::{comparison_rows, table_value};
+use crate::artefacts::doe::ComparisonRow;
 use crate::core::progress::Progress;
 use crate::error::{Error, Result};
 use crate::numerics::annealing::{sensitivity_points, Annealer, AnnealingRecord, StopReason};
 use crate::slider::sweep::CaseOutcome;
 use rayon::prelude::*;
-use serde_json::{json, Map, Value};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// The annealing's box, in coded units.
@@ -122,7 +122,20 @@ pub(crate) struct Sensitivity {
     pub(crate) most_sensitive: Option<&'static str>,
     pub(crate) case_keys: Vec<String>,
     /// The sensitivity table.
-    pub(crate) rows: Vec<Map<String, Value>>,
+    pub(crate) rows: Vec<SensitivityRow>,
+}
+
+/// One point of the sensitivity check: the factor moved, by how many steps, the design and
+/// its ξ.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub(crate) struct SensitivityRow {
+    pub factor: &'static str,
+    pub offset_steps: i32,
+    pub offset_nm: Option<f64>,
+    pub a_um: Option<f64>,
+    pub w_um: Option<f64>,
+    pub x_um: Option<f64>,
+    pub xi: Option<f64>,
 }
 
 /// ± steps of `sensitivity_step` per factor around the optimum.
@@ -157,18 +170,15 @@ pub(crate) fn check_sensitivity(
         if s.offset.abs() == 1 {
             spread[s.coordinate] = spread[s.coordinate].max((xi - annealing.best_xi).abs());
         }
-        let mut m = Map::new();
-        m.insert("factor".into(), json!(FACTORS[s.coordinate]));
-        m.insert("offset_steps".into(), json!(s.offset));
-        m.insert(
-            "offset_nm".into(),
-            table_value(f64::from(s.offset) * p.sensitivity_step / NM),
-        );
-        m.insert("a_um".into(), table_value(d[0] / UM));
-        m.insert("w_um".into(), table_value(d[1] / UM));
-        m.insert("x_um".into(), table_value(d[2] / UM));
-        m.insert("xi".into(), table_value(xi));
-        sens_rows.push(m);
+        sens_rows.push(SensitivityRow {
+            factor: FACTORS[s.coordinate],
+            offset_steps: s.offset,
+            offset_nm: table_value(f64::from(s.offset) * p.sensitivity_step / NM),
+            a_um: table_value(d[0] / UM),
+            w_um: table_value(d[1] / UM),
+            x_um: table_value(d[2] / UM),
+            xi: table_value(xi),
+        });
     }
     let most_sensitive = (0..3)
         .max_by(|a, b| spread[*a].total_cmp(&spread[*b]))
@@ -189,7 +199,7 @@ pub(crate) struct DesignSweep {
 
 /// Table 2.8's rows and the cases they used.
 pub(crate) struct Comparison {
-    pub(crate) rows: Vec<Map<String, Value>>,
+    pub(crate) rows: Vec<ComparisonRow>,
     pub(crate) case_keys: Vec<String>,
     /// Both designs' sweeps, for the comparison plot.
     pub(crate) sweeps: Vec<DesignSweep>,

@@ -4,6 +4,7 @@
 use super::cases::DesignCase;
 use super::params::{DoeParams, FACTORS, NM, UM};
 use super::surface::{model_selection, LevelFit};
+use crate::artefacts::doe::{ComparisonRow, DegreeTest, LevelFitSummary, SurfaceFitSummary};
 use crate::dynamics::metrics::Regime;
 use crate::error::{Error, Result};
 use crate::numerics::annealing::AnnealingRecord;
@@ -11,15 +12,38 @@ use crate::numerics::regression::{decoded, Polynomial, ResponseSurface};
 use crate::slider::case::SweepCaseResult;
 use crate::slider::params::SimulateParams;
 use crate::slider::sweep::{sweep_analysis, CaseOutcome};
-use serde_json::{json, Map, Value};
+use serde::Serialize;
+use serde_json::Value;
 
 /// A table value: seven significant digits, null when not finite.
-pub(crate) fn table_value(v: f64) -> Value {
-    if v.is_finite() {
-        json!(crate::core::store::round_significant(v, 7))
-    } else {
-        Value::Null
-    }
+pub(crate) fn table_value(v: f64) -> Option<f64> {
+    v.is_finite()
+        .then(|| crate::core::store::round_significant(v, 7))
+}
+
+/// A table value of a quantity a case's result.json may hold as null (non-finite).
+fn finite_value(v: f64, scale: f64) -> Option<f64> {
+    Some(v)
+        .filter(|v| v.is_finite())
+        .and_then(|v| table_value(v / scale))
+}
+
+/// One row of the design table: a case, its coded point and bulge, and its response.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub(crate) struct DesignRow {
+    pub run: usize,
+    pub a_tfc_coded: f64,
+    pub w_tfc_coded: f64,
+    pub x_tfc_coded: f64,
+    pub a_um: Option<f64>,
+    pub w_um: Option<f64>,
+    pub x_um: Option<f64>,
+    pub actuation_nm: Option<f64>,
+    pub clearance_nm: Option<f64>,
+    pub fhm_or_bv_percent: Option<f64>,
+    pub regime: String,
+    pub xi: Option<f64>,
+    pub case_key: String,
 }
 
 /// The design table: one row per case, level by level.
@@ -27,39 +51,54 @@ pub(crate) fn design_rows(
     coded_points: &[Vec<f64>],
     per_level: usize,
     cases: &[DesignCase],
-) -> Vec<Map<String, Value>> {
-    let mut rows = Vec::new();
-    for (i, c) in cases.iter().enumerate() {
-        let coded_point = &coded_points[i % per_level];
-        let mut row = Map::new();
-        row.insert("run".into(), json!(i + 1));
-        for f in 0..3 {
-            row.insert(format!("{}_coded", FACTORS[f]), json!(coded_point[f]));
-        }
-        row.insert("a_um".into(), table_value(c.design[0] / UM));
-        row.insert("w_um".into(), table_value(c.design[1] / UM));
-        row.insert("x_um".into(), table_value(c.design[2] / UM));
-        row.insert("actuation_nm".into(), table_value(c.actuation / NM));
-        let m = &c.result;
-        // A non-finite value is null in the case's result.json: null here too.
-        let finite = |v: f64| Some(v).filter(|v| v.is_finite());
-        row.insert(
-            "clearance_nm".into(),
-            finite(m.clearance_m.mean).map_or(Value::Null, |v| table_value(v / NM)),
-        );
-        row.insert(
-            "fhm_or_bv_percent".into(),
-            finite(m.vibration_percent).map_or(Value::Null, table_value),
-        );
-        row.insert(
-            "regime".into(),
-            crate::slider::sweep::regime_label(&json!(m.regime)),
-        );
-        row.insert("xi".into(), table_value(c.xi));
-        row.insert("case_key".into(), json!(c.entry.key));
-        rows.push(row);
+) -> Vec<DesignRow> {
+    cases
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let coded_point = &coded_points[i % per_level];
+            let m = &c.result;
+            DesignRow {
+                run: i + 1,
+                a_tfc_coded: coded_point[0],
+                w_tfc_coded: coded_point[1],
+                x_tfc_coded: coded_point[2],
+                a_um: table_value(c.design[0] / UM),
+                w_um: table_value(c.design[1] / UM),
+                x_um: table_value(c.design[2] / UM),
+                actuation_nm: table_value(c.actuation / NM),
+                // A non-finite value is null in the case's result.json: null here too.
+                clearance_nm: finite_value(m.clearance_m.mean, NM),
+                fhm_or_bv_percent: finite_value(m.vibration_percent, 1.0),
+                regime: regime_label_of(&m.regime),
+                xi: table_value(c.xi),
+                case_key: c.entry.key.clone(),
+            }
+        })
+        .collect()
+}
+
+/// A case result's regime as the tables name it (`regime_label`).
+fn regime_label_of(regime: &str) -> String {
+    match crate::slider::sweep::regime_label(&Value::from(regime)) {
+        Value::String(s) => s,
+        _ => regime.to_string(),
     }
-    rows
+}
+
+/// One evaluation of the annealing, with its ξ.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub(crate) struct AnnealingRow {
+    pub iteration: usize,
+    pub temperature: Option<f64>,
+    pub a_um: Option<f64>,
+    pub w_um: Option<f64>,
+    pub x_um: Option<f64>,
+    pub xi: Option<f64>,
+    pub candidate_j: Option<f64>,
+    pub accepted: bool,
+    pub current_j: Option<f64>,
+    pub best_j: Option<f64>,
 }
 
 /// The annealing table: one row per evaluation, with its ξ.
@@ -67,32 +106,51 @@ pub(crate) fn annealing_rows(
     p: &DoeParams,
     history: &[AnnealingRecord],
     xis: &[f64],
-) -> Vec<Map<String, Value>> {
-    let mut rows = Vec::new();
-    for (r, xi) in history.iter().zip(xis) {
-        let d = p.decode(&r.candidate);
-        let mut m = Map::new();
-        m.insert("iteration".into(), json!(r.iteration));
-        m.insert("temperature".into(), table_value(r.temperature));
-        m.insert("a_um".into(), table_value(d[0] / UM));
-        m.insert("w_um".into(), table_value(d[1] / UM));
-        m.insert("x_um".into(), table_value(d[2] / UM));
-        m.insert("xi".into(), table_value(*xi));
-        m.insert("candidate_j".into(), table_value(r.candidate_j));
-        m.insert("accepted".into(), json!(r.accepted));
-        m.insert("current_j".into(), table_value(r.current_j));
-        m.insert("best_j".into(), table_value(r.best_j));
-        rows.push(m);
-    }
-    rows
+) -> Vec<AnnealingRow> {
+    history
+        .iter()
+        .zip(xis)
+        .map(|(r, xi)| {
+            let d = p.decode(&r.candidate);
+            AnnealingRow {
+                iteration: r.iteration,
+                temperature: table_value(r.temperature),
+                a_um: table_value(d[0] / UM),
+                w_um: table_value(d[1] / UM),
+                x_um: table_value(d[2] / UM),
+                xi: table_value(*xi),
+                candidate_j: table_value(r.candidate_j),
+                accepted: r.accepted,
+                current_j: table_value(r.current_j),
+                best_j: table_value(r.best_j),
+            }
+        })
+        .collect()
 }
 
-/// Table 2.7 coefficient names of a two-factor reduced polynomial, in output order.
-const PREDICTIVE_TERMS: [&str; 9] = [
-    "b0", "b1", "b2", "b11", "b22", "b12", "b112", "b122", "b1122",
-];
+/// One of Table 2.7's predictive equations: a level's quartic with one factor fixed at a
+/// coded level, its coefficients in [`PREDICTIVE_TERMS`] order.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub(crate) struct PredictiveRow {
+    pub actuation_nm: Option<f64>,
+    pub fixed_factor: &'static str,
+    pub fixed_coded: f64,
+    pub fixed_value_um: Option<f64>,
+    pub x1: &'static str,
+    pub x2: &'static str,
+    pub b0: Option<f64>,
+    pub b1: Option<f64>,
+    pub b2: Option<f64>,
+    pub b11: Option<f64>,
+    pub b22: Option<f64>,
+    pub b12: Option<f64>,
+    pub b112: Option<f64>,
+    pub b122: Option<f64>,
+    pub b1122: Option<f64>,
+    pub residual_error: Option<f64>,
+}
 
-pub(crate) fn predictive_rows(p: &DoeParams, fits: &[LevelFit]) -> Result<Vec<Map<String, Value>>> {
+pub(crate) fn predictive_rows(p: &DoeParams, fits: &[LevelFit]) -> Result<Vec<PredictiveRow>> {
     let mut rows = Vec::new();
     for lf in fits {
         let poly: Polynomial = lf.quartic.polynomial();
@@ -100,37 +158,50 @@ pub(crate) fn predictive_rows(p: &DoeParams, fits: &[LevelFit]) -> Result<Vec<Ma
             let reduced = poly
                 .fix_factor(lf.fixed, level)
                 .map_err(Error::PredictiveEquation)?;
-            let free: Vec<&str> = (0..3)
+            let free: Vec<&'static str> = (0..3)
                 .filter(|f| *f != lf.fixed)
                 .map(|f| FACTORS[f])
                 .collect();
-            let mut row = Map::new();
-            row.insert("actuation_nm".into(), table_value(lf.actuation / NM));
-            row.insert("fixed_factor".into(), json!(FACTORS[lf.fixed]));
-            row.insert("fixed_coded".into(), json!(level));
-            row.insert(
-                "fixed_value_um".into(),
-                table_value(decoded(level, p.levels[lf.fixed][0], p.levels[lf.fixed][2]) / UM),
-            );
-            row.insert("x1".into(), json!(free[0]));
-            row.insert("x2".into(), json!(free[1]));
-            for name in PREDICTIVE_TERMS {
-                row.insert(
-                    name.into(),
-                    table_value(reduced.coefficient(name).unwrap_or(0.0)),
-                );
-            }
-            row.insert(
-                "residual_error".into(),
-                table_value(lf.quartic.residual_ss_at(lf.fixed, level, 1e-9)),
-            );
-            rows.push(row);
+            let b = |name: &str| table_value(reduced.coefficient(name).unwrap_or(0.0));
+            rows.push(PredictiveRow {
+                actuation_nm: table_value(lf.actuation / NM),
+                fixed_factor: FACTORS[lf.fixed],
+                fixed_coded: level,
+                fixed_value_um: table_value(
+                    decoded(level, p.levels[lf.fixed][0], p.levels[lf.fixed][2]) / UM,
+                ),
+                x1: free[0],
+                x2: free[1],
+                b0: b("b0"),
+                b1: b("b1"),
+                b2: b("b2"),
+                b11: b("b11"),
+                b22: b("b22"),
+                b12: b("b12"),
+                b112: b("b112"),
+                b122: b("b122"),
+                b1122: b("b1122"),
+                residual_error: table_value(lf.quartic.residual_ss_at(lf.fixed, level, 1e-9)),
+            });
         }
     }
     Ok(rows)
 }
 
-pub(crate) fn coefficient_rows(fits: &[LevelFit]) -> Vec<Map<String, Value>> {
+/// One coefficient of a level's degree-4 or degree-5 surface.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub(crate) struct CoefficientRow {
+    pub actuation_nm: Option<f64>,
+    /// `degree 4` or `degree 5`.
+    pub model: &'static str,
+    pub term: String,
+    pub coefficient: Option<f64>,
+    pub std_error: Option<f64>,
+    pub t: Option<f64>,
+    pub p: Option<f64>,
+}
+
+pub(crate) fn coefficient_rows(fits: &[LevelFit]) -> Vec<CoefficientRow> {
     let mut rows = Vec::new();
     for lf in fits {
         for (model, s) in [
@@ -138,62 +209,73 @@ pub(crate) fn coefficient_rows(fits: &[LevelFit]) -> Vec<Map<String, Value>> {
             ("degree 5", lf.quintic.as_ref()),
         ] {
             let Some(s) = s else { continue };
-            for (j, name) in s.basis.names().iter().enumerate() {
-                let mut row = Map::new();
-                row.insert("actuation_nm".into(), table_value(lf.actuation / NM));
-                row.insert("model".into(), json!(model));
-                row.insert("term".into(), json!(name));
-                row.insert("coefficient".into(), table_value(s.fit.coefficients[j]));
-                row.insert("std_error".into(), table_value(s.fit.standard_errors[j]));
-                row.insert("t".into(), table_value(s.fit.t_values[j]));
-                row.insert("p".into(), table_value(s.fit.p_values[j]));
-                rows.push(row);
+            for (j, name) in s.basis.names().into_iter().enumerate() {
+                rows.push(CoefficientRow {
+                    actuation_nm: table_value(lf.actuation / NM),
+                    model,
+                    term: name,
+                    coefficient: table_value(s.fit.coefficients[j]),
+                    std_error: table_value(s.fit.standard_errors[j]),
+                    t: table_value(s.fit.t_values[j]),
+                    p: table_value(s.fit.p_values[j]),
+                });
             }
         }
     }
     rows
 }
 
-pub(crate) fn anova_rows(fits: &[LevelFit]) -> Vec<Map<String, Value>> {
+/// One source of a level's degree-4 ANOVA.
+#[allow(non_snake_case)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub(crate) struct AnovaTableRow {
+    pub actuation_nm: Option<f64>,
+    pub source: String,
+    pub df: usize,
+    pub sum_sq: Option<f64>,
+    pub mean_sq: Option<f64>,
+    pub F: Option<f64>,
+    pub p: Option<f64>,
+}
+
+pub(crate) fn anova_rows(fits: &[LevelFit]) -> Vec<AnovaTableRow> {
     let mut rows = Vec::new();
     for lf in fits {
         let t = lf.quartic.anova();
         let all = t.terms.iter().chain([&t.model, &t.residual, &t.total]);
         for r in all {
-            let mut row = Map::new();
-            row.insert("actuation_nm".into(), table_value(lf.actuation / NM));
-            row.insert("source".into(), json!(r.source));
-            row.insert("df".into(), json!(r.df));
-            row.insert("sum_sq".into(), table_value(r.sum_sq));
-            row.insert("mean_sq".into(), table_value(r.mean_sq));
-            row.insert("F".into(), r.f.map_or(Value::Null, table_value));
-            row.insert("p".into(), r.p.map_or(Value::Null, table_value));
-            rows.push(row);
+            rows.push(AnovaTableRow {
+                actuation_nm: table_value(lf.actuation / NM),
+                source: r.source.clone(),
+                df: r.df,
+                sum_sq: table_value(r.sum_sq),
+                mean_sq: table_value(r.mean_sq),
+                F: r.f.and_then(table_value),
+                p: r.p.and_then(table_value),
+            });
         }
     }
     rows
 }
 
-pub(crate) fn fit_summary(lf: &LevelFit) -> Value {
-    let one = |s: &ResponseSurface| {
-        json!({
-            "terms": s.basis.len(),
-            "residual_df": s.fit.residual_df,
-            "rss": s.fit.rss,
-            "r_squared": s.fit.r_squared,
-            "adj_r_squared": s.fit.adj_r_squared,
-            "sigma": s.fit.sigma,
-        })
+pub(crate) fn fit_summary(lf: &LevelFit) -> LevelFitSummary {
+    let one = |s: &ResponseSurface| SurfaceFitSummary {
+        terms: s.basis.len(),
+        residual_df: s.fit.residual_df,
+        rss: s.fit.rss,
+        r_squared: s.fit.r_squared,
+        adj_r_squared: s.fit.adj_r_squared,
+        sigma: s.fit.sigma,
     };
     let (f, p, selected) = model_selection(lf);
-    json!({
-        "actuation_m": lf.actuation,
-        "fixed_factor": FACTORS[lf.fixed],
-        "degree_4": one(&lf.quartic),
-        "degree_5": lf.quintic.as_ref().map(one),
-        "degree_5_vs_4": {"F": f, "p": p},
-        "selected_degree": selected,
-    })
+    LevelFitSummary {
+        actuation_m: lf.actuation,
+        fixed_factor: FACTORS[lf.fixed].to_string(),
+        degree_4: one(&lf.quartic),
+        degree_5: lf.quintic.as_ref().map(one),
+        degree_5_vs_4: DegreeTest { F: f, p },
+        selected_degree: selected,
+    }
 }
 
 /// One condition of Table 2.8 for a design; `touchdown_refined` (the convention's) goes into
@@ -204,7 +286,7 @@ pub(crate) fn comparison_rows(
     sp: &SimulateParams,
     cases: &[CaseOutcome],
     touchdown_refined: Option<f64>,
-) -> Result<Vec<Map<String, Value>>> {
+) -> Result<Vec<ComparisonRow>> {
     let sweep = sweep_analysis(sp, cases)?;
     let nearest = |h: f64| {
         cases
@@ -232,41 +314,26 @@ pub(crate) fn comparison_rows(
         ("touchdown", sweep.touchdown_index),
         ("steady contact", steady),
     ] {
-        let mut row = Map::new();
-        row.insert("design".into(), json!(label));
-        row.insert("a_um".into(), table_value(design[0] / UM));
-        row.insert("w_um".into(), table_value(design[1] / UM));
-        row.insert("x_um".into(), table_value(design[2] / UM));
-        row.insert("condition".into(), json!(condition));
-        row.insert(
-            "touchdown_refined_nm".into(),
-            match (condition, touchdown_refined) {
-                ("touchdown", Some(t)) => table_value(t / NM),
-                _ => Value::Null,
-            },
-        );
         let m = idx.map(|i| (&cases[i].metrics, cases[i].actuation));
         // As the case's result.json has it: a non-finite value is null there.
-        let get = |of: fn(&SweepCaseResult) -> f64| {
-            m.and_then(|(m, _)| Some(of(m)).filter(|v| v.is_finite()))
+        let get = |of: fn(&SweepCaseResult) -> f64, scale: f64| {
+            m.and_then(|(m, _)| finite_value(of(m), scale))
         };
-        row.insert(
-            "h_tfc_nm".into(),
-            m.map_or(Value::Null, |(_, h)| table_value(h / NM)),
-        );
-        row.insert(
-            "clearance_nm".into(),
-            get(|m| m.clearance_m.mean).map_or(Value::Null, |v| table_value(v / NM)),
-        );
-        row.insert(
-            "hms_nm".into(),
-            get(|m| m.hms_mean_m).map_or(Value::Null, |v| table_value(v / NM)),
-        );
-        row.insert(
-            "fhm_or_bv_percent".into(),
-            get(|m| m.vibration_percent).map_or(Value::Null, table_value),
-        );
-        rows.push(row);
+        rows.push(ComparisonRow {
+            design: label.to_string(),
+            a_um: table_value(design[0] / UM),
+            w_um: table_value(design[1] / UM),
+            x_um: table_value(design[2] / UM),
+            condition: condition.to_string(),
+            touchdown_refined_nm: match (condition, touchdown_refined) {
+                ("touchdown", Some(t)) => table_value(t / NM),
+                _ => None,
+            },
+            h_tfc_nm: m.and_then(|(_, h)| table_value(h / NM)),
+            clearance_nm: get(|m| m.clearance_m.mean, NM),
+            hms_nm: get(|m| m.hms_mean_m, NM),
+            fhm_or_bv_percent: get(|m| m.vibration_percent, 1.0),
+        });
     }
     Ok(rows)
 }
