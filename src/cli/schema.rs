@@ -9,10 +9,12 @@ use schemars::{JsonSchema, Schema};
 use serde_json::Value;
 use std::path::Path;
 
-/// One documented output: its file stem, the command it describes, the generator.
+/// One documented output: its file stem, the command it describes, its layout version (in
+/// `$id`), the generator.
 struct Documented {
     name: &'static str,
     title: &'static str,
+    version: u32,
     schema: fn() -> Schema,
 }
 
@@ -20,6 +22,7 @@ const fn doc<T: JsonSchema>(name: &'static str, title: &'static str) -> Document
     Documented {
         name,
         title,
+        version: 1,
         schema: generate::<T>,
     }
 }
@@ -33,6 +36,12 @@ const DOCUMENTED: &[Documented] = &[
     doc::<super::analyze::AnalyzeOutput>("analyze", "hdi analyze --json"),
     doc::<hdi::bench::BenchDocument>("bench", "hdi bench --json"),
     doc::<hdi::artefacts::bulge::BulgeReport>("bulge", "hdi bulge FILE… --json"),
+    Documented {
+        name: "case-manifest",
+        title: "Slurm case manifest",
+        version: hdi::core::executor::MANIFEST_SCHEMA_VERSION,
+        schema: case_manifest,
+    },
     doc::<hdi::stages::contact::ContactReport>("contact", "hdi contact --json"),
     doc::<hdi::engine::diff::Diff>("diff", "hdi diff --json"),
     doc::<hdi::stages::dmw::DmwReport>("dmw", "hdi dmw FILE --json"),
@@ -53,6 +62,72 @@ fn generate<T: JsonSchema>() -> Schema {
         .with_transform(Closed)
         .into_generator()
         .into_root_schema_for::<T>()
+}
+
+/// The case types a manifest's recipes carry, by case kind: the schema of `recipe.case` for
+/// entries of those kinds. A case kind without one fails `hdi schema --check`.
+const CASE_TYPES: &[(&[&str], fn() -> Schema)] = &[
+    (
+        &["simulate", "doe"],
+        generate::<hdi::slider::sweep::SweepCase>,
+    ),
+    (&["three_dof"], three_dof_case),
+    (
+        &["calibration"],
+        generate::<hdi::stages::calibrate::CalibrationCase>,
+    ),
+];
+
+/// A 3-DOF case is its interface label.
+fn three_dof_case() -> Schema {
+    let mut s = generate::<String>();
+    s.insert(
+        "description".into(),
+        Value::from("case label: isbl, or mtl_<lubricant case of Table 4.4>"),
+    );
+    s
+}
+
+/// The manifest with each entry's recipe as [`CaseRecipe`](hdi::stages::case_engine::CaseRecipe)
+/// and its `case` in the type of the entry's kind (core, which writes the manifest, knows
+/// neither).
+fn case_manifest() -> Schema {
+    let mut s = generate::<hdi::core::executor::CaseManifest>();
+    let mut recipe = generate::<hdi::stages::case_engine::CaseRecipe>().to_value();
+    if let Some(m) = recipe.as_object_mut() {
+        m.remove("$schema");
+        m.remove("title");
+    }
+    let cases: Vec<Value> = CASE_TYPES
+        .iter()
+        .map(|(kinds, schema)| {
+            let mut case = schema().to_value();
+            if let Some(m) = case.as_object_mut() {
+                m.remove("$schema");
+                m.remove("title");
+            }
+            serde_json::json!({
+                "if": {"properties": {"kind": {"enum": kinds}}},
+                "then": {"properties": {"recipe": {"properties": {"case": case}}}}
+            })
+        })
+        .collect();
+    if let Some(Value::Object(entry)) = s.pointer_mut("/properties/cases/items") {
+        if let Some(Value::Object(props)) = entry.get_mut("properties") {
+            props.insert("recipe".into(), recipe);
+        }
+        entry.insert("allOf".into(), Value::Array(cases));
+    }
+    s
+}
+
+/// Case kinds the registry has no case type for.
+fn case_kinds_without_a_type() -> Vec<&'static str> {
+    hdi::stages::case_kinds()
+        .into_iter()
+        .map(|(case_kind, _)| case_kind)
+        .filter(|k| !CASE_TYPES.iter().any(|(kinds, _)| kinds.contains(k)))
+        .collect()
 }
 
 /// Closes every object schema that lists its properties and says nothing about others, and
@@ -93,7 +168,7 @@ fn document(d: &Documented) -> Value {
     );
     out.insert(
         "$id".into(),
-        Value::from(format!("urn:hdi:json-schema:v1:{}", d.name)),
+        Value::from(format!("urn:hdi:json-schema:v{}:{}", d.version, d.name)),
     );
     out.insert("title".into(), Value::from(d.title));
     let mut generated = generated;
@@ -156,6 +231,13 @@ pub(super) fn cmd_schema(
             if p.extension().is_some_and(|x| x == "json") && !known.contains(&stem) {
                 stray.push(p.display().to_string());
             }
+        }
+        let untyped = case_kinds_without_a_type();
+        if !untyped.is_empty() {
+            bail!(
+                "case kinds without a case type in the manifest schema: {}",
+                untyped.join(", ")
+            );
         }
         if !drifted.is_empty() || !stray.is_empty() {
             bail!(

@@ -157,18 +157,20 @@ impl PreparedSweep {
     }
 }
 
-/// One case of a 2-DOF sweep or of a DOE design, as the stages list it and a recipe carries
-/// it (docs/schemas/case-manifest.json, `sweep_case`).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+/// A 2-DOF sweep case or DOE design case, as the stages list it and a recipe carries it
+/// (docs/schemas/case-manifest.json).
+#[derive(
+    Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 #[serde(deny_unknown_fields)]
 pub struct SweepCase {
-    /// TFC actuation [m].
+    /// TFC actuation of the case, m.
     pub actuation_m: f64,
-    /// DOE design point (bulge semi-width, full width, offset from the trailing edge) [m];
-    /// `None` for a sweep case.
+    /// DOE design point (bulge semi-width, full width, offset from the trailing edge, m);
+    /// null for a sweep case.
     pub design_m: Option<[f64; 3]>,
-    /// Continuation equilibrium `(z, ϑ)` the case starts Newton from (branch-tracking
-    /// sweeps); `None`: as configured.
+    /// Continuation equilibrium (z, ϑ) the case starts Newton from (branch-tracking sweeps);
+    /// null otherwise.
     pub static_start: Option<[f64; 2]>,
 }
 

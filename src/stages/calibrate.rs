@@ -663,16 +663,17 @@ impl CaseRounds for StoreRounds<'_> {
     }
 }
 
-/// One calibration case as a recipe carries it: the round's knob values, target geometry
-/// and actuation (docs/schemas/case-manifest.json, `calibration_case`).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+/// One case of a calibration round, as a recipe carries it (docs/schemas/case-manifest.json).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CalibrationCase {
-    /// `[[name, value], …]` (JSON numbers round-trip f64 exactly: serde_json
-    /// `float_roundtrip`).
+    /// The round's knob values, [name, value] pairs (JSON numbers round-trip f64 exactly:
+    /// serde_json `float_roundtrip`).
     pub knobs: Vec<(String, f64)>,
-    /// `base` / `optimised`.
+    /// Target geometry: base or optimised.
+    #[schemars(extend("enum" = ["base", "optimised"]))]
     pub geometry: String,
+    /// TFC actuation of the case, m.
     pub actuation_m: f64,
 }
 

@@ -70,29 +70,37 @@ pub fn read_result(dir: &Path) -> Result<Value> {
 }
 
 /// One upstream entry a recipe names.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct UpstreamRef {
+    /// Upstream instance.
     pub name: String,
+    /// Its cache key (part of the case key).
+    #[schemars(regex(pattern = r"^[0-9a-f]{64}$"))]
     pub key: String,
-    /// Entry directory relative to `processed/`.
+    /// Its store entry directory, relative to processed/.
     pub dir: String,
 }
 
-/// What a worker needs to recompute one case (`recipe` of a case manifest entry,
-/// docs/schemas/case-manifest.json): the instance, the upstream entries its preparation read,
-/// the kind's own typed case, and the case key the submitter derived (a worker refuses to
-/// file a case whose key it does not re-derive: the file or an upstream entry changed).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// What a worker needs besides params to recompute the case: it rebuilds the instance alone
+/// from the pipeline file, prepares it from exactly the upstream entries named here, and
+/// refuses to compute when the parameters it derives give another key (the file or an
+/// upstream entry changed). `recipe` of a case manifest entry (docs/schemas/case-manifest.json).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CaseRecipe {
     /// Absolute path of the pipeline file (the batch runner sets it on submission).
     #[serde(default)]
     pub config: String,
+    /// The instance whose case this is (its section follows from the case kind).
     pub instance: String,
+    /// The upstream entries the submitter's preparation read.
     pub upstream: Vec<UpstreamRef>,
-    /// The case in the kind's own type, serialised (e.g. `{actuation_m, design_m,
-    /// static_start}` of a sweep case, a 3-DOF interface label).
+    /// The case in its kind's own type, serialised (a sweep case's `{actuation_m, design_m,
+    /// static_start}`, a 3-DOF interface label, …).
     pub case: Value,
+    /// The case key again: the worker re-derives the parameters and refuses to compute when
+    /// they give another key.
+    #[schemars(regex(pattern = r"^[0-9a-f]{64}$"))]
     pub key: String,
 }
 

@@ -124,20 +124,26 @@ impl std::str::FromStr for ExecutorKind {
 }
 
 /// One independent case as a worker process sees it.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 pub struct CaseSpec {
-    /// Case kind: which registered worker recomputes it (`simulate`, `three_dof`, ...).
+    /// Case kind: the registered worker that recomputes it (simulate, doe, three_dof,
+    /// calibration).
+    #[schemars(regex(pattern = r"^[a-z][a-z0-9_]*$"))]
     pub kind: String,
-    /// Cache key (`cases::case_fingerprint(model_version, params).key()`); the worker checks
-    /// it, so a binary that hashes differently fails loudly instead of filling the cache
-    /// under keys the submitter never looks up.
+    /// Cache key of the case's store entry (BLAKE3 of model_version and params, hex):
+    /// `cases::case_fingerprint(model_version, params).key()`. The worker checks it, so a
+    /// binary that hashes differently fails loudly instead of filling the cache under keys the
+    /// submitter never looks up.
+    #[schemars(regex(pattern = r"^[0-9a-f]{64}$"))]
     pub key: String,
+    /// Model version of the case kind, hashed into the key (e.g. three-dof-3).
     pub model_version: String,
-    /// Canonical parameters exactly as hashed into the key.
+    /// Canonical case parameters exactly as hashed into the key (the stage's key parameters).
+    #[schemars(with = "serde_json::Map<String, Value>")]
     pub params: Value,
-    /// What the worker needs besides `params` (e.g. the stage's validated parameters and the
-    /// upstream entry keys to load the ISBL table or DMW track from): key parameters can be
-    /// lossy (`model_parameters` is a Debug string), so they cannot double as the recipe.
+    /// What the worker needs besides `params` to recompute the case (the stage's case recipe:
+    /// `stages::case_engine::CaseRecipe`): key parameters can be lossy (`model_parameters` is
+    /// a Debug string), so they cannot double as the recipe.
     pub recipe: Value,
 }
 
@@ -155,26 +161,33 @@ impl CaseSpec {
     }
 }
 
-/// Where a manifest case stands.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+/// Where the case stands; failed carries the error chain and where it ran.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(tag = "state", rename_all = "snake_case")]
 pub enum CaseStatus {
+    /// Not computed yet.
     Pending,
+    /// In the cache.
     Done,
+    /// Its worker failed.
     Failed {
+        /// The error and its sources.
         error: String,
-        /// Slurm array job id and task id (absent when run outside Slurm).
+        /// Slurm array job id (null outside Slurm).
         job_id: Option<u64>,
+        /// Slurm array task id (null outside Slurm).
         task_id: Option<u32>,
         /// The task's log file, for `hdi status`.
         log: Option<PathBuf>,
     },
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+/// One case of the manifest: its spec and its status.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 pub struct ManifestEntry {
     #[serde(flatten)]
     pub spec: CaseSpec,
+    /// Where the case stands.
     pub status: CaseStatus,
 }
 
@@ -189,16 +202,29 @@ pub struct SubmissionRecord {
     pub submitted: String,
 }
 
-/// The stale cases of one `hdi run --executor slurm`, as JSON under
-/// `processed/.hdi/slurm/manifests/`.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+/// processed/.hdi/slurm/manifests/<created>-<hash12>.json, written by `hdi run --executor
+/// slurm` and read by `hdi exec-cases` on the nodes and by `hdi status` (docs/slurm.md). The
+/// stale cases of one submission, each with its cache key, the canonical parameters hashed
+/// into that key, the recipe a worker recomputes it from, and its status. Schema version 3
+/// (issue 31: every kind's recipe is one envelope naming the instance, the upstream entries
+/// its preparation read, the kind's own case and the key); a reader refuses any other version
+/// naming the file and both versions.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 pub struct CaseManifest {
+    /// Layout version of manifests, outcome files and submission records
+    /// (MANIFEST_SCHEMA_VERSION).
+    #[schemars(extend("const" = 3))]
     pub schema_version: u32,
+    /// Version of the hdi that wrote the manifest.
     pub hdi_version: String,
+    /// Creation time, ISO 8601 UTC (also the start of the file name).
+    #[schemars(regex(pattern = r"^[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9]{2}:[0-9]{2}:[0-9]{2}"))]
     pub created: String,
-    /// Fixed when the manifest is written: global task `t` runs cases
-    /// `t*cases_per_task .. (t+1)*cases_per_task` (clipped to the case count).
+    /// Fixed when the manifest is written: global array task t runs cases
+    /// t*cases_per_task .. (t+1)*cases_per_task (clipped to the case count).
+    #[schemars(range(min = 1))]
     pub cases_per_task: usize,
+    /// The cases in task order; no two share a key.
     pub cases: Vec<ManifestEntry>,
 }
 
