@@ -492,6 +492,32 @@ fn the_engine_names_no_stage_kind() {
     assert!(bad.is_empty(), "engine → stage kind:\n{}", bad.join("\n"));
 }
 
+#[test]
+fn every_stage_kind_writes_typed_results_and_rows() {
+    // A kind's result and summary row are its own serde types, read back by consumers through
+    // the same types (issue 31): never untyped JSON.
+    let mut files = Vec::new();
+    rust_files(&src().join("stages"), &mut files);
+    let mut impls = 0;
+    let mut bad = Vec::new();
+    for f in &files {
+        let code = code_only(&std::fs::read_to_string(f).unwrap());
+        for line in code.lines().map(str::trim) {
+            if line.starts_with("impl StageKind for") {
+                impls += 1;
+            }
+            let untyped = ["Value", "Map<"].iter().any(|t| line.contains(t));
+            if (line.starts_with("type Result =") || line.starts_with("type Row =")) && untyped {
+                bad.push(format!("{}: `{line}`", f.display()));
+            }
+        }
+    }
+    let mut kinds = stage_kinds();
+    kinds.dedup();
+    assert_eq!(impls, kinds.len(), "one StageKind impl per kind: {kinds:?}");
+    assert!(bad.is_empty(), "untyped stage outputs:\n{}", bad.join("\n"));
+}
+
 /// The module path of a library file (`src/slider/sweep.rs` → `slider::sweep`,
 /// `src/stages/mod.rs` → `stages`).
 fn module_path_of(rel: &Path) -> Vec<String> {
