@@ -3,12 +3,12 @@
 //! `result.json` values. The `[calibrate]` stage writes them.
 
 use super::WarmStart;
+use crate::artefacts::calibration::{EvaluationRecord, KnobValue, TargetRecord};
+use crate::artefacts::finite;
 use crate::dynamics::calibration::{
     in_band, CalibrationResult, CalibrationSettings, Evaluation, Knob, KnobRange, TargetOutcome,
     TargetSet,
 };
-use crate::artefacts::calibration::{EvaluationRecord, KnobValue, TargetRecord};
-use crate::artefacts::finite;
 use crate::error::Result;
 use serde::Serialize;
 
