@@ -8,12 +8,17 @@ use super::case_engine::{
     UpstreamRef,
 };
 use super::{FromConfig, Output, StageContext, StageKind};
-use crate::artefacts::calibration::fitted_json;
+use crate::artefacts::calibration::{
+    fitted_list, CalibrateResult, ConvergenceRecord, FailureRecord, HeldOutRecord, InBandCount,
+    InBandRecord, KnobAtBound, TouchdownSearchRecord,
+};
+use crate::artefacts::finite;
 use crate::artefacts::ordered::OrderedMap;
 use crate::contact::isbl::IsblParams;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::executor::batch::BatchRunner;
 use crate::core::executor::CaseSpec;
+use crate::core::store::rows_of;
 use crate::dynamics::calibration::{
     calibrate, round_case, CalibrationResult, CalibrationSettings, CaseRound, CaseRounds, Knob,
     TargetGeometry, DEFAULT_MAX_EVALUATIONS,
@@ -23,7 +28,7 @@ use crate::dynamics::DynamicsError;
 use crate::error::Result;
 pub use crate::slider::calibration::report::describe_knobs;
 use crate::slider::calibration::report::{
-    evaluation_json, knob_rows, residuals_png, summary_text, table_rows, InBandCounts,
+    evaluation_record, knob_rows, residuals_png, summary_text, table_rows, InBandCounts,
 };
 pub use crate::slider::calibration::WarmStart;
 use crate::slider::calibration::{base_inputs, base_of};
@@ -251,7 +256,7 @@ impl FromConfig for CalibrateStage {
 impl StageKind for CalibrateStage {
     const KIND: &'static str = "calibrate";
     const MODEL_VERSION: &'static str = MODEL_VERSION;
-    type Result = serde_json::Value;
+    type Result = CalibrateResult;
     type Row = CalibrateRow;
     const CASE_KIND: Option<&'static str> = Some(CALIBRATION_CASE);
     fn case_engine(&self) -> Option<&dyn CaseEngine> {
@@ -270,7 +275,7 @@ impl StageKind for CalibrateStage {
         // The base is uncalibrated: its contact and DMW instances.
         self.base.upstream()
     }
-    fn run(&self, ctx: &StageContext) -> Result<Output<Value, CalibrateRow>> {
+    fn run(&self, ctx: &StageContext) -> Result<Output<CalibrateResult, CalibrateRow>> {
         let (isbl, dmw) = base_inputs(&self.base, &ctx.upstream, &ctx.upstream_dirs)?;
         // Under a batch runner (`hdi run --executor slurm`) the rounds of cases go to it; the
         // search stays here (docs/slurm.md, "Calibration on Slurm").
@@ -302,10 +307,10 @@ impl StageKind for CalibrateStage {
             r.finish(ctx)?;
         }
         let result = result?;
-        let rows = table_rows(&result);
+        let rows = rows_of(&table_rows(&result));
         crate::core::store::write_table(&rows, &ctx.out_dir.join("calibration"))?;
         crate::core::store::write_table(
-            &knob_rows(&self.settings.knobs, &result),
+            &rows_of(&knob_rows(&self.settings.knobs, &result)),
             &ctx.out_dir.join("knobs"),
         )?;
         self.convergence_png(ctx, &result)?;
@@ -317,7 +322,7 @@ impl StageKind for CalibrateStage {
         ctx.progress
             .set_message(log.lines().next().unwrap_or_default());
         Ok(Output {
-            result: self.result_json(&settings, &fit_inputs, &warm, &result, &counts),
+            result: self.result(&settings, &fit_inputs, &warm, &result, &counts),
             summary_row: Some(self.summary_row(&result, &counts)),
         })
     }
@@ -414,70 +419,92 @@ impl CalibrateStage {
 
     /// The stage's `result.json`: the fitted knobs, the evaluations at the defaults and at the
     /// fit, the in-band counts, the convergence and the search's history.
-    fn result_json(
+    fn result(
         &self,
         settings: &CalibrationSettings,
         fit_inputs: &str,
         warm: &WarmStart,
         result: &CalibrationResult,
         counts: &InBandCounts,
-    ) -> Value {
+    ) -> CalibrateResult {
         let search = &settings.search;
         let td = &settings.touchdown;
-        json!({
-            "base": self.base_name,
-            "model": self.base.model_name,
-            "fitted": fitted_json(&result.best.knobs),
-            "fitted_description": describe_knobs(&result.best.knobs),
-            "defaults": evaluation_json(&result.initial),
-            "calibrated": evaluation_json(&result.best),
-            "held_out": {
-                "defaults": result.held_out_initial.as_ref().map(evaluation_json),
-                "calibrated": result.held_out_best.as_ref().map(evaluation_json),
-                "sweep_grid_nm": self.settings.sweep_grid.iter().map(|a| a * 1e9).collect::<Vec<_>>(),
+        let count = |targets: usize, (defaults, calibrated): (usize, usize)| InBandCount {
+            targets,
+            defaults,
+            calibrated,
+        };
+        CalibrateResult {
+            base: self.base_name.clone(),
+            model: self.base.model_name.clone(),
+            fitted: fitted_list(&result.best.knobs),
+            fitted_description: describe_knobs(&result.best.knobs),
+            defaults: evaluation_record(&result.initial),
+            calibrated: evaluation_record(&result.best),
+            held_out: HeldOutRecord {
+                defaults: result.held_out_initial.as_ref().map(evaluation_record),
+                calibrated: result.held_out_best.as_ref().map(evaluation_record),
+                sweep_grid_nm: self.settings.sweep_grid.iter().map(|a| a * 1e9).collect(),
             },
-            "in_band": {
-                "fitted": {"targets": counts.fitted_total, "defaults": counts.fitted.0, "calibrated": counts.fitted.1},
-                "held_out": {"targets": counts.held_out_total, "defaults": counts.held_out.0, "calibrated": counts.held_out.1},
-                "selection": {"targets": counts.selection_total, "defaults": counts.selection.0, "calibrated": counts.selection.1},
-                "final": {"targets": counts.final_total, "defaults": counts.final_set.0, "calibrated": counts.final_set.1},
+            in_band: InBandRecord {
+                fitted: count(counts.fitted_total, counts.fitted),
+                held_out: count(counts.held_out_total, counts.held_out),
+                selection: count(counts.selection_total, counts.selection),
+                final_set: count(counts.final_total, counts.final_set),
             },
-            "converged": result.converged,
-            "convergence": {
-                "converged": result.converged,
-                "reason": result.stop.name(),
-                "f_tolerance": search.f_tolerance,
-                "x_tolerance": search.x_tolerance,
-                "final_f_spread": result.final_f_spread,
-                "final_x_spread": result.final_x_spread,
-                "max_evaluations": search.max_evaluations,
-                "initial_step": search.initial_step,
-                "start": fitted_json(&settings.start),
-                "fit_inputs": fit_inputs,
-                "start_fitted_for": self.start_fitted_for,
-                "warm_start": warm.name(),
-                "start_ignored": match warm {
-                    WarmStart::Ignored(reason) => Some(reason.as_str()),
+            converged: result.converged,
+            convergence: ConvergenceRecord {
+                converged: result.converged,
+                reason: result.stop.name().to_string(),
+                f_tolerance: search.f_tolerance,
+                x_tolerance: search.x_tolerance,
+                final_f_spread: finite(result.final_f_spread),
+                final_x_spread: finite(result.final_x_spread),
+                max_evaluations: search.max_evaluations,
+                initial_step: search.initial_step,
+                start: fitted_list(&settings.start),
+                fit_inputs: fit_inputs.to_string(),
+                start_fitted_for: self.start_fitted_for.clone(),
+                warm_start: warm.name().to_string(),
+                start_ignored: match warm {
+                    WarmStart::Ignored(reason) => Some(reason.clone()),
                     _ => None,
                 },
             },
-            "at_bound": result.at_bound.iter().map(|(k, b)| json!({
-                "knob": k.name(), "bound": b.name(),
-            })).collect::<Vec<_>>(),
-            "touchdown_search": {
-                "start_nm": td.start * 1e9, "stop_nm": td.stop * 1e9, "step_nm": td.step * 1e9,
-                "resolution_nm": td.resolution * 1e9, "batch": td.batch,
+            at_bound: result
+                .at_bound
+                .iter()
+                .map(|(k, b)| KnobAtBound {
+                    knob: k.name().to_string(),
+                    bound: b.name().to_string(),
+                })
+                .collect(),
+            touchdown_search: TouchdownSearchRecord {
+                start_nm: td.start * 1e9,
+                stop_nm: td.stop * 1e9,
+                step_nm: td.step * 1e9,
+                resolution_nm: td.resolution * 1e9,
+                batch: td.batch,
             },
-            "evaluations": result.evaluations,
-            "cases": result.cases,
-            "failures": result.failures.iter().map(|(k, e)| json!({
-                "knobs": describe_knobs(k), "error": e,
-            })).collect::<Vec<_>>(),
-            "history": result.history.iter().map(|(i, f, b, exact)| json!([i, f, b, exact])).collect::<Vec<_>>(),
-            "rejected_early": result.rejected,
-            "table": "calibration.parquet",
-            "log": "calibration.log",
-        })
+            evaluations: result.evaluations,
+            cases: result.cases,
+            failures: result
+                .failures
+                .iter()
+                .map(|(k, e)| FailureRecord {
+                    knobs: describe_knobs(k),
+                    error: e.clone(),
+                })
+                .collect(),
+            history: result
+                .history
+                .iter()
+                .map(|(i, f, b, exact)| (*i, finite(*f), finite(*b), *exact))
+                .collect(),
+            rejected_early: result.rejected,
+            table: "calibration.parquet".into(),
+            log: "calibration.log".into(),
+        }
     }
 }
 

@@ -2,7 +2,7 @@
 //! re-evaluated now with the current code.
 
 use super::{Class, Origin, Row, Tolerance};
-use crate::artefacts::calibration::fitted_knobs;
+use crate::artefacts::calibration::{fitted_knobs, CalibrateResult, TargetRecord};
 use crate::core::cache::Store;
 use crate::dynamics::calibration::{evaluate, evaluate_held_out, Evaluation, Knob};
 use crate::engine::{plan, read_result, State};
@@ -10,6 +10,7 @@ use crate::error::{Error, Result};
 use crate::slider::calibration::{base_inputs, base_of};
 use crate::stages::calibrate::{describe_knobs, CalibrateConfig, CalibrateStage};
 use crate::stages::{FromConfig, StageKind};
+use serde::Deserialize;
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -113,7 +114,13 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
             let p = planned(n).expect("checked above");
             store.entry_dir(&p.kind, &p.key)
         };
-        let result = read_result(&entry(name))?;
+        let result = CalibrateResult::deserialize(read_result(&entry(name))?).map_err(|e| {
+            Error::UpstreamField {
+                kind: "calibrate",
+                name: name.to_string(),
+                what: format!("readable result ({e})"),
+            }
+        })?;
         let fitted = fitted_knobs(&result).ok_or_else(|| Error::UpstreamField {
             kind: "calibrate",
             name: name.to_string(),
@@ -126,30 +133,20 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
             dirs.insert(u.clone(), entry(u));
         }
         let e = re_evaluate(&stage, &fitted, &up, &dirs)?;
-        let recorded = |set: &str| {
-            result[set]["targets"]
-                .as_array()
-                .cloned()
-                .unwrap_or_default()
-        };
-        let (defaults, fit) = (recorded("defaults"), recorded("calibrated"));
+        let (defaults, fit) = (&result.defaults.targets, &result.calibrated.targets);
         let key = planned(name).map_or(String::new(), |p| p.key.clone());
         for o in &e.outcomes {
             let t = &o.target;
             let scale = t.display_scale;
-            let of = |set: &[Value]| {
-                set.iter()
-                    .find(|d| d["id"] == t.id)
-                    .and_then(|d| d["value"].as_f64())
-            };
-            let before = of(&defaults).map_or("–".into(), |v| format!("{:.3}", v * scale));
+            let of = |set: &[TargetRecord]| set.iter().find(|d| d.id == t.id).and_then(|d| d.value);
+            let before = of(defaults).map_or("–".into(), |v| format!("{:.3}", v * scale));
             let now = o.value.map_or(f64::NAN, |v| v * scale);
             let in_band = (now - t.published * scale).abs() <= t.tolerance * scale;
             // The fit's own record at its knobs is the target: the row checks that the fit
             // still holds with the current code. The published number it was fitted to is in
             // the note; whether that is in band says how well the fit did, not what hdi
             // reproduces (a fitted target is no reproduction).
-            let recorded = of(&fit).map_or(f64::NAN, |v| v * scale);
+            let recorded = of(fit).map_or(f64::NAN, |v| v * scale);
             rows.push(
                 Row::new(
                     &format!("cal-{}", t.id),

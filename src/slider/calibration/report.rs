@@ -3,34 +3,47 @@
 //! `result.json` values. The `[calibrate]` stage writes them.
 
 use super::WarmStart;
+use crate::artefacts::calibration::{EvaluationRecord, KnobValue, TargetRecord};
+use crate::artefacts::finite;
 use crate::dynamics::calibration::{
     in_band, CalibrationResult, CalibrationSettings, Evaluation, Knob, KnobRange, TargetOutcome,
     TargetSet,
 };
 use crate::error::Result;
-use serde_json::{json, Map, Value};
+use serde::Serialize;
 
 /// One evaluation (knobs, objective, every target) for `result.json`.
-pub(crate) fn evaluation_json(e: &Evaluation) -> Value {
+pub(crate) fn evaluation_record(e: &Evaluation) -> EvaluationRecord {
     let (inside, total) = in_band(e);
-    json!({
-        "objective": e.objective,
-        "cases": e.cases,
-        "in_band": inside,
-        "targets_total": total,
-        "knobs": e.knobs.iter().map(|(k, v)| json!({"knob": k.name(), "value": v})).collect::<Vec<_>>(),
-        "targets": e.outcomes.iter().map(|o| json!({
-            "id": o.target.id,
-            "set": o.target.set.name(),
-            "class": o.target.class,
-            "value": o.value,
-            "published": o.target.published,
-            "tolerance": o.target.tolerance,
-            "weight": o.target.weight,
-            "normalised_residual": o.normalised_residual,
-            "within_tolerance": o.within_tolerance(),
-        })).collect::<Vec<_>>(),
-    })
+    EvaluationRecord {
+        objective: finite(e.objective),
+        cases: e.cases,
+        in_band: inside,
+        targets_total: total,
+        knobs: e
+            .knobs
+            .iter()
+            .map(|(k, v)| KnobValue {
+                knob: k.name().to_string(),
+                value: *v,
+            })
+            .collect(),
+        targets: e
+            .outcomes
+            .iter()
+            .map(|o| TargetRecord {
+                id: o.target.id.to_string(),
+                set: o.target.set.name().to_string(),
+                class: o.target.class.to_string(),
+                value: o.value.and_then(finite),
+                published: o.target.published,
+                tolerance: o.target.tolerance,
+                weight: o.target.weight,
+                normalised_residual: finite(o.normalised_residual),
+                within_tolerance: o.within_tolerance(),
+            })
+            .collect(),
+    }
 }
 
 /// Describe the knob values compactly in display units (`dmw_scale 2.1, Δγ 52 mN/m, …`).
@@ -50,9 +63,33 @@ pub fn describe_knobs(values: &[(Knob, f64)]) -> String {
         .join(", ")
 }
 
+/// One row of the calibration table (`calibration.parquet`): a target of either set in
+/// display units, before (spec defaults) and after (fitted knobs) the fit.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub(crate) struct TargetRow {
+    pub(crate) target: &'static str,
+    pub(crate) set: &'static str,
+    pub(crate) class: &'static str,
+    /// `dissertation` / `optimised`.
+    pub(crate) geometry: &'static str,
+    /// The id of `hdi validate` (docs/validation.md), e.g. dyn-16.
+    pub(crate) spec_row: String,
+    pub(crate) unit: &'static str,
+    pub(crate) published: f64,
+    pub(crate) tolerance: f64,
+    pub(crate) weight: f64,
+    pub(crate) spec_defaults: Option<f64>,
+    pub(crate) calibrated: Option<f64>,
+    pub(crate) residual_defaults: Option<f64>,
+    pub(crate) residual_calibrated: Option<f64>,
+    pub(crate) in_band_defaults: bool,
+    pub(crate) in_band_calibrated: bool,
+    pub(crate) within_tolerance: bool,
+}
+
 /// One row per target of both sets: published, tolerance, value before (spec defaults) and
 /// after (fitted knobs), in band before and after.
-pub(crate) fn table_rows(r: &CalibrationResult) -> Vec<Map<String, Value>> {
+pub(crate) fn table_rows(r: &CalibrationResult) -> Vec<TargetRow> {
     let pairs = |before: &Evaluation, after: &Evaluation| -> Vec<(TargetOutcome, TargetOutcome)> {
         before
             .outcomes
@@ -68,60 +105,60 @@ pub(crate) fn table_rows(r: &CalibrationResult) -> Vec<Map<String, Value>> {
     all.iter()
         .map(|(i, b)| {
             let t = &b.target;
-            let s = |v: Option<f64>| json!(v.map(|v| v * t.display_scale));
-            let mut m = Map::new();
-            m.insert("target".into(), json!(t.id));
-            m.insert("set".into(), json!(t.set.name()));
-            m.insert("class".into(), json!(t.class));
-            m.insert(
-                "geometry".into(),
-                json!(match t.geometry {
+            let s = |v: Option<f64>| v.map(|v| v * t.display_scale).and_then(finite);
+            TargetRow {
+                target: t.id,
+                set: t.set.name(),
+                class: t.class,
+                geometry: match t.geometry {
                     crate::dynamics::calibration::TargetGeometry::Base => "dissertation",
                     crate::dynamics::calibration::TargetGeometry::Optimised => "optimised",
-                }),
-            );
-            m.insert(
-                "spec_row".into(),
-                // The id of `hdi validate` (docs/validation.md), e.g. dyn-16.
-                json!(format!("dyn-{}", t.source.trim_start_matches('#'))),
-            );
-            m.insert("unit".into(), json!(t.unit));
-            m.insert("published".into(), json!(t.published * t.display_scale));
-            m.insert("tolerance".into(), json!(t.tolerance * t.display_scale));
-            m.insert("weight".into(), json!(t.weight));
-            m.insert("spec_defaults".into(), s(i.value));
-            m.insert("calibrated".into(), s(b.value));
-            m.insert("residual_defaults".into(), json!(i.normalised_residual));
-            m.insert("residual_calibrated".into(), json!(b.normalised_residual));
-            m.insert("in_band_defaults".into(), json!(i.within_tolerance()));
-            m.insert("in_band_calibrated".into(), json!(b.within_tolerance()));
-            m.insert("within_tolerance".into(), json!(b.within_tolerance()));
-            m
+                },
+                spec_row: format!("dyn-{}", t.source.trim_start_matches('#')),
+                unit: t.unit,
+                published: t.published * t.display_scale,
+                tolerance: t.tolerance * t.display_scale,
+                weight: t.weight,
+                spec_defaults: s(i.value),
+                calibrated: s(b.value),
+                residual_defaults: finite(i.normalised_residual),
+                residual_calibrated: finite(b.normalised_residual),
+                in_band_defaults: i.within_tolerance(),
+                in_band_calibrated: b.within_tolerance(),
+                within_tolerance: b.within_tolerance(),
+            }
         })
         .collect()
 }
 
+/// One row of the knob table (`knobs.parquet`): its bounds, the fitted value and the bound it
+/// ended on (`null` for none).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub(crate) struct KnobRow {
+    pub(crate) knob: &'static str,
+    pub(crate) unit: &'static str,
+    pub(crate) lower_bound: f64,
+    pub(crate) upper_bound: f64,
+    pub(crate) fitted: f64,
+    pub(crate) at_bound: Option<&'static str>,
+}
+
 /// One row per knob: its bounds, the fitted value and the bound it ended on.
-pub(crate) fn knob_rows(knobs: &[KnobRange], r: &CalibrationResult) -> Vec<Map<String, Value>> {
+pub(crate) fn knob_rows(knobs: &[KnobRange], r: &CalibrationResult) -> Vec<KnobRow> {
     knobs
         .iter()
         .zip(&r.best.knobs)
-        .map(|(range, (k, v))| {
-            let mut m = Map::new();
-            m.insert("knob".into(), json!(k.name()));
-            m.insert("unit".into(), json!(k.unit()));
-            m.insert("lower_bound".into(), json!(range.lo));
-            m.insert("upper_bound".into(), json!(range.hi));
-            m.insert("fitted".into(), json!(v));
-            m.insert(
-                "at_bound".into(),
-                json!(r
-                    .at_bound
-                    .iter()
-                    .find(|(kb, _)| kb == k)
-                    .map(|(_, b)| b.name())),
-            );
-            m
+        .map(|(range, (k, v))| KnobRow {
+            knob: k.name(),
+            unit: k.unit(),
+            lower_bound: range.lo,
+            upper_bound: range.hi,
+            fitted: *v,
+            at_bound: r
+                .at_bound
+                .iter()
+                .find(|(kb, _)| kb == k)
+                .map(|(_, b)| b.name()),
         })
         .collect()
 }
@@ -253,23 +290,19 @@ pub(crate) fn summary_text(
         "set\ttarget\tpublished\ttolerance\tdefaults\tcalibrated\tin band before/after"
     );
     for row in table_rows(r) {
-        let f = |k: &str| {
-            row[k]
-                .as_f64()
-                .map_or("–".to_string(), |v| format!("{v:.4}"))
-        };
+        let f = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.4}"));
         let _ = writeln!(
             s,
             "{}\t{}\t{} {}\t±{}\t{}\t{}\t{}/{}",
-            row["set"].as_str().unwrap_or_default(),
-            row["target"].as_str().unwrap_or_default(),
-            f("published"),
-            row["unit"].as_str().unwrap_or_default(),
-            f("tolerance"),
-            f("spec_defaults"),
-            f("calibrated"),
-            row["in_band_defaults"],
-            row["in_band_calibrated"],
+            row.set,
+            row.target,
+            f(finite(row.published)),
+            row.unit,
+            f(finite(row.tolerance)),
+            f(row.spec_defaults),
+            f(row.calibrated),
+            row.in_band_defaults,
+            row.in_band_calibrated,
         );
     }
     s
