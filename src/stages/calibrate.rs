@@ -586,11 +586,22 @@ pub fn case_params(
 
 /// A case's result as stored: `{"metrics": …}`, or `{"error": …}` for a case that fails (a
 /// failing case is deterministic, and the fit counts its point infeasible with this text).
-pub fn case_result(outcome: &crate::dynamics::Result<CaseMetrics>) -> Value {
+pub fn case_result(outcome: &crate::dynamics::Result<CaseMetrics>) -> CalibrationCaseResult {
     match outcome {
-        Ok(m) => json!({ "metrics": m }),
-        Err(e) => json!({ "error": e.to_string() }),
+        Ok(m) => CalibrationCaseResult::Metrics(m.clone()),
+        Err(e) => CalibrationCaseResult::Error(e.to_string()),
     }
+}
+
+/// A calibration case's stored result (`{"metrics": …}` or `{"error": "…"}`): written by the
+/// worker, read back by the fit's round through this type.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CalibrationCaseResult {
+    /// The case's metrics.
+    Metrics(CaseMetrics),
+    /// The error that ended the case (the round reports the first in order).
+    Error(String),
 }
 
 /// The fit's rounds as store entries computed by a batch runner. A round that does not come
@@ -678,13 +689,14 @@ impl CaseRounds for StoreRounds<'_> {
             .map_err(|e| self.fail(crate::core::chain(&e)))?;
         let mut metrics = Vec::with_capacity(results.len());
         for (spec, r) in specs.iter().zip(results) {
-            if let Some(e) = r.get("error").and_then(Value::as_str) {
+            match serde_json::from_value::<CalibrationCaseResult>(r) {
                 // As the in-process round: the case's own error (the first in order).
-                return Err(DynamicsError::Numerical(e.to_string()));
+                Ok(CalibrationCaseResult::Error(e)) => return Err(DynamicsError::Numerical(e)),
+                Ok(CalibrationCaseResult::Metrics(m)) => metrics.push(m),
+                Err(e) => {
+                    return Err(self.fail(format!("case {}: unreadable metrics: {e}", spec.key)))
+                }
             }
-            let m = serde_json::from_value::<CaseMetrics>(r["metrics"].clone())
-                .map_err(|e| self.fail(format!("case {}: unreadable metrics: {e}", spec.key)))?;
-            metrics.push(m);
         }
         Ok(metrics)
     }
@@ -786,15 +798,17 @@ impl PreparedCases for CalibrationCases {
         let base = base_of(&self.base, self.isbl, self.dmw.as_ref());
         let outcome = round_case(&base, &knobs, geometry, c.actuation_m);
         let result = case_result(&outcome);
+        let written =
+            serde_json::to_value(&result).map_err(|_| crate::error::Error::CaseMetricsJson)?;
         // The fit compares these numbers: they must come back bit for bit (a non-finite value
         // would not survive JSON).
-        if let Ok(m) = &outcome {
-            let back = serde_json::from_value(result["metrics"].clone()).ok();
-            if back.as_ref() != Some(m) {
+        if outcome.is_ok() {
+            let back = serde_json::from_value::<CalibrationCaseResult>(written.clone()).ok();
+            if back.as_ref() != Some(&result) {
                 return Err(crate::error::Error::CaseMetricsJson);
             }
         }
-        Ok(result)
+        Ok(written)
     }
 }
 
