@@ -646,10 +646,11 @@ fn cached_sweep(cache: &Cache, name: &str) -> Option<Sweep> {
 /// The rows whose targets were in the objective (weight > 0) of the calibration behind the
 /// calibrated sweep `name`: their calibrated values are fits, not reproductions.
 fn fitted_rows(cache: &Cache, name: &str) -> Vec<&'static str> {
-    let Some(cal) = cache
-        .current(name)
-        .and_then(|s| s.result["calibration"].as_str().map(str::to_string))
-    else {
+    let Some(cal) = cache.current(name).and_then(|s| {
+        serde_json::from_value::<SimulateResult>(s.result)
+            .ok()?
+            .calibration
+    }) else {
         return Vec::new();
     };
     let Some(fit) = cache.current(&cal) else {
