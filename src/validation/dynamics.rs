@@ -22,6 +22,9 @@ use super::spectral::{
 };
 use super::{Basis, Calibrated, Class, Ordering, Origin, Relation, Row, Tolerance};
 use crate::artefacts::analysis::AnalysisResult;
+use crate::artefacts::cases::{Stats, SweepCaseResult};
+use crate::artefacts::simulate::SimulateResult;
+use crate::artefacts::three_dof::ThreeDofResult;
 use crate::contact::isbl::{FrictionLaw, IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
 use crate::core::cache::Store;
@@ -253,20 +256,24 @@ impl Pt {
         Pt::ratio(self.q, self.ar)
     }
 
-    fn from_json(m: &Value) -> Option<Pt> {
-        let f = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
-        Some(Pt {
-            h: m["actuation_m"].as_f64()?,
-            clearance: m["clearance_m"]["mean"].as_f64()?,
-            fhm: f(&m["vibration_percent"]),
-            solid: f(&m["percent_solid_contact"]),
-            fc: m["contact_force_N"]["mean"].as_f64().unwrap_or(0.0),
-            q: m["friction_N"]["mean"].as_f64().unwrap_or(0.0),
-            ar: m["real_area_m2"]["mean"].as_f64().unwrap_or(0.0),
-            adhesion: m["adhesion_N"]["mean"].as_f64().unwrap_or(0.0),
-            mu_inst: f(&m["friction_coefficient"]),
-            pm_inst: f(&m["mean_pressure_Pa"]),
-            tau_inst: f(&m["shear_traction_Pa"]),
+    /// A grid case's point from its metrics; `None` where its actuation or mean clearance is
+    /// undefined (written as null). Missing contact statistics read as zero load.
+    fn from_metrics(m: &SweepCaseResult) -> Option<Pt> {
+        let mean_or_zero =
+            |s: &Option<Stats>| s.map(|s| s.mean).filter(|m| !m.is_nan()).unwrap_or(0.0);
+        let clearance = m.clearance_m.mean;
+        (!clearance.is_nan()).then(|| Pt {
+            h: m.actuation_m,
+            clearance,
+            fhm: m.vibration_percent,
+            solid: m.percent_solid_contact,
+            fc: mean_or_zero(&m.contact_force_N),
+            q: mean_or_zero(&m.friction_N),
+            ar: mean_or_zero(&m.real_area_m2),
+            adhesion: mean_or_zero(&m.adhesion_N),
+            mu_inst: m.friction_coefficient.unwrap_or(f64::NAN),
+            pm_inst: m.mean_pressure_Pa.unwrap_or(f64::NAN),
+            tau_inst: m.shear_traction_Pa.unwrap_or(f64::NAN),
         })
     }
 }
@@ -602,36 +609,28 @@ fn run_sweep(
 /// A calibrated sweep of the pipeline, read from the cache.
 fn cached_sweep(cache: &Cache, name: &str) -> Option<Sweep> {
     let Stored { result, origin, .. } = cache.current(name)?;
+    let result: SimulateResult = serde_json::from_value(result).ok()?;
     // The up branch of a continuation sweep (the branches coincide at the shipped inputs;
-    // docs/conventions.md); sweeps without branches have no `branch` field.
-    let pts: Vec<Pt> = result["cases"]
-        .as_array()?
+    // docs/conventions.md). A sweep without branches writes `nominal` and is not read here.
+    let pts: Vec<Pt> = result
+        .cases
         .iter()
-        .filter(|c| c["branch"].as_str().is_none_or(|b| b == "up"))
-        .filter_map(|c| Pt::from_json(&c["metrics"]))
+        .filter(|c| c.branch == "up")
+        .filter_map(|c| Pt::from_metrics(&c.metrics))
         .collect();
     // The grid touchdown: the rows at touchdown need the full metrics of a touching case, and
     // the stage stores those for its grid cases only (its refined touchdown is in result.json).
-    let td = result["sweep"]["touchdown_m"].as_f64();
-    let knobs = result["calibrated_knobs"]
-        .as_array()
-        .map(|k| {
-            k.iter()
-                .map(|k| {
-                    format!(
-                        "{} = {:.4e}",
-                        k["knob"].as_str().unwrap_or("?"),
-                        k["value"].as_f64().unwrap_or(f64::NAN)
-                    )
-                })
-                .collect::<Vec<_>>()
-                .join(", ")
-        })
-        .unwrap_or_default();
+    let td = result.sweep.metrics.touchdown_m;
+    let knobs = result
+        .calibrated_knobs
+        .iter()
+        .map(|k| format!("{} = {:.4e}", k.knob, k.value))
+        .collect::<Vec<_>>()
+        .join(", ");
     let record = cache
         .record_label(name)
         .unwrap_or_else(|| "the pipeline's DMW record".into());
-    let inputs = match result["calibration"].as_str() {
+    let inputs = match result.calibration {
         Some(cal) => format!(
             "{record}, static start (up branch), calibration [calibrate.{cal}] \
              ({knobs}); the stage's own 0.2 nm grid and grid touchdown"
@@ -647,10 +646,11 @@ fn cached_sweep(cache: &Cache, name: &str) -> Option<Sweep> {
 /// The rows whose targets were in the objective (weight > 0) of the calibration behind the
 /// calibrated sweep `name`: their calibrated values are fits, not reproductions.
 fn fitted_rows(cache: &Cache, name: &str) -> Vec<&'static str> {
-    let Some(cal) = cache
-        .current(name)
-        .and_then(|s| s.result["calibration"].as_str().map(str::to_string))
-    else {
+    let Some(cal) = cache.current(name).and_then(|s| {
+        serde_json::from_value::<SimulateResult>(s.result)
+            .ok()?
+            .calibration
+    }) else {
         return Vec::new();
     };
     let Some(fit) = cache.current(&cal) else {
@@ -1902,7 +1902,8 @@ fn chirp_rows(cache: Option<&Cache>) -> Vec<Row> {
     // Fig. B.8: noise over the AB modes makes larger vibrations than noise away from them.
     let bv = |name: &str| -> Option<(f64, Origin)> {
         let s = cache?.current(name)?;
-        let v = s.result["cases"].as_array()?.first()?["bulge_vibration_percent"].as_f64()?;
+        let result: ThreeDofResult = serde_json::from_value(s.result).ok()?;
+        let v = result.cases.first()?.bulge_vibration_percent?;
         Some((v, s.origin))
     };
     let q =

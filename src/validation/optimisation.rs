@@ -2,11 +2,14 @@
 //! beside the dissertation's (§2.3.2).
 
 use super::{Class, Origin, Row, Tolerance};
+use crate::artefacts::doe::DoeResult;
+use crate::artefacts::upstream_result;
 use crate::core::cache::Store;
 use crate::dynamics::UM;
 use crate::engine::{plan, read_result, State};
 use crate::error::Result;
 use crate::stages::doe::DoeConfig;
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// `hdi validate` rows (area `optimisation`): each current `[doe]` optimum beside the
@@ -41,22 +44,27 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
             continue;
         };
         let result = read_result(&store.entry_dir(&entry.kind, &entry.key))?;
-        let o = &result["optimum"];
+        let result: DoeResult =
+            upstream_result(&BTreeMap::from([(name.clone(), result)]), "doe", name)?;
+        let optimum = result.optimum.as_ref();
         let variant = format!(
             "ξ = (c̄/FH_nom)(V/100) [assumed]; SA on the {} objective, {} evaluations ({}), seed {}",
-            o["objective"].as_str().unwrap_or("?").to_lowercase(),
-            o["evaluations"],
-            o["stop"].as_str().unwrap_or("?"),
+            optimum.map_or("?".into(), |o| o.objective.to_lowercase()),
+            optimum.map_or("null".into(), |o| o.evaluations.to_string()),
+            optimum.map_or("?", |o| o.stop.as_str()),
             cfg.sa_seed
         );
-        let w = o["w_m"].as_f64().unwrap_or(f64::NAN) / UM;
+        let w = optimum.map_or(f64::NAN, |o| o.w_m) / UM;
         let note = format!(
             "class D: ξ's formula, the DOE levels and the DMW were dropped from the text and the \
              model runs at the spec's default inputs (touchdown 10.4 nm, not 9.7); our w_TFC = \
              {w:.2} µm (dropped); most sensitive: {}",
-            o["most_sensitive"].as_str().unwrap_or("?")
+            optimum
+                .and_then(|o| o.most_sensitive.as_deref())
+                .unwrap_or("?")
         );
-        for (q, key, target) in [("a_TFC", "a_m", 4.86), ("x_TFC", "x_m", 6.35)] {
+        let (a, x) = optimum.map_or((f64::NAN, f64::NAN), |o| (o.a_m, o.x_m));
+        for (q, value, target) in [("a_TFC", a, 4.86), ("x_TFC", x, 6.35)] {
             rows.push(
                 Row::new(
                     &format!("doe-{name}.{q}"),
@@ -64,7 +72,7 @@ pub fn rows(config: &Path) -> Result<Vec<Row>> {
                     &format!("optimised {q}"),
                     "um",
                     target,
-                    o[key].as_f64().unwrap_or(f64::NAN) / UM,
+                    value / UM,
                     Tolerance::Absolute(0.5),
                 )
                 .published("dissertation §2.3.2")

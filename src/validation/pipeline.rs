@@ -3,7 +3,7 @@
 //! [`Origin`] that names the instance and its cache key.
 
 use super::Origin;
-use crate::core::cache::Store;
+use crate::core::cache::{Manifest, Store};
 use crate::engine::{plan, read_result, Plan, State};
 use crate::error::Result;
 use serde_json::Value;
@@ -82,7 +82,8 @@ impl Cache {
                 .find(|p| p.name == n && p.state == State::Fresh)?;
             let dir = self.store.entry_dir(&p.kind, &p.key);
             if p.kind == "dmw" {
-                let file = read_result(&dir).ok()?["file"].as_str()?.to_string();
+                let DmwRecordFile { file } =
+                    serde_json::from_value(read_result(&dir).ok()?).ok()?;
                 return Some(format!(
                     "{} DMW record `{n}`",
                     if synthesised(&self.root.join(file)) {
@@ -92,16 +93,19 @@ impl Cache {
                     }
                 ));
             }
-            let manifest: Value =
+            let manifest: Manifest =
                 serde_json::from_slice(&std::fs::read(dir.join("manifest.json")).ok()?).ok()?;
-            for u in manifest["fingerprint"]["upstream"].as_array()? {
-                if let Some(u) = u["name"].as_str() {
-                    todo.push(u.to_string());
-                }
-            }
+            todo.extend(manifest.fingerprint.upstream.into_iter().map(|u| u.name));
         }
         None
     }
+}
+
+/// The one field of a `[dmw]` result (`DmwStageResult`, written by its stage) read here: the
+/// record file, relative to the project directory.
+#[derive(serde::Deserialize)]
+struct DmwRecordFile {
+    file: String,
 }
 
 /// Whether `file` was written by `hdi synth`: its folder's `samples.json` names it and that
@@ -113,17 +117,25 @@ fn synthesised(file: &Path) -> bool {
     let Ok(text) = std::fs::read(samples) else {
         return false;
     };
-    let Ok(v) = serde_json::from_slice::<Value>(&text) else {
+    let Ok(v) = serde_json::from_slice::<SynthSamples>(&text) else {
         return false;
     };
     let named = file
         .file_name()
         .and_then(|f| f.to_str())
-        .is_some_and(|f| v["file"].as_str() == Some(f));
+        .is_some_and(|f| v.file.as_deref() == Some(f));
     named
-        && v["generator"]
-            .as_str()
+        && v.generator
+            .as_deref()
             .is_some_and(|g| g.starts_with("hdi synth"))
+}
+
+/// The two fields of `hdi synth`'s `samples.json` read here (a record it wrote: its file
+/// name and the generator); either may be absent from a hand-written file.
+#[derive(serde::Deserialize)]
+struct SynthSamples {
+    file: Option<String>,
+    generator: Option<String>,
 }
 
 /// The cache of `config`, if it exists and plans.

@@ -3,6 +3,7 @@
 
 use super::pipeline::Cache;
 use super::{Basis, Class, Ordering, Origin, Relation, Row, Tolerance};
+use crate::artefacts::three_dof::{Table44Columns, ThreeDofCaseResult, ThreeDofResult};
 use crate::contact::isbl::{IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
 use crate::contact::mtl::LubricantCase;
@@ -578,24 +579,35 @@ fn basis_of(id: &str, reference: &str) -> Basis {
     }
 }
 
-/// The cached 3-DOF stage cases by label (`isbl`, `mtl_reference`, …).
-fn cached_cases(cache: Option<&Cache>, name: &str) -> Option<(Vec<serde_json::Value>, Origin)> {
+/// The cached 3-DOF stage cases (each labelled `isbl`, `mtl_reference`, …).
+fn cached_cases(cache: Option<&Cache>, name: &str) -> Option<(Vec<ThreeDofCaseResult>, Origin)> {
     let s = cache?.current(name)?;
-    Some((s.result["cases"].as_array()?.clone(), s.origin))
+    let result: ThreeDofResult = serde_json::from_value(s.result).ok()?;
+    Some((result.cases, s.origin))
 }
 
-fn case_of<'a>(cases: &'a [serde_json::Value], label: &str) -> Option<&'a serde_json::Value> {
-    cases.iter().find(|c| c["case"] == label)
+fn case_of<'a>(cases: &'a [ThreeDofCaseResult], label: &str) -> Option<&'a ThreeDofCaseResult> {
+    cases.iter().find(|c| c.case == label)
 }
 
-fn num(c: Option<&serde_json::Value>, key: &str) -> f64 {
-    c.and_then(|c| c[key].as_f64()).unwrap_or(f64::NAN)
+/// `field` of the case `c`, NaN without the case (undefined values read back as NaN).
+fn num(c: Option<&ThreeDofCaseResult>, field: impl Fn(&ThreeDofCaseResult) -> f64) -> f64 {
+    c.map_or(f64::NAN, field)
 }
 
-fn features(c: Option<&serde_json::Value>) -> Vec<String> {
-    c.and_then(|c| c["features_in_solid_contact"].as_str())
-        .map(|s| s.split_whitespace().map(str::to_string).collect())
-        .unwrap_or_default()
+/// A Table 4.4 column of the case `c`; NaN where the case has none or it is undefined.
+fn table_4_4(c: &ThreeDofCaseResult, column: impl Fn(&Table44Columns) -> Option<f64>) -> f64 {
+    c.table_4_4.as_ref().and_then(column).unwrap_or(f64::NAN)
+}
+
+fn features(c: Option<&ThreeDofCaseResult>) -> Vec<String> {
+    c.map(|c| {
+        c.features_in_solid_contact
+            .split_whitespace()
+            .map(str::to_string)
+            .collect()
+    })
+    .unwrap_or_default()
 }
 
 fn needs(id: &str, quantity: &str, instance: &str) -> Row {
@@ -655,7 +667,7 @@ fn constant_12nm_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
                 .note(&format!(
                     "features in solid contact: [{}]; bulge spacing {:.2} nm vs 3σ = 1.5 nm",
                     f.join(", "),
-                    num(isbl, "bulge_spacing_mean_nm")
+                    num(isbl, |c| c.bulge_spacing_mean_nm)
                 )),
             );
             rows.push(
@@ -665,8 +677,8 @@ fn constant_12nm_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
                     Ordering::new(
                         Relation::Close { tol: 0.2 },
                         &[
-                            ("ISBL PT", num(isbl, "pole_tip_mean_nm")),
-                            ("MTL PT", num(mtl, "pole_tip_mean_nm")),
+                            ("ISBL PT", num(isbl, |c| c.pole_tip_mean_nm)),
+                            ("MTL PT", num(mtl, |c| c.pole_tip_mean_nm)),
                         ],
                     ),
                 )
@@ -681,7 +693,7 @@ fn constant_12nm_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
                     "S3 12 nm: MTL vibrations die out, ISBL keeps vibrating (PT std MTL < ISBL)",
                     Ordering::new(
                         Relation::Ascending,
-                        &[("MTL PT std", num(mtl, "pole_tip_std_nm")), ("ISBL PT std", num(isbl, "pole_tip_std_nm"))],
+                        &[("MTL PT std", num(mtl, |c| c.pole_tip_std_nm)), ("ISBL PT std", num(isbl, |c| c.pole_tip_std_nm))],
                     ),
                 )
                 .reference("dissertation §4.2 (S3)")
@@ -710,7 +722,7 @@ fn shock_contact_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
             let c = case_of(&cases, "isbl").or(cases.first());
             let f = features(c);
             let has = |p: &str| f.iter().any(|x| x.starts_with(p));
-            let peak = num(c, "peak_contact_force_mN");
+            let peak = num(c, |c| c.peak_contact_force_mN);
             rows.push(
                 Row::ordering(
                     "dyn-32",
@@ -785,10 +797,13 @@ fn variable_actuation_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
                     Ordering::new(
                         Relation::Ascending,
                         &[
-                            ("steady-contact BV", num(isbl, "steady_contact_bv_percent")),
+                            (
+                                "steady-contact BV",
+                                num(isbl, |c| table_4_4(c, |t| t.steady_contact_bv_percent)),
+                            ),
                             (
                                 "jump-to-contact BV",
-                                num(isbl, "jump_to_contact_bv_percent"),
+                                num(isbl, |c| table_4_4(c, |t| t.jump_to_contact_bv_percent)),
                             ),
                         ],
                     ),
@@ -810,13 +825,13 @@ fn variable_actuation_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
                         &[
                             (
                                 "ISBL JTC BV / MTL JTC BV",
-                                num(isbl, "jump_to_contact_bv_percent")
-                                    / num(mtl, "jump_to_contact_bv_percent"),
+                                num(isbl, |c| table_4_4(c, |t| t.jump_to_contact_bv_percent))
+                                    / num(mtl, |c| table_4_4(c, |t| t.jump_to_contact_bv_percent)),
                             ),
                             (
                                 "ISBL steady BV / MTL steady BV",
-                                num(isbl, "steady_contact_bv_percent")
-                                    / num(mtl, "steady_contact_bv_percent"),
+                                num(isbl, |c| table_4_4(c, |t| t.steady_contact_bv_percent))
+                                    / num(mtl, |c| table_4_4(c, |t| t.steady_contact_bv_percent)),
                             ),
                             ("1", 1.0),
                         ],
@@ -833,7 +848,7 @@ fn variable_actuation_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
                     "S5: MTL has less solid contact than ISBL (solid contact only in the transients)",
                     Ordering::new(
                         Relation::Ascending,
-                        &[("MTL solid-contact share", num(mtl, "solid_contact_percent")), ("ISBL solid-contact share", num(isbl, "solid_contact_percent"))],
+                        &[("MTL solid-contact share", num(mtl, |c| c.solid_contact_percent)), ("ISBL solid-contact share", num(isbl, |c| c.solid_contact_percent))],
                     ),
                 )
                 .reference(r)
@@ -847,7 +862,13 @@ fn variable_actuation_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
                     "S5: μ > 1 in steady contact (ISBL)",
                     Ordering::new(
                         Relation::Ascending,
-                        &[("1", 1.0), ("μ", num(isbl, "friction_coefficient"))],
+                        &[
+                            ("1", 1.0),
+                            (
+                                "μ",
+                                num(isbl, |c| c.friction_coefficient.unwrap_or(f64::NAN)),
+                            ),
+                        ],
                     ),
                 )
                 .reference(r)
