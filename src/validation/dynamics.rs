@@ -656,14 +656,16 @@ fn fitted_rows(cache: &Cache, name: &str) -> Vec<&'static str> {
     let Some(fit) = cache.current(&cal) else {
         return Vec::new();
     };
-    let targets = fit.result["calibrated"]["targets"]
-        .as_array()
-        .cloned()
-        .unwrap_or_default();
-    targets
+    let Ok(fit) =
+        serde_json::from_value::<crate::artefacts::calibration::CalibrateResult>(fit.result)
+    else {
+        return Vec::new();
+    };
+    fit.calibrated
+        .targets
         .iter()
-        .filter(|t| t["set"] == "fitted" && t["weight"].as_f64().is_some_and(|w| w > 0.0))
-        .filter_map(|t| row_of_calibration_target(t["id"].as_str()?))
+        .filter(|t| t.set == "fitted" && t.weight > 0.0)
+        .filter_map(|t| row_of_calibration_target(&t.id))
         .collect()
 }
 
