@@ -64,9 +64,12 @@ fn generate<T: JsonSchema>() -> Schema {
         .into_root_schema_for::<T>()
 }
 
+/// Case kinds and the schema of their recipes' `case`.
+type CaseType = (&'static [&'static str], fn() -> Schema);
+
 /// The case types a manifest's recipes carry, by case kind: the schema of `recipe.case` for
 /// entries of those kinds. A case kind without one fails `hdi schema --check`.
-const CASE_TYPES: &[(&[&str], fn() -> Schema)] = &[
+const CASE_TYPES: &[CaseType] = &[
     (
         &["simulate", "doe"],
         generate::<hdi::slider::sweep::SweepCase>,

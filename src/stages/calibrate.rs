@@ -588,7 +588,7 @@ pub fn case_params(
 /// failing case is deterministic, and the fit counts its point infeasible with this text).
 pub fn case_result(outcome: &crate::dynamics::Result<CaseMetrics>) -> CalibrationCaseResult {
     match outcome {
-        Ok(m) => CalibrationCaseResult::Metrics(m.clone()),
+        Ok(m) => CalibrationCaseResult::Metrics(Box::new(m.clone())),
         Err(e) => CalibrationCaseResult::Error(e.to_string()),
     }
 }
@@ -599,7 +599,7 @@ pub fn case_result(outcome: &crate::dynamics::Result<CaseMetrics>) -> Calibratio
 #[serde(rename_all = "snake_case")]
 pub enum CalibrationCaseResult {
     /// The case's metrics.
-    Metrics(CaseMetrics),
+    Metrics(Box<CaseMetrics>),
     /// The error that ended the case (the round reports the first in order).
     Error(String),
 }
@@ -692,7 +692,7 @@ impl CaseRounds for StoreRounds<'_> {
             match serde_json::from_value::<CalibrationCaseResult>(r) {
                 // As the in-process round: the case's own error (the first in order).
                 Ok(CalibrationCaseResult::Error(e)) => return Err(DynamicsError::Numerical(e)),
-                Ok(CalibrationCaseResult::Metrics(m)) => metrics.push(m),
+                Ok(CalibrationCaseResult::Metrics(m)) => metrics.push(*m),
                 Err(e) => {
                     return Err(self.fail(format!("case {}: unreadable metrics: {e}", spec.key)))
                 }
