@@ -20,7 +20,7 @@ use crate::core::executor::batch::BatchRunner;
 use crate::core::executor::CaseSpec;
 use crate::core::store::rows_of;
 use crate::dynamics::calibration::{
-    calibrate, round_case, CalibrationResult, CalibrationSettings, CaseRound, CaseRounds, Knob,
+    calibrate, round_case, CalibrationResult, CalibrationSettings, CaseRound, CaseRounds,
     TargetGeometry, DEFAULT_MAX_EVALUATIONS,
 };
 use crate::dynamics::metrics::CaseMetrics;
@@ -34,6 +34,7 @@ pub use crate::slider::calibration::WarmStart;
 use crate::slider::calibration::{base_inputs, base_of};
 use crate::slider::params::{uncalibrated_base, SimulateParams};
 use crate::units::Length;
+pub use case::{case_params, case_result, knobs_json, CalibrationCase, CalibrationCaseResult};
 use serde::Deserialize;
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
@@ -561,49 +562,6 @@ pub fn geometry_from_name(s: &str) -> Option<TargetGeometry> {
     }
 }
 
-/// `[[name, value], …]` (JSON numbers round-trip f64 exactly: serde_json `float_roundtrip`).
-pub fn knobs_json(knobs: &[(Knob, f64)]) -> Value {
-    json!(knobs
-        .iter()
-        .map(|(k, v)| json!([k.name(), v]))
-        .collect::<Vec<_>>())
-}
-
-/// Canonical parameters of one case (its store key).
-pub fn case_params(
-    base_params: &Value,
-    knobs: &[(Knob, f64)],
-    geometry: TargetGeometry,
-    actuation: f64,
-) -> Value {
-    json!({
-        "calibration_base": base_params,
-        "knobs": knobs_json(knobs),
-        "geometry": geometry_name(geometry),
-        "actuation_m": actuation,
-    })
-}
-
-/// A case's result as stored: `{"metrics": …}`, or `{"error": …}` for a case that fails (a
-/// failing case is deterministic, and the fit counts its point infeasible with this text).
-pub fn case_result(outcome: &crate::dynamics::Result<CaseMetrics>) -> CalibrationCaseResult {
-    match outcome {
-        Ok(m) => CalibrationCaseResult::Metrics(Box::new(m.clone())),
-        Err(e) => CalibrationCaseResult::Error(e.to_string()),
-    }
-}
-
-/// A calibration case's stored result (`{"metrics": …}` or `{"error": "…"}`): written by the
-/// worker, read back by the fit's round through this type.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum CalibrationCaseResult {
-    /// The case's metrics.
-    Metrics(Box<CaseMetrics>),
-    /// The error that ended the case (the round reports the first in order).
-    Error(String),
-}
-
 /// The fit's rounds as store entries computed by a batch runner. A round that does not come
 /// back (scheduler, store, unreadable result) is recorded as fatal: the fit then fails fast
 /// and the stage reports it, instead of counting the point infeasible.
@@ -702,52 +660,6 @@ impl CaseRounds for StoreRounds<'_> {
     }
 }
 
-/// One case of a calibration round, as a recipe carries it (docs/schemas/case-manifest.json).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct CalibrationCase {
-    /// The round's knob values, [name, value] pairs (JSON numbers round-trip f64 exactly:
-    /// serde_json `float_roundtrip`).
-    pub knobs: Vec<(String, f64)>,
-    /// Target geometry: base or optimised.
-    #[schemars(extend("enum" = ["base", "optimised"]))]
-    pub geometry: String,
-    /// TFC actuation of the case, m.
-    pub actuation_m: f64,
-}
-
-impl CalibrationCase {
-    fn new(knobs: &[(Knob, f64)], geometry: TargetGeometry, actuation_m: f64) -> Self {
-        CalibrationCase {
-            knobs: knobs
-                .iter()
-                .map(|(k, v)| (k.name().to_string(), *v))
-                .collect(),
-            geometry: geometry_name(geometry).to_string(),
-            actuation_m,
-        }
-    }
-
-    /// The knobs and geometry as the fit names them.
-    fn resolve(&self) -> Result<(Vec<(Knob, f64)>, TargetGeometry)> {
-        let bad = |what: &str| {
-            let source = <serde_json::Error as serde::de::Error>::custom(what);
-            crate::error::Error::RecipeCase {
-                kind: CALIBRATION_CASE,
-                source,
-            }
-        };
-        let knobs = self
-            .knobs
-            .iter()
-            .map(|(k, v)| Knob::from_name(k).map(|k| (k, *v)))
-            .collect::<Option<Vec<_>>>()
-            .ok_or_else(|| bad("unknown knob"))?;
-        let geometry = geometry_from_name(&self.geometry).ok_or_else(|| bad("unknown geometry"))?;
-        Ok((knobs, geometry))
-    }
-}
-
 impl CaseEngine for CalibrateStage {
     /// The base's interface parameters, DMW track and case base parameters, rebuilt from the
     /// entries the submitting fit read.
@@ -812,5 +724,6 @@ impl PreparedCases for CalibrationCases {
     }
 }
 
+mod case;
 #[cfg(test)]
 mod tests;
