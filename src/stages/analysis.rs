@@ -14,6 +14,7 @@ use crate::artefacts::analysis::{
 };
 use crate::artefacts::cases as case_files;
 use crate::artefacts::dmw_tracks;
+use crate::artefacts::finite;
 pub use crate::artefacts::series::{read_any_series, read_series, Series, DEFAULT_SERIES};
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::store::H5Out;
@@ -149,11 +150,6 @@ impl AnalysisSettings {
 /// Six significant digits for the summary table; the HDF5 keeps full precision.
 fn sig6(x: f64) -> f64 {
     crate::core::store::round_significant(x, 6)
-}
-
-/// A ratio as the JSON states it: null when it could not be computed (not finite).
-fn finite(x: f64) -> Option<f64> {
-    Some(x).filter(|x| x.is_finite())
 }
 
 /// The periodicity class of a report, as `summary.class` states it (the period is a separate

@@ -3,6 +3,7 @@
 //! non-finite numbers are written as null.
 
 use super::{class_counts, Basis, Calibrated, Class, Ledger, Ordering, Origin, Row, Tally};
+use crate::artefacts::finite;
 use crate::dynamics::calibration::TargetSet;
 use schemars::JsonSchema;
 use serde::Serialize;
@@ -128,11 +129,6 @@ pub struct ClassCount {
     pub rows: usize,
     /// Of which pass.
     pub pass: usize,
-}
-
-/// `x`, or null when it is not finite (not defined for this input, docs/json.md).
-fn finite(x: f64) -> Option<f64> {
-    x.is_finite().then_some(x)
 }
 
 /// One validation target as written.

@@ -4,6 +4,7 @@
 
 use super::{FromConfig, Output, StageContext, StageKind};
 use crate::artefacts::dmw_tracks;
+use crate::artefacts::finite;
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::dmw::average::AverageMode;
 use crate::dmw::chain::{
@@ -451,11 +452,6 @@ pub fn analyse(p: &DmwParams) -> Result<(LdvRecord, DmwResult)> {
         other => other,
     })?;
     Ok((rec, res))
-}
-
-/// `Some(v)` for a finite value, `None` (JSON `null`) for what the record does not define.
-fn finite(v: f64) -> Option<f64> {
-    v.is_finite().then_some(v)
 }
 
 /// The QA block and statistics, as printed by `hdi dmw --json` (and the stage's `result.json`):
