@@ -25,6 +25,13 @@ pub enum Error {
         #[source]
         source: std::io::Error,
     },
+    /// An input file could not be read to fingerprint it.
+    #[error("cannot read {}", path.display())]
+    Input {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
     /// Writing an output (HDF5, table, plot) failed.
     #[error("writing {}: {message}", path.display())]
     Output { path: PathBuf, message: String },
@@ -83,6 +90,10 @@ pub enum Error {
     /// A stage names an upstream that the pipeline does not declare.
     #[error("stage `{stage}` consumes `{upstream}`, which is not declared")]
     UndeclaredUpstream { stage: String, upstream: String },
+    /// An instance run alone (a one-off command through the engine) failed; the engine's
+    /// message, which names the cause.
+    #[error("{message}")]
+    InstanceFailed { name: String, message: String },
     /// The stages' upstream links form a cycle.
     #[error("dependency cycle through stage `{0}`")]
     DependencyCycle(String),

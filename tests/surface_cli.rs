@@ -384,3 +384,55 @@ fn walk(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
     }
     out
 }
+
+/// `hdi surface FILE --out` is a one-instance pipeline run through the engine: its files are,
+/// byte for byte, those of `hdi run` on a pipeline that declares the same map with the same
+/// settings, and its scratch store is gone afterwards.
+#[test]
+fn a_one_off_surface_is_the_pipeline_instance_byte_for_byte() {
+    let raw = repo_root().join("raw/afm/disk_dlc_1um.gwy");
+    let dir = tempfile::tempdir().unwrap();
+    let scratch = tempfile::tempdir().unwrap();
+    let o = hdi()
+        .env("TMPDIR", scratch.path())
+        .arg("surface")
+        .arg(&raw)
+        .arg("--out")
+        .arg(dir.path().join("one/disk.h5"))
+        .output()
+        .unwrap();
+    assert_ok(&o);
+    let left: Vec<_> = std::fs::read_dir(scratch.path()).unwrap().collect();
+    assert!(left.is_empty(), "scratch store left behind: {left:?}");
+    std::fs::write(
+        dir.path().join("pipeline.toml"),
+        format!(
+            "[project]\nname = \"t\"\n\n[surface.disk]\nfile = {:?}\n",
+            raw.to_string_lossy()
+        ),
+    )
+    .unwrap();
+    let o = hdi()
+        .current_dir(dir.path())
+        .args(["run", "--config", "pipeline.toml"])
+        .output()
+        .unwrap();
+    assert_ok(&o);
+    let entry = dir.path().join("processed/disk");
+    let mut compared = 0;
+    for f in std::fs::read_dir(&entry).unwrap() {
+        let name = f.unwrap().file_name().to_string_lossy().into_owned();
+        if name == "result.json" || name == "manifest.json" {
+            continue;
+        }
+        let one = dir.path().join("one").join(if name == "surface.h5" {
+            "disk.h5"
+        } else {
+            name.as_str()
+        });
+        let same = std::fs::read(&one).unwrap() == std::fs::read(entry.join(&name)).unwrap();
+        assert!(same, "{name} differs from the one-off's {}", one.display());
+        compared += 1;
+    }
+    assert!(compared >= 4, "{compared} files compared");
+}

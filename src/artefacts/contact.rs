@@ -422,7 +422,8 @@ impl SummitOrigin {
                     "summit_mixture"
                 } else {
                     "single_surface"
-                },
+                }
+                .into(),
             },
         }
     }
@@ -430,7 +431,7 @@ impl SummitOrigin {
 
 /// How a fitted (`fig_2_11`) or measured (`measured`) summit distribution was obtained; absent
 /// for `surface` and `mccool` (docs/model-form.md, "Summit heights").
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "kind")]
 pub enum SummitDistributionReport {
     /// Fitted to Fig. 2.11's two numbers.
@@ -462,13 +463,13 @@ pub enum SummitDistributionReport {
         combined: SummitHeightsReport,
         /// How two surfaces' summits combine (surface::combine::combine_summit_heights).
         #[schemars(extend("enum" = ["summit_mixture", "single_surface"]))]
-        rule: &'static str,
+        rule: String,
     },
 }
 
 /// The two numbers of Fig. 2.11 a `fig_2_11` distribution is fitted to.
 #[allow(non_snake_case)]
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Fig211Target {
     /// h/σ of the force, dimensionless.
     pub h_star: f64,
@@ -482,7 +483,7 @@ pub struct Fig211Target {
 
 /// What the fitted model gives at Fig. 2.11's two points.
 #[allow(non_snake_case)]
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Fig211Fitted {
     /// P(3σ)·A_n, N.
     pub force_N: f64,
@@ -491,7 +492,7 @@ pub struct Fig211Fitted {
 }
 
 /// A surface's (or the combined) summit heights.
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct SummitHeightsReport {
     /// RMS of the surface heights, m (combined: in quadrature).
     pub sigma_m: f64,

@@ -1,9 +1,13 @@
-//! `hdi bulge FILE…`: the TFC bulge of profilometer scans and the efficiency over heater power.
+//! `hdi bulge FILE…`: the TFC bulge of profilometer scans and the efficiency over heater power,
+//! as a one-instance pipeline through the engine.
 
 use anyhow::{anyhow, Result};
 
 use super::args::BulgeArgs;
-use hdi::stages::bulge::{self, BulgeParams};
+use super::one_off;
+use hdi::artefacts::bulge::BulgeReport;
+use hdi::stages::bulge::{self, BulgeParams, BulgeStage};
+use hdi::stages::Instance;
 use hdi::surface::bulge::BulgeOptions;
 
 pub(super) fn cmd_bulge(a: BulgeArgs) -> Result<()> {
@@ -24,60 +28,60 @@ pub(super) fn cmd_bulge(a: BulgeArgs) -> Result<()> {
         },
         channel: a.channel,
     };
-    let analysis = bulge::analyse(&params)?;
+    let stage = Instance {
+        name: one_off::NAME.into(),
+        stage: BulgeStage { params },
+    };
+    let ran = one_off::run::<BulgeReport>("bulge", Box::new(stage))?;
     if let Some(dir) = &a.out {
-        std::fs::create_dir_all(dir)?;
-        bulge::write_outputs(
-            &analysis,
-            &serde_json::Value::Object(Default::default()),
-            "",
-            dir,
-        )?;
-        bulge::write_figures(&analysis, &params.options, dir)?;
+        std::fs::create_dir_all(dir).map_err(|e| anyhow!("creating {}: {e}", dir.display()))?;
+        one_off::deliver(&ran.dir, dir, "", None)?;
     }
+    let r = &ran.result;
     if a.json {
-        println!("{}", serde_json::to_string(&bulge::report(&analysis))?);
+        println!("{}", serde_json::to_string(r)?);
         return Ok(());
     }
     println!(
         "{:<24} {:>7} {:>16} {:>16} {:>16} {:>16} {:>9}",
         "file", "P (mW)", "h (nm)", "a (µm)", "w (µm)", "x_TFC (µm)", "rms (nm)"
     );
-    for s in &analysis.scans {
-        let f = &s.fit;
-        let name = s
-            .file
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
+    // Non-finite values are `None` in the result; they print as NaN.
+    let nan = |v: Option<f64>| v.unwrap_or(f64::NAN);
+    let pm =
+        |v: Option<f64>, se: Option<f64>, k: f64| format!("{:.3} ± {:.3}", nan(v) * k, nan(se) * k);
+    for s in &r.scans {
         let p = s
-            .power
-            .map(|p| format!("{:.1}", p * 1e3))
+            .heater_power_mw
+            .map(|p| format!("{p:.1}"))
             .unwrap_or_else(|| "?".into());
-        let pm = |v: f64, se: f64, k: f64| format!("{:.3} ± {:.3}", v * k, se * k);
-        let x = f
-            .x_tfc
-            .map(|x| pm(x, f.xc_se, 1e6))
+        let x = s
+            .x_tfc_m
+            .map(|x| pm(Some(x), s.x_tfc_se_m, 1e6))
             .unwrap_or_else(|| "no edge".into());
         println!(
             "{:<24} {:>7} {:>16} {:>16} {:>16} {:>16} {:>9.3}",
-            name,
+            s.file,
             p,
-            pm(f.height, f.height_se, 1e9),
-            pm(f.a, f.a_se, 1e6),
-            pm(f.w, f.w_se, 1e6),
+            pm(s.height_m, s.height_se_m, 1e9),
+            pm(s.a_tfc_m, s.a_tfc_se_m, 1e6),
+            pm(s.w_tfc_m, s.w_tfc_se_m, 1e6),
             x,
-            f.residual_rms * 1e9
+            nan(s.residual_rms_m) * 1e9
         );
     }
-    match analysis.efficiency {
+    match r.efficiency_m_per_w {
         Some(e) => println!(
             "efficiency {:.4} ± {:.4} nm/mW, unpowered bulge {:.3} ± {:.3} nm ({} scans)",
-            e.efficiency * 1e6,
-            e.efficiency_se * 1e6,
-            e.intercept * 1e9,
-            e.intercept_se * 1e9,
-            e.n
+            e * 1e6,
+            nan(r.efficiency_se_m_per_w) * 1e6,
+            nan(r.intercept_m) * 1e9,
+            nan(r.intercept_se_m) * 1e9,
+            // The efficiency is fitted over the scans with a known power.
+            r.scans
+                .iter()
+                .filter(|s| s.heater_power_mw.is_some())
+                .count()
         ),
         None => println!("efficiency: needs two or more scans at different known powers"),
     }

@@ -1,11 +1,15 @@
-//! `hdi contact`: ISBL contact curves (and the MTL lubricant law) for one interface.
+//! `hdi contact`: ISBL contact curves (and the MTL lubricant law) for one interface, as a
+//! one-instance pipeline through the engine.
 
 use anyhow::Result;
-use serde_json::json;
 
 use super::args::ContactArgs;
-use super::{flag, out_parent};
-use hdi::stages::contact::{self, ContactConfig, SurfaceEnergyConfig};
+use super::{flag, one_off, out_parent};
+use hdi::artefacts::contact::SummitDistributionReport;
+use hdi::stages::contact::{
+    self, ContactConfig, ContactStage, ContactStageResult, SurfaceEnergyConfig,
+};
+use hdi::stages::Instance;
 
 pub(super) fn cmd_contact(a: ContactArgs) -> Result<()> {
     let mut cfg = ContactConfig::defaults();
@@ -43,23 +47,28 @@ pub(super) fn cmd_contact(a: ContactArgs) -> Result<()> {
     cfg.gyration_radius = a.gyration_radius;
     let params =
         contact::check(&cfg).map_err(|e| anyhow::anyhow!("{}: {}", flag(&e.key), e.message))?;
-    let analysis = contact::analyse(&params.params, &params, None)?;
+    let summits = params.summits.name(params.params.summits);
+    let (h_star_min, h_star_max) = (params.h_star_min, params.h_star_max);
+    let stage = Instance {
+        name: one_off::NAME.into(),
+        stage: ContactStage {
+            name: one_off::NAME.into(),
+            params,
+        },
+    };
+    let ran = one_off::run::<ContactStageResult>("contact", Box::new(stage))?;
     if let Some(out) = &a.out {
-        let dir = out_parent(out)?;
-        contact::write_outputs(&analysis, &params, out, Some(dir), "", &json!([]))?;
+        one_off::deliver(&ran.dir, out_parent(out)?, &ran.result.h5, Some(out))?;
     }
+    let r = &ran.result.report;
     if a.json {
-        println!(
-            "{}",
-            serde_json::to_string(&contact::report_json(&analysis, &params))?
-        );
+        println!("{}", serde_json::to_string(r)?);
         return Ok(());
     }
-    let p = analysis.model.params();
-    let d = analysis.model.derived();
+    let (p, d) = (&r.inputs, &r.derived);
     println!(
         "ISBL interface ({}): σ = {:.3} nm, R = {:.3} µm, η = {:.1} µm⁻², β = {:.4}",
-        params.parameter_set,
+        r.parameter_set,
         p.sigma * 1e9,
         p.summit_radius * 1e6,
         p.summit_density * 1e-12,
@@ -67,64 +76,80 @@ pub(super) fn cmd_contact(a: ContactArgs) -> Result<()> {
     );
     println!(
         "  E* = {:.1} GPa, ω_c = {:.4} nm, ψ = {:.3}, t = {:.2} nm, ε = {:.2} nm",
-        d.composite_modulus / 1e9,
-        d.critical_interference * 1e9,
-        d.plasticity_index,
+        d.E_star_Pa / 1e9,
+        d.omega_c_m * 1e9,
+        d.psi,
         p.lubricant_thickness * 1e9,
         p.lj_spacing * 1e9
     );
     println!(
-        "  summits ({}): σ_s = {:.4}σ, y_s = {:.4}σ above the mean plane",
-        params.summits.name(p.summits),
-        d.summit_sigma / p.sigma,
-        d.summit_offset / p.sigma
+        "  summits ({summits}): σ_s = {:.4}σ, y_s = {:.4}σ above the mean plane",
+        d.sigma_s_m / p.sigma,
+        d.y_s_m / p.sigma
     );
-    if let Some(contact::SummitOrigin::Fig211 { nominal_area, fit }) = &analysis.summit_origin {
+    if let Some(SummitDistributionReport::Fig211 {
+        nominal_area_m2,
+        fitted,
+        ..
+    }) = &r.summit_distribution
+    {
         println!(
             "    fitted to Fig. 2.11 on A_n = {:.1} µm²: P(3σ)·A_n = {:.3} µN, P(3σ)/P(2.5σ) = {:.4}",
-            nominal_area * 1e12,
-            fit.force * 1e6,
-            fit.ratio
+            nominal_area_m2 * 1e12,
+            fitted.force_N * 1e6,
+            fitted.ratio
         );
     }
     println!(
         "  {:>6} {:>12} {:>12} {:>12} {:>12} {:>12}",
         "h/σ", "P (Pa)", "k_c (Pa/nm)", "A_r/A_n", "Q (Pa)", "F_s (Pa)"
     );
+    // The curve points at (or, off the output grid, nearest) these h/σ.
+    let mut shown: Vec<usize> = Vec::new();
     for x in [0.0, 1.0, 2.0, 3.0, 4.0, 6.0] {
-        if x < params.h_star_min || x > params.h_star_max {
+        if x < h_star_min || x > h_star_max {
             continue;
         }
-        let q = analysis.lookup.at(x * p.sigma)?;
+        let nearest = (0..r.curves.len()).min_by(|&i, &j| {
+            let d = |k: usize| (r.curves[k].h_star - x).abs();
+            d(i).total_cmp(&d(j))
+        });
+        let Some(k) = nearest.filter(|k| !shown.contains(k)) else {
+            continue;
+        };
+        shown.push(k);
+        let q = &r.curves[k];
         println!(
             "  {:>6.2} {:>12.4e} {:>12.4e} {:>12.4e} {:>12.4e} {:>12.4e}",
-            x,
-            q.pressure,
-            q.stiffness * 1e-9,
-            q.real_area_fraction,
-            q.friction,
-            q.adhesion
+            q.h_star,
+            q.P_Pa,
+            q.k_c_Pa_per_m * 1e-9,
+            q.A_r_fraction,
+            q.Q_Pa,
+            q.F_s_Pa
         );
     }
-    let worst = analysis
-        .table_error()
+    let worst = r
+        .table
+        .max_rel_error
+        .0
         .iter()
-        .map(|e| e.max_rel)
+        .map(|e| e.1)
         .fold(0.0, f64::max);
-    let (lo, hi) = analysis.table().range();
+    let (lo, hi) = r.table.h_star_range;
     println!(
         "  force table: h/σ {lo} … {hi} step {}, max relative error vs direct {worst:.1e}",
-        analysis.table().step()
+        r.table.h_star_step
     );
-    if let Some(m) = &analysis.mtl {
-        let l = m.landmarks();
+    if let Some(m) = &r.mtl {
+        let (s, l) = (&m.settings, &m.landmarks);
         println!(
             "MTL lubricant ({}): μ0 = {} Pa·s, κ = {} nm, U = {} m/s, A_n = {} µm²",
             l.lubricant,
-            m.settings.limiting_viscosity,
-            m.settings.kappa * 1e9,
-            m.settings.speed,
-            m.settings.nominal_area * 1e12
+            s.mu0_Pa_s,
+            s.kappa_m * 1e9,
+            s.speed_m_per_s,
+            s.nominal_area_m2 * 1e12
         );
         println!(
             "  k_P,max = {:.4e} N/m at h/σ = {:.4}; k_Q,max = {:.2} N/m",

@@ -1,11 +1,12 @@
-//! `hdi dmw FILE`: one LDV record's DMW tracks and their statistics.
+//! `hdi dmw FILE`: one LDV record's DMW tracks and their statistics, as a one-instance
+//! pipeline through the engine.
 
 use anyhow::Result;
-use serde_json::json;
 
 use super::args::DmwArgs;
-use super::{flag, out_parent};
-use hdi::stages::dmw::{self, DmwConfig};
+use super::{flag, one_off, out_parent};
+use hdi::stages::dmw::{self, DmwConfig, DmwStage, DmwStageResult};
+use hdi::stages::Instance;
 
 pub(super) fn cmd_dmw(a: DmwArgs) -> Result<()> {
     let mut cfg = DmwConfig::for_file(a.file.clone());
@@ -66,67 +67,64 @@ pub(super) fn cmd_dmw(a: DmwArgs) -> Result<()> {
     }
     let params = dmw::check(&cfg, a.file.clone())
         .map_err(|e| anyhow::anyhow!("{}: {}", flag(&e.key), e.message))?;
-    let (rec, res) = dmw::analyse(&params)?;
+    let stage = Instance {
+        name: one_off::NAME.into(),
+        stage: DmwStage {
+            name: one_off::NAME.into(),
+            params,
+        },
+    };
+    let ran = one_off::run::<DmwStageResult>("dmw", Box::new(stage))?;
     if let Some(out) = &a.out {
-        let dir = out_parent(out)?;
-        dmw::write_outputs(
-            &rec,
-            &res,
-            &params,
-            out,
-            Some(dir),
-            "",
-            &json!([a.file.to_string_lossy()]),
-        )?;
+        one_off::deliver(&ran.dir, out_parent(out)?, &ran.result.h5, Some(out))?;
     }
-    let report = dmw::report_json(&rec, &res, &params);
+    let r = &ran.result.report;
     if a.json {
-        println!("{}", serde_json::to_string(&report)?);
+        println!("{}", serde_json::to_string(r)?);
         return Ok(());
     }
-    let q = &res.qa;
-    let s = &res.stats;
+    // Non-finite values are `None` in the result; they print as NaN.
+    let nan = |v: Option<f64>| v.unwrap_or(f64::NAN);
     println!(
-        "{} ({}, {}), {} samples at {} MS/s",
+        "{} ({}, {}), recorded at {} MS/s",
         a.file.display(),
-        rec.format,
-        q.layout,
-        rec.velocity.len(),
-        rec.sample_rate / 1e6
+        r.format,
+        r.layout,
+        r.record_sample_rate_Hz / 1e6
     );
     println!(
         "  revolutions  {} averaged of {} triggers ({}; {} averaging)",
-        q.n_avg, q.n_triggers, q.segmentation, params.chain.averaging
+        r.n_avg, r.n_triggers, r.segmentation, r.averaging
     );
-    if q.period_mean.is_finite() {
+    if let Some(period) = r.period_mean_s {
         println!(
             "  period       {:.6} ms ({:.1} rpm), relative std {:.2e}",
-            q.period_mean * 1e3,
-            60.0 / q.period_mean,
-            q.period_relstd
+            period * 1e3,
+            nan(r.rpm_measured),
+            nan(r.period_relstd)
         );
     }
     println!(
         "  noise floor  {:.3} µm/s in the average (residual {:.3} µm/s per revolution)",
-        q.noise_floor * 1e6,
-        q.residual_std * 1e6
+        nan(r.noise_floor_m_per_s) * 1e6,
+        nan(r.residual_std_m_per_s) * 1e6
     );
     println!(
         "  DMW          std {:.4} nm, peak-to-peak {:.4} nm ({} samples at {} MS/s, {} edge samples excluded each end)",
-        s.std * 1e9,
-        s.peak_to_peak * 1e9,
-        res.tracks.d[0].len(),
-        res.sample_rate / 1e6,
-        q.edge_samples
+        nan(r.dmw_std_m) * 1e9,
+        nan(r.dmw_peak_to_peak_m) * 1e9,
+        r.n_samples,
+        r.sample_rate_Hz / 1e6,
+        r.edge_samples
     );
-    for p in s.peaks.iter().take(5) {
+    for p in r.peaks.iter().take(5) {
         println!(
             "  line         {:9.3} kHz  {:.4} nm",
-            p.frequency / 1e3,
-            p.amplitude * 1e9
+            nan(p.frequency_Hz) / 1e3,
+            nan(p.amplitude_m) * 1e9
         );
     }
-    for w in &q.warnings {
+    for w in &r.warnings {
         println!("  warning: {w}");
     }
     Ok(())

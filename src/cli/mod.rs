@@ -8,6 +8,7 @@ mod bulge;
 mod contact;
 mod diff;
 mod dmw;
+mod one_off;
 mod progress;
 mod report;
 mod run;

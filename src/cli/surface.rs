@@ -1,10 +1,13 @@
-//! `hdi surface FILE`: one height map's roughness parameters.
+//! `hdi surface FILE`: one height map's roughness parameters, as a one-instance pipeline
+//! through the engine.
 
 use anyhow::Result;
 
 use super::args::SurfaceArgs;
-use super::{flag, out_parent};
-use hdi::stages::surfaces::{self, SurfaceConfig};
+use super::{flag, one_off, out_parent};
+use hdi::artefacts::surface::SurfaceResult;
+use hdi::stages::surfaces::{self, SurfaceConfig, SurfaceStage};
+use hdi::stages::Instance;
 
 pub(super) fn cmd_surface(a: SurfaceArgs) -> Result<()> {
     let cfg = SurfaceConfig {
@@ -29,59 +32,69 @@ pub(super) fn cmd_surface(a: SurfaceArgs) -> Result<()> {
     };
     let params = surfaces::check(&cfg, a.file.clone())
         .map_err(|e| anyhow::anyhow!("{}: {}", flag(&e.key), e.message))?;
-    let analysis = surfaces::analyse(&params)?;
+    let filter = surfaces::filter_text(&params);
+    let stage = SurfaceStage {
+        name: one_off::NAME.into(),
+        params,
+    };
+    let ran = one_off::run::<SurfaceResult>(
+        "surface",
+        Box::new(Instance {
+            name: one_off::NAME.into(),
+            stage,
+        }),
+    )?;
     if let Some(out) = &a.out {
-        let dir = out_parent(out)?;
-        surfaces::write_outputs(
-            &analysis,
-            &params,
-            out,
-            Some(dir),
-            "",
-            &serde_json::Value::from(vec![a.file.to_string_lossy().into_owned()]),
-        )?;
+        one_off::deliver(&ran.dir, out_parent(out)?, "surface.h5", Some(out))?;
     }
-    let report = surfaces::report(&analysis, &params);
+    let r = &ran.result.report;
     if a.json {
-        println!("{}", serde_json::to_string(&report)?);
-    } else {
-        let r = &analysis.report;
-        println!(
-            "{} ({}, channel {}), {} × {} px, dx = {:.3} nm",
-            a.file.display(),
-            analysis.raw.source.format,
-            analysis.raw.channel,
-            analysis.final_map().nx(),
-            analysis.final_map().ny(),
-            analysis.final_map().dx * 1e9
-        );
-        println!("  levelling  {}", serde_json::to_string(&report.levelling)?);
-        println!("  filter     {}", surfaces::filter_text(&params));
-        println!(
-            "  σ          {:.4} nm   (Sa {:.4} nm, Ssk {:.3}, Sku {:.3})",
-            r.sigma * 1e9,
-            r.sa * 1e9,
-            r.ssk,
-            r.sku
-        );
-        println!(
-            "  η          {:.2} µm⁻²  ({} summits, {})",
-            r.eta * 1e-12,
-            r.n_summits,
-            r.summit_scheme
-        );
-        println!("  R          {:.4} µm   ({})", r.r * 1e6, r.r_definition);
-        println!("  β = σRη    {:.5}", r.beta);
-        println!(
-            "  Nayak      η {:.2} µm⁻², R {:.4} µm, β {:.5} (α = {:.3})",
-            r.nayak.eta * 1e-12,
-            r.nayak.r * 1e6,
-            r.nayak.beta,
-            r.alpha
-        );
-        for w in &r.warnings {
-            println!("  warning: {w}");
-        }
+        println!("{}", serde_json::to_string(r)?);
+        return Ok(());
+    }
+    // Non-finite values are `None` in the result; they print as before, as NaN.
+    let f = |v: Option<f64>, scale: f64, digits: usize| {
+        format!("{:.digits$}", v.map_or(f64::NAN, |v| v * scale))
+    };
+    println!(
+        "{} ({}, channel {}), {} × {} px, dx = {:.3} nm",
+        a.file.display(),
+        r.format,
+        r.channel,
+        r.nx,
+        r.ny,
+        r.dx_m * 1e9
+    );
+    println!("  levelling  {}", serde_json::to_string(&r.levelling)?);
+    println!("  filter     {filter}");
+    println!(
+        "  σ          {:.4} nm   (Sa {:.4} nm, Ssk {}, Sku {})",
+        r.sigma_m * 1e9,
+        r.sa_m * 1e9,
+        f(r.ssk, 1.0, 3),
+        f(r.sku, 1.0, 3)
+    );
+    println!(
+        "  η          {} µm⁻²  ({} summits, {})",
+        f(r.eta_per_m2, 1e-12, 2),
+        r.n_summits,
+        r.summit_scheme
+    );
+    println!(
+        "  R          {} µm   ({})",
+        f(r.r_m, 1e6, 4),
+        r.r_definition
+    );
+    println!("  β = σRη    {}", f(r.beta, 1.0, 5));
+    println!(
+        "  Nayak      η {} µm⁻², R {} µm, β {} (α = {})",
+        f(r.nayak.eta_per_m2, 1e-12, 2),
+        f(r.nayak.r_m, 1e6, 4),
+        f(r.nayak.beta, 1.0, 5),
+        f(r.alpha, 1.0, 3)
+    );
+    for w in &r.warnings {
+        println!("  warning: {w}");
     }
     Ok(())
 }

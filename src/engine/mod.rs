@@ -1,6 +1,7 @@
 //! The pipeline engine: the stage instances' dependency graph, plan (fresh/stale and why), run
 //! with a thread pool (reporting to a `RunObserver`), status, gc. Above the stages: it drives
 //! them through the [`Stage`] contract they define.
+pub mod alone;
 pub mod diff;
 pub mod distributed;
 pub mod verify;
@@ -112,7 +113,10 @@ fn plan_inner(
         for (role, path) in s.inputs() {
             let blake3 = store
                 .hash_input(&mut input_cache, &path)
-                .map_err(|e| Error::io(&path, e))?;
+                .map_err(|source| Error::Input {
+                    path: path.clone(),
+                    source,
+                })?;
             inputs.push(InputRecord {
                 role,
                 path: path.to_string_lossy().to_string(),

@@ -752,7 +752,7 @@ impl StageKind for ContactStage {
         Ok(Output {
             result: ContactStageResult {
                 report: report_json(&a, &self.params),
-                h5: "contact.h5",
+                h5: "contact.h5".into(),
             },
             summary_row: Some(summary_row(&a, &self.params)),
         })

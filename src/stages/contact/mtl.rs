@@ -15,7 +15,7 @@ use crate::error::Result;
 use crate::figures;
 use crate::units::{Area, Length, Velocity, Viscosity};
 use schemars::JsonSchema;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::path::Path;
 use std::sync::Arc;
@@ -150,11 +150,11 @@ pub fn resolve(
 
 /// The lubricant settings as the result and the cache key state them.
 #[allow(non_snake_case)]
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct MtlSettingsReport {
     /// MTL lubricant case.
     #[schemars(extend("enum" = ["reference", "humidity_temperature", "more_bonding", "larger_gyration_radius"]))]
-    pub lubricant: &'static str,
+    pub lubricant: String,
     /// Nominal area A_n, m².
     pub nominal_area_m2: f64,
     /// Sliding speed U, m/s.
@@ -168,7 +168,7 @@ pub struct MtlSettingsReport {
 impl MtlSettings {
     pub fn report(&self) -> MtlSettingsReport {
         MtlSettingsReport {
-            lubricant: case_name(self.case),
+            lubricant: case_name(self.case).into(),
             nominal_area_m2: self.nominal_area,
             speed_m_per_s: self.speed,
             mu0_Pa_s: self.limiting_viscosity,
@@ -258,7 +258,7 @@ pub fn analyse(settings: &MtlSettings, isbl: &Arc<IsblLookup>) -> Result<MtlAnal
 }
 
 /// The MTL lubricant law (with --lubricant).
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct MtlReport {
     pub settings: MtlSettingsReport,
     /// Landmarks of Figs 3.19–3.22 (docs/contact.md).
@@ -269,11 +269,11 @@ pub struct MtlReport {
 
 /// Landmarks of the reference discussion (Figs 3.19–3.22; docs/contact.md).
 #[allow(non_snake_case)]
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct MtlLandmarks {
     /// MTL lubricant case.
     #[schemars(extend("enum" = ["reference", "humidity_temperature", "more_bonding", "larger_gyration_radius"]))]
-    pub lubricant: &'static str,
+    pub lubricant: String,
     /// h/σ of the maximum lubricant stiffness (3σ + 2κ), dimensionless.
     pub h_star_max_stiffness: f64,
     /// Maximum lubricant normal stiffness, N/m.
@@ -316,7 +316,7 @@ impl MtlLandmarks {
 
 /// One point of the MTL curves.
 #[allow(non_snake_case)]
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct MtlCurvePoint {
     /// Mean-plane separation h, m.
     pub h_m: f64,
@@ -351,7 +351,7 @@ impl MtlAnalysis {
         // lubricant dominates the normal, the solid the lateral stiffness"): k_c + k_P,max.
         let peak = self.interface.evaluate(end * (1.0 + 1e-12)).total;
         MtlLandmarks {
-            lubricant: case_name(self.settings.case),
+            lubricant: case_name(self.settings.case).into(),
             h_star_max_stiffness: end / m.film().sigma,
             k_P_max_N_per_m: m.max_normal_stiffness(),
             k_Q_max_N_per_m: m.max_shear_stiffness(),

@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::figures;
 use schemars::{json_schema, JsonSchema, Schema, SchemaGenerator};
 use serde::ser::SerializeMap;
-use serde::{Serialize, Serializer};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use serde_json::Value;
 use std::borrow::Cow;
 use std::path::Path;
@@ -18,7 +18,7 @@ use std::path::Path;
 /// ISBL contact curves of one interface and, with --lubricant, the MTL law (docs/contact.md);
 /// SI units named in the keys. Schema version 1 (docs/json.md): existing keys keep their
 /// name, unit and type; renaming or removing one makes version 2.
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ContactReport {
     /// Dissertation parameter set the interface starts from.
     #[schemars(extend("enum" = ["initial_2dof", "improved_2dof", "three_dof", "mtl_table_3_2"]))]
@@ -44,17 +44,17 @@ pub struct ContactReport {
 }
 
 /// The contact stage's `result.json`: the report and where the curves and table are.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ContactStageResult {
     #[serde(flatten)]
     pub report: ContactReport,
     /// `contact.h5` in the entry.
-    pub h5: &'static str,
+    pub h5: String,
 }
 
 /// Derived interface quantities (docs/contact.md).
 #[allow(non_snake_case)]
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct IsblDerived {
     /// Composite modulus E*, Pa.
     pub E_star_Pa: f64,
@@ -80,7 +80,7 @@ pub struct IsblDerived {
 
 /// One point of the ISBL curves (per unit nominal area).
 #[allow(non_snake_case)]
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct IsblCurvePoint {
     /// Separation h/σ, dimensionless.
     pub h_star: f64,
@@ -101,7 +101,7 @@ pub struct IsblCurvePoint {
 }
 
 /// The verified force table the slider cases interpolate.
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ForceTableReport {
     /// Force-table range [min, max] of h/σ, dimensionless.
     pub h_star_range: (f64, f64),
@@ -123,6 +123,20 @@ impl Serialize for PerChannel {
             m.serialize_entry(name, v)?;
         }
         m.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for PerChannel {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> std::result::Result<Self, D::Error> {
+        // The map in file order (serde_json keeps it).
+        let map = serde_json::Map::<String, Value>::deserialize(deserializer)?;
+        map.into_iter()
+            .map(|(k, v)| match v.as_f64() {
+                Some(x) => Ok((k, x)),
+                None => Err(serde::de::Error::custom(format!("`{k}` is not a number"))),
+            })
+            .collect::<std::result::Result<Vec<_>, _>>()
+            .map(PerChannel)
     }
 }
 

@@ -462,20 +462,20 @@ pub fn report_json(rec: &LdvRecord, r: &DmwResult, p: &DmwParams) -> DmwReport {
     let s = &r.stats;
     DmwReport {
         file: p.file.display().to_string(),
-        format: rec.format,
-        layout: q.layout,
-        segmentation: q.segmentation,
+        format: rec.format.into(),
+        layout: q.layout.into(),
+        segmentation: q.segmentation.into(),
         sample_rate_Hz: r.sample_rate,
         record_sample_rate_Hz: rec.sample_rate,
         n_samples: r.tracks.d[0].len(),
         duration_s: r.tracks.d[0].len() as f64 / r.sample_rate,
-        velocity_unit: rec.velocity_unit.symbol(),
+        velocity_unit: rec.velocity_unit.symbol().into(),
         sensitivity_m_per_s_per_V: p.chain.sensitivity,
         n_triggers: q.n_triggers,
         n_avg: q.n_avg,
         n_dropped: q.n_dropped,
         trigger_level_V: finite(q.trigger_level),
-        trigger_polarity: q.trigger_polarity,
+        trigger_polarity: q.trigger_polarity.into(),
         duty_cycle: finite(q.duty_cycle),
         n_debounced: q.n_debounced,
         missing_pulse_times_s: q.missing_pulses.iter().map(|m| finite(m.time)).collect(),
@@ -507,7 +507,7 @@ pub fn report_json(rec: &LdvRecord, r: &DmwResult, p: &DmwParams) -> DmwReport {
             D1_std_m: finite(s.std),
             D2_std_m: finite(s.std),
             D3_std_m: finite(s.std),
-            note: TRACKS_NOTE,
+            note: TRACKS_NOTE.into(),
         },
         chain_order: p.chain.order.to_string(),
         averaging: p.chain.averaging.to_string(),
@@ -593,7 +593,7 @@ impl StageKind for DmwStage {
         Ok(Output {
             result: DmwStageResult {
                 report: report_json(&rec, &res, &self.params),
-                h5: dmw_tracks::FILE,
+                h5: dmw_tracks::FILE.into(),
             },
             summary_row: Some(summary_row(&rec, &res, &self.params)),
         })

@@ -9,7 +9,7 @@ use crate::dmw::{LdvRecord, VelocityUnit};
 use crate::error::Result;
 use crate::figures;
 use schemars::JsonSchema;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 use std::path::Path;
 
@@ -18,18 +18,18 @@ use std::path::Path;
 /// few revolutions). Schema version 1 (docs/json.md): existing keys keep their name, unit and
 /// type; renaming or removing one makes version 2.
 #[allow(non_snake_case)]
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct DmwReport {
     /// The record as given.
     pub file: String,
     /// Detected format (e.g. `hdf5`, `csv`, `parquet`, `arrow`, `uff58`, `npy`, `wav`).
-    pub format: &'static str,
+    pub format: String,
     /// Record layout (docs/dmw.md).
     #[schemars(extend("enum" = ["continuous", "segments", "averaged"]))]
-    pub layout: &'static str,
+    pub layout: String,
     /// How revolutions were found: `index channel`, `spindle speed`, `pre-segmented` or
     /// `pre-averaged`.
-    pub segmentation: &'static str,
+    pub segmentation: String,
     /// Sample rate of the output tracks, Hz.
     pub sample_rate_Hz: f64,
     /// Sample rate of the record, Hz.
@@ -40,7 +40,7 @@ pub struct DmwReport {
     pub duration_s: f64,
     /// Unit of the velocity channel in the record.
     #[schemars(extend("enum" = ["V", "m/s"]))]
-    pub velocity_unit: &'static str,
+    pub velocity_unit: String,
     /// Decoder sensitivity, m/s per V (used for a channel in V).
     pub sensitivity_m_per_s_per_V: f64,
     /// Index triggers found.
@@ -54,7 +54,7 @@ pub struct DmwReport {
     pub trigger_level_V: Option<f64>,
     /// Index edge used; empty without an index channel.
     #[schemars(extend("enum" = ["rising", "falling", ""]))]
-    pub trigger_polarity: &'static str,
+    pub trigger_polarity: String,
     /// Fraction of time the index channel is in the pulse state, 0–1. `null` when not defined
     /// for this input (docs/json.md).
     pub duty_cycle: Option<f64>,
@@ -119,17 +119,17 @@ pub struct DmwReport {
 }
 
 /// The DMW stage's `result.json`: the report and where the tracks are.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DmwStageResult {
     #[serde(flatten)]
     pub report: DmwReport,
     /// Where the simulations find the tracks (`dmw.h5` in the entry).
-    pub h5: &'static str,
+    pub h5: String,
 }
 
 /// One spectral line of D1.
 #[allow(non_snake_case)]
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct SpectralLine {
     /// Line frequency, Hz. `null` when not defined for this input (docs/json.md).
     pub frequency_Hz: Option<f64>,
@@ -144,7 +144,7 @@ pub const TRACKS_NOTE: &str =
 
 /// Per-track statistics.
 #[allow(non_snake_case)]
-#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct TrackStd {
     /// Std of track D1, m. `null` when not defined for this input (docs/json.md).
     pub D1_std_m: Option<f64>,
@@ -153,7 +153,7 @@ pub struct TrackStd {
     /// Std of track D3, m. `null` when not defined for this input (docs/json.md).
     pub D3_std_m: Option<f64>,
     /// How D2 and D3 relate to D1.
-    pub note: &'static str,
+    pub note: String,
 }
 
 /// One row of the tidy DMW table (unit suffixes in the names).

@@ -1,0 +1,98 @@
+//! The one-off commands' road through the engine: one stage instance, run alone against a
+//! scratch store of its own (removed afterwards), its result read through the kind's type and
+//! its files delivered where `--out` says (docs/architecture.md).
+
+use anyhow::{Context, Result};
+use serde::de::DeserializeOwned;
+use std::path::{Path, PathBuf};
+
+use super::progress::StageBars;
+use hdi::core::cache::{write_atomic, Store};
+use hdi::stages::Stage;
+
+/// The instance name one-off commands give their stage (it names the store's ref only).
+pub(super) const NAME: &str = "cli";
+
+/// An instance's committed entry in a scratch store that is removed when this is dropped.
+pub(super) struct Ran<R> {
+    /// Its `result.json`, read through the kind's result type.
+    pub result: R,
+    /// Its store directory.
+    pub dir: PathBuf,
+    scratch: PathBuf,
+}
+
+impl<R> Drop for Ran<R> {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.scratch);
+    }
+}
+
+/// Run `stage` through the engine against a fresh scratch store under the system's temporary
+/// directory (`command` names it).
+pub(super) fn run<R: DeserializeOwned>(
+    command: &'static str,
+    stage: Box<dyn Stage>,
+) -> Result<Ran<R>> {
+    let scratch = std::env::temp_dir().join(format!(
+        "hdi-{command}-{}-{}",
+        std::process::id(),
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos())
+    ));
+    let entry = Store::open(&scratch)
+        .with_context(|| format!("opening a scratch store at {}", scratch.display()))
+        .and_then(|store| {
+            Ok(hdi::engine::alone::run_alone(
+                stage,
+                &store,
+                &StageBars::new(command),
+            )?)
+        });
+    let entry = match entry {
+        Ok(e) => e,
+        Err(e) => {
+            let _ = std::fs::remove_dir_all(&scratch);
+            return Err(e);
+        }
+    };
+    // Dropping `Ran` removes the scratch store, so it owns it from here on.
+    let dir = entry.dir;
+    let parsed = serde_json::from_value(entry.result);
+    let ran = |result| Ran {
+        result,
+        dir: dir.clone(),
+        scratch: scratch.clone(),
+    };
+    match parsed {
+        Ok(r) => Ok(ran(r)),
+        Err(e) => {
+            let _ = std::fs::remove_dir_all(&scratch);
+            Err(e).context("the stage's result.json does not read as its type")
+        }
+    }
+}
+
+/// The entry's files (not the store's `result.json`, `manifest.json`): each written to
+/// `dir` through a temporary file and a rename, `main` renamed to `main_as` when given.
+pub(super) fn deliver(entry: &Path, dir: &Path, main: &str, main_as: Option<&Path>) -> Result<()> {
+    let mut names: Vec<String> = std::fs::read_dir(entry)
+        .with_context(|| format!("reading {}", entry.display()))?
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n != "result.json" && n != "manifest.json")
+        .collect();
+    names.sort();
+    for name in names {
+        let to = match main_as {
+            Some(path) if name == main => path.to_path_buf(),
+            _ => dir.join(&name),
+        };
+        let bytes = std::fs::read(entry.join(&name))
+            .with_context(|| format!("reading {}", entry.join(&name).display()))?;
+        write_atomic(&to, &bytes).with_context(|| format!("writing {}", to.display()))?;
+    }
+    Ok(())
+}
