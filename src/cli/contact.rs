@@ -6,8 +6,9 @@ use anyhow::Result;
 use super::args::ContactArgs;
 use super::{flag, one_off, out_parent};
 use hdi::artefacts::contact::SummitDistributionReport;
+use hdi::stages::contact::mtl::MtlReport;
 use hdi::stages::contact::{
-    self, ContactConfig, ContactStage, ContactStageResult, SurfaceEnergyConfig,
+    self, ContactConfig, ContactReport, ContactStage, ContactStageResult, SurfaceEnergyConfig,
 };
 use hdi::stages::Instance;
 
@@ -65,6 +66,15 @@ pub(super) fn cmd_contact(a: ContactArgs) -> Result<()> {
         println!("{}", serde_json::to_string(r)?);
         return Ok(());
     }
+    print_isbl(r, summits, (h_star_min, h_star_max));
+    if let Some(m) = &r.mtl {
+        print_mtl(m);
+    }
+    Ok(())
+}
+
+/// The interface, its derived quantities, the curves at a few h/σ and the table's accuracy.
+fn print_isbl(r: &ContactReport, summits: &str, (h_star_min, h_star_max): (f64, f64)) {
     let (p, d) = (&r.inputs, &r.derived);
     println!(
         "ISBL interface ({}): σ = {:.3} nm, R = {:.3} µm, η = {:.1} µm⁻², β = {:.4}",
@@ -141,28 +151,29 @@ pub(super) fn cmd_contact(a: ContactArgs) -> Result<()> {
         "  force table: h/σ {lo} … {hi} step {}, max relative error vs direct {worst:.1e}",
         r.table.h_star_step
     );
-    if let Some(m) = &r.mtl {
-        let (s, l) = (&m.settings, &m.landmarks);
-        println!(
-            "MTL lubricant ({}): μ0 = {} Pa·s, κ = {} nm, U = {} m/s, A_n = {} µm²",
-            l.lubricant,
-            s.mu0_Pa_s,
-            s.kappa_m * 1e9,
-            s.speed_m_per_s,
-            s.nominal_area_m2 * 1e12
-        );
-        println!(
-            "  k_P,max = {:.4e} N/m at h/σ = {:.4}; k_Q,max = {:.2} N/m",
-            l.k_P_max_N_per_m, l.h_star_max_stiffness, l.k_Q_max_N_per_m
-        );
-        println!(
-            "  total stiffness there: normal {:.4e} N/m, lateral {:.4e} N/m",
-            l.k_normal_total_at_peak_N_per_m, l.k_lateral_total_at_peak_N_per_m
-        );
-        println!(
-            "  lubricant bearing force: {:.4} mN at 3σ + 2κ, {:.4} mN at 3σ; Q_lub {:.4} µN",
-            l.P_lub_transition_end_mN, l.P_lub_onset_mN, l.Q_lub_transition_end_uN
-        );
-    }
-    Ok(())
+}
+
+/// The MTL lubricant law's settings and landmarks.
+fn print_mtl(m: &MtlReport) {
+    let (s, l) = (&m.settings, &m.landmarks);
+    println!(
+        "MTL lubricant ({}): μ0 = {} Pa·s, κ = {} nm, U = {} m/s, A_n = {} µm²",
+        l.lubricant,
+        s.mu0_Pa_s,
+        s.kappa_m * 1e9,
+        s.speed_m_per_s,
+        s.nominal_area_m2 * 1e12
+    );
+    println!(
+        "  k_P,max = {:.4e} N/m at h/σ = {:.4}; k_Q,max = {:.2} N/m",
+        l.k_P_max_N_per_m, l.h_star_max_stiffness, l.k_Q_max_N_per_m
+    );
+    println!(
+        "  total stiffness there: normal {:.4e} N/m, lateral {:.4e} N/m",
+        l.k_normal_total_at_peak_N_per_m, l.k_lateral_total_at_peak_N_per_m
+    );
+    println!(
+        "  lubricant bearing force: {:.4} mN at 3σ + 2κ, {:.4} mN at 3σ; Q_lub {:.4} µN",
+        l.P_lub_transition_end_mN, l.P_lub_onset_mN, l.Q_lub_transition_end_uN
+    );
 }

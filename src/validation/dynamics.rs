@@ -1775,9 +1775,16 @@ fn swing(x: &[f64], dt: f64, fa: f64, fb: f64) -> f64 {
 
 /// #38: the chirp crossing the 1st pitch mode (Fig. B.9) and the noise bands (Fig. B.8).
 fn chirp_rows(cache: Option<&Cache>) -> Vec<Row> {
+    let mut rows = vec![chirp_crossing_row()];
+    rows.extend(chirp_response_rows(cache));
+    rows.push(noise_band_row(cache));
+    rows
+}
+
+/// dyn-38: the chirp crosses 110 kHz where App. B says (a check of the excitation).
+fn chirp_crossing_row() -> Row {
     let r = "dissertation App. B, Fig. B.9";
     let (t_sweep, f0, f1) = CHIRP;
-    let mut rows = Vec::new();
     // The sweep time was chosen for this crossing: a check of the excitation, not a result.
     let chosen = "the sweep time T = 1.923 ms was chosen so that the chirp passes 110 kHz at \
                   0.75 ms (App. B: contact at ~110 kHz, 0.75 ms)";
@@ -1794,8 +1801,7 @@ fn chirp_rows(cache: Option<&Cache>) -> Vec<Row> {
         }
         0.5 * (lo + hi) * 1e3
     });
-    rows.push(
-        Row::new(
+    Row::new(
             "dyn-38",
             Class::C,
             "chirp 40 → 500 kHz over 1.923 ms crosses 110 kHz at",
@@ -1808,8 +1814,13 @@ fn chirp_rows(cache: Option<&Cache>) -> Vec<Row> {
         .by_construction(chosen)
         .variant("quadratic chirp f(t) = f0 + (f1 − f0)(t/T)²")
         .inputs("excitation only")
-        .note("the region boundaries 90, 120 and 240 kHz of Fig. B.9(c) are frequencies; their times follow from T in the same way and are no result (dyn-38.regions uses them as windows)"),
-    );
+        .note("the region boundaries 90, 120 and 240 kHz of Fig. B.9(c) are frequencies; their times follow from T in the same way and are no result (dyn-38.regions uses them as windows)")
+}
+
+/// dyn-38.response and dyn-38.regions: where the chirp response dips and swings (Fig. B.9(c)).
+fn chirp_response_rows(cache: Option<&Cache>) -> Vec<Row> {
+    let (t_sweep, f0, f1) = CHIRP;
+    let mut rows = Vec::new();
     let three = chirp_response(cache, "chirp_flight");
     let two = chirp_response(cache, "chirp_flight_2dof");
     let within = |x: &[f64], dt: f64| {
@@ -1901,7 +1912,12 @@ fn chirp_rows(cache: Option<&Cache>) -> Vec<Row> {
         None => not_run_ordering("dyn-38.regions", q, "`three_dof.chirp_flight`")
             .published("dissertation App. B, Fig. B.9(c)"),
     });
-    // Fig. B.8: noise over the AB modes makes larger vibrations than noise away from them.
+    rows
+}
+
+/// dyn-38.noise_bands (Fig. B.8): noise over the AB modes makes larger vibrations than noise
+/// away from them.
+fn noise_band_row(cache: Option<&Cache>) -> Row {
     let bv = |name: &str| -> Option<(f64, Origin)> {
         let s = cache?.current(name)?;
         let result: ThreeDofResult = serde_json::from_value(s.result).ok()?;
@@ -1911,7 +1927,7 @@ fn chirp_rows(cache: Option<&Cache>) -> Vec<Row> {
     let q =
         "noise over the AB modes (10–500 kHz) makes larger vibrations than the same level below \
              them (10–50 kHz)";
-    rows.push(match (bv("noise_low_flight"), bv("noise_flight")) {
+    match (bv("noise_low_flight"), bv("noise_flight")) {
         (Some((low, _)), Some((high, origin))) => Row::ordering(
             "dyn-38.noise_bands",
             q,
@@ -1930,8 +1946,7 @@ fn chirp_rows(cache: Option<&Cache>) -> Vec<Row> {
             "`three_dof.noise_flight` and `three_dof.noise_low_flight`",
         )
         .published("dissertation App. B, Fig. B.8"),
-    });
-    rows
+    }
 }
 
 // ------------------------------------------------------------------------------------------
@@ -2089,9 +2104,16 @@ fn summit_variant_sweeps(
         .collect()
 }
 
-pub fn rows(config: Option<&Path>) -> Vec<Row> {
-    let mut rows = geometry_rows();
-    let cache = pipeline::open(config);
+/// The two interfaces and the synthetic DMW every default sweep runs on; a dyn-16 row saying
+/// why when they cannot be built.
+fn sweep_inputs() -> Result<
+    (
+        IsblLookup,
+        IsblLookup,
+        crate::dmw::excitation_tracks::Excitation,
+    ),
+    Box<Row>,
+> {
     let inputs = (|| {
         let improved = interface(IsblParams::improved_2dof())?;
         let initial = interface(IsblParams::initial_2dof())?;
@@ -2099,21 +2121,45 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
         // Display (not the chain) of the crate error is the domain error's own text.
         Ok::<_, crate::error::Error>((improved, initial, track))
     })();
-    let (improved, initial, track) = match inputs {
+    inputs.map_err(|e| {
+        Box::new(
+            Row::new(
+                "dyn-16",
+                Class::D,
+                "simulation inputs (interfaces, synthetic DMW)",
+                "-",
+                f64::NAN,
+                f64::NAN,
+                Tolerance::Absolute(0.0),
+            )
+            .note(&format!("could not be built: {e}")),
+        )
+    })
+}
+
+/// The initial 2-DOF model's actuation grid (nm).
+fn initial_grid() -> Vec<f64> {
+    [4.0, 5.0, 6.0, 7.0]
+        .into_iter()
+        .chain((0..=15).map(|i| 8.0 + 0.2 * i as f64))
+        .collect()
+}
+
+/// The optimised design's actuation grid (nm).
+fn optimised_grid() -> Vec<f64> {
+    let mut grid: Vec<f64> = (4..=16).map(|i| i as f64 * 0.5).collect();
+    grid.extend((1..=12).map(|i| 8.0 + 0.2 * i as f64));
+    grid.extend([12.0, 13.0]);
+    grid
+}
+
+pub fn rows(config: Option<&Path>) -> Vec<Row> {
+    let mut rows = geometry_rows();
+    let cache = pipeline::open(config);
+    let (improved, initial, track) = match sweep_inputs() {
         Ok(x) => x,
-        Err(e) => {
-            rows.push(
-                Row::new(
-                    "dyn-16",
-                    Class::D,
-                    "simulation inputs (interfaces, synthetic DMW)",
-                    "-",
-                    f64::NAN,
-                    f64::NAN,
-                    Tolerance::Absolute(0.0),
-                )
-                .note(&format!("could not be built: {e}")),
-            );
+        Err(row) => {
+            rows.push(*row);
             return rows;
         }
     };
@@ -2122,13 +2168,7 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
     let improved_model = improved_2dof();
     let optimised_model =
         crate::dynamics::params::optimised_bulge(50e-6).map(|b| improved_2dof().with_bulge(b));
-    let initial_grid: Vec<f64> = [4.0, 5.0, 6.0, 7.0]
-        .into_iter()
-        .chain((0..=15).map(|i| 8.0 + 0.2 * i as f64))
-        .collect();
-    let mut optimised_grid: Vec<f64> = (4..=16).map(|i| i as f64 * 0.5).collect();
-    optimised_grid.extend((1..=12).map(|i| 8.0 + 0.2 * i as f64));
-    optimised_grid.extend([12.0, 13.0]);
+    let (initial_grid, optimised_grid) = (initial_grid(), optimised_grid());
     // The case store of a pipeline that has run (a validation before the first run creates
     // nothing in the project).
     let store = cache
