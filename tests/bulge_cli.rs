@@ -145,6 +145,9 @@ fn bulge_stage_in_a_pipeline() {
         r#"[project]
 name = "bulge test"
 
+[report]
+validation = false
+
 [bulge.tfc]
 files = ["raw/tfc_00mW.gsf", "raw/tfc_30mW.gsf", "raw/tfc_60mW.gsf", "raw/tfc_90mW.gsf"]
 powers = ["0 mW", "30 mW", "60 mW", "90 mW"]
@@ -201,7 +204,7 @@ fn simulate_sweep_in_heater_power_from_a_fitted_bulge() {
         rest[..end].to_string()
     };
     let text = format!(
-        "[project]\nname = \"t\"\n\n{}\n[contact.improved]\nparameter_set = \"improved_2dof\"\n\n{}",
+        "[project]\nname = \"t\"\n\n[report]\nvalidation = false\n\n{}\n[contact.improved]\nparameter_set = \"improved_2dof\"\n\n{}",
         table("[bulge.tfc]").replace("raw/bulge/", "raw/"),
         table("[simulate.power_sweep]")
             .replace("dmw = \"disk_md\"", "dmw = \"none\"")
@@ -262,7 +265,7 @@ fn run_with_fitted_bulge(text: &str) -> (tempfile::TempDir, Value) {
     let dir = tempfile::tempdir().unwrap();
     synth(&dir.path().join("raw"));
     let text = format!(
-        "[project]\nname = \"t\"\n\n[bulge.tfc]\nfiles = [\"raw/tfc_00mW.gsf\", \"raw/tfc_30mW.gsf\", \"raw/tfc_60mW.gsf\", \"raw/tfc_90mW.gsf\"]\n\n{text}"
+        "[project]\nname = \"t\"\n\n[report]\nvalidation = false\n\n[bulge.tfc]\nfiles = [\"raw/tfc_00mW.gsf\", \"raw/tfc_30mW.gsf\", \"raw/tfc_60mW.gsf\", \"raw/tfc_90mW.gsf\"]\n\n{text}"
     );
     std::fs::write(dir.path().join("pipeline.toml"), &text).unwrap();
     let o = hdi()

@@ -153,7 +153,7 @@ fn cell_matches(v: &Value, cell: &str) -> bool {
     }
 }
 
-const SMALL: &str = "[project]\nname = \"diff test\"\n\n[surface.disk]\nfile = \"raw/afm/disk_dlc_1um.gwy\"\n\n[surface.slider]\nfile = \"raw/afm/slider_tfc_1um.spm\"\nfilter_s = \"16 nm\"\n\n[interface.hdi]\nsurfaces = [\"disk\", \"slider\"]\nrule = \"sum_surface\"\n";
+const SMALL: &str = "[project]\nname = \"diff test\"\n\n[report]\nvalidation = false\n\n[surface.disk]\nfile = \"raw/afm/disk_dlc_1um.gwy\"\n\n[surface.slider]\nfile = \"raw/afm/slider_tfc_1um.spm\"\nfilter_s = \"16 nm\"\n\n[interface.hdi]\nsurfaces = [\"disk\", \"slider\"]\nrule = \"sum_surface\"\n";
 
 fn cp_a(from: &Path, to: &Path) {
     let o = std::process::Command::new("cp")

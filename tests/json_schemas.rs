@@ -274,6 +274,9 @@ fn status_json_matches_its_schema_in_every_state() {
     let one = r#"[project]
 name = "status"
 
+[report]
+validation = false
+
 [surface.disk]
 file = "raw/afm/disk_dlc_1um.gwy"
 scale_sweep = false

@@ -8,11 +8,13 @@ use crate::slurm_cli::{fake_slurm, run_with};
 /// The shipped test pipeline's calibration and what it consumes (the base sweep included:
 /// the sweep's own cases then go out first, as `hdi run --executor slurm` does).
 fn calibration_config(full: &str) -> String {
+    // …and the tests' `[report]` settings (no validation table: seconds per run here).
     let keep = [
         "[dmw.disk_md]",
         "[contact.improved]",
         "[simulate.improved_sweep]",
         "[calibrate.improved_calibration]",
+        "[report]",
     ];
     let mut out = String::new();
     let mut on = false;

@@ -2098,7 +2098,7 @@ mod tests {
             resolution: nm(0.25),
             batch: 2,
         };
-        settings.search.max_evaluations = 8;
+        settings.search.max_evaluations = 5;
         let local = calibrate(&short_base(None), &settings, |_, _| {}).unwrap();
         let runner = Serial {
             base: short_base(None),

@@ -20,7 +20,7 @@ use std::path::Path;
 /// How far the preamble (comments + header) may reach.
 const PREAMBLE_MAX: u64 = 1 << 20;
 /// Bytes of text parsed per call of polars' eager CSV reader (cut at a line end). Tiny in the
-/// unit tests so that their records (million_row_csv, the bad-input files) cross part
+/// unit tests so that their records (multi_chunk_csv, the bad-input files) cross part
 /// boundaries.
 const PART: usize = if cfg!(test) { 4 << 10 } else { 64 << 20 };
 /// Bytes read from the end of the file to check the last line.
