@@ -148,6 +148,14 @@ b[184:188] = struct.pack(">f", 2e-6)
 b[232:234] = struct.pack(">h", 1)
 b += b"".join(struct.pack(">i", 100 * k - 300) for k in range(12))
 (maps / "map_metropro.dat").write_bytes(bytes(b))
+# Wyko OPD: directory, a 4×3 int16 array and the four scalars (the layout of opd.rs's test).
+blocks = [(b"RAW DATA", 3, struct.pack("<HHH", 4, 3, 2) + struct.pack("<12h", *range(12))),
+          (b"Wavelength", 7, struct.pack("<f", 600.0)), (b"Mult", 6, struct.pack("<H", 1)),
+          (b"Aspect", 7, struct.pack("<f", 1.0)), (b"Pixel_size", 7, struct.pack("<f", 0.002))]
+entry = lambda name, kind, n: name.ljust(16, b"\0") + struct.pack("<hiH", kind, n, 0)
+opd = b"\x01\x00" + entry(b"Directory", 1, 24 * (len(blocks) + 1))
+opd += b"".join(entry(n, k, len(c)) for n, k, c in blocks) + b"".join(c for _, _, c in blocks)
+(maps / "map.opd").write_bytes(opd)
 # Digital Surf: the header of the SurfaceTopography sample with an 8×6 data block.
 sur = bytearray((ROOT / "tests/data/surfaces/sur-3.sur").read_bytes())
 comment, private = struct.unpack("<HH", sur[334:338])

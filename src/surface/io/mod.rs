@@ -1,15 +1,16 @@
 //! Height-map readers (detect by magic bytes, never by extension) and writers.
 //!
-//! Formats (docs/surfaces.md): Bruker NanoScope v4.3+ binary (`nanoscope`), Gwyddion native
-//! (`gwy`), Gwyddion Simple Field (`gsf`), Asylum Research / Igor binary wave (`ibw`), Digital Surf
-//! (`sur`), Surface Data File ISO 25178-71 (`sdf`), Zygo MetroPro `.dat` (`metropro`), Zygo `.datx`
-//! (`datx`, HDF5), ISO 25178-71 `.x3p` (`x3p`), ASCII matrix / Gwyddion ASCII export / CSV
-//! (`ascii`) and XYZ on a rectangular lattice (`xyz`). Every reader returns heights and lengths in
+//! Formats (docs/surfaces.md; the list is `registry::READERS`): Bruker NanoScope v4.3+ binary
+//! (`nanoscope`), Gwyddion native (`gwy`), Gwyddion Simple Field (`gsf`), Asylum Research / Igor
+//! binary wave (`ibw`), Digital Surf (`sur`), Surface Data File ISO 25178-71 (`sdf`), Zygo
+//! MetroPro `.dat` (`metropro`), Zygo `.datx` (`datx`, HDF5), ISO 25178-71 `.x3p` (`x3p`), Wyko /
+//! Vision `.opd` (`opd`), ASCII matrix / Gwyddion ASCII export / CSV (`ascii`) and XYZ on a
+//! rectangular lattice (`xyz`). Every reader returns heights and lengths in
 //! metres with row 0 = top of the image as the instrument software shows it. NaN and saturated
 //! pixels come back as `valid = false` with `z = 0.0`.
 //!
 //! `ReadOptions::channel` only matters for the multi-channel formats (NanoScope, GWY, IBW layers,
-//! SUR objects, MetroPro, datx); the single-channel formats ignore it.
+//! SUR objects, MetroPro, datx, OPD); the single-channel formats ignore it.
 use super::{HeightMap, Result, SourceInfo, SurfaceError};
 use ndarray::Array2;
 use std::collections::BTreeMap;
@@ -29,6 +30,10 @@ mod xyz;
 mod datx;
 mod metropro;
 mod x3p;
+// Wyko / Vision .opd (white-light interferometers).
+mod opd;
+// The list of readers: detection, dispatch, the docs' table.
+pub mod registry;
 
 #[cfg(test)]
 mod testutil;
@@ -52,57 +57,23 @@ pub struct ReadOptions {
     pub z_unit: Option<String>,
 }
 
-/// The formats `read_height_map` reads, for error messages.
-pub const SUPPORTED_FORMATS: &str = "Gwyddion .gwy (GWYP), Bruker NanoScope v4.3+ binary, \
-     Gwyddion Simple Field .gsf, Asylum/Igor .ibw (v5), Digital Surf .sur, \
-     Surface Data File .sdf (ASCII/binary), Zygo MetroPro .dat, Zygo .datx (HDF5), ISO 25178-71 .x3p, \
-     ASCII matrix/CSV, XYZ lattice";
+/// The formats `read_height_map` reads, for error messages (from the registry).
+pub fn supported_formats() -> String {
+    registry::supported()
+}
 
 /// How many leading bytes `read_height_map` shows `detect_format`: enough for several lines of
 /// a wide ASCII matrix (a 256-column row is ~5 kB).
 const SNIFF_BYTES: usize = 64 * 1024;
 
-/// Short format id of a file's content, from its first bytes; `None` if not recognised.
-///
-/// Binary formats are recognised by their magic (`GWYP`/`GWYO` → "gwy", `\*File list` /
-/// `?*File list` → "nanoscope", `Gwyddion Simple Field` → "gsf", `DIGITAL SURF` /
-/// `DSCOMPRESSED` → "sur", `aISO-1.0`/`bISO-1.0`/`aBCR-1.0`/`bBCR-1.0` → "sdf", an Igor
-/// binary-wave version (1, 2, 3, 5 in either byte order) with a known number type → "ibw"; the reader then rejects the
-/// variants it does not support with a clear error). Text is "xyz" if it has an XYZ unit header
-/// (`# xy_unit:`, `# z_unit:`, `# Units:`) or its data lines have three columns whose first two
-/// look like lattice coordinates (the first two lines share x or y), else "ascii".
+/// Short format id of a file's content, from its first bytes; `None` if not recognised. The
+/// readers' sniffers are asked in the registry's order ([`registry::READERS`]): magic bytes,
+/// then Igor's plausibility check (Igor waves have no magic; the reader then rejects variants
+/// it does not support with a clear error), then text. Text is "xyz" if it has an XYZ unit
+/// header (`# xy_unit:`, `# z_unit:`, `# Units:`) or its data lines have three columns whose
+/// first two look like lattice coordinates (the first two lines share x or y), else "ascii".
 pub fn detect_format(head: &[u8]) -> Option<&'static str> {
-    if head.starts_with(b"GWYP") || head.starts_with(b"GWYO") {
-        return Some("gwy");
-    }
-    if head.starts_with(b"\\*File list") || head.starts_with(b"?*File list") {
-        return Some("nanoscope");
-    }
-    if head.starts_with(b"Gwyddion Simple Field ") {
-        return Some("gsf");
-    }
-    if head.starts_with(sur::MAGIC) || head.starts_with(sur::MAGIC_COMPRESSED) {
-        return Some("sur");
-    }
-    if sdf::MAGICS.iter().any(|m| head.starts_with(m)) {
-        return Some("sdf");
-    }
-    if metropro::MAGICS.iter().any(|m| head.starts_with(m)) {
-        return Some("metropro");
-    }
-    // Zygo .datx is HDF5; its reader requires the `/MetaData` dataset.
-    if head.starts_with(datx::MAGIC) {
-        return Some("datx");
-    }
-    // ISO 25178-71 .x3p is a ZIP archive; its reader requires `main.xml` inside.
-    if crate::formats::zip::is_zip(head) {
-        return Some("x3p");
-    }
-    // Igor waves have no magic: a plausibility check of the header, after every magic.
-    if ibw::looks_like(head) {
-        return Some("ibw");
-    }
-    sniff_text(head)
+    registry::detect(head).map(|r| r.id)
 }
 
 fn sniff_text(head: &[u8]) -> Option<&'static str> {
@@ -181,27 +152,17 @@ pub fn read_height_map(path: &Path, opts: &ReadOptions) -> Result<HeightMap> {
         source,
     })?;
     let head = &bytes[..bytes.len().min(SNIFF_BYTES)];
-    let raw = match detect_format(head) {
-        Some("gwy") => gwy::read(path, &bytes, opts)?,
-        Some("nanoscope") => nanoscope::read(path, &bytes, opts)?,
-        Some("gsf") => gsf::read(path, &bytes, opts)?,
-        Some("ibw") => ibw::read(path, &bytes, opts)?,
-        Some("sur") => sur::read(path, &bytes, opts)?,
-        Some("sdf") => sdf::read(path, &bytes)?,
-        Some("metropro") => metropro::read(path, &bytes, opts)?,
-        Some("x3p") => x3p::read(path, &bytes, opts)?,
-        Some("datx") => datx::read(path, &bytes, opts)?,
-        Some("xyz") => xyz::read(path, &bytes, opts)?,
-        Some(_) => ascii::read(path, &bytes, opts)?,
+    let raw = match registry::detect(head) {
+        Some(reader) => (reader.read)(path, &bytes, opts)?,
         None => {
             let what = if bytes.is_empty() {
-                "empty file".to_string()
+                "empty file"
             } else {
-                "unrecognised content".to_string()
+                "unrecognised content"
             };
             return Err(unsupported(
                 path,
-                format!("{what}; supported: {SUPPORTED_FORMATS}"),
+                format!("{what}; supported: {}", supported_formats()),
             ));
         }
     };

@@ -56,7 +56,7 @@ impl Lcg {
 }
 
 /// Reads `valid` truncated at ~40 lengths and with bytes flipped at ~200 positions; every read
-/// must return (Ok or Err), never panic. Returns how many reads failed, to show both paths ran.
+/// must return (Ok or an error naming the file), never panic. Returns how many reads failed, to show both paths ran.
 pub fn fuzz_reader(name: &str, valid: &[u8]) -> usize {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join(name);
@@ -66,7 +66,15 @@ pub fn fuzz_reader(name: &str, valid: &[u8]) -> usize {
         let outcome = std::panic::catch_unwind(|| read_height_map(&path, &ReadOptions::default()));
         match outcome {
             Ok(Ok(_)) => {}
-            Ok(Err(_)) => failures += 1,
+            Ok(Err(e)) => {
+                // One clear error that names the file.
+                let message = e.to_string();
+                assert!(
+                    message.contains(name),
+                    "the error on {what} does not name the file: {message}"
+                );
+                failures += 1
+            }
             Err(_) => panic!("reader panicked on {what}"),
         }
     };
