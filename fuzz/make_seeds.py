@@ -156,6 +156,10 @@ entry = lambda name, kind, n: name.ljust(16, b"\0") + struct.pack("<hiH", kind, 
 opd = b"\x01\x00" + entry(b"Directory", 1, 24 * (len(blocks) + 1))
 opd += b"".join(entry(n, k, len(c)) for n, k, c in blocks) + b"".join(c for _, _, c in blocks)
 (maps / "map.opd").write_bytes(opd)
+# TrueMap v2.0: magic, comment, a 4×3 float32 grid (the layout of tmd.rs's test).
+tmd = b"Binary TrueMap Data File v2.0\r\n\0" + b"seed\0" + struct.pack("<II4f", 4, 3, 4.0, 3.0, 0.0, 0.0)
+tmd += struct.pack("<12f", *[0.1 * k for k in range(12)])
+(maps / "map.tmd").write_bytes(tmd)
 # Digital Surf: the header of the SurfaceTopography sample with an 8×6 data block.
 sur = bytearray((ROOT / "tests/data/surfaces/sur-3.sur").read_bytes())
 comment, private = struct.unpack("<HH", sur[334:338])

@@ -6,8 +6,8 @@
 //! samples, or is missing from the docs' table.
 
 use super::{
-    ascii, datx, gsf, gwy, ibw, metropro, nanoscope, opd, sdf, sniff_text, sur, x3p, xyz, RawMap,
-    ReadOptions,
+    ascii, datx, gsf, gwy, ibw, metropro, nanoscope, opd, sdf, sniff_text, sur, tmd, x3p, xyz,
+    RawMap, ReadOptions,
 };
 use crate::surface::Result;
 use std::path::Path;
@@ -126,6 +126,15 @@ pub const READERS: &[Reader] = &[
         sniff: opd::looks_like,
         read: opd::read,
         samples: &["tests/data/surfaces/opd-1.opd"],
+    },
+    Reader {
+        id: "tmd",
+        name: "TrueMap",
+        extensions: &["tmd"],
+        detected_by: "`Binary TrueMap Data File` (versions other than 2.0: refused)",
+        sniff: |h| h.starts_with(tmd::MAGIC),
+        read: tmd::read,
+        samples: &["tests/data/surfaces/tmd-1.tmd"],
     },
     Reader {
         id: "ibw",
