@@ -160,6 +160,13 @@ opd += b"".join(entry(n, k, len(c)) for n, k, c in blocks) + b"".join(c for _, _
 tmd = b"Binary TrueMap Data File v2.0\r\n\0" + b"seed\0" + struct.pack("<II4f", 4, 3, 4.0, 3.0, 0.0, 0.0)
 tmd += struct.pack("<12f", *[0.1 * k for k in range(12)])
 (maps / "map.tmd").write_bytes(tmd)
+# WSxM: the three lines, a minimal header and a 4×3 int16 image (the layout of wsxm.rs's test).
+body = ("\n[Control]\n    X Amplitude: 2 nm\n    Y Amplitude: 1.5 nm\n[General Info]\n"
+        "    Image Data Type: short\n    Number of columns: 4\n    Number of rows: 3\n"
+        "    Z Amplitude: 1 nm\n[Miscellaneous]\n    Maximum: 11\n    Minimum: 0\n[Header end]\n")
+head = lambda n: f"WSxM file copyright UAM\r\nSxM Image file\r\nImage header size: {n}\r\n{body}".encode()
+n = len(head(len(head(0))))
+(maps / "map.top").write_bytes(head(n) + struct.pack("<12h", *range(12)))
 # Digital Surf: the header of the SurfaceTopography sample with an 8×6 data block.
 sur = bytearray((ROOT / "tests/data/surfaces/sur-3.sur").read_bytes())
 comment, private = struct.unpack("<HH", sur[334:338])

@@ -4,7 +4,7 @@
 //! (`nanoscope`), Gwyddion native (`gwy`), Gwyddion Simple Field (`gsf`), Asylum Research / Igor
 //! binary wave (`ibw`), Digital Surf (`sur`), Surface Data File ISO 25178-71 (`sdf`), Zygo
 //! MetroPro `.dat` (`metropro`), Zygo `.datx` (`datx`, HDF5), ISO 25178-71 `.x3p` (`x3p`), Wyko /
-//! Vision `.opd` (`opd`), TrueMap `.tmd` (`tmd`), ASCII matrix / Gwyddion ASCII export / CSV (`ascii`) and XYZ on a
+//! Vision `.opd` (`opd`), TrueMap `.tmd` (`tmd`), WSxM `.top`/`.stp` (`wsxm`), ASCII matrix / Gwyddion ASCII export / CSV (`ascii`) and XYZ on a
 //! rectangular lattice (`xyz`). Every reader returns heights and lengths in
 //! metres with row 0 = top of the image as the instrument software shows it. NaN and saturated
 //! pixels come back as `valid = false` with `z = 0.0`.
@@ -33,6 +33,8 @@ mod x3p;
 // Wyko / Vision .opd (white-light interferometers), TrueMap .tmd.
 mod opd;
 mod tmd;
+// WSxM .top/.stp (Nanotec SPM images).
+mod wsxm;
 // The list of readers: detection, dispatch, the docs' table.
 pub mod registry;
 

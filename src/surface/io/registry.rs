@@ -6,8 +6,8 @@
 //! samples, or is missing from the docs' table.
 
 use super::{
-    ascii, datx, gsf, gwy, ibw, metropro, nanoscope, opd, sdf, sniff_text, sur, tmd, x3p, xyz,
-    RawMap, ReadOptions,
+    ascii, datx, gsf, gwy, ibw, metropro, nanoscope, opd, sdf, sniff_text, sur, tmd, wsxm, x3p,
+    xyz, RawMap, ReadOptions,
 };
 use crate::surface::Result;
 use std::path::Path;
@@ -135,6 +135,18 @@ pub const READERS: &[Reader] = &[
         sniff: |h| h.starts_with(tmd::MAGIC),
         read: tmd::read,
         samples: &["tests/data/surfaces/tmd-1.tmd"],
+    },
+    Reader {
+        id: "wsxm",
+        name: "WSxM SPM image",
+        extensions: &["top", "stp", "tom", "cur"],
+        detected_by: "`WSxM file copyright`",
+        sniff: |h| h.starts_with(wsxm::MAGIC),
+        read: |path, bytes, _| wsxm::read(path, bytes),
+        samples: &[
+            "tests/data/surfaces/top-1.top",
+            "tests/data/surfaces/stp-1.stp",
+        ],
     },
     Reader {
         id: "ibw",
