@@ -51,7 +51,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<RawMap> {
         .checked_mul(ny)
         .and_then(|n| n.checked_mul(size))
         .and_then(|n| n.checked_add(data_at));
-    if !need.is_some_and(|need| need <= bytes.len()) {
+    if need.is_none_or(|need| need > bytes.len()) {
         return Err(fail(format!(
             "WSxM image of {nx} × {ny} {kind} values does not fit the file ({} bytes, data at {data_at})",
             bytes.len()
