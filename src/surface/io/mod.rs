@@ -31,6 +31,7 @@ mod datx;
 mod metropro;
 mod x3p;
 // Wyko / Vision .opd (white-light interferometers), TrueMap .tmd.
+mod le;
 mod opd;
 mod tmd;
 // WSxM .top/.stp (Nanotec SPM images).

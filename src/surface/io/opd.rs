@@ -11,6 +11,7 @@
 //! Heights: z = value · Wavelength / Mult (nm); int16 values ≥ 32766 and float32 values
 //! ≥ 1e38 (or non-finite) mark pixels without data. Spacing: dx = Pixel_size, dy = Pixel_size ·
 //! Aspect. 8-bit arrays are refused as unsupported (no sample to test them on).
+use super::le::{le_f32, le_i32, le_u16};
 use super::{find_channel, format_error, unsupported, RawMap, ReadOptions};
 use crate::surface::Result;
 use ndarray::Array2;
@@ -43,16 +44,6 @@ struct ArrayBlock {
     ny: usize,
     element_size: usize,
     data_at: usize,
-}
-
-fn le_u16(b: &[u8], at: usize) -> u16 {
-    u16::from_le_bytes([b[at], b[at + 1]])
-}
-fn le_i32(b: &[u8], at: usize) -> i32 {
-    i32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
-}
-fn le_f32(b: &[u8], at: usize) -> f64 {
-    f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]) as f64
 }
 
 fn entry(bytes: &[u8], at: usize) -> Block {

@@ -8,6 +8,7 @@
 //! value `zmin − 2` marks an invalid pixel (both SurfaceTopography samples use exactly that).
 //! Several objects may follow each other; hdi reads the first surface, or the one whose object
 //! name matches `ReadOptions::channel`. Compressed files (`DSCOMPRESSED`) are refused.
+use super::le::{le_f32, le_i32, le_u16};
 use super::units::{decode_text, length_factor};
 use super::{find_channel, format_error, unsupported, RawMap, ReadOptions};
 use crate::surface::Result;
@@ -22,15 +23,6 @@ const HEADER: usize = 512;
 /// Object types of the header (2 = surface; 1 = profile, 3 = binary image, 4/5 = series).
 const SURFACE: u16 = 2;
 
-fn le_u16(b: &[u8], at: usize) -> u16 {
-    u16::from_le_bytes([b[at], b[at + 1]])
-}
-fn le_i32(b: &[u8], at: usize) -> i32 {
-    i32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
-}
-fn le_f32(b: &[u8], at: usize) -> f64 {
-    f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]) as f64
-}
 fn text(b: &[u8], at: usize, len: usize) -> String {
     let s = &b[at..at + len];
     let end = s.iter().position(|&c| c == 0).unwrap_or(len);

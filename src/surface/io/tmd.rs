@@ -9,6 +9,7 @@
 //! (1.27.1) takes millimetres, its repository's newer reader micrometres. hdi takes
 //! millimetres, which the public sample supports (a 19 mm field of 300 pixels with heights
 //! under 1 mm, a GelSight-sized TrueMap v6 scan), and `z_unit` names another.
+use super::le::{le_f32, le_u32};
 use super::units::length_factor;
 use super::{format_error, unsupported, RawMap, ReadOptions};
 use crate::surface::Result;
@@ -21,13 +22,6 @@ pub(crate) const MAGIC: &[u8] = b"Binary TrueMap Data File";
 const V2: &[u8] = b"Binary TrueMap Data File v2.0\r\n\0";
 /// How far the comment may reach before its NUL.
 const COMMENT_MAX: usize = 4096;
-
-fn le_u32(b: &[u8], at: usize) -> u32 {
-    u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
-}
-fn le_f32(b: &[u8], at: usize) -> f64 {
-    f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]) as f64
-}
 
 pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawMap> {
     let fail = |reason: String| format_error(path, reason);
