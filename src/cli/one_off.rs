@@ -13,19 +13,22 @@ use hdi::stages::Stage;
 /// The instance name one-off commands give their stage (it names the store's ref only).
 pub(super) const NAME: &str = "cli";
 
+/// A scratch directory, removed when dropped.
+struct Scratch(PathBuf);
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
 /// An instance's committed entry in a scratch store that is removed when this is dropped.
 pub(super) struct Ran<R> {
     /// Its `result.json`, read through the kind's result type.
     pub result: R,
     /// Its store directory.
     pub dir: PathBuf,
-    scratch: PathBuf,
-}
-
-impl<R> Drop for Ran<R> {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.scratch);
-    }
+    _scratch: Scratch,
 }
 
 /// Run `stage` through the engine against a fresh scratch store under the system's temporary
@@ -34,44 +37,23 @@ pub(super) fn run<R: DeserializeOwned>(
     command: &'static str,
     stage: Box<dyn Stage>,
 ) -> Result<Ran<R>> {
-    let scratch = std::env::temp_dir().join(format!(
+    let scratch = Scratch(std::env::temp_dir().join(format!(
         "hdi-{command}-{}-{}",
         std::process::id(),
         std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map_or(0, |d| d.as_nanos())
-    ));
-    let entry = Store::open(&scratch)
-        .with_context(|| format!("opening a scratch store at {}", scratch.display()))
-        .and_then(|store| {
-            Ok(hdi::engine::alone::run_alone(
-                stage,
-                &store,
-                &StageBars::new(command),
-            )?)
-        });
-    let entry = match entry {
-        Ok(e) => e,
-        Err(e) => {
-            let _ = std::fs::remove_dir_all(&scratch);
-            return Err(e);
-        }
-    };
-    // Dropping `Ran` removes the scratch store, so it owns it from here on.
-    let dir = entry.dir;
-    let parsed = serde_json::from_value(entry.result);
-    let ran = |result| Ran {
+    )));
+    let store = Store::open(&scratch.0)
+        .with_context(|| format!("opening a scratch store at {}", scratch.0.display()))?;
+    let entry = hdi::engine::alone::run_alone(stage, &store, &StageBars::new(command))?;
+    let result = serde_json::from_value(entry.result)
+        .context("the stage's result.json does not read as its type")?;
+    Ok(Ran {
         result,
-        dir: dir.clone(),
-        scratch: scratch.clone(),
-    };
-    match parsed {
-        Ok(r) => Ok(ran(r)),
-        Err(e) => {
-            let _ = std::fs::remove_dir_all(&scratch);
-            Err(e).context("the stage's result.json does not read as its type")
-        }
-    }
+        dir: entry.dir,
+        _scratch: scratch,
+    })
 }
 
 /// The entry's files (not the store's `result.json`, `manifest.json`): each written to

@@ -834,9 +834,8 @@ mod tests {
             );
         }
         // Flipped bytes in the datatype messages once made libhdf5 copy out of bounds and
-        // left uninitialised strings behind (missing compound members): both files, no crash.
-        assert!(fuzz_reader("f.datx", &bytes) > 0);
-        let fixed = std::fs::read(sample("datx_fixed.datx")).unwrap();
-        assert!(fuzz_reader("g.datx", &fixed) > 0);
+        // left uninitialised strings behind (missing compound members): both files are registry
+        // samples, whose corrupt copies registry.rs reads
+        // (`every_sample_survives_truncation_and_flipped_bytes`).
     }
 }

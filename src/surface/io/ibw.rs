@@ -584,7 +584,8 @@ mod tests {
         let mut negative = bytes.clone();
         negative[12..16].copy_from_slice(&(-5i32).to_be_bytes());
         assert!(read_bytes("n.ibw", &negative).is_err());
-        assert!(fuzz_reader("f.ibw", &bytes) > 0);
+        // Corrupt copies of this sample: registry.rs,
+        // `every_sample_survives_truncation_and_flipped_bytes`; the small one here.
         let small = std::fs::read(sample("10x10-one_channel_without_name.ibw")).unwrap();
         assert!(fuzz_reader("g.ibw", &small) > 0);
     }

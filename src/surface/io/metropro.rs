@@ -299,6 +299,7 @@ mod tests {
                 "{at}: {msg}"
             );
         }
-        assert!(fuzz_reader("f.dat", &bytes) > 0);
+        // Its 240 corrupt copies: registry.rs,
+        // `every_sample_survives_truncation_and_flipped_bytes`.
     }
 }

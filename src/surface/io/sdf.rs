@@ -371,8 +371,7 @@ mod tests {
         huge[42..46].copy_from_slice(&[0xFF; 4]);
         let msg = read_bytes("h.sdf", &huge).unwrap_err().to_string();
         assert!(msg.contains("truncated"), "{msg}");
-        assert!(fuzz_reader("f.sdf", &bytes) > 0);
-        let ascii = std::fs::read(sample("sdf-1.sdf")).unwrap();
-        assert!(fuzz_reader("g.sdf", &ascii) > 0);
+        // Corrupt copies of both samples: registry.rs,
+        // `every_sample_survives_truncation_and_flipped_bytes`.
     }
 }

@@ -536,7 +536,8 @@ mod tests {
 
     #[test]
     fn truncations_and_byte_flips_never_panic() {
-        for name in ["x3p_int32_mask.x3p", "x3p_datalist.x3p", "x3p_float32.x3p"] {
+        // x3p_int32_mask.x3p is a registry sample (registry.rs corrupts it the same way).
+        for name in ["x3p_datalist.x3p", "x3p_float32.x3p"] {
             let bytes = std::fs::read(sample(&format!("readers_b/{name}"))).unwrap();
             assert!(fuzz_reader(name, &bytes) > 0);
         }
