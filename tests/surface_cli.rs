@@ -390,7 +390,8 @@ fn walk(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
 
 /// `hdi surface FILE --out` is a one-instance pipeline run through the engine: its files are,
 /// byte for byte, those of `hdi run` on a pipeline that declares the same map with the same
-/// settings, and its scratch store is gone afterwards.
+/// settings (the X3P of `--x3p-out` and `x3p = true` included), and its scratch store is gone
+/// afterwards.
 #[test]
 fn a_one_off_surface_is_the_pipeline_instance_byte_for_byte() {
     let dir = tempfile::tempdir().unwrap();
@@ -411,6 +412,8 @@ fn a_one_off_surface_is_the_pipeline_instance_byte_for_byte() {
         .arg(&raw)
         .arg("--out")
         .arg(dir.path().join("one/disk.h5"))
+        .arg("--x3p-out")
+        .arg(dir.path().join("disk.x3p"))
         .output()
         .unwrap();
     assert_ok(&o);
@@ -420,7 +423,7 @@ fn a_one_off_surface_is_the_pipeline_instance_byte_for_byte() {
         dir.path().join("pipeline.toml"),
         format!(
             // (The report without the validation table, which costs seconds here.)
-            "[project]\nname = \"t\"\n\n[report]\nvalidation = false\n\n[surface.disk]\nfile = {:?}\n",
+            "[project]\nname = \"t\"\n\n[report]\nvalidation = false\n\n[surface.disk]\nfile = {:?}\nx3p = true\n",
             raw.to_string_lossy()
         ),
     )
@@ -447,5 +450,7 @@ fn a_one_off_surface_is_the_pipeline_instance_byte_for_byte() {
         assert!(same, "{name} differs from the one-off's {}", one.display());
         compared += 1;
     }
-    assert!(compared >= 4, "{compared} files compared");
+    assert!(compared >= 5, "{compared} files compared");
+    let x3p = std::fs::read(dir.path().join("disk.x3p")).unwrap();
+    assert!(x3p == std::fs::read(entry.join("surface.x3p")).unwrap());
 }

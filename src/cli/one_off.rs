@@ -56,6 +56,13 @@ pub(super) fn run<R: DeserializeOwned>(
     })
 }
 
+/// One file of the entry, written to `to` through a temporary file and a rename.
+pub(super) fn deliver_file(entry: &Path, name: &str, to: &Path) -> Result<()> {
+    let from = entry.join(name);
+    let bytes = std::fs::read(&from).with_context(|| format!("reading {}", from.display()))?;
+    write_atomic(to, &bytes).with_context(|| format!("writing {}", to.display()))
+}
+
 /// The entry's files (not the store's `result.json`, `manifest.json`): each written to
 /// `dir` through a temporary file and a rename, `main` renamed to `main_as` when given.
 pub(super) fn deliver(entry: &Path, dir: &Path, main: &str, main_as: Option<&Path>) -> Result<()> {
@@ -72,9 +79,7 @@ pub(super) fn deliver(entry: &Path, dir: &Path, main: &str, main_as: Option<&Pat
             Some(path) if name == main => path.to_path_buf(),
             _ => dir.join(&name),
         };
-        let bytes = std::fs::read(entry.join(&name))
-            .with_context(|| format!("reading {}", entry.join(&name).display()))?;
-        write_atomic(&to, &bytes).with_context(|| format!("writing {}", to.display()))?;
+        deliver_file(entry, &name, &to)?;
     }
     Ok(())
 }

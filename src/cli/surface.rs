@@ -29,6 +29,7 @@ pub(super) fn cmd_surface(a: SurfaceArgs) -> Result<()> {
         periodic: a.periodic,
         histogram_bins: a.histogram_bins,
         scale_sweep: a.out.is_some(),
+        x3p: a.x3p_out.is_some(),
     };
     let params = surfaces::check(&cfg, a.file.clone())
         .map_err(|e| anyhow::anyhow!("{}: {}", flag(&e.key), e.message))?;
@@ -46,6 +47,9 @@ pub(super) fn cmd_surface(a: SurfaceArgs) -> Result<()> {
     )?;
     if let Some(out) = &a.out {
         one_off::deliver(&ran.dir, out_parent(out)?, "surface.h5", Some(out))?;
+    }
+    if let Some(path) = &a.x3p_out {
+        one_off::deliver_file(&ran.dir, "surface.x3p", path)?;
     }
     let r = &ran.result.report;
     if a.json {

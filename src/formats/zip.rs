@@ -1,5 +1,5 @@
-//! A read-only ZIP archive reader over a byte slice: what `.x3p` (ISO 25178-71) and NumPy
-//! `.npz` files are built on (docs/formats.md).
+//! A ZIP archive reader over a byte slice, and a small deterministic writer: what `.x3p`
+//! (ISO 25178-71) and NumPy `.npz` files are built on (docs/formats.md).
 //!
 //! Written from PKWARE's APPNOTE (sections 4.3.7 local header, 4.3.12 central directory,
 //! 4.3.14–4.3.16 ZIP64 end records, 4.5.3 ZIP64 extra field). Entries are listed from the
@@ -275,6 +275,69 @@ fn parse_central_record(b: &[u8], at: usize) -> Option<(ZipEntry, usize)> {
     ))
 }
 
+/// Bytes a classic (non-ZIP64) archive can address: sizes and offsets are 32-bit.
+const MAX_CLASSIC: u64 = u32::MAX as u64;
+
+/// A deflated archive of `members` (name, content), in the given order. Deterministic: every
+/// entry is dated 1980-01-01 00:00 (the DOS epoch), so the same members give the same bytes.
+/// Archives beyond 4 GiB would need ZIP64 and are refused.
+pub fn write_deflated(members: &[(&str, &[u8])]) -> Result<Vec<u8>, ZipError> {
+    // DOS time 00:00:00, date 1980-01-01 (day 1, month 1, year 0).
+    const DOS_TIME: u16 = 0;
+    const DOS_DATE: u16 = (1 << 5) | 1;
+    let too_big = |what: &str| corrupt(format!("{what} exceeds 4 GiB; ZIP64 is not written"));
+    let mut out = Vec::new();
+    let mut central = Vec::new();
+    for (name, data) in members {
+        let packed = miniz_oxide::deflate::compress_to_vec(data, 1);
+        let offset = u32::try_from(out.len()).map_err(|_| too_big("archive"))?;
+        let size = u32::try_from(data.len()).map_err(|_| too_big(name))?;
+        let csize = u32::try_from(packed.len()).map_err(|_| too_big(name))?;
+        let name_len = u16::try_from(name.len()).map_err(|_| corrupt("member name too long"))?;
+        let crc = crc32fast::hash(data);
+        // The fields the local header and the directory record share (APPNOTE 4.3.7, 4.3.12).
+        let mut common = Vec::with_capacity(26);
+        for v in [20u16, 0, 8, DOS_TIME, DOS_DATE] {
+            common.extend_from_slice(&v.to_le_bytes());
+        }
+        for v in [crc, csize, size] {
+            common.extend_from_slice(&v.to_le_bytes());
+        }
+        common.extend_from_slice(&name_len.to_le_bytes());
+        common.extend_from_slice(&0u16.to_le_bytes());
+
+        out.extend_from_slice(&LOCAL_SIG.to_le_bytes());
+        out.extend_from_slice(&common);
+        out.extend_from_slice(name.as_bytes());
+        out.extend_from_slice(&packed);
+
+        central.extend_from_slice(&CENTRAL_SIG.to_le_bytes());
+        central.extend_from_slice(&20u16.to_le_bytes()); // version made by: 2.0, MS-DOS
+        central.extend_from_slice(&common);
+        for v in [0u16, 0, 0] {
+            central.extend_from_slice(&v.to_le_bytes()); // comment, disk, internal attributes
+        }
+        central.extend_from_slice(&0u32.to_le_bytes()); // external attributes
+        central.extend_from_slice(&offset.to_le_bytes());
+        central.extend_from_slice(name.as_bytes());
+    }
+    let count = u16::try_from(members.len()).map_err(|_| corrupt("more than 65535 members"))?;
+    let cd_offset = out.len() as u64;
+    let cd_size = central.len() as u64;
+    if cd_offset + cd_size > MAX_CLASSIC {
+        return Err(too_big("archive"));
+    }
+    out.extend_from_slice(&central);
+    out.extend_from_slice(&EOCD_SIG.to_le_bytes());
+    for v in [0u16, 0, count, count] {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out.extend_from_slice(&(cd_size as u32).to_le_bytes());
+    out.extend_from_slice(&(cd_offset as u32).to_le_bytes());
+    out.extend_from_slice(&0u16.to_le_bytes());
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -306,6 +369,25 @@ mod tests {
         // Written with force_zip64=True (as numpy's savez does): ZIP64 extra fields.
         let c = zip.find("dir/c64.bin").unwrap();
         assert_eq!(zip.read(c, 1 << 20).unwrap(), vec![7u8; 1000]);
+    }
+
+    #[test]
+    fn written_archives_read_back_and_are_deterministic() {
+        let big: Vec<u8> = (0..100_000u32)
+            .flat_map(|k| (k % 251).to_le_bytes())
+            .collect();
+        let members: [(&str, &[u8]); 3] =
+            [("main.xml", b"<a/>"), ("bin/data.bin", &big), ("e", b"")];
+        let bytes = write_deflated(&members).unwrap();
+        assert_eq!(bytes, write_deflated(&members).unwrap());
+        let zip = ZipArchive::parse(&bytes).unwrap();
+        let names: Vec<&str> = zip.entries().iter().map(|e| e.name.as_str()).collect();
+        assert_eq!(names, ["main.xml", "bin/data.bin", "e"]);
+        for (name, data) in members {
+            let e = zip.find(name).unwrap();
+            assert_eq!(e.method, 8);
+            assert_eq!(zip.read(e, 1 << 30).unwrap(), data);
+        }
     }
 
     #[test]

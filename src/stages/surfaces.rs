@@ -29,7 +29,7 @@ use std::path::PathBuf;
 mod output;
 mod rows;
 pub use output::write_outputs;
-use output::{write_areas_plot, write_figures, write_h5_body};
+use output::{write_areas_plot, write_figures, write_h5_body, write_x3p};
 pub use rows::{AreaColumns, AreaRow, SurfaceRow, SurfaceSummaryRow};
 
 /// Bump when the numbers this stage produces change.
@@ -112,6 +112,10 @@ pub struct SurfaceConfig {
     /// Also compute the sub-sampling / S-filter scale sweep.
     #[serde(default = "default_true")]
     pub scale_sweep: bool,
+    /// Also write the analysed map (levelled, and filtered when a filter is set) as ISO
+    /// 25178-71 X3P: `surface.x3p`, or `area_K.x3p` per area.
+    #[serde(default)]
+    pub x3p: bool,
 }
 
 /// `crop = { x0 = "0 um", y0 = "0 um", width = "1 um", height = "1 um" }`: x along a scan
@@ -159,6 +163,8 @@ pub struct SurfaceParams {
     pub roughness: RoughnessOptions,
     pub periodic: bool,
     pub scale_sweep: bool,
+    /// Write the analysed map as X3P too.
+    pub x3p: bool,
 }
 
 /// One analysed area: a file and an optional rectangle of it.
@@ -341,6 +347,7 @@ pub fn check(
         },
         periodic: cfg.periodic,
         scale_sweep: cfg.scale_sweep,
+        x3p: cfg.x3p,
     })
 }
 
@@ -391,7 +398,7 @@ impl SurfaceParams {
     }
 
     fn canonical_one(&self) -> Value {
-        json!({
+        let mut v = json!({
             "channel": self.read.channel,
             "size_x_m": self.read.size_x,
             "size_y_m": self.read.size_y,
@@ -407,7 +414,12 @@ impl SurfaceParams {
             "periodic": self.periodic,
             "histogram_bins": self.roughness.histogram_bins,
             "scale_sweep": self.scale_sweep,
-        })
+        });
+        // Only when asked for: the instances written before the option keep their keys.
+        if let (true, Value::Object(m)) = (self.x3p, &mut v) {
+            m.insert("x3p".into(), Value::Bool(true));
+        }
+        v
     }
 }
 
@@ -608,6 +620,9 @@ impl StageKind for SurfaceStage {
             ctx.key,
             &inputs,
         )?;
+        if self.params.x3p {
+            write_x3p(&a, &self.params, &ctx.out_dir.join("surface.x3p"))?;
+        }
         let r = &a.report;
         // What the interface stage combines.
         let stats = SummitStats {
@@ -718,6 +733,11 @@ fn run_areas(
     )?;
     out.finish()?;
     write_figures(&analyses[0], ctx.out_dir)?;
+    if p.x3p {
+        for (k, a) in analyses.iter().enumerate() {
+            write_x3p(a, &p.area(k), &ctx.out_dir.join(format!("area_{k}.x3p")))?;
+        }
+    }
 
     let rows: Vec<AreaRow> = analyses
         .iter()

@@ -47,6 +47,9 @@ pub struct SurfaceArgs {
     /// Also write the full HDF5 output (and PNGs beside it).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Also write the analysed (levelled, filtered) map as ISO 25178-71 X3P to this file.
+    #[arg(long, value_name = "FILE")]
+    pub x3p_out: Option<PathBuf>,
     #[arg(long)]
     pub json: bool,
 }

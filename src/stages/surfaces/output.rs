@@ -39,6 +39,37 @@ pub(super) fn write_map(out: &H5Out, path: &str, m: &HeightMap, long_name: &str)
     Ok(())
 }
 
+/// The analysed map as ISO 25178-71 X3P (float64 metres, docs/surfaces.md "X3P out"), with the
+/// source file's name and the processing in a comment of its `main.xml`. The file name only,
+/// not its path: the same input gives the same bytes wherever the project lies.
+pub(super) fn write_x3p(a: &SurfaceAnalysis, p: &SurfaceParams, path: &Path) -> Result<()> {
+    let map = a.final_map();
+    let steps: Vec<String> = map
+        .history
+        .iter()
+        .map(|s| {
+            let args: Vec<String> = s.params.iter().map(|(k, v)| format!("{k}={v}")).collect();
+            format!("{}({})", s.name, args.join(", "))
+        })
+        .collect();
+    let note = format!(
+        "written by hdi {} from {} ({}, channel {}); processing: {}",
+        env!("CARGO_PKG_VERSION"),
+        p.file
+            .file_name()
+            .map_or_else(String::new, |f| f.to_string_lossy().into_owned()),
+        map.source.format,
+        map.channel,
+        if steps.is_empty() {
+            "none".to_string()
+        } else {
+            steps.join("; ")
+        }
+    );
+    let bytes = crate::surface::io::encode_x3p(map, &note)?;
+    std::fs::write(path, bytes).map_err(|e| crate::error::Error::io(path, e))
+}
+
 /// HDF5 (layout in docs/hdf5.md) and PNGs into `dir`.
 pub fn write_outputs(
     a: &SurfaceAnalysis,

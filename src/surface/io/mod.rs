@@ -46,6 +46,7 @@ pub use ascii::encode_ascii_matrix;
 pub use gsf::encode_gsf;
 pub use gwy::encode_gwy;
 pub use nanoscope::encode_nanoscope;
+pub use x3p::encode_x3p;
 pub use xyz::encode_xyz;
 
 /// Options a reader may need. Lengths in metres.

@@ -9,13 +9,18 @@
 //! validity bit array `ValidPointsLink` (1 bit per point, least significant bit first; 0 =
 //! invalid). The point data's MD5 (`MD5ChecksumPointData`) is checked when present, on top of
 //! the ZIP CRC-32. Row 0 of the map is the first y line of the file.
-use super::{format_error, unsupported, RawMap, ReadOptions};
+//!
+//! Write ([`encode_x3p`]): the same layout back, heights as float64 (`D`) in metres so that
+//! reading the file returns the map bit for bit, invalid points as NaN plus a validity bit array,
+//! the MD5 sums of the point data, the validity array and `main.xml` (`md5checksum.hex`).
+use super::{format_error, heights_with_nan, unsupported, RawMap, ReadOptions};
 use crate::formats::md5::md5_hex;
 use crate::formats::xml::{Event, Scanner};
-use crate::formats::zip::ZipArchive;
-use crate::surface::Result;
+use crate::formats::zip::{write_deflated, ZipArchive};
+use crate::surface::{HeightMap, Result, SurfaceError};
 use ndarray::Array2;
 use std::collections::BTreeMap;
+use std::fmt::Write as _;
 use std::path::Path;
 
 /// The largest `main.xml` read (an inline DataList of a 4k × 4k map is ~300 MB of text).
@@ -72,8 +77,11 @@ pub(crate) fn read(path: &Path, bytes: &[u8], _opts: &ReadOptions) -> Result<Raw
     } else {
         read_point_member(path, &zip, &h, data_type, width, (nx, ny))?
     };
-    for v in values.iter_mut() {
-        *v = axes.z_off + axes.z_inc * *v;
+    // Skipped for the identity scale, so that a float64 file reads back bit for bit (−0.0 too).
+    if axes.z_inc != 1.0 || axes.z_off != 0.0 {
+        for v in values.iter_mut() {
+            *v = axes.z_off + axes.z_inc * *v;
+        }
     }
     if let Some(link) = h.valid_link.as_deref().map(str::trim) {
         apply_validity_mask(path, &zip, link, &mut values)?;
@@ -92,6 +100,72 @@ pub(crate) fn read(path: &Path, bytes: &[u8], _opts: &ReadOptions) -> Result<Raw
         format: "x3p",
         header,
     })
+}
+
+/// The map as an ISO 25178-71 `.x3p` archive (`main.xml`, `bin/data.bin`, `bin/valid.bin` when
+/// some point is invalid, `md5checksum.hex`). `note` goes into an XML comment (provenance: the
+/// source file and the processing). Deterministic: the same map and note give the same bytes.
+pub fn encode_x3p(map: &HeightMap, note: &str) -> Result<Vec<u8>> {
+    let (nx, ny) = (map.nx(), map.ny());
+    let mut data = Vec::with_capacity(nx * ny * 8);
+    for v in heights_with_nan(map).iter() {
+        data.extend_from_slice(&v.to_le_bytes());
+    }
+    // One bit per point, least significant first, x fastest (ISO 25178-71, ValidPointsLink).
+    let some_invalid = map.valid.as_ref().filter(|v| v.iter().any(|ok| !ok));
+    let valid_bits = some_invalid.map(|valid| {
+        let mut bits = vec![0u8; (nx * ny).div_ceil(8)];
+        for (k, _) in valid.iter().enumerate().filter(|(_, ok)| **ok) {
+            bits[k / 8] |= 1 << (k % 8);
+        }
+        bits
+    });
+    // A comment cannot hold `--` (XML 1.0 §2.5).
+    let note = note.replace("--", "- -").replace(['\n', '\r'], " ");
+    let mut xml = String::new();
+    let _ = write!(
+        xml,
+        r#"<?xml version="1.0" encoding="UTF-8"?>
+<p:ISO5436_2 xmlns:p="http://www.opengps.eu/2008/ISO5436_2" xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" xsi:schemaLocation="http://www.opengps.eu/2008/ISO5436_2 http://www.opengps.eu/2008/ISO5436_2/ISO5436_2.xsd">
+<!-- {note} -->
+<Record1>
+<Revision>ISO5436 - 2000</Revision>
+<FeatureType>SUR</FeatureType>
+<Axes>
+<CX><AxisType>I</AxisType><DataType>D</DataType><Increment>{dx:e}</Increment><Offset>{x0:e}</Offset></CX>
+<CY><AxisType>I</AxisType><DataType>D</DataType><Increment>{dy:e}</Increment><Offset>{y0:e}</Offset></CY>
+<CZ><AxisType>A</AxisType><DataType>D</DataType><Increment>1</Increment><Offset>0</Offset></CZ>
+</Axes>
+</Record1>
+<Record3>
+<MatrixDimension><SizeX>{nx}</SizeX><SizeY>{ny}</SizeY><SizeZ>1</SizeZ></MatrixDimension>
+<DataLink><PointDataLink>bin/data.bin</PointDataLink><MD5ChecksumPointData>{md5}</MD5ChecksumPointData>"#,
+        dx = map.dx,
+        dy = map.dy,
+        x0 = map.x0,
+        y0 = map.y0,
+        md5 = md5_hex(&data).to_uppercase(),
+    );
+    if let Some(bits) = &valid_bits {
+        let _ = write!(
+            xml,
+            "<ValidPointsLink>bin/valid.bin</ValidPointsLink>\
+             <MD5ChecksumValidPoints>{}</MD5ChecksumValidPoints>",
+            md5_hex(bits).to_uppercase()
+        );
+    }
+    xml.push_str(
+        "</DataLink>\n</Record3>\n<Record4>\n<ChecksumFile>md5checksum.hex</ChecksumFile>\n\
+         </Record4>\n</p:ISO5436_2>\n",
+    );
+    let checksum = format!("{} *main.xml\n", md5_hex(xml.as_bytes()).to_uppercase());
+    let mut members: Vec<(&str, &[u8])> = vec![("main.xml", xml.as_bytes())];
+    members.push(("bin/data.bin", &data));
+    if let Some(bits) = &valid_bits {
+        members.push(("bin/valid.bin", bits));
+    }
+    members.push(("md5checksum.hex", checksum.as_bytes()));
+    write_deflated(&members).map_err(|e| SurfaceError::InvalidData(format!("x3p: {e}")))
 }
 
 /// Only areal surfaces stored as a matrix are height maps; profiles and point lists are not.
@@ -563,5 +637,49 @@ mod tests {
                 mb / s
             );
         }
+    }
+
+    /// Bit for bit: heights (negative zero included), spacing, offsets and the validity mask.
+    #[test]
+    fn written_x3p_reads_back_bit_for_bit() {
+        let mut map = sample_map(37, 23, 2.5e-9, 3.125e-9);
+        map.x0 = 1.5e-6;
+        map.y0 = -0.25e-6;
+        map.z[[0, 1]] = -0.0;
+        map.z[[5, 7]] = 1e-300;
+        let mut valid = ndarray::Array2::from_elem(map.z.dim(), true);
+        for (j, i) in [(0, 0), (3, 36), (22, 5)] {
+            valid[[j, i]] = false;
+            map.z[[j, i]] = 0.0;
+        }
+        map.valid = Some(valid);
+        let bytes = super::encode_x3p(&map, "test -- note").unwrap();
+        assert_eq!(bytes, super::encode_x3p(&map, "test -- note").unwrap());
+        let back = read_bytes("w.x3p", &bytes).unwrap();
+        assert_eq!(back.z.dim(), map.z.dim());
+        for (a, b) in back.z.iter().zip(map.z.iter()) {
+            assert_eq!(a.to_bits(), b.to_bits());
+        }
+        assert_eq!(back.valid, map.valid);
+        for (a, b) in [
+            (back.dx, map.dx),
+            (back.dy, map.dy),
+            (back.x0, map.x0),
+            (back.y0, map.y0),
+        ] {
+            assert_eq!(a.to_bits(), b.to_bits());
+        }
+        // All valid: no validity member, and the map reads back without a mask.
+        map.valid = None;
+        let bytes = super::encode_x3p(&map, "").unwrap();
+        let zip = crate::formats::zip::ZipArchive::parse(&bytes).unwrap();
+        assert!(zip.find("bin/valid.bin").is_none());
+        let checksum = zip.read(zip.find("md5checksum.hex").unwrap(), 100).unwrap();
+        let xml = zip.read(zip.find("main.xml").unwrap(), 1 << 20).unwrap();
+        let want = format!("{} *main.xml\n", crate::formats::md5::md5_hex(&xml));
+        assert!(String::from_utf8(checksum)
+            .unwrap()
+            .eq_ignore_ascii_case(&want));
+        assert_eq!(read_bytes("w.x3p", &bytes).unwrap().valid, None);
     }
 }
