@@ -2,7 +2,8 @@
 # Coverage-guided fuzzing of hdi's readers with afl.rs on stable Rust (docs/reliability.md,
 # "Coverage-guided fuzzing").
 #
-#   bash scripts/fuzz.sh TARGET SECONDS      TARGET: height_map | ldv | pipeline | manifest | all
+#   bash scripts/fuzz.sh TARGET SECONDS
+#       TARGET: height_map | every_reader | ldv | pipeline | manifest | all
 #
 # Installs cargo-afl (and its AFL++ runtime) if missing, builds the targets of fuzz/, then runs
 # afl-fuzz on TARGET for SECONDS from the seed corpus fuzz/corpus/TARGET (or, if it exists, resumes
@@ -16,7 +17,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 root="$PWD"
 
-targets=(height_map ldv pipeline manifest)
+targets=(height_map every_reader ldv pipeline manifest)
 if [ $# -ne 2 ] || ! [[ "$2" =~ ^[0-9]+$ ]]; then
   echo "usage: $0 TARGET SECONDS   (TARGET: ${targets[*]} | all)" >&2
   exit 2
@@ -59,11 +60,14 @@ bin="$CARGO_TARGET_DIR/release/$target"
 # --- run
 out="${HDI_FUZZ_OUT:-/var/tmp/hdi-fuzz-out}/$target"
 mkdir -p "$out"
-input="$root/fuzz/corpus/$target"
+# every_reader feeds each input to every height-map reader: it starts from height_map's seeds.
+corpus="$target"
+[ "$target" = every_reader ] && corpus=height_map
+input="$root/fuzz/corpus/$corpus"
 # Resume a previous run's queue (afl-fuzz's `-i -`) so long runs add up.
 [ -d "$out/default/queue" ] && input=-
 dict=()
-[ -f "$root/fuzz/dict/$target.dict" ] && dict=(-x "$root/fuzz/dict/$target.dict")
+[ -f "$root/fuzz/dict/$corpus.dict" ] && dict=(-x "$root/fuzz/dict/$corpus.dict")
 scratch="$(mktemp -d /dev/shm/hdi-fuzz-XXXXXX 2>/dev/null || mktemp -d)"
 trap 'rm -rf "$scratch"' EXIT
 # CI machines have no core_pattern/CPU-governor tuning and share cores with others: skip those

@@ -361,6 +361,12 @@ fn walk_container<'a>(path: &Path, bytes: &'a [u8]) -> Result<Container<'a>> {
             "Gwyddion 1.x file (magic GWYO); re-save it with Gwyddion 2",
         ));
     }
+    if !bytes.starts_with(b"GWYP") {
+        return Err(format_error(
+            path,
+            "no Gwyddion 2 magic `GWYP` at the start",
+        ));
+    }
     let mut cursor = Cursor {
         buf: bytes,
         pos: 4,

@@ -187,7 +187,7 @@ pub(crate) struct RawMap {
 }
 
 /// Checks what every reader must guarantee and turns NaNs into the validity mask.
-fn finish(path: &Path, raw: RawMap) -> Result<HeightMap> {
+pub(crate) fn finish(path: &Path, raw: RawMap) -> Result<HeightMap> {
     let (ny, nx) = raw.z.dim();
     if nx < 3 || ny < 3 {
         return Err(SurfaceError::InvalidData(format!(
