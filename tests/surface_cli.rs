@@ -454,3 +454,39 @@ fn a_one_off_surface_is_the_pipeline_instance_byte_for_byte() {
     let x3p = std::fs::read(dir.path().join("disk.x3p")).unwrap();
     assert!(x3p == std::fs::read(entry.join("surface.x3p")).unwrap());
 }
+
+/// `hdi surface FILE --info`: what the file holds, every channel listed, without analysing it;
+/// `--channel` picks another one (the NanoScope sample's four channels, two of them heights).
+#[test]
+fn info_lists_the_channels_and_the_metadata() {
+    let file = test_data().join("surfaces/di-3.di");
+    let o = hdi()
+        .args(["surface", "--info", "--json"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert_ok(&o);
+    let info: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(info["format"], "nanoscope");
+    assert_eq!(info["channel"], "Height Sensor");
+    assert_eq!(
+        (info["nx"].as_u64(), info["ny"].as_u64()),
+        (Some(256), Some(256))
+    );
+    let channels = info["channels"].as_str().unwrap();
+    for name in ["Height Sensor", "Amplitude Error", "Phase", "Height"] {
+        assert!(channels.contains(name), "{channels}");
+    }
+    assert!(info["header"]["version"].is_string());
+    let o = hdi()
+        .args(["surface", "--info", "--channel", "Height"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert_ok(&o);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.lines().any(|l| l == "  channel read  Height"),
+        "{text}"
+    );
+}

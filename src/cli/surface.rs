@@ -8,8 +8,12 @@ use super::{flag, one_off, out_parent};
 use hdi::artefacts::surface::SurfaceResult;
 use hdi::stages::surfaces::{self, SurfaceConfig, SurfaceStage};
 use hdi::stages::Instance;
+use hdi::surface::io::{read_height_map, ReadOptions};
 
 pub(super) fn cmd_surface(a: SurfaceArgs) -> Result<()> {
+    if a.info {
+        return show_info(&a);
+    }
     let cfg = SurfaceConfig {
         file: a.file.clone(),
         files: None,
@@ -99,6 +103,65 @@ pub(super) fn cmd_surface(a: SurfaceArgs) -> Result<()> {
     );
     for w in &r.warnings {
         println!("  warning: {w}");
+    }
+    Ok(())
+}
+
+/// `hdi surface FILE --info`: the file as read, before any processing.
+fn show_info(a: &SurfaceArgs) -> Result<()> {
+    let opts = ReadOptions {
+        channel: a.channel.clone(),
+        size_x: a.size_x.map(|l| l.0),
+        size_y: a.size_y.map(|l| l.0),
+        z_unit: a.z_unit.clone(),
+    };
+    let map = read_height_map(&a.file, &opts)?;
+    let invalid = map
+        .valid
+        .as_ref()
+        .map_or(0, |v| v.iter().filter(|ok| !**ok).count());
+    let header = &map.source.header;
+    if a.json {
+        let info = serde_json::json!({
+            "file": a.file,
+            "format": map.source.format,
+            "channel": map.channel,
+            "channels": header.get("channels"),
+            "nx": map.nx(),
+            "ny": map.ny(),
+            "dx_m": map.dx,
+            "dy_m": map.dy,
+            "x0_m": map.x0,
+            "y0_m": map.y0,
+            "invalid_pixels": invalid,
+            "header": header,
+        });
+        println!("{}", serde_json::to_string(&info)?);
+        return Ok(());
+    }
+    println!(
+        "{} ({}), {} × {} px, dx = {:.4} nm, dy = {:.4} nm, {invalid} invalid",
+        a.file.display(),
+        map.source.format,
+        map.nx(),
+        map.ny(),
+        map.dx * 1e9,
+        map.dy * 1e9
+    );
+    println!("  channel read  {}", map.channel);
+    if let Some(list) = header.get("channels") {
+        println!("  channels      {list} (choose with --channel)");
+    }
+    for (key, value) in header.iter().filter(|(k, _)| *k != "channels") {
+        // One line each: long values (notes, XML) are cut.
+        let one_line = value.replace(['\n', '\r'], " ");
+        let shown: String = one_line.chars().take(160).collect();
+        let cut = if shown.len() < one_line.len() {
+            " …"
+        } else {
+            ""
+        };
+        println!("  {key}: {shown}{cut}");
     }
     Ok(())
 }

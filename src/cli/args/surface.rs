@@ -52,4 +52,8 @@ pub struct SurfaceArgs {
     pub x3p_out: Option<PathBuf>,
     #[arg(long)]
     pub json: bool,
+    /// Only show what the file holds — format, grid, spacing, the channel read and every
+    /// channel, the instrument's metadata — without analysing it (with --json: as JSON).
+    #[arg(long)]
+    pub info: bool,
 }

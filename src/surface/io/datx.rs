@@ -432,6 +432,12 @@ fn read_inner(path: &Path, file_len: usize, opts: &ReadOptions) -> Result<RawMap
         header.insert("unit".to_string(), u.clone());
     }
     header.insert("path".to_string(), ds_path.clone());
+    let channels = if intensity_path.is_some() {
+        "height, intensity"
+    } else {
+        "height"
+    };
+    header.insert("channels".to_string(), channels.to_string());
 
     let (z, no_data) = dataset.read_values(file_len, scale)?;
     if let Some(nd) = no_data {

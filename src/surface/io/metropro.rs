@@ -170,6 +170,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
         Array2::from_shape_vec((ac_h, ac_w), values)
     }
     .map_err(|e| fail(format!("MetroPro data shape: {e}")))?;
+    header.insert("channels".into(), "height, intensity".into());
     Ok(RawMap {
         z,
         dx: lateral,

@@ -218,6 +218,12 @@ pub(crate) fn finish(path: &Path, raw: RawMap) -> Result<HeightMap> {
         )));
     }
     z.mapv_inplace(|v| if v.is_finite() { v } else { 0.0 });
+    // Every map lists the file's channels (`hdi surface FILE --info`): a single-channel
+    // format's reader leaves it to here.
+    let mut header = raw.header;
+    header
+        .entry("channels".into())
+        .or_insert_with(|| raw.channel.clone());
     Ok(HeightMap {
         z,
         dx: raw.dx,
@@ -229,7 +235,7 @@ pub(crate) fn finish(path: &Path, raw: RawMap) -> Result<HeightMap> {
         periodic: false,
         source: SourceInfo {
             format: raw.format.to_string(),
-            header: raw.header,
+            header,
         },
         history: vec![],
     })

@@ -138,6 +138,8 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
     let a = arrays
         .get(k)
         .ok_or_else(|| fail("OPD file has no data array".into()))?;
+    let arrays_named: Vec<&str> = arrays.iter().map(|a| a.name.as_str()).collect();
+    header.insert("channels".into(), arrays_named.join(", "));
     header.insert("blocks".into(), {
         let names: Vec<&str> = blocks.iter().map(|b| b.name.as_str()).collect();
         names.join(", ")

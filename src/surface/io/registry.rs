@@ -254,7 +254,7 @@ mod tests {
         }
     }
 
-    /// Each sample is detected as its reader's format and read by it.
+    /// Each sample is detected as its reader's format and read by it, and lists its channels.
     #[test]
     fn every_sample_is_detected_and_read_by_its_reader() {
         for r in READERS {
@@ -266,6 +266,12 @@ mod tests {
                 let map = read_height_map(&path, &ReadOptions::default())
                     .unwrap_or_else(|e| panic!("{s}: {e}"));
                 assert_eq!(map.source.format, r.id, "{s}");
+                // The file's channels are listed, the one read among them.
+                let channels = map.source.header.get("channels").map(|c| c.to_lowercase());
+                let listed = channels
+                    .as_ref()
+                    .is_some_and(|c| c.contains(&map.channel.to_lowercase()));
+                assert!(listed, "{s}: `{}` not in {channels:?}", map.channel);
             }
         }
     }

@@ -226,7 +226,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
 
     let h = &bytes[o.start..o.start + HEADER];
     let mut header = BTreeMap::new();
-    header.insert("objects".into(), names.join(", "));
+    header.insert("channels".into(), names.join(", "));
     header.insert("version".into(), le_u16(h, 16).to_string());
     header.insert("operator".into(), text(h, 50, 30));
     header.insert("point_bits".into(), o.point_bits.to_string());
