@@ -273,7 +273,7 @@ mod tests {
         let mut bytes = std::fs::read(surface_sample("al3d-1.al3d")).unwrap();
         let at = |row: usize, col: usize| 1261 + row * 800 + 4 * col;
         let (a, b) = (at(0, 3), at(7, 9));
-        bytes[a..a + 4].copy_from_slice(&3.000000028082e15f32.to_le_bytes());
+        bytes[a..a + 4].copy_from_slice(&(3.000000028082e15_f64 as f32).to_le_bytes());
         bytes[b..b + 4].copy_from_slice(&f32::NAN.to_le_bytes());
         let map = read_bytes("a.al3d", &bytes).unwrap();
         let valid = map.valid.as_ref().unwrap();

@@ -168,7 +168,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
     let z = match sources[chosen] {
         Source::Heights(k) => {
             let l = &layers[k];
-            let z = Array2::from_shape_fn((l.ny, l.nx), |(j, i)| {
+            Array2::from_shape_fn((l.ny, l.nx), |(j, i)| {
                 let v = f32::from_le_bytes(
                     bytes[l.heights_at + 4 * (j * l.nx + i)..][..4]
                         .try_into()
@@ -179,8 +179,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
                 } else {
                     f64::from(v) * 1e-6
                 }
-            });
-            z
+            })
         }
         Source::Colour {
             layer,
@@ -189,10 +188,9 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<RawM
         } => {
             let l = &layers[layer];
             let start = l.images_at + image * 3 * l.nx * l.ny + colour;
-            let z = Array2::from_shape_fn((l.ny, l.nx), |(j, i)| {
+            Array2::from_shape_fn((l.ny, l.nx), |(j, i)| {
                 f64::from(bytes[start + 3 * (j * l.nx + i)])
-            });
-            z
+            })
         }
     };
 
