@@ -174,6 +174,42 @@ bits = struct.unpack("<H", sur[16:18])[0]
 sur[108:116] = struct.pack("<ii", nx, ny)
 start = 512 + comment + private
 (maps / "map.sur").write_bytes(bytes(sur[:start + nx * ny * bits // 8]))
+# Sensofar PLU: the 500-byte header of the SurfaceTopography sample, one 4×3 layer with one RGB
+# image (the layout of plu.rs).
+plu = bytearray((ROOT / "tests/data/surfaces/plu-1.plu").read_bytes()[:500])
+plu[489], plu[492] = 1, 1
+plu += struct.pack("<II", 3, 4) + struct.pack("<12f", *[0.5 * k for k in range(12)])
+plu += struct.pack("<2f", 0.0, 5.5) + bytes(range(36))
+(maps / "map.plu").write_bytes(bytes(plu))
+# Alicona AL3D: magic, Version, TagCount, tags, comment, a 4×3 depth image (rows padded to 8
+# bytes) and one texture plane (the layout of al3d.rs).
+tag = lambda k, v: k.encode().ljust(20, b"\0") + v.encode().ljust(30, b"\0") + b"\r\n"
+magic = b"AliconaImaging\0\r\n"
+tags = [("Cols", "4"), ("Rows", "3"), ("PixelSizeXMeter", "1e-06"), ("PixelSizeYMeter", "1e-06"),
+        ("InvalidPixelValue", "3e+15"), ("NumberOfPlanes", "1"), ("TexturePtr", "0")]
+depth_at = len(magic) + 52 * (2 + len(tags) + 2) + 256
+tags += [("DepthImageOffset", str(depth_at)), ("TextureImageOffset", str(depth_at + 3 * 16))]
+al3d = magic + tag("Version", "1") + tag("TagCount", str(len(tags)))
+al3d += b"".join(tag(k, v) for k, v in tags) + b"seed".ljust(256, b"\0")
+al3d += struct.pack("<12f", *[1e-6 * k for k in range(12)]) + bytes(3 * 8)
+(maps / "map.al3d").write_bytes(al3d)
+# FRT MicroProf 1.00: size, scan, scale, valid-range, topography and image blocks, 4×3 uint16.
+frt_block = lambda t, c: struct.pack("<HI", t, len(c)) + c
+values = struct.pack("<12H", *[1] + [10 * k for k in range(1, 12)])
+frt_blocks = [frt_block(0x66, struct.pack("<3I", 4, 3, 16)),
+              frt_block(0x67, struct.pack("<5dI", 4e-3, 3e-3, 0.0, 0.0, 1.0, 1)),
+              frt_block(0x6C, struct.pack("<Id", 5, 1e-8)), frt_block(0x0B, values),
+              frt_block(0x70, struct.pack("<2I", 1, 65529)),
+              frt_block(0x7D, struct.pack("<4H", 0, 0, 0, 0) + struct.pack("<4I", 4, 4, 3, 16)
+                        + values + struct.pack("<4I", 2, 4, 3, 16) + values)]
+(maps / "map.frt").write_bytes(b"FRTM_GLIDERV1.00" + struct.pack("<H", len(frt_blocks))
+                               + b"".join(frt_blocks))
+# NanoFocus NMS: the 3468-byte header of the SurfaceTopography sample with a 4×3 grid, uint16
+# heights and the 8-bit intensity image (the layout of nms.rs).
+nms = bytearray((ROOT / "tests/data/surfaces/nms-1.nms").read_bytes()[:3468])
+nms[1368:1376] = struct.pack("<II", 4, 3)
+nms += struct.pack("<12H", *[5000 * k for k in range(12)]) + bytes(range(12))
+(maps / "map.nms").write_bytes(bytes(nms))
 copy(maps, "src/surface/io/testdata/gwyfile_writer.gwy",
      "tests/data/surfaces/bcr_binary_int16.sdf", "tests/data/surfaces/sdf-1.sdf",
      "tests/data/surfaces/10x10-one_channel_without_name.ibw",

@@ -6,8 +6,8 @@
 //! samples, or is missing from the docs' table.
 
 use super::{
-    ascii, datx, finish, gsf, gwy, ibw, metropro, nanoscope, opd, sdf, sniff_text, sur, tmd, wsxm,
-    x3p, xyz, RawMap, ReadOptions,
+    al3d, ascii, datx, finish, frt, gsf, gwy, ibw, metropro, nanoscope, nms, opd, plu, sdf,
+    sniff_text, sur, tmd, wsxm, x3p, xyz, RawMap, ReadOptions,
 };
 use crate::surface::{HeightMap, Result, SurfaceError};
 use std::path::Path;
@@ -146,6 +146,48 @@ pub const READERS: &[Reader] = &[
         samples: &[
             "tests/data/surfaces/top-1.top",
             "tests/data/surfaces/stp-1.stp",
+        ],
+    },
+    Reader {
+        id: "al3d",
+        name: "Alicona Imaging AL3D",
+        extensions: &["al3d"],
+        detected_by: "`AliconaImaging\\0\\r\\n`",
+        sniff: |h| h.starts_with(al3d::MAGIC),
+        read: al3d::read,
+        samples: &["tests/data/surfaces/al3d-1.al3d"],
+    },
+    Reader {
+        id: "frt",
+        name: "FRT MicroProf",
+        extensions: &["frt"],
+        detected_by: "`FRTM_GLIDERV` (versions other than 1.00, 1.01: refused)",
+        sniff: |h| h.starts_with(frt::MAGIC),
+        read: frt::read,
+        samples: &[
+            "tests/data/surfaces/frt-1.frt",
+            "tests/data/surfaces/frt-2.frt",
+        ],
+    },
+    Reader {
+        id: "plu",
+        name: "Sensofar PLu",
+        extensions: &["plu", "apx"],
+        detected_by: "an `asctime` date at byte 0 and a format version (0 or ≥ 0xF0) at byte 490",
+        sniff: plu::looks_like,
+        read: plu::read,
+        samples: &["tests/data/surfaces/plu-1.plu"],
+    },
+    Reader {
+        id: "nms",
+        name: "NanoFocus NMS",
+        extensions: &["nms"],
+        detected_by: "`OM_MS_` at byte 32 and a plausible grid at byte 1368",
+        sniff: nms::looks_like,
+        read: nms::read,
+        samples: &[
+            "tests/data/surfaces/nms-1.nms",
+            "tests/data/surfaces/nms-2.nms",
         ],
     },
     Reader {

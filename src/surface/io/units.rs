@@ -25,6 +25,17 @@ pub(crate) fn decode_text(bytes: &[u8]) -> String {
     }
 }
 
+/// The text of a fixed-size, NUL-padded binary field, trimmed (latin-1 for non-ASCII bytes).
+pub(crate) fn nul_terminated(field: &[u8]) -> String {
+    let end = field.iter().position(|&c| c == 0).unwrap_or(field.len());
+    field[..end]
+        .iter()
+        .map(|&c| c as char)
+        .collect::<String>()
+        .trim()
+        .to_string()
+}
+
 /// Parses a numeric token; `NaN`/`nan` (and infinities) become NaN = invalid pixel.
 pub(crate) fn parse_value(token: &str) -> Option<f64> {
     let value: f64 = token.parse().ok()?;
