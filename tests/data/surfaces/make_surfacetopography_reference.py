@@ -18,7 +18,8 @@ here = pathlib.Path(__file__).parent
 to_m = {"m": 1.0, "mm": 1e-3, "µm": 1e-6, "um": 1e-6, "nm": 1e-9, "Å": 1e-10, "pm": 1e-12}
 
 out = {"SurfaceTopography": SurfaceTopography.__version__, "files": {}}
-for name in ["di-3.di", "opd-1.opd", "tmd-1.tmd", "top-1.top", "stp-1.stp"]:
+for name in ["di-3.di", "opd-1.opd", "tmd-1.tmd", "top-1.top", "stp-1.stp",
+             "nid-1.nid", "mi-1.mi", "bcrf-1.bcrf", "mnt-1.mnt", "mnt-2.mnt"]:
     path = here / name
     if not path.exists():
         continue
