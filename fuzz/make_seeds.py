@@ -11,6 +11,7 @@ import json
 import os
 import shutil
 import struct
+import zlib
 import wave
 from pathlib import Path
 
@@ -167,6 +168,54 @@ body = ("\n[Control]\n    X Amplitude: 2 nm\n    Y Amplitude: 1.5 nm\n[General I
 head = lambda n: f"WSxM file copyright UAM\r\nSxM Image file\r\nImage header size: {n}\r\n{body}".encode()
 n = len(head(len(head(0))))
 (maps / "map.top").write_bytes(head(n) + struct.pack("<12h", *range(12)))
+# Nanosurf NID: the INI header and one 4×3 int16 data set after `#!` (the layout of nid.rs's test).
+nid = ("[DataSet]\r\nGroupCount=1\r\nGr0-Count=1\r\nGr0-Ch0=DataSet-0:0\r\n\r\n[DataSet-0:0]\r\n"
+       "Points=4\r\nLines=3\r\nFrame=Scan forward\r\nDim0Range=2e-06\r\nDim0Unit=m\r\n"
+       "Dim1Range=1.5e-06\r\nDim1Unit=m\r\nDim2Name=Z-Axis\r\nDim2Unit=m\r\nDim2Range=1e-06\r\n"
+       "Dim2Min=-5e-07\r\nSaveMode=Binary\r\nSaveBits=16\r\nSaveSign=Signed\r\nSaveOrder=Intel\r\n\r\n#!")
+(maps / "map.nid").write_bytes(nid.encode() + struct.pack("<12h", *range(12)))
+# Molecular Imaging: 14-character key column, one µm channel, int32 data (the layout of mi.rs's test).
+mi = "".join(f"{k:<14}{v}\n" for k, v in [
+    ("fileType", "Image"), ("xPixels", "4"), ("yPixels", "3"), ("xLength", "2e-6"),
+    ("yLength", "1.5e-6"), ("bufferLabel", "Topography"), ("bufferRange", "1.5"),
+    ("bufferUnit", "um"), ("data", "BINARY_32")])
+(maps / "map.mi").write_bytes(mi.encode() + struct.pack("<12i", *range(12)))
+# Image Metrology BCR-STM: a 2048-character header and 4×3 int16 values (the layout of bcr.rs's test).
+bcr = "fileformat = bcrstm\nxpixels = 4\nypixels = 3\nxlength = 2\nylength = 1.5\nbit2nm = 0.5\n"
+(maps / "map.bcr").write_bytes(bcr.ljust(2048).encode() + struct.pack("<12h", *range(12)))
+# Digital Surf Mountains: a version-3 compound file (MS-CFB, 512-byte sectors) whose one stream
+# `ScopedContents` holds a document with one 4×3 surface (the TLV layout of mnt.rs), padded past
+# the 4096-byte mini-stream cutoff.
+tlv = lambda tag, value: struct.pack("<HQ", tag, len(value)) + value
+text = lambda t: b"\x04" + t.encode("utf-16-le")
+obj = lambda cls, body: tlv(1, tlv(1, struct.pack("<I", cls))) + tlv(2, body)
+scale = lambda step, unit: tlv(1, struct.pack("<d", step)) + tlv(2, text(unit)) + tlv(5, struct.pack("<d", 0.0))
+counts = struct.pack("<12i", *range(12))
+z = zlib.compress(counts)
+blocks = struct.pack("<Q", len(counts)) + struct.pack("<QII", 0, 12, len(z)) + z
+heights = obj(9049, tlv(1, struct.pack("<I", 12)) + tlv(2, blocks))
+axis = lambda n: tlv(0xFFFF, tlv(0xFFFF, scale(0.5, "µm")) + tlv(1, struct.pack("<I", n)))
+grid = tlv(0xFFFF, tlv(0xFFFF, tlv(0xFFFF, tlv(1, text("seed")))) + tlv(1, axis(4)) + tlv(2, axis(3)))
+measurement = obj(9062, tlv(0xFFFF, grid + tlv(1, heights) + tlv(2, tlv(0xFFFF, scale(1e-3, "nm")))))
+surface = obj(9012, tlv(1, measurement))
+doc = tlv(1, tlv(0x2BD, tlv(2, tlv(1, struct.pack("<Q", 0) + tlv(1, surface)))))
+contents = struct.pack("<Q", len(doc)) + doc
+contents += b"\0" * (4608 - len(contents))
+sectors = [contents[k:k + 512] for k in range(0, len(contents), 512)]
+n = len(sectors)  # stream in sectors 0…n−1, directory in n, FAT in n + 1
+fat = list(range(1, n)) + [0xFFFFFFFE, 0xFFFFFFFE, 0xFFFFFFFD]
+fat_sector = struct.pack(f"<{len(fat)}I", *fat).ljust(512, b"\xff")
+def direntry(name, kind, start, size, child=0xFFFFFFFF):
+    units = (name + "\0").encode("utf-16-le")
+    return (units.ljust(64, b"\0") + struct.pack("<HBB3I", len(units), kind, 1, 0xFFFFFFFF, 0xFFFFFFFF, child)
+            + b"\0" * 36 + struct.pack("<IQ", start, size)).ljust(128, b"\0")
+directory = (direntry("Root Entry", 5, 0xFFFFFFFE, 0, child=1)
+             + direntry("ScopedContents", 2, 0, len(contents))).ljust(512, b"\0")
+header = (b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1" + b"\0" * 16
+          + struct.pack("<HHHHH", 0x3E, 3, 0xFFFE, 9, 6) + b"\0" * 6
+          + struct.pack("<IIIIIIIII", 0, 1, n, 0, 4096, 0xFFFFFFFE, 0, 0xFFFFFFFE, 0)
+          + struct.pack("<I", n + 1) + b"\xff" * 4 * 108)
+(maps / "map.mnt").write_bytes(header + b"".join(sectors) + directory + fat_sector)
 # Digital Surf: the header of the SurfaceTopography sample with an 8×6 data block.
 sur = bytearray((ROOT / "tests/data/surfaces/sur-3.sur").read_bytes())
 comment, private = struct.unpack("<HH", sur[334:338])

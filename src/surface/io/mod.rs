@@ -6,14 +6,16 @@
 //! MetroPro `.dat` (`metropro`), Zygo `.datx` (`datx`, HDF5), ISO 25178-71 `.x3p` (`x3p`), Wyko /
 //! Vision `.opd` (`opd`), TrueMap `.tmd` (`tmd`), WSxM `.top`/`.stp` (`wsxm`), Alicona `.al3d`
 //! (`al3d`), FRT MicroProf `.frt` (`frt`), Sensofar `.plu` (`plu`), NanoFocus `.nms` (`nms`),
-//! ASCII matrix / Gwyddion ASCII export / CSV (`ascii`) and XYZ on a rectangular lattice
-//! (`xyz`). Every reader returns heights and lengths in
+//! Nanosurf `.nid`/`.ezd` (`nid`), Molecular Imaging `.mi` (`mi`), Image Metrology BCR-STM/BCRF
+//! (`bcr`), Digital Surf Mountains `.mnt` (`mnt`), ASCII matrix / Gwyddion ASCII export / CSV
+//! (`ascii`) and XYZ on a rectangular lattice (`xyz`). Every reader returns heights and lengths in
 //! metres with row 0 = top of the image as the instrument software shows it. NaN and saturated
 //! pixels come back as `valid = false` with `z = 0.0`.
 //!
 //! `ReadOptions::channel` only matters for the multi-channel formats (NanoScope, GWY, IBW layers,
 //! SUR objects, MetroPro, datx, OPD, PLU layers and images, AL3D depth and texture, FRT images,
-//! NMS height and intensity); the single-channel formats ignore it.
+//! NMS height and intensity, NID data sets, MI buffers, MNT surfaces); the single-channel
+//! formats ignore it.
 use super::{HeightMap, Result, SourceInfo, SurfaceError};
 use ndarray::Array2;
 use std::collections::BTreeMap;
@@ -44,6 +46,12 @@ mod al3d;
 mod frt;
 mod nms;
 mod plu;
+// Nanosurf .nid, Molecular Imaging .mi, Image Metrology BCR-STM/BCRF (SPM images).
+mod bcr;
+mod mi;
+mod nid;
+// Digital Surf Mountains .mnt (compound file; nothing shared with .sur).
+mod mnt;
 // The list of readers: detection, dispatch, the docs' table.
 pub mod registry;
 

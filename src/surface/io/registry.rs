@@ -6,8 +6,8 @@
 //! samples, or is missing from the docs' table.
 
 use super::{
-    al3d, ascii, datx, finish, frt, gsf, gwy, ibw, metropro, nanoscope, nms, opd, plu, sdf,
-    sniff_text, sur, tmd, wsxm, x3p, xyz, RawMap, ReadOptions,
+    al3d, ascii, bcr, datx, finish, frt, gsf, gwy, ibw, metropro, mi, mnt, nanoscope, nid, nms,
+    opd, plu, sdf, sniff_text, sur, tmd, wsxm, x3p, xyz, RawMap, ReadOptions,
 };
 use crate::surface::{HeightMap, Result, SurfaceError};
 use std::path::Path;
@@ -167,6 +167,44 @@ pub const READERS: &[Reader] = &[
         samples: &[
             "tests/data/surfaces/frt-1.frt",
             "tests/data/surfaces/frt-2.frt",
+        ],
+    },
+        id: "nid",
+        name: "Nanosurf NID / EZD",
+        extensions: &["nid", "ezd"],
+        detected_by: "`[DataSet]` + CR LF",
+        sniff: |h| h.starts_with(nid::MAGIC),
+        read: nid::read,
+        samples: &["tests/data/surfaces/nid-1.nid"],
+    },
+    Reader {
+        id: "mi",
+        name: "Molecular Imaging / Agilent PicoView",
+        extensions: &["mi"],
+        detected_by: "`fileType`",
+        sniff: |h| h.starts_with(mi::MAGIC),
+        read: mi::read,
+        samples: &["tests/data/surfaces/mi-1.mi"],
+    },
+    Reader {
+        id: "bcr",
+        name: "Image Metrology BCR-STM / BCRF",
+        extensions: &["bcr", "bcrf"],
+        detected_by: "`fileformat = bcr` (latin-1 or UTF-16)",
+        sniff: bcr::looks_like,
+        read: |path, bytes, _| bcr::read(path, bytes),
+        samples: &["tests/data/surfaces/bcrf-1.bcrf"],
+    },
+    Reader {
+        id: "mnt",
+        name: "Digital Surf Mountains document",
+        extensions: &["mnt"],
+        detected_by: "compound-file signature `D0 CF 11 E0`; a `ScopedContents` stream must exist",
+        sniff: |h| h.starts_with(mnt::MAGIC),
+        read: mnt::read,
+        samples: &[
+            "tests/data/surfaces/mnt-1.mnt",
+            "tests/data/surfaces/mnt-2.mnt",
         ],
     },
     Reader {
