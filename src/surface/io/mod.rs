@@ -2,15 +2,16 @@
 //!
 //! Formats (docs/surfaces.md; the list is `registry::READERS`): Bruker NanoScope v4.3+ binary
 //! (`nanoscope`), Gwyddion native (`gwy`), Gwyddion Simple Field (`gsf`), Asylum Research / Igor
-//! binary wave (`ibw`), Digital Surf (`sur`), Surface Data File ISO 25178-71 (`sdf`), Zygo
-//! MetroPro `.dat` (`metropro`), Zygo `.datx` (`datx`, HDF5), ISO 25178-71 `.x3p` (`x3p`), Wyko /
-//! Vision `.opd` (`opd`), TrueMap `.tmd` (`tmd`), WSxM `.top`/`.stp` (`wsxm`), ASCII matrix / Gwyddion ASCII export / CSV (`ascii`) and XYZ on a
-//! rectangular lattice (`xyz`). Every reader returns heights and lengths in
-//! metres with row 0 = top of the image as the instrument software shows it. NaN and saturated
-//! pixels come back as `valid = false` with `z = 0.0`.
+//! binary wave (`ibw`), Digital Surf (`sur`), Surface Data File ISO 25178-71 (`sdf`), Zygo MetroPro
+//! `.dat` (`metropro`), Zygo `.datx` (`datx`, HDF5), ISO 25178-71 `.x3p` (`x3p`), Wyko / Vision
+//! `.opd` (`opd`), TrueMap `.tmd` (`tmd`), WSxM `.top`/`.stp` (`wsxm`), Park Systems TIFF (`park`)
+//! and JPK `.jpk` / `.jpk-qi-image` (`jpk`) (both on the classic TIFF structure of `tiff`), ASCII
+//! matrix / Gwyddion ASCII export / CSV (`ascii`) and XYZ on a rectangular lattice (`xyz`). Every
+//! reader returns heights and lengths in metres with row 0 = top of the image as the instrument
+//! software shows it. NaN and saturated pixels come back as `valid = false` with `z = 0.0`.
 //!
 //! `ReadOptions::channel` only matters for the multi-channel formats (NanoScope, GWY, IBW layers,
-//! SUR objects, MetroPro, datx, OPD); the single-channel formats ignore it.
+//! SUR objects, MetroPro, datx, OPD, JPK); the single-channel formats ignore it.
 use super::{HeightMap, Result, SourceInfo, SurfaceError};
 use ndarray::Array2;
 use std::collections::BTreeMap;
@@ -36,6 +37,10 @@ mod opd;
 mod tmd;
 // WSxM .top/.stp (Nanotec SPM images).
 mod wsxm;
+// TIFF structure, and the instrument formats built on it: Park Systems, JPK.
+mod jpk;
+mod park;
+mod tiff;
 // The list of readers: detection, dispatch, the docs' table.
 pub mod registry;
 

@@ -6,8 +6,8 @@
 //! samples, or is missing from the docs' table.
 
 use super::{
-    ascii, datx, gsf, gwy, ibw, metropro, nanoscope, opd, sdf, sniff_text, sur, tmd, wsxm, x3p,
-    xyz, RawMap, ReadOptions,
+    ascii, datx, gsf, gwy, ibw, jpk, metropro, nanoscope, opd, park, sdf, sniff_text, sur, tmd,
+    wsxm, x3p, xyz, RawMap, ReadOptions,
 };
 use crate::surface::Result;
 use std::path::Path;
@@ -146,6 +146,27 @@ pub const READERS: &[Reader] = &[
         samples: &[
             "tests/data/surfaces/top-1.top",
             "tests/data/surfaces/stp-1.stp",
+        ],
+    },
+    Reader {
+        id: "park",
+        name: "Park Systems TIFF",
+        extensions: &["tiff", "tif"],
+        detected_by: "TIFF whose first IFD has Park's tag 50432 = `0x0E031301`",
+        sniff: park::looks_like,
+        read: |path, bytes, _| park::read(path, bytes),
+        samples: &["tests/data/surfaces/example_ps.tiff"],
+    },
+    Reader {
+        id: "jpk",
+        name: "JPK image scan / QI image",
+        extensions: &["jpk", "jpk-qi-image"],
+        detected_by: "TIFF whose first IFD has JPK's tags 0x8000 (ASCII) and 0x8042 (double)",
+        sniff: jpk::looks_like,
+        read: jpk::read,
+        samples: &[
+            "tests/data/surfaces/sample_0.jpk",
+            "tests/data/surfaces/sample_0.jpk-qi-image",
         ],
     },
     Reader {

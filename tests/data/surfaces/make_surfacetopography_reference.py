@@ -1,6 +1,7 @@
 """What SurfaceTopography (MIT, https://github.com/ContactEngineering/SurfaceTopography; tested
 with 1.27.1) reads from the public instrument samples beside this script, copied unchanged from
-its `test/file_format_examples/`: grid size, physical size and RMS height (`rms_height_from_area`,
+its `test/file_format_examples/` (the JPK files from AFMReader's `tests/resources/`; provenance
+in tests/data/README.md): grid size, physical size and RMS height (`rms_height_from_area`,
 about the mean, no levelling) in SI units. Writes `surfacetopography_reference.json`, which the
 reader tests compare against.
 
@@ -18,7 +19,10 @@ here = pathlib.Path(__file__).parent
 to_m = {"m": 1.0, "mm": 1e-3, "µm": 1e-6, "um": 1e-6, "nm": 1e-9, "Å": 1e-10, "pm": 1e-12}
 
 out = {"SurfaceTopography": SurfaceTopography.__version__, "files": {}}
-for name in ["di-3.di", "opd-1.opd", "tmd-1.tmd", "top-1.top", "stp-1.stp"]:
+for name in [
+    "di-3.di", "opd-1.opd", "tmd-1.tmd", "top-1.top", "stp-1.stp", "example_ps.tiff",
+    "sample_0.jpk", "sample_0.jpk-qi-image",
+]:
     path = here / name
     if not path.exists():
         continue
