@@ -216,6 +216,30 @@ header = (b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1" + b"\0" * 16
           + struct.pack("<IIIIIIIII", 0, 1, n, 0, 4096, 0xFFFFFFFE, 0, 0xFFFFFFFE, 0)
           + struct.pack("<I", n + 1) + b"\xff" * 4 * 108)
 (maps / "map.mnt").write_bytes(header + b"".join(sectors) + directory + fat_sector)
+# A classic TIFF IFD (tag, type, count, value or offset), values past 4 bytes after the IFD.
+def tiff_le(entries, tail=b""):
+    out = b"II*\0" + struct.pack("<I", 8) + struct.pack("<H", len(entries))
+    extra, at = b"", 8 + 2 + 12 * len(entries) + 4
+    for tag, kind, count, value in sorted(entries):
+        if len(value) <= 4:
+            out += struct.pack("<HHI", tag, kind, count) + value.ljust(4, b"\0")
+        else:
+            out += struct.pack("<HHII", tag, kind, count, at + len(extra))
+            extra += value
+    return out + struct.pack("<I", 0) + extra + tail
+# Park Systems TIFF v2: magic, version, a 4×3 float32 data tag and the 408-byte header (the
+# layout of park.rs's test: name, grid, 8 × 6 µm, gain 2, scale 0.5, offset 1, unit nm).
+ph = bytearray(408)
+ph[4:20] = "Z Height".encode("utf-16-le")
+ph[100:108] = struct.pack("<II", 4, 3)
+ph[140:156] = struct.pack("<dd", 8.0, 6.0)
+ph[220:244] = struct.pack("<ddd", 2.0, 0.5, 1.0)
+ph[244:248] = "nm".encode("utf-16-le")
+ph[348:352] = struct.pack("<I", 2)
+pdata = struct.pack("<12f", *[0.5 * k for k in range(12)])
+(maps / "map_park.tiff").write_bytes(tiff_le([
+    (50432, 4, 1, struct.pack("<I", 0x0E031301)), (50433, 4, 1, struct.pack("<I", 0x01000002)),
+    (50434, 1, len(pdata), pdata), (50435, 7, len(ph), bytes(ph))]))
 # Digital Surf: the header of the SurfaceTopography sample with an 8×6 data block.
 sur = bytearray((ROOT / "tests/data/surfaces/sur-3.sur").read_bytes())
 comment, private = struct.unpack("<HH", sur[334:338])

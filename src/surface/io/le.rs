@@ -1,5 +1,5 @@
 //! Little-endian numbers at a byte offset, shared by the binary readers (`sur`, `opd`, `tmd`,
-//! `plu`, `frt`, `nms`).
+//! `plu`, `frt`, `nms`, `park`).
 //! The caller has checked that the bytes are there.
 
 pub(crate) fn le_u16(b: &[u8], at: usize) -> u16 {
@@ -16,14 +16,7 @@ pub(crate) fn le_f32(b: &[u8], at: usize) -> f64 {
     f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]) as f64
 }
 pub(crate) fn le_f64(b: &[u8], at: usize) -> f64 {
-    f64::from_le_bytes([
-        b[at],
-        b[at + 1],
-        b[at + 2],
-        b[at + 3],
-        b[at + 4],
-        b[at + 5],
-        b[at + 6],
-        b[at + 7],
-    ])
+    let mut v = [0u8; 8];
+    v.copy_from_slice(&b[at..at + 8]);
+    f64::from_le_bytes(v)
 }

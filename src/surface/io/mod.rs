@@ -7,7 +7,8 @@
 //! Vision `.opd` (`opd`), TrueMap `.tmd` (`tmd`), WSxM `.top`/`.stp` (`wsxm`), Alicona `.al3d`
 //! (`al3d`), FRT MicroProf `.frt` (`frt`), Sensofar `.plu` (`plu`), NanoFocus `.nms` (`nms`),
 //! Nanosurf `.nid`/`.ezd` (`nid`), Molecular Imaging `.mi` (`mi`), Image Metrology BCR-STM/BCRF
-//! (`bcr`), Digital Surf Mountains `.mnt` (`mnt`), ASCII matrix / Gwyddion ASCII export / CSV
+//! (`bcr`), Digital Surf Mountains `.mnt` (`mnt`), Park Systems TIFF (`park`, on the classic TIFF
+//! structure of `tiff`), ASCII matrix / Gwyddion ASCII export / CSV
 //! (`ascii`) and XYZ on a rectangular lattice (`xyz`). Every reader returns heights and lengths in
 //! metres with row 0 = top of the image as the instrument software shows it. NaN and saturated
 //! pixels come back as `valid = false` with `z = 0.0`.
@@ -52,6 +53,9 @@ mod mi;
 mod nid;
 // Digital Surf Mountains .mnt (compound file; nothing shared with .sur).
 mod mnt;
+// TIFF structure, and the instrument format built on it: Park Systems.
+mod park;
+mod tiff;
 // The list of readers: detection, dispatch, the docs' table.
 pub mod registry;
 

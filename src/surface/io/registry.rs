@@ -7,7 +7,7 @@
 
 use super::{
     al3d, ascii, bcr, datx, finish, frt, gsf, gwy, ibw, metropro, mi, mnt, nanoscope, nid, nms,
-    opd, plu, sdf, sniff_text, sur, tmd, wsxm, x3p, xyz, RawMap, ReadOptions,
+    opd, park, plu, sdf, sniff_text, sur, tmd, wsxm, x3p, xyz, RawMap, ReadOptions,
 };
 use crate::surface::{HeightMap, Result, SurfaceError};
 use std::path::Path;
@@ -226,6 +226,17 @@ pub const READERS: &[Reader] = &[
         samples: &[
             "tests/data/surfaces/nms-1.nms",
             "tests/data/surfaces/nms-2.nms",
+        ],
+    },
+    Reader {
+        id: "park",
+        name: "Park Systems TIFF",
+        extensions: &["tiff", "tif"],
+        detected_by: "TIFF whose first IFD has Park's tag 50432 = `0x0E031301`",
+        sniff: park::looks_like,
+        read: |path, bytes, _| park::read(path, bytes),
+        samples: &[
+            "tests/data/surfaces/example_ps.tiff",
         ],
     },
     Reader {

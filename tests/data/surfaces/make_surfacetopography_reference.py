@@ -1,6 +1,6 @@
 """What SurfaceTopography (MIT, https://github.com/ContactEngineering/SurfaceTopography; tested
 with 1.27.1) reads from the public instrument samples beside this script, copied unchanged from
-its `test/file_format_examples/`: grid size, physical size and RMS height (`rms_height_from_area`,
+its `test/file_format_examples/` (provenance in tests/data/README.md): grid size, physical size and RMS height (`rms_height_from_area`,
 about the mean, no levelling) in SI units. Writes `surfacetopography_reference.json`, which the
 reader tests compare against.
 
@@ -31,6 +31,7 @@ to_m = {"m": 1.0, "mm": 1e-3, "µm": 1e-6, "um": 1e-6, "nm": 1e-9, "Å": 1e-10, 
 out = {"SurfaceTopography": SurfaceTopography.__version__, "files": {}}
 names = ["di-3.di", "opd-1.opd", "tmd-1.tmd", "top-1.top", "stp-1.stp"]
 names += ["plu-1.plu", "al3d-1.al3d", "frt-1.frt", "frt-2.frt", "nms-1.nms", "nms-2.nms"]
+names += ["example_ps.tiff"]
 names += ["nid-1.nid", "mi-1.mi", "bcrf-1.bcrf", "mnt-1.mnt", "mnt-2.mnt"]
 for name in names:
     path = here / name
