@@ -38,6 +38,8 @@ mod tmd;
 mod wsxm;
 // The list of readers: detection, dispatch, the docs' table.
 pub mod registry;
+// 1-D line profiles (stylus profilometers) for the bulge fit, with their own registry.
+pub mod profile;
 
 #[cfg(test)]
 mod testutil;
