@@ -544,7 +544,7 @@ fn fit_line(x: &[f64], z: &[f64], use_pt: &[bool]) -> Option<[f64; 2]> {
         sxz += x[k] * z[k];
     }
     let det = n * sxx - sx * sx;
-    if n < 2.0 || !(det.abs() > 1e-30 * sxx.max(1e-300) * n) {
+    if n < 2.0 || det.is_nan() || det.abs() <= 1e-30 * sxx.max(1e-300) * n {
         return None;
     }
     let c1 = (n * sxz - sx * sz) / det;

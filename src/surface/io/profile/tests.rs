@@ -66,7 +66,7 @@ fn every_sample_survives_truncation_and_flipped_bytes() {
             }
             for _ in 0..200 {
                 let mut copy = bytes.clone();
-                let at = rng.below(copy.len().min(4096).max(1));
+                let at = rng.below(copy.len().clamp(1, 4096));
                 let at = if rng.below(2) == 0 {
                     at
                 } else {
