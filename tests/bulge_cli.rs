@@ -330,3 +330,153 @@ fn doe_compares_the_fitted_bulge_with_the_optimum() {
     }
     assert!(r["comparison"].is_array(), "{r}");
 }
+
+/// The line scans of the shipped bulge (tests/data/bulge_lines/, written from raw/bulge/ by
+/// numpy: make_bulge_lines.py), as `FILE@OFFSET` arguments, in lines.json's order.
+fn shipped_lines() -> (Vec<String>, Value) {
+    let dir = repo_root().join("tests/data/bulge_lines");
+    let list: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("lines.json")).unwrap()).unwrap();
+    let args = list["lines"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| {
+            format!(
+                "{}@{}um",
+                dir.join(l["file"].as_str().unwrap()).display(),
+                l["offset_um"].as_i64().unwrap()
+            )
+        })
+        .collect();
+    let truth = serde_json::from_str(
+        &std::fs::read_to_string(repo_root().join("raw/bulge/truth.json")).unwrap(),
+    )
+    .unwrap();
+    (args, truth)
+}
+
+/// Acceptance (issue 32): five line scans per power (centre, ±10 µm as x–z text, ±20 µm as
+/// Dektak CSV) recover a, w, x_TFC, the heights and the efficiency of the shipped bulge to the
+/// map fit's tolerances (`check_against_truth`: a, w 5 %, x_TFC 0.5 µm, h 0.3 nm, efficiency
+/// 5 %, intercept 0.3 nm).
+#[test]
+fn bulge_from_line_scans_recovers_the_shipped_bulge() {
+    let (lines, truth) = shipped_lines();
+    assert_eq!(lines.len(), 20);
+    let mut args = vec!["bulge".to_string()];
+    for l in &lines {
+        args.push("--line".into());
+        args.push(l.clone());
+    }
+    args.push("--json".into());
+    let o = hdi().args(&args).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let scans = j["scans"].as_array().unwrap();
+    assert_eq!(scans.len(), 4);
+    let want = truth["scans"].as_array().unwrap();
+    for (s, t) in scans.iter().zip(want) {
+        assert_eq!(f(s, "heater_power_mW"), f(t, "heater_power_mW"));
+        assert!(
+            (f(s, "a_tfc_m") / f(t, "a_tfc_m") - 1.0).abs() < 0.05,
+            "{s}"
+        );
+        assert!(
+            (f(s, "w_tfc_m") / f(t, "w_tfc_m") - 1.0).abs() < 0.05,
+            "{s}"
+        );
+        assert!((f(s, "x_tfc_m") - f(t, "x_tfc_m")).abs() < 0.5e-6, "{s}");
+        assert!((f(s, "height_m") - f(t, "height_m")).abs() < 0.3e-9, "{s}");
+        for k in ["height_se_m", "a_tfc_se_m", "w_tfc_se_m", "x_tfc_se_m"] {
+            assert!(f(s, k) > 0.0, "{k}");
+        }
+        assert!(s["y_c_m"].is_null());
+    }
+    let e = f(&j, "efficiency_m_per_W");
+    assert!(
+        (e / f(&truth, "efficiency_m_per_W") - 1.0).abs() < 0.05,
+        "{e}"
+    );
+    assert!((f(&j, "intercept_m") - f(&truth, "intercept_m")).abs() < 0.3e-9);
+    let tfc = &j["tfc"];
+    assert!((f(tfc, "w_tfc_m") / 50e-6 - 1.0).abs() < 0.05, "{tfc}");
+    // The centre lines alone give h, a, x_TFC but no width: a clean error naming w.
+    let centre: Vec<String> = lines
+        .iter()
+        .filter(|l| l.ends_with("@0um"))
+        .cloned()
+        .collect();
+    assert_eq!(centre.len(), 4);
+    let mut args = vec!["bulge".to_string()];
+    for l in &centre {
+        args.push("--line".into());
+        args.push(l.clone());
+    }
+    let o = hdi().args(&args).output().unwrap();
+    assert_clean_failure(&o, "width w");
+}
+
+#[test]
+fn bulge_stage_takes_line_scans_and_refuses_unknown_keys() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = repo_root().join("tests/data/bulge_lines");
+    let list: Value =
+        serde_json::from_str(&std::fs::read_to_string(src.join("lines.json")).unwrap()).unwrap();
+    std::fs::create_dir_all(dir.path().join("raw")).unwrap();
+    let mut entries = Vec::new();
+    for l in list["lines"].as_array().unwrap() {
+        let name = l["file"].as_str().unwrap();
+        std::fs::copy(src.join(name), dir.path().join("raw").join(name)).unwrap();
+        entries.push(format!(
+            "  {{ file = \"raw/{name}\", offset = \"{} um\" }},",
+            l["offset_um"].as_i64().unwrap()
+        ));
+    }
+    let text = format!(
+        "[project]\nname = \"lines\"\n\n[report]\nvalidation = false\n\n[bulge.tfc]\nlines = [\n{}\n]\n",
+        entries.join("\n")
+    );
+    std::fs::write(dir.path().join("pipeline.toml"), &text).unwrap();
+    let o = hdi()
+        .current_dir(dir.path())
+        .args(["run", "-j", "1"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}\n{text}", stderr(&o));
+    let r = result_of(dir.path(), "tfc");
+    assert_eq!(r["scans"].as_array().map(|s| s.len()), Some(4), "{r}");
+    assert!(
+        (f(&r["tfc"], "a_tfc_m") / 4.86e-6 - 1.0).abs() < 0.05,
+        "{r}"
+    );
+    assert!((f(&r["tfc"], "x_tfc_m") - 6.35e-6).abs() < 0.5e-6, "{r}");
+    let store = dir.path().join("processed/.hdi/store/bulge");
+    let entry = std::fs::read_dir(&store)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.join("result.json").is_file())
+        .unwrap();
+    for out in [
+        "bulge.h5",
+        "scans.csv",
+        "scan_0_lines.png",
+        "height_vs_power.png",
+    ] {
+        assert!(entry.join(out).is_file(), "{out}");
+    }
+    // A misspelt key inside a line is refused, naming the key, the file and the line.
+    let bad = text.replacen("offset = ", "ofset = ", 1);
+    std::fs::write(dir.path().join("pipeline.toml"), &bad).unwrap();
+    let o = hdi()
+        .current_dir(dir.path())
+        .args(["run", "-j", "1"])
+        .output()
+        .unwrap();
+    assert_clean_failure(&o, "ofset");
+    let err = stderr(&o);
+    assert!(
+        err.contains("pipeline.toml") && err.contains("line 9"),
+        "{err}"
+    );
+}

@@ -18,9 +18,16 @@ pub(super) fn cmd_bulge(a: BulgeArgs) -> Result<()> {
     if te_margin.is_nan() || te_margin < 0.0 {
         return Err(anyhow!("--te-margin: {te_margin} m must be ≥ 0"));
     }
+    let lines = a
+        .lines
+        .iter()
+        .map(|l| bulge::line_spec(l.file.clone(), l))
+        .collect::<std::result::Result<Vec<_>, _>>()
+        .map_err(|m| anyhow!("--line: {m}"))?;
     let params = BulgeParams {
         files: a.files.clone(),
         powers,
+        lines,
         options: BulgeOptions {
             exclude: bulge::rects(&a.exclude),
             auto_te: !a.no_auto_te,

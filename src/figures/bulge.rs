@@ -67,7 +67,7 @@ pub fn plot_xy(x: f64, y: f64, dx: f64, dy: f64, ny: usize) -> (f64, f64) {
 /// to the map border on the far side (docs/bulge.md step 1).
 pub fn te_mask(fit: &BulgeFit, te_margin: f64) -> Option<Rect> {
     let te = fit.trailing_edge?;
-    let lev = &fit.levelled;
+    let lev = fit.levelled.as_ref()?;
     let (w, h) = (lev.nx() as f64 * lev.dx, lev.ny() as f64 * lev.dy);
     let (x0, x1) = if te.slider_below {
         ((te.x - te_margin).max(0.0), w)
@@ -124,6 +124,32 @@ pub fn scan_lines(shown: ArrayView2<f64>, dx: f64, dy: f64, cap: &Cap) -> Vec<Sc
     out
 }
 
+/// The levelled line scans of a line-scan fit (`row` = the line's index) and the fitted cap
+/// along each at its offset.
+pub fn offset_lines(fit: &BulgeFit) -> Vec<ScanLine> {
+    let cap = Cap::from(fit);
+    fit.lines
+        .iter()
+        .enumerate()
+        .map(|(row, l)| {
+            let pts: Vec<(f64, f64)> =
+                l.x.iter()
+                    .zip(&l.z)
+                    .filter(|(_, z)| z.is_finite())
+                    .map(|(x, z)| (*x, *z))
+                    .collect();
+            // Without a fitted width only the centre line is defined (v = 0 there).
+            let y = if cap.w.is_finite() { l.offset } else { 0.0 };
+            ScanLine {
+                offset: l.offset,
+                row,
+                fitted: pts.iter().map(|&(x, _)| (x, cap.at(x, y))).collect(),
+                measured: pts,
+            }
+        })
+        .collect()
+}
+
 fn rect_path(r: &Rect, dx: f64, dy: f64, ny: usize) -> Vec<(f64, f64)> {
     // Rectangles bound pixel centres: draw them through the same mapping as the pixels.
     let c = |x: f64, y: f64| plot_xy(x, y, dx, dy, ny);
@@ -148,7 +174,10 @@ pub fn levelled_map_png(
     te_margin: f64,
     title: &str,
 ) -> Result<()> {
-    let lev = &fit.levelled;
+    // A line-scan fit has no map to draw (its lines are `offset_lines`).
+    let Some(lev) = fit.levelled.as_ref() else {
+        return Ok(());
+    };
     let (dx, dy, ny) = (lev.dx, lev.dy, lev.ny());
     let cap = Cap::from(fit);
     let outline: Vec<(f64, f64)> = cap

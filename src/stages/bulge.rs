@@ -9,8 +9,10 @@ use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::store::{write_table, H5Out};
 use crate::error::Result;
 use crate::surface::bulge::{
-    fit_bulge, fit_efficiency, power_from_name, BulgeFit, BulgeOptions, EfficiencyFit, Rect,
+    fit_bulge, fit_bulge_lines, fit_efficiency, power_from_name, BulgeFit, BulgeOptions,
+    EfficiencyFit, OffsetLine, Rect,
 };
+use crate::surface::io::profile::read_line_profile;
 use crate::surface::io::{read_height_map, ReadOptions};
 use crate::surface::SurfaceError;
 use crate::units::{Length, Power};
@@ -29,7 +31,12 @@ fn default_true() -> bool {
 #[serde(deny_unknown_fields)]
 pub struct BulgeConfig {
     /// Profilometer scans (any height-map format hdi reads).
+    #[serde(default)]
     pub files: Vec<PathBuf>,
+    /// Line scans (any line-profile format hdi reads), each at a stated offset from the bulge
+    /// centre; the lines of one heater power are fitted together (docs/bulge.md "Line scans").
+    #[serde(default)]
+    pub lines: Vec<LineConfig>,
     /// Heater power of each scan (e.g. "30 mW"); default: from the file names (`…30mW…`).
     #[serde(default)]
     pub powers: Option<Vec<Power>>,
@@ -45,6 +52,77 @@ pub struct BulgeConfig {
     /// Channel for multi-channel formats.
     #[serde(default)]
     pub channel: Option<String>,
+}
+
+/// One line scan, `{ file = "tfc_30mW_y+10um.csv", offset = "10 um", power = "30 mW" }`
+/// or on the command line `FILE@OFFSET[@POWER]`: `offset` (default 0) is the line's distance
+/// from the bulge centre across the slider, `power` (default: from the file name) its heater
+/// power.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LineConfig {
+    pub file: PathBuf,
+    #[serde(default)]
+    pub offset: Option<Length>,
+    #[serde(default)]
+    pub power: Option<Power>,
+}
+
+impl std::str::FromStr for LineConfig {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let mut parts = s.split('@');
+        let file = parts.next().unwrap_or_default();
+        if file.is_empty() {
+            return Err(format!(
+                "`{s}`: expected FILE[@OFFSET[@POWER]] (e.g. scan.csv@10um)"
+            ));
+        }
+        let offset = parts.next().map(str::parse::<Length>).transpose()?;
+        let power = parts.next().map(str::parse::<Power>).transpose()?;
+        if parts.next().is_some() {
+            return Err(format!("`{s}`: expected FILE[@OFFSET[@POWER]]"));
+        }
+        Ok(Self {
+            file: PathBuf::from(file),
+            offset,
+            power,
+        })
+    }
+}
+
+/// A line scan, validated: file, offset (m), heater power (W, `None`: unknown).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LineSpec {
+    pub file: PathBuf,
+    pub offset: f64,
+    pub power: Option<f64>,
+}
+
+/// Checks a line's offset and power (given, else from the file name).
+pub fn line_spec(file: PathBuf, c: &LineConfig) -> std::result::Result<LineSpec, String> {
+    let offset = c.offset.map(|l| l.0).unwrap_or(0.0);
+    if !offset.is_finite() {
+        return Err(format!(
+            "{}: offset {offset} m is not finite",
+            file.display()
+        ));
+    }
+    let power = match c.power {
+        Some(p) if !(p.0.is_finite() && p.0 >= 0.0) => {
+            return Err(format!("{}: power {} W must be ≥ 0", file.display(), p.0))
+        }
+        Some(p) => Some(p.0),
+        None => file
+            .file_name()
+            .and_then(|n| n.to_str())
+            .and_then(power_from_name),
+    };
+    Ok(LineSpec {
+        file,
+        offset,
+        power,
+    })
 }
 
 /// An excluded rectangle, `{ x0 = "0 um", y0 = "0 um", width = "10 um", height = "5 um" }`
@@ -83,6 +161,8 @@ pub struct BulgeParams {
     pub files: Vec<PathBuf>,
     /// Heater power per file, W (`None`: unknown).
     pub powers: Vec<Option<f64>>,
+    /// Line scans; those of one power (or all of unknown power) make one scan.
+    pub lines: Vec<LineSpec>,
     pub options: BulgeOptions,
     pub channel: Option<String>,
 }
@@ -128,9 +208,11 @@ pub fn rects(exclude: &[RectConfig]) -> Vec<Rect> {
         .collect()
 }
 
-/// One fitted scan.
+/// One fitted scan: a map, or the line scans of one heater power.
 pub struct ScanResult {
     pub file: PathBuf,
+    /// The line scans fitted together (empty for a map).
+    pub line_files: Vec<PathBuf>,
     pub power: Option<f64>,
     pub fit: BulgeFit,
 }
@@ -172,7 +254,28 @@ pub fn analyse(params: &BulgeParams) -> Result<BulgeAnalysis> {
         })?;
         scans.push(ScanResult {
             file: file.clone(),
+            line_files: Vec::new(),
             power: *power,
+            fit,
+        });
+    }
+    for group in line_groups(&params.lines) {
+        let mut lines = Vec::with_capacity(group.len());
+        for l in &group {
+            lines.push(OffsetLine {
+                profile: read_line_profile(&l.file)?,
+                offset: l.offset,
+            });
+        }
+        let names: Vec<String> = group.iter().map(|l| l.file.display().to_string()).collect();
+        let fit = fit_bulge_lines(&lines, &params.options).map_err(|e| SurfaceError::Format {
+            path: PathBuf::from(names.join(" + ")),
+            reason: e.to_string(),
+        })?;
+        scans.push(ScanResult {
+            file: group[0].file.clone(),
+            line_files: group.iter().map(|l| l.file.clone()).collect(),
+            power: group[0].power,
             fit,
         });
     }
@@ -192,13 +295,27 @@ pub fn analyse(params: &BulgeParams) -> Result<BulgeAnalysis> {
     let pick = |f: &dyn Fn(&BulgeFit) -> (f64, f64)| {
         weighted_mean(&scans.iter().map(|s| f(&s.fit)).collect::<Vec<_>>())
     };
+    // Centre lines alone do not give w: the mean is over the scans that do.
+    let widths: Vec<(f64, f64)> = scans
+        .iter()
+        .filter(|s| s.fit.w.is_finite())
+        .map(|s| (s.fit.w, s.fit.w_se))
+        .collect();
+    if widths.is_empty() {
+        return Err(SurfaceError::InvalidData(
+            "no scan gives the bulge width w (line scans through the centre alone do not): \
+             add a line at an offset from the centre"
+                .into(),
+        )
+        .into());
+    }
     let x_tfc = scans
         .iter()
         .all(|s| s.fit.x_tfc.is_some())
         .then(|| pick(&|f| (f.x_tfc.unwrap_or(f64::NAN), f.xc_se)));
     let tfc = FittedBulge {
         a_tfc_m: pick(&|f| (f.a, f.a_se)),
-        w_tfc_m: pick(&|f| (f.w, f.w_se)),
+        w_tfc_m: weighted_mean(&widths),
         x_tfc_m: x_tfc,
         efficiency_m_per_w: efficiency.map(|e| e.efficiency),
         intercept_m: efficiency.map(|e| e.intercept),
@@ -210,17 +327,49 @@ pub fn analyse(params: &BulgeParams) -> Result<BulgeAnalysis> {
     })
 }
 
+/// The line scans grouped into scans: one per heater power (lines of unknown power together),
+/// in order of first appearance.
+fn line_groups(lines: &[LineSpec]) -> Vec<Vec<LineSpec>> {
+    let mut groups: Vec<Vec<LineSpec>> = Vec::new();
+    for l in lines {
+        let key = l.power.map(f64::to_bits);
+        match groups
+            .iter_mut()
+            .find(|g| g[0].power.map(f64::to_bits) == key)
+        {
+            Some(g) => g.push(l.clone()),
+            None => groups.push(vec![l.clone()]),
+        }
+    }
+    groups
+}
+
+/// The name a scan is reported under: the file name, or the line scans' names joined by ` + `.
+fn scan_label(s: &ScanResult) -> String {
+    let name = |p: &Path| {
+        p.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
+    if s.line_files.is_empty() {
+        name(&s.file)
+    } else {
+        s.line_files
+            .iter()
+            .map(|p| name(p))
+            .collect::<Vec<_>>()
+            .join(" + ")
+    }
+}
+
 /// One scan as the `hdi bulge --json` and `scans.csv` keys have it (SI units named in the
 /// keys). x_TFC's standard error is that of the centre: the edge position is taken as exact
 /// (it is known to ±dx/2).
 pub fn scan(s: &ScanResult) -> BulgeScan {
     let f = &s.fit;
+    let lines = !s.line_files.is_empty();
     BulgeScan {
-        file: s
-            .file
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default(),
+        file: scan_label(s),
         heater_power_mw: s.power.map(|p| p * 1e3),
         height_m: finite(f.height),
         height_se_m: finite(f.height_se),
@@ -231,7 +380,8 @@ pub fn scan(s: &ScanResult) -> BulgeScan {
         x_tfc_m: f.x_tfc.and_then(finite),
         x_tfc_se_m: f.x_tfc.and_then(|_| finite(f.xc_se)),
         x_c_m: finite(f.xc),
-        y_c_m: finite(f.yc),
+        // Line offsets are from the centre: y_c is not fitted.
+        y_c_m: if lines { None } else { finite(f.yc) },
         y_c_se_m: finite(f.yc_se),
         trailing_edge_x_m: f.trailing_edge.and_then(|t| finite(t.x)),
         residual_rms_m: finite(f.residual_rms),
@@ -279,7 +429,18 @@ pub fn write_outputs(a: &BulgeAnalysis, params: &Value, key: &str, dir: &Path) -
     let files: Vec<String> = a
         .scans
         .iter()
-        .map(|s| s.file.to_string_lossy().into_owned())
+        .map(|s| {
+            if s.line_files.is_empty() {
+                s.file.to_string_lossy().into_owned()
+            } else {
+                let f: Vec<String> = s
+                    .line_files
+                    .iter()
+                    .map(|p| p.to_string_lossy().into_owned())
+                    .collect();
+                f.join(" + ")
+            }
+        })
         .collect();
     out.root_attributes("bulge", key, params, &Value::from(files.clone()), "bulge")?;
     let g = out.group("bulge", Some("NXentry"))?;
@@ -376,15 +537,34 @@ pub fn write_outputs(a: &BulgeAnalysis, params: &Value, key: &str, dir: &Path) -
     for (k, s) in a.scans.iter().enumerate() {
         let sg = out.group(&format!("bulge/scan_{k}"), Some("NXdata"))?;
         out.write_string(&sg, "file", &files[k])?;
-        out.write_array(
-            &sg,
-            "levelled",
-            s.fit.levelled.z.view(),
-            "m",
-            "levelled height",
-        )?;
-        out.write_scalar(&sg, "dx", s.fit.levelled.dx, "m", "pixel spacing along x")?;
-        out.write_scalar(&sg, "dy", s.fit.levelled.dy, "m", "pixel spacing along y")?;
+        if let Some(lev) = &s.fit.levelled {
+            out.write_array(&sg, "levelled", lev.z.view(), "m", "levelled height")?;
+            out.write_scalar(&sg, "dx", lev.dx, "m", "pixel spacing along x")?;
+            out.write_scalar(&sg, "dy", lev.dy, "m", "pixel spacing along y")?;
+        }
+        for (l, line) in s.fit.lines.iter().enumerate() {
+            out.write_scalar(
+                &sg,
+                &format!("line_{l}_offset"),
+                line.offset,
+                "m",
+                "offset of the line from the bulge centre",
+            )?;
+            out.write_1d(
+                &sg,
+                &format!("line_{l}_x"),
+                &line.x,
+                "m",
+                "position along the line",
+            )?;
+            out.write_1d(
+                &sg,
+                &format!("line_{l}_levelled"),
+                &line.z,
+                "m",
+                "levelled height (NaN: not fitted)",
+            )?;
+        }
     }
     out.finish()?;
     let rows = a
@@ -408,7 +588,18 @@ pub fn write_figures(a: &BulgeAnalysis, options: &BulgeOptions, dir: &Path) -> R
     use crate::figures::bulge as fig;
     for (k, s) in a.scans.iter().enumerate() {
         let f = &s.fit;
-        let lev = &f.levelled;
+        let label = match s.power {
+            Some(p) => format!("{:.0} mW", p * 1e3),
+            None => s.file.display().to_string(),
+        };
+        let Some(lev) = &f.levelled else {
+            fig::scan_lines_png(
+                &dir.join(format!("scan_{k}_lines.png")),
+                &fig::offset_lines(f),
+                &format!("Line scans across the bulge, {label}"),
+            )?;
+            continue;
+        };
         let shown = ndarray::Array2::from_shape_fn(lev.z.dim(), |(j, i)| {
             if lev.is_valid(j, i) {
                 lev.z[[j, i]]
@@ -416,10 +607,6 @@ pub fn write_figures(a: &BulgeAnalysis, options: &BulgeOptions, dir: &Path) -> R
                 f64::NAN
             }
         });
-        let label = match s.power {
-            Some(p) => format!("{:.0} mW", p * 1e3),
-            None => s.file.display().to_string(),
-        };
         fig::levelled_map_png(
             &dir.join(format!("scan_{k}_levelled.png")),
             f,
@@ -464,9 +651,20 @@ impl FromConfig for BulgeStage {
         cfg: &BulgeConfig,
     ) -> std::result::Result<Self, ConfigError> {
         let err = |k: &str, m: String| file.error("bulge", name, k, m);
-        if cfg.files.is_empty() {
-            return Err(err("files", "needs at least one scan".into()));
+        if cfg.files.is_empty() && cfg.lines.is_empty() {
+            return Err(err(
+                "files",
+                "needs at least one scan (`files` or `lines`)".into(),
+            ));
         }
+        let lines = cfg
+            .lines
+            .iter()
+            .map(|l| {
+                let f = file.input_file("bulge", name, "lines", &l.file, "line scan")?;
+                line_spec(f, l).map_err(|m| err("lines", m))
+            })
+            .collect::<std::result::Result<Vec<_>, _>>()?;
         let files = cfg
             .files
             .iter()
@@ -482,6 +680,7 @@ impl FromConfig for BulgeStage {
             params: BulgeParams {
                 files,
                 powers,
+                lines,
                 options: BulgeOptions {
                     exclude: rects(&cfg.exclude),
                     auto_te: cfg.auto_te,
@@ -501,21 +700,36 @@ impl StageKind for BulgeStage {
 
     fn params(&self) -> Value {
         let p = &self.params;
-        json!({
+        let mut v = json!({
             "powers_W": p.powers,
             "exclude_m": p.options.exclude.iter().map(|r| [r.x0, r.y0, r.width, r.height]).collect::<Vec<_>>(),
             "auto_te": p.options.auto_te,
             "te_margin_m": p.options.te_margin,
             "channel": p.channel,
-        })
+        });
+        // Only when given, so map-only instances keep their cache key.
+        if !p.lines.is_empty() {
+            v["lines"] = p
+                .lines
+                .iter()
+                .map(|l| json!({ "offset_m": l.offset, "power_W": l.power }))
+                .collect();
+        }
+        v
     }
     fn inputs(&self) -> Vec<(String, PathBuf)> {
-        self.params
+        let p = &self.params;
+        let files = p
             .files
             .iter()
             .enumerate()
-            .map(|(k, f)| (format!("files[{k}]"), f.clone()))
-            .collect()
+            .map(|(k, f)| (format!("files[{k}]"), f.clone()));
+        let lines = p
+            .lines
+            .iter()
+            .enumerate()
+            .map(|(k, l)| (format!("lines[{k}]"), l.file.clone()));
+        files.chain(lines).collect()
     }
     fn run(&self, ctx: &StageContext) -> Result<Output<BulgeReport, BulgeRow>> {
         let a = analyse(&self.params)?;

@@ -8,6 +8,7 @@
 //! along the slider), row `j` = y (between scan lines); dx ≠ dy is normal here (0.5 µm along
 //! the scan, 1 µm between lines in App. C.2).
 
+use super::io::profile::LineProfile;
 use super::{HeightMap, Result, SourceInfo, SurfaceError};
 use crate::numerics::rng::Rng;
 use nalgebra::{DMatrix, DVector};
@@ -86,8 +87,29 @@ pub struct BulgeFit {
     /// Pixels used by the fit.
     pub n_pixels: usize,
     pub iterations: usize,
-    /// The levelled map (plane fitted outside the bulge removed), invalid pixels marked.
-    pub levelled: HeightMap,
+    /// The levelled map (plane fitted outside the bulge removed), invalid pixels marked;
+    /// `None` for a fit of line scans.
+    pub levelled: Option<HeightMap>,
+    /// The levelled line scans of a line-scan fit (empty for a map).
+    pub lines: Vec<LevelledLine>,
+}
+
+/// One line scan at a stated lateral offset from the bulge centre (docs/bulge.md "Line
+/// scans"): x along the slider as the profile gives it, heights in metres.
+#[derive(Debug, Clone)]
+pub struct OffsetLine {
+    pub profile: LineProfile,
+    /// Distance of the line from the bulge centre across the slider, metres.
+    pub offset: f64,
+}
+
+/// A line scan after levelling: its own straight line fitted outside the bulge removed;
+/// points left out of the fit (invalid, masked, excluded) are NaN.
+#[derive(Debug, Clone)]
+pub struct LevelledLine {
+    pub offset: f64,
+    pub x: Vec<f64>,
+    pub z: Vec<f64>,
 }
 
 /// Plane `c0 + cx·x + cy·y` by least squares over the `use_px` pixels.
@@ -200,7 +222,9 @@ struct LmResult {
 }
 
 /// Levenberg–Marquardt (Marquardt's diagonal scaling) on the cap model over `pts` = (x, y, z).
-fn levenberg_marquardt(pts: &[(f64, f64, f64)], p0: [f64; 6]) -> Option<LmResult> {
+/// Parameters with `free[k] == false` stay at `p0[k]` (their rows and columns of JᵀJ are
+/// the identity, their gradient zero).
+fn levenberg_marquardt(pts: &[(f64, f64, f64)], p0: [f64; 6], free: [bool; 6]) -> Option<LmResult> {
     let sse_of = |p: &[f64; 6]| -> f64 {
         pts.iter()
             .map(|&(x, y, z)| {
@@ -221,6 +245,14 @@ fn levenberg_marquardt(pts: &[(f64, f64, f64)], p0: [f64; 6]) -> Option<LmResult
                     jtj[(k, l)] += g[k] * g[l];
                 }
             }
+        }
+        for k in (0..6).filter(|&k| !free[k]) {
+            jtr[k] = 0.0;
+            for l in 0..6 {
+                jtj[(k, l)] = 0.0;
+                jtj[(l, k)] = 0.0;
+            }
+            jtj[(k, k)] = 1.0;
         }
         (jtj, jtr)
     };
@@ -367,7 +399,7 @@ pub fn fit_bulge(map: &HeightMap, opts: &BulgeOptions) -> Result<BulgeFit> {
             .filter(|(_, ok)| **ok)
             .map(|((j, i), _)| (i as f64 * map.dx, j as f64 * map.dy, lev.z[[j, i]]))
             .collect();
-        let r = levenberg_marquardt(&pts, p0).ok_or_else(|| {
+        let r = levenberg_marquardt(&pts, p0, [true; 6]).ok_or_else(|| {
             SurfaceError::InvalidData("bulge fit did not converge (singular Jacobian)".into())
         })?;
         if pass == 0 {
@@ -418,7 +450,8 @@ pub fn fit_bulge(map: &HeightMap, opts: &BulgeOptions) -> Result<BulgeFit> {
         residual_rms: (r.sse / n as f64).sqrt(),
         n_pixels: n,
         iterations: r.iterations,
-        levelled: lev,
+        levelled: Some(lev),
+        lines: Vec::new(),
     })
 }
 
@@ -466,6 +499,388 @@ fn initial_guess(lev: &HeightMap, usable: &Array2<bool>, min_peak: f64) -> Resul
         jm as f64 * lev.dy,
         0.0,
     ])
+}
+
+/// The trailing edge of one line scan: the largest height step between neighbouring points in
+/// `ok`, if it is at least 20 typical steps and 5 nm (the map's criterion, docs/bulge.md).
+fn line_trailing_edge(x: &[f64], z: &[f64], ok: &[bool]) -> Option<TrailingEdge> {
+    let idx: Vec<usize> = (0..x.len()).filter(|&k| ok[k]).collect();
+    if idx.len() < 4 {
+        return None;
+    }
+    // (midpoint, height step, position step) along the line.
+    let steps: Vec<(f64, f64, f64)> = idx
+        .windows(2)
+        .map(|w| {
+            let (a, b) = (w[0], w[1]);
+            ((x[a] + x[b]) / 2.0, z[b] - z[a], x[b] - x[a])
+        })
+        .collect();
+    let (xe, step, run) = steps
+        .iter()
+        .copied()
+        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))?;
+    let mut abs: Vec<f64> = steps.iter().map(|s| s.1.abs()).collect();
+    abs.sort_by(f64::total_cmp);
+    let typical = abs[abs.len() / 2];
+    if step.abs() < (20.0 * typical).max(5e-9) {
+        return None;
+    }
+    Some(TrailingEdge {
+        x: xe,
+        // The surface falls going +x off the slider.
+        slider_below: step * run.signum() < 0.0,
+    })
+}
+
+/// Straight line `c0 + c1·x` by least squares over the points in `use_pt`.
+fn fit_line(x: &[f64], z: &[f64], use_pt: &[bool]) -> Option<[f64; 2]> {
+    let (mut n, mut sx, mut sz, mut sxx, mut sxz) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for k in (0..x.len()).filter(|&k| use_pt[k]) {
+        n += 1.0;
+        sx += x[k];
+        sz += z[k];
+        sxx += x[k] * x[k];
+        sxz += x[k] * z[k];
+    }
+    let det = n * sxx - sx * sx;
+    if n < 2.0 || det.is_nan() || det.abs() <= 1e-30 * sxx.max(1e-300) * n {
+        return None;
+    }
+    let c1 = (n * sxz - sx * sz) / det;
+    let c0 = (sz - c1 * sx) / n;
+    (c0.is_finite() && c1.is_finite()).then_some([c0, c1])
+}
+
+/// Fit the bulge cap to line scans at stated offsets from the bulge centre (docs/bulge.md
+/// "Line scans"): the map procedure per line — trailing edge (median over the lines that show
+/// one; the lines share the x axis), exclusions (`y` = the line's offset), a straight line
+/// fitted outside the bulge removed from each line — then the same cap model evaluated along
+/// each line at its offset (y_c = 0 by definition of the offsets). w is fitted when a line lies
+/// off the centre; a centre line alone gives h, a and x_c, and w is NaN.
+pub fn fit_bulge_lines(lines: &[OffsetLine], opts: &BulgeOptions) -> Result<BulgeFit> {
+    if lines.is_empty() {
+        return Err(SurfaceError::InvalidData("no line scans given".into()));
+    }
+    if let Some(l) = lines.iter().find(|l| !l.offset.is_finite()) {
+        return Err(SurfaceError::InvalidData(format!(
+            "line offset {} is not a finite length",
+            l.offset
+        )));
+    }
+    let fit_w = lines.iter().any(|l| l.offset != 0.0);
+    // Valid and outside the exclusions, per line.
+    let base: Vec<Vec<bool>> = lines
+        .iter()
+        .map(|l| {
+            let p = &l.profile;
+            (0..p.len())
+                .map(|k| {
+                    p.valid[k]
+                        && p.z[k].is_finite()
+                        && !opts.exclude.iter().any(|r| r.contains(p.x[k], l.offset))
+                })
+                .collect()
+        })
+        .collect();
+    let te = if opts.auto_te {
+        let found: Vec<TrailingEdge> = lines
+            .iter()
+            .zip(&base)
+            .filter_map(|(l, ok)| line_trailing_edge(&l.profile.x, &l.profile.z, ok))
+            .collect();
+        (!found.is_empty()).then(|| {
+            let mut xs: Vec<f64> = found.iter().map(|t| t.x).collect();
+            xs.sort_by(f64::total_cmp);
+            let below = found.iter().filter(|t| t.slider_below).count();
+            TrailingEdge {
+                x: xs[xs.len() / 2],
+                slider_below: 2 * below >= found.len(),
+            }
+        })
+    } else {
+        None
+    };
+    let usable: Vec<Vec<bool>> = lines
+        .iter()
+        .zip(&base)
+        .map(|(l, ok)| {
+            l.profile
+                .x
+                .iter()
+                .zip(ok)
+                .map(|(&x, &ok)| {
+                    ok && match te {
+                        None => true,
+                        Some(t) if t.slider_below => x < t.x - opts.te_margin,
+                        Some(t) => x > t.x + opts.te_margin,
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let n_usable: usize = usable
+        .iter()
+        .map(|u| u.iter().filter(|v| **v).count())
+        .sum();
+    let n_free = if fit_w { 5 } else { 4 };
+    if n_usable < 10 * n_free {
+        return Err(SurfaceError::InvalidData(format!(
+            "only {n_usable} usable points left on the line scans after masking (exclusions and \
+             trailing edge)"
+        )));
+    }
+    let no_line = || {
+        SurfaceError::InvalidData(
+            "levelling a line scan: fewer than two usable points outside the bulge".into(),
+        )
+    };
+    let level = |planes: &[[f64; 2]]| -> Vec<Vec<f64>> {
+        lines
+            .iter()
+            .zip(planes)
+            .map(|(l, c)| {
+                let p = &l.profile;
+                p.x.iter()
+                    .zip(&p.z)
+                    .map(|(x, z)| z - c[0] - c[1] * x)
+                    .collect()
+            })
+            .collect()
+    };
+    // The noise from neighbouring differences (robust, and blind to the smooth bulge, which
+    // covers a large share of a line through it: the MAD about the line would not be).
+    let mut diffs: Vec<f64> = lines
+        .iter()
+        .zip(&usable)
+        .flat_map(|(l, u)| {
+            (1..u.len())
+                .filter(|&k| u[k] && u[k - 1])
+                .map(|k| (l.profile.z[k] - l.profile.z[k - 1]).abs())
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    if diffs.is_empty() {
+        return Err(no_line());
+    }
+    diffs.sort_by(f64::total_cmp);
+    let sigma = (1.4826 * diffs[diffs.len() / 2] / 2f64.sqrt()).max(1e-15);
+    // Levelling: a line through everything usable on each scan line, then drop what sticks up
+    // more than 3 σ (the bulge) and refit, until nothing changes (at most 20 rounds).
+    let mut outside = usable.clone();
+    let mut planes = lines
+        .iter()
+        .zip(&outside)
+        .map(|(l, o)| fit_line(&l.profile.x, &l.profile.z, o).ok_or_else(no_line))
+        .collect::<Result<Vec<_>>>()?;
+    for _ in 0..20 {
+        let lev = level(&planes);
+        let next: Vec<Vec<bool>> = usable
+            .iter()
+            .zip(&lev)
+            .map(|(u, z)| {
+                u.iter()
+                    .zip(z)
+                    .map(|(u, z)| *u && *z <= 3.0 * sigma)
+                    .collect()
+            })
+            .collect();
+        if next == outside {
+            break;
+        }
+        let refit: Option<Vec<[f64; 2]>> = lines
+            .iter()
+            .zip(&next)
+            .map(|(l, o)| fit_line(&l.profile.x, &l.profile.z, o))
+            .collect();
+        let Some(refit) = refit else { break };
+        outside = next;
+        planes = refit;
+    }
+    let mut lev = level(&planes);
+    let points = |lev: &[Vec<f64>]| -> Vec<(f64, f64, f64)> {
+        let mut pts = Vec::with_capacity(n_usable);
+        for ((l, u), z) in lines.iter().zip(&usable).zip(lev) {
+            for k in (0..u.len()).filter(|&k| u[k]) {
+                pts.push((l.profile.x[k], l.offset, z[k]));
+            }
+        }
+        pts
+    };
+    let free = [true, true, fit_w, true, false, true];
+    let mut fit: Option<LmResult> = None;
+    for pass in 0..2 {
+        let p0 = match &fit {
+            Some(r) => r.p,
+            None => line_initial_guess(lines, &usable, &lev, 5.0 * sigma, fit_w)?,
+        };
+        let r = levenberg_marquardt(&points(&lev), p0, free).ok_or_else(|| {
+            SurfaceError::InvalidData("bulge fit did not converge (singular Jacobian)".into())
+        })?;
+        if pass == 0 {
+            // Relevel outside the fitted cap enlarged by 25 %, as for maps.
+            let [_, a, w, xc, _, _] = r.p;
+            let out2: Vec<Vec<bool>> = lines
+                .iter()
+                .zip(&usable)
+                .map(|(l, u)| {
+                    let v = if fit_w {
+                        2.0 * l.offset / (1.25 * w)
+                    } else {
+                        0.0
+                    };
+                    l.profile
+                        .x
+                        .iter()
+                        .zip(u)
+                        .map(|(x, u)| {
+                            let q = (x - xc) / (1.25 * a);
+                            *u && q * q + v * v >= 1.0
+                        })
+                        .collect()
+                })
+                .collect();
+            let refit: Option<Vec<[f64; 2]>> = lines
+                .iter()
+                .zip(&out2)
+                .map(|(l, o)| fit_line(&l.profile.x, &l.profile.z, o))
+                .collect();
+            if let Some(refit) = refit {
+                planes = refit;
+                lev = level(&planes);
+            }
+        }
+        fit = Some(r);
+    }
+    let Some(r) = fit else {
+        return Err(SurfaceError::InvalidData("bulge fit failed".into()));
+    };
+    let dof = n_usable.saturating_sub(n_free).max(1) as f64;
+    let s2 = r.sse / dof;
+    let se = |k: usize| {
+        if free[k] {
+            (s2 * r.cov_unscaled[(k, k)]).max(0.0).sqrt()
+        } else {
+            f64::NAN
+        }
+    };
+    let [h, a, w, xc, _, offset] = r.p;
+    if !(h > 0.0 && a > 0.0 && w > 0.0) {
+        return Err(SurfaceError::InvalidData(format!(
+            "no bulge found: fitted height {:.3} nm",
+            h * 1e9
+        )));
+    }
+    let levelled_lines = lines
+        .iter()
+        .zip(&usable)
+        .zip(&lev)
+        .map(|((l, u), z)| LevelledLine {
+            offset: l.offset,
+            x: l.profile.x.clone(),
+            z: z.iter()
+                .zip(u)
+                .map(|(z, u)| if *u { *z } else { f64::NAN })
+                .collect(),
+        })
+        .collect();
+    Ok(BulgeFit {
+        height: h,
+        height_se: se(0),
+        a,
+        a_se: se(1),
+        w: if fit_w { w } else { f64::NAN },
+        w_se: se(2),
+        xc,
+        xc_se: se(3),
+        yc: 0.0,
+        yc_se: f64::NAN,
+        offset,
+        x_tfc: te.map(|t| (t.x - xc).abs()),
+        trailing_edge: te,
+        residual_rms: (r.sse / n_usable as f64).sqrt(),
+        n_pixels: n_usable,
+        iterations: r.iterations,
+        levelled: None,
+        lines: levelled_lines,
+    })
+}
+
+/// Start values on levelled lines (a peak below `min_peak` is no bulge): the maximum of the
+/// 5-point box-smoothed lines, its height, a from the half-maximum extent along its line (the
+/// cap is at half height at u = √3/2), and w from how much lower the off-centre lines peak
+/// (h_line = h·√(1 − (2·offset/w)²)); w = 1 (unused) when it is not fitted.
+fn line_initial_guess(
+    lines: &[OffsetLine],
+    usable: &[Vec<bool>],
+    lev: &[Vec<f64>],
+    min_peak: f64,
+    fit_w: bool,
+) -> Result<[f64; 6]> {
+    let smooth: Vec<Vec<f64>> = usable
+        .iter()
+        .zip(lev)
+        .map(|(u, z)| {
+            (0..u.len())
+                .map(|k| {
+                    if !u[k] {
+                        return f64::NEG_INFINITY;
+                    }
+                    let r = k.saturating_sub(2)..(k + 3).min(u.len());
+                    let (s, c) = r
+                        .filter(|&m| u[m])
+                        .fold((0.0, 0.0), |(s, c), m| (s + z[m], c + 1.0));
+                    s / c
+                })
+                .collect()
+        })
+        .collect();
+    let peak_of = |s: &Vec<f64>| {
+        s.iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map(|(k, v)| (k, *v))
+    };
+    let (line, (k, peak)) = smooth
+        .iter()
+        .enumerate()
+        .filter_map(|(j, s)| peak_of(s).map(|p| (j, p)))
+        .max_by(|a, b| a.1 .1.total_cmp(&b.1 .1))
+        .ok_or_else(|| SurfaceError::InvalidData("no usable points".into()))?;
+    if !(peak.is_finite() && peak > min_peak) {
+        return Err(SurfaceError::InvalidData(
+            "no bulge found: nothing stands above the levelled lines".into(),
+        ));
+    }
+    let s = &smooth[line];
+    let x = &lines[line].profile.x;
+    let (mut lo, mut hi) = (k, k);
+    while lo > 0 && s[lo - 1] > peak / 2.0 {
+        lo -= 1;
+    }
+    while hi + 1 < s.len() && s[hi + 1] > peak / 2.0 {
+        hi += 1;
+    }
+    let spacing = (x[x.len() - 1] - x[0]).abs() / (x.len() - 1).max(1) as f64;
+    let half = ((x[hi] - x[lo]).abs() + spacing) / 2.0;
+    let a0 = (half / (3f64.sqrt() / 2.0)).max(2.0 * spacing);
+    let max_off = lines.iter().map(|l| l.offset.abs()).fold(0.0, f64::max);
+    let w0 = if fit_w {
+        let mut est: Vec<f64> = lines
+            .iter()
+            .zip(&smooth)
+            .filter(|(l, _)| l.offset != 0.0)
+            .filter_map(|(l, s)| {
+                let r = peak_of(s)?.1 / peak;
+                (r > 0.05 && r < 0.98).then(|| 2.0 * l.offset.abs() / (1.0 - r * r).sqrt())
+            })
+            .collect();
+        est.sort_by(f64::total_cmp);
+        est.get(est.len() / 2).copied().unwrap_or(4.0 * max_off)
+    } else {
+        1.0
+    };
+    Ok([peak, a0, w0, x[k], 0.0, 0.0])
 }
 
 /// Heater power from a file name such as `tfc_30mW.gsf` or `scan-7.5mW`: the number right
@@ -682,6 +1097,60 @@ mod tests {
                 fit.residual_rms
             );
         }
+    }
+
+    /// Rows of a synthetic scan as line scans at their offsets from y_c.
+    fn rows_as_lines(map: &HeightMap, spec: &ScanSpec, offsets_um: &[f64]) -> Vec<OffsetLine> {
+        offsets_um
+            .iter()
+            .map(|o| {
+                let j = ((spec.yc + o * 1e-6) / spec.dy).round() as usize;
+                let x: Vec<f64> = (0..spec.nx).map(|i| i as f64 * spec.dx).collect();
+                OffsetLine {
+                    profile: LineProfile {
+                        z: (0..spec.nx).map(|i| map.z[[j, i]]).collect(),
+                        valid: vec![true; x.len()],
+                        x,
+                        format: "xz",
+                        header: Default::default(),
+                    },
+                    offset: o * 1e-6,
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn line_scans_recover_the_bulge() {
+        for (k, h) in [3e-9, 12e-9, 21e-9, 30e-9].into_iter().enumerate() {
+            let spec = ScanSpec::shipped(h, 300 + k as u64);
+            let map = synth_scan(&spec);
+            let lines = rows_as_lines(&map, &spec, &[-20.0, -10.0, 0.0, 10.0, 20.0]);
+            let fit = fit_bulge_lines(&lines, &BulgeOptions::default()).unwrap();
+            assert!(fit.levelled.is_none() && fit.lines.len() == 5);
+            check_fit(&fit, &spec);
+            assert!(fit.w_se > 0.0 && fit.a_se > 0.0 && fit.xc_se > 0.0);
+            assert!(
+                (fit.residual_rms / spec.noise - 1.0).abs() < 0.2,
+                "{}",
+                fit.residual_rms
+            );
+        }
+        // The centre line alone: h, a and x_TFC, no width.
+        let spec = ScanSpec::shipped(21e-9, 9);
+        let lines = rows_as_lines(&synth_scan(&spec), &spec, &[0.0]);
+        let fit = fit_bulge_lines(&lines, &BulgeOptions::default()).unwrap();
+        assert!(fit.w.is_nan() && fit.w_se.is_nan());
+        assert!((fit.a / spec.a - 1.0).abs() < 0.05, "{}", fit.a);
+        assert!((fit.height - spec.height).abs() < 0.3e-9, "{}", fit.height);
+        assert!((fit.x_tfc.unwrap() - spec.x_tfc).abs() < 0.5e-6);
+        // A flat line is "no bulge", not a panic.
+        let mut flat = spec.clone();
+        flat.height = 0.0;
+        flat.pullup = 0.0;
+        let lines = rows_as_lines(&synth_scan(&flat), &flat, &[0.0, 10.0]);
+        assert!(fit_bulge_lines(&lines, &BulgeOptions::default()).is_err());
+        assert!(fit_bulge_lines(&[], &BulgeOptions::default()).is_err());
     }
 
     #[test]

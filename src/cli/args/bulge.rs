@@ -7,8 +7,14 @@ use std::path::PathBuf;
 /// `hdi bulge FILE…`: the options have the names of the `[bulge.NAME]` keys.
 #[derive(Args, Debug)]
 pub struct BulgeArgs {
-    #[arg(required = true, num_args = 1..)]
+    /// Height maps (one scan each).
+    #[arg(required_unless_present = "lines", num_args = 1..)]
     pub files: Vec<PathBuf>,
+    /// A line scan: FILE[@OFFSET[@POWER]], OFFSET the line's distance from the bulge centre
+    /// across the slider (default 0), POWER its heater power (default: from the file name),
+    /// e.g. "tfc_30mW_y+10um.csv@10um". Repeatable; the lines of one power are fitted together.
+    #[arg(long = "line", id = "lines")]
+    pub lines: Vec<hdi::stages::bulge::LineConfig>,
     /// Heater power of each file, in order (e.g. "30 mW"); default: from the file names
     /// (`…30mW…`).
     #[arg(long = "power")]

@@ -58,6 +58,8 @@ mod park;
 mod tiff;
 // The list of readers: detection, dispatch, the docs' table.
 pub mod registry;
+// 1-D line profiles (stylus profilometers) for the bulge fit, with their own registry.
+pub mod profile;
 
 #[cfg(test)]
 mod testutil;
