@@ -29,6 +29,7 @@ pub(super) fn cmd_surface(a: SurfaceArgs) -> Result<()> {
         periodic: a.periodic,
         histogram_bins: a.histogram_bins,
         scale_sweep: a.out.is_some(),
+        tip_radius: a.tip_radius,
     };
     let params = surfaces::check(&cfg, a.file.clone())
         .map_err(|e| anyhow::anyhow!("{}: {}", flag(&e.key), e.message))?;
