@@ -32,7 +32,7 @@ use std::path::PathBuf;
 mod output;
 mod rows;
 pub use output::write_outputs;
-use output::{write_areas_plot, write_figures, write_h5_body};
+use output::{write_areas_plot, write_figures, write_h5_body, write_spectra};
 pub use rows::{AreaColumns, AreaRow, SurfaceRow, SurfaceSummaryRow};
 
 /// Bump when the numbers this stage produces change.
@@ -168,6 +168,9 @@ pub struct SurfaceParams {
     pub scale_sweep: bool,
     /// Tip radius for the reliability cutoff, m.
     pub tip_radius: Option<f64>,
+    /// Compute the PSD/ACF/slope/curvature curves (`surface/analyses`). Always in a pipeline;
+    /// `hdi surface` without `--out` has nowhere to put them and skips their cost.
+    pub analyses: bool,
 }
 
 /// One analysed area: a file and an optional rectangle of it.
@@ -355,6 +358,7 @@ pub fn check(
         periodic: cfg.periodic,
         scale_sweep: cfg.scale_sweep,
         tip_radius: cfg.tip_radius.map(|l| l.0),
+        analyses: true,
     })
 }
 
@@ -425,6 +429,9 @@ impl SurfaceParams {
         // Only when given: without it the key is what it was before the option existed.
         if let (Some(r), Value::Object(m)) = (self.tip_radius, &mut v) {
             m.insert("tip_radius_m".into(), json!(r));
+        }
+        if let (false, Value::Object(m)) = (self.analyses, &mut v) {
+            m.insert("analyses".into(), json!(false));
         }
         v
     }
@@ -515,10 +522,14 @@ pub fn analyse(params: &SurfaceParams) -> Result<SurfaceAnalysis> {
     } else {
         Vec::new()
     };
-    let spectra = match surface_analyses(target) {
-        Ok(s) => Ok(s),
-        Err(SurfaceError::InvalidData(why)) => Err(why),
-        Err(e) => return Err(e.into()),
+    let spectra = if !params.analyses {
+        Err("not requested (`hdi surface` without --out)".to_string())
+    } else {
+        match surface_analyses(target) {
+            Ok(s) => Ok(s),
+            Err(SurfaceError::InvalidData(why)) => Err(why),
+            Err(e) => return Err(e.into()),
+        }
     };
     let tip = match params.tip_radius {
         Some(radius) => Some(tip_reliability(
@@ -811,6 +822,10 @@ fn run_areas(
         }
     }
     out.write_count(&g, "n_areas", n as u64, "areas analysed")?;
+    // Each area's curves and tip cutoff (area 0's are also those under /surface).
+    for (k, a) in analyses.iter().enumerate() {
+        write_spectra(&out, &format!("surface/areas/area_{k}"), a)?;
+    }
     out.write_count(
         &g,
         "bootstrap_resamples",

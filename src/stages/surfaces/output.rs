@@ -76,7 +76,7 @@ pub(super) fn write_h5_body(out: &H5Out, a: &SurfaceAnalysis) -> Result<()> {
     if !a.sweep.is_empty() {
         write_sweeps(out, &a.sweep)?;
     }
-    write_spectra(out, a)?;
+    write_spectra(out, "surface", a)?;
     let fm = a.final_map();
     let history: Vec<Value> = fm
         .history
@@ -278,10 +278,10 @@ pub(super) fn write_sweeps(out: &H5Out, sweep: &[SweepRow]) -> Result<()> {
     Ok(())
 }
 
-/// `surface/analyses` (PSD, ACF, scale-dependent slope and curvature of the analysed map) and,
-/// with a tip radius, `surface/tip_reliability` (docs/hdf5.md, docs/surfaces.md).
-pub(super) fn write_spectra(out: &H5Out, a: &SurfaceAnalysis) -> Result<()> {
-    let g = out.group("surface/analyses", None)?;
+/// `{at}/analyses` (PSD, ACF, scale-dependent slope and curvature of the analysed map) and,
+/// with a tip radius, `{at}/tip_reliability` (docs/surfaces.md).
+pub(super) fn write_spectra(out: &H5Out, at: &str, a: &SurfaceAnalysis) -> Result<()> {
+    let g = out.group(&format!("{at}/analyses"), None)?;
     match &a.spectra {
         Err(why) => out.write_string(&g, "not_computed", why)?,
         Ok(s) => {
@@ -361,7 +361,7 @@ pub(super) fn write_spectra(out: &H5Out, a: &SurfaceAnalysis) -> Result<()> {
                 ),
             ];
             for (name, curve, [(xn, xu, xl), (yn, yu, yl)]) in entries {
-                let c = out.group(&format!("surface/analyses/{name}"), None)?;
+                let c = out.group(&format!("{at}/analyses/{name}"), None)?;
                 out.write_1d(&c, xn, &curve.x, xu, xl)?;
                 out.write_1d(&c, yn, &curve.y, yu, yl)?;
             }
@@ -370,7 +370,7 @@ pub(super) fn write_spectra(out: &H5Out, a: &SurfaceAnalysis) -> Result<()> {
     let Some(t) = &a.tip else {
         return Ok(());
     };
-    let g = out.group("surface/tip_reliability", None)?;
+    let g = out.group(&format!("{at}/tip_reliability"), None)?;
     out.write_scalar(&g, "tip_radius", t.tip_radius, "m", "tip radius given")?;
     out.write_scalar(
         &g,
@@ -465,18 +465,18 @@ fn write_spectra_figures(a: &SurfaceAnalysis, dir: &Path) -> Result<()> {
     plot(
         "psd_profile.png",
         "1-D power spectral density along x",
-        "wavevector q = 2π/λ (1/m)",
-        "C¹ᴰ (m³)",
-        vec![("averaged over the rows", pts(&s.psd_profile, 1.0, 1.0))],
-        cutoff.map(|l| 2.0 * PI / l),
+        "wavevector q = 2π/λ (1/µm)",
+        "C¹ᴰ (nm³)",
+        vec![("averaged over the rows", pts(&s.psd_profile, 1e-6, 1e27))],
+        cutoff.map(|l| 2.0 * PI / l * 1e-6),
     )?;
     plot(
         "psd_area.png",
         "Radially averaged 2-D power spectral density",
-        "wavevector |q| = 2π/λ (1/m)",
-        "C²ᴰ (m⁴)",
-        vec![("radial average", pts(&s.psd_area, 1.0, 1.0))],
-        cutoff.map(|l| 2.0 * PI / l),
+        "wavevector |q| = 2π/λ (1/µm)",
+        "C²ᴰ (nm⁴)",
+        vec![("radial average", pts(&s.psd_area, 1e-6, 1e36))],
+        cutoff.map(|l| 2.0 * PI / l * 1e-6),
     )?;
     plot(
         "acf.png",
