@@ -532,12 +532,7 @@ pub fn analyse(params: &SurfaceParams) -> Result<SurfaceAnalysis> {
         }
     };
     let tip = match params.tip_radius {
-        Some(radius) => Some(tip_reliability(
-            target,
-            radius,
-            &report,
-            &params.roughness,
-        )?),
+        Some(radius) => Some(tip_reliability(target, radius, &report, &params.roughness)?),
         None => None,
     };
     Ok(SurfaceAnalysis {

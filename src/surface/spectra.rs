@@ -352,7 +352,10 @@ fn acf_area_map(g: &Grid) -> Vec<f64> {
     let (fx, fy) = if g.periodic {
         (nx, ny)
     } else {
-        ((2 * nx - 1).next_power_of_two(), (2 * ny - 1).next_power_of_two())
+        (
+            (2 * nx - 1).next_power_of_two(),
+            (2 * ny - 1).next_power_of_two(),
+        )
     };
     let mut padded = Array2::<f64>::zeros((fy, fx));
     for j in 0..ny {

@@ -8,9 +8,9 @@ use crate::figures;
 use crate::numerics::bootstrap::Summary;
 use crate::surface::roughness::{RoughnessReport, SweepRow};
 use crate::surface::spectra::{Curve, TipCutoff, TIP_SAFETY_FACTOR};
-use std::f64::consts::PI;
 use crate::surface::HeightMap;
 use serde_json::{json, Value};
+use std::f64::consts::PI;
 use std::path::Path;
 
 pub(super) fn axis(n: usize, d: f64, off: f64) -> Vec<f64> {
@@ -422,7 +422,10 @@ fn write_spectra_figures(a: &SurfaceAnalysis, dir: &Path) -> Result<()> {
         return Ok(());
     };
     let pts = |c: &Curve, kx: f64, ky: f64| -> Vec<(f64, f64)> {
-        c.x.iter().zip(&c.y).map(|(x, y)| (x * kx, y * ky)).collect()
+        c.x.iter()
+            .zip(&c.y)
+            .map(|(x, y)| (x * kx, y * ky))
+            .collect()
     };
     let cutoff = a
         .tip

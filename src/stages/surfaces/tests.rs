@@ -39,7 +39,11 @@ fn crops_and_files_make_every_area_and_one_area_keeps_the_old_key() {
 fn tip_radius_enters_the_key_only_when_given() {
     let without = check(&cfg("file = \"a.gwy\""), "a.gwy".into()).unwrap();
     assert!(without.canonical().get("tip_radius_m").is_none());
-    let with = check(&cfg("file = \"a.gwy\"\ntip_radius = \"40 nm\""), "a.gwy".into()).unwrap();
+    let with = check(
+        &cfg("file = \"a.gwy\"\ntip_radius = \"40 nm\""),
+        "a.gwy".into(),
+    )
+    .unwrap();
     assert_eq!(with.tip_radius, Some(40e-9));
     assert_eq!(with.canonical()["tip_radius_m"], serde_json::json!(40e-9));
     let mut rest = with.canonical();

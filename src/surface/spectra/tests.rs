@@ -8,10 +8,8 @@ fn repo(p: &str) -> std::path::PathBuf {
 }
 
 fn reference() -> serde_json::Value {
-    let text = std::fs::read_to_string(repo(
-        "tests/data/surfaces/surface_analyses_reference.json",
-    ))
-    .unwrap();
+    let text = std::fs::read_to_string(repo("tests/data/surfaces/surface_analyses_reference.json"))
+        .unwrap();
     serde_json::from_str(&text).unwrap()
 }
 
@@ -45,7 +43,10 @@ fn assert_curve(name: &str, what: &str, got: &Curve, want: &serde_json::Value) {
     let mut worst: f64 = 0.0;
     for (k, (g, w)) in got.x.iter().zip(&x).enumerate() {
         let rel = ((g - w) / w).abs();
-        assert!(rel < TOLERANCE, "{name} {what} x #{k}: {g:e} vs {w:e} ({rel:e})");
+        assert!(
+            rel < TOLERANCE,
+            "{name} {what} x #{k}: {g:e} vs {w:e} ({rel:e})"
+        );
         worst = worst.max(rel);
     }
     // A smooth spectrum falls to the FFT's round-off floor at high q (the Gaussian-ACF
@@ -58,11 +59,17 @@ fn assert_curve(name: &str, what: &str, got: &Curve, want: &serde_json::Value) {
     for (k, (g, w)) in got.y.iter().zip(&y).enumerate() {
         if w.abs() < 1e-12 * largest {
             floor += 1;
-            assert!((g - w).abs() < 1e-12 * largest, "{name} {what} #{k}: {g:e} vs {w:e}");
+            assert!(
+                (g - w).abs() < 1e-12 * largest,
+                "{name} {what} #{k}: {g:e} vs {w:e}"
+            );
             continue;
         }
         let rel = ((g - w) / w).abs();
-        assert!(rel < TOLERANCE, "{name} {what} #{k}: {g:e} vs {w:e} ({rel:e})");
+        assert!(
+            rel < TOLERANCE,
+            "{name} {what} #{k}: {g:e} vs {w:e} ({rel:e})"
+        );
         worst = worst.max(rel);
     }
     eprintln!(
