@@ -480,8 +480,8 @@ fn tip_reliability(
             apply_filters(&mut filtered, Some(*lambda), None)?;
             Some(roughness(&filtered, opts)?)
         }
-        Ok(TipCutoff::None) => Some(raw.clone()),
-        Ok(TipCutoff::Everything(_)) | Err(_) => None,
+        Ok(TipCutoff::NoArtefacts) => Some(raw.clone()),
+        Ok(TipCutoff::NoReliableData(_)) | Err(_) => None,
     };
     Ok(TipReliability {
         tip_radius,
@@ -616,8 +616,8 @@ pub fn report(a: &SurfaceAnalysis, p: &SurfaceParams) -> SurfaceReport {
 fn tip_report(t: &TipReliability) -> TipReliabilityReport {
     let (status, cutoff_m) = match &t.cutoff {
         Ok(TipCutoff::At(l)) => ("cutoff", Some(*l)),
-        Ok(TipCutoff::None) => ("no_artefacts", None),
-        Ok(TipCutoff::Everything(l)) => ("no_reliable_data", Some(*l)),
+        Ok(TipCutoff::NoArtefacts) => ("no_artefacts", None),
+        Ok(TipCutoff::NoReliableData(l)) => ("no_reliable_data", Some(*l)),
         Err(_) => ("not_computed", None),
     };
     let above = t.above.as_ref();

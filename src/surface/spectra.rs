@@ -159,10 +159,10 @@ fn bin_average(edges: &[f64], points: impl Iterator<Item = (f64, f64)>) -> Curve
         }
     }
     let mut out = Curve::default();
-    for b in 0..bins {
-        if count[b] > 0 {
-            out.x.push(sum_x[b] / count[b] as f64);
-            out.y.push(sum_y[b] / count[b] as f64);
+    for ((n, sx), sy) in count.iter().zip(&sum_x).zip(&sum_y) {
+        if *n > 0 {
+            out.x.push(sx / *n as f64);
+            out.y.push(sy / *n as f64);
         }
     }
     out
@@ -316,8 +316,8 @@ fn acf_profile_grid(g: &Grid) -> (Vec<f64>, Vec<f64>) {
         } else {
             // ½ Σ_{i<N−k} (hᵢ² + h_{i+k}²) from the cumulative sums of h².
             let mut head = vec![0.0; nx + 1];
-            for i in 0..nx {
-                head[i + 1] = head[i] + row[i] * row[i];
+            for (i, h) in row.iter().enumerate() {
+                head[i + 1] = head[i] + h * h;
             }
             let total = head[nx];
             for (k, s) in sum.iter_mut().enumerate() {
@@ -514,20 +514,20 @@ pub fn surface_analyses(map: &HeightMap) -> Result<SurfaceAnalyses> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum TipCutoff {
     /// The curvature stays above −f/R down to the smallest scale: no tip artefacts.
-    None,
+    NoArtefacts,
     /// Below this stencil length (m) the curvature exceeds what the tip can follow.
     At(f64),
     /// Even the largest scale violates the criterion: no reliable data; the value is the upper
     /// bound of the bandwidth (mean physical size), as SurfaceTopography returns it.
-    Everything(f64),
+    NoReliableData(f64),
 }
 
 impl TipCutoff {
     /// The length below which data are unreliable, if any.
     pub fn length(self) -> Option<f64> {
         match self {
-            TipCutoff::None => None,
-            TipCutoff::At(l) | TipCutoff::Everything(l) => Some(l),
+            TipCutoff::NoArtefacts => None,
+            TipCutoff::At(l) | TipCutoff::NoReliableData(l) => Some(l),
         }
     }
 }
@@ -674,9 +674,9 @@ pub fn tip_reliability_cutoff(map: &HeightMap, tip_radius: f64) -> Result<TipCut
     };
     let (a, b) = (2.0 * lower / fac, upper / (2.0 * fac));
     if objective(a) > 0.0 {
-        Ok(TipCutoff::None)
+        Ok(TipCutoff::NoArtefacts)
     } else if objective(b) < 0.0 {
-        Ok(TipCutoff::Everything(upper))
+        Ok(TipCutoff::NoReliableData(upper))
     } else {
         Ok(TipCutoff::At(fac * brentq(objective, a, b, 2e-12, 1e-8)))
     }

@@ -381,8 +381,8 @@ pub(super) fn write_spectra(out: &H5Out, at: &str, a: &SurfaceAnalysis) -> Resul
     )?;
     let (status, cutoff) = match &t.cutoff {
         Ok(TipCutoff::At(l)) => ("cutoff", *l),
-        Ok(TipCutoff::None) => ("no_artefacts", f64::NAN),
-        Ok(TipCutoff::Everything(l)) => ("no_reliable_data", *l),
+        Ok(TipCutoff::NoArtefacts) => ("no_artefacts", f64::NAN),
+        Ok(TipCutoff::NoReliableData(l)) => ("no_reliable_data", *l),
         Err(_) => ("not_computed", f64::NAN),
     };
     out.write_string(&g, "status", status)?;

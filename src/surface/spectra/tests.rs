@@ -113,8 +113,8 @@ fn tip_cutoffs_agree_with_surface_topography() {
             let radius: f64 = radius.parse().unwrap();
             let got = tip_reliability_cutoff(&m, radius).unwrap();
             match (got, want.as_f64()) {
-                (TipCutoff::None, None) => {}
-                (TipCutoff::At(l) | TipCutoff::Everything(l), Some(w)) => {
+                (TipCutoff::NoArtefacts, None) => {}
+                (TipCutoff::At(l) | TipCutoff::NoReliableData(l), Some(w)) => {
                     let rel = ((l - w) / w).abs();
                     assert!(rel < TOLERANCE, "{name} R = {radius:e}: {l:e} vs {w:e}");
                     reached += matches!(got, TipCutoff::At(_)) as usize;
