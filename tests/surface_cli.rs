@@ -183,7 +183,7 @@ fn tip_radius_gives_surface_topographys_reliability_cutoff() {
     let j = surface_json(&f, &[]);
     assert!(j.get("tip_reliability").is_none(), "{j}");
     let o = hdi()
-        .args(["surface", "--tip-radius", "-3nm"])
+        .args(["surface", "--tip-radius=-3nm"])
         .arg(&f)
         .output()
         .unwrap();
