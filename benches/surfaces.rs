@@ -5,6 +5,7 @@ use hdi::surface::filter::gaussian_lowpass;
 use hdi::surface::io::{read_height_map, ReadOptions};
 use hdi::surface::level::{level, LevelOp};
 use hdi::surface::roughness::{roughness, scale_sweep_with, RoughnessOptions};
+use hdi::surface::spectra;
 use hdi::surface::synth::{gaussian_acf_surface, GaussianSurfaceSpec};
 
 fn surfaces(c: &mut Criterion) {
@@ -40,6 +41,27 @@ fn surfaces(c: &mut Criterion) {
     });
     g.bench_function("gaussian_filter_mirror", |b| {
         b.iter(|| gaussian_lowpass(&map.z, map.dx, map.dy, 16.0 * map.dx, false))
+    });
+    // Surface analyses (docs/surfaces.md, "Surface analyses"): each curve, all of them as the
+    // stage computes them, and the tip cutoff for a radius that puts it inside the bandwidth.
+    g.bench_function("psd_profile", |b| {
+        b.iter(|| spectra::psd_profile(&map).unwrap())
+    });
+    g.bench_function("psd_area", |b| b.iter(|| spectra::psd_area(&map).unwrap()));
+    g.bench_function("acf_profile", |b| {
+        b.iter(|| spectra::acf_profile(&map).unwrap())
+    });
+    g.bench_function("acf_area", |b| b.iter(|| spectra::acf_area(&map).unwrap()));
+    g.bench_function("surface_analyses_all_curves", |b| {
+        b.iter(|| spectra::surface_analyses(&map).unwrap())
+    });
+    let tip_radius = 1e-6;
+    eprintln!(
+        "tip cutoff for R = {tip_radius:e} m: {:?}",
+        spectra::tip_reliability_cutoff(&map, tip_radius).unwrap()
+    );
+    g.bench_function("tip_reliability_cutoff", |b| {
+        b.iter(|| spectra::tip_reliability_cutoff(&map, tip_radius).unwrap())
     });
     g.bench_function("synth_gaussian_acf", |b| {
         b.iter(|| gaussian_acf_surface(&spec))

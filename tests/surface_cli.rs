@@ -151,6 +151,85 @@ fn out_option_writes_hdf5_and_plots() {
     assert!(text.contains("β = σRη"), "{text}");
 }
 
+/// The tip reliability cutoff through the CLI on a real AFM file, against SurfaceTopography
+/// 1.27.1's on the same heights (`tests/data/surfaces/surface_analyses_reference.json`). The
+/// default levelling (row medians, plane) leaves the x second differences unchanged up to
+/// round-off, so the cutoff is the one of the map as read. Without `--tip-radius` the report
+/// has no `tip_reliability`.
+#[test]
+fn tip_radius_gives_surface_topographys_reliability_cutoff() {
+    let f = repo_root().join("tests/data/surfaces/di-3.di");
+    let reference: Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            repo_root().join("tests/data/surfaces/surface_analyses_reference.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    let want = reference["maps"]["di-3.di"]["tip_reliability_cutoff_m"]["4e-08"]
+        .as_f64()
+        .unwrap();
+    let j = surface_json(&f, &["--tip-radius", "40nm"]);
+    let t = &j["tip_reliability"];
+    assert_eq!(t["status"], "cutoff", "{t}");
+    let got = t["cutoff_m"].as_f64().unwrap();
+    assert!(rel(got, want) < 1e-9, "{got:e} vs {want:e}");
+    // Above the cutoff the small summits are gone: fewer, blunter summits.
+    assert!(t["n_summits"].as_u64().unwrap() < j["n_summits"].as_u64().unwrap());
+    assert!(t["R_m"].as_f64().unwrap() > j["R_m"].as_f64().unwrap());
+    let j = surface_json(&f, &["--tip-radius", "10nm"]);
+    assert_eq!(j["tip_reliability"]["status"], "no_artefacts");
+    assert_eq!(j["tip_reliability"]["R_m"], j["R_m"]);
+    let j = surface_json(&f, &[]);
+    assert!(j.get("tip_reliability").is_none(), "{j}");
+    let o = hdi()
+        .args(["surface", "--tip-radius=-3nm"])
+        .arg(&f)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("tip-radius"), "{}", stderr(&o));
+}
+
+#[test]
+fn out_option_writes_the_surface_analyses() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("res").join("di.h5");
+    let f = repo_root().join("tests/data/surfaces/di-3.di");
+    let o = hdi()
+        .arg("surface")
+        .arg(&f)
+        .args(["--tip-radius", "40nm", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    for png in [
+        "psd_profile.png",
+        "psd_area.png",
+        "acf.png",
+        "slope.png",
+        "curvature.png",
+    ] {
+        assert!(dir.path().join("res").join(png).is_file(), "{png}");
+    }
+    let h5 = hdf5::File::open(&out).unwrap();
+    for (path, units) in [
+        ("surface/analyses/psd_profile/q", "1/m"),
+        ("surface/analyses/psd_profile/C", "m^3"),
+        ("surface/analyses/psd_area/C", "m^4"),
+        ("surface/analyses/acf_area/A", "m^2"),
+        ("surface/analyses/slope_profile/slope", "1"),
+        ("surface/analyses/curvature_area/curvature", "1/m"),
+        ("surface/tip_reliability/cutoff", "m"),
+        ("surface/tip_reliability/R", "m"),
+    ] {
+        let ds = h5.dataset(path).unwrap();
+        let u: hdf5::types::VarLenUnicode = ds.attr("units").unwrap().read_scalar().unwrap();
+        assert_eq!(u.as_str(), units, "{path}");
+    }
+}
+
 /// The docs/surfaces.md reference table on the canonical surface in tests/data, through the
 /// real reader and the CLI (the unit tests in roughness.rs check the full table).
 #[test]

@@ -97,6 +97,42 @@ pub struct SurfaceReport {
     pub masked_fraction: f64,
     /// Warnings in words (also why a value is null).
     pub warnings: Vec<String>,
+    /// The scanning-probe tip-radius reliability cutoff and σ, R, η, β above it
+    /// (docs/surfaces.md, "Surface analyses"); present only when a tip radius is given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tip_reliability: Option<TipReliabilityReport>,
+}
+
+/// The tip-radius reliability cutoff (SurfaceTopography's `scanning_probe_reliability_cutoff`)
+/// and the roughness above it: the analysed map S-filtered (ISO 16610-61 Gaussian) at
+/// λs = the cutoff.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct TipReliabilityReport {
+    /// Tip radius given, m.
+    pub tip_radius_m: f64,
+    /// Safety factor f of the criterion min h''(λ) = −f/R, dimensionless.
+    pub safety_factor: f64,
+    /// `cutoff`: data below `cutoff_m` are unreliable; `no_artefacts`: the curvature criterion
+    /// holds down to the pixel scale (the values above the cutoff are the raw ones);
+    /// `no_reliable_data`: it fails even at the largest scale; `not_computed`: the map has
+    /// invalid pixels (see `warnings`).
+    #[schemars(extend("enum" = ["cutoff", "no_artefacts", "no_reliable_data", "not_computed"]))]
+    pub status: String,
+    /// Stencil length λc below which the curvature exceeds what the tip can follow, m; for
+    /// `no_reliable_data` the mean physical size. `null` for `no_artefacts` and `not_computed`.
+    pub cutoff_m: Option<f64>,
+    /// σ above the cutoff, m. `null` when not defined (docs/json.md).
+    pub sigma_m: Option<f64>,
+    /// Summit density above the cutoff, 1/m². `null` when not defined (docs/json.md).
+    pub eta_per_m2: Option<f64>,
+    /// Mean summit radius above the cutoff (same definition as `R_m`), m. `null` when not
+    /// defined (docs/json.md).
+    #[serde(rename = "R_m")]
+    pub r_m: Option<f64>,
+    /// β = σ·R·η above the cutoff, dimensionless. `null` when not defined (docs/json.md).
+    pub beta: Option<f64>,
+    /// Summits found above the cutoff.
+    pub n_summits: Option<usize>,
 }
 
 /// Nayak's random-process estimates (docs/surfaces.md).
@@ -292,6 +328,7 @@ mod tests {
             filter_l_m: Some(2.5e-7),
             masked_fraction: 0.0,
             warnings: Vec::new(),
+            tip_reliability: None,
         }
     }
 

@@ -34,9 +34,12 @@ pub(super) fn cmd_surface(a: SurfaceArgs) -> Result<()> {
         histogram_bins: a.histogram_bins,
         scale_sweep: a.out.is_some(),
         x3p: a.x3p_out.is_some(),
+        tip_radius: a.tip_radius,
     };
-    let params = surfaces::check(&cfg, a.file.clone())
+    let mut params = surfaces::check(&cfg, a.file.clone())
         .map_err(|e| anyhow::anyhow!("{}: {}", flag(&e.key), e.message))?;
+    // The curves go to the HDF5 file and the PNGs only.
+    params.analyses = a.out.is_some();
     let filter = surfaces::filter_text(&params);
     let stage = SurfaceStage {
         name: one_off::NAME.into(),

@@ -6,7 +6,7 @@ use super::{FromConfig, Output, StageContext, StageKind};
 use crate::artefacts::finite;
 use crate::artefacts::surface::{
     AreaQuantities, AreasSummary, BootstrapSettings, NayakReport, Spread, SummitStats,
-    SurfaceReport, SurfaceResult,
+    SurfaceReport, SurfaceResult, TipReliabilityReport,
 };
 use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::store::H5Out;
@@ -20,7 +20,10 @@ use crate::surface::roughness::{
     roughness, scale_sweep_with, MomentsMethod, RadiusDefinition, RoughnessOptions,
     RoughnessReport, SummitScheme, SweepRow,
 };
-use crate::surface::HeightMap;
+use crate::surface::spectra::{
+    surface_analyses, tip_reliability_cutoff, SurfaceAnalyses, TipCutoff, TIP_SAFETY_FACTOR,
+};
+use crate::surface::{HeightMap, SurfaceError};
 use crate::units::Length;
 use serde::Deserialize;
 use serde_json::{json, Map, Value};
@@ -29,7 +32,7 @@ use std::path::PathBuf;
 mod output;
 mod rows;
 pub use output::write_outputs;
-use output::{write_areas_plot, write_figures, write_h5_body, write_x3p};
+use output::{write_areas_plot, write_figures, write_h5_body, write_spectra, write_x3p};
 pub use rows::{AreaColumns, AreaRow, SurfaceRow, SurfaceSummaryRow};
 
 /// Bump when the numbers this stage produces change.
@@ -116,6 +119,10 @@ pub struct SurfaceConfig {
     /// 25178-71 X3P: `surface.x3p`, or `area_K.x3p` per area.
     #[serde(default)]
     pub x3p: bool,
+    /// Scanning-probe tip radius (e.g. "40 nm"): computes the tip reliability cutoff and σ, R,
+    /// η, β above it (docs/surfaces.md, "Surface analyses"). Absent: no cutoff.
+    #[serde(default)]
+    pub tip_radius: Option<Length>,
 }
 
 /// `crop = { x0 = "0 um", y0 = "0 um", width = "1 um", height = "1 um" }`: x along a scan
@@ -165,6 +172,11 @@ pub struct SurfaceParams {
     pub scale_sweep: bool,
     /// Write the analysed map as X3P too.
     pub x3p: bool,
+    /// Tip radius for the reliability cutoff, m.
+    pub tip_radius: Option<f64>,
+    /// Compute the PSD/ACF/slope/curvature curves (`surface/analyses`). Always in a pipeline;
+    /// `hdi surface` without `--out` has nowhere to put them and skips their cost.
+    pub analyses: bool,
 }
 
 /// One analysed area: a file and an optional rectangle of it.
@@ -261,7 +273,11 @@ pub fn check(
             );
         }
     }
-    for (k, v) in [("size_x", cfg.size_x), ("size_y", cfg.size_y)] {
+    for (k, v) in [
+        ("size_x", cfg.size_x),
+        ("size_y", cfg.size_y),
+        ("tip_radius", cfg.tip_radius),
+    ] {
         if let Some(Length(x)) = v {
             if x <= 0.0 {
                 return bad(k, format!("{x:e} m is out of range: must be > 0"));
@@ -348,6 +364,8 @@ pub fn check(
         periodic: cfg.periodic,
         scale_sweep: cfg.scale_sweep,
         x3p: cfg.x3p,
+        tip_radius: cfg.tip_radius.map(|l| l.0),
+        analyses: true,
     })
 }
 
@@ -419,6 +437,13 @@ impl SurfaceParams {
         if let (true, Value::Object(m)) = (self.x3p, &mut v) {
             m.insert("x3p".into(), Value::Bool(true));
         }
+        // Only when given: without it the key is what it was before the option existed.
+        if let (Some(r), Value::Object(m)) = (self.tip_radius, &mut v) {
+            m.insert("tip_radius_m".into(), json!(r));
+        }
+        if let (false, Value::Object(m)) = (self.analyses, &mut v) {
+            m.insert("analyses".into(), json!(false));
+        }
         v
     }
 }
@@ -431,6 +456,49 @@ pub struct SurfaceAnalysis {
     pub filtered: Option<HeightMap>,
     pub report: RoughnessReport,
     pub sweep: Vec<SweepRow>,
+    /// PSD, ACF, scale-dependent slope and curvature of the analysed map, or why not (a map
+    /// with invalid pixels).
+    pub spectra: std::result::Result<SurfaceAnalyses, String>,
+    /// The tip reliability cutoff, when a tip radius is given.
+    pub tip: Option<TipReliability>,
+}
+
+/// The tip-radius reliability cutoff of the analysed map and the roughness above it.
+pub struct TipReliability {
+    pub tip_radius: f64,
+    /// `Err`: not computed (why).
+    pub cutoff: std::result::Result<TipCutoff, String>,
+    /// σ, R, η, β of the analysed map S-filtered at λs = the cutoff (`cutoff` = `At`), of the
+    /// map itself (`None`: no artefacts); absent when no data are reliable or not computed.
+    pub above: Option<RoughnessReport>,
+}
+
+/// The cutoff for `tip_radius` and the roughness above it (docs/surfaces.md).
+fn tip_reliability(
+    map: &HeightMap,
+    tip_radius: f64,
+    raw: &RoughnessReport,
+    opts: &RoughnessOptions,
+) -> Result<TipReliability> {
+    let cutoff = match tip_reliability_cutoff(map, tip_radius) {
+        Ok(c) => Ok(c),
+        Err(SurfaceError::InvalidData(why)) => Err(why),
+        Err(e) => return Err(e.into()),
+    };
+    let above = match &cutoff {
+        Ok(TipCutoff::At(lambda)) => {
+            let mut filtered = map.clone();
+            apply_filters(&mut filtered, Some(*lambda), None)?;
+            Some(roughness(&filtered, opts)?)
+        }
+        Ok(TipCutoff::NoArtefacts) => Some(raw.clone()),
+        Ok(TipCutoff::NoReliableData(_)) | Err(_) => None,
+    };
+    Ok(TipReliability {
+        tip_radius,
+        cutoff,
+        above,
+    })
 }
 
 impl SurfaceAnalysis {
@@ -465,12 +533,27 @@ pub fn analyse(params: &SurfaceParams) -> Result<SurfaceAnalysis> {
     } else {
         Vec::new()
     };
+    let spectra = if !params.analyses {
+        Err("not requested (`hdi surface` without --out)".to_string())
+    } else {
+        match surface_analyses(target) {
+            Ok(s) => Ok(s),
+            Err(SurfaceError::InvalidData(why)) => Err(why),
+            Err(e) => return Err(e.into()),
+        }
+    };
+    let tip = match params.tip_radius {
+        Some(radius) => Some(tip_reliability(target, radius, &report, &params.roughness)?),
+        None => None,
+    };
     Ok(SurfaceAnalysis {
         raw,
         levelled,
         filtered,
         report,
         sweep,
+        spectra,
+        tip,
     })
 }
 
@@ -536,6 +619,29 @@ pub fn report(a: &SurfaceAnalysis, p: &SurfaceParams) -> SurfaceReport {
         filter_l_m: p.filter_l,
         masked_fraction: m.masked_fraction(),
         warnings: r.warnings.clone(),
+        tip_reliability: a.tip.as_ref().map(tip_report),
+    }
+}
+
+/// `tip_reliability` of the `--json` report.
+fn tip_report(t: &TipReliability) -> TipReliabilityReport {
+    let (status, cutoff_m) = match &t.cutoff {
+        Ok(TipCutoff::At(l)) => ("cutoff", Some(*l)),
+        Ok(TipCutoff::NoArtefacts) => ("no_artefacts", None),
+        Ok(TipCutoff::NoReliableData(l)) => ("no_reliable_data", Some(*l)),
+        Err(_) => ("not_computed", None),
+    };
+    let above = t.above.as_ref();
+    TipReliabilityReport {
+        tip_radius_m: t.tip_radius,
+        safety_factor: TIP_SAFETY_FACTOR,
+        status: status.into(),
+        cutoff_m,
+        sigma_m: above.and_then(|r| finite(r.sigma)),
+        eta_per_m2: above.and_then(|r| finite(r.eta)),
+        r_m: above.and_then(|r| finite(r.r)),
+        beta: above.and_then(|r| finite(r.beta)),
+        n_summits: above.map(|r| r.n_summits),
     }
 }
 
@@ -725,6 +831,10 @@ fn run_areas(
         }
     }
     out.write_count(&g, "n_areas", n as u64, "areas analysed")?;
+    // Each area's curves and tip cutoff (area 0's are also those under /surface).
+    for (k, a) in analyses.iter().enumerate() {
+        write_spectra(&out, &format!("surface/areas/area_{k}"), a)?;
+    }
     out.write_count(
         &g,
         "bootstrap_resamples",

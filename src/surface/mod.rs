@@ -12,6 +12,7 @@ pub mod filter;
 pub mod io;
 pub mod level;
 pub mod roughness;
+pub mod spectra;
 pub mod synth;
 
 use ndarray::Array2;

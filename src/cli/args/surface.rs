@@ -44,6 +44,10 @@ pub struct SurfaceArgs {
     pub periodic: bool,
     #[arg(long, default_value_t = 64)]
     pub histogram_bins: usize,
+    /// Scanning-probe tip radius (e.g. 40nm): report the tip reliability cutoff and σ, R, η, β
+    /// above it (docs/surfaces.md, "Surface analyses").
+    #[arg(long)]
+    pub tip_radius: Option<Length>,
     /// Also write the full HDF5 output (and PNGs beside it).
     #[arg(long)]
     pub out: Option<PathBuf>,

@@ -7,8 +7,10 @@ use crate::error::Result;
 use crate::figures;
 use crate::numerics::bootstrap::Summary;
 use crate::surface::roughness::{RoughnessReport, SweepRow};
+use crate::surface::spectra::{Curve, TipCutoff, TIP_SAFETY_FACTOR};
 use crate::surface::HeightMap;
 use serde_json::{json, Value};
+use std::f64::consts::PI;
 use std::path::Path;
 
 pub(super) fn axis(n: usize, d: f64, off: f64) -> Vec<f64> {
@@ -105,6 +107,7 @@ pub(super) fn write_h5_body(out: &H5Out, a: &SurfaceAnalysis) -> Result<()> {
     if !a.sweep.is_empty() {
         write_sweeps(out, &a.sweep)?;
     }
+    write_spectra(out, "surface", a)?;
     let fm = a.final_map();
     let history: Vec<Value> = fm
         .history
@@ -306,6 +309,245 @@ pub(super) fn write_sweeps(out: &H5Out, sweep: &[SweepRow]) -> Result<()> {
     Ok(())
 }
 
+/// `{at}/analyses` (PSD, ACF, scale-dependent slope and curvature of the analysed map) and,
+/// with a tip radius, `{at}/tip_reliability` (docs/surfaces.md).
+pub(super) fn write_spectra(out: &H5Out, at: &str, a: &SurfaceAnalysis) -> Result<()> {
+    let g = out.group(&format!("{at}/analyses"), None)?;
+    match &a.spectra {
+        Err(why) => out.write_string(&g, "not_computed", why)?,
+        Ok(s) => {
+            type Entry<'a> = (&'a str, &'a Curve, [(&'a str, &'a str, &'a str); 2]);
+            let entries: [Entry; 8] = [
+                (
+                    "psd_profile",
+                    &s.psd_profile,
+                    [
+                        ("q", "1/m", "wavevector 2π/λ along x"),
+                        ("C", "m^3", "1-D PSD along x, averaged over the rows"),
+                    ],
+                ),
+                (
+                    "psd_area",
+                    &s.psd_area,
+                    [
+                        ("q", "1/m", "wavevector magnitude 2π/λ"),
+                        ("C", "m^4", "radially averaged 2-D PSD"),
+                    ],
+                ),
+                (
+                    "acf_profile",
+                    &s.acf_profile,
+                    [
+                        ("r", "m", "distance along x"),
+                        (
+                            "A",
+                            "m^2",
+                            "height-difference ACF ½⟨(h(x+r)−h(x))²⟩ along x, averaged over the rows",
+                        ),
+                    ],
+                ),
+                (
+                    "acf_area",
+                    &s.acf_area,
+                    [
+                        ("r", "m", "distance"),
+                        ("A", "m^2", "radially averaged height-difference ACF"),
+                    ],
+                ),
+                (
+                    "slope_profile",
+                    &s.slope_profile,
+                    [
+                        ("scale", "m", "distance λ of the two-point difference"),
+                        ("slope", "1", "RMS slope along x at scale λ"),
+                    ],
+                ),
+                (
+                    "slope_area",
+                    &s.slope_area,
+                    [
+                        ("scale", "m", "distance λ of the two-point difference"),
+                        ("slope", "1", "RMS slope at scale λ from the radial ACF"),
+                    ],
+                ),
+                (
+                    "curvature_profile",
+                    &s.curvature_profile,
+                    [
+                        ("scale", "m", "total length λ of the three-point stencil"),
+                        ("curvature", "1/m", "RMS curvature along x at scale λ"),
+                    ],
+                ),
+                (
+                    "curvature_area",
+                    &s.curvature_area,
+                    [
+                        ("scale", "m", "total length λ of the three-point stencil"),
+                        (
+                            "curvature",
+                            "1/m",
+                            "RMS curvature at scale λ from the radial ACF",
+                        ),
+                    ],
+                ),
+            ];
+            for (name, curve, [(xn, xu, xl), (yn, yu, yl)]) in entries {
+                let c = out.group(&format!("{at}/analyses/{name}"), None)?;
+                out.write_1d(&c, xn, &curve.x, xu, xl)?;
+                out.write_1d(&c, yn, &curve.y, yu, yl)?;
+            }
+        }
+    }
+    let Some(t) = &a.tip else {
+        return Ok(());
+    };
+    let g = out.group(&format!("{at}/tip_reliability"), None)?;
+    out.write_scalar(&g, "tip_radius", t.tip_radius, "m", "tip radius given")?;
+    out.write_scalar(
+        &g,
+        "safety_factor",
+        TIP_SAFETY_FACTOR,
+        "1",
+        "f in the criterion min h''(λ) = −f/R",
+    )?;
+    let (status, cutoff) = match &t.cutoff {
+        Ok(TipCutoff::At(l)) => ("cutoff", *l),
+        Ok(TipCutoff::NoArtefacts) => ("no_artefacts", f64::NAN),
+        Ok(TipCutoff::NoReliableData(l)) => ("no_reliable_data", *l),
+        Err(_) => ("not_computed", f64::NAN),
+    };
+    out.write_string(&g, "status", status)?;
+    if let Err(why) = &t.cutoff {
+        out.write_string(&g, "not_computed", why)?;
+    }
+    out.write_scalar(
+        &g,
+        "cutoff",
+        cutoff,
+        "m",
+        "stencil length below which the tip distorts the map (NaN: none)",
+    )?;
+    if let Some(r) = &t.above {
+        for (name, v, u, ln) in [
+            ("sigma", r.sigma, "m", "RMS roughness above the cutoff"),
+            ("eta", r.eta, "m^-2", "summit density above the cutoff"),
+            ("R", r.r, "m", "mean summit radius above the cutoff"),
+            ("beta", r.beta, "1", "sigma R eta above the cutoff"),
+        ] {
+            out.write_scalar(&g, name, v, u, ln)?;
+        }
+        out.write_count(
+            &g,
+            "n_summits",
+            r.n_summits as u64,
+            "summits above the cutoff",
+        )?;
+    }
+    Ok(())
+}
+
+/// PSD, ACF, slope and curvature against scale, log–log (`psd_profile.png`, `psd_area.png`,
+/// `acf.png`, `slope.png`, `curvature.png`); nothing when the analyses were not computed.
+fn write_spectra_figures(a: &SurfaceAnalysis, dir: &Path) -> Result<()> {
+    let Ok(s) = &a.spectra else {
+        return Ok(());
+    };
+    let pts = |c: &Curve, kx: f64, ky: f64| -> Vec<(f64, f64)> {
+        c.x.iter()
+            .zip(&c.y)
+            .map(|(x, y)| (x * kx, y * ky))
+            .collect()
+    };
+    let cutoff = a
+        .tip
+        .as_ref()
+        .and_then(|t| t.cutoff.as_ref().ok())
+        .and_then(|c| match c {
+            TipCutoff::At(l) => Some(*l),
+            _ => None,
+        });
+    let title = |what: &str| match cutoff {
+        Some(l) => format!("{what} (tip cutoff λc = {:.1} nm)", l * 1e9),
+        None => what.to_string(),
+    };
+    // The cutoff as a vertical line across the plotted values (at q = 2π/λc on a spectrum,
+    // r = λc/2 on the ACF: the ACF's distance is half the curvature stencil).
+    let plot = |file: &str,
+                what: &str,
+                x_desc: &str,
+                y_desc: &str,
+                series: Vec<(&str, Vec<(f64, f64)>)>,
+                x_of_cutoff: Option<f64>|
+     -> Result<()> {
+        let mut series = series;
+        if let Some(xc) = x_of_cutoff {
+            let (lo, hi) = series
+                .iter()
+                .flat_map(|(_, s)| s.iter().map(|p| p.1))
+                .filter(|y| *y > 0.0 && y.is_finite())
+                .fold((f64::INFINITY, 0.0f64), |(a, b), y| (a.min(y), b.max(y)));
+            if lo.is_finite() {
+                series.push((
+                    "tip reliability cutoff",
+                    vec![(xc, lo.max(hi * 1e-10)), (xc, hi)],
+                ));
+            }
+        }
+        figures::loglog_png(&dir.join(file), &title(what), x_desc, y_desc, &series, &[])?;
+        Ok(())
+    };
+    plot(
+        "psd_profile.png",
+        "1-D power spectral density along x",
+        "wavevector q = 2π/λ (1/µm)",
+        "C¹ᴰ (nm³)",
+        vec![("averaged over the rows", pts(&s.psd_profile, 1e-6, 1e27))],
+        cutoff.map(|l| 2.0 * PI / l * 1e-6),
+    )?;
+    plot(
+        "psd_area.png",
+        "Radially averaged 2-D power spectral density",
+        "wavevector |q| = 2π/λ (1/µm)",
+        "C²ᴰ (nm⁴)",
+        vec![("radial average", pts(&s.psd_area, 1e-6, 1e36))],
+        cutoff.map(|l| 2.0 * PI / l * 1e-6),
+    )?;
+    plot(
+        "acf.png",
+        "Height-difference autocorrelation ½⟨(h(x+r) − h(x))²⟩",
+        "distance r (nm)",
+        "A (nm²)",
+        vec![
+            ("along x (profiles)", pts(&s.acf_profile, 1e9, 1e18)),
+            ("radial average (map)", pts(&s.acf_area, 1e9, 1e18)),
+        ],
+        cutoff.map(|l| l / 2.0 * 1e9),
+    )?;
+    plot(
+        "slope.png",
+        "RMS slope against scale",
+        "scale λ (nm)",
+        "RMS slope (1)",
+        vec![
+            ("along x (profiles)", pts(&s.slope_profile, 1e9, 1.0)),
+            ("radial average (map)", pts(&s.slope_area, 1e9, 1.0)),
+        ],
+        cutoff.map(|l| l / 2.0 * 1e9),
+    )?;
+    plot(
+        "curvature.png",
+        "RMS curvature against scale",
+        "scale λ = stencil length (nm)",
+        "RMS curvature (1/µm)",
+        vec![
+            ("along x (profiles)", pts(&s.curvature_profile, 1e9, 1e-6)),
+            ("radial average (map)", pts(&s.curvature_area, 1e9, 1e-6)),
+        ],
+        cutoff.map(|l| l * 1e9),
+    )?;
+    Ok(())
+}
+
 /// Height map, height and summit-height histograms, and the β scale sweep.
 pub(super) fn write_figures(a: &SurfaceAnalysis, dir: &Path) -> Result<()> {
     let fm = a.final_map();
@@ -345,7 +587,8 @@ pub(super) fn write_figures(a: &SurfaceAnalysis, dir: &Path) -> Result<()> {
             "Gaussian, same mean and σ_s",
         )?;
     }
-    write_sweep_plot(&dir.join("scale_sweep.png"), &a.sweep, fm.dx.max(fm.dy))
+    write_sweep_plot(&dir.join("scale_sweep.png"), &a.sweep, fm.dx.max(fm.dy))?;
+    write_spectra_figures(a, dir)
 }
 
 /// β against the lateral scale it was measured at: the sampling interval (sub-sampling) or the

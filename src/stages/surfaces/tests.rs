@@ -97,4 +97,22 @@ fn x3p_out_opens_in_surfacetopography_with_the_analysed_heights() {
         let (x, y) = (px[0].as_u64().unwrap(), px[1].as_u64().unwrap());
         assert_eq!(map.z[[y as usize, x as usize]], px[2].as_f64().unwrap());
     }
+
+#[test]
+fn tip_radius_enters_the_key_only_when_given() {
+    let without = check(&cfg("file = \"a.gwy\""), "a.gwy".into()).unwrap();
+    assert!(without.canonical().get("tip_radius_m").is_none());
+    let with = check(
+        &cfg("file = \"a.gwy\"\ntip_radius = \"40 nm\""),
+        "a.gwy".into(),
+    )
+    .unwrap();
+    assert_eq!(with.tip_radius, Some(40e-9));
+    assert_eq!(with.canonical()["tip_radius_m"], serde_json::json!(40e-9));
+    let mut rest = with.canonical();
+    rest.as_object_mut().unwrap().remove("tip_radius_m");
+    assert_eq!(rest, without.canonical());
+    let e = check(&cfg("tip_radius = \"-1 nm\""), "a".into()).unwrap_err();
+    assert_eq!(e.key, "tip_radius");
+    assert!(toml::from_str::<SurfaceConfig>("tip_radius_nm = 40").is_err());
 }

@@ -169,6 +169,7 @@ pub const READERS: &[Reader] = &[
             "tests/data/surfaces/frt-2.frt",
         ],
     },
+    Reader {
         id: "nid",
         name: "Nanosurf NID / EZD",
         extensions: &["nid", "ezd"],
