@@ -35,8 +35,9 @@ pub use output::write_outputs;
 use output::{write_areas_plot, write_figures, write_h5_body, write_spectra, write_x3p};
 pub use rows::{AreaColumns, AreaRow, SurfaceRow, SurfaceSummaryRow};
 
-/// Bump when the numbers this stage produces change.
-pub const MODEL_VERSION: &str = "surface-1";
+/// Bump when the numbers or files this stage produces change. surface-2: `surface.h5` holds
+/// the PSD/ACF/slope/curvature curves and the stage draws their figures (issue 32).
+pub const MODEL_VERSION: &str = "surface-2";
 
 /// The default levelling recipe (docs/surfaces.md).
 pub fn default_level() -> Vec<String> {

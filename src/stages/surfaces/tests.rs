@@ -97,6 +97,7 @@ fn x3p_out_opens_in_surfacetopography_with_the_analysed_heights() {
         let (x, y) = (px[0].as_u64().unwrap(), px[1].as_u64().unwrap());
         assert_eq!(map.z[[y as usize, x as usize]], px[2].as_f64().unwrap());
     }
+}
 
 #[test]
 fn tip_radius_enters_the_key_only_when_given() {

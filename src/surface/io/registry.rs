@@ -236,9 +236,7 @@ pub const READERS: &[Reader] = &[
         detected_by: "TIFF whose first IFD has Park's tag 50432 = `0x0E031301`",
         sniff: park::looks_like,
         read: |path, bytes, _| park::read(path, bytes),
-        samples: &[
-            "tests/data/surfaces/example_ps.tiff",
-        ],
+        samples: &["tests/data/surfaces/example_ps.tiff"],
     },
     Reader {
         id: "ibw",
