@@ -370,14 +370,19 @@ mod tests {
     /// map, never a panic; and some of them fail, so the error path ran.
     #[test]
     fn every_sample_survives_truncation_and_flipped_bytes() {
-        for r in READERS {
-            for s in r.samples {
-                let bytes = std::fs::read(repo(s)).unwrap();
-                let name = s.rsplit('/').next().unwrap();
-                let failed = fuzz_reader(name, &bytes);
-                assert!(failed > 0, "{s}: no corrupt copy was refused");
-            }
-        }
+        use rayon::prelude::*;
+        // The longest unit test (~7000 corrupt copies of multi-MB files): samples in parallel,
+        // so that it does not hold the end of `cargo test` on one core.
+        let samples: Vec<&str> = READERS
+            .iter()
+            .flat_map(|r| r.samples.iter().copied())
+            .collect();
+        samples.par_iter().for_each(|s| {
+            let bytes = std::fs::read(repo(s)).unwrap();
+            let name = s.rsplit('/').next().unwrap();
+            let failed = fuzz_reader(name, &bytes);
+            assert!(failed > 0, "{s}: no corrupt copy was refused");
+        });
     }
 
     /// Each reader given every other reader's samples (what its sniffer would keep from it):
