@@ -289,11 +289,18 @@ pub fn detect(head: &[u8]) -> Option<&'static Reader> {
 
 /// The list of the error message for a file no reader claims.
 pub fn supported() -> String {
-    READERS
-        .iter()
-        .map(|r| {
-            let ext: Vec<String> = r.extensions.iter().map(|e| format!(".{e}")).collect();
-            format!("{} ({})", r.name, ext.join(" "))
+    supported_list(READERS.iter().map(|r| (r.name, r.extensions)))
+}
+
+/// "Name (.ext .ext), …" of formats given as (name, extensions): the "supported:" list of the
+/// height-map and the line-profile registries.
+pub(crate) fn supported_list<'a>(
+    formats: impl Iterator<Item = (&'a str, &'a [&'a str])>,
+) -> String {
+    formats
+        .map(|(name, extensions)| {
+            let ext: Vec<String> = extensions.iter().map(|e| format!(".{e}")).collect();
+            format!("{name} ({})", ext.join(" "))
         })
         .collect::<Vec<_>>()
         .join(", ")
@@ -301,22 +308,30 @@ pub fn supported() -> String {
 
 /// The format table of docs/surfaces.md, between its `readers:begin`/`readers:end` markers.
 pub fn markdown_table() -> String {
+    markdown_table_of(
+        READERS
+            .iter()
+            .map(|r| (r.name, r.id, r.extensions, r.detected_by, r.samples)),
+    )
+}
+
+/// A docs table of formats given as (name, id, extensions, detected by, samples): the
+/// height-map and the line-profile registries.
+pub(crate) fn markdown_table_of<'a>(
+    formats: impl Iterator<Item = (&'a str, &'a str, &'a [&'a str], &'a str, &'a [&'a str])>,
+) -> String {
     let mut s = String::from(
         "| format | id | extensions | detected by | read in the tests on |\n|---|---|---|---|---|\n",
     );
-    for r in READERS {
-        let ext: Vec<String> = r.extensions.iter().map(|e| format!("`.{e}`")).collect();
-        let samples: Vec<String> = r
-            .samples
+    for (name, id, extensions, detected_by, samples) in formats {
+        let ext: Vec<String> = extensions.iter().map(|e| format!("`.{e}`")).collect();
+        let samples: Vec<String> = samples
             .iter()
             .map(|p| format!("`{}`", p.rsplit('/').next().unwrap_or(p)))
             .collect();
         s.push_str(&format!(
-            "| {} | `{}` | {} | {} | {} |\n",
-            r.name,
-            r.id,
+            "| {name} | `{id}` | {} | {detected_by} | {} |\n",
             ext.join(" "),
-            r.detected_by,
             samples.join(", ")
         ));
     }

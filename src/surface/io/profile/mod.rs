@@ -125,39 +125,17 @@ pub fn detect(head: &[u8]) -> Option<&'static ProfileReader> {
 
 /// The formats, for the "supported:" list of the error.
 pub fn supported() -> String {
-    PROFILE_READERS
-        .iter()
-        .map(|r| {
-            let ext: Vec<String> = r.extensions.iter().map(|e| format!(".{e}")).collect();
-            format!("{} ({})", r.name, ext.join(" "))
-        })
-        .collect::<Vec<_>>()
-        .join(", ")
+    super::registry::supported_list(PROFILE_READERS.iter().map(|r| (r.name, r.extensions)))
 }
 
 /// The line-profile table of docs/surfaces.md, between its `profiles:begin`/`profiles:end`
 /// markers.
 pub fn markdown_table() -> String {
-    let mut s = String::from(
-        "| format | id | extensions | detected by | read in the tests on |\n|---|---|---|---|---|\n",
-    );
-    for r in PROFILE_READERS {
-        let ext: Vec<String> = r.extensions.iter().map(|e| format!("`.{e}`")).collect();
-        let samples: Vec<String> = r
-            .samples
+    super::registry::markdown_table_of(
+        PROFILE_READERS
             .iter()
-            .map(|p| format!("`{}`", p.rsplit('/').next().unwrap_or(p)))
-            .collect();
-        s.push_str(&format!(
-            "| {} | `{}` | {} | {} | {} |\n",
-            r.name,
-            r.id,
-            ext.join(" "),
-            r.detected_by,
-            samples.join(", ")
-        ));
-    }
-    s
+            .map(|r| (r.name, r.id, r.extensions, r.detected_by, r.samples)),
+    )
 }
 
 /// How many leading bytes the sniffers see.
