@@ -7,6 +7,7 @@ pub mod bulge;
 pub mod calibration;
 pub mod cases;
 pub mod contact;
+pub mod contact_bem;
 pub mod dmw_tracks;
 pub mod doe;
 pub mod interface;

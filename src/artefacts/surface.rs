@@ -252,6 +252,69 @@ pub fn upstream_surface_stats(
     upstream(upstream_results, name)?.stats.stats(name)
 }
 
+/// The height map a surface instance analysed last (its `surface.h5`: the filtered map when a
+/// filter ran, else the levelled one, as the group's `default` attribute says), in metres,
+/// `[ny, nx]`, with its spacing. A surface of several areas is refused (its file holds one
+/// map per area).
+pub struct FinalMap {
+    pub z: ndarray::Array2<f64>,
+    pub dx: f64,
+    pub dy: f64,
+}
+
+/// The [`FinalMap`] of the upstream surface instance `name` (from its store directory).
+pub fn upstream_final_map(
+    upstream_dirs: &BTreeMap<String, std::path::PathBuf>,
+    name: &str,
+) -> Result<FinalMap> {
+    let dir = upstream_dirs
+        .get(name)
+        .ok_or_else(|| Error::MissingUpstreamFiles {
+            kind: "surface",
+            name: name.to_string(),
+        })?;
+    let path = dir.join("surface.h5");
+    let read_err = |what: String| {
+        let path = path.clone();
+        move |source| Error::Hdf5Read { path, what, source }
+    };
+    let file = hdf5::File::open(&path).map_err(|source| Error::Hdf5Open {
+        path: path.clone(),
+        source,
+    })?;
+    let entry = file.group("surface").map_err(|_| Error::UpstreamField {
+        kind: "surface",
+        name: name.to_string(),
+        what: "single map (several areas: give the BEM one area)".into(),
+    })?;
+    let default = entry
+        .attr("default")
+        .and_then(|a| a.read_scalar::<hdf5::types::VarLenUnicode>())
+        .map_err(read_err("surface `default` attribute".into()))?
+        .to_string();
+    let group = format!("surface/{default}");
+    let z = file
+        .dataset(&format!("{group}/height"))
+        .and_then(|d| d.read_2d::<f64>())
+        .map_err(read_err(format!("{group}/height")))?;
+    let axis = |a: &str| -> Result<f64> {
+        let v = file
+            .dataset(&format!("{group}/{a}"))
+            .and_then(|d| d.read_raw::<f64>())
+            .map_err(read_err(format!("{group}/{a}")))?;
+        Ok(if v.len() >= 2 { v[1] - v[0] } else { f64::NAN })
+    };
+    let (dx, dy) = (axis("x")?, axis("y")?);
+    if !(dx > 0.0 && dy > 0.0) {
+        return Err(Error::UpstreamField {
+            kind: "surface",
+            name: name.to_string(),
+            what: format!("usable pixel spacing in {group} (dx = {dx}, dy = {dy})"),
+        });
+    }
+    Ok(FinalMap { z, dx, dy })
+}
+
 /// The measured summit heights of the upstream surface instance `name` (its discrete summits:
 /// `mean_summit_height_m`, `sigma_s_m`, with `sigma_m` and `eta_per_m2`). A surface of several
 /// areas is refused: its result carries these for the first area only.

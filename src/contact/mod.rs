@@ -3,6 +3,7 @@
 //! adhesion, real area), the molecularly-thin-lubricant model, and fast force tables for the
 //! dynamics. Pure functions; no I/O.
 
+pub mod bem;
 pub mod isbl;
 pub mod lookup;
 pub mod mtl;

@@ -14,7 +14,31 @@ use std::path::Path;
 
 /// Height map as a viridis heat map with a colour bar; axes in µm, colour in nm.
 pub fn heatmap_png(path: &Path, z: ArrayView2<f64>, dx: f64, dy: f64, title: &str) -> Result<()> {
-    heatmap_overlay_png(path, z, dx, dy, title, |_| Ok(()))
+    heatmap_overlay_png(path, z, dx, dy, title, HEIGHT_NM, |_| Ok(()))
+}
+
+/// How a heat map's colour bar shows values: the factor from SI and the axis label.
+#[derive(Debug, Clone, Copy)]
+pub struct ColourScale {
+    pub factor: f64,
+    pub label: &'static str,
+}
+
+/// Heights in nm.
+pub const HEIGHT_NM: ColourScale = ColourScale {
+    factor: 1e9,
+    label: "height (nm)",
+};
+
+/// A field (pressure, gap, …) as a viridis heat map, colour bar per `colour`; axes in µm.
+pub fn field_png(
+    path: &Path,
+    z: ArrayView2<f64>,
+    (dx, dy): (f64, f64),
+    title: &str,
+    colour: ColourScale,
+) -> Result<()> {
+    heatmap_overlay_png(path, z, dx, dy, title, colour, |_| Ok(()))
 }
 
 /// [`heatmap_png`] with `overlay` drawn on top, in the map's plot coordinates (µm; row 0 at
@@ -25,6 +49,7 @@ pub(crate) fn heatmap_overlay_png(
     dx: f64,
     dy: f64,
     title: &str,
+    colour: ColourScale,
     overlay: impl FnOnce(&mut Chart) -> DrawResult<()>,
 ) -> Result<()> {
     let (ny, nx) = z.dim();
@@ -72,30 +97,30 @@ pub(crate) fn heatmap_overlay_png(
             )
         }))?;
         overlay(&mut chart)?;
-        let lo_nm = lo * 1e9;
-        let hi_nm = (lo + span) * 1e9;
+        let lo_shown = lo * colour.factor;
+        let hi_shown = (lo + span) * colour.factor;
         let mut cb = ChartBuilder::on(&bar)
             .margin_top(40)
             .margin_bottom(50)
             .margin_left(10)
             .margin_right(60)
             .y_label_area_size(60)
-            .build_cartesian_2d(0.0..1.0, lo_nm..hi_nm)?;
+            .build_cartesian_2d(0.0..1.0, lo_shown..hi_shown)?;
         cb.configure_mesh()
             .disable_mesh()
             .disable_x_axis()
             .y_labels(6)
             .label_style(font(14))
             .axis_desc_style(font(14))
-            .y_desc("height (nm)")
+            .y_desc(colour.label)
             .draw()?;
         let n = 100;
         cb.draw_series((0..n).map(|k| {
-            let a = lo_nm + (hi_nm - lo_nm) * k as f64 / n as f64;
-            let b = lo_nm + (hi_nm - lo_nm) * (k + 1) as f64 / n as f64;
+            let a = lo_shown + (hi_shown - lo_shown) * k as f64 / n as f64;
+            let b = lo_shown + (hi_shown - lo_shown) * (k + 1) as f64 / n as f64;
             Rectangle::new(
                 [(0.0, a), (1.0, b)],
-                ViridisRGB::get_color_normalized(a, lo_nm, hi_nm).filled(),
+                ViridisRGB::get_color_normalized(a, lo_shown, hi_shown).filled(),
             )
         }))?;
         Ok(())

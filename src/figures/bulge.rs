@@ -3,7 +3,7 @@
 //! the fitted cap (Fig. C.5 style), and the bulge height against heater power with the
 //! efficiency line.
 
-use super::basic::{heatmap_overlay_png, lines_png};
+use super::basic::{heatmap_overlay_png, lines_png, HEIGHT_NM};
 use super::kit::{dashed_line, draw_polyline, Result};
 use crate::surface::bulge::{BulgeFit, Rect};
 use ndarray::ArrayView2;
@@ -188,7 +188,7 @@ pub fn levelled_map_png(
     let te = te_mask(fit, te_margin).map(|r| rect_path(&r, dx, dy, ny));
     let rects: Vec<Vec<(f64, f64)>> = exclude.iter().map(|r| rect_path(r, dx, dy, ny)).collect();
     let title = format!("{title} — red: fit, dashed: TE mask");
-    heatmap_overlay_png(path, shown, dx, dy, &title, |chart| {
+    heatmap_overlay_png(path, shown, dx, dy, &title, HEIGHT_NM, |chart| {
         draw_polyline(chart, &outline, RED.stroke_width(2))?;
         for r in &rects {
             draw_polyline(chart, r, BLACK.stroke_width(2))?;

@@ -24,6 +24,7 @@ mod kit;
 pub mod analysis;
 pub mod basic;
 pub mod bulge;
+pub mod contact_bem;
 pub mod doe;
 pub mod sweep;
 

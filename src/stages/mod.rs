@@ -9,6 +9,7 @@ pub mod bulge;
 pub mod calibrate;
 pub mod case_engine;
 pub mod contact;
+pub mod contact_bem;
 pub mod dmw;
 pub mod doe;
 pub mod excitation;
@@ -276,6 +277,7 @@ pub const KINDS: &[Registered] = &[
     kind::<bulge::BulgeStage>(),
     kind::<interface::InterfaceStage>(),
     kind::<contact::ContactStage>(),
+    kind::<contact_bem::ContactBemStage>(),
     kind::<dmw::DmwStage>(),
     kind::<excitation::ExcitationStage>(),
     kind::<simulate::SimulateStage>(),

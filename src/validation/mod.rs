@@ -650,6 +650,7 @@ pub fn assign_ids(prefix: &str, rows: &mut [Row]) {
     }
 }
 
+pub mod bem;
 pub mod calibration;
 pub mod contact;
 pub mod dmw;
@@ -723,6 +724,7 @@ pub const AREAS: &[Area] = &[
     Area::code("dmw", dmw::rows),
     Area::mixed("contact", contact::rows),
     Area::code("mtl", mtl::rows),
+    Area::code("bem", bem::rows),
     Area::mixed("dynamics", dynamics::rows),
     Area::mixed("three_dof", three_dof::rows),
     Area::pipeline("calibration", calibration::rows),

@@ -178,9 +178,14 @@ pub fn read_height_map(path: &Path, opts: &ReadOptions) -> Result<HeightMap> {
         path: path.to_path_buf(),
         source,
     })?;
+    read_height_map_bytes(path, &bytes, opts)
+}
+
+/// [`read_height_map`] of a file already in memory (`path` names it in errors).
+pub fn read_height_map_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<HeightMap> {
     let head = &bytes[..bytes.len().min(SNIFF_BYTES)];
     let raw = match registry::detect(head) {
-        Some(reader) => (reader.read)(path, &bytes, opts)?,
+        Some(reader) => (reader.read)(path, bytes, opts)?,
         None => {
             let what = if bytes.is_empty() {
                 "empty file"
