@@ -17,6 +17,9 @@ inputs for both sides into a temp dir (numpy .npy: a 10⁶-sample and a 10⁷-sa
               (plane level + roughness)                  map.npy --json (total_seconds)
   two-dof     hdi bench --only two-dof (8.5 / 12 nm,     bench/two_dof_scipy.py --synthetic-dmw
               2 ms, synthetic DMW)                       --init static --max-step inf (RK45)
+  bem         hdi bench --only bem --input map.npy       tamaas PolonskyKeerRey, same map, E* = 1,
+              (one periodic load step, tolerance 1e-10;  p̄ = 0.05·h′_rms, tolerance 1e-10, cold
+              the non-periodic 2n² padded step too)      start (needs `pip install tamaas`)
 
 hdi's figures are timed inside the hdi process after a warm-up run (`--repeat 1`: one warm-up,
 one timed run per round), so start-up and reading the .npy are excluded on both sides. Ratio =
@@ -35,7 +38,7 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 FS = 4e6
-GROUPS = ["two-dof", "cwt", "fft", "roughness"]
+GROUPS = ["two-dof", "cwt", "fft", "roughness", "bem"]
 
 
 def series(n):
@@ -95,6 +98,50 @@ def row(figure, hdi_v, anchor_v, unit, goal, note=""):
     return dict(figure=figure, hdi=hdi_v, anchor=anchor_v, unit=unit, ratio=ratio, goal=goal, note=note)
 
 
+def bem_load(h, dx):
+    """p̄ = 0.05·E*·h′_rms with E* = 1 and periodic forward differences (hdi bench's load)."""
+    gx = (np.roll(h, -1, axis=1) - h) / dx
+    gy = (np.roll(h, -1, axis=0) - h) / dx
+    return 0.05 * math.sqrt(float(np.mean(gx**2 + gy**2)))
+
+
+def bem_rows(hdi, mp, n, size):
+    """One periodic load step: hdi's and tamaas's, alternating, best of n; hdi's padded step."""
+    try:
+        import tamaas as tm
+    except ImportError:
+        return [row(f"BEM load step {size}²", None, None, "s", "≥ 1×", "anchor missing: pip install tamaas")]
+    h = np.ascontiguousarray(np.load(mp), dtype=np.float64)
+    side = 4e-6  # hdi bench reads map.npy as a 4 µm square
+    load = bem_load(h, side / h.shape[0])
+    tm.set_log_level(tm.LogLevel.error)
+    bh, ba, bp, fig, its = math.inf, math.inf, math.inf, None, None
+    for k in range(n):
+        say(f"bem round {k + 1}/{n}")
+        f = hdi_figures(hdi, ["--only", "bem", "--input", mp])
+        if f["bem_periodic_load_step"]["value"] < bh:
+            bh, fig = f["bem_periodic_load_step"]["value"], f
+        bp = min(bp, f["bem_non_periodic_load_step"]["value"])
+        model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [side, side], list(h.shape))
+        model.E, model.nu = 1.0, 0.0
+        solver = tm.PolonskyKeerRey(model, h, 1e-10)
+        ba = min(ba, timed(lambda: solver.solve(load)))
+        area = float((np.array(model.traction) > 0).mean())
+    d = fig["bem_periodic_load_step"]["details"]
+    hdi_area = fig["bem_periodic_load_step"]["label"].rsplit("= ", 1)[-1].rstrip(")")
+    dp = fig["bem_non_periodic_load_step"]["details"]
+    threads = os.environ.get("OMP_NUM_THREADS", "default")
+    return [
+        row(f"BEM load step {size}² periodic", bh, ba, "s", "≥ 1×",
+            f"hdi {d['iterations']} iterations, {d['memory_bytes'] / 2**20:.0f} MiB, A_r/A_0 = "
+            f"{hdi_area}; tamaas {tm.__version__} A_r/A_0 = {area:.4f} "
+            f"(OMP_NUM_THREADS {threads})"),
+        row(f"BEM load step {size}² non-periodic", bp, None, "s", "-",
+            f"padded {2 * size}², {dp['iterations']} iterations, "
+            f"{dp['memory_bytes'] / 2**20:.0f} MiB"),
+    ]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--hdi", required=True, help="the hdi binary (a release build)")
@@ -116,7 +163,7 @@ def main():
             np.save(sig6, series(1_000_000))
         if "fft" in only:
             np.save(sig7, series(10_000_000))
-        if "roughness" in only:
+        if "roughness" in only or "bem" in only:
             np.save(mp, gaussian_map(a.map_size))
 
         if "two-dof" in only:
@@ -195,6 +242,9 @@ def main():
                     note = "anchor failed: " + (o.stderr.strip().splitlines() or ["no output"])[-1]
             rows.append(row(f"roughness {a.map_size}²", bh, ba if ba < math.inf else None,
                             "s", "≥ 5×", note))
+
+        if "bem" in only:
+            rows.extend(bem_rows(a.hdi, mp, n, a.map_size))
 
     print(f"{'figure':<30} {'hdi':>10} {'anchor':>10} {'unit':<5} {'ratio':>7}  {'goal':<14} note")
     for r in rows:

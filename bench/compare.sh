@@ -4,7 +4,7 @@
 #   2. hdi release (cargo build --release; HDI=… to use a built binary instead),
 #   3. bench/compare.py: the same .npy inputs for both sides, hdi and the anchor alternately,
 #      best of N, one table (figure, hdi, anchor, ratio, goal).
-# Usage: bash bench/compare.sh [--repeat N] [--only two-dof,cwt,fft,roughness] [--json]
+# Usage: bash bench/compare.sh [--repeat N] [--only two-dof,cwt,fft,roughness,bem] [--json]
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(dirname "$here")"

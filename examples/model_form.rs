@@ -8,8 +8,12 @@
 //!     [lubricant=none|mtl] [summit_distribution=surface|mccool|fig_2_11|given]
 //!     [fig_2_11_area=55] [summits=S,Y] [surface_energy=constant|variable]
 //!     [friction_law=junction_shear|seed_power_elastic|ke_static] [dmw_seed=1]
-//!     [model=initial_2dof]
+//!     [model=initial_2dof] [contact_law=bem bem_result=processed/bem_measured/result.json]
 //! ```
+//!
+//! `contact_law=bem` takes the contact pressure, real area and junction-shear friction from
+//! the BEM curve in a `[contact_bem]` instance's `result.json` (`hdi run` writes it), adhesion
+//! from the variant's ISBL interface.
 //!
 //! `summit_offset=none|mccool` is still read (the older name). `fig_2_11` fits σ_s and y_s to
 //! Fig. 2.11 on the variant's interface with the force on `fig_2_11_area` µm² (default 55);
@@ -191,6 +195,8 @@ fn main() {
     let mut summits = Summits::Surface;
     let mut fig_area = 55e-12;
     let mut given = (f64::NAN, f64::NAN);
+    let mut bem_law = false;
+    let mut bem_result = std::path::PathBuf::from("processed/bem_measured/result.json");
     for arg in std::env::args().skip(1) {
         let (k, v) = arg.split_once('=').expect("key=value");
         label.push(arg.clone());
@@ -228,6 +234,9 @@ fn main() {
             ("friction_law", "ke_static") => ip.friction_law = FrictionLaw::KeStatic,
             ("dmw_seed", s) => seed = s.parse().expect("dmw_seed=N"),
             ("model", "initial_2dof") => initial = true,
+            ("contact_law", "isbl") => bem_law = false,
+            ("contact_law", "bem") => bem_law = true,
+            ("bem_result", path) => bem_result = path.into(),
             _ => panic!("unknown {arg}"),
         }
     }
@@ -323,7 +332,32 @@ fn main() {
         return;
     }
     ip.summits = distribution(&ip);
-    let isbl = IsblLookup::build_standard(IsblModel::new(ip).expect("ISBL")).expect("table");
+    let isbl = if bem_law {
+        let text =
+            std::fs::read_to_string(&bem_result).expect("bem_result: a [contact_bem] result.json");
+        let r: hdi::artefacts::contact_bem::BemResult =
+            serde_json::from_str(&text).expect("BEM result");
+        let points: Vec<(f64, f64, f64)> = r
+            .curve
+            .iter()
+            .map(|p| (p.mean_gap_m, p.pressure_Pa, p.contact_fraction))
+            .collect();
+        let law = hdi::contact::bem::law::ContactCurve::new(&points).expect("BEM curve");
+        let (lo, hi) = law.measured_range();
+        println!(
+            "  BEM law from {} (mean gap {:.3}–{:.3} nm solved)",
+            bem_result.display(),
+            lo / NM,
+            hi / NM
+        );
+        IsblLookup::build_with_contact_law(
+            IsblModel::new(ip).expect("ISBL"),
+            std::sync::Arc::new(law),
+        )
+        .expect("table")
+    } else {
+        IsblLookup::build_standard(IsblModel::new(ip).expect("ISBL")).expect("table")
+    };
     let model = improved_2dof();
     let dmw = synthetic_dmw(2.2e-3, 4e6, 1e-9, seed).expect("DMW");
 

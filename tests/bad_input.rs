@@ -458,3 +458,41 @@ fn an_arrow_stream_with_a_huge_decompressed_length_fails_cleanly() {
     assert_clean_failure(&o, name);
     assert!(stderr(&o).contains("decompressed"), "{}", stderr(&o));
 }
+
+#[test]
+fn contact_bem_errors_name_the_key_or_the_file() {
+    let p = Project::shipped();
+    // An explicit interface has no map to solve.
+    p.set_config(&p.config().replace(
+        "[contact_bem.bem_measured]\ninterface = \"hdi\"",
+        "[contact_bem.bem_measured]\ninterface = \"table_2_2\"",
+    ));
+    let o = p.run(&["run"]);
+    assert_clean_failure(&o, "contact_bem.bem_measured.interface");
+    assert!(
+        stderr(&o).contains("two measured surfaces"),
+        "{}",
+        stderr(&o)
+    );
+    p.set_config(&p.config().replace(
+        "interface = \"table_2_2\"\ncontact = \"measured\"",
+        "interface = \"hdi\"\ncontact = \"measured\"\nh_star_min = -1",
+    ));
+    assert_clean_failure(&p.run(&["run"]), "contact_bem.bem_measured.h_star_min");
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing.gwy");
+    let o = hdi()
+        .args(["contact", "--bem"])
+        .arg(&missing)
+        .output()
+        .unwrap();
+    assert_clean_failure(&o, "missing.gwy");
+    let map = repo_root().join("tests/data/surfaces/di-3.di");
+    let o = hdi()
+        .args(["contact", "--bem"])
+        .arg(&map)
+        .args(["--tolerance", "0"])
+        .output()
+        .unwrap();
+    assert_clean_failure(&o, "--tolerance");
+}

@@ -155,6 +155,39 @@ fn dmw_json_matches_its_schema() {
     assert!(v["trigger_level_V"].is_null(), "{v}");
 }
 
+/// `hdi contact --bem` on a real instrument file (a public NanoScope sample): the curve of the
+/// map against a flat, its schema, and a pressure that rises as the separation falls.
+#[test]
+fn contact_bem_on_a_real_instrument_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = repo_root().join("tests/data/surfaces/di-3.di");
+    let args = [
+        "contact",
+        "--bem",
+        map.to_str().unwrap(),
+        "--step",
+        "0.5",
+        "--json",
+    ];
+    let out = json_of(dir.path(), &args, true);
+    assert_matches_schema("contact-bem", &out);
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["grid"], serde_json::json!([256, 256]), "{}", v["grid"]);
+    assert!(v["isbl_sigma_m"].is_null());
+    let curve = v["curve"].as_array().unwrap();
+    assert_eq!(curve.len(), 8, "h/σ = 4, 3.5, … 0.5");
+    let p: Vec<f64> = curve
+        .iter()
+        .map(|c| c["pressure_Pa"].as_f64().unwrap())
+        .collect();
+    assert!(p.windows(2).all(|w| w[1] > w[0]), "{p:?}");
+    for c in curve {
+        let a = c["contact_fraction"].as_f64().unwrap();
+        assert!(a > 0.0 && a < 1.0, "{c}");
+        assert!(c["error"].as_f64().unwrap() <= 1e-10, "{c}");
+    }
+}
+
 #[test]
 fn contact_json_matches_its_schema() {
     let dir = tempfile::tempdir().unwrap();

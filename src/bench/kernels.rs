@@ -166,3 +166,66 @@ pub(super) fn roughness(out: &mut Figures, map: &HeightMap, repeats: usize) -> R
     ));
     Ok(())
 }
+
+/// The BEM's reduced load on a bench map: `p̄ = 0.05·E*·h′_rms` (A_r/A_0 ≈ 10 %, κ ≈ 2), with
+/// `h′_rms² = mean((Δ_x h/dx)² + (Δ_y h/dy)²)` by periodic forward differences — the load
+/// bench/compare.py gives tamaas.
+pub(super) const BEM_LOAD: f64 = 0.05;
+/// Tolerance of the timed solves, the same number bench/compare.py gives tamaas.
+pub(super) const BEM_TOLERANCE: f64 = 1e-10;
+
+/// One pressure-controlled load step of the map with `E*` = 1 Pa, periodic, cold-started
+/// (`bem_periodic_load_step`), and non-periodic on the 2n × 2n padded grid
+/// (`bem_non_periodic_load_step`); iterations and memory in the details.
+pub(super) fn bem(out: &mut Figures, map: &HeightMap, repeats: usize) -> Result<()> {
+    use crate::contact::bem::{BemSolver, Boundary, SolverSettings, Target};
+    let (ny, nx) = (map.ny(), map.nx());
+    let h: Vec<f64> = map.z.iter().copied().collect();
+    let (dx, dy) = (map.dx, map.dy);
+    let mut slope2 = 0.0;
+    for j in 0..ny {
+        for i in 0..nx {
+            let here = h[j * nx + i];
+            let gx = (h[j * nx + (i + 1) % nx] - here) / dx;
+            let gy = (h[((j + 1) % ny) * nx + i] - here) / dy;
+            slope2 += gx * gx + gy * gy;
+        }
+    }
+    let load = BEM_LOAD * (slope2 / (nx * ny) as f64).sqrt();
+    let settings = SolverSettings {
+        tolerance: BEM_TOLERANCE,
+        max_iterations: 10_000,
+    };
+    for (boundary, name, what) in [
+        (Boundary::Periodic, "bem_periodic_load_step", "periodic"),
+        (
+            Boundary::NonPeriodic,
+            "bem_non_periodic_load_step",
+            "non-periodic, padded 2n × 2n",
+        ),
+    ] {
+        let solver = BemSolver::new(&h, nx, ny, (dx, dy), 1.0, boundary)?;
+        let (times, s) = time_best(repeats, || {
+            Ok(solver.solve(Target::MeanPressure(load), &settings, None)?)
+        })?;
+        out.push(Figure::best(
+            Group::Bem,
+            name,
+            format!(
+                "BEM load step, {ny}×{nx} map, {what}, p̄ = 0.05 E* h′_rms, tolerance {:e} \
+                 (A_r/A_0 = {:.4})",
+                BEM_TOLERANCE, s.contact_fraction
+            ),
+            times,
+            Unit::Seconds,
+            repeats,
+            Details {
+                pixels: Some(nx * ny),
+                iterations: Some(s.iterations),
+                memory_bytes: Some(solver.memory_bytes()),
+                ..Details::default()
+            },
+        ));
+    }
+    Ok(())
+}

@@ -24,7 +24,7 @@ use std::time::Instant;
 const FS: f64 = 4e6;
 
 /// The figure groups, in the order they run; `--only` takes these names.
-pub const GROUPS: [&str; 9] = [
+pub const GROUPS: [&str; 10] = [
     "surfaces",
     "two-dof",
     "sweep",
@@ -32,6 +32,7 @@ pub const GROUPS: [&str; 9] = [
     "cwt",
     "fft",
     "roughness",
+    "bem",
     "noop",
     "main-job",
 ];
@@ -42,7 +43,7 @@ pub enum BenchError {
     #[error("--only: unknown group `{group}` (groups: {})", GROUPS.join(", "))]
     UnknownGroup { group: String },
     #[error(
-        "--input {}: give exactly one of --only cwt, --only fft, --only roughness \
+        "--input {}: give exactly one of --only cwt, --only fft, --only roughness, --only bem \
          (the kernel that times this array)",
         .0.display()
     )]
@@ -175,6 +176,7 @@ pub enum Group {
     Cwt,
     Fft,
     Roughness,
+    Bem,
     Noop,
     MainJob,
 }
@@ -252,6 +254,12 @@ pub struct Details {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schemars(range(min = 0))]
     pub us_per_step: Option<f64>,
+    /// BEM solves: conjugate-gradient iterations of the timed solve, and the memory the
+    /// solver held, bytes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub iterations: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub memory_bytes: Option<usize>,
     /// Stage instances the cold main job ran.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stages_ran: Option<usize>,
@@ -411,7 +419,8 @@ pub fn check(o: &BenchOptions) -> Result<()> {
         return Err(BenchError::UnknownGroup { group: g.clone() });
     }
     if let Some(input) = &o.input {
-        if !(o.only.len() == 1 && ["cwt", "fft", "roughness"].contains(&o.only[0].as_str())) {
+        if !(o.only.len() == 1 && ["cwt", "fft", "roughness", "bem"].contains(&o.only[0].as_str()))
+        {
             return Err(BenchError::InputWithoutKernel(input.clone()));
         }
     }
@@ -426,7 +435,8 @@ pub fn run(o: &BenchOptions, host: &mut dyn BenchHost) -> Result<Vec<Figure>> {
     check(o)?;
     let wanted = |g: &str| -> bool {
         if o.only.is_empty() {
-            g != "main-job" || o.main_job
+            // The BEM solves take tens of seconds: only when asked (bench/compare.py).
+            g != "bem" && (g != "main-job" || o.main_job)
         } else {
             o.only.iter().any(|x| x == g) || (g == "main-job" && o.main_job)
         }
@@ -465,6 +475,13 @@ pub fn run(o: &BenchOptions, host: &mut dyn BenchHost) -> Result<Vec<Figure>> {
             None => kernels::synthetic_map(o.size),
         };
         kernels::roughness(&mut out, &map, n(5))?;
+    }
+    if wanted("bem") {
+        let map = match &o.input {
+            Some(p) => npy::read_map(p, 4e-6)?,
+            None => kernels::synthetic_map(o.size),
+        };
+        kernels::bem(&mut out, &map, n(3))?;
     }
     if wanted("noop") && o.config.is_file() {
         main_job::noop(&mut out, &o.config, n(4))?;

@@ -6,13 +6,18 @@ use anyhow::Result;
 use super::args::ContactArgs;
 use super::{flag, one_off, out_parent};
 use hdi::artefacts::contact::SummitDistributionReport;
+use hdi::artefacts::contact_bem::{BemResult, BEM_FILE};
 use hdi::stages::contact::mtl::MtlReport;
 use hdi::stages::contact::{
     self, ContactConfig, ContactReport, ContactStage, ContactStageResult, SurfaceEnergyConfig,
 };
+use hdi::stages::contact_bem::{self, ContactBemConfig, ContactBemStage, MapSource};
 use hdi::stages::Instance;
 
 pub(super) fn cmd_contact(a: ContactArgs) -> Result<()> {
+    if !a.bem.is_empty() {
+        return cmd_contact_bem(a);
+    }
     let mut cfg = ContactConfig::defaults();
     if let Some(v) = a.parameter_set {
         cfg.parameter_set = v;
@@ -176,4 +181,74 @@ fn print_mtl(m: &MtlReport) {
         "  lubricant bearing force: {:.4} mN at 3σ + 2κ, {:.4} mN at 3σ; Q_lub {:.4} µN",
         l.P_lub_transition_end_mN, l.P_lub_onset_mN, l.Q_lub_transition_end_uN
     );
+}
+
+/// `hdi contact --bem FILE [FILE]`: the FFT-BEM force–separation curve of one map (or the sum
+/// of two), as a one-instance `[contact_bem]` pipeline.
+fn cmd_contact_bem(a: ContactArgs) -> Result<()> {
+    let cfg = ContactBemConfig {
+        modulus: a.modulus,
+        poisson: a.poisson,
+        boundary: a.boundary.clone(),
+        h_star_min: a.h_star_min,
+        h_star_max: a.h_star_max,
+        step: a.step,
+        map_at: a.map_at,
+        tolerance: a.tolerance,
+        ..Default::default()
+    };
+    for f in &a.bem {
+        if !f.is_file() {
+            anyhow::bail!("--bem: {} not found", f.display());
+        }
+    }
+    let params = contact_bem::check(&cfg, MapSource::Files(a.bem.clone()))
+        .map_err(|e| anyhow::anyhow!("{}: {}", flag(e.key), e.message))?;
+    let stage = Instance {
+        name: one_off::NAME.into(),
+        stage: ContactBemStage {
+            name: one_off::NAME.into(),
+            params,
+        },
+    };
+    let ran = one_off::run::<BemResult>("contact", Box::new(stage))?;
+    if let Some(out) = &a.out {
+        one_off::deliver(&ran.dir, out_parent(out)?, BEM_FILE, Some(out))?;
+    }
+    let r = &ran.result;
+    if a.json {
+        println!("{}", serde_json::to_string(r)?);
+        return Ok(());
+    }
+    println!(
+        "BEM {} × {} elements of {:.3} × {:.3} nm ({}), σ = {:.4} nm, E* = {:.1} GPa, \
+         tolerance {:e}",
+        r.grid[0],
+        r.grid[1],
+        r.spacing_m[0] * 1e9,
+        r.spacing_m[1] * 1e9,
+        r.boundary,
+        r.sigma_m * 1e9,
+        r.e_star_Pa * 1e-9,
+        r.tolerance
+    );
+    println!(
+        "{:>6} {:>12} {:>12} {:>10} {:>6}",
+        "h/σ", "P (MPa)", "A_r/A_0", "gap (nm)", "iter"
+    );
+    let every = (r.curve.len() / 16).max(1);
+    for p in r.curve.iter().step_by(every) {
+        println!(
+            "{:>6.2} {:>12.5e} {:>12.5e} {:>10.4} {:>6}",
+            p.h_star,
+            p.pressure_Pa * 1e-6,
+            p.contact_fraction,
+            p.mean_gap_m * 1e9,
+            p.iterations
+        );
+    }
+    if let Some(v) = r.ratio_3_over_2_5.bem {
+        println!("P(3σ)/P(2.5σ) = {v:.4}");
+    }
+    Ok(())
 }

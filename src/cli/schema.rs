@@ -43,6 +43,7 @@ const DOCUMENTED: &[Documented] = &[
         schema: case_manifest,
     },
     doc::<hdi::stages::contact::ContactReport>("contact", "hdi contact --json"),
+    doc::<hdi::artefacts::contact_bem::BemResult>("contact-bem", "hdi contact --bem FILE… --json"),
     doc::<hdi::engine::diff::Diff>("diff", "hdi diff --json"),
     doc::<hdi::stages::dmw::DmwReport>("dmw", "hdi dmw FILE --json"),
     doc::<super::simulate::SimulateOutput>("simulate", "hdi simulate --json"),

@@ -2,6 +2,7 @@
 //! tabulated once per interface and looked up in O(1) with the out-of-range rules of
 //! docs/contact.md, and the same table as the solid of the MTL law.
 
+use super::bem::law::ContactCurve;
 use super::isbl::{IsblModel, IsblPoint};
 use super::mtl::rough::{SolidContact, SolidResponse};
 use super::table::{ChannelError, ForceTable, Interp, Sample, TablePoint};
@@ -100,6 +101,37 @@ fn isbl_sample(model: &IsblModel, x: f64) -> Result<Sample, ContactError> {
     Ok(Sample { value, derivative })
 }
 
+/// [`isbl_sample`] with the contact channels (P, k_c, A_r, Q) from a measured contact law:
+/// friction is the junction-shear stress on the law's real area (`Q = τ·A_r`), adhesion stays
+/// ISBL's.
+fn law_sample(model: &IsblModel, law: &ContactCurve, x: f64) -> Result<Sample, ContactError> {
+    let mut s = isbl_sample(model, x)?;
+    let sigma = model.params().sigma;
+    let tau = model.derived().junction_shear_strength;
+    let h = x * sigma;
+    let q = law.at(h);
+    let delta = 1e-3 * sigma;
+    let kc = |dh: f64| -law.at(h + dh).pressure_slope;
+    let dkc = (-kc(2.0 * delta) + 8.0 * kc(delta) - 8.0 * kc(-delta) + kc(-2.0 * delta))
+        / (12.0 * delta)
+        * sigma;
+    let values = [
+        (P, q.pressure, q.pressure_slope * sigma),
+        (KC, -q.pressure_slope, dkc),
+        (AR, q.real_area_fraction, q.real_area_slope * sigma),
+        (
+            Q,
+            tau * q.real_area_fraction,
+            tau * q.real_area_slope * sigma,
+        ),
+    ];
+    for (c, v, d) in values {
+        s.value[c] = v.max(CONTACT_FLOOR);
+        s.derivative[c] = if v < CONTACT_FLOOR { 0.0 } else { d };
+    }
+    Ok(s)
+}
+
 /// Smallest tabulated contact value (Pa, Pa/m or 1): below it the quadrature's own absolute
 /// floor (1e-280) makes the value noise. Never reached by the dissertation's parameter sets
 /// with `surface` or `mccool` summits (P(16σ) ≥ 1e-93 Pa), whose tables are unchanged by it.
@@ -125,6 +157,8 @@ pub struct IsblLookup {
     /// Far-tail adhesion `F_s ≈ a·(ε/D)²·(1 + 3σ_s²/D²)`, `D = h − y_s − t + ε`
     /// (docs/contact.md), scaled so it meets the table at its last node.
     tail_scale: f64,
+    /// `contact_law = "bem"`: the measured contact law replacing ISBL's contact channels.
+    law: Option<std::sync::Arc<ContactCurve>>,
 }
 
 impl IsblLookup {
@@ -165,16 +199,40 @@ impl IsblLookup {
         Self::build_unverified(model, g.step, g.h_star_min, g.h_star_max)
     }
 
+    /// The standard table with the contact channels (P, k_c, A_r and the junction-shear
+    /// friction on A_r) from the measured contact law `law` instead of ISBL; adhesion stays
+    /// ISBL's (`[simulate] contact_law = "bem"`, docs/model-form.md "Contact law").
+    pub fn build_with_contact_law(
+        model: IsblModel,
+        law: std::sync::Arc<ContactCurve>,
+    ) -> Result<Self, ContactError> {
+        let g = FORCE_TABLE_GRID;
+        Self::build_table(model, g.step, g.h_star_min, g.h_star_max, Some(law))
+    }
+
     fn build_unverified(
         model: IsblModel,
         step: f64,
         h_star_min: f64,
         h_star_max: f64,
     ) -> Result<Self, ContactError> {
+        Self::build_table(model, step, h_star_min, h_star_max, None)
+    }
+
+    fn build_table(
+        model: IsblModel,
+        step: f64,
+        h_star_min: f64,
+        h_star_max: f64,
+        law: Option<std::sync::Arc<ContactCurve>>,
+    ) -> Result<Self, ContactError> {
         let p = *model.params();
         let top = (3.0 + p.lubricant_thickness / p.sigma + 10.0).max(h_star_max);
         let lo = h_star_min.min(-4.0);
-        let table = ForceTable::build(&ISBL_CHANNELS, lo, top, step, |x| isbl_sample(&model, x))?;
+        let table = ForceTable::build(&ISBL_CHANNELS, lo, top, step, |x| match &law {
+            Some(l) => law_sample(&model, l, x),
+            None => isbl_sample(&model, x),
+        })?;
         let error = Vec::new();
         let (_, last) = table.range();
         let at_last = table.eval(FS, last).unwrap_or(0.0);
@@ -186,6 +244,7 @@ impl IsblLookup {
             table,
             error,
             tail_scale,
+            law,
         })
     }
 
@@ -228,6 +287,20 @@ impl IsblLookup {
         }
         if x < lo {
             let p = self.model.at(h)?;
+            if let Some(law) = &self.law {
+                let q = law.at(h);
+                let tau = self.model.derived().junction_shear_strength;
+                return Ok(IsblForces {
+                    pressure: q.pressure,
+                    stiffness: -q.pressure_slope,
+                    real_area_fraction: q.real_area_fraction,
+                    friction: tau * q.real_area_fraction,
+                    friction_stiffness: -tau * q.real_area_slope,
+                    adhesion: p.adhesion,
+                    adhesion_gradient: p.adhesion_gradient,
+                    range: LookupRange::BelowTable,
+                });
+            }
             return Ok(IsblForces {
                 pressure: p.contact_pressure,
                 stiffness: p.contact_stiffness,

@@ -105,6 +105,13 @@ pub struct SimulateConfig {
     /// `integrated_stiffness` (docs/model-form.md).
     #[serde(default = "default_contact_force")]
     pub contact_force: String,
+    /// `isbl` (default) or `bem`: the contact pressure, real area and junction-shear friction
+    /// from the `[contact_bem.*]` curve named by `contact_bem` (docs/model-form.md, "Contact
+    /// law"); adhesion stays the `contact` instance's.
+    #[serde(default)]
+    pub contact_law: Option<String>,
+    #[serde(default)]
+    pub contact_bem: Option<String>,
     /// `none` (default, Chapter 2: the lubricant offers no resistance) or `mtl` (Chapter 3's
     /// lubricant force inside the film; improved model only; docs/model-form.md).
     #[serde(default = "default_none")]
@@ -185,6 +192,8 @@ pub struct SimulateParams {
     pub model_name: String,
     pub model: Model2Dof,
     pub contact: String,
+    /// `contact_law = "bem"`: the `[contact_bem.*]` instance whose curve is the contact law.
+    pub contact_bem: Option<String>,
     pub dmw: Option<String>,
     pub actuations: Vec<f64>,
     pub options: SimOptions,
@@ -539,10 +548,36 @@ impl SimulateParams {
             GeometryConfig::Bulge { bulge } => (format!("bulge:{bulge}"), Some(bulge.clone())),
         };
         let dmw = (cfg.dmw != "none").then(|| cfg.dmw.clone());
+        let contact_bem = match (
+            cfg.contact_law.as_deref().unwrap_or("isbl"),
+            &cfg.contact_bem,
+        ) {
+            ("isbl", None) => None,
+            ("bem", Some(b)) => Some(b.clone()),
+            ("bem", None) => {
+                return Err(KeyError::new(
+                    "contact_bem",
+                    "contact_law = \"bem\" needs contact_bem = the [contact_bem.*] instance",
+                ))
+            }
+            ("isbl", Some(_)) => {
+                return Err(KeyError::new(
+                    "contact_bem",
+                    "is read only with contact_law = \"bem\"",
+                ))
+            }
+            (other, _) => {
+                return Err(KeyError::new(
+                    "contact_law",
+                    format!("`{other}`: use isbl or bem"),
+                ))
+            }
+        };
         Ok(SimulateParams {
             model_name: cfg.model.clone(),
             model,
             contact: cfg.contact.clone(),
+            contact_bem,
             dmw,
             actuations,
             options,
@@ -577,6 +612,10 @@ impl SimulateParams {
         }
         if let (false, Some(obj)) = (self.refine_touchdown, v.as_object_mut()) {
             obj.insert("refine_touchdown".into(), json!(false));
+        }
+        // Only instances with the BEM law carry it: the others keep their keys.
+        if let (Some(b), Some(obj)) = (&self.contact_bem, v.as_object_mut()) {
+            obj.insert("contact_bem".into(), json!(b));
         }
         // Only instances with a fitted bulge carry these keys: the others keep their keys.
         if let (Some(b), Some(obj)) = (&self.bulge, v.as_object_mut()) {
@@ -628,6 +667,16 @@ impl SimulateParams {
                 format!("no [contact.{}] in this file", cfg.contact),
             ));
         }
+        if let Some(b) = &params.contact_bem {
+            if !file.has_instance("contact_bem", b) {
+                return Err(file.error(
+                    "simulate",
+                    name,
+                    "contact_bem",
+                    format!("no [contact_bem.{b}] in this file"),
+                ));
+            }
+        }
         if let Some(c) = &params.calibration {
             let Some(cal) = file.instance::<CalibrateTarget>("calibrate", c)? else {
                 return Err(file.error(
@@ -672,6 +721,7 @@ impl SimulateParams {
     /// The instances whose results the cases need: contact, DMW, calibration.
     pub fn upstream(&self) -> Vec<String> {
         let mut u = vec![self.contact.clone()];
+        u.extend(self.contact_bem.iter().cloned());
         u.extend(self.dmw.iter().cloned());
         u.extend(self.calibration.iter().cloned());
         u.extend(self.bulge.iter().cloned());

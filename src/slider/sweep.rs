@@ -6,6 +6,7 @@
 use crate::artefacts::calibration::upstream_fitted_knobs;
 use crate::artefacts::cases;
 use crate::artefacts::dmw_tracks::DmwTrack;
+use crate::contact::bem::law::ContactCurve;
 use crate::contact::isbl::{IsblModel, IsblParams};
 use crate::contact::lookup::IsblLookup;
 use crate::core::cache::Store;
@@ -23,6 +24,22 @@ use crate::slider::params::SimulateParams;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+
+/// The force–separation curve of the upstream `[contact_bem.*]` instance `name` as a contact
+/// law (its mean gaps, pressures and real areas).
+pub fn upstream_contact_law(
+    upstream: &BTreeMap<String, Value>,
+    name: &str,
+) -> Result<std::sync::Arc<ContactCurve>> {
+    let r: crate::artefacts::contact_bem::BemResult =
+        crate::artefacts::upstream_result(upstream, "contact_bem", name)?;
+    let points: Vec<(f64, f64, f64)> = r
+        .curve
+        .iter()
+        .map(|p| (p.mean_gap_m, p.pressure_Pa, p.contact_fraction))
+        .collect();
+    Ok(std::sync::Arc::new(ContactCurve::new(&points)?))
+}
 
 /// One finished case: its actuation, result, and where its files are.
 pub struct CaseOutcome {
@@ -64,7 +81,11 @@ impl PreparedSweep {
             let fitted = crate::artefacts::bulge::upstream_bulge(upstream, b)?;
             calibrated.apply_bulge(&fitted, b)?;
         }
-        Self::assemble(calibrated, isbl_params, dmw_track, key_of)
+        let law = match &params.contact_bem {
+            Some(b) => Some(upstream_contact_law(upstream, b)?),
+            None => None,
+        };
+        Self::assemble_with_law(calibrated, isbl_params, law, dmw_track, key_of)
     }
 
     /// The shared inputs of `params` as they stand (calibrated, bulge in place): its interface
@@ -75,13 +96,33 @@ impl PreparedSweep {
         dmw_track: Option<DmwTrack>,
         key_of: impl Fn(&str) -> String,
     ) -> Result<PreparedSweep> {
-        let isbl = IsblLookup::build_standard_unverified(IsblModel::new(isbl_params)?)?;
+        Self::assemble_with_law(params, isbl_params, None, dmw_track, key_of)
+    }
+
+    /// [`Self::assemble`] with the contact channels from a measured law (`contact_law =
+    /// "bem"`), whose instance key joins the contact key of every case.
+    fn assemble_with_law(
+        params: SimulateParams,
+        isbl_params: IsblParams,
+        law: Option<std::sync::Arc<ContactCurve>>,
+        dmw_track: Option<DmwTrack>,
+        key_of: impl Fn(&str) -> String,
+    ) -> Result<PreparedSweep> {
+        let model = IsblModel::new(isbl_params)?;
+        let isbl = match law {
+            Some(l) => IsblLookup::build_with_contact_law(model, l)?,
+            None => IsblLookup::build_standard_unverified(model)?,
+        };
+        let contact_key = match &params.contact_bem {
+            Some(b) => format!("{}+{}", key_of(&params.contact), key_of(b)),
+            None => key_of(&params.contact),
+        };
         let dmw = match (&params.dmw, dmw_track) {
             (Some(d), Some(t)) => Some((t, key_of(d))),
             _ => None,
         };
         Ok(PreparedSweep {
-            contact_key: key_of(&params.contact),
+            contact_key,
             params,
             isbl,
             dmw,

@@ -2104,6 +2104,32 @@ fn summit_variant_sweeps(
         .collect()
 }
 
+/// The `contact_law = bem` variant of dyn-19 and dyn-24: the improved interface with the
+/// contact channels from the pipeline's BEM curve, the same 3 cases (not cached: the law's
+/// instance key is not part of the case store's key).
+fn bem_law_sweep(
+    improved_model: &Model2Dof,
+    track: &Excitation,
+    synth: &str,
+    bem: pipeline::BemLaw,
+) -> Option<SummitSweep> {
+    let model = IsblModel::new(IsblParams::improved_2dof()).ok()?;
+    let lookup = IsblLookup::build_with_contact_law(model, bem.law).ok()?;
+    let pts = SUMMIT_VARIANT_ACTUATIONS
+        .par_iter()
+        .filter_map(|&h| run_case(improved_model, &lookup, h * NM, track, true, None))
+        .collect();
+    Some(SummitSweep {
+        name: "contact_law = bem".into(),
+        sweep: Sweep::new(
+            pts,
+            None,
+            format!("{synth}, static start; {}", bem.inputs),
+            bem.origin,
+        ),
+    })
+}
+
 /// The two interfaces and the synthetic DMW every default sweep runs on; a dyn-16 row saying
 /// why when they cannot be built.
 fn sweep_inputs() -> Result<
@@ -2241,8 +2267,15 @@ pub fn rows(config: Option<&Path>) -> Vec<Row> {
         .as_ref()
         .zip(config)
         .and_then(|(c, path)| pipeline::measured_summits(path, c));
-    let summit_sweeps =
+    let mut summit_sweeps =
         summit_variant_sweeps(&improved_model, &track, &stores, synth, measured.as_ref());
+    // The contact law variant (docs/model-form.md, "Contact law"): the same cases with the
+    // measured interface's BEM curve as the contact law, when the pipeline's BEM has run.
+    let bem = cache
+        .as_ref()
+        .zip(config)
+        .and_then(|(c, path)| pipeline::bem_law(path, c));
+    summit_sweeps.extend(bem.and_then(|b| bem_law_sweep(&improved_model, &track, synth, b)));
     let sweep = |name: &str| cache.as_ref().and_then(|c| cached_sweep(c, name));
     let (rec_improved, cal_improved) = (sweep("improved_sweep"), sweep("improved_calibrated"));
     let (rec_optimised, cal_optimised) = (sweep("optimised_sweep"), sweep("optimised_calibrated"));

@@ -155,6 +155,40 @@ pub struct MeasuredSummits {
     pub origin: Origin,
 }
 
+/// The contact law of the pipeline's first `[contact_bem.*]` instance (its force–separation
+/// curve on the measured map) for the `contact_law = bem` variants; `None` where it has not run.
+pub struct BemLaw {
+    pub law: std::sync::Arc<crate::contact::bem::law::ContactCurve>,
+    pub inputs: String,
+    pub origin: Origin,
+}
+
+pub fn bem_law(config: &Path, cache: &Cache) -> Option<BemLaw> {
+    let file = crate::stages::load(config).ok()?;
+    let name = file.instance_names("contact_bem").first()?.to_string();
+    let stored = cache.current(&name)?;
+    let up = std::collections::BTreeMap::from([(name.clone(), stored.result)]);
+    let law = crate::slider::sweep::upstream_contact_law(&up, &name).ok()?;
+    let (lo, hi) = law.measured_range();
+    let key = match stored.origin {
+        Origin::Cache { key, .. } => key,
+        _ => String::new(),
+    };
+    Some(BemLaw {
+        law,
+        inputs: format!(
+            "the FFT-BEM curve of [contact_bem.{name}] (mean gap {:.3}–{:.3} nm solved; \
+             exponential beyond)",
+            lo * 1e9,
+            hi * 1e9
+        ),
+        origin: Origin::Recomputed {
+            instance: format!("contact_bem.{name}"),
+            key,
+        },
+    })
+}
+
 /// [`MeasuredSummits`] of the pipeline in `config`; `None` where its surfaces have not run.
 pub fn measured_summits(config: &Path, cache: &Cache) -> Option<MeasuredSummits> {
     use crate::artefacts::interface::InterfaceSurfaces;

@@ -70,6 +70,20 @@ pub struct ContactArgs {
     /// Minimum liquid gap κ (radius of gyration), e.g. "0.3 nm".
     #[arg(long, allow_hyphen_values = true)]
     pub gyration_radius: Option<Length>,
+    /// Deterministic contact instead of ISBL: the FFT-BEM on one height map, or on the sum
+    /// of two (each levelled rows:median, plane, mean), against a rigid flat
+    /// (docs/contact.md, "Deterministic contact"; `[contact_bem.NAME] files`).
+    #[arg(long, num_args = 1..=2, value_name = "FILE")]
+    pub bem: Vec<PathBuf>,
+    /// --bem: periodic (default) or non_periodic.
+    #[arg(long)]
+    pub boundary: Option<String>,
+    /// --bem: h/σ of the pressure map and gap histogram (default 1.5).
+    #[arg(long)]
+    pub map_at: Option<f64>,
+    /// --bem: convergence tolerance (default 1e-10).
+    #[arg(long)]
+    pub tolerance: Option<f64>,
     /// Also write the HDF5 output (and PNGs beside it).
     #[arg(long)]
     pub out: Option<PathBuf>,

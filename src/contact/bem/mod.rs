@@ -11,6 +11,7 @@
 //! flat from the mean plane of the heights (the mean gap, in a periodic domain).
 
 pub mod kernel;
+pub mod law;
 pub mod reference;
 pub mod solver;
 
