@@ -12,7 +12,11 @@
 //!     [lubricant=none|mtl] [surface_energy=constant|variable]
 //!     [friction_law=junction_shear|seed_power_elastic|ke_static]
 //!     [summit_distribution=surface|mccool|fig_2_11] [summits=S,Y]   (σ_s/σ, y_s/σ given)
+//!     [contact_law=bem [bem_result=processed/bem_measured/result.json]]
 //! ```
+//!
+//! `contact_law=bem`: contact pressure, real area and junction-shear friction from the BEM
+//! curve of a `[contact_bem]` instance's `result.json` (docs/model-form.md, "Contact law").
 
 use hdi::contact::isbl::summits::{fit_two_point, TwoPointTarget, FIG_2_11_NOMINAL_AREA};
 use hdi::contact::isbl::{FrictionLaw, SummitDistribution, SurfaceEnergy};
@@ -64,10 +68,37 @@ fn main() {
             .collect::<Vec<_>>()
             .join(", ")
     };
-    let e =
-        hdi::validation::calibration::held_out_under(&config, "improved_calibration", |p, isbl| {
+    let bem_result = switches
+        .iter()
+        .find(|(k, _)| k == "bem_result")
+        .map_or("processed/bem_measured/result.json".into(), |(_, v)| {
+            v.clone()
+        });
+    let law = switches
+        .iter()
+        .any(|(k, v)| k == "contact_law" && v == "bem")
+        .then(|| {
+            let text = std::fs::read_to_string(&bem_result)
+                .expect("bem_result: a [contact_bem] result.json");
+            let r: hdi::artefacts::contact_bem::BemResult =
+                serde_json::from_str(&text).expect("BEM result");
+            let points: Vec<(f64, f64, f64)> = r
+                .curve
+                .iter()
+                .map(|p| (p.mean_gap_m, p.pressure_Pa, p.contact_fraction))
+                .collect();
+            std::sync::Arc::new(
+                hdi::contact::bem::law::ContactCurve::new(&points).expect("BEM curve"),
+            )
+        });
+    let e = hdi::validation::calibration::held_out_under(
+        &config,
+        "improved_calibration",
+        law,
+        |p, isbl| {
             for (k, v) in &switches {
                 match (k.as_str(), v.as_str()) {
+                    ("contact_law", _) | ("bem_result", _) => {}
                     ("contact_force", "interference_tangent") => {
                         p.options.contact_force = ContactForceForm::InterferenceTangent
                     }
@@ -115,8 +146,9 @@ fn main() {
                     .expect("Fig. 2.11 fit")
                     .distribution();
             }
-        })
-        .unwrap_or_else(|e| panic!("{e}"));
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     println!("variant: {label} (spec defaults, no fitted knobs; the calibration's base and grid)");
     println!("selection set (dissertation geometry):");
     let (s, st) = print_set(&e, TargetSet::Selection);

@@ -939,6 +939,9 @@ pub struct CalibrationBase<'a> {
     pub dmw: Option<DmwInput<'a>>,
     pub options: SimOptions,
     pub case_params: CaseParams,
+    /// `contact_law = "bem"`: the measured contact law replacing ISBL's contact channels in
+    /// every table (docs/model-form.md, "Contact law"); `None`: ISBL.
+    pub contact_law: Option<std::sync::Arc<crate::contact::bem::law::ContactCurve>>,
     /// Who computes the cases of a round: `None` is this process's thread pool (the fit's
     /// own code path); a [`CaseRounds`] can send them elsewhere (Slurm arrays, docs/slurm.md
     /// "Calibration on Slurm"). The driver (the search, the touchdown scan) stays here.
@@ -1157,8 +1160,19 @@ pub fn apply_knobs(
 
 /// ISBL table of the 2-DOF cases (the simulate stage's grid).
 pub fn interface_table(isbl: IsblParams) -> Result<IsblLookup> {
+    interface_table_with(isbl, None)
+}
+
+/// [`interface_table`] with the contact channels from a measured law when given.
+pub fn interface_table_with(
+    isbl: IsblParams,
+    law: Option<&std::sync::Arc<crate::contact::bem::law::ContactCurve>>,
+) -> Result<IsblLookup> {
     IsblModel::new(isbl)
-        .and_then(IsblLookup::build_standard_unverified)
+        .and_then(|m| match law {
+            Some(l) => IsblLookup::build_with_contact_law(m, std::sync::Arc::clone(l)),
+            None => IsblLookup::build_standard_unverified(m),
+        })
         .map_err(|e| DynamicsError::Numerical(format!("interface table: {e}")))
 }
 
@@ -1234,7 +1248,7 @@ fn prepare<'a>(base: &'a CalibrationBase<'a>, values: &[(Knob, f64)]) -> Result<
     };
     Ok(Prepared {
         model,
-        lookup: std::sync::Arc::new(interface_table(isbl)?),
+        lookup: std::sync::Arc::new(interface_table_with(isbl, base.contact_law.as_ref())?),
         dmw: std::sync::Arc::new(dmw),
         base,
         knobs: std::sync::Arc::new(values.to_vec()),
@@ -1855,6 +1869,7 @@ mod tests {
         CalibrationBase {
             model: improved_2dof(),
             isbl: IsblParams::improved_2dof(),
+            contact_law: None,
             dmw,
             options: SimOptions {
                 duration: 0.4e-3,

@@ -4,39 +4,39 @@
 
 use super::basic::{field_png, histogram_png, semilogy_png, ColourScale};
 use super::Result;
-use crate::artefacts::contact_bem::BemResult;
 use crate::contact::bem::GapHistogram;
+
+/// One separation of the overlay: BEM pressure [Pa] and A_r/A_0, and ISBL's when overlaid.
+#[derive(Debug, Clone, Copy)]
+pub struct OverlayPoint {
+    pub h_star: f64,
+    pub bem: (f64, f64),
+    pub isbl: Option<(f64, f64)>,
+}
 use ndarray::ArrayView2;
 use std::path::Path;
 
 /// Every figure of one instance into `dir`.
 pub fn write_all(
     dir: &Path,
-    r: &BemResult,
+    curve: &[OverlayPoint],
     pressure: &[f64],
     ((nx, ny), (dx, dy)): ((usize, usize), (f64, f64)),
     histogram: &GapHistogram,
     map_at: f64,
 ) -> Result<()> {
-    let series = |f: &dyn Fn(&crate::artefacts::contact_bem::BemCurvePoint) -> Option<f64>| {
-        r.curve
+    let series = |f: &dyn Fn(&OverlayPoint) -> Option<f64>| {
+        curve
             .iter()
             .filter_map(|p| f(p).map(|v| (p.h_star, v)))
             .collect::<Vec<_>>()
     };
-    let mut pressures = vec![(
-        "BEM (measured map)",
-        series(&|p| Some(p.pressure_Pa * 1e-6)),
-    )];
-    let mut areas = vec![("BEM (measured map)", series(&|p| Some(p.contact_fraction)))];
-    if r.isbl_sigma_m.is_some() {
-        pressures.push(("ISBL", series(&|p| p.isbl_pressure_Pa.map(|v| v * 1e-6))));
-        areas.push(("ISBL", series(&|p| p.isbl_contact_fraction)));
-        let ratio = series(&|p| {
-            p.isbl_pressure_Pa
-                .filter(|v| *v > 0.0)
-                .map(|v| p.pressure_Pa / v)
-        });
+    let mut pressures = vec![("BEM (measured map)", series(&|p| Some(p.bem.0 * 1e-6)))];
+    let mut areas = vec![("BEM (measured map)", series(&|p| Some(p.bem.1)))];
+    if curve.iter().any(|p| p.isbl.is_some()) {
+        pressures.push(("ISBL", series(&|p| p.isbl.map(|v| v.0 * 1e-6))));
+        areas.push(("ISBL", series(&|p| p.isbl.map(|v| v.1))));
+        let ratio = series(&|p| p.isbl.filter(|v| v.0 > 0.0).map(|v| p.bem.0 / v.0));
         semilogy_png(
             &dir.join("bem_isbl_ratio.png"),
             "BEM / ISBL contact pressure",

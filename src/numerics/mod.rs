@@ -3,7 +3,6 @@ pub mod annealing;
 pub mod bootstrap;
 pub mod buffer;
 pub mod fft2;
-pub mod fft_convolution;
 pub mod nelder_mead;
 pub mod ode;
 pub mod regression;

@@ -3,6 +3,7 @@
 //! evaluation and amplitude spectra. Pure functions on slices; no I/O.
 
 pub mod butterworth;
+pub mod fft_convolution;
 pub mod integrate;
 pub mod resample;
 pub mod rfft;

@@ -242,6 +242,12 @@ pub fn uncalibrated_base(
              instance"
         )));
     }
+    if cfg.contact_law.as_deref() == Some("bem") {
+        return Err(err(format!(
+            "[simulate.{base}] has contact_law = \"bem\"; [{section}] builds ISBL tables \
+             (docs/model-form.md, \"Contact law\"): use an ISBL instance"
+        )));
+    }
     SimulateParams::check(&cfg).map_err(|e| err(format!("[simulate.{base}] is invalid ({e})")))
 }
 
@@ -884,8 +890,19 @@ mod tests {
         assert_eq!(q.actuations, vec![0.0, 2.25e-9, 4.5e-9, 6.75e-9, 9e-9]);
         assert_eq!(q.power_of(4.5e-9), Some(0.015));
         assert_eq!(q.model, opt.model);
-        // Powers need a bulge; both lists at once are an error.
         let bad = |t: &str| SimulateParams::check(&toml::from_str(t).unwrap()).is_err();
+        // contact_law: bem needs its instance, isbl refuses one, other values are refused.
+        let law = params("contact = \"c\"\ncontact_law = \"bem\"\ncontact_bem = \"b\"");
+        assert_eq!(law.contact_bem.as_deref(), Some("b"));
+        assert_eq!(law.canonical()["contact_bem"], "b");
+        assert!(params("contact = \"c\"")
+            .canonical()
+            .get("contact_bem")
+            .is_none());
+        assert!(bad("contact = \"c\"\ncontact_law = \"bem\""));
+        assert!(bad("contact = \"c\"\ncontact_bem = \"b\""));
+        assert!(bad("contact = \"c\"\ncontact_law = \"gw\""));
+        // Powers need a bulge; both lists at once are an error.
         assert!(bad("contact = \"c\"\npowers = [\"10 mW\"]"));
         assert!(bad(
             "contact = \"c\"\ngeometry = { bulge = \"t\" }\npowers = [\"10 mW\"]\nactuations = [\"1 nm\"]"

@@ -16,6 +16,7 @@ use crate::core::config::{ConfigError, PipelineFile};
 use crate::core::store::{round_significant, rows_of, write_table, H5Out};
 use crate::error::Result;
 use crate::figures;
+use crate::figures::contact_bem::OverlayPoint;
 use crate::surface::io::{read_height_map, ReadOptions};
 use crate::surface::level::{level, LevelOp};
 use crate::surface::SurfaceError;
@@ -397,9 +398,18 @@ impl StageKind for ContactBemStage {
             &histogram,
             p.map_at,
         )?;
+        let overlay: Vec<OverlayPoint> = result
+            .curve
+            .iter()
+            .map(|c| OverlayPoint {
+                h_star: c.h_star,
+                bem: (c.pressure_Pa, c.contact_fraction),
+                isbl: c.isbl_pressure_Pa.zip(c.isbl_contact_fraction),
+            })
+            .collect();
         figures::contact_bem::write_all(
             ctx.out_dir,
-            &result,
+            &overlay,
             &at_map.pressure,
             ((nx, ny), (map.dx, map.dy)),
             &histogram,

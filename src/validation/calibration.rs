@@ -36,6 +36,7 @@ pub fn re_evaluate(
 pub fn held_out_under(
     config: &Path,
     name: &str,
+    contact_law: Option<std::sync::Arc<crate::contact::bem::law::ContactCurve>>,
     adjust: impl Fn(&mut crate::slider::params::SimulateParams, &mut crate::contact::isbl::IsblParams),
 ) -> Result<Evaluation> {
     let file = crate::stages::load(config)?;
@@ -72,7 +73,8 @@ pub fn held_out_under(
     let (mut isbl, dmw) = base_inputs(&stage.base, &up, &dirs)?;
     let mut params = stage.base.clone();
     adjust(&mut params, &mut isbl);
-    let base = base_of(&params, isbl, dmw.as_ref());
+    let mut base = base_of(&params, isbl, dmw.as_ref());
+    base.contact_law = contact_law;
     Ok(evaluate_held_out(&base, &stage.settings, &[])?)
 }
 

@@ -177,14 +177,14 @@ pub enum Command {
         #[arg(long)]
         json: bool,
         /// Run only these groups: surfaces, two-dof, sweep, three-dof, cwt, fft, roughness,
-        /// noop, main-job (comma-separated).
+        /// bem (only when named), noop, main-job (comma-separated).
         #[arg(long, value_delimiter = ',')]
         only: Vec<String>,
         /// Also run CONFIG (and the raw/ beside it) cold in a temp dir and print its per-stage
         /// wall times (takes as long as the main job).
         #[arg(long)]
         main_job: bool,
-        /// Time the one kernel of `--only cwt|fft|roughness` on this float `.npy` array (1-D
+        /// Time the one kernel of `--only cwt|fft|roughness|bem` on this float `.npy` array (1-D
         /// signal at 4 MS/s, or 2-D map over 4 µm) instead of the built-in input.
         #[arg(long)]
         input: Option<PathBuf>,

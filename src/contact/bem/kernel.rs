@@ -9,7 +9,7 @@
 //!   (Hockney's method) so that the FFT convolution equals the direct, non-periodic sum.
 
 use crate::numerics::fft2::fft2_real;
-use crate::numerics::fft_convolution::{signed_bin, FftConvolver};
+use crate::signal::fft_convolution::{signed_bin, FftConvolver};
 use ndarray::Array2;
 use std::f64::consts::PI;
 

@@ -19,7 +19,7 @@
 
 use super::kernel;
 use crate::contact::ContactError;
-use crate::numerics::fft_convolution::{ConvolutionWork, FftConvolver};
+use crate::signal::fft_convolution::{ConvolutionWork, FftConvolver};
 use std::sync::Mutex;
 
 /// The domain's boundary condition.

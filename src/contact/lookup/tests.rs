@@ -322,3 +322,38 @@ fn the_unverified_table_is_the_verified_one_bit_for_bit() {
         }
     }
 }
+
+/// `contact_law = "bem"`: the contact channels follow the measured law (inside the table and
+/// below it), friction is τ·A_r on its area, adhesion stays ISBL's.
+#[test]
+fn a_contact_law_replaces_the_contact_channels_only() {
+    use crate::contact::bem::law::ContactCurve;
+    let model = IsblModel::new(IsblParams::improved_2dof()).unwrap();
+    let points: Vec<(f64, f64, f64)> = (1..=20)
+        .map(|k| {
+            let h = 0.1e-9 * k as f64;
+            (h, 2e9 * (-h / 0.3e-9).exp(), 0.3 * (-h / 0.5e-9).exp())
+        })
+        .collect();
+    let law = std::sync::Arc::new(ContactCurve::new(&points).unwrap());
+    let isbl = IsblLookup::build_standard(model.clone()).unwrap();
+    let bem = IsblLookup::build_with_contact_law(model.clone(), law.clone()).unwrap();
+    let tau = model.derived().junction_shear_strength;
+    for h in [0.15e-9, 0.72e-9, 1.33e-9, -0.5e-9, -3e-9] {
+        let (a, b, q) = (isbl.at(h).unwrap(), bem.at(h).unwrap(), law.at(h));
+        assert!(
+            (b.pressure / q.pressure - 1.0).abs() < 1e-6,
+            "{h}: {b:?} {q:?}"
+        );
+        assert!((b.stiffness / -q.pressure_slope - 1.0).abs() < 1e-4, "{h}");
+        assert!(
+            (b.real_area_fraction / q.real_area_fraction - 1.0).abs() < 1e-6,
+            "{h}"
+        );
+        assert!(
+            (b.friction / (tau * q.real_area_fraction) - 1.0).abs() < 1e-6,
+            "{h}"
+        );
+        assert!((b.adhesion / a.adhesion - 1.0).abs() < 1e-9, "{h}");
+    }
+}

@@ -44,6 +44,7 @@ pub fn base_of<'a>(
     CalibrationBase {
         model: p.model,
         isbl,
+        contact_law: None,
         dmw: dmw.map(|t| DmwInput {
             displacement: &t.displacement,
             velocity: &t.velocity,
