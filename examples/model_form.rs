@@ -337,12 +337,7 @@ fn main() {
             std::fs::read_to_string(&bem_result).expect("bem_result: a [contact_bem] result.json");
         let r: hdi::artefacts::contact_bem::BemResult =
             serde_json::from_str(&text).expect("BEM result");
-        let points: Vec<(f64, f64, f64)> = r
-            .curve
-            .iter()
-            .map(|p| (p.mean_gap_m, p.pressure_Pa, p.contact_fraction))
-            .collect();
-        let law = hdi::contact::bem::law::ContactCurve::new(&points).expect("BEM curve");
+        let law = r.contact_law().expect("BEM curve");
         let (lo, hi) = law.measured_range();
         println!(
             "  BEM law from {} (mean gap {:.3}–{:.3} nm solved)",

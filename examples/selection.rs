@@ -82,14 +82,7 @@ fn main() {
                 .expect("bem_result: a [contact_bem] result.json");
             let r: hdi::artefacts::contact_bem::BemResult =
                 serde_json::from_str(&text).expect("BEM result");
-            let points: Vec<(f64, f64, f64)> = r
-                .curve
-                .iter()
-                .map(|p| (p.mean_gap_m, p.pressure_Pa, p.contact_fraction))
-                .collect();
-            std::sync::Arc::new(
-                hdi::contact::bem::law::ContactCurve::new(&points).expect("BEM curve"),
-            )
+            std::sync::Arc::new(r.contact_law().expect("BEM curve"))
         });
     let e = hdi::validation::calibration::held_out_under(
         &config,

@@ -57,8 +57,9 @@ fn pipeline_files_differing_in_one_parameter_change_that_instance_and_its_consum
     assert_eq!(v["identical"], false);
     assert_eq!(v["a"]["source"], "pipeline");
     // Who consumes whom, read off pipeline.toml: [interface.hdi] surfaces = ["disk",
-    // "slider"]; [contact.measured] interface = "hdi"; nothing names `measured`.
-    let expected: BTreeSet<String> = ["slider", "hdi", "measured"]
+    // "slider"]; [contact.measured] interface = "hdi"; [contact_bem.bem_measured] reads the
+    // slider's map (through `hdi`) and `measured`'s curves; nothing names `bem_measured`.
+    let expected: BTreeSet<String> = ["slider", "hdi", "measured", "bem_measured"]
         .iter()
         .map(|s| s.to_string())
         .collect();
@@ -70,7 +71,7 @@ fn pipeline_files_differing_in_one_parameter_change_that_instance_and_its_consum
         // Instances are `[kind.name]` tables (`[project]`, `[report]` are settings).
         .filter(|l| l.starts_with('[') && l.trim_end().trim_end_matches(']').contains('.'))
         .count();
-    assert_eq!(v["summary"]["unchanged"], n_instances as u64 - 3);
+    assert_eq!(v["summary"]["unchanged"], n_instances as u64 - 4);
     // Exactly one parameter: the S-filter cut-off in metres.
     let params = v["params"].as_array().unwrap();
     assert_eq!(params.len(), 1, "{params:?}");

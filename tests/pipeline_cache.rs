@@ -9,7 +9,7 @@ fn default_pipeline_writes_hdf5_tables_and_plots_readable_by_others() {
     let (p, o) = Project::shipped_with_cold_run();
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("ran 55, cached 0, failed 0, skipped 0 of 55"),
+        stderr(&o).contains("ran 56, cached 0, failed 0, skipped 0 of 56"),
         "{}",
         stderr(&o)
     );
@@ -101,7 +101,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let o = p.run(&["run"]);
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("nothing to do: all 55 stage instances fresh"),
+        stderr(&o).contains("nothing to do: all 56 stage instances fresh"),
         "{}",
         stderr(&o)
     );
@@ -129,6 +129,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     );
     assert!(s.contains("stale    hdi: upstream disk changed"), "{s}");
     assert!(s.contains("stale    measured: upstream hdi changed"), "{s}");
+    assert!(s.contains("stale    bem_measured: upstream "), "{s}");
     assert!(s.contains("fresh    improved"), "{s}");
     assert!(s.contains("fresh    slider"), "{s}");
     assert!(s.contains("fresh    table_2_2"), "{s}");
@@ -140,7 +141,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let o = p.run(&["run"]);
     assert_ok(&o);
     let e = stderr(&o);
-    assert!(e.contains("ran 3, cached 52"), "{e}");
+    assert!(e.contains("ran 4, cached 52"), "{e}");
     assert!(
         e.contains("ran     disk") && e.contains("ran     hdi"),
         "{e}"

@@ -3,7 +3,9 @@
 //! the same h/σ) and its `contact.h5` (`/bem`; docs/hdf5.md). `[simulate] contact_law = "bem"`
 //! reads the curve back through the same type.
 
+use crate::contact::bem::law::ContactCurve;
 use crate::contact::bem::CurvePoint;
+use crate::contact::ContactError;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -143,6 +145,17 @@ impl BemResult {
             curve,
             table: "bem_vs_isbl".into(),
         }
+    }
+
+    /// The curve as the dynamics' contact law (`[simulate] contact_law = "bem"`): mean gap,
+    /// pressure and real area of every solved separation.
+    pub fn contact_law(&self) -> Result<ContactCurve, ContactError> {
+        let points: Vec<(f64, f64, f64)> = self
+            .curve
+            .iter()
+            .map(|p| (p.mean_gap_m, p.pressure_Pa, p.contact_fraction))
+            .collect();
+        ContactCurve::new(&points)
     }
 
     /// A_r/A_0 at h/σ = `h_star`, when the curve holds it.

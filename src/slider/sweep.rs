@@ -33,12 +33,7 @@ pub fn upstream_contact_law(
 ) -> Result<std::sync::Arc<ContactCurve>> {
     let r: crate::artefacts::contact_bem::BemResult =
         crate::artefacts::upstream_result(upstream, "contact_bem", name)?;
-    let points: Vec<(f64, f64, f64)> = r
-        .curve
-        .iter()
-        .map(|p| (p.mean_gap_m, p.pressure_Pa, p.contact_fraction))
-        .collect();
-    Ok(std::sync::Arc::new(ContactCurve::new(&points)?))
+    Ok(std::sync::Arc::new(r.contact_law()?))
 }
 
 /// One finished case: its actuation, result, and where its files are.

@@ -18,7 +18,7 @@ use crate::error::Result;
 use crate::figures;
 use crate::figures::contact_bem::OverlayPoint;
 use crate::surface::io::{read_height_map, ReadOptions};
-use crate::surface::level::{level, LevelOp};
+use crate::surface::level::{level, DEFAULT_RECIPE};
 use crate::surface::SurfaceError;
 use crate::units::Pressure;
 use ndarray::Array2;
@@ -508,12 +508,7 @@ fn composite_map(p: &BemParams, ctx: &StageContext) -> Result<Map> {
 /// are an error (the BEM needs every element).
 pub fn read_levelled(path: &std::path::Path) -> Result<Map> {
     let mut m = read_height_map(path, &ReadOptions::default())?;
-    let recipe: Vec<LevelOp> = crate::stages::surfaces::default_level()
-        .iter()
-        .map(|s| s.parse())
-        .collect::<std::result::Result<_, String>>()
-        .map_err(SurfaceError::InvalidData)?;
-    level(&mut m, &recipe)?;
+    level(&mut m, &DEFAULT_RECIPE)?;
     if m.valid.as_ref().is_some_and(|v| v.iter().any(|ok| !ok)) {
         return Err(SurfaceError::InvalidData(format!(
             "{}: {:.2} % of the pixels are invalid; the BEM needs a complete map (crop it)",

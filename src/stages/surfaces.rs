@@ -41,7 +41,10 @@ pub const MODEL_VERSION: &str = "surface-2";
 
 /// The default levelling recipe (docs/surfaces.md).
 pub fn default_level() -> Vec<String> {
-    vec!["rows:median".into(), "plane".into(), "mean".into()]
+    crate::surface::level::DEFAULT_RECIPE
+        .iter()
+        .map(ToString::to_string)
+        .collect()
 }
 fn default_summits() -> u8 {
     9

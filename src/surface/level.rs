@@ -21,6 +21,10 @@ pub enum LevelOp {
 }
 
 /// Highest polynomial degree accepted by `poly(n)` and `rows:poly(n)`.
+/// The default levelling of a surface (`[surface] level`): the rows' medians, a plane, the
+/// mean.
+pub const DEFAULT_RECIPE: [LevelOp; 3] = [LevelOp::RowsMedian, LevelOp::Plane, LevelOp::Mean];
+
 pub const MAX_POLY_DEGREE: usize = 5;
 
 /// Maps with every pixel valid and at least this many pixels along each side cannot fail any

@@ -56,20 +56,14 @@ pub fn force_separation(
     separations: &[f64],
     settings: &SolverSettings,
 ) -> Result<Vec<CurvePoint>, ContactError> {
-    let mut order: Vec<usize> = (0..separations.len()).collect();
-    order.sort_by(|&a, &b| separations[b].total_cmp(&separations[a]));
-    let mut points = vec![None; separations.len()];
-    let mut warm: Option<Vec<f64>> = None;
-    for i in order {
-        let s = solver.solve(
-            Target::Separation(separations[i]),
-            settings,
-            warm.as_deref(),
-        )?;
-        points[i] = Some(CurvePoint::of(&s));
-        warm = Some(s.pressure);
-    }
-    Ok(points.into_iter().flatten().collect())
+    let targets: Vec<Target> = separations.iter().map(|&d| Target::Separation(d)).collect();
+    let solutions = solve_warm(
+        solver,
+        &targets,
+        |a, b| separations[b].total_cmp(&separations[a]),
+        settings,
+    )?;
+    Ok(solutions.iter().map(CurvePoint::of).collect())
 }
 
 /// The pressure-controlled solutions at `pressures` (solved from the lightest up, each
@@ -79,16 +73,29 @@ pub fn at_pressures(
     pressures: &[f64],
     settings: &SolverSettings,
 ) -> Result<Vec<BemSolution>, ContactError> {
-    let mut order: Vec<usize> = (0..pressures.len()).collect();
-    order.sort_by(|&a, &b| pressures[a].total_cmp(&pressures[b]));
-    let mut out: Vec<Option<BemSolution>> = vec![None; pressures.len()];
+    let targets: Vec<Target> = pressures.iter().map(|&p| Target::MeanPressure(p)).collect();
+    solve_warm(
+        solver,
+        &targets,
+        |a, b| pressures[a].total_cmp(&pressures[b]),
+        settings,
+    )
+}
+
+/// Each target, solved in the order `solve_first` sorts their indices, warm-started from the
+/// previous solution; returned in the order given.
+fn solve_warm(
+    solver: &BemSolver,
+    targets: &[Target],
+    solve_first: impl Fn(usize, usize) -> std::cmp::Ordering,
+    settings: &SolverSettings,
+) -> Result<Vec<BemSolution>, ContactError> {
+    let mut order: Vec<usize> = (0..targets.len()).collect();
+    order.sort_by(|&a, &b| solve_first(a, b));
+    let mut out: Vec<Option<BemSolution>> = vec![None; targets.len()];
     let mut warm: Option<Vec<f64>> = None;
     for i in order {
-        let s = solver.solve(
-            Target::MeanPressure(pressures[i]),
-            settings,
-            warm.as_deref(),
-        )?;
+        let s = solver.solve(targets[i], settings, warm.as_deref())?;
         warm = Some(s.pressure.clone());
         out[i] = Some(s);
     }

@@ -336,8 +336,8 @@ fn a_contact_law_replaces_the_contact_channels_only() {
         })
         .collect();
     let law = std::sync::Arc::new(ContactCurve::new(&points).unwrap());
-    let isbl = IsblLookup::build_standard(model.clone()).unwrap();
-    let bem = IsblLookup::build_with_contact_law(model.clone(), law.clone()).unwrap();
+    let isbl = IsblLookup::build_standard(model).unwrap();
+    let bem = IsblLookup::build_with_contact_law(model, law.clone()).unwrap();
     let tau = model.derived().junction_shear_strength;
     for h in [0.15e-9, 0.72e-9, 1.33e-9, -0.5e-9, -3e-9] {
         let (a, b, q) = (isbl.at(h).unwrap(), bem.at(h).unwrap(), law.at(h));
