@@ -14,6 +14,14 @@ fn default_pipeline_writes_hdf5_tables_and_plots_readable_by_others() {
         stderr(&o)
     );
     let proc = p.processed();
+    // The map tamaas solved for the `bem` validation rows is the one the shipped pipeline
+    // solves, byte for byte (tests/data/README.md, `bem/`: its composite.x3p).
+    assert_eq!(
+        std::fs::read(proc.join("bem_measured/composite.x3p")).unwrap(),
+        std::fs::read(test_data().join("bem/interface_hdi.x3p")).unwrap(),
+        "the shipped composite map is not tests/data/bem/interface_hdi.x3p: regenerate the \
+         tamaas reference (tests/data/bem/make_tamaas_reference.py)"
+    );
     for f in [
         "disk/surface.h5",
         "disk/height_map.png",
