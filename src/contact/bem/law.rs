@@ -13,6 +13,7 @@
 //! without bound and makes the DMW-driven cases diverge; docs/model-form.md.)
 
 use crate::contact::ContactError;
+use crate::signal::resample::hermite_segment;
 
 /// `ln P(h)` and `ln A_r(h)` on the solved separations.
 #[derive(Debug, Clone, PartialEq)]
@@ -66,23 +67,14 @@ impl Log {
         }
         let i = h.partition_point(|&v| v <= x) - 1;
         let w = h[i + 1] - h[i];
-        let t = (x - h[i]) / w;
-        let (t2, t3) = (t * t, t * t * t);
-        let (y0, y1, m0, m1) = (
+        let (value, slope) = hermite_segment(
             self.y[i],
             self.y[i + 1],
             self.slope[i] * w,
             self.slope[i + 1] * w,
+            (x - h[i]) / w,
         );
-        let value = (2.0 * t3 - 3.0 * t2 + 1.0) * y0
-            + (t3 - 2.0 * t2 + t) * m0
-            + (-2.0 * t3 + 3.0 * t2) * y1
-            + (t3 - t2) * m1;
-        let dt = (6.0 * t2 - 6.0 * t) * y0
-            + (3.0 * t2 - 4.0 * t + 1.0) * m0
-            + (-6.0 * t2 + 6.0 * t) * y1
-            + (3.0 * t2 - 2.0 * t) * m1;
-        (value, dt / w)
+        (value, slope / w)
     }
 }
 
