@@ -75,7 +75,7 @@ impl Default for Wavelet {
 
 impl Wavelet {
     /// Centre angular frequency ω_c (rad per unit scale) and spectral width σ of `G`.
-    fn gaussian(&self) -> (f64, f64) {
+    pub(crate) fn gaussian(&self) -> (f64, f64) {
         match *self {
             Wavelet::Morlet { omega0 } => (omega0, 1.0),
             Wavelet::Cmor { bandwidth, center } => (2.0 * PI * center, (2.0 / bandwidth).sqrt()),
@@ -91,7 +91,7 @@ impl Wavelet {
     }
 
     /// Peak of the Fourier transform of the unit-energy mother wavelet.
-    fn energy_peak(&self) -> f64 {
+    pub(crate) fn energy_peak(&self) -> f64 {
         match *self {
             Wavelet::Morlet { .. } => PI.powf(-0.25) * (2.0 * PI).sqrt(),
             Wavelet::Cmor { bandwidth, .. } => (2.0 * PI * bandwidth).powf(0.25),
@@ -466,15 +466,15 @@ pub fn reconstruction_integrals(wavelet: &Wavelet) -> (f64, f64) {
 
 /// Everything shared by all scales: the padded series' one-sided spectrum (bins 0…N_pad/2 of
 /// a real-input FFT; negative bins are their conjugates).
-struct Prepared {
-    spectrum: Vec<Complex64>,
-    n: usize,
-    n_pad: usize,
-    fs: f64,
-    frequencies: Vec<f64>,
-    scales: Vec<f64>,
-    wavelet: Wavelet,
-    normalization: Normalization,
+pub(crate) struct Prepared {
+    pub(crate) spectrum: Vec<Complex64>,
+    pub(crate) n: usize,
+    pub(crate) n_pad: usize,
+    pub(crate) fs: f64,
+    pub(crate) frequencies: Vec<f64>,
+    pub(crate) scales: Vec<f64>,
+    pub(crate) wavelet: Wavelet,
+    pub(crate) normalization: Normalization,
 }
 
 /// Smallest 2^a or 3·2^a ≥ n (fast rustfft lengths).
@@ -485,7 +485,7 @@ fn fast_len(n: usize) -> usize {
 }
 
 /// `min_pad`: a longer FFT than needed (tests compare against the spec's ≥ 2N padding).
-fn prepare(
+pub(crate) fn prepare(
     signal: &[f64],
     fs: f64,
     opts: &CwtOptions,
@@ -514,20 +514,8 @@ fn prepare(
         });
     }
     let n_pad = fast_len((n + support as usize).max(min_pad));
-    let mean = if opts.keep_mean {
-        0.0
-    } else {
-        signal.iter().sum::<f64>() / n as f64
-    };
-    // The series is real: one real-input FFT (half the work and memory of a complex one).
-    let mut padded = vec![0.0; n_pad];
-    for (b, v) in padded.iter_mut().zip(signal) {
-        *b = v - mean;
-    }
     let rfft = RealFft::new(&mut FftPlanner::<f64>::new(), n_pad);
-    let mut spectrum = vec![Complex64::default(); rfft.spectrum_len()];
-    rfft.forward(&padded, &mut spectrum);
-    drop(padded);
+    let spectrum = padded_spectrum(signal, opts.keep_mean, &rfft);
     Ok(Prepared {
         spectrum,
         n,
@@ -540,7 +528,39 @@ fn prepare(
     })
 }
 
+/// One-sided spectrum of the (mean-removed unless `keep_mean`) series zero-padded to the
+/// plan's length.
+pub(crate) fn padded_spectrum(signal: &[f64], keep_mean: bool, rfft: &RealFft<f64>) -> Vec<Complex64> {
+    let mean = if keep_mean {
+        0.0
+    } else {
+        signal.iter().sum::<f64>() / signal.len() as f64
+    };
+    // The series is real: one real-input FFT (half the work and memory of a complex one).
+    let mut padded = vec![0.0; rfft.len()];
+    for (b, v) in padded.iter_mut().zip(signal) {
+        *b = v - mean;
+    }
+    let mut spectrum = vec![Complex64::default(); rfft.spectrum_len()];
+    rfft.forward(&padded, &mut spectrum);
+    spectrum
+}
+
 impl Prepared {
+    /// The same grid and padding with no spectrum (for another series of the same length).
+    pub(crate) fn same_grid(&self) -> Prepared {
+        Prepared {
+            spectrum: Vec::new(),
+            n: self.n,
+            n_pad: self.n_pad,
+            fs: self.fs,
+            frequencies: self.frequencies.clone(),
+            scales: self.scales.clone(),
+            wavelet: self.wavelet,
+            normalization: self.normalization,
+        }
+    }
+
     /// n_freq × n_time, refused beyond MAX_LEN values rather than overflowing.
     fn output_len(&self) -> Result<usize, AnalysisError> {
         match self.n.checked_mul(self.frequencies.len()) {
@@ -568,6 +588,20 @@ impl Prepared {
         buf: &mut [Complex<T>],
         scratch: &mut [Complex<T>],
     ) {
+        self.row_decimated(j, ifft, buf, scratch);
+    }
+
+    /// [`Self::row`] at every `N_pad/m`-th sample, `m = buf.len() = ifft.len()` dividing N_pad:
+    /// the bins are folded modulo m, which is exact while the row's band (bins `k_lo…k_hi`)
+    /// spans fewer than m bins — the caller's choice of m guarantees it.
+    pub(crate) fn row_decimated<T: FftNum + Float>(
+        &self,
+        j: usize,
+        ifft: &dyn Fft<T>,
+        buf: &mut [Complex<T>],
+        scratch: &mut [Complex<T>],
+    ) {
+        let m = buf.len() as i64;
         let s = self.scales[j];
         let (wc, sigma) = self.wavelet.gaussian();
         let root = (s * self.fs).sqrt();
@@ -591,7 +625,7 @@ impl Prepared {
         let inv_two_var = 0.5 / (sigma * sigma);
         let cast = |v: f64| T::from_f64(v).unwrap_or_else(T::zero);
         for k in k_lo..=k_hi {
-            let i = k.rem_euclid(self.n_pad as i64) as usize;
+            let i = k.rem_euclid(m) as usize;
             let d = s * k as f64 * dw - wc;
             let g = scale * (-d * d * inv_two_var).exp();
             // X_{−k} = conj X_k for the real series.
@@ -647,7 +681,7 @@ impl Prepared {
             });
     }
 
-    fn coi(&self) -> Vec<f64> {
+    pub(crate) fn coi(&self) -> Vec<f64> {
         let nyquist = self.fs / 2.0;
         (0..self.n)
             .map(|i| {

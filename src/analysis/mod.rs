@@ -16,10 +16,12 @@
 //!   section, with the thresholds and the diagnostics behind the verdict.
 
 pub mod classify;
+pub mod coherence;
 pub mod cwt;
 pub mod poincare;
 pub mod report;
 pub mod series;
+pub mod significance;
 
 #[cfg(test)]
 mod tests;
