@@ -232,14 +232,6 @@ fn fill(buf: &mut [f64], bytes: &[u8], decode: impl Fn(&[u8]) -> f64) {
     }
 }
 
-/// Peak resident set size of this process (Linux `VmHWM`), bytes.
-fn peak_rss_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
-
 pub(super) fn cmd_analyze_stream(a: &AnalyzeArgs) -> Result<()> {
     let file = a.file.display().to_string();
     if !a.file.is_file() {
@@ -304,7 +296,7 @@ pub(super) fn cmd_analyze_stream(a: &AnalyzeArgs) -> Result<()> {
         },
         memory: Memory {
             transform_bytes: r.working_bytes,
-            peak_rss_bytes: peak_rss_bytes(),
+            peak_rss_bytes: hdi::bench::readers::peak_rss_bytes(),
         },
         seconds: Seconds {
             mean_pass,
