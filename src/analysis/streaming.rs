@@ -27,9 +27,10 @@
 //!
 //! Memory: O(M + n_freq·n/decimate) — the block (M f64), its spectrum (M/2 + 1 complex f64)
 //! and FFT scratch, one M-point complex f32 buffer and scratch per worker (at most one per
-//! thread), the filter gains (≤ M/2 f64 per frequency), and per frequency and bin 16 bytes
-//! (f64 power sum, f32 max, f32 mean) plus the ridge's 4; [`BandScalogram::working_bytes`]
-//! adds up the actual allocations. Only the bins grow with the record.
+//! thread), the filter gains (≤ M/2 f64 per frequency); per frequency and bin 12 bytes of sums
+//! and maxima (f64, f32) and 12 of outputs (f32 mean |W|², max |W| and the ridge's RMS), per bin
+//! about 50 (time, COI, ridge). [`BandScalogram::working_bytes`] adds up the actual allocations.
+//! Only the bins grow with the record.
 //!
 //! Determinism: the block loop is sequential and each frequency's row is transformed and
 //! accumulated by one worker in sample order, so the results are bit-identical for any
