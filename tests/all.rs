@@ -1,5 +1,6 @@
 //! One integration-test binary (one link step on 2 cores), one module per concern.
 mod analysis_cli;
+mod analysis_stream_cli;
 mod architecture;
 mod arrow_tables;
 mod bad_input;

@@ -53,10 +53,10 @@ use rustfft::{Fft, FftNum, FftPlanner};
 use std::f64::consts::{PI, SQRT_2};
 
 /// Where `G(sω)` is treated as zero: `|sω − ω_c| > CUTOFF·σ` (e^{−36} ≈ 2·10⁻¹⁶).
-const CUTOFF: f64 = 8.5;
+pub(crate) const CUTOFF: f64 = 8.5;
 
 /// Largest padded length accepted (2³³ complex samples would be 128 GiB).
-const MAX_LEN: usize = 1 << 33;
+pub(crate) const MAX_LEN: usize = 1 << 33;
 
 /// The mother wavelet.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -119,7 +119,14 @@ impl Wavelet {
         wc * SQRT_2 / (2.0 * PI * sigma * t_edge)
     }
 
-    fn validate(&self) -> Result<(), AnalysisError> {
+    /// One-sided time support (samples at `fs`) of the wavelet at scale `s`: its envelope
+    /// `exp(−σ²t²/(2s²))` falls below e^{−36} beyond `CUTOFF·s·fs/σ` (the time-domain twin of
+    /// the frequency cut-off). The zero padding and the streaming overlap are this long.
+    pub(crate) fn support_samples(&self, s: f64, fs: f64) -> f64 {
+        CUTOFF * s * fs / self.gaussian().1
+    }
+
+    pub(crate) fn validate(&self) -> Result<(), AnalysisError> {
         let bad = |x: f64| x.is_nan() || x.is_infinite() || x <= 0.0;
         match *self {
             Wavelet::Morlet { omega0 } if bad(omega0) => Err(AnalysisError::parameter(
@@ -464,6 +471,71 @@ pub fn reconstruction_integrals(wavelet: &Wavelet) -> (f64, f64) {
     (i_e * h / 3.0, i_r * h / 3.0)
 }
 
+/// The normalisation's peak gain of `Ψ̂` at scale `s` (module docs), whether the wavelet is
+/// analytic (positive frequencies only), and PyWavelets' sub-sample shift when it applies.
+pub(crate) fn normalization_terms(
+    normalization: Normalization,
+    wavelet: &Wavelet,
+    s: f64,
+    fs: f64,
+) -> (f64, bool, Option<f64>) {
+    let root = (s * fs).sqrt();
+    match normalization {
+        Normalization::Amplitude => (2.0, true, None),
+        Normalization::Energy => (root * wavelet.energy_peak(), true, None),
+        Normalization::Pywt { precision } => (
+            root * wavelet.pywt_peak(),
+            false,
+            Some(precision.map_or(0.0, |p| pywt_time_offset(s * fs, p))),
+        ),
+    }
+}
+
+/// The Gaussian filter of scale `s` on the `n_pad`-point FFT grid at `fs`: the signed bins
+/// `k_lo…k_hi` where `G(sω_k)` is not negligible (bin `n_pad/2` counts as positive; analytic:
+/// `k ≥ 1`) and the gain `peak·G(sω_k)/n_pad` there (the `1/n_pad` of the inverse FFT folded in).
+pub(crate) struct ScaleFilter {
+    pub(crate) k_lo: i64,
+    pub(crate) k_hi: i64,
+    s: f64,
+    wc: f64,
+    dw: f64,
+    scale: f64,
+    inv_two_var: f64,
+}
+
+impl ScaleFilter {
+    pub(crate) fn new(
+        wavelet: &Wavelet,
+        s: f64,
+        fs: f64,
+        n_pad: usize,
+        peak: f64,
+        analytic: bool,
+    ) -> Self {
+        let (wc, sigma) = wavelet.gaussian();
+        let dw = 2.0 * PI * fs / n_pad as f64;
+        let half = (n_pad / 2) as i64;
+        let k_lo = (((wc - CUTOFF * sigma) / s) / dw).ceil() as i64;
+        let k_hi = ((((wc + CUTOFF * sigma) / s) / dw).floor() as i64).min(half);
+        ScaleFilter {
+            k_lo: k_lo.max(if analytic { 1 } else { 1 - half }),
+            k_hi,
+            s,
+            wc,
+            dw,
+            scale: peak / n_pad as f64,
+            inv_two_var: 0.5 / (sigma * sigma),
+        }
+    }
+
+    /// `peak·G(s ω_k)/n_pad` at signed bin `k`.
+    pub(crate) fn gain(&self, k: i64) -> f64 {
+        let d = self.s * k as f64 * self.dw - self.wc;
+        self.scale * (-d * d * self.inv_two_var).exp()
+    }
+}
+
 /// Everything shared by all scales: the padded series' one-sided spectrum (bins 0…N_pad/2 of
 /// a real-input FFT; negative bins are their conjugates).
 pub(crate) struct Prepared {
@@ -478,7 +550,7 @@ pub(crate) struct Prepared {
 }
 
 /// Smallest 2^a or 3·2^a ≥ n (fast rustfft lengths).
-fn fast_len(n: usize) -> usize {
+pub(crate) fn fast_len(n: usize) -> usize {
     let p2 = n.next_power_of_two();
     let p3 = 3 * n.div_ceil(3).next_power_of_two();
     p2.min(p3)
@@ -500,9 +572,8 @@ pub(crate) fn prepare(
         .map(|&f| opts.wavelet.scale_of_frequency(f))
         .collect();
     let n = signal.len();
-    let (_, sigma) = opts.wavelet.gaussian();
     let s_max = scales.iter().cloned().fold(0.0, f64::max);
-    let support = (CUTOFF * s_max * fs / sigma).ceil();
+    let support = opts.wavelet.support_samples(s_max, fs).ceil();
     // Absurdly low frequencies (a wavelet of billions of samples) would overflow the FFT size.
     if support > MAX_LEN as f64 || n + min_pad > MAX_LEN {
         return Err(AnalysisError::FrequencyRange {
@@ -603,31 +674,14 @@ impl Prepared {
     ) {
         let m = buf.len() as i64;
         let s = self.scales[j];
-        let (wc, sigma) = self.wavelet.gaussian();
-        let root = (s * self.fs).sqrt();
-        let (peak, analytic, pywt) = match self.normalization {
-            Normalization::Amplitude => (2.0, true, None),
-            Normalization::Energy => (root * self.wavelet.energy_peak(), true, None),
-            Normalization::Pywt { precision } => (
-                root * self.wavelet.pywt_peak(),
-                false,
-                Some(precision.map_or(0.0, |p| pywt_time_offset(s * self.fs, p))),
-            ),
-        };
-        let scale = peak / self.n_pad as f64;
-        let dw = 2.0 * PI * self.fs / self.n_pad as f64;
-        let half = (self.n_pad / 2) as i64;
-        // Signed bin range where G is not negligible; bin N_pad/2 counts as positive.
-        let mut k_lo = (((wc - CUTOFF * sigma) / s) / dw).ceil() as i64;
-        let k_hi = ((((wc + CUTOFF * sigma) / s) / dw).floor() as i64).min(half);
-        k_lo = k_lo.max(if analytic { 1 } else { 1 - half });
+        let (peak, analytic, pywt) =
+            normalization_terms(self.normalization, &self.wavelet, s, self.fs);
+        let filter = ScaleFilter::new(&self.wavelet, s, self.fs, self.n_pad, peak, analytic);
         buf.fill(Complex::new(T::zero(), T::zero()));
-        let inv_two_var = 0.5 / (sigma * sigma);
         let cast = |v: f64| T::from_f64(v).unwrap_or_else(T::zero);
-        for k in k_lo..=k_hi {
+        for k in filter.k_lo..=filter.k_hi {
             let i = k.rem_euclid(m) as usize;
-            let d = s * k as f64 * dw - wc;
-            let g = scale * (-d * d * inv_two_var).exp();
+            let g = filter.gain(k);
             // X_{−k} = conj X_k for the real series.
             let x = if k >= 0 {
                 self.spectrum[k as usize]
@@ -682,17 +736,21 @@ impl Prepared {
     }
 
     pub(crate) fn coi(&self) -> Vec<f64> {
-        let nyquist = self.fs / 2.0;
         (0..self.n)
-            .map(|i| {
-                let t_edge = i.min(self.n - 1 - i) as f64 / self.fs;
-                if t_edge > 0.0 {
-                    self.wavelet.coi_frequency(t_edge).min(nyquist)
-                } else {
-                    nyquist
-                }
-            })
+            .map(|i| coi_at_edge(&self.wavelet, i.min(self.n - 1 - i), self.fs))
             .collect()
+    }
+}
+
+/// The cone of influence `edge` samples from the nearest record edge, clamped to Nyquist
+/// (and Nyquist on the edge itself).
+pub(crate) fn coi_at_edge(wavelet: &Wavelet, edge: usize, fs: f64) -> f64 {
+    let nyquist = fs / 2.0;
+    let t_edge = edge as f64 / fs;
+    if t_edge > 0.0 {
+        wavelet.coi_frequency(t_edge).min(nyquist)
+    } else {
+        nyquist
     }
 }
 

@@ -12,6 +12,8 @@
 //!   L1 / L2 / PyWavelets normalisations, cone of influence and ridge.
 //! - [`poincare`]: the section {v = 0} (one extremum per half period, parabola-refined), the
 //!   return map (x_n, x_{n+1}) of the maxima, and the decimated phase-space trajectory.
+//! - [`streaming`]: the same CWT for a band of frequencies over a record read block by block
+//!   (overlap-save), reduced to decimated bins in bounded memory.
 //! - [`classify`]: fixed point / periodic (period k) / quasi-periodic / irregular from the
 //!   section, with the thresholds and the diagnostics behind the verdict.
 
@@ -22,6 +24,7 @@ pub mod poincare;
 pub mod report;
 pub mod series;
 pub mod significance;
+pub mod streaming;
 
 #[cfg(test)]
 mod tests;

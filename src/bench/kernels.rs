@@ -229,3 +229,65 @@ pub(super) fn bem(out: &mut Figures, map: &HeightMap, repeats: usize) -> Result<
     }
     Ok(())
 }
+
+/// The streaming band CWT (`analysis::streaming`, what `hdi analyze --stream` runs) on a
+/// generated record of `samples` samples at 4 MS/s — a 100 kHz tone of amplitude 1 plus
+/// uniform noise of amplitude 0.5, computed inside the reader so that no record is held —
+/// at 10 log-spaced frequencies 90–120 kHz, decimate 1000: both passes (mean, transform).
+pub(super) fn stream(out: &mut Figures, samples: usize, repeats: usize) -> Result<()> {
+    use crate::analysis::cwt::{FrequencyGrid, Wavelet};
+    use crate::analysis::streaming::{band_cwt, series_mean, BandOptions, BandPlan, StreamError};
+    use std::convert::Infallible;
+    let opts = BandOptions {
+        wavelet: Wavelet::default(),
+        frequencies: FrequencyGrid::Log {
+            f_min_hz: 90e3,
+            f_max_hz: 120e3,
+            count: 10,
+        },
+        decimate: 1000,
+        block: None,
+    };
+    let plan = BandPlan::new(samples, FS, &opts)?;
+    let read = |start: usize, buf: &mut [f64]| -> std::result::Result<(), Infallible> {
+        for (i, v) in buf.iter_mut().enumerate() {
+            let k = (start + i) as u64;
+            // splitmix64 of the index: noise that any block reproduces on its own.
+            let mut z = k.wrapping_add(1).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            let u = (z ^ (z >> 31)) as f64 / u64::MAX as f64 - 0.5;
+            let t = k as f64 / FS;
+            *v = (2.0 * std::f64::consts::PI * 100e3 * t).cos() + u;
+        }
+        Ok(())
+    };
+    let unwrap = |e: StreamError<Infallible>| match e {
+        StreamError::Analysis(a) => BenchError::Analysis(a),
+        StreamError::Read { error, .. } => match error {},
+    };
+    let (times, r) = time_best(repeats, || {
+        let mean = series_mean(samples, plan.fft_len, read).map_err(unwrap)?;
+        band_cwt(&plan, mean, read).map_err(unwrap)
+    })?;
+    out.push(Figure::best(
+        Group::Stream,
+        "stream_band_cwt_10_frequencies",
+        format!(
+            "streaming band CWT, {samples} samples × {} frequencies (90–120 kHz, decimate {})",
+            plan.frequencies_hz.len(),
+            plan.decimate
+        ),
+        times,
+        Unit::Seconds,
+        repeats,
+        Details {
+            samples: Some(samples),
+            frequencies: Some(plan.frequencies_hz.len()),
+            memory_bytes: Some(r.working_bytes),
+            peak_rss_bytes: super::readers::peak_rss_bytes(),
+            ..Details::default()
+        },
+    ));
+    Ok(())
+}

@@ -23,8 +23,11 @@ use std::time::Instant;
 /// Sample rate the signal kernels assume (also for `--input`): the LDV records' 4 MS/s.
 const FS: f64 = 4e6;
 
+/// Length of the streaming CWT's generated record (docs/performance.md, "Streaming band CWT").
+const STREAM_SAMPLES: usize = 100_000_000;
+
 /// The figure groups, in the order they run; `--only` takes these names.
-pub const GROUPS: [&str; 10] = [
+pub const GROUPS: [&str; 11] = [
     "surfaces",
     "two-dof",
     "sweep",
@@ -33,6 +36,7 @@ pub const GROUPS: [&str; 10] = [
     "fft",
     "roughness",
     "bem",
+    "stream",
     "noop",
     "main-job",
 ];
@@ -177,6 +181,7 @@ pub enum Group {
     Fft,
     Roughness,
     Bem,
+    Stream,
     Noop,
     MainJob,
 }
@@ -255,11 +260,15 @@ pub struct Details {
     #[schemars(range(min = 0))]
     pub us_per_step: Option<f64>,
     /// BEM solves: conjugate-gradient iterations of the timed solve, and the memory the
-    /// solver held, bytes.
+    /// solver held, bytes (the streaming CWT: the transform's allocations at their peak).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub iterations: Option<usize>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub memory_bytes: Option<usize>,
+    /// Peak resident set of the bench process after the figure (Linux VmHWM), bytes: it
+    /// includes every group run before.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_rss_bytes: Option<u64>,
     /// Stage instances the cold main job ran.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stages_ran: Option<usize>,
@@ -282,6 +291,8 @@ impl Details {
             ("threads", n(self.threads)),
             ("rejected_steps", self.rejected_steps),
             ("rhs_evaluations", self.rhs_evaluations),
+            ("memory_bytes", n(self.memory_bytes)),
+            ("peak_rss_bytes", self.peak_rss_bytes),
         ];
         let floats = [
             ("case_ms", self.case_ms),
@@ -435,8 +446,9 @@ pub fn run(o: &BenchOptions, host: &mut dyn BenchHost) -> Result<Vec<Figure>> {
     check(o)?;
     let wanted = |g: &str| -> bool {
         if o.only.is_empty() {
-            // The BEM solves take tens of seconds: only when asked (bench/compare.py).
-            g != "bem" && (g != "main-job" || o.main_job)
+            // The BEM solves and the 10⁸-sample streaming CWT take tens of seconds: only when
+            // asked (bench/compare.py).
+            g != "bem" && g != "stream" && (g != "main-job" || o.main_job)
         } else {
             o.only.iter().any(|x| x == g) || (g == "main-job" && o.main_job)
         }
@@ -482,6 +494,9 @@ pub fn run(o: &BenchOptions, host: &mut dyn BenchHost) -> Result<Vec<Figure>> {
             None => kernels::synthetic_map(o.size),
         };
         kernels::bem(&mut out, &map, n(3))?;
+    }
+    if wanted("stream") {
+        kernels::stream(&mut out, STREAM_SAMPLES, n(1))?;
     }
     if wanted("noop") && o.config.is_file() {
         main_job::noop(&mut out, &o.config, n(4))?;

@@ -41,6 +41,9 @@ struct AnalysedFile<'a> {
 }
 
 pub(super) fn cmd_analyze(a: AnalyzeArgs) -> Result<()> {
+    if a.stream {
+        return super::analyze_stream::cmd_analyze_stream(&a);
+    }
     use hdi::stages::analysis::{read_any_series, summary, write_outputs, AnalysisSettings};
     let settings = AnalysisSettings {
         window: match a.window.as_slice() {

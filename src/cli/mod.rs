@@ -2,6 +2,7 @@
 //! anyhow live only here (feature `cli`).
 
 mod analyze;
+mod analyze_stream;
 mod args;
 mod bench;
 mod bulge;

@@ -34,6 +34,10 @@ const DOCUMENTED: &[Documented] = &[
         "analysis stage result.json",
     ),
     doc::<super::analyze::AnalyzeOutput>("analyze", "hdi analyze --json"),
+    doc::<super::analyze_stream::StreamOutput>(
+        "analyze-stream",
+        "hdi analyze FILE --stream --json",
+    ),
     doc::<hdi::bench::BenchDocument>("bench", "hdi bench --json"),
     doc::<hdi::artefacts::bulge::BulgeReport>("bulge", "hdi bulge FILE… --json"),
     Documented {

@@ -44,4 +44,12 @@ pub struct AnalyzeArgs {
     pub out: Option<PathBuf>,
     #[arg(long)]
     pub json: bool,
+    /// Band CWT of a long 1-D float `.npy` series in bounded memory, read block by block: mean
+    /// |W|² and max |W| per `--decimate` samples at the `--frequencies` log-spaced frequencies
+    /// from --f-min to --f-max (docs/analysis.md, "Streaming band CWT").
+    #[arg(long, requires = "decimate", conflicts_with_all = ["dataset", "column", "velocity", "window"])]
+    pub stream: bool,
+    /// With --stream: samples per output bin.
+    #[arg(long, requires = "stream")]
+    pub decimate: Option<usize>,
 }

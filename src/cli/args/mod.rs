@@ -177,7 +177,7 @@ pub enum Command {
         #[arg(long)]
         json: bool,
         /// Run only these groups: surfaces, two-dof, sweep, three-dof, cwt, fft, roughness,
-        /// bem (only when named), noop, main-job (comma-separated).
+        /// bem and stream (only when named), noop, main-job (comma-separated).
         #[arg(long, value_delimiter = ',')]
         only: Vec<String>,
         /// Also run CONFIG (and the raw/ beside it) cold in a temp dir and print its per-stage
