@@ -7,6 +7,10 @@ use super::classify::{classify_signal, Classification, ClassifyOptions};
 use super::cwt::{cwt_morlet, ridge, CwtOptions, FrequencyGrid, Ridge, Scalogram};
 use super::poincare::{phase_space, poincare_section, PhaseSpace, PoincareSection};
 use super::series::{detrend, spectrum, time_window, Detrend};
+use super::significance::{
+    scale_average, spectrum_level, wavelet_significance, RedNoise, ScaleAverage,
+    WaveletSignificance,
+};
 use super::AnalysisError;
 use crate::signal::spectrum::{AmplitudeSpectrum, Peak, PeakOptions, Window};
 
@@ -22,6 +26,131 @@ pub struct AnalyzeOptions {
     /// Phase-space points kept for the output (all points enter the section).
     pub phase_space_points: usize,
     pub classify: ClassifyOptions,
+    pub significance: SignificanceOptions,
+    /// The CWT grid from the record (replaces `cwt.frequencies`); `None`: `cwt.frequencies`.
+    pub grid: Option<GridRequest>,
+}
+
+/// The CWT frequency range as asked: unset bounds and count follow the record.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct GridRequest {
+    pub f_min_hz: Option<f64>,
+    pub f_max_hz: Option<f64>,
+    pub count: Option<usize>,
+}
+
+/// The grid used and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridChoice {
+    pub f_min_hz: f64,
+    pub f_max_hz: f64,
+    pub count: usize,
+    pub reason: String,
+}
+
+/// The HDI band of the dissertation's wavelet figures (Fig. 4.12, App. B): 5 kHz–1 MHz at 100
+/// log-spaced frequencies.
+const HDI_BAND: (f64, f64, usize) = (5e3, 1e6, 100);
+
+/// The grid for `n` samples at `fs`: the HDI band where the record resolves it, else
+///
+/// - top `min(1 MHz, fs/3)`: at fs/3 the Morlet's band (ω0 ± 3σ) ends at Nyquist;
+/// - bottom `max(f_coi, min(5 kHz, f_max/200))`, `f_coi` the cone of influence at mid-record
+///   (below it no sample is trusted), 200 the HDI band's span;
+/// - count: the HDI band's density, 100 per log2(200) octaves (13.1 per octave), at least 16.
+///
+/// Bounds that are given are kept (and checked later against Nyquist).
+pub fn choose_grid(fs: f64, n: usize, req: GridRequest, wavelet: &super::cwt::Wavelet) -> GridChoice {
+    let mut why = Vec::new();
+    let f_max = req.f_max_hz.unwrap_or_else(|| {
+        if fs / 3.0 < HDI_BAND.1 {
+            why.push(format!("top fs/3 = {:.6} Hz (the Morlet band stays below Nyquist)", fs / 3.0));
+            fs / 3.0
+        } else {
+            HDI_BAND.1
+        }
+    });
+    let f_min = req.f_min_hz.unwrap_or_else(|| {
+        let coi = wavelet.coi_frequency((n as f64 / 2.0) / fs);
+        let span = HDI_BAND.0.min(f_max * HDI_BAND.0 / HDI_BAND.1);
+        if coi > span {
+            why.push(format!(
+                "bottom {coi:.6} Hz: the cone of influence at mid-record ({n} samples)"
+            ));
+            coi
+        } else {
+            if span < HDI_BAND.0 {
+                why.push("bottom f_max/200 (the HDI band's span)".to_string());
+            }
+            span
+        }
+    });
+    let count = req.count.unwrap_or_else(|| {
+        let octaves = (f_max / f_min).log2().max(0.0);
+        let per_octave = HDI_BAND.2 as f64 / (HDI_BAND.1 / HDI_BAND.0).log2();
+        (octaves * per_octave).round().max(16.0) as usize
+    });
+    let given = [req.f_min_hz.is_some(), req.f_max_hz.is_some(), req.count.is_some()];
+    let reason = if given == [true, true, true] {
+        "given".to_string()
+    } else if why.is_empty() {
+        let g: Vec<&str> = ["f_min", "f_max", "count"]
+            .iter()
+            .zip(given)
+            .filter(|(_, g)| *g)
+            .map(|(k, _)| *k)
+            .collect();
+        if g.is_empty() {
+            "default: the HDI band 5 kHz–1 MHz, 100 frequencies (the record resolves it)".to_string()
+        } else {
+            format!("{} given; the rest the HDI band's", g.join(", "))
+        }
+    } else {
+        format!("from the record: {}", why.join("; "))
+    };
+    GridChoice {
+        f_min_hz: f_min,
+        f_max_hz: f_max,
+        count,
+        reason,
+    }
+}
+
+/// What the red-noise test reports (docs/analysis.md, "Significance").
+#[derive(Debug, Clone, PartialEq)]
+pub struct SignificanceOptions {
+    /// Confidence level, e.g. 0.95.
+    pub level: f64,
+    /// Named bands (Hz) whose scale-averaged power is tested; a band with no analysed
+    /// frequency is left out.
+    pub bands: Vec<(String, f64, f64)>,
+}
+
+impl Default for SignificanceOptions {
+    /// 95 %; the bands of the slider's response (docs/analysis.md, the validation bands): the
+    /// DMW lines 3–20 kHz, the pitch/roll modes 90–120 kHz, the normal mode 200–1000 kHz.
+    fn default() -> Self {
+        SignificanceOptions {
+            level: 0.95,
+            bands: vec![
+                ("dmw".into(), 3e3, 20e3),
+                ("pitch_roll".into(), 90e3, 120e3),
+                ("normal".into(), 200e3, 1000e3),
+            ],
+        }
+    }
+}
+
+/// The significance of everything reported, against the window's AR(1) background.
+#[derive(Debug, Clone)]
+pub struct Significance {
+    pub background: RedNoise,
+    pub wavelet: WaveletSignificance,
+    pub bands: Vec<ScaleAverage>,
+    /// The amplitude level at each spectrum bin.
+    pub spectrum_level: Vec<f64>,
+    /// The level at each reported peak's frequency.
+    pub peak_levels: Vec<f64>,
 }
 
 impl Default for AnalyzeOptions {
@@ -46,6 +175,8 @@ impl Default for AnalyzeOptions {
             },
             phase_space_points: 20_000,
             classify: ClassifyOptions::default(),
+            significance: SignificanceOptions::default(),
+            grid: Some(GridRequest::default()),
         }
     }
 }
@@ -66,9 +197,27 @@ pub struct AnalysisReport {
     /// the reason is reported instead of a class.
     pub classification: Result<Classification, AnalysisError>,
     pub phase_space: PhaseSpace,
+    /// `Err` when the window has no background to test against (a constant series).
+    pub significance: Result<Significance, AnalysisError>,
+    /// The CWT grid used and why.
+    pub grid: GridChoice,
 }
 
 impl AnalysisReport {
+    /// Fraction of the trusted ridge samples where the scalogram is significant.
+    pub fn ridge_significant_fraction(&self) -> Option<f64> {
+        let sig = self.significance.as_ref().ok()?;
+        let nt = self.scalogram.n_time;
+        let (mut trusted, mut hit) = (0usize, 0usize);
+        for n in 0..nt {
+            if self.ridge.trusted[n] {
+                trusted += 1;
+                hit += usize::from(sig.wavelet.significant(self.ridge.index[n], n, nt));
+            }
+        }
+        (trusted > 0).then(|| hit as f64 / trusted as f64)
+    }
+
     /// Median ridge frequency over the samples the cone of influence trusts (Hz).
     pub fn median_trusted_ridge_hz(&self) -> Option<f64> {
         let mut f: Vec<f64> = self
@@ -127,11 +276,36 @@ pub fn analyze(
     let vw = v.map(|v| &v[w.clone()]);
     let spectrum = spectrum(&xw, fs, opts.spectrum_window)?;
     let peaks = spectrum.peaks(&opts.peaks);
-    let scalogram = cwt_morlet(&xw, fs, &opts.cwt)?;
+    let (cwt, grid) = match opts.grid {
+        Some(req) => {
+            let g = choose_grid(fs, xw.len(), req, &opts.cwt.wavelet);
+            let cwt = super::cwt::CwtOptions {
+                frequencies: FrequencyGrid::Log {
+                    f_min_hz: g.f_min_hz,
+                    f_max_hz: g.f_max_hz,
+                    count: g.count,
+                },
+                ..opts.cwt.clone()
+            };
+            (cwt, g)
+        }
+        None => {
+            let f = opts.cwt.frequencies.frequencies(fs)?;
+            let g = GridChoice {
+                f_min_hz: f[0],
+                f_max_hz: f[f.len() - 1],
+                count: f.len(),
+                reason: "given".into(),
+            };
+            (opts.cwt.clone(), g)
+        }
+    };
+    let scalogram = cwt_morlet(&xw, fs, &cwt)?;
     let ridge = ridge(&scalogram);
     let section = poincare_section(&xw, vw, fs)?;
     let classification = classify_signal(&xw, fs, &section, &spectrum, &opts.classify);
     let phase_space = phase_space(&xw, vw, fs, opts.phase_space_points)?;
+    let significance = test_significance(&xw, &spectrum, &peaks, &scalogram, &opts.significance);
     Ok(AnalysisReport {
         t0_s: t0 + w.start as f64 / fs,
         sample_rate_hz: fs,
@@ -143,6 +317,43 @@ pub fn analyze(
         section,
         classification,
         phase_space,
+        significance,
+        grid,
+    })
+}
+
+/// Local, global and band significance of the scalogram and the spectrum's levels.
+fn test_significance(
+    x: &[f64],
+    spectrum: &AmplitudeSpectrum,
+    peaks: &[Peak],
+    scalogram: &Scalogram,
+    opts: &SignificanceOptions,
+) -> Result<Significance, AnalysisError> {
+    let background = RedNoise::estimate(x)?;
+    let wavelet = wavelet_significance(scalogram, &background, opts.level)?;
+    let f = &scalogram.frequencies_hz;
+    let bands = opts
+        .bands
+        .iter()
+        .filter(|(_, lo, hi)| f.iter().any(|f| f >= lo && f <= hi))
+        .map(|(name, lo, hi)| scale_average(scalogram, &background, name, (*lo, *hi), opts.level))
+        .collect::<Result<Vec<_>, _>>()?;
+    let level_at =
+        |f: f64| spectrum_level(spectrum, x.len(), &background, f, opts.level);
+    Ok(Significance {
+        spectrum_level: spectrum
+            .frequency
+            .iter()
+            .map(|f| level_at(*f))
+            .collect::<Result<_, _>>()?,
+        peak_levels: peaks
+            .iter()
+            .map(|p| level_at(p.frequency))
+            .collect::<Result<_, _>>()?,
+        background,
+        wavelet,
+        bands,
     })
 }
 

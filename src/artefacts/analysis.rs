@@ -102,6 +102,69 @@ pub struct AnalysisSummary {
     pub poincare_maxima: usize,
     /// the evidence behind `class`; null when unclassified
     pub evidence: Option<Evidence>,
+    /// fraction of the trusted ridge samples where the wavelet power is significant
+    #[serde(default)]
+    pub ridge_significant_fraction: Option<f64>,
+    /// the CWT frequency grid used and why
+    #[serde(default)]
+    pub frequency_grid: Option<FrequencyGridUsed>,
+    /// red-noise significance of the spectrum and the scalogram (docs/analysis.md,
+    /// "Significance"); null when the window has no background (a constant series)
+    #[serde(default)]
+    pub significance: Option<SignificanceSummary>,
+    /// why there is no significance test
+    #[serde(default)]
+    pub significance_unavailable: Option<String>,
+}
+
+/// The CWT grid: log-spaced frequencies from `f_min` to `f_max`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct FrequencyGridUsed {
+    #[serde(rename = "f_min_Hz")]
+    pub f_min_hz: f64,
+    #[serde(rename = "f_max_Hz")]
+    pub f_max_hz: f64,
+    pub count: usize,
+    /// given, the HDI band's default, or what the record changed (fs/3, cone of influence)
+    pub reason: String,
+}
+
+/// Torrence & Compo (1998) red-noise significance of one analysed window.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct SignificanceSummary {
+    /// confidence level of every test
+    #[schemars(range(min = 0, max = 1))]
+    pub level: f64,
+    /// background model: AR(1) with the window's lag-1 autocorrelation and variance
+    pub background: String,
+    /// the window's lag-1 autocorrelation α (biased sample ACF)
+    pub lag1_autocorrelation: f64,
+    /// fraction of the time–frequency cells outside the cone of influence whose wavelet
+    /// power exceeds the local level (≈ 1 − level for noise)
+    #[schemars(range(min = 0, max = 1))]
+    pub significant_area_fraction: f64,
+    /// frequencies where the global wavelet spectrum has a local maximum above its level, Hz
+    #[serde(rename = "global_significant_peaks_Hz")]
+    pub global_significant_peaks_hz: Vec<f64>,
+    /// scale-averaged power of the stated bands that the grid covers
+    pub bands: Vec<BandSignificance>,
+}
+
+/// Scale-averaged power of one band against its level (T&C eqs. 24–28).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct BandSignificance {
+    pub name: String,
+    /// the band asked for, Hz
+    #[serde(rename = "band_Hz")]
+    pub band_hz: [f64; 2],
+    /// analysed frequencies inside it
+    pub frequencies: usize,
+    /// mean band power over the samples outside the cone of influence, over its level
+    pub mean_power_to_level: Option<f64>,
+    /// fraction of those samples above the level
+    pub significant_fraction: Option<f64>,
+    /// degrees of freedom of the level
+    pub dof: f64,
 }
 
 /// The periodicity class as a stable word (the period is a separate key).
@@ -142,6 +205,12 @@ pub struct SpectralPeak {
     /// refined line frequency, Hz
     #[serde(rename = "frequency_Hz")]
     pub frequency_hz: f64,
+    /// above the red-noise level (`significance.level`) at its frequency; null when untested
+    #[serde(default)]
+    pub significant: Option<bool>,
+    /// amplitude over that level
+    #[serde(default)]
+    pub amplitude_to_level: Option<f64>,
 }
 
 /// The evidence behind the class (docs/analysis.md).

@@ -241,12 +241,16 @@ pub(super) fn cmd_analyze_stream(a: &AnalyzeArgs) -> Result<()> {
     let Some(fs) = a.sample_rate.map(|f| f.0) else {
         bail!("{file}: a .npy array has no time axis: give --sample-rate");
     };
+    // A band is what streaming is for: it is not guessed from the record.
+    let (Some(f_min), Some(f_max)) = (a.f_min, a.f_max) else {
+        bail!("{file}: --stream analyses a band: give --f-min and --f-max");
+    };
     let opts = BandOptions {
         wavelet: Wavelet::default(),
         frequencies: FrequencyGrid::Log {
-            f_min_hz: a.f_min.0,
-            f_max_hz: a.f_max.0,
-            count: a.frequencies,
+            f_min_hz: f_min.0,
+            f_max_hz: f_max.0,
+            count: a.frequencies.unwrap_or(10),
         },
         decimate: a.decimate.unwrap_or(0),
         block: None,

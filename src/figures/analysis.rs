@@ -79,6 +79,77 @@ pub fn scalogram_png(
     ridge_hz: Option<&[f64]>,
     magnitude_unit: &str,
 ) -> Result<()> {
+    scalogram_figure(
+        path,
+        title,
+        time_s,
+        frequencies_hz,
+        magnitude,
+        coi_hz,
+        ridge_hz,
+        magnitude_unit,
+        None,
+    )
+}
+
+/// The significance drawn over a scalogram: the mask (row-major like the magnitude) is
+/// outlined outside the cone of influence, and the global wavelet spectrum with its level
+/// is plotted beside the scalogram against the same frequency axis.
+pub struct SignificanceOverlay<'a> {
+    pub mask: &'a [bool],
+    /// Global spectrum and its level per frequency row, in `power_unit` (NaN: not formed).
+    pub global: &'a [f64],
+    pub global_level: &'a [f64],
+    pub power_unit: &'a str,
+    /// Confidence level, e.g. 0.95.
+    pub level: f64,
+}
+
+/// [`scalogram_png`] with the significance contours and the global spectrum panel.
+#[allow(clippy::too_many_arguments)]
+pub fn scalogram_significance_png(
+    path: &Path,
+    title: &str,
+    time_s: &[f64],
+    frequencies_hz: &[f64],
+    magnitude: &[f32],
+    coi_hz: &[f64],
+    ridge_hz: Option<&[f64]>,
+    magnitude_unit: &str,
+    overlay: &SignificanceOverlay,
+) -> Result<()> {
+    let nf = frequencies_hz.len();
+    if overlay.mask.len() != magnitude.len()
+        || overlay.global.len() != nf
+        || overlay.global_level.len() != nf
+    {
+        return Err(perr(path, "significance overlay does not match the scalogram"));
+    }
+    scalogram_figure(
+        path,
+        title,
+        time_s,
+        frequencies_hz,
+        magnitude,
+        coi_hz,
+        ridge_hz,
+        magnitude_unit,
+        Some(overlay),
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn scalogram_figure(
+    path: &Path,
+    title: &str,
+    time_s: &[f64],
+    frequencies_hz: &[f64],
+    magnitude: &[f32],
+    coi_hz: &[f64],
+    ridge_hz: Option<&[f64]>,
+    magnitude_unit: &str,
+    overlay: Option<&SignificanceOverlay>,
+) -> Result<()> {
     let order = scalogram_row_order(path, time_s, frequencies_hz, magnitude, coi_hz, ridge_hz)?;
     let (nt, nf) = (time_s.len(), frequencies_hz.len());
     let f_khz: Vec<f64> = order.iter().map(|&j| frequencies_hz[j] * 1e-3).collect();
@@ -107,12 +178,129 @@ pub fn scalogram_png(
         y: (y0, y1),
         coi: cone_per_column(coi_hz, nt, cols, y0, y1),
         ridge_segments: ridge_segments(ridge_hz, time_s, y0, y1),
+        contours: Vec::new(),
     };
-    render_png(path, (940, 580), |root| {
-        let (main, bar) = root.split_horizontally(800);
+    let Some(overlay) = overlay else {
+        return render_png(path, (940, 580), |root| {
+            let (main, bar) = root.split_horizontally(800);
+            draw_scalogram_chart(&main, title, &grid, &layout)?;
+            draw_colour_bar(&bar, grid.lo, grid.hi, magnitude_unit)
+        });
+    };
+    let mut layout = layout;
+    layout.contours = contour_segments(overlay.mask, &order, nt, rows, cols, &layout);
+    let global: Vec<(f64, f64, f64)> = order
+        .iter()
+        .map(|&j| {
+            (
+                frequencies_hz[j] * 1e-3,
+                overlay.global[j],
+                overlay.global_level[j],
+            )
+        })
+        .filter(|(_, g, l)| g.is_finite() && l.is_finite() && *g > 0.0 && *l > 0.0)
+        .collect();
+    render_png(path, (1180, 580), |root| {
+        let (main, rest) = root.split_horizontally(800);
+        let (side, bar) = rest.split_horizontally(240);
         draw_scalogram_chart(&main, title, &grid, &layout)?;
+        draw_global_spectrum(&side, &global, (y0, y1), overlay)?;
         draw_colour_bar(&bar, grid.lo, grid.hi, magnitude_unit)
     })
+}
+
+/// Cell edges between significant and non-significant cells (a cell is significant when
+/// most of its samples are), where both cells lie outside the cone of influence.
+fn contour_segments(
+    mask: &[bool],
+    order: &[usize],
+    nt: usize,
+    rows: usize,
+    cols: usize,
+    layout: &ScalogramLayout,
+) -> Vec<[(f64, f64); 2]> {
+    let nf = order.len();
+    let mut flag = vec![false; rows * cols];
+    for g in 0..rows {
+        for b in 0..cols {
+            let (mut hit, mut all) = (0usize, 0usize);
+            for &j in &order[block_start(nf, rows, g)..block_start(nf, rows, g + 1)] {
+                let row = &mask[j * nt..(j + 1) * nt];
+                for &m in &row[block_start(nt, cols, b)..block_start(nt, cols, b + 1)] {
+                    all += 1;
+                    hit += usize::from(m);
+                }
+            }
+            flag[g * cols + b] = 2 * hit > all;
+        }
+    }
+    let (cx, ry) = (&layout.col_x, &layout.row_y);
+    let outside = |g: usize, b: usize| {
+        layout.coi.is_empty() || (ry[g] * ry[g + 1]).sqrt() >= layout.coi[b]
+    };
+    let mut segs = Vec::new();
+    for g in 0..rows {
+        for b in 0..cols {
+            let here = flag[g * cols + b];
+            if b + 1 < cols && here != flag[g * cols + b + 1] && outside(g, b) && outside(g, b + 1)
+            {
+                segs.push([(cx[b + 1], ry[g]), (cx[b + 1], ry[g + 1])]);
+            }
+            if g + 1 < rows && here != flag[(g + 1) * cols + b] && outside(g, b) && outside(g + 1, b)
+            {
+                segs.push([(cx[b], ry[g + 1]), (cx[b + 1], ry[g + 1])]);
+            }
+        }
+    }
+    segs
+}
+
+/// The global wavelet spectrum (black) and its level (red) against frequency (kHz, log).
+fn draw_global_spectrum(
+    area: &Area,
+    global: &[(f64, f64, f64)],
+    (y0, y1): (f64, f64),
+    overlay: &SignificanceOverlay,
+) -> DrawResult<()> {
+    let (lo, hi) = finite_min_max(global.iter().flat_map(|(_, g, l)| [*g, *l]));
+    let (lo, hi) = if lo > 0.0 && hi > lo {
+        (lo / 1.5, hi * 1.5)
+    } else {
+        (1e-30, 1.0)
+    };
+    let mut chart = ChartBuilder::on(area)
+        .caption("global spectrum", font(15))
+        .margin(10)
+        .margin_top(30)
+        .x_label_area_size(45)
+        .y_label_area_size(8)
+        .build_cartesian_2d((lo..hi).log_scale(), (y0..y1).log_scale())?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .disable_y_axis()
+        .x_labels(3)
+        .x_label_formatter(&|v| format!("{v:.0e}"))
+        .x_desc(with_unit("mean |W|²", overlay.power_unit))
+        .label_style(font(12))
+        .axis_desc_style(font(13))
+        .draw()?;
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            global.iter().map(|(f, g, _)| (*g, *f)).collect::<Vec<_>>(),
+            BLACK.stroke_width(2),
+        )))?
+        .label("global")
+        .legend(line_key(16, BLACK.stroke_width(2)));
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            global.iter().map(|(f, _, l)| (*l, *f)).collect::<Vec<_>>(),
+            RED.stroke_width(2),
+        )))?
+        .label(format!("{:.0} % AR(1)", overlay.level * 100.0))
+        .legend(line_key(16, RED.stroke_width(2)));
+    draw_legend(&mut chart, Legend::at(SeriesLabelPosition::UpperRight, 12))?;
+    Ok(())
 }
 
 /// Checks the scalogram's inputs; the order of the frequency rows that makes them increase.
@@ -250,6 +438,8 @@ struct ScalogramLayout {
     y: (f64, f64),
     /// Cone of influence per column (empty: no cone).
     coi: Vec<f64>,
+    /// Outline of the significant region (segments in plot coordinates).
+    contours: Vec<[(f64, f64); 2]>,
     ridge_segments: Vec<Vec<(f64, f64)>>,
 }
 
@@ -363,6 +553,17 @@ fn draw_scalogram_chart(
                     + PathElement::new(vec![(0, -5), (16, -5)], BLACK.stroke_width(2))
             });
     }
+    for (k, seg) in layout.contours.iter().enumerate() {
+        let drawn = chart.draw_series(std::iter::once(PathElement::new(
+            seg.to_vec(),
+            BLACK.stroke_width(2),
+        )))?;
+        if k == 0 {
+            drawn
+                .label("significant (outlined)")
+                .legend(line_key(16, BLACK.stroke_width(2)));
+        }
+    }
     for (k, seg) in ridge_segments.iter().enumerate() {
         let drawn = chart.draw_series(std::iter::once(PathElement::new(
             seg.clone(),
@@ -374,7 +575,7 @@ fn draw_scalogram_chart(
                 .legend(line_key(16, RED.stroke_width(2)));
         }
     }
-    if !coi.is_empty() || !ridge_segments.is_empty() {
+    if !coi.is_empty() || !ridge_segments.is_empty() || !layout.contours.is_empty() {
         // Low frequencies at late times: usually inside the cone, the least trusted part.
         draw_legend(&mut chart, Legend::at(SeriesLabelPosition::LowerRight, 13))?;
     }

@@ -28,7 +28,10 @@ pub mod contact_bem;
 pub mod doe;
 pub mod sweep;
 
-pub use analysis::{phase_portrait_png, poincare_png, scalogram_png, spectrum_png};
+pub use analysis::{
+    phase_portrait_png, poincare_png, scalogram_png, scalogram_significance_png, spectrum_png,
+    SignificanceOverlay,
+};
 pub use basic::{
     category_dots_png, heatmap_png, histogram_png, lines_png, loglog_png, semilogy_png, stacked_png,
 };

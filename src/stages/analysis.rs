@@ -4,12 +4,11 @@
 //! section with a periodicity class, phase space. `hdi analyze FILE` runs the same on any file.
 
 use super::{FromConfig, Output, StageContext, StageKind};
-use crate::analysis::cwt::FrequencyGrid;
-use crate::analysis::report::{analyze, AnalysisReport, AnalyzeOptions};
+use crate::analysis::report::{analyze, AnalysisReport, AnalyzeOptions, GridRequest, Significance};
 pub use crate::artefacts::analysis::amplitude_key;
 use crate::artefacts::analysis::{
     display_unit, Amplitudes, AnalysedSeries, AnalysisResult, AnalysisRow, AnalysisSummary,
-    Evidence, PeakColumns, PeriodicityClass, SectionStatistics, SpectralLine, SpectralLines,
+    BandSignificance, Evidence, FrequencyGridUsed, SignificanceSummary, PeakColumns, PeriodicityClass, SectionStatistics, SpectralLine, SpectralLines,
     SpectralPeak, FILE as ANALYSIS_FILE,
 };
 use crate::artefacts::cases as case_files;
@@ -28,18 +27,10 @@ use std::path::Path;
 
 /// 2: periodicity from the spectral lines too (issue 19), JSON evidence instead of a debug
 /// string, any HDF5 time axis. 3: real-input FFTs and the scalogram's inverse transforms in f32
-/// (issue 20): |W| and spectra change in their last digits.
-pub const MODEL_VERSION: &str = "analysis-3";
+/// (issue 20): |W| and spectra change in their last digits. 4: red-noise significance, the
+/// grid from the record, coherence against a second series (issue 34).
+pub const MODEL_VERSION: &str = "analysis-4";
 
-fn default_f_min() -> Frequency {
-    Frequency(5e3)
-}
-fn default_f_max() -> Frequency {
-    Frequency(1e6)
-}
-fn default_frequencies() -> usize {
-    100
-}
 fn default_peaks() -> usize {
     5
 }
@@ -67,13 +58,14 @@ pub struct AnalysisConfig {
     /// `[start, end]` on the series' time axis (default: the whole record).
     #[serde(default)]
     pub window: Option<[TimeSpan; 2]>,
-    #[serde(default = "default_f_min")]
-    pub f_min: Frequency,
-    #[serde(default = "default_f_max")]
-    pub f_max: Frequency,
-    /// Log-spaced CWT frequencies between f_min and f_max.
-    #[serde(default = "default_frequencies")]
-    pub frequencies: usize,
+    /// CWT range (default: from the record, `analysis::report::choose_grid`).
+    #[serde(default)]
+    pub f_min: Option<Frequency>,
+    #[serde(default)]
+    pub f_max: Option<Frequency>,
+    /// Log-spaced CWT frequencies between f_min and f_max (default: from the range).
+    #[serde(default)]
+    pub frequencies: Option<usize>,
     /// Spectral peaks reported.
     #[serde(default = "default_peaks")]
     pub peaks: usize,
@@ -95,9 +87,9 @@ pub struct SeriesSpec {
 #[derive(Debug, Clone, PartialEq)]
 pub struct AnalysisSettings {
     pub window: (Option<f64>, Option<f64>),
-    pub f_min: f64,
-    pub f_max: f64,
-    pub frequencies: usize,
+    pub f_min: Option<f64>,
+    pub f_max: Option<f64>,
+    pub frequencies: Option<usize>,
     pub peaks: usize,
     pub min_peak_frequency: f64,
 }
@@ -105,20 +97,22 @@ pub struct AnalysisSettings {
 impl AnalysisSettings {
     pub fn check(&self) -> std::result::Result<(), crate::core::config::KeyError> {
         let bad = |k: &str, m: String| Err(crate::core::config::KeyError::new(k, m));
-        if !(self.f_min > 0.0 && self.f_max > self.f_min && self.f_max.is_finite()) {
-            return bad(
-                "f_min",
-                format!(
-                    "need 0 < f_min < f_max (got {} … {} Hz)",
-                    self.f_min, self.f_max
-                ),
-            );
+        for (key, f) in [("f_min", self.f_min), ("f_max", self.f_max)] {
+            if let Some(f) = f {
+                if !(f.is_finite() && f > 0.0) {
+                    return bad(key, format!("need a finite frequency > 0 (got {f} Hz)"));
+                }
+            }
         }
-        if !(2..=2000).contains(&self.frequencies) {
-            return bad(
-                "frequencies",
-                format!("{} is out of range: 2 … 2000", self.frequencies),
-            );
+        if let (Some(lo), Some(hi)) = (self.f_min, self.f_max) {
+            if hi <= lo {
+                return bad("f_min", format!("need f_min < f_max (got {lo} … {hi} Hz)"));
+            }
+        }
+        if let Some(n) = self.frequencies {
+            if !(2..=2000).contains(&n) {
+                return bad("frequencies", format!("{n} is out of range: 2 … 2000"));
+            }
         }
         if !(1..=100).contains(&self.peaks) {
             return bad("peaks", format!("{} is out of range: 1 … 100", self.peaks));
@@ -136,11 +130,11 @@ impl AnalysisSettings {
             window: self.window,
             ..AnalyzeOptions::default()
         };
-        o.cwt.frequencies = FrequencyGrid::Log {
+        o.grid = Some(GridRequest {
             f_min_hz: self.f_min,
             f_max_hz: self.f_max,
             count: self.frequencies,
-        };
+        });
         o.peaks.max_peaks = self.peaks;
         o.peaks.min_frequency = self.min_peak_frequency;
         o
@@ -222,6 +216,7 @@ pub fn summary(r: &AnalysisReport, unit: &str) -> AnalysisSummary {
         Class::Periodic { period } => Some(period),
         _ => None,
     });
+    let sig = r.significance.as_ref().ok();
     AnalysisSummary {
         window_s: [r.t0_s, r.t0_s + r.samples as f64 / r.sample_rate_hz],
         samples: r.samples,
@@ -230,9 +225,15 @@ pub fn summary(r: &AnalysisReport, unit: &str) -> AnalysisSummary {
         peaks: r
             .peaks
             .iter()
-            .map(|p| SpectralPeak {
-                amplitude: Amplitudes::new(unit, p.amplitude),
-                frequency_hz: p.frequency,
+            .enumerate()
+            .map(|(i, p)| {
+                let ratio = sig.map(|s| p.amplitude / s.peak_levels[i]);
+                SpectralPeak {
+                    amplitude: Amplitudes::new(unit, p.amplitude),
+                    frequency_hz: p.frequency,
+                    significant: ratio.map(|q| q > 1.0),
+                    amplitude_to_level: ratio.map(sig6),
+                }
             })
             .collect(),
         ridge_median_hz: r.median_trusted_ridge_hz(),
@@ -242,6 +243,55 @@ pub fn summary(r: &AnalysisReport, unit: &str) -> AnalysisSummary {
         unclassified_reason: r.classification.as_ref().err().map(|e| e.to_string()),
         poincare_maxima: r.section.maxima.len(),
         evidence: c.map(|c| evidence(c, unit)),
+        ridge_significant_fraction: r.ridge_significant_fraction().map(sig6),
+        frequency_grid: Some(FrequencyGridUsed {
+            f_min_hz: r.grid.f_min_hz,
+            f_max_hz: r.grid.f_max_hz,
+            count: r.grid.count,
+            reason: r.grid.reason.clone(),
+        }),
+        significance: sig.map(|s| significance_summary(r, s)),
+        significance_unavailable: r.significance.as_ref().err().map(|e| e.to_string()),
+    }
+}
+
+/// The JSON view of the red-noise tests.
+fn significance_summary(r: &AnalysisReport, s: &Significance) -> SignificanceSummary {
+    let w = &s.wavelet;
+    let f = &r.scalogram.frequencies_hz;
+    let excess: Vec<Option<f64>> = w
+        .global_power
+        .iter()
+        .zip(&w.global_level)
+        .map(|(p, l)| Some((*p)? / (*l)?))
+        .collect();
+    let global_significant_peaks_hz = (0..f.len())
+        .filter(|&j| {
+            let e = |k: usize| excess[k].unwrap_or(0.0);
+            excess[j].is_some_and(|x| x > 1.0)
+                && (j == 0 || e(j) >= e(j - 1))
+                && (j + 1 == f.len() || e(j) >= e(j + 1))
+        })
+        .map(|j| sig6(f[j]))
+        .collect();
+    SignificanceSummary {
+        level: w.level,
+        background: "AR(1)".into(),
+        lag1_autocorrelation: sig6(s.background.alpha),
+        significant_area_fraction: sig6(w.significant_fraction),
+        global_significant_peaks_hz,
+        bands: s
+            .bands
+            .iter()
+            .map(|b| BandSignificance {
+                name: b.name.clone(),
+                band_hz: [b.band_hz.0, b.band_hz.1],
+                frequencies: b.rows.1 - b.rows.0 + 1,
+                mean_power_to_level: b.mean_power.map(|m| sig6(m / b.level_power)),
+                significant_fraction: b.significant_fraction.map(sig6),
+                dof: sig6(b.dof),
+            })
+            .collect(),
     }
 }
 
@@ -290,6 +340,9 @@ pub fn write_outputs(
     out.attr_str(&entry, "class", &r.class_label())?;
     write_spectrum(&out, r, s)?;
     write_scalogram(&out, r, s)?;
+    if let Ok(sig) = &r.significance {
+        write_significance(&out, r, sig, s)?;
+    }
     write_poincare(&out, r, s)?;
     write_phase_space(&out, r, s)?;
     out.finish()?;
@@ -363,6 +416,102 @@ fn write_scalogram(out: &H5Out, r: &AnalysisReport, s: &Series) -> Result<()> {
     Ok(())
 }
 
+/// `analysis/significance`: the AR(1) background, the local and global levels, the mask and
+/// the scale-averaged power of the bands; `analysis/spectrum/significance_level` beside the
+/// spectrum.
+fn write_significance(out: &H5Out, r: &AnalysisReport, sig: &Significance, s: &Series) -> Result<()> {
+    let spec = out.group("analysis/spectrum", None)?;
+    out.write_1d(
+        &spec,
+        "significance_level",
+        &sig.spectrum_level,
+        &s.unit,
+        "red-noise amplitude level at the confidence `level` of analysis/significance",
+    )?;
+    let w = &sig.wavelet;
+    let g = out.group("analysis/significance", Some("NXdata"))?;
+    out.attr_str(&g, "signal", "mask")?;
+    out.attr_str_list(&g, "axes", &["frequency", "time"])?;
+    out.attr_f64(&g, "level", w.level)?;
+    out.attr_str(&g, "background", "AR(1), Torrence & Compo (1998) eq. 16")?;
+    out.attr_f64(&g, "lag1_autocorrelation", sig.background.alpha)?;
+    out.attr_f64(&g, "variance", sig.background.variance)?;
+    let power_unit = if s.unit == "1" {
+        "1".to_string()
+    } else {
+        format!("({})^2", s.unit)
+    };
+    let sc = &r.scalogram;
+    let nf = sc.frequencies_hz.len();
+    let mask: Vec<u8> = w.mask.iter().map(|m| u8::from(*m)).collect();
+    let mask = ndarray::ArrayView2::from_shape((nf, sc.n_time), &mask).map_err(|source| {
+        Error::Shape {
+            what: "significance mask",
+            source,
+        }
+    })?;
+    out.write_array(
+        &g,
+        "mask",
+        mask,
+        "1",
+        "1 where |W|^2 exceeds the local level (T&C eq. 18)",
+    )?;
+    out.write_1d(&g, "frequency", &sc.frequencies_hz, "Hz", "frequency")?;
+    out.write_1d(&g, "time", &shifted(r, &sc.time_s()), "s", "time")?;
+    out.write_1d(
+        &g,
+        "fourier_frequency",
+        &w.fourier_frequency_hz,
+        "Hz",
+        "T&C Fourier frequency of each scale",
+    )?;
+    out.write_1d(
+        &g,
+        "background_power",
+        &w.background_power,
+        &power_unit,
+        "expected |W|^2 of the AR(1) background (L1)",
+    )?;
+    out.write_1d(
+        &g,
+        "local_level",
+        &w.local_level,
+        &power_unit,
+        "local level of |W|^2",
+    )?;
+    let nan = |v: &[Option<f64>]| -> Vec<f64> { v.iter().map(|x| x.unwrap_or(f64::NAN)).collect() };
+    out.write_1d(
+        &g,
+        "global_power",
+        &nan(&w.global_power),
+        &power_unit,
+        "global wavelet spectrum: mean |W|^2 outside the cone of influence (NaN: none)",
+    )?;
+    out.write_1d(
+        &g,
+        "global_level",
+        &nan(&w.global_level),
+        &power_unit,
+        "level of the global spectrum (T&C eq. 23)",
+    )?;
+    out.write_1d(&g, "global_dof", &w.global_dof, "1", "degrees of freedom")?;
+    for b in &sig.bands {
+        let d = out.write_1d(
+            &g,
+            &format!("band_{}", b.name),
+            &b.power,
+            &power_unit,
+            "scale-averaged power (the band's variance; T&C eq. 24)",
+        )?;
+        out.attr_f64(&d, "level", b.level_power)?;
+        out.attr_f64(&d, "dof", b.dof)?;
+        out.attr_f64(&d, "band_low_Hz", b.band_hz.0)?;
+        out.attr_f64(&d, "band_high_Hz", b.band_hz.1)?;
+    }
+    Ok(())
+}
+
 /// `analysis/poincare`: the maxima and minima section.
 fn write_poincare(out: &H5Out, r: &AnalysisReport, s: &Series) -> Result<()> {
     let g = out.group("analysis/poincare", Some("NXdata"))?;
@@ -433,16 +582,46 @@ fn write_figures(dir: &Path, label: &str, r: &AnalysisReport, s: &Series) -> Res
         .iter()
         .map(|m| (*m as f64 * k) as f32)
         .collect();
-    figures::scalogram_png(
-        &dir.join("scalogram.png"),
-        &format!("Wavelet scalogram — {label}"),
-        &time,
-        &sc.frequencies_hz,
-        &mag,
-        &sc.coi_hz,
-        Some(&r.ridge.frequency_hz),
-        du,
-    )?;
+    match &r.significance {
+        Ok(sig) => {
+            let k2 = k * k;
+            let scaled = |v: &[Option<f64>]| -> Vec<f64> {
+                v.iter().map(|x| x.map_or(f64::NAN, |x| x * k2)).collect()
+            };
+            let power_unit = if du.is_empty() || du == "1" {
+                String::new()
+            } else {
+                format!("{du}²")
+            };
+            figures::scalogram_significance_png(
+                &dir.join("scalogram.png"),
+                &format!("Wavelet scalogram — {label}"),
+                &time,
+                &sc.frequencies_hz,
+                &mag,
+                &sc.coi_hz,
+                Some(&r.ridge.frequency_hz),
+                du,
+                &figures::SignificanceOverlay {
+                    mask: &sig.wavelet.mask,
+                    global: &scaled(&sig.wavelet.global_power),
+                    global_level: &scaled(&sig.wavelet.global_level),
+                    power_unit: &power_unit,
+                    level: sig.wavelet.level,
+                },
+            )?;
+        }
+        Err(_) => figures::scalogram_png(
+            &dir.join("scalogram.png"),
+            &format!("Wavelet scalogram — {label}"),
+            &time,
+            &sc.frequencies_hz,
+            &mag,
+            &sc.coi_hz,
+            Some(&r.ridge.frequency_hz),
+            du,
+        )?,
+    }
     let rm: Vec<(f64, f64)> = r
         .section
         .return_map()
@@ -609,8 +788,8 @@ impl FromConfig for AnalysisStage {
             window: cfg
                 .window
                 .map_or((None, None), |[a, b]| (Some(a.0), Some(b.0))),
-            f_min: cfg.f_min.0,
-            f_max: cfg.f_max.0,
+            f_min: cfg.f_min.map(|f| f.0),
+            f_max: cfg.f_max.map(|f| f.0),
             frequencies: cfg.frequencies,
             peaks: cfg.peaks,
             min_peak_frequency: cfg.min_peak_frequency.map_or(0.0, |f| f.0),

@@ -27,13 +27,16 @@ pub struct AnalyzeArgs {
     /// Time window, e.g. `--window "0.7 ms" "1.3 ms"`.
     #[arg(long, num_args = 2)]
     pub window: Vec<TimeSpan>,
-    #[arg(long, default_value = "5 kHz")]
-    pub f_min: Frequency,
-    #[arg(long, default_value = "1 MHz")]
-    pub f_max: Frequency,
-    /// Log-spaced CWT frequencies.
-    #[arg(long, default_value_t = 100)]
-    pub frequencies: usize,
+    /// Lowest CWT frequency (default: 5 kHz, raised to the cone of influence at mid-record
+    /// for a short record, lowered with f_max for a slow one; the JSON says which).
+    #[arg(long)]
+    pub f_min: Option<Frequency>,
+    /// Highest CWT frequency (default: 1 MHz, or fs/3 when that is lower).
+    #[arg(long)]
+    pub f_max: Option<Frequency>,
+    /// Log-spaced CWT frequencies (default: 13.1 per octave, 100 over 5 kHz–1 MHz).
+    #[arg(long)]
+    pub frequencies: Option<usize>,
     #[arg(long, default_value_t = 5)]
     pub peaks: usize,
     #[arg(long)]
