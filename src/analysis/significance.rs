@@ -512,6 +512,9 @@ pub fn spectrum_level(
 }
 
 #[cfg(test)]
+mod golden;
+
+#[cfg(test)]
 mod tests {
     use super::*;
 
