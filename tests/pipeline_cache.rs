@@ -9,7 +9,7 @@ fn default_pipeline_writes_hdf5_tables_and_plots_readable_by_others() {
     let (p, o) = Project::shipped_with_cold_run();
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("ran 56, cached 0, failed 0, skipped 0 of 56"),
+        stderr(&o).contains("ran 57, cached 0, failed 0, skipped 0 of 57"),
         "{}",
         stderr(&o)
     );
@@ -109,7 +109,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let o = p.run(&["run"]);
     assert_ok(&o);
     assert!(
-        stderr(&o).contains("nothing to do: all 56 stage instances fresh"),
+        stderr(&o).contains("nothing to do: all 57 stage instances fresh"),
         "{}",
         stderr(&o)
     );
@@ -149,7 +149,7 @@ fn second_run_recomputes_nothing_and_a_cutoff_change_reruns_only_its_dependents(
     let o = p.run(&["run"]);
     assert_ok(&o);
     let e = stderr(&o);
-    assert!(e.contains("ran 4, cached 52"), "{e}");
+    assert!(e.contains("ran 4, cached 53"), "{e}");
     assert!(
         e.contains("ran     disk") && e.contains("ran     hdi"),
         "{e}"

@@ -17,7 +17,9 @@
 //! cheap. Surrogate i draws from its own seeded stream and histograms add as integers, so
 //! the levels do not depend on the thread count.
 
-use super::cwt::{padded_spectrum, prepare, CwtOptions, Normalization, Prepared};
+use super::cwt::{
+    normalization_terms, padded_spectrum, prepare, CwtOptions, Normalization, Prepared, ScaleFilter,
+};
 use super::significance::{RedNoise, MORLET_DJ0};
 use super::{check_series, AnalysisError};
 use crate::numerics::rng::Rng;
@@ -70,8 +72,19 @@ struct Engine {
     d_comp: Vec<usize>,
     boxcar: Vec<f64>,
     /// (forward, inverse) f32 plans by length.
-    plans: BTreeMap<usize, (Arc<dyn Fft<f32>>, Arc<dyn Fft<f32>>)>,
+    plans: BTreeMap<usize, PlanPair>,
+    /// Per row: the first signed bin of the wavelet's band and its gains there (the same
+    /// filter as the transform's, evaluated once for all surrogates).
+    filters: Vec<(i64, Vec<f64>)>,
+    /// Per row: the time-smoothing Gaussian on its decimated FFT grid, with the inverse's 1/m.
+    smoothers: Vec<Vec<f32>>,
 }
+
+type PlanPair = (Arc<dyn Fft<f32>>, Arc<dyn Fft<f32>>);
+
+/// One row of a pair, time-smoothed: (smoothed W_x W_y*, smoothed |W_x|² + i|W_y|², the raw
+/// W_x W_y* on the record's samples).
+type SmoothedRow = (Vec<Complex32>, Vec<Complex32>, Vec<Complex32>);
 
 /// Boxcar weights over scale rows: width δj0/δj rows, each row weighted by the overlap of
 /// `[i − ½, i + ½]` with `[−w/2, w/2]` (Torrence & Webster 1999's 0.6-octave boxcar).
@@ -99,11 +112,7 @@ impl Engine {
         }
         let f = &template.frequencies;
         let nf = f.len();
-        let dj = if nf >= 2 {
-            (f[1] / f[0]).log2()
-        } else {
-            1.0
-        };
+        let dj = if nf >= 2 { (f[1] / f[0]).log2() } else { 1.0 };
         if nf >= 2
             && f.windows(2)
                 .any(|w| ((w[1] / w[0]).log2() / dj - 1.0).abs() > 1e-6)
@@ -127,7 +136,7 @@ impl Engine {
                 }
                 let rate = (wc + CUTOFF * sigma + CUTOFF) / (2.0 * PI * s);
                 let mut d = 1;
-                while n_pad % (2 * d) == 0 && template.fs / (2 * d) as f64 > rate {
+                while n_pad.is_multiple_of(2 * d) && template.fs / (2 * d) as f64 > rate {
                     d *= 2;
                 }
                 d
@@ -144,6 +153,33 @@ impl Engine {
                 .entry(m)
                 .or_insert_with(|| (planner.plan_fft_forward(m), planner.plan_fft_inverse(m)));
         }
+        let filters = template
+            .scales
+            .iter()
+            .map(|&s| {
+                let (peak, analytic, _) =
+                    normalization_terms(template.normalization, &template.wavelet, s, template.fs);
+                let f = ScaleFilter::new(&template.wavelet, s, template.fs, n_pad, peak, analytic);
+                (f.k_lo, (f.k_lo..=f.k_hi).map(|k| f.gain(k)).collect())
+            })
+            .collect();
+        let dw = 2.0 * PI * template.fs / n_pad as f64;
+        let smoothers = (0..nf)
+            .map(|j| {
+                let (m, s) = (n_pad / d_comp[j], template.scales[j]);
+                (0..m)
+                    .map(|k| {
+                        let signed = if k <= m / 2 {
+                            k as f64
+                        } else {
+                            k as f64 - m as f64
+                        };
+                        let w = signed * dw * s;
+                        ((-0.5 * w * w).exp() / m as f64) as f32
+                    })
+                    .collect()
+            })
+            .collect();
         Ok(Engine {
             coi: template.coi(),
             template,
@@ -151,28 +187,45 @@ impl Engine {
             d_comp,
             boxcar,
             plans,
+            filters,
+            smoothers,
         })
     }
 
     /// Row j of x and y at decimation `d_comp[j]`, multiplied and time-smoothed: (smoothed
     /// cross products, smoothed |W_x|² in re and |W_y|² in im, the raw cross products).
-    fn smoothed_row(
-        &self,
-        x: &Prepared,
-        y: &Prepared,
-        j: usize,
-    ) -> (Vec<Complex32>, Vec<Complex32>, Vec<Complex32>) {
+    fn smoothed_row(&self, x: &Prepared, y: &Prepared, j: usize) -> SmoothedRow {
         let d = self.d_comp[j];
         let m = self.template.n_pad / d;
         let nv = self.template.n.div_ceil(d);
         let (fwd, inv) = &self.plans[&m];
         let zero = Complex32::new(0.0, 0.0);
-        let mut scratch =
-            vec![zero; inv.get_inplace_scratch_len().max(fwd.get_inplace_scratch_len())];
+        let mut scratch = vec![
+            zero;
+            inv.get_inplace_scratch_len()
+                .max(fwd.get_inplace_scratch_len())
+        ];
         let mut wx = vec![zero; m];
         let mut wy = vec![zero; m];
-        x.row_decimated(j, &**inv, &mut wx, &mut scratch);
-        y.row_decimated(j, &**inv, &mut wy, &mut scratch);
+        // X·Ψ̂ folded onto the m-point grid (exact: the band spans fewer than m bins), for both
+        // series at once.
+        let (k_lo, gains) = &self.filters[j];
+        for (i, g) in gains.iter().enumerate() {
+            let k = k_lo + i as i64;
+            let slot = k.rem_euclid(m as i64) as usize;
+            let at = |spec: &[rustfft::num_complex::Complex64]| {
+                let v = if k >= 0 {
+                    spec[k as usize]
+                } else {
+                    spec[(-k) as usize].conj()
+                } * *g;
+                Complex32::new(v.re as f32, v.im as f32)
+            };
+            wx[slot] = at(&x.spectrum);
+            wy[slot] = at(&y.spectrum);
+        }
+        inv.process_with_scratch(&mut wx, &mut scratch);
+        inv.process_with_scratch(&mut wy, &mut scratch);
         let mut cross = vec![zero; m];
         let mut powers = vec![zero; m];
         // Over the whole padded span, not only the record: the products stay band-limited, so
@@ -186,21 +239,14 @@ impl Engine {
         let raw = cross[..nv].to_vec();
         fwd.process_with_scratch(&mut cross, &mut scratch);
         fwd.process_with_scratch(&mut powers, &mut scratch);
-        // Gaussian of standard deviation s in time: exp(−ω²s²/2) in frequency, with the
-        // inverse transform's 1/m.
-        let s = self.template.scales[j];
-        let dw = 2.0 * PI * self.template.fs / self.template.n_pad as f64;
-        let half = m / 2;
-        for k in 0..m {
-            let signed = if k <= half {
-                k as f64
-            } else {
-                k as f64 - m as f64
-            };
-            let w = signed * dw * s;
-            let g = ((-0.5 * w * w).exp() / m as f64) as f32;
-            cross[k] *= g;
-            powers[k] *= g;
+        // Gaussian of standard deviation s in time: exp(−ω²s²/2) in frequency.
+        for ((c, p), g) in cross
+            .iter_mut()
+            .zip(powers.iter_mut())
+            .zip(&self.smoothers[j])
+        {
+            *c *= *g;
+            *p *= *g;
         }
         inv.process_with_scratch(&mut cross, &mut scratch);
         inv.process_with_scratch(&mut powers, &mut scratch);
@@ -210,12 +256,7 @@ impl Engine {
     }
 
     /// Every row of x and y time-smoothed, in parallel.
-    fn smoothed_rows(
-        &self,
-        x: &Prepared,
-        y: &Prepared,
-        parallel: bool,
-    ) -> Vec<(Vec<Complex32>, Vec<Complex32>, Vec<Complex32>)> {
+    fn smoothed_rows(&self, x: &Prepared, y: &Prepared, parallel: bool) -> Vec<SmoothedRow> {
         let nf = self.template.frequencies.len();
         if parallel {
             (0..nf)
@@ -231,7 +272,7 @@ impl Engine {
     /// output sample n (a multiple of `d_out[j]`).
     fn output_row(
         &self,
-        rows: &[(Vec<Complex32>, Vec<Complex32>, Vec<Complex32>)],
+        rows: &[SmoothedRow],
         j: usize,
         mut emit: impl FnMut(usize, Complex32, f32, f32),
     ) {
@@ -402,7 +443,8 @@ pub fn coherence_levels(
         .fold(
             || vec![0u64; nf * BINS],
             |mut hist, i| {
-                let mut rng = Rng::new(mc.seed ^ (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+                let mut rng =
+                    Rng::new(mc.seed ^ (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
                 let xs = ar1_series(&mut rng, alpha_x, n);
                 let ys = ar1_series(&mut rng, alpha_y, n);
                 let px = Prepared {
@@ -582,7 +624,10 @@ mod behaviour {
                 let want = -2.0 * PI * f * tau;
                 let got = f64::from(c.phase[j * n + t]);
                 let d = (got - want + PI).rem_euclid(2.0 * PI) - PI;
-                assert!(d.abs() < 0.005 + 0.3 * want.abs(), "phase {got} vs {want} at {f} Hz");
+                assert!(
+                    d.abs() < 0.005 + 0.3 * want.abs(),
+                    "phase {got} vs {want} at {f} Hz"
+                );
                 if want.abs() < 2.5 {
                     ratio += (want + d) / want;
                     ratios += 1;
@@ -592,7 +637,10 @@ mod behaviour {
         }
         assert!(checked > 300, "{checked}");
         let ratio = ratio / ratios as f64;
-        assert!((0.99..1.06).contains(&ratio), "mean phase / −2πfτ = {ratio}");
+        assert!(
+            (0.99..1.06).contains(&ratio),
+            "mean phase / −2πfτ = {ratio}"
+        );
         assert!(sum / checked as f64 > 0.998, "{}", sum / checked as f64);
     }
 

@@ -601,7 +601,11 @@ pub(crate) fn prepare(
 
 /// One-sided spectrum of the (mean-removed unless `keep_mean`) series zero-padded to the
 /// plan's length.
-pub(crate) fn padded_spectrum(signal: &[f64], keep_mean: bool, rfft: &RealFft<f64>) -> Vec<Complex64> {
+pub(crate) fn padded_spectrum(
+    signal: &[f64],
+    keep_mean: bool,
+    rfft: &RealFft<f64>,
+) -> Vec<Complex64> {
     let mean = if keep_mean {
         0.0
     } else {
@@ -853,14 +857,28 @@ pub fn ridge(s: &Scalogram) -> Ridge {
         index: Vec::with_capacity(nt),
         trusted: Vec::with_capacity(nt),
     };
+    // The raw maximum per sample, row by row (contiguous reads; the first maximum wins, as a
+    // scan up the column would give), in parallel over blocks of samples.
+    let mut best_row = vec![0usize; nt];
+    best_row
+        .par_chunks_mut(8192)
+        .enumerate()
+        .for_each(|(b, rows)| {
+            let start = b * 8192;
+            let mut best: Vec<f32> = s.magnitude[start..start + rows.len()].to_vec();
+            for i in 1..nf {
+                let row = &s.magnitude[i * nt + start..i * nt + start + rows.len()];
+                for ((r, m), v) in rows.iter_mut().zip(best.iter_mut()).zip(row) {
+                    if *v > *m {
+                        *m = *v;
+                        *r = i;
+                    }
+                }
+            }
+        });
     for n in 0..nt {
         let at = |j: usize| s.magnitude[j * nt + n] as f64;
-        let mut j = 0;
-        for i in 1..nf {
-            if at(i) > at(j) {
-                j = i;
-            }
-        }
+        let j = if nf == 0 { 0 } else { best_row[n] };
         let (mut u, mut y) = (logf[j], at(j));
         if j > 0 && j + 1 < nf && at(j - 1) > 0.0 && at(j + 1) > 0.0 {
             let (u0, u1, u2) = (logf[j - 1], logf[j], logf[j + 1]);

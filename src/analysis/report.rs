@@ -8,7 +8,7 @@ use super::cwt::{cwt_morlet, ridge, CwtOptions, FrequencyGrid, Ridge, Scalogram}
 use super::poincare::{phase_space, poincare_section, PhaseSpace, PoincareSection};
 use super::series::{detrend, spectrum, time_window, Detrend};
 use super::significance::{
-    scale_average, spectrum_level, wavelet_significance, RedNoise, ScaleAverage,
+    scale_average, spectrum_levels, wavelet_significance, RedNoise, ScaleAverage,
     WaveletSignificance,
 };
 use super::AnalysisError;
@@ -60,11 +60,19 @@ const HDI_BAND: (f64, f64, usize) = (5e3, 1e6, 100);
 /// - count: the HDI band's density, 100 per log2(200) octaves (13.1 per octave), at least 16.
 ///
 /// Bounds that are given are kept (and checked later against Nyquist).
-pub fn choose_grid(fs: f64, n: usize, req: GridRequest, wavelet: &super::cwt::Wavelet) -> GridChoice {
+pub fn choose_grid(
+    fs: f64,
+    n: usize,
+    req: GridRequest,
+    wavelet: &super::cwt::Wavelet,
+) -> GridChoice {
     let mut why = Vec::new();
     let f_max = req.f_max_hz.unwrap_or_else(|| {
         if fs / 3.0 < HDI_BAND.1 {
-            why.push(format!("top fs/3 = {:.6} Hz (the Morlet band stays below Nyquist)", fs / 3.0));
+            why.push(format!(
+                "top fs/3 = {:.6} Hz (the Morlet band stays below Nyquist)",
+                fs / 3.0
+            ));
             fs / 3.0
         } else {
             HDI_BAND.1
@@ -90,7 +98,11 @@ pub fn choose_grid(fs: f64, n: usize, req: GridRequest, wavelet: &super::cwt::Wa
         let per_octave = HDI_BAND.2 as f64 / (HDI_BAND.1 / HDI_BAND.0).log2();
         (octaves * per_octave).round().max(16.0) as usize
     });
-    let given = [req.f_min_hz.is_some(), req.f_max_hz.is_some(), req.count.is_some()];
+    let given = [
+        req.f_min_hz.is_some(),
+        req.f_max_hz.is_some(),
+        req.count.is_some(),
+    ];
     let reason = if given == [true, true, true] {
         "given".to_string()
     } else if why.is_empty() {
@@ -101,7 +113,8 @@ pub fn choose_grid(fs: f64, n: usize, req: GridRequest, wavelet: &super::cwt::Wa
             .map(|(k, _)| *k)
             .collect();
         if g.is_empty() {
-            "default: the HDI band 5 kHz–1 MHz, 100 frequencies (the record resolves it)".to_string()
+            "default: the HDI band 5 kHz–1 MHz, 100 frequencies (the record resolves it)"
+                .to_string()
         } else {
             format!("{} given; the rest the HDI band's", g.join(", "))
         }
@@ -339,18 +352,11 @@ fn test_significance(
         .filter(|(_, lo, hi)| f.iter().any(|f| f >= lo && f <= hi))
         .map(|(name, lo, hi)| scale_average(scalogram, &background, name, (*lo, *hi), opts.level))
         .collect::<Result<Vec<_>, _>>()?;
-    let level_at =
-        |f: f64| spectrum_level(spectrum, x.len(), &background, f, opts.level);
+    let levels = |f: &[f64]| spectrum_levels(spectrum, x.len(), &background, f, opts.level);
+    let peak_frequencies: Vec<f64> = peaks.iter().map(|p| p.frequency).collect();
     Ok(Significance {
-        spectrum_level: spectrum
-            .frequency
-            .iter()
-            .map(|f| level_at(*f))
-            .collect::<Result<_, _>>()?,
-        peak_levels: peaks
-            .iter()
-            .map(|p| level_at(p.frequency))
-            .collect::<Result<_, _>>()?,
+        spectrum_level: levels(&spectrum.frequency)?,
+        peak_levels: levels(&peak_frequencies)?,
         background,
         wavelet,
         bands,
@@ -422,4 +428,107 @@ mod tests {
         };
         assert!(analyze(&ok, None, fs, 0.0, &late).is_err());
     }
+}
+
+/// The coherence of the analysed window with a second series on the same time axis.
+#[derive(Debug, Clone)]
+pub struct CoherenceReport {
+    pub coherence: super::coherence::WaveletCoherence,
+    /// Monte Carlo level of R² per row (`None`: the cone covers the row).
+    pub levels: Vec<Option<f64>>,
+    pub monte_carlo: super::coherence::MonteCarlo,
+    /// Lag-1 autocorrelations of the series and of the against-series.
+    pub alpha: (f64, f64),
+    /// Per row: mean R² over the samples outside the cone (NaN: none).
+    pub mean_coherence: Vec<f64>,
+    /// Per row: fraction of those samples above the level.
+    pub significant_fraction: Vec<f64>,
+}
+
+/// Aligns `y` (sampled at `fs_y` from `t0_y`) with the window of `r` (the report of `x`, whose
+/// first sample is at `t0_x`) and computes the coherence of the window against it on the
+/// report's grid, with Monte Carlo levels.
+pub fn coherence_against(
+    x: &[f64],
+    t0_x: f64,
+    r: &AnalysisReport,
+    y: &[f64],
+    fs_y: f64,
+    t0_y: f64,
+    mc: &super::coherence::MonteCarlo,
+) -> Result<CoherenceReport, AnalysisError> {
+    use super::coherence::{coherence_levels, wavelet_coherence};
+    let fs = r.sample_rate_hz;
+    if ((fs_y - fs) / fs).abs() > 1e-9 {
+        return Err(AnalysisError::parameter(
+            "against-series sample rate",
+            format!("{fs_y} Hz"),
+            format!("must equal the series' {fs} Hz (resample one of them)"),
+        ));
+    }
+    // The window's first sample on y's axis; the grids must coincide.
+    let offset = (r.t0_s - t0_y) * fs;
+    let start = offset.round();
+    if (offset - start).abs() > 1e-6 || start < 0.0 || start as usize + r.samples > y.len() {
+        return Err(AnalysisError::parameter(
+            "against-series time axis",
+            format!("{} samples from {t0_y} s", y.len()),
+            format!(
+                "must cover the window {} s … {} s on the same sample grid",
+                r.t0_s,
+                r.t0_s + r.samples as f64 / fs
+            ),
+        ));
+    }
+    let start = start as usize;
+    let yw = detrend(&y[start..start + r.samples], Detrend::Mean);
+    let sx = ((r.t0_s - t0_x) * fs).round().max(0.0) as usize;
+    let xw = &detrend(&x[sx..(sx + r.samples).min(x.len())], Detrend::Mean)[..];
+    let grid = &r.scalogram.frequencies_hz;
+    let opts = super::cwt::CwtOptions {
+        frequencies: FrequencyGrid::Log {
+            f_min_hz: grid[0],
+            f_max_hz: grid[grid.len() - 1],
+            count: grid.len(),
+        },
+        ..Default::default()
+    };
+    let coherence = wavelet_coherence(xw, &yw, fs, &opts)?;
+    let alpha = (
+        super::significance::lag1_autocorrelation(xw)?,
+        super::significance::lag1_autocorrelation(&yw)?,
+    );
+    let levels = coherence_levels(r.samples, fs, &opts, alpha.0, alpha.1, mc)?;
+    let n = r.samples;
+    let (mut mean_coherence, mut significant_fraction) = (Vec::new(), Vec::new());
+    for (j, level) in levels.iter().enumerate() {
+        let f = coherence.frequencies_hz[j];
+        let (mut sum, mut count, mut above) = (0.0, 0usize, 0usize);
+        for t in 0..n {
+            if f >= coherence.coi_hz[t] {
+                let c = f64::from(coherence.coherence[j * n + t]);
+                sum += c;
+                count += 1;
+                above += usize::from(level.is_some_and(|l| c > l));
+            }
+        }
+        mean_coherence.push(if count > 0 {
+            sum / count as f64
+        } else {
+            f64::NAN
+        });
+        significant_fraction.push(if count > 0 {
+            above as f64 / count as f64
+        } else {
+            f64::NAN
+        });
+    }
+    Ok(CoherenceReport {
+        coherence,
+        levels,
+        monte_carlo: *mc,
+        alpha,
+        mean_coherence,
+        significant_fraction,
+    })
 }

@@ -21,6 +21,7 @@
 use super::cwt::{Normalization, Scalogram, Wavelet};
 use super::{check_series, AnalysisError};
 use crate::signal::spectrum::{AmplitudeSpectrum, Window};
+use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// T&C Table 2, Morlet ω0 = 6: decorrelation factor of the time-averaged power.
@@ -140,7 +141,7 @@ pub fn chi2_quantile(p: f64, nu: f64) -> Result<f64, AnalysisError> {
     }
     let a = nu / 2.0;
     let cdf = |x: f64| gamma_p(a, x / 2.0);
-    // Bracket, then bisect in ln x (robust for tiny and huge ν), then polish with Newton.
+    // Bracket, then bisect in ln x (robust for tiny and huge ν) to 1e-14 relative.
     let (mut lo, mut hi) = (1e-300_f64, nu.max(1.0));
     while cdf(hi) < p {
         hi *= 2.0;
@@ -311,6 +312,26 @@ pub fn wavelet_significance(
     }
     let local: Vec<f64> = bg.iter().map(|b| b * local_factor).collect();
     let mut mask = vec![false; nf * nt];
+    // Rows in parallel; each row's sums in sample order, so the result does not depend on the
+    // thread count.
+    let per_row: Vec<(f64, usize, usize)> = mask
+        .par_chunks_mut(nt.max(1))
+        .enumerate()
+        .map(|(j, mask_row)| {
+            let (f, row) = (sc.frequencies_hz[j], sc.row(j));
+            let (mut sum, mut count, mut hits) = (0.0, 0usize, 0usize);
+            for ((m, sig), coi) in row.iter().zip(mask_row.iter_mut()).zip(&sc.coi_hz) {
+                let p = f64::from(*m) * f64::from(*m);
+                *sig = p > local[j];
+                if f >= *coi {
+                    sum += p;
+                    count += 1;
+                    hits += usize::from(*sig);
+                }
+            }
+            (sum, count, hits)
+        })
+        .collect();
     let (mut global, mut samples, mut dof, mut glevel) = (
         Vec::with_capacity(nf),
         Vec::with_capacity(nf),
@@ -318,20 +339,9 @@ pub fn wavelet_significance(
         Vec::with_capacity(nf),
     );
     let (mut outside, mut significant) = (0usize, 0usize);
-    for j in 0..nf {
-        let (f, row) = (sc.frequencies_hz[j], sc.row(j));
-        let (mut sum, mut count) = (0.0, 0usize);
-        for (n, m) in row.iter().enumerate() {
-            let p = f64::from(*m).powi(2);
-            let sig = p > local[j];
-            mask[j * nt + n] = sig;
-            if f >= sc.coi_hz[n] {
-                sum += p;
-                count += 1;
-                outside += 1;
-                significant += usize::from(sig);
-            }
-        }
+    for (j, &(sum, count, hits)) in per_row.iter().enumerate() {
+        outside += count;
+        significant += hits;
         // T&C eq. 23 with n_a the samples averaged.
         let nu = 2.0 * (1.0 + (count as f64 / fs / (MORLET_GAMMA * sc.scales_s[j])).powi(2)).sqrt();
         let nu = nu.max(2.0);
@@ -425,7 +435,9 @@ pub fn scale_average(
     let dj = if f.len() >= 2 {
         (f[1] / f[0]).log2()
     } else {
-        return Err(range("a scale average needs a grid of at least 2 frequencies"));
+        return Err(range(
+            "a scale average needs a grid of at least 2 frequencies",
+        ));
     };
     if f.windows(2)
         .any(|w| ((w[1] / w[0]).log2() / dj - 1.0).abs() > 1e-6)
@@ -498,6 +510,17 @@ pub fn spectrum_level(
     f_hz: f64,
     level: f64,
 ) -> Result<f64, AnalysisError> {
+    Ok(spectrum_levels(spectrum, samples, background, &[f_hz], level)?[0])
+}
+
+/// [`spectrum_level`] at many frequencies (the χ² quantile computed once).
+pub fn spectrum_levels(
+    spectrum: &AmplitudeSpectrum,
+    samples: usize,
+    background: &RedNoise,
+    f_hz: &[f64],
+    level: f64,
+) -> Result<Vec<f64>, AnalysisError> {
     check_level(level)?;
     let n = samples as f64;
     // Periodic Hann: Σw = N/2, Σw² = 3N/8 (exact for N ≥ 3); rectangular: N, N.
@@ -506,9 +529,12 @@ pub fn spectrum_level(
         Window::None => (n, n),
     };
     let fs = spectrum.resolution * n;
-    let expected = 4.0 * background.variance * background.normalized_spectrum(f_hz, fs) * sum_w2
-        / (sum_w * sum_w);
-    Ok((expected * chi2_quantile(level, 2.0)? / 2.0).sqrt())
+    let factor =
+        4.0 * background.variance * sum_w2 / (sum_w * sum_w) * chi2_quantile(level, 2.0)? / 2.0;
+    Ok(f_hz
+        .iter()
+        .map(|&f| (factor * background.normalized_spectrum(f, fs)).sqrt())
+        .collect())
 }
 
 #[cfg(test)]
@@ -620,7 +646,10 @@ mod behaviour {
         let area = flagged / cells;
         assert!((area - 0.05).abs() <= 0.01, "mask covers {area}");
         let band = band_flagged / band_samples;
-        assert!((0.03..=0.08).contains(&band), "scale-averaged power above its level {band}");
+        assert!(
+            (0.03..=0.08).contains(&band),
+            "scale-averaged power above its level {band}"
+        );
         let fft = bins_flagged / bins;
         assert!((fft - 0.05).abs() <= 0.01, "FFT bins above the level {fft}");
     }
@@ -656,7 +685,12 @@ mod behaviour {
         // More than half an octave away the sine's wavelet power has fallen by e^{-(ω0 ln√2)²}…
         for j in 0..sc.frequencies_hz.len() {
             if (sc.frequencies_hz[j] / f0).log2().abs() > 0.5 {
-                assert!(fraction(j) < 0.12, "{} Hz: {}", sc.frequencies_hz[j], fraction(j));
+                assert!(
+                    fraction(j) < 0.12,
+                    "{} Hz: {}",
+                    sc.frequencies_hz[j],
+                    fraction(j)
+                );
             }
         }
         assert!(sig.global_power[j0].unwrap() > sig.global_level[j0].unwrap());

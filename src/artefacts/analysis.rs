@@ -115,6 +115,42 @@ pub struct AnalysisSummary {
     /// why there is no significance test
     #[serde(default)]
     pub significance_unavailable: Option<String>,
+    /// wavelet coherence with a second series (`--against`, `against = …`)
+    #[serde(default)]
+    pub coherence: Option<CoherenceSummary>,
+}
+
+/// Wavelet coherence of the series against a second one (Grinsted et al. 2004), with Monte
+/// Carlo levels from AR(1) surrogates.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct CoherenceSummary {
+    /// the against-series (file or instance, and dataset/column)
+    pub against: String,
+    /// AR(1) surrogate pairs of the Monte Carlo
+    pub surrogates: usize,
+    /// seed of the surrogates
+    pub seed: u64,
+    /// confidence level of the coherence levels
+    pub level: f64,
+    /// lag-1 autocorrelations of the series and of the against-series
+    pub lag1_autocorrelation: [f64; 2],
+    /// the stated bands the grid covers
+    pub bands: Vec<BandCoherence>,
+}
+
+/// Coherence inside one band, over the samples outside the cone of influence.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct BandCoherence {
+    pub name: String,
+    #[serde(rename = "band_Hz")]
+    pub band_hz: [f64; 2],
+    /// mean squared coherence R²
+    pub mean_coherence: Option<f64>,
+    /// fraction of the cells above the Monte Carlo level
+    pub significant_fraction: Option<f64>,
+    /// circular mean of the phase arg S(W_x W_y*), rad (negative: the series lags)
+    #[serde(rename = "phase_rad")]
+    pub phase_rad: Option<f64>,
 }
 
 /// The CWT grid: log-spaced frequencies from `f_min` to `f_max`.
@@ -478,11 +514,13 @@ mod tests {
         let peak = SpectralPeak {
             amplitude: Amplitudes::new("m/s", 2e-3),
             frequency_hz: 1e4,
+            significant: Some(true),
+            amplitude_to_level: Some(2.5),
         };
         let text = serde_json::to_string(&peak).unwrap();
         assert_eq!(
             text,
-            r#"{"amplitude_m_s":0.002,"amplitude_mm_s":2.0,"frequency_Hz":10000.0}"#
+            r#"{"amplitude_m_s":0.002,"amplitude_mm_s":2.0,"frequency_Hz":10000.0,"significant":true,"amplitude_to_level":2.5}"#
         );
         assert_eq!(serde_json::from_str::<SpectralPeak>(&text).unwrap(), peak);
         // Dimensionless: one key; a value that is not finite is null and reads back as NaN.

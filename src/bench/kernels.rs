@@ -116,6 +116,84 @@ pub(super) fn cwt(out: &mut Figures, x: &[f64], repeats: usize) -> Result<()> {
     Ok(())
 }
 
+/// The whole `hdi analyze` of a series (spectrum, CWT, red-noise significance, Poincaré
+/// section, class) beside its bare CWT, and the coherence Monte Carlo of a 10⁴-sample pair
+/// with 300 AR(1) surrogates (docs/performance.md, "Significance").
+pub(super) fn significance(out: &mut Figures, x: &[f64], repeats: usize) -> Result<()> {
+    use crate::analysis::coherence::{coherence_levels, MonteCarlo};
+    use crate::analysis::cwt::{cwt_morlet, CwtOptions, FrequencyGrid};
+    use crate::analysis::report::{analyze, AnalyzeOptions};
+    let opts = CwtOptions {
+        frequencies: FrequencyGrid::Log {
+            f_min_hz: 5e3,
+            f_max_hz: 1e6,
+            count: 100,
+        },
+        ..Default::default()
+    };
+    let (bare, _) = time_best(repeats, || Ok(cwt_morlet(x, FS, &opts)?.n_time))?;
+    let (whole, r) = time_best(repeats, || {
+        Ok(analyze(x, None, FS, 0.0, &AnalyzeOptions::default())?)
+    })?;
+    let details = Details {
+        samples: Some(x.len()),
+        frequencies: Some(r.scalogram.frequencies_hz.len()),
+        ..Details::default()
+    };
+    out.push(Figure::best(
+        Group::Significance,
+        "bare_cwt_100_frequencies",
+        format!("CWT alone, {} samples × 100 frequencies", x.len()),
+        bare,
+        Unit::Seconds,
+        repeats,
+        details.clone(),
+    ));
+    out.push(Figure::best(
+        Group::Significance,
+        "analyze_with_significance",
+        format!(
+            "the whole analysis (spectrum, CWT, AR(1) significance, Poincaré, class), {} samples",
+            x.len()
+        ),
+        whole,
+        Unit::Seconds,
+        repeats,
+        details,
+    ));
+    let n = 10_000;
+    let mc = MonteCarlo::default();
+    let grid = CwtOptions {
+        frequencies: FrequencyGrid::Log {
+            f_min_hz: 5e3,
+            f_max_hz: 1e6,
+            count: 100,
+        },
+        ..Default::default()
+    };
+    let (times, levels) = time_best(repeats, || {
+        Ok(coherence_levels(n, FS, &grid, 0.9, 0.5, &mc)?)
+    })?;
+    out.push(Figure::best(
+        Group::Significance,
+        "coherence_monte_carlo_300",
+        format!(
+            "coherence levels: {} AR(1) surrogate pairs of {n} samples × {} frequencies",
+            mc.surrogates,
+            levels.len()
+        ),
+        times,
+        Unit::Seconds,
+        repeats,
+        Details {
+            samples: Some(n),
+            frequencies: Some(levels.len()),
+            ..Details::default()
+        },
+    ));
+    Ok(())
+}
+
 /// One-sided Hann amplitude spectrum (mean removed, window, transform, scaling).
 pub(super) fn fft(out: &mut Figures, x: &[f64], repeats: usize) -> Result<()> {
     use crate::analysis::series::spectrum;

@@ -27,7 +27,7 @@ const FS: f64 = 4e6;
 const STREAM_SAMPLES: usize = 100_000_000;
 
 /// The figure groups, in the order they run; `--only` takes these names.
-pub const GROUPS: [&str; 11] = [
+pub const GROUPS: [&str; 12] = [
     "surfaces",
     "two-dof",
     "sweep",
@@ -37,6 +37,7 @@ pub const GROUPS: [&str; 11] = [
     "roughness",
     "bem",
     "stream",
+    "significance",
     "noop",
     "main-job",
 ];
@@ -182,6 +183,7 @@ pub enum Group {
     Roughness,
     Bem,
     Stream,
+    Significance,
     Noop,
     MainJob,
 }
@@ -448,7 +450,7 @@ pub fn run(o: &BenchOptions, host: &mut dyn BenchHost) -> Result<Vec<Figure>> {
         if o.only.is_empty() {
             // The BEM solves and the 10⁸-sample streaming CWT take tens of seconds: only when
             // asked (bench/compare.py).
-            g != "bem" && g != "stream" && (g != "main-job" || o.main_job)
+            g != "bem" && g != "stream" && g != "significance" && (g != "main-job" || o.main_job)
         } else {
             o.only.iter().any(|x| x == g) || (g == "main-job" && o.main_job)
         }
@@ -494,6 +496,13 @@ pub fn run(o: &BenchOptions, host: &mut dyn BenchHost) -> Result<Vec<Figure>> {
             None => kernels::synthetic_map(o.size),
         };
         kernels::bem(&mut out, &map, n(3))?;
+    }
+    if wanted("significance") {
+        let x = match &o.input {
+            Some(p) => npy::read_signal(p)?,
+            None => kernels::series(1_000_000),
+        };
+        kernels::significance(&mut out, &x, n(3))?;
     }
     if wanted("stream") {
         kernels::stream(&mut out, STREAM_SAMPLES, n(1))?;

@@ -79,9 +79,43 @@ pub(super) fn cmd_analyze(a: AnalyzeArgs) -> Result<()> {
         s.t0,
         &settings.options(),
     )
-    .with_context(|| format!("{}", a.file.display()))?;
+    .map_err(|e| match e {
+        // The range the options and the record gave: name the options.
+        hdi::analysis::AnalysisError::FrequencyRange { .. } => {
+            anyhow::anyhow!("{}: --f-min/--f-max: {e}", a.file.display())
+        }
+        e => anyhow::Error::new(e).context(format!("{}", a.file.display())),
+    })?;
+    let coherence = match &a.against {
+        None => None,
+        Some(path) => {
+            if !path.is_file() {
+                bail!("{}: no such file", path.display());
+            }
+            let y = read_any_series(path, a.against_series.as_deref(), Some("none"), None)?;
+            let mc = hdi::analysis::coherence::MonteCarlo {
+                surrogates: a.surrogates,
+                seed: a.seed,
+                ..Default::default()
+            };
+            let c = hdi::analysis::report::coherence_against(
+                &s.x,
+                s.t0,
+                &r,
+                &y.x,
+                y.sample_rate,
+                y.t0,
+                &mc,
+            )
+            .with_context(|| format!("{} against {}", a.file.display(), path.display()))?;
+            Some((c, format!("{} `{}`", path.display(), y.name)))
+        }
+    };
     let seconds = started.elapsed().as_secs_f64();
-    let sum = summary(&r, &s.unit);
+    let mut sum = summary(&r, &s.unit);
+    sum.coherence = coherence
+        .as_ref()
+        .map(|(c, l)| hdi::stages::analysis::coherence_summary(c, l));
     if let Some(dir) = &a.out {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         let label = a
@@ -99,6 +133,7 @@ pub(super) fn cmd_analyze(a: AnalyzeArgs) -> Result<()> {
             })?,
             &r,
             &s,
+            coherence.as_ref().map(|(c, l)| (c, l.as_str())),
         )?;
     }
     if a.json {
@@ -171,8 +206,51 @@ pub(super) fn cmd_analyze(a: AnalyzeArgs) -> Result<()> {
             );
         }
     }
+    if let Ok(sig) = &r.significance {
+        println!(
+            "  red noise: lag-1 autocorrelation {:.4}; {:.1} % of the scalogram outside the cone \
+             is significant at {:.0} %",
+            sig.background.alpha,
+            sig.wavelet.significant_fraction * 100.0,
+            sig.wavelet.level * 100.0
+        );
+        for (p, l) in r.peaks.iter().zip(&sig.peak_levels) {
+            println!(
+                "    {:>10.3} kHz: {} ({:.2}× the level)",
+                p.frequency / 1e3,
+                if p.amplitude > *l {
+                    "significant"
+                } else {
+                    "not significant"
+                },
+                p.amplitude / l
+            );
+        }
+    }
+    if let Some(c) = &sum.coherence {
+        println!(
+            "  coherence against {} ({} surrogates, seed {}):",
+            c.against, c.surrogates, c.seed
+        );
+        for b in &c.bands {
+            println!(
+                "    {:<11} {:>8.1}–{:<8.1} kHz: mean R² {}, {} above the {:.0} % level",
+                b.name,
+                b.band_hz[0] / 1e3,
+                b.band_hz[1] / 1e3,
+                b.mean_coherence.map_or("–".into(), |m| format!("{m:.3}")),
+                b.significant_fraction
+                    .map_or("–".into(), |m| format!("{:.1} %", m * 100.0)),
+                c.level * 100.0
+            );
+        }
+    }
     if let Some(dir) = &a.out {
-        println!("  wrote {}/analysis.h5 and 4 PNGs", dir.display());
+        println!(
+            "  wrote {}/analysis.h5 and {} PNGs",
+            dir.display(),
+            if coherence.is_some() { 5 } else { 4 }
+        );
     }
     Ok(())
 }

@@ -233,6 +233,11 @@ impl PipelineFile {
         self.sections.get(kind).is_some_and(|n| n.contains(name))
     }
 
+    /// Whether the file declares an instance `name` of any kind.
+    pub fn has_any_instance(&self, name: &str) -> bool {
+        self.sections.values().any(|n| n.contains(name))
+    }
+
     /// The instance names of `kind`, sorted.
     pub fn instance_names(&self, kind: &str) -> Vec<&str> {
         self.sections

@@ -123,7 +123,10 @@ pub fn scalogram_significance_png(
         || overlay.global.len() != nf
         || overlay.global_level.len() != nf
     {
-        return Err(perr(path, "significance overlay does not match the scalogram"));
+        return Err(perr(
+            path,
+            "significance overlay does not match the scalogram",
+        ));
     }
     scalogram_figure(
         path,
@@ -235,9 +238,8 @@ fn contour_segments(
         }
     }
     let (cx, ry) = (&layout.col_x, &layout.row_y);
-    let outside = |g: usize, b: usize| {
-        layout.coi.is_empty() || (ry[g] * ry[g + 1]).sqrt() >= layout.coi[b]
-    };
+    let outside =
+        |g: usize, b: usize| layout.coi.is_empty() || (ry[g] * ry[g + 1]).sqrt() >= layout.coi[b];
     let mut segs = Vec::new();
     for g in 0..rows {
         for b in 0..cols {
@@ -246,7 +248,10 @@ fn contour_segments(
             {
                 segs.push([(cx[b + 1], ry[g]), (cx[b + 1], ry[g + 1])]);
             }
-            if g + 1 < rows && here != flag[(g + 1) * cols + b] && outside(g, b) && outside(g + 1, b)
+            if g + 1 < rows
+                && here != flag[(g + 1) * cols + b]
+                && outside(g, b)
+                && outside(g + 1, b)
             {
                 segs.push([(cx[b], ry[g + 1]), (cx[b + 1], ry[g + 1])]);
             }

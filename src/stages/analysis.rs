@@ -4,11 +4,16 @@
 //! section with a periodicity class, phase space. `hdi analyze FILE` runs the same on any file.
 
 use super::{FromConfig, Output, StageContext, StageKind};
-use crate::analysis::report::{analyze, AnalysisReport, AnalyzeOptions, GridRequest, Significance};
+use crate::analysis::coherence::MonteCarlo;
+use crate::analysis::report::{
+    analyze, coherence_against, AnalysisReport, AnalyzeOptions, CoherenceReport, GridRequest,
+    Significance, SignificanceOptions,
+};
 pub use crate::artefacts::analysis::amplitude_key;
 use crate::artefacts::analysis::{
     display_unit, Amplitudes, AnalysedSeries, AnalysisResult, AnalysisRow, AnalysisSummary,
-    BandSignificance, Evidence, FrequencyGridUsed, SignificanceSummary, PeakColumns, PeriodicityClass, SectionStatistics, SpectralLine, SpectralLines,
+    BandCoherence, BandSignificance, CoherenceSummary, Evidence, FrequencyGridUsed, PeakColumns,
+    PeriodicityClass, SectionStatistics, SignificanceSummary, SpectralLine, SpectralLines,
     SpectralPeak, FILE as ANALYSIS_FILE,
 };
 use crate::artefacts::cases as case_files;
@@ -72,6 +77,31 @@ pub struct AnalysisConfig {
     /// Ignore spectral peaks below this frequency (e.g. a sweep's slow settling).
     #[serde(default)]
     pub min_peak_frequency: Option<Frequency>,
+    /// A second series for wavelet coherence: the instance that holds it (e.g. the DMW the
+    /// slider flew over), on the same time axis.
+    #[serde(default)]
+    pub against: Option<String>,
+    /// Its file and dataset (default for a DMW/excitation instance: dmw.h5, dmw/tracks/D1).
+    #[serde(default)]
+    pub against_file: Option<String>,
+    #[serde(default)]
+    pub against_dataset: Option<String>,
+    /// AR(1) surrogate pairs of the coherence Monte Carlo (default 300).
+    #[serde(default)]
+    pub surrogates: Option<usize>,
+    /// Their seed (default 1).
+    #[serde(default)]
+    pub seed: Option<u64>,
+}
+
+/// The second series of a coherence analysis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AgainstSpec {
+    pub source: String,
+    pub file: String,
+    pub dataset: String,
+    pub surrogates: usize,
+    pub seed: u64,
 }
 
 /// Where the series is and how to analyse it.
@@ -252,7 +282,136 @@ pub fn summary(r: &AnalysisReport, unit: &str) -> AnalysisSummary {
         }),
         significance: sig.map(|s| significance_summary(r, s)),
         significance_unavailable: r.significance.as_ref().err().map(|e| e.to_string()),
+        coherence: None,
     }
+}
+
+/// The JSON view of a coherence analysis: per stated band the mean R², the fraction above the
+/// Monte Carlo level and the circular-mean phase, outside the cone of influence.
+pub fn coherence_summary(c: &CoherenceReport, against: &str) -> CoherenceSummary {
+    let wc = &c.coherence;
+    let n = wc.n_time;
+    let bands = SignificanceOptions::default()
+        .bands
+        .iter()
+        .filter_map(|(name, lo, hi)| {
+            let rows: Vec<usize> = (0..wc.frequencies_hz.len())
+                .filter(|&j| wc.frequencies_hz[j] >= *lo && wc.frequencies_hz[j] <= *hi)
+                .collect();
+            if rows.is_empty() {
+                return None;
+            }
+            let (mut sum, mut count, mut above, mut re, mut im) = (0.0, 0usize, 0usize, 0.0, 0.0);
+            for &j in &rows {
+                let f = wc.frequencies_hz[j];
+                for t in 0..n {
+                    if f >= wc.coi_hz[t] {
+                        let r2 = f64::from(wc.coherence[j * n + t]);
+                        sum += r2;
+                        count += 1;
+                        above += usize::from(c.levels[j].is_some_and(|l| r2 > l));
+                        let ph = f64::from(wc.phase[j * n + t]);
+                        re += ph.cos();
+                        im += ph.sin();
+                    }
+                }
+            }
+            let some = count > 0;
+            Some(BandCoherence {
+                name: name.clone(),
+                band_hz: [*lo, *hi],
+                mean_coherence: some.then(|| sig6(sum / count as f64)),
+                significant_fraction: some.then(|| sig6(above as f64 / count as f64)),
+                phase_rad: some.then(|| sig6(im.atan2(re))),
+            })
+        })
+        .collect();
+    CoherenceSummary {
+        against: against.to_string(),
+        surrogates: c.monte_carlo.surrogates,
+        seed: c.monte_carlo.seed,
+        level: c.monte_carlo.level,
+        lag1_autocorrelation: [sig6(c.alpha.0), sig6(c.alpha.1)],
+        bands,
+    }
+}
+
+/// `analysis/coherence` (R², phase, cross-wavelet power, the Monte Carlo level per row) and
+/// `coherence.png` (R² with the significant region outlined, the mean R² beside it).
+fn write_coherence(
+    out: &H5Out,
+    dir: &Path,
+    label: &str,
+    r: &AnalysisReport,
+    c: &CoherenceReport,
+    against: &str,
+) -> Result<()> {
+    let wc = &c.coherence;
+    let (nf, n) = (wc.frequencies_hz.len(), wc.n_time);
+    let g = out.group("analysis/coherence", Some("NXdata"))?;
+    out.attr_str(&g, "signal", "coherence")?;
+    out.attr_str_list(&g, "axes", &["frequency", "time"])?;
+    out.attr_str(&g, "against", against)?;
+    out.attr_f64(&g, "level", c.monte_carlo.level)?;
+    out.attr_f64(&g, "surrogates", c.monte_carlo.surrogates as f64)?;
+    out.attr_f64(&g, "seed", c.monte_carlo.seed as f64)?;
+    let shape = |what: &'static str, v: &[f32]| {
+        ndarray::ArrayView2::from_shape((nf, n), v)
+            .map(|a| a.to_owned())
+            .map_err(|source| Error::Shape { what, source })
+    };
+    out.write_array(
+        &g,
+        "coherence",
+        shape("coherence", &wc.coherence)?.view(),
+        "1",
+        "squared wavelet coherence R^2 (Grinsted et al. 2004)",
+    )?;
+    out.write_array(
+        &g,
+        "phase",
+        shape("phase", &wc.phase)?.view(),
+        "rad",
+        "arg S(W_x W_y*): negative when the series lags the against-series",
+    )?;
+    out.write_array(
+        &g,
+        "cross_magnitude",
+        shape("cross", &wc.cross_magnitude)?.view(),
+        "1",
+        "|W_x W_y*| (L1, product of the two series' units)",
+    )?;
+    let levels: Vec<f64> = c.levels.iter().map(|l| l.unwrap_or(f64::NAN)).collect();
+    out.write_1d(
+        &g,
+        "level",
+        &levels,
+        "1",
+        "Monte Carlo level of R^2 (AR(1) surrogates)",
+    )?;
+    out.write_1d(&g, "frequency", &wc.frequencies_hz, "Hz", "frequency")?;
+    out.write_1d(&g, "time", &shifted(r, &r.scalogram.time_s()), "s", "time")?;
+    let mask: Vec<bool> = (0..nf * n)
+        .map(|i| c.levels[i / n].is_some_and(|l| f64::from(wc.coherence[i]) > l))
+        .collect();
+    crate::figures::scalogram_significance_png(
+        &dir.join("coherence.png"),
+        &format!("Wavelet coherence — {label} vs {against}"),
+        &shifted(r, &r.scalogram.time_s()),
+        &wc.frequencies_hz,
+        &wc.coherence,
+        &wc.coi_hz,
+        None,
+        "R²",
+        &crate::figures::SignificanceOverlay {
+            mask: &mask,
+            global: &c.mean_coherence,
+            global_level: &levels,
+            power_unit: "R²",
+            level: c.monte_carlo.level,
+        },
+    )?;
+    Ok(())
 }
 
 /// The JSON view of the red-noise tests.
@@ -326,6 +485,7 @@ pub fn write_outputs(
     source: &Value,
     r: &AnalysisReport,
     s: &Series,
+    coherence: Option<(&CoherenceReport, &str)>,
 ) -> Result<()> {
     let out = H5Out::create(&dir.join(ANALYSIS_FILE))?;
     out.root_attributes(
@@ -345,6 +505,9 @@ pub fn write_outputs(
     }
     write_poincare(&out, r, s)?;
     write_phase_space(&out, r, s)?;
+    if let Some((c, against)) = coherence {
+        write_coherence(&out, dir, label, r, c, against)?;
+    }
     out.finish()?;
     write_figures(dir, label, r, s)
 }
@@ -419,7 +582,12 @@ fn write_scalogram(out: &H5Out, r: &AnalysisReport, s: &Series) -> Result<()> {
 /// `analysis/significance`: the AR(1) background, the local and global levels, the mask and
 /// the scale-averaged power of the bands; `analysis/spectrum/significance_level` beside the
 /// spectrum.
-fn write_significance(out: &H5Out, r: &AnalysisReport, sig: &Significance, s: &Series) -> Result<()> {
+fn write_significance(
+    out: &H5Out,
+    r: &AnalysisReport,
+    sig: &Significance,
+    s: &Series,
+) -> Result<()> {
     let spec = out.group("analysis/spectrum", None)?;
     out.write_1d(
         &spec,
@@ -444,12 +612,11 @@ fn write_significance(out: &H5Out, r: &AnalysisReport, sig: &Significance, s: &S
     let sc = &r.scalogram;
     let nf = sc.frequencies_hz.len();
     let mask: Vec<u8> = w.mask.iter().map(|m| u8::from(*m)).collect();
-    let mask = ndarray::ArrayView2::from_shape((nf, sc.n_time), &mask).map_err(|source| {
-        Error::Shape {
+    let mask =
+        ndarray::ArrayView2::from_shape((nf, sc.n_time), &mask).map_err(|source| Error::Shape {
             what: "significance mask",
             source,
-        }
-    })?;
+        })?;
     out.write_array(
         &g,
         "mask",
@@ -657,6 +824,7 @@ pub struct AnalysisStage {
     pub source: String,
     pub series: SeriesSpec,
     pub settings: AnalysisSettings,
+    pub against: Option<AgainstSpec>,
 }
 
 impl FromConfig for AnalysisStage {
@@ -795,6 +963,63 @@ impl FromConfig for AnalysisStage {
             min_peak_frequency: cfg.min_peak_frequency.map_or(0.0, |f| f.0),
         };
         settings.check().map_err(|e| err(&e.key, e.message))?;
+        let against = match &cfg.against {
+            None => {
+                for (k, given) in [
+                    ("against_file", cfg.against_file.is_some()),
+                    ("against_dataset", cfg.against_dataset.is_some()),
+                    ("surrogates", cfg.surrogates.is_some()),
+                    ("seed", cfg.seed.is_some()),
+                ] {
+                    if given {
+                        return Err(err(k, "only with `against`".into()));
+                    }
+                }
+                None
+            }
+            Some(a) => {
+                let dmw_like = has_instance(file, "dmw", a) || has_instance(file, "excitation", a);
+                if !dmw_like && !file.has_any_instance(a) {
+                    return Err(err(
+                        "against",
+                        format!("no stage instance `{a}` in this file"),
+                    ));
+                }
+                let (f, d) = match (&cfg.against_file, &cfg.against_dataset, dmw_like) {
+                    (Some(f), Some(d), _) => (f.clone(), d.clone()),
+                    (f, d, true) => (
+                        f.clone().unwrap_or_else(|| dmw_tracks::FILE.to_string()),
+                        d.clone().unwrap_or_else(|| DEFAULT_SERIES[1].0.to_string()),
+                    ),
+                    _ => {
+                        return Err(err(
+                            "against_file",
+                            format!("say which file and dataset of `{a}` hold the series"),
+                        ))
+                    }
+                };
+                if f.starts_with('/') || f.split('/').any(|c| c == "..") {
+                    return Err(err(
+                        "against_file",
+                        format!("`{f}` must be a path inside the instance's outputs"),
+                    ));
+                }
+                let surrogates = cfg.surrogates.unwrap_or(300);
+                if !(20..=100_000).contains(&surrogates) {
+                    return Err(err(
+                        "surrogates",
+                        format!("{surrogates} is out of range: 20 … 100000"),
+                    ));
+                }
+                Some(AgainstSpec {
+                    source: a.clone(),
+                    file: f,
+                    dataset: d,
+                    surrogates,
+                    seed: cfg.seed.unwrap_or(1),
+                })
+            }
+        };
         Ok(AnalysisStage {
             name: name.to_string(),
             source: cfg.source.clone(),
@@ -804,8 +1029,13 @@ impl FromConfig for AnalysisStage {
                 velocity,
             },
             settings,
+            against,
         })
     }
+}
+
+fn has_instance(file: &PipelineFile, kind: &str, name: &str) -> bool {
+    file.has_instance(kind, name)
 }
 
 impl StageKind for AnalysisStage {
@@ -831,10 +1061,23 @@ impl StageKind for AnalysisStage {
                 "peaks": st.peaks,
                 "min_peak_frequency_Hz": st.min_peak_frequency,
             },
+            "against": self.against.as_ref().map(|a| json!({
+                "source": a.source,
+                "file": a.file,
+                "dataset": a.dataset,
+                "surrogates": a.surrogates,
+                "seed": a.seed,
+            })),
         })
     }
     fn upstream(&self) -> Vec<String> {
-        vec![self.source.clone()]
+        let mut u = vec![self.source.clone()];
+        if let Some(a) = &self.against {
+            if a.source != self.source {
+                u.push(a.source.clone());
+            }
+        }
+        u
     }
     fn run(&self, ctx: &StageContext) -> Result<Output<AnalysisResult, AnalysisRow>> {
         let dir = ctx
@@ -887,13 +1130,57 @@ impl StageKind for AnalysisStage {
             what: "series".into(),
             message: e.to_string(),
         })?;
+        let coherence = match &self.against {
+            None => None,
+            Some(a) => {
+                ctx.progress
+                    .set_message("wavelet coherence and its Monte Carlo levels");
+                let adir =
+                    ctx.upstream_dirs
+                        .get(&a.source)
+                        .ok_or_else(|| Error::NoUpstreamFiles {
+                            stage: a.source.clone(),
+                        })?;
+                let apath = adir.join(&a.file);
+                if !apath.is_file() {
+                    return Err(Error::MissingOutput {
+                        stage: a.source.clone(),
+                        file: a.file.clone(),
+                    });
+                }
+                let y = read_series(&apath, Some(&a.dataset), Some("none"), None)?;
+                let mc = MonteCarlo {
+                    surrogates: a.surrogates,
+                    seed: a.seed,
+                    ..MonteCarlo::default()
+                };
+                let c = coherence_against(&s.x, s.t0, &r, &y.x, y.sample_rate, y.t0, &mc).map_err(
+                    |source| Error::AnalysisOf {
+                        file: a.file.clone(),
+                        dataset: a.dataset.clone(),
+                        source,
+                    },
+                )?;
+                Some((c, format!("{} {}", a.source, a.dataset)))
+            }
+        };
         ctx.progress.set_message("HDF5 and plots");
-        write_outputs(ctx.out_dir, ctx.key, &label, &source, &r, &s)?;
+        write_outputs(
+            ctx.out_dir,
+            ctx.key,
+            &label,
+            &source,
+            &r,
+            &s,
+            coherence.as_ref().map(|(c, l)| (c, l.as_str())),
+        )?;
         let summary_row = summary_row(&self.source, &self.series.dataset, &r, &s.unit);
+        let mut summary = summary(&r, &s.unit);
+        summary.coherence = coherence.as_ref().map(|(c, l)| coherence_summary(c, l));
         Ok(Output {
             result: AnalysisResult {
                 series,
-                summary: summary(&r, &s.unit),
+                summary,
                 file: ANALYSIS_FILE.to_string(),
             },
             summary_row: Some(summary_row),

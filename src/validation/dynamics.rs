@@ -1219,6 +1219,15 @@ impl Analysed {
             .as_ref()
             .map_or(f64::NAN, StoredSpectrum::resolution)
     }
+
+    /// A heave line for the notes with its red-noise significance.
+    fn heave_line(&self, p: Option<Peak>) -> String {
+        let sig = self
+            .spectrum
+            .as_ref()
+            .map_or(String::new(), |s| s.significance_note(p));
+        format!("{}{sig}", heave_line(p, self.resolution()))
+    }
 }
 
 fn khz(p: Option<Peak>) -> f64 {
@@ -1335,7 +1344,7 @@ fn dmw_line_rows(dmw: &Option<Analysed>, dmw2: &Option<Analysed>) -> Vec<Row> {
                 .variant(&band_variant(APP_B_3DOF, &DMW_BAND))
                 .inputs(DMW_INPUTS)
                 .origin(a.origin.clone())
-                .note(&format!("line {}", heave_line(p, a.resolution())));
+                .note(&format!("line {}", a.heave_line(p)));
             with_2dof(row, dmw2.as_ref(), "dmw_response_2dof", |a| {
                 khz(a.line(&DMW_BAND))
             })
@@ -1372,9 +1381,9 @@ fn dmw_line_rows(dmw: &Option<Analysed>, dmw2: &Option<Analysed>) -> Vec<Row> {
                 .origin(a.origin.clone())
                 .note(&format!(
                     "lines {}; {}; {}",
-                    heave_line(d, a.resolution()),
-                    heave_line(p, a.resolution()),
-                    heave_line(n, a.resolution())
+                    a.heave_line(d),
+                    a.heave_line(p),
+                    a.heave_line(n)
                 ));
             with_2dof_ordering(
                 row,
@@ -1411,7 +1420,7 @@ fn free_decay_rows(still: &Option<Analysed>, still2: &Option<Analysed>) -> Vec<R
                 ))
                 .inputs("zero excitation, static start + 1 nm heave, Table 4.1 roll −10 µrad")
                 .origin(a.origin.clone())
-                .note(&format!("line {}", describe(p, 1e9, "nm")));
+                .note(&format!("line {}", a.heave_line(p)));
             with_2dof(row, still2.as_ref(), "still_response_2dof", |a| {
                 khz(a.line(&PITCH_ROLL_BAND))
             })
@@ -1498,10 +1507,7 @@ fn normal_mode_rows(
                 .variant(&band_variant(APP_B_3DOF, &NORMAL_BAND))
                 .inputs(DMW_INPUTS)
                 .origin(a.origin.clone())
-                .note(&format!(
-                    "line {}{mode_note}",
-                    heave_line(p, a.resolution())
-                ));
+                .note(&format!("line {}{mode_note}", a.heave_line(p)));
             with_2dof(row, dmw2.as_ref(), "dmw_response_2dof", |a| {
                 khz(a.line(&NORMAL_BAND))
             })
@@ -1546,8 +1552,8 @@ fn normal_mode_rows(
                     "pitch/roll-band line {}, normal-band line {}: on the synthetic record both \
                      bands' strongest lines can be the record's own (120.0 kHz 0.15 nm, 275.0 kHz \
                      0.05 nm), and then the ordering follows the record{mode_note}",
-                    heave_line(p, a.resolution()),
-                    heave_line(n, a.resolution())
+                    a.heave_line(p),
+                    a.heave_line(n)
                 ));
             with_2dof_ordering(
                 row,

@@ -79,6 +79,9 @@ pub fn record_line(f: f64, tol: f64) -> Option<f64> {
 pub struct StoredSpectrum {
     pub frequency: Vec<f64>,
     pub amplitude: Vec<f64>,
+    /// The red-noise amplitude level per bin (`analysis/spectrum/significance_level`; absent
+    /// in analyses before issue 34 or of a constant series).
+    pub level: Option<Vec<f64>>,
 }
 
 impl StoredSpectrum {
@@ -87,7 +90,30 @@ impl StoredSpectrum {
         Some(StoredSpectrum {
             frequency: read_1d(&path, "analysis/spectrum/frequency")?,
             amplitude: read_1d(&path, "analysis/spectrum/amplitude")?,
+            level: read_1d(&path, "analysis/spectrum/significance_level"),
         })
+    }
+
+    /// A line's amplitude over the red-noise level at its frequency (linear between bins).
+    pub fn level_ratio(&self, p: &Peak) -> Option<f64> {
+        let level = self.level.as_ref()?;
+        let df = self.resolution();
+        let x = p.frequency / df;
+        let (i, t) = (x.floor() as usize, x - x.floor());
+        let l0 = *level.get(i)?;
+        let l = level.get(i + 1).map_or(l0, |l1| l0 + t * (l1 - l0));
+        (l > 0.0).then(|| p.amplitude / l)
+    }
+
+    /// What the analysis's 95 % red-noise test says of a line, for a row's note.
+    pub fn significance_note(&self, p: Option<Peak>) -> String {
+        match p.and_then(|p| self.level_ratio(&p)) {
+            Some(r) if r > 1.0 => {
+                format!(" (significant against AR(1) noise: {r:.2}× the 95 % level)")
+            }
+            Some(r) => format!(" (NOT significant against AR(1) noise: {r:.2}× the 95 % level)"),
+            None => String::new(),
+        }
     }
 
     /// Bin spacing [Hz].

@@ -931,7 +931,11 @@ fn shock_mode_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
                 .variant(&variant(&PITCH_ROLL_BAND))
                 .inputs(inputs)
                 .origin(origin.clone())
-                .note(&format!("line {}", describe(pitch, 1e9, "nm"))),
+                .note(&format!(
+                    "line {}{}",
+                    describe(pitch, 1e9, "nm"),
+                    s.significance_note(pitch)
+                )),
             );
             rows.push(
                 Row::new(
@@ -948,7 +952,11 @@ fn shock_mode_rows(cache: Option<&Cache>, inputs: &str) -> Vec<Row> {
                 .variant(&variant(&DMW_BAND))
                 .inputs(inputs)
                 .origin(origin.clone())
-                .note(&format!("line {}", describe(dmw, 1e9, "nm"))),
+                .note(&format!(
+                    "line {}{}",
+                    describe(dmw, 1e9, "nm"),
+                    s.significance_note(dmw)
+                )),
             );
             let from_record = normal
                 .and_then(|p| record_line(p.frequency, 2.0 * s.resolution()))
@@ -1042,7 +1050,11 @@ fn shock_roll_row(cache: Option<&Cache>, inputs: &str) -> Row {
                 ))
                 .inputs(inputs)
                 .origin(origin.clone())
-                .note(&format!("line {}", describe(p, 1e6, "µrad")))
+                .note(&format!(
+                    "line {}{}",
+                    describe(p, 1e6, "µrad"),
+                    s.significance_note(p)
+                ))
         }
         None => not_run_value(
             "dyn-33.roll",

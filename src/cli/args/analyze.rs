@@ -47,6 +47,19 @@ pub struct AnalyzeArgs {
     pub out: Option<PathBuf>,
     #[arg(long)]
     pub json: bool,
+    /// A second series file on the same time axis: wavelet coherence of FILE against it, with
+    /// Monte Carlo levels from AR(1) surrogates.
+    #[arg(long)]
+    pub against: Option<PathBuf>,
+    /// The against-series' column (tables) or dataset (HDF5).
+    #[arg(long)]
+    pub against_series: Option<String>,
+    /// AR(1) surrogate pairs of the coherence Monte Carlo.
+    #[arg(long, default_value_t = 300)]
+    pub surrogates: usize,
+    /// Seed of the surrogates.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
     /// Band CWT of a long 1-D float `.npy` series in bounded memory, read block by block: mean
     /// |W|² and max |W| per `--decimate` samples at the `--frequencies` log-spaced frequencies
     /// from --f-min to --f-max (docs/analysis.md, "Streaming band CWT").
