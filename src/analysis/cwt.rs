@@ -876,9 +876,8 @@ pub fn ridge(s: &Scalogram) -> Ridge {
                 }
             }
         });
-    for n in 0..nt {
+    for (n, &j) in best_row.iter().enumerate() {
         let at = |j: usize| s.magnitude[j * nt + n] as f64;
-        let j = if nf == 0 { 0 } else { best_row[n] };
         let (mut u, mut y) = (logf[j], at(j));
         if j > 0 && j + 1 < nf && at(j - 1) > 0.0 && at(j + 1) > 0.0 {
             let (u0, u1, u2) = (logf[j - 1], logf[j], logf[j + 1]);
