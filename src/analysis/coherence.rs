@@ -528,7 +528,7 @@ mod tests {
         assert_eq!(quantile(&[0, 0], 0.5), None);
     }
 
-    fn opts(f_min: f64, f_max: f64, count: usize) -> CwtOptions {
+    pub(super) fn opts(f_min: f64, f_max: f64, count: usize) -> CwtOptions {
         CwtOptions {
             frequencies: FrequencyGrid::Log {
                 f_min_hz: f_min,
@@ -572,19 +572,8 @@ mod tests {
 mod behaviour {
     //! The checks that can fail: a lagged copy is coherent with the lag's phase,
     //! independent noises stay below the Monte Carlo level.
+    use super::tests::opts as grid;
     use super::*;
-    use crate::analysis::cwt::FrequencyGrid;
-
-    fn grid(f_min: f64, f_max: f64, count: usize) -> CwtOptions {
-        CwtOptions {
-            frequencies: FrequencyGrid::Log {
-                f_min_hz: f_min,
-                f_max_hz: f_max,
-                count,
-            },
-            ..Default::default()
-        }
-    }
 
     #[test]
     fn a_lagged_copy_is_coherent_with_the_phase_of_its_lag() {

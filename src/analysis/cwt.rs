@@ -831,6 +831,21 @@ pub(crate) fn cwt_complex_padded(
     })
 }
 
+/// Median of the ridge frequencies the cone of influence trusts (Hz; `None`: none trusted).
+pub fn median_trusted(frequency_hz: &[f64], trusted: &[bool]) -> Option<f64> {
+    let mut f: Vec<f64> = frequency_hz
+        .iter()
+        .zip(trusted)
+        .filter(|(_, t)| **t)
+        .map(|(f, _)| *f)
+        .collect();
+    if f.is_empty() {
+        return None;
+    }
+    f.sort_by(f64::total_cmp);
+    Some(f[f.len() / 2])
+}
+
 /// The dominant frequency at every sample.
 #[derive(Debug, Clone)]
 pub struct Ridge {

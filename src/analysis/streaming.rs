@@ -310,19 +310,7 @@ impl BandScalogram {
 
     /// Median ridge frequency over the bins inside the cone of influence.
     pub fn median_trusted_ridge_hz(&self) -> Option<f64> {
-        let mut f: Vec<f64> = self
-            .ridge
-            .frequency_hz
-            .iter()
-            .zip(&self.ridge.trusted)
-            .filter(|(_, t)| **t)
-            .map(|(f, _)| *f)
-            .collect();
-        if f.is_empty() {
-            return None;
-        }
-        f.sort_by(f64::total_cmp);
-        Some(f[f.len() / 2])
+        super::cwt::median_trusted(&self.ridge.frequency_hz, &self.ridge.trusted)
     }
 }
 
