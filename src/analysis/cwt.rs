@@ -663,20 +663,6 @@ impl Prepared {
         buf: &mut [Complex<T>],
         scratch: &mut [Complex<T>],
     ) {
-        self.row_decimated(j, ifft, buf, scratch);
-    }
-
-    /// [`Self::row`] at every `N_pad/m`-th sample, `m = buf.len() = ifft.len()` dividing N_pad:
-    /// the bins are folded modulo m, which is exact while the row's band (bins `k_lo…k_hi`)
-    /// spans fewer than m bins — the caller's choice of m guarantees it.
-    pub(crate) fn row_decimated<T: FftNum + Float>(
-        &self,
-        j: usize,
-        ifft: &dyn Fft<T>,
-        buf: &mut [Complex<T>],
-        scratch: &mut [Complex<T>],
-    ) {
-        let m = buf.len() as i64;
         let s = self.scales[j];
         let (peak, analytic, pywt) =
             normalization_terms(self.normalization, &self.wavelet, s, self.fs);
@@ -684,7 +670,7 @@ impl Prepared {
         buf.fill(Complex::new(T::zero(), T::zero()));
         let cast = |v: f64| T::from_f64(v).unwrap_or_else(T::zero);
         for k in filter.k_lo..=filter.k_hi {
-            let i = k.rem_euclid(m) as usize;
+            let i = k.rem_euclid(self.n_pad as i64) as usize;
             let g = filter.gain(k);
             // X_{−k} = conj X_k for the real series.
             let x = if k >= 0 {

@@ -978,7 +978,7 @@ impl FromConfig for AnalysisStage {
                 None
             }
             Some(a) => {
-                let dmw_like = has_instance(file, "dmw", a) || has_instance(file, "excitation", a);
+                let dmw_like = file.has_instance("dmw", a) || file.has_instance("excitation", a);
                 if !dmw_like && !file.has_any_instance(a) {
                     return Err(err(
                         "against",
@@ -1032,10 +1032,6 @@ impl FromConfig for AnalysisStage {
             against,
         })
     }
-}
-
-fn has_instance(file: &PipelineFile, kind: &str, name: &str) -> bool {
-    file.has_instance(kind, name)
 }
 
 impl StageKind for AnalysisStage {
